@@ -1,0 +1,58 @@
+/*
+ * accelcal -- build a resolver table on the device from calibrated channel
+ * parameters, with no host: after a field recalibration firmware re-derives
+ * M (the 6x6 inverse for N = 6, the least-squares pseudo-inverse
+ * (R^T R)^-1 R^T for 6 < N <= AC_MAX_CHANNELS), the offset term and the
+ * centripetal table, in integer arithmetic (ac_xf), and quantises them with
+ * the same rule as the host's quantizer (python/accelcal/quantize.py).
+ *
+ * Columns of R are equilibrated by powers of two; Gauss-Jordan elimination
+ * uses partial pivoting.  A pivot below 2^-26 of the largest matrix entry
+ * gives AC_ERR_SINGULAR; a 1-norm condition number above 2^AC_COND_LOG2_MAX
+ * gives AC_ERR_ILL_COND.  On error the output table is left untouched.
+ */
+#ifndef AC_INVERT_H
+#define AC_INVERT_H
+
+#include "ac_config.h"
+#include "ac_status.h"
+#include "ac_xf.h"
+#include "ac_resolve.h"
+
+/* One channel's calibration in fixed point (see ac_config.h for formats). */
+typedef struct ac_channel_cal {
+    int32_t sens[3]; /* s_i, counts per m/s^2, Q.AC_SENS_FRAC */
+    int32_t pos[3];  /* r_i, m, Q.AC_POS_FRAC */
+    int32_t offset;  /* b_i - trim_i, counts, Q.AC_OFFSET_FRAC */
+} ac_channel_cal;
+
+/* Caller-owned scratch memory for ac_resolver_build (may live in a union
+ * with other buffers; nothing in it is needed afterwards). */
+typedef struct ac_build_work {
+    ac_xf a[6][6];   /* equilibrated R (N = 6) or R^T R (N > 6), then its inverse */
+    ac_xf g[6][6];   /* M C */
+    ac_xf k[6];      /* M o */
+    ac_xf rmax[6];   /* per output row: max |M_ji| */
+    ac_xf rsum[6];   /* per output row: sum |M_ji| */
+    int16_t colexp[6];
+    int8_t perm[6];
+} ac_build_work;
+
+/* ceil(log2(cond_1)) of the matrix inverted, written when info is not NULL. */
+typedef struct ac_build_info {
+    int16_t cond_log2;
+} ac_build_info;
+
+ac_status ac_resolver_build(const ac_channel_cal *cal, uint16_t n, ac_build_work *work,
+                            ac_resolver *out, ac_build_info *info);
+
+/* Row i of the sensor matrix, [s_i, r_i x s_i] (counts per m/s^2, counts per rad/s^2),
+ * and the centripetal row C_i with c_i(omega) = sum_q C_iq p_q (counts per (rad/s)^2). */
+ac_status ac_sensor_row(const ac_channel_cal *cal, ac_xf row[6]);
+ac_status ac_centripetal_row(const ac_channel_cal *cal, ac_xf row[6]);
+
+/* In-place inverse of the 6x6 matrix a by Gauss-Jordan with partial pivoting;
+ * cond_log2 (may be NULL) receives ceil(log2(||a||_1 ||a^-1||_1)). */
+ac_status ac_invert6(ac_xf a[6][6], int8_t perm[6], int16_t *cond_log2);
+
+#endif /* AC_INVERT_H */

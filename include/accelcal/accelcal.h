@@ -1,0 +1,16 @@
+/* accelcal -- integer-only accelerometer-array core.  One include for all. */
+#ifndef ACCELCAL_H
+#define ACCELCAL_H
+
+#define ACCELCAL_VERSION "0.1.0"
+
+#include "ac_config.h"
+#include "ac_status.h"
+#include "ac_fixed.h"
+#include "ac_xf.h"
+#include "ac_trim.h"
+#include "ac_resolve.h"
+#include "ac_invert.h"
+#include "ac_rate.h"
+
+#endif /* ACCELCAL_H */
