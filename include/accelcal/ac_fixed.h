@@ -30,15 +30,19 @@ ac_status ac_add32_sat(int32_t a, int32_t b, int32_t *out);
 ac_status ac_asr32(int32_t v, uint8_t n, int32_t *out);
 
 /* *out = v * 2^-shift rounded half up (towards +inf at ties) for shift > 0,
- * v * 2^-shift exactly for shift <= 0, clipped to int32.
- * shift must be in -31..31 (AC_ERR_RANGE otherwise). */
-ac_status ac_scale_round32(int32_t v, int8_t shift, int32_t *out);
+ * v * 2^-shift exactly for shift <= 0, clipped to int32.  Any int16 shift:
+ * beyond 31 the result is 0 (right) or saturates unless v == 0 (left). */
+ac_status ac_scale_round32(int32_t v, int16_t shift, int32_t *out);
 
 /* *out = a * b exactly, with 16x16-bit partial products only. */
 ac_status ac_mul32x32(int32_t a, int32_t b, ac_i64 *out);
 
 /* *out = round(a * b / 2^n), half up, for 0 <= n <= 62, clipped to int32. */
 ac_status ac_mul32_shift(int32_t a, int32_t b, uint8_t n, int32_t *out);
+
+/* Two's-complement reinterpretation of u as int32, without relying on the
+ * implementation-defined conversion of out-of-range unsigned values. */
+ac_status ac_u32_to_i32(uint32_t u, int32_t *out);
 
 /* Number of significant bits of |v| (0 for v == 0, 32 for INT32_MIN). */
 ac_status ac_bitlen32(int32_t v, uint8_t *out);

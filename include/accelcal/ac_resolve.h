@@ -25,10 +25,12 @@
  * any int16 input; shifts in -31..31.
  *
  * Accuracy: the linear part is exact before the final rounding.  The squared
- * rates p_q are kept to 14 significant bits (a block exponent shared by the
- * sample), so |out_j - exact_j| <= 0.5 LSB + E_j with
- *   E_j = sum_q |g[j][q]| 2^(s-1-2*AC_OMEGA_FRAC-g_shift[j]) + 2^(-1-m_shift[j])  (s > 0),
- * where s = max(0, bitlen(max_a w_a^2) - 14); E_j = 0 when |omega| < 0.125 rad/s.
+ * rates p_q are kept to 14 significant bits (a block exponent s shared by the
+ * sample, s = max(0, bitlen(max_a w_a^2) - 14)), and T_j is rounded once more
+ * when it is aligned to the accumulator (d = s - 2*AC_OMEGA_FRAC - g_shift[j]
+ * + m_shift[j] < 0), so  |out_j - exact_j| <= 0.5 LSB + E_j  with
+ *   E_j = [s > 0] sum_q |g[j][q]| 2^(s-1-2*AC_OMEGA_FRAC-g_shift[j]) + [d < 0] 2^(-1-m_shift[j]).
+ * s = 0 (p exact) whenever |omega_a| < 0.125 rad/s on every axis.
  * python/accelcal/quantize.py computes the same bound; the tests hold the core to it.
  */
 #ifndef AC_RESOLVE_H

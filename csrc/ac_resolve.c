@@ -1,0 +1,181 @@
+/* accelcal -- apply a calibration (see ac_resolve.h for the arithmetic). */
+#include "accelcal/ac_resolve.h"
+#include "accelcal/ac_trim.h"
+#include "ac_internal.h"
+
+#define ROW_L1_MAX 65535L
+
+static int shift_ok(int8_t s)
+{
+    return s >= -31 && s <= 31;
+}
+
+ac_status ac_resolver_check(const ac_resolver *r)
+{
+    uint8_t j;
+    uint16_t i;
+    if (r == 0) {
+        return AC_ERR_NULL;
+    }
+    if (r->n < 6u || r->n > (uint16_t)AC_MAX_CHANNELS) {
+        return AC_ERR_SIZE;
+    }
+    for (j = 0u; j < 6u; j++) {
+        int32_t l1 = 0;
+        if (!shift_ok(r->m_shift[j]) || !shift_ok(r->g_shift[j])) {
+            return AC_ERR_FORMAT;
+        }
+        for (i = 0u; i < r->n; i++) {
+            int16_t v = r->m[j][i];
+            if (v == INT16_MIN) { /* keeps |m| <= 32767 so -m is representable */
+                return AC_ERR_FORMAT;
+            }
+            l1 += (v < 0) ? -(int32_t)v : (int32_t)v;
+        }
+        if (l1 > ROW_L1_MAX) {
+            return AC_ERR_FORMAT;
+        }
+        l1 = 0;
+        for (i = 0u; i < 6u; i++) {
+            int16_t v = r->g[j][i];
+            if (v == INT16_MIN) {
+                return AC_ERR_FORMAT;
+            }
+            l1 += (v < 0) ? -(int32_t)v : (int32_t)v;
+        }
+        if (l1 > ROW_L1_MAX) {
+            return AC_ERR_FORMAT;
+        }
+    }
+    return AC_OK;
+}
+
+/* The per-sample arithmetic; r must have passed ac_resolver_check. */
+static ac_status resolve_checked(const ac_resolver *r, const int16_t *x, const int16_t *omega,
+                                 int32_t *out)
+{
+    uint8_t sat = 0u;
+    uint8_t j, q;
+    uint16_t i;
+    int16_t p[6];
+    uint8_t s = 0u;
+
+    if (omega != 0) {
+        int32_t sq[6];
+        uint8_t len;
+        int32_t maxsq;
+        sq[0] = (int32_t)omega[0] * omega[0];
+        sq[1] = (int32_t)omega[1] * omega[1];
+        sq[2] = (int32_t)omega[2] * omega[2];
+        sq[3] = (int32_t)omega[0] * omega[1];
+        sq[4] = (int32_t)omega[1] * omega[2];
+        sq[5] = (int32_t)omega[2] * omega[0];
+        /* |w_a w_b| <= max(w_a^2, w_b^2): one block exponent for all six */
+        maxsq = sq[0];
+        if (sq[1] > maxsq) {
+            maxsq = sq[1];
+        }
+        if (sq[2] > maxsq) {
+            maxsq = sq[2];
+        }
+        len = ac_bitlen_u((uint32_t)maxsq);
+        s = (len > 14u) ? (uint8_t)(len - 14u) : 0u;
+        for (q = 0u; q < 6u; q++) {
+            /* |p| <= 2^14 after rounding: fits int16 */
+            p[q] = (int16_t)ac_scale_round(sq[q], (int16_t)s, &sat);
+        }
+    }
+
+    for (j = 0u; j < 6u; j++) {
+        int32_t acc = 0;
+        const int16_t *mrow = r->m[j];
+        /* row L1 <= 65535 and |x| <= 32768 keep every partial sum in int32 */
+        for (i = 0u; i < r->n; i++) {
+            acc += (int32_t)mrow[i] * x[i];
+        }
+        acc = ac_sat_sub(acc, r->k[j], &sat);
+        if (omega != 0) {
+            int32_t t = 0;
+            int16_t d;
+            for (q = 0u; q < 6u; q++) {
+                t += (int32_t)r->g[j][q] * p[q];
+            }
+            /* T (units 2^(s - 2 W - g_shift) LSB) -> accumulator units 2^-m_shift LSB */
+            d = (int16_t)((int16_t)s - 2 * AC_OMEGA_FRAC - r->g_shift[j] + r->m_shift[j]);
+            t = ac_scale_round(t, (int16_t)-d, &sat);
+            acc = ac_sat_sub(acc, t, &sat);
+        }
+        out[j] = ac_scale_round(acc, r->m_shift[j], &sat);
+    }
+    return sat ? AC_SATURATED : AC_OK;
+}
+
+ac_status ac_resolve(const ac_resolver *r, const int16_t *x, const int16_t *omega, int32_t *out)
+{
+    ac_status st;
+    if (x == 0 || out == 0) {
+        return AC_ERR_NULL;
+    }
+    st = ac_resolver_check(r);
+    if (st != AC_OK) {
+        return st;
+    }
+    return resolve_checked(r, x, omega, out);
+}
+
+ac_status ac_process(const ac_resolver *r, const uint16_t *trim, const uint16_t *raw,
+                     const int16_t *omega, int32_t *out)
+{
+    int16_t x[AC_MAX_CHANNELS];
+    ac_status st, st_trim;
+    if (raw == 0 || trim == 0 || out == 0) {
+        return AC_ERR_NULL;
+    }
+    st = ac_resolver_check(r);
+    if (st != AC_OK) {
+        return st;
+    }
+    st_trim = ac_trim(raw, trim, r->n, x);
+    if (st_trim < 0) {
+        return st_trim;
+    }
+    return ac_merge(st_trim, resolve_checked(r, x, omega, out));
+}
+
+ac_status ac_process_batch(const ac_resolver *r, const uint16_t *trim, const uint16_t *raw,
+                           uint32_t count, const int16_t *omega, int32_t *out, uint8_t *flags)
+{
+    int16_t x[AC_MAX_CHANNELS];
+    ac_status st, any = AC_OK;
+    uint32_t k;
+    if (raw == 0 || trim == 0 || out == 0) {
+        return AC_ERR_NULL;
+    }
+    st = ac_resolver_check(r);
+    if (st != AC_OK) {
+        return st;
+    }
+    for (k = 0u; k < count; k++) {
+        uint8_t f = 0u;
+        ac_status s1 = ac_trim(raw, trim, r->n, x);
+        ac_status s2 = resolve_checked(r, x, omega, out);
+        if (s1 == AC_SATURATED) {
+            f |= AC_FLAG_TRIM_SAT;
+        }
+        if (s2 == AC_SATURATED) {
+            f |= AC_FLAG_OUT_SAT;
+        }
+        if (f != 0u) {
+            any = AC_SATURATED;
+        }
+        if (flags != 0) {
+            flags[k] = f;
+        }
+        raw += r->n;
+        out += 6;
+        if (omega != 0) {
+            omega += 3;
+        }
+    }
+    return any;
+}

@@ -1,0 +1,138 @@
+"""Bindings to the integer C core (``accelcal._core``, cffi API mode).
+
+Wrappers take and return numpy arrays; a negative status becomes the matching
+``CoreError`` subclass, and saturation comes back as flags, never silently.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._core import ffi, lib
+from .errors import core_error
+
+
+@dataclass(frozen=True)
+class Formats:
+    """Fixed-point formats of the compiled core (from ac_config.h, the single source)."""
+    out_frac: int
+    omega_frac: int
+    sens_frac: int
+    pos_frac: int
+    offset_frac: int
+    max_channels: int
+    cond_log2_max: int
+    rate_state_frac: int
+
+
+FORMATS = Formats(out_frac=lib.AC_OUT_FRAC, omega_frac=lib.AC_OMEGA_FRAC,
+                  sens_frac=lib.AC_SENS_FRAC, pos_frac=lib.AC_POS_FRAC,
+                  offset_frac=lib.AC_OFFSET_FRAC, max_channels=lib.AC_MAX_CHANNELS,
+                  cond_log2_max=lib.AC_COND_LOG2_MAX, rate_state_frac=lib.AC_RATE_STATE_FRAC)
+
+
+def check(status: int, context: str) -> bool:
+    """Raise for an error status; return True when the core reports saturation."""
+    if status < 0:
+        raise core_error(int(status), context)
+    return status == lib.AC_SATURATED
+
+
+def _ptr(ctype: str, arr: np.ndarray):
+    return ffi.cast(ctype, ffi.from_buffer(arr))
+
+
+def new_resolver(m, m_shift, k, g, g_shift):
+    """An ``ac_resolver`` filled from table arrays (m is 6 x N)."""
+    m = np.asarray(m)
+    n = m.shape[1]
+    r = ffi.new("ac_resolver *")
+    r.n = n
+    for j in range(6):
+        r.m_shift[j] = int(m_shift[j])
+        r.g_shift[j] = int(g_shift[j])
+        r.k[j] = int(k[j])
+        for i in range(n):
+            r.m[j][i] = int(m[j, i])
+        for q in range(6):
+            r.g[j][q] = int(g[j][q])
+    return r
+
+
+def resolver_arrays(r) -> dict:
+    """The table arrays of an ``ac_resolver`` (inverse of new_resolver)."""
+    n = int(r.n)
+    return dict(
+        m=np.array([[r.m[j][i] for i in range(n)] for j in range(6)], dtype=np.int16),
+        m_shift=np.array([r.m_shift[j] for j in range(6)], dtype=np.int8),
+        k=np.array([r.k[j] for j in range(6)], dtype=np.int32),
+        g=np.array([[r.g[j][q] for q in range(6)] for j in range(6)], dtype=np.int16),
+        g_shift=np.array([r.g_shift[j] for j in range(6)], dtype=np.int8),
+    )
+
+
+def process_batch(resolver, trim: np.ndarray, raw: np.ndarray,
+                  omega_q: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Pre-trim and resolve every sample: raw (n,N) -> out (n,6) int32 Q.AC_OUT_FRAC, flags (n,)."""
+    raw = np.ascontiguousarray(raw, dtype=np.uint16)
+    trim = np.ascontiguousarray(trim, dtype=np.uint16)
+    n = raw.shape[0]
+    if raw.ndim != 2 or raw.shape[1] != resolver.n or trim.shape != (resolver.n,):
+        raise ValueError(f"raw must be (n, {resolver.n}) and trim ({resolver.n},)")
+    out = np.zeros((n, 6), dtype=np.int32)
+    flags = np.zeros(n, dtype=np.uint8)
+    if omega_q is not None:
+        omega_q = np.ascontiguousarray(omega_q, dtype=np.int16)
+        if omega_q.shape != (n, 3):
+            raise ValueError("omega must be (n, 3)")
+        wp = _ptr("int16_t *", omega_q)
+    else:
+        wp = ffi.NULL
+    st = lib.ac_process_batch(resolver, _ptr("uint16_t *", trim), _ptr("uint16_t *", raw), n, wp,
+                              _ptr("int32_t *", out), _ptr("uint8_t *", flags))
+    check(st, "ac_process_batch")
+    return out, flags
+
+
+def resolve_one(resolver, x: np.ndarray, omega_q: np.ndarray | None = None) -> tuple[np.ndarray, bool]:
+    """ac_resolve on one sample of trimmed readings; returns (out (6,), saturated)."""
+    x = np.ascontiguousarray(x, dtype=np.int16)
+    out = np.zeros(6, dtype=np.int32)
+    wp = ffi.NULL if omega_q is None else _ptr("int16_t *", np.ascontiguousarray(omega_q, dtype=np.int16))
+    sat = check(lib.ac_resolve(resolver, _ptr("int16_t *", x), wp, _ptr("int32_t *", out)), "ac_resolve")
+    return out, sat
+
+
+def build_resolver(sens_q: np.ndarray, pos_q: np.ndarray, offset_q: np.ndarray):
+    """On-device inversion (ac_resolver_build) from fixed-point channel parameters.
+
+    Returns (resolver, cond_log2)."""
+    n = len(offset_q)
+    cal = ffi.new("ac_channel_cal[]", max(n, 1))
+    for i in range(n):
+        for a in range(3):
+            cal[i].sens[a] = int(sens_q[i][a])
+            cal[i].pos[a] = int(pos_q[i][a])
+        cal[i].offset = int(offset_q[i])
+    work = ffi.new("ac_build_work *")
+    out = ffi.new("ac_resolver *")
+    info = ffi.new("ac_build_info *")
+    check(lib.ac_resolver_build(cal, n, work, out, info), "ac_resolver_build")
+    return out, int(info.cond_log2)
+
+
+def rate_integrate(alpha_q: np.ndarray, dt_m: int, dt_shift: int, leak: int) -> tuple[np.ndarray, bool]:
+    """ac_rate_step over alpha (n,3) int32 Q.AC_OUT_FRAC -> omega (n,3) int16 Q.AC_OMEGA_FRAC."""
+    alpha_q = np.ascontiguousarray(alpha_q, dtype=np.int32)
+    st = ffi.new("ac_rate *")
+    check(lib.ac_rate_init(st, dt_m, dt_shift, leak), "ac_rate_init")
+    out = np.zeros(alpha_q.shape, dtype=np.int16)
+    a = ffi.new("int32_t[3]")
+    w = ffi.new("int16_t[3]")
+    sat = False
+    for n in range(alpha_q.shape[0]):
+        a[0], a[1], a[2] = (int(v) for v in alpha_q[n])
+        sat |= check(lib.ac_rate_step(st, a, w), "ac_rate_step")
+        out[n] = (w[0], w[1], w[2])
+    return out, sat

@@ -1,0 +1,189 @@
+"""The one quantizer: calibration (float) -> the C core's fixed-point tables.
+
+The generated C header, ``resolve --engine fixed`` and the tests all take their
+constants from :func:`quantize`, so "the fixed engine uses exactly the header's
+constants" holds by construction.  The same rules are implemented on the device
+by ``ac_resolver_build`` (csrc/ac_invert.c); tests compare the two.
+
+Rules (see include/accelcal/ac_resolve.h for the arithmetic they feed):
+  trim_i   = round(b_i)                       uint16 counts
+  o_i      = b_i - trim_i                     residual offset, Q.AC_OFFSET_FRAC
+  s_i, r_i                                    Q.AC_SENS_FRAC, Q.AC_POS_FRAC (int32)
+  M        = pinv(R(s~, r~)) in output LSB per count, from the *quantised* s~, r~
+  m_shift_j = largest s <= 31 with max_i|M_ji| 2^s <= 32767 and sum_i|M_ji| 2^s <= 65535 - N
+  m_ji     = round(M_ji 2^m_shift_j),  k_j = round((M o~)_j 2^m_shift_j)
+  G        = M C (LSB per (rad/s)^2), g / g_shift by the same rule with 6 terms
+Rounding is half up (floor(x + 1/2)), as in the core.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import model
+from .errors import AccelcalError
+from .native import FORMATS
+
+COEF_MAX = 32767
+ROW_L1_MAX = 65535
+
+
+class QuantizeError(AccelcalError):
+    """A calibration value does not fit its fixed-point format."""
+
+
+def round_half_up(x):
+    return np.floor(np.asarray(x, float) + 0.5)
+
+
+def largest_shift(v: float, limit: float) -> int:
+    """Largest integer s with v * 2^s <= limit (v > 0), exactly."""
+    s = math.floor(math.log2(limit / v))
+    while math.ldexp(v, s) > limit:
+        s -= 1
+    while math.ldexp(v, s + 1) <= limit:
+        s += 1
+    return s
+
+
+def row_shift(row: np.ndarray, what: str) -> int:
+    a = np.abs(np.asarray(row, float))
+    vmax, vsum = float(a.max()), float(a.sum())
+    if vmax == 0.0:
+        return 31
+    s = min(31, largest_shift(vmax, COEF_MAX), largest_shift(vsum, ROW_L1_MAX - len(a)))
+    if s < -31:
+        raise QuantizeError(f"{what}: coefficients too large for the resolver's Q format")
+    return s
+
+
+def _fixed(x, frac: int, what: str, lo: int = -2**31, hi: int = 2**31 - 1) -> np.ndarray:
+    q = round_half_up(np.asarray(x, float) * 2.0**frac)
+    bad = np.argwhere((q < lo) | (q > hi) | ~np.isfinite(q))
+    if bad.size:
+        idx = tuple(int(v) for v in bad[0])
+        val = np.asarray(x, float)[idx]
+        raise QuantizeError(f"{what}{list(idx)} = {val:.9g} does not fit its fixed-point format "
+                            f"(Q.{frac} in [{lo}, {hi}])")
+    return q.astype(np.int64)
+
+
+@dataclass
+class FixedTables:
+    """Everything the firmware needs, in the core's integer formats."""
+    device: str
+    trim: np.ndarray      # (N,) uint16 counts
+    sens_q: np.ndarray    # (N,3) int32 Q.sens_frac
+    pos_q: np.ndarray     # (N,3) int32 Q.pos_frac
+    offset_q: np.ndarray  # (N,) int32 Q.offset_frac (b_i - trim_i)
+    m: np.ndarray         # (6,N) int16
+    m_shift: np.ndarray   # (6,) int8
+    k: np.ndarray         # (6,) int32
+    g: np.ndarray         # (6,6) int16
+    g_shift: np.ndarray   # (6,) int8
+    cond_log2: int
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def n(self) -> int:
+        return len(self.trim)
+
+    # dequantised views (exact values of the table entries)
+    def sensitivity(self) -> np.ndarray:
+        return self.sens_q / 2.0**FORMATS.sens_frac
+
+    def positions(self) -> np.ndarray:
+        return self.pos_q / 2.0**FORMATS.pos_frac
+
+    def offsets(self) -> np.ndarray:
+        return self.trim + self.offset_q / 2.0**FORMATS.offset_frac
+
+    def resolver(self):
+        from .native import new_resolver
+        return new_resolver(self.m, self.m_shift, self.k, self.g, self.g_shift)
+
+
+def cond_log2_equilibrated(R: np.ndarray) -> int:
+    """ceil(log2 cond_1) of the matrix ac_resolver_build inverts (R~ or R~^T R~)."""
+    colmax = np.abs(R).max(axis=0)
+    colexp = np.array([math.frexp(v)[1] for v in colmax])  # colmax * 2^-colexp in [0.5, 1)
+    Rt = R * 2.0 ** (-colexp)
+    A = Rt if R.shape[0] == 6 else Rt.T @ Rt
+    c = np.linalg.norm(A, 1) * np.linalg.norm(np.linalg.inv(A), 1)
+    return int(math.ceil(math.log2(c)))
+
+
+def quantize(offsets, sensitivity, positions, device: str = "") -> FixedTables:
+    """Quantise a calibration (b (N,), s (N,3), r (N,3)) into the core's tables."""
+    f = FORMATS
+    b = np.asarray(offsets, float)
+    n = len(b)
+    if not 6 <= n <= f.max_channels:
+        raise QuantizeError(f"{n} channels: the resolver takes 6..{f.max_channels}")
+    trim = _fixed(b, 0, "offset_counts", 0, 65535)
+    sens_q = _fixed(sensitivity, f.sens_frac, "sensitivity")
+    pos_q = _fixed(positions, f.pos_frac, "position_m")
+    offset_q = _fixed(b - trim, f.offset_frac, "residual offset")
+    s_t = sens_q / 2.0**f.sens_frac
+    r_t = pos_q / 2.0**f.pos_frac
+    o_t = offset_q / 2.0**f.offset_frac
+    R = model.sensor_matrix(r_t, s_t)
+    if np.linalg.matrix_rank(R) < 6:
+        from .errors import SingularError
+        raise SingularError(-3, "sensor matrix has rank < 6: the geometry does not determine f and alpha")
+    cl2 = cond_log2_equilibrated(R)
+    if cl2 > f.cond_log2_max:
+        from .errors import IllConditionedError
+        raise IllConditionedError(-4, f"geometry too ill-conditioned: cond ~ 2^{cl2} > 2^{f.cond_log2_max}")
+    M = np.linalg.pinv(R) * 2.0**f.out_frac            # LSB per count
+    G = M @ model.centripetal_matrix(r_t, s_t)          # LSB per (rad/s)^2
+    kv = M @ o_t                                        # LSB
+    m_shift = np.array([row_shift(M[j], f"resolve matrix row {j}") for j in range(6)])
+    g_shift = np.array([row_shift(G[j], f"centripetal table row {j}") for j in range(6)])
+    m = round_half_up(M * 2.0 ** m_shift[:, None]).astype(np.int16)
+    g = round_half_up(G * 2.0 ** g_shift[:, None]).astype(np.int16)
+    k = _fixed(kv * 2.0 ** m_shift, 0, "offset term k")
+    return FixedTables(device=device, trim=trim.astype(np.uint16), sens_q=sens_q.astype(np.int32),
+                       pos_q=pos_q.astype(np.int32), offset_q=offset_q.astype(np.int32),
+                       m=m, m_shift=m_shift.astype(np.int8), k=k.astype(np.int32), g=g,
+                       g_shift=g_shift.astype(np.int8), cond_log2=cl2)
+
+
+def quantize_calibration(device, cal) -> FixedTables:
+    """quantize() for a Device and a Calibration (positions default to the device's)."""
+    pos = cal.positions if cal.positions is not None else device.positions
+    return quantize(cal.offsets, cal.sensitivity, pos, device.name)
+
+
+def omega_to_fixed(omega) -> np.ndarray:
+    """rad/s -> int16 Q.AC_OMEGA_FRAC, refusing values outside the range (no silent clipping)."""
+    return _fixed(omega, FORMATS.omega_frac, "omega", -32768, 32767).astype(np.int16)
+
+
+def exact_fixed_semantics(t: FixedTables, raw: np.ndarray, omega_q: np.ndarray | None = None):
+    """The core's arithmetic without its intermediate roundings, in float64.
+
+    Returns (exact (n,6) in output LSB, bound (n,6) in LSB, trim_saturated (n,)):
+    the core's output must satisfy |out - exact| <= 0.5 + bound unless it saturated."""
+    f = FORMATS
+    raw = np.atleast_2d(np.asarray(raw, np.int64))
+    d = raw - t.trim.astype(np.int64)
+    x = np.clip(d, -32768, 32767)
+    trim_sat = np.any(x != d, axis=1)
+    ms = t.m_shift.astype(float)
+    exact = (x @ t.m.T.astype(float) - t.k) * 2.0 ** (-ms)
+    bound = np.zeros_like(exact)
+    if omega_q is not None:
+        w = np.atleast_2d(np.asarray(omega_q, np.int64))
+        p = model.omega_products(w.astype(float))                 # units 2^-2W (rad/s)^2, exact
+        gs = t.g_shift.astype(float)
+        exact = exact - (p @ t.g.T.astype(float)) * 2.0 ** (-2 * f.omega_frac - gs)
+        maxsq = np.max(w * w, axis=1)
+        s = np.maximum(0, np.array([int(v).bit_length() for v in maxsq]) - 14)
+        gl1 = np.abs(t.g.astype(float)).sum(axis=1)
+        bound = np.where(s[:, None] > 0, gl1 * 2.0 ** (s[:, None] - 1 - 2 * f.omega_frac - gs), 0.0)
+        dsh = s[:, None] - 2 * f.omega_frac - gs + ms
+        bound = bound + np.where(dsh < 0, 2.0 ** (-1 - ms), 0.0)
+    return exact, bound, trim_sat
