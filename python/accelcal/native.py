@@ -122,17 +122,19 @@ def build_resolver(sens_q: np.ndarray, pos_q: np.ndarray, offset_q: np.ndarray):
     return out, int(info.cond_log2)
 
 
-def rate_integrate(alpha_q: np.ndarray, dt_m: int, dt_shift: int, leak: int) -> tuple[np.ndarray, bool]:
-    """ac_rate_step over alpha (n,3) int32 Q.AC_OUT_FRAC -> omega (n,3) int16 Q.AC_OMEGA_FRAC."""
+def rate_integrate(alpha_q: np.ndarray, dt_m: int, dt_shift: int,
+                   leak: int) -> tuple[np.ndarray, np.ndarray]:
+    """ac_rate_step over alpha (n,3) int32 Q.AC_OUT_FRAC -> omega (n,3) int16 Q.AC_OMEGA_FRAC,
+    and the per-step saturation flags (n,)."""
     alpha_q = np.ascontiguousarray(alpha_q, dtype=np.int32)
     st = ffi.new("ac_rate *")
     check(lib.ac_rate_init(st, dt_m, dt_shift, leak), "ac_rate_init")
     out = np.zeros(alpha_q.shape, dtype=np.int16)
     a = ffi.new("int32_t[3]")
     w = ffi.new("int16_t[3]")
-    sat = False
+    sat = np.zeros(alpha_q.shape[0], dtype=bool)
     for n in range(alpha_q.shape[0]):
         a[0], a[1], a[2] = (int(v) for v in alpha_q[n])
-        sat |= check(lib.ac_rate_step(st, a, w), "ac_rate_step")
+        sat[n] = check(lib.ac_rate_step(st, a, w), "ac_rate_step")
         out[n] = (w[0], w[1], w[2])
     return out, sat
