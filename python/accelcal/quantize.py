@@ -187,3 +187,17 @@ def exact_fixed_semantics(t: FixedTables, raw: np.ndarray, omega_q: np.ndarray |
         dsh = s[:, None] - 2 * f.omega_frac - gs + ms
         bound = bound + np.where(dsh < 0, 2.0 ** (-1 - ms), 0.0)
     return exact, bound, trim_sat
+
+
+def table_error_bound(t: FixedTables, raw: np.ndarray, omega_q: np.ndarray | None = None) -> np.ndarray:
+    """Bound (n,6) in output LSB on |exact fixed semantics - float reference| that comes from
+    rounding the table entries (m, k, g each by at most half a mantissa LSB); the float
+    reference here uses the calibration as the tables store it (s, r, o in their Q formats)."""
+    raw = np.atleast_2d(np.asarray(raw, np.int64))
+    x = np.clip(raw - t.trim.astype(np.int64), -32768, 32767)
+    half_m = 0.5 * 2.0 ** (-t.m_shift.astype(float))
+    bound = (np.abs(x).sum(axis=1, keepdims=True) + 1.0) * half_m
+    if omega_q is not None:
+        p = np.abs(model.omega_products(np.atleast_2d(omega_q) / 2.0 ** FORMATS.omega_frac))
+        bound = bound + p.sum(axis=1, keepdims=True) * 0.5 * 2.0 ** (-t.g_shift.astype(float))
+    return bound

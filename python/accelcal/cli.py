@@ -1,0 +1,182 @@
+"""The ``accelcal`` command (forms fixed by shared/spec/data-contract.md).
+
+Every subcommand exits 0 on success; on bad input it prints one line to stderr
+(no traceback) and exits 2, leaving no partial output file (all outputs are
+written through errors.atomic_write).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from .errors import AccelcalError, atomic_write
+
+EXIT_INPUT = 2
+EXIT_INTERNAL = 3
+
+
+def _load_device(path):
+    from .device import default_device, load_device
+    return default_device() if path in (None, "default") else load_device(path)
+
+
+def _load_cal(path, device):
+    from .calibration import load_calibration
+    return load_calibration(path, device)
+
+
+def _write_csv(path, header: list[str], columns: list[np.ndarray], comments: list[str] = ()):
+    data = np.column_stack(columns)
+
+    def write(f):
+        for c in comments:
+            f.write(f"# {c}\n")
+        f.write(",".join(header) + "\n")
+        np.savetxt(f, data, delimiter=",", fmt="%.9g")
+    atomic_write(path, write)
+
+
+# ---- subcommands -------------------------------------------------------------
+
+def cmd_resolve(a):
+    from .recording import read_recording
+    from .resolve import resolve_recording
+    dev = _load_device(a.device)
+    cal = _load_cal(a.calibration, dev)
+    rec = read_recording(a.recording, dev.n_channels)
+    f, al, flags = resolve_recording(dev, cal, rec, a.engine, a.omega)
+    comments = [f"engine: {a.engine}", f"device: {dev.name}"]
+    if flags is not None and flags.any():
+        print(f"accelcal resolve: warning: {int(np.count_nonzero(flags))} samples saturated in the "
+              "fixed-point core (see column saturated)", file=sys.stderr)
+    cols = [rec.t, f[:, 0], f[:, 1], f[:, 2], al[:, 0], al[:, 1], al[:, 2]]
+    header = ["t", "f_x", "f_y", "f_z", "dw_x", "dw_y", "dw_z"]
+    if flags is not None:
+        cols.append(flags.astype(float))
+        header.append("saturated")
+    _write_csv(a.output, header, cols, comments)
+    return 0
+
+
+def cmd_header(a):
+    from .header import render_header
+    from .quantize import quantize_calibration
+    dev = _load_device(a.device)
+    cal = _load_cal(a.calibration, dev)
+    t = quantize_calibration(dev, cal)
+    text = render_header(t, prefix=a.prefix, calibration_method=cal.method,
+                         temp_ref_c=getattr(cal, "temp_ref_c", None),
+                         offset_tc=getattr(cal, "offset_tc", None), gain_tc=getattr(cal, "gain_tc", None))
+    atomic_write(a.output, lambda f: f.write(text))
+    return 0
+
+
+def cmd_simulate(a):
+    from .effects import parse_effect_spec
+    from .recording import write_recording
+    from .simulate import simulate
+    dev = _load_device(a.device)
+    effects = [parse_effect_spec(s) for s in a.effect]
+    params = {}
+    for kv in a.param:
+        if "=" not in kv:
+            raise AccelcalError(f"--param {kv!r}: expected NAME=VALUE")
+        k, v = kv.split("=", 1)
+        try:
+            params[k] = json.loads(v)
+        except json.JSONDecodeError:
+            params[k] = v
+    cal = _load_cal(a.calibration, dev) if a.calibration else None
+    rec = simulate(dev, a.motion, effects=effects, seed=a.seed, calibration=cal, **params)
+    write_recording(a.output, rec)
+    return 0
+
+
+def cmd_calibrate(a):
+    from .calibrate import calibrate_recordings
+    from .calibration import save_calibration
+    from .recording import read_recording
+    dev = _load_device(a.device)
+    recs = [read_recording(p, dev.n_channels) for p in a.recordings]
+    cal = calibrate_recordings(dev, recs, method=a.method)
+    save_calibration(cal, a.output)
+    return 0
+
+
+def cmd_demo(a):
+    from .demo import run_demo
+    return run_demo(out_dir=Path(a.out), seed=a.seed)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="accelcal", description=__doc__.splitlines()[0])
+    from . import __version__
+    p.add_argument("--version", action="version", version=f"accelcal {__version__}")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    s = sub.add_parser("demo", help="simulate, calibrate, emit the header, resolve with the C core, "
+                       "diagnose, on the seed's 6-channel r = 60 mm prototype")
+    s.add_argument("--out", default="accelcal-demo", help="directory for the demo's files")
+    s.add_argument("--seed", type=int, default=1)
+    s.set_defaults(func=cmd_demo)
+
+    s = sub.add_parser("simulate", help="simulate a recording")
+    s.add_argument("--device", required=True, help="device JSON ('default' = the seed prototype)")
+    s.add_argument("--motion", required=True, help="motion profile name")
+    s.add_argument("--effect", action="append", default=[], metavar="NAME[:k=v,...]",
+                   help="unmodelled effect to put in the data (repeatable)")
+    s.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="motion parameter (repeatable; JSON values)")
+    s.add_argument("--calibration", help="true channel parameters (default: the device's nominal)")
+    s.add_argument("--seed", type=int, default=0)
+    s.add_argument("-o", "--output", required=True)
+    s.set_defaults(func=cmd_simulate)
+
+    s = sub.add_parser("calibrate", help="estimate a calibration")
+    s.add_argument("--device", required=True)
+    s.add_argument("recordings", nargs="+", metavar="REC.csv")
+    s.add_argument("--method", choices=["full", "gain", "offset", "jigfree"], default=None)
+    s.add_argument("-o", "--output", required=True)
+    s.set_defaults(func=cmd_calibrate)
+
+    s = sub.add_parser("header", help="emit the C header for firmware")
+    s.add_argument("--device", required=True)
+    s.add_argument("--calibration", required=True)
+    s.add_argument("--prefix", default="AC_CAL", help="C identifier prefix (default AC_CAL)")
+    s.add_argument("-o", "--output", required=True)
+    s.set_defaults(func=cmd_header)
+
+    s = sub.add_parser("resolve", help="per-sample f and alpha")
+    s.add_argument("--device", required=True)
+    s.add_argument("--calibration", required=True)
+    s.add_argument("recording", metavar="REC.csv")
+    s.add_argument("--engine", choices=["float", "fixed"], default="float")
+    s.add_argument("--omega", choices=["auto", "reference", "none"], default="auto",
+                   help="omega for the centripetal correction (auto: the w_* columns when complete)")
+    s.add_argument("-o", "--output", required=True)
+    s.set_defaults(func=cmd_resolve)
+    return p
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    a = parser.parse_args(argv)
+    try:
+        return int(a.func(a) or 0)
+    except AccelcalError as e:
+        print(f"accelcal {a.command}: error: {e}", file=sys.stderr)
+        return EXIT_INPUT
+    except KeyboardInterrupt:
+        print(f"accelcal {a.command}: interrupted", file=sys.stderr)
+        return 130
+    except Exception as e:  # noqa: BLE001 - one line, never a traceback
+        print(f"accelcal {a.command}: internal error: {type(e).__name__}: {e}", file=sys.stderr)
+        return EXIT_INTERNAL
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,55 @@
+"""Per-sample f and alpha from a recording: the float reference or the C core.
+
+``engine="fixed"`` runs the integer core with exactly the tables the header
+generator emits (both come from quantize.quantize_calibration).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import model
+from .errors import InputError
+from .quantize import FORMATS, quantize_calibration
+
+
+def omega_for(rec, source: str) -> np.ndarray | None:
+    """The omega used for the centripetal correction: 'reference' (the recording's
+    w_* columns), 'none', or 'auto' (reference when every sample has it)."""
+    if source == "none":
+        return None
+    have = np.all(np.isfinite(rec.w), axis=1)
+    if source == "reference":
+        if not have.all():
+            row = int(np.argmin(have))
+            raise InputError(rec.source, "omega source 'reference' needs w_x, w_y, w_z on every sample",
+                             row=row + 1, field="w_x")
+        return rec.w
+    if source == "auto":
+        return rec.w if have.all() else None
+    raise ValueError(f"unknown omega source {source!r}")
+
+
+def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str = "auto"):
+    """Returns (f (n,3) m/s^2, alpha (n,3) rad/s^2, flags (n,) uint8 or None)."""
+    if rec.n_channels != device.n_channels:
+        raise InputError(rec.source, f"recording has {rec.n_channels} channels but device "
+                         f"'{device.name}' has {device.n_channels}")
+    omega = omega_for(rec, omega_source)
+    pos = cal.positions if cal.positions is not None else device.positions
+    if engine == "float":
+        f, a = model.resolve(cal.offsets, cal.sensitivity, pos, rec.raw, omega)
+        return f, a, None
+    if engine != "fixed":
+        raise ValueError(f"unknown engine {engine!r}")
+    from . import native
+    from .quantize import omega_to_fixed
+    bad = np.argwhere((rec.raw < 0) | (rec.raw > 65535))
+    if bad.size:
+        r, c = (int(v) for v in bad[0])
+        raise InputError(rec.source, f"raw reading {int(rec.raw[r, c])} does not fit the core's "
+                         "uint16 input", row=r + 1, field=f"raw_{c}")
+    t = quantize_calibration(device, cal)
+    w_q = None if omega is None else omega_to_fixed(omega)
+    out, flags = native.process_batch(t.resolver(), t.trim, rec.raw, w_q)
+    y = out / 2.0 ** FORMATS.out_frac
+    return y[:, :3], y[:, 3:], flags

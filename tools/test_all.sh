@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Installs everything the test suite needs and runs every test: the C core on the
+# host (warnings as errors, ctest, ASan/UBSan, cppcheck), the H8/300H build and
+# link without libgcc, the AVR (16-bit int) run under simavr bit-for-bit against the
+# host, and the Python suite (property tests at 10,000 examples each).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+need_apt=0
+for tool in h8300-hms-gcc avr-gcc simavr cppcheck cmake valgrind; do
+    command -v "$tool" >/dev/null 2>&1 || need_apt=1
+done
+[ -f /usr/lib/avr/include/avr/io.h ] || need_apt=1
+if [ "$need_apt" = 1 ]; then
+    echo "== installing Debian packages"
+    SUDO=""; [ "$(id -u)" = 0 ] || SUDO="sudo"
+    $SUDO apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq \
+        gcc-h8300-hms binutils-h8300-hms gcc-avr avr-libc simavr cppcheck cmake valgrind >/dev/null
+fi
+
+echo "== installing the Python package"
+python3 -m pip install -q -e ".[test]"
+
+echo "== C core: host builds, ctest, sanitizers, cppcheck"
+bash tools/check_c.sh
+echo "== C core: H8/300H (h8300-hms-gcc -mh -mn) build and link without libgcc"
+bash tools/build_h8.sh
+echo "== C core: AVR (16-bit int) under simavr, bit for bit against the host"
+bash tools/run_avr_tests.sh
+
+echo "== Python suite"
+ACCELCAL_HYPOTHESIS="${ACCELCAL_HYPOTHESIS:-ci}" python3 -m pytest -q -p no:cacheprovider
