@@ -50,7 +50,27 @@ ac_status ac_resolver_check(const ac_resolver *r)
     return AC_OK;
 }
 
-/* The per-sample arithmetic; r must have passed ac_resolver_check. */
+/* Cheap per-call checks; the row sums are ac_resolver_check's job (once per table). */
+static ac_status resolver_shape_ok(const ac_resolver *r)
+{
+    uint8_t j;
+    if (r == 0) {
+        return AC_ERR_NULL;
+    }
+    if (r->n < 6u || r->n > (uint16_t)AC_MAX_CHANNELS) {
+        return AC_ERR_SIZE;
+    }
+    for (j = 0u; j < 6u; j++) {
+        if (!shift_ok(r->m_shift[j]) || !shift_ok(r->g_shift[j])) {
+            return AC_ERR_FORMAT;
+        }
+    }
+    return AC_OK;
+}
+
+/* The per-sample arithmetic.  With a table that passed ac_resolver_check the
+ * sums below cannot overflow; they are done in uint32 (defined wrap-around) so
+ * that even an unchecked, corrupt table cannot cause undefined behaviour. */
 static ac_status resolve_checked(const ac_resolver *r, const int16_t *x, const int16_t *omega,
                                  int32_t *out)
 {
@@ -87,19 +107,22 @@ static ac_status resolve_checked(const ac_resolver *r, const int16_t *x, const i
     }
 
     for (j = 0u; j < 6u; j++) {
-        int32_t acc = 0;
+        uint32_t uacc = 0u;
+        int32_t acc;
         const int16_t *mrow = r->m[j];
         /* row L1 <= 65535 and |x| <= 32768 keep every partial sum in int32 */
         for (i = 0u; i < r->n; i++) {
-            acc += (int32_t)mrow[i] * x[i];
+            uacc += (uint32_t)((int32_t)mrow[i] * x[i]);
         }
-        acc = ac_sat_sub(acc, r->k[j], &sat);
+        acc = ac_sat_sub(ac_i_from_u(uacc), r->k[j], &sat);
         if (omega != 0) {
-            int32_t t = 0;
+            uint32_t ut = 0u;
+            int32_t t;
             int16_t d;
             for (q = 0u; q < 6u; q++) {
-                t += (int32_t)r->g[j][q] * p[q];
+                ut += (uint32_t)((int32_t)r->g[j][q] * p[q]);
             }
+            t = ac_i_from_u(ut);
             /* T (units 2^(s - 2 W - g_shift) LSB) -> accumulator units 2^-m_shift LSB */
             d = (int16_t)((int16_t)s - 2 * AC_OMEGA_FRAC - r->g_shift[j] + r->m_shift[j]);
             t = ac_scale_round(t, (int16_t)-d, &sat);
@@ -116,7 +139,7 @@ ac_status ac_resolve(const ac_resolver *r, const int16_t *x, const int16_t *omeg
     if (x == 0 || out == 0) {
         return AC_ERR_NULL;
     }
-    st = ac_resolver_check(r);
+    st = resolver_shape_ok(r);
     if (st != AC_OK) {
         return st;
     }
@@ -131,7 +154,7 @@ ac_status ac_process(const ac_resolver *r, const uint16_t *trim, const uint16_t 
     if (raw == 0 || trim == 0 || out == 0) {
         return AC_ERR_NULL;
     }
-    st = ac_resolver_check(r);
+    st = resolver_shape_ok(r);
     if (st != AC_OK) {
         return st;
     }

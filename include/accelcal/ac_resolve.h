@@ -55,7 +55,11 @@ typedef struct ac_resolver {
 /* AC_OK if the table keeps every invariant above, AC_ERR_SIZE / AC_ERR_FORMAT if not. */
 ac_status ac_resolver_check(const ac_resolver *r);
 
-/* One sample of trimmed readings x[0..n-1] -> out[0..5]. */
+/* One sample of trimmed readings x[0..n-1] -> out[0..5].
+ * Per call only n and the shifts are checked (cheap); check a table you did not
+ * make with ac_resolver_build or a generated header once with ac_resolver_check.
+ * An unchecked table that breaks the row-sum invariant gives wrong numbers but
+ * never undefined behaviour.  ac_process_batch runs the full check itself. */
 ac_status ac_resolve(const ac_resolver *r, const int16_t *x, const int16_t *omega, int32_t *out);
 
 /* Pre-trim and resolve one sample of raw readings (what firmware calls per sample). */
