@@ -60,8 +60,9 @@ static ac_i64 mul_signed(int32_t a, int32_t b)
     ac_i64 r;
     if ((a < 0) != (b < 0)) {
         /* two's complement negation of the 64-bit magnitude */
+        uint32_t carry = (m.lo == 0u) ? 1u : 0u; /* -x = ~x + 1, carried into hi */
         m.lo = ~m.lo + 1u;
-        m.hi = ~m.hi + ((m.lo == 0u) ? 1u : 0u);
+        m.hi = ~m.hi + carry;
     }
     r.hi = ac_i_from_u(m.hi);
     r.lo = m.lo;

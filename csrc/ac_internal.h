@@ -41,13 +41,54 @@ static inline uint32_t ac_abs_u(int32_t v)
     return (v < 0) ? (uint32_t)0u - (uint32_t)v : (uint32_t)v;
 }
 
+/* u >> n for 0 <= n <= 31, in whole-byte and whole-word steps first: 8-bit
+ * cores (AVR) have no barrel shifter and shift 32-bit values one bit a loop. */
+static inline uint32_t ac_shr_u(uint32_t u, uint8_t n)
+{
+    if ((n & 16u) != 0u) {
+        u >>= 16;
+    }
+    if ((n & 8u) != 0u) {
+        u >>= 8;
+    }
+    return u >> (n & 7u);
+}
+
 /* floor(v / 2^n), 0 <= n <= 31 */
 static inline int32_t ac_floor_shift(int32_t v, uint8_t n)
 {
     if (v >= 0) {
-        return (int32_t)((uint32_t)v >> n);
+        return (int32_t)ac_shr_u((uint32_t)v, n);
     }
-    return -1 - (int32_t)((uint32_t)(-1 - v) >> n);
+    return -1 - (int32_t)ac_shr_u((uint32_t)(-1 - v), n);
+}
+
+/* 1 << n for 0 <= n <= 31, in byte steps (see ac_shr_u). */
+static inline uint32_t ac_pow2_u(uint8_t n)
+{
+    uint32_t u = (uint32_t)1u << (n & 7u);
+    if ((n & 8u) != 0u) {
+        u <<= 8;
+    }
+    if ((n & 16u) != 0u) {
+        u <<= 16;
+    }
+    return u;
+}
+
+/* round(v / 2^n) half up, 1 <= n <= 31, without overflow. */
+static inline int32_t ac_round_shift(int32_t v, uint8_t n)
+{
+    uint32_t half = ac_pow2_u((uint8_t)(n - 1u));
+    int32_t w;
+    if (v >= 0) {
+        return (int32_t)ac_shr_u((uint32_t)v + half, n); /* < 2^31 + 2^30: fits uint32 */
+    }
+    w = v + (int32_t)half; /* v < 0 < half: no overflow */
+    if (w >= 0) {
+        return (int32_t)ac_shr_u((uint32_t)w, n);
+    }
+    return -1 - (int32_t)ac_shr_u((uint32_t)(-1 - w), n); /* floor of a negative */
 }
 
 static inline int32_t ac_sat_add(int32_t a, int32_t b, uint8_t *sat)
@@ -93,15 +134,10 @@ static inline int16_t ac_sat_to16(int32_t v, uint8_t *sat)
 static inline int32_t ac_scale_round(int32_t v, int16_t shift, uint8_t *sat)
 {
     if (shift > 0) {
-        uint8_t n;
-        int32_t q;
         if (shift > 31) {
             return 0; /* |v| / 2^shift < 1/2 */
         }
-        n = (uint8_t)shift;
-        q = ac_floor_shift(v, n);
-        /* round half up: add the bit just below the cut */
-        return q + (int32_t)(((uint32_t)v >> (uint8_t)(n - 1u)) & 1u);
+        return ac_round_shift(v, (uint8_t)shift);
     }
     if (shift < 0) {
         uint8_t k;
@@ -113,7 +149,7 @@ static inline int32_t ac_scale_round(int32_t v, int16_t shift, uint8_t *sat)
             return (v > 0) ? INT32_MAX : INT32_MIN;
         }
         k = (uint8_t)(-shift);
-        if (v > (INT32_MAX >> k)) {
+        if (v > (int32_t)ac_shr_u((uint32_t)INT32_MAX, k)) {
             *sat = 1u;
             return INT32_MAX;
         }
@@ -124,6 +160,43 @@ static inline int32_t ac_scale_round(int32_t v, int16_t shift, uint8_t *sat)
         return ac_i_from_u((uint32_t)v << k);
     }
     return v;
+}
+
+/* acc + a * b (16 x 16 -> 32, wrapping in uint32).  On AVR the multiply-
+ * accumulate is the Atmel AVR201 sequence (muls/mulsu/mul into the accumulator),
+ * about a third of the cycles of avr-gcc's __mulhisi3 call plus a 32-bit add;
+ * elsewhere plain C, which compilers turn into one widening multiply. */
+static inline uint32_t ac_mac16(uint32_t acc, int16_t a, int16_t b)
+{
+#if defined(__AVR__) && defined(__AVR_HAVE_MUL__) && !defined(AC_NO_ASM)
+    uint8_t zero;
+    __asm__("clr  %[z]         \n\t"
+            "muls %B[a], %B[b] \n\t"
+            "add  %C[acc], r0  \n\t"
+            "adc  %D[acc], r1  \n\t"
+            "mul  %A[a], %A[b] \n\t"
+            "add  %A[acc], r0  \n\t"
+            "adc  %B[acc], r1  \n\t"
+            "adc  %C[acc], %[z] \n\t"
+            "adc  %D[acc], %[z] \n\t"
+            "mulsu %B[a], %A[b] \n\t"
+            "sbc  %D[acc], %[z] \n\t"
+            "add  %B[acc], r0  \n\t"
+            "adc  %C[acc], r1  \n\t"
+            "adc  %D[acc], %[z] \n\t"
+            "mulsu %B[b], %A[a] \n\t"
+            "sbc  %D[acc], %[z] \n\t"
+            "add  %B[acc], r0  \n\t"
+            "adc  %C[acc], r1  \n\t"
+            "adc  %D[acc], %[z] \n\t"
+            "clr  r1           \n\t"
+            : [acc] "+r"(acc), [z] "=&r"(zero)
+            : [a] "a"(a), [b] "a"(b)
+            : "r0", "r1");
+    return acc;
+#else
+    return acc + (uint32_t)((int32_t)a * b);
+#endif
 }
 
 /* 16 x 16 -> 32 unsigned: the widening multiply every target has. */

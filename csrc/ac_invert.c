@@ -200,13 +200,14 @@ static ac_status scaled_row(const ac_channel_cal *cal, const int16_t colexp[6], 
 static ac_status m_column(const ac_build_work *w, const ac_channel_cal *cal, uint16_t i,
                           uint16_t n, ac_xf col[6])
 {
-    uint8_t j, l;
+    uint8_t j;
     if (n == 6u) {
         for (j = 0u; j < 6u; j++) {
             col[j] = w->a[j][i];
         }
     } else {
         ac_xf rt[6];
+        uint8_t l;
         TRY(scaled_row(cal, w->colexp, rt));
         for (j = 0u; j < 6u; j++) {
             col[j] = xf_zero;

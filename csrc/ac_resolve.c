@@ -27,9 +27,6 @@ ac_status ac_resolver_check(const ac_resolver *r)
         }
         for (i = 0u; i < r->n; i++) {
             int16_t v = r->m[j][i];
-            if (v == INT16_MIN) { /* keeps |m| <= 32767 so -m is representable */
-                return AC_ERR_FORMAT;
-            }
             l1 += (v < 0) ? -(int32_t)v : (int32_t)v;
         }
         if (l1 > ROW_L1_MAX) {
@@ -38,9 +35,6 @@ ac_status ac_resolver_check(const ac_resolver *r)
         l1 = 0;
         for (i = 0u; i < 6u; i++) {
             int16_t v = r->g[j][i];
-            if (v == INT16_MIN) {
-                return AC_ERR_FORMAT;
-            }
             l1 += (v < 0) ? -(int32_t)v : (int32_t)v;
         }
         if (l1 > ROW_L1_MAX) {
@@ -109,23 +103,35 @@ static ac_status resolve_checked(const ac_resolver *r, const int16_t *x, const i
     for (j = 0u; j < 6u; j++) {
         uint32_t uacc = 0u;
         int32_t acc;
-        const int16_t *mrow = r->m[j];
+        const int16_t *mp = r->m[j];
+        const int16_t *xp = x;
         /* row L1 <= 65535 and |x| <= 32768 keep every partial sum in int32 */
-        for (i = 0u; i < r->n; i++) {
-            uacc += (uint32_t)((int32_t)mrow[i] * x[i]);
+        for (i = r->n; i != 0u; i--) {
+            uacc = ac_mac16(uacc, *mp++, *xp++);
         }
         acc = ac_sat_sub(ac_i_from_u(uacc), r->k[j], &sat);
         if (omega != 0) {
             uint32_t ut = 0u;
-            int32_t t;
+            const int16_t *gp = r->g[j];
             int16_t d;
+            int32_t t;
+            uint8_t tsat;
             for (q = 0u; q < 6u; q++) {
-                ut += (uint32_t)((int32_t)r->g[j][q] * p[q]);
+                if (gp[q] != 0) { /* planar layouts leave whole columns zero */
+                    ut = ac_mac16(ut, gp[q], p[q]);
+                }
             }
-            t = ac_i_from_u(ut);
             /* T (units 2^(s - 2 W - g_shift) LSB) -> accumulator units 2^-m_shift LSB */
             d = (int16_t)((int16_t)s - 2 * AC_OMEGA_FRAC - r->g_shift[j] + r->m_shift[j]);
-            t = ac_scale_round(t, (int16_t)-d, &sat);
+            tsat = 0u;
+            t = ac_scale_round(ac_i_from_u(ut), (int16_t)-d, &tsat);
+            if (tsat != 0u) {
+                /* the centripetal term alone exceeds int32 accumulator units: it
+                 * dominates, so the output clips in its (negated) direction */
+                sat = 1u;
+                out[j] = (t > 0) ? INT32_MIN : INT32_MAX;
+                continue;
+            }
             acc = ac_sat_sub(acc, t, &sat);
         }
         out[j] = ac_scale_round(acc, r->m_shift[j], &sat);

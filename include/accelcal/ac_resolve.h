@@ -24,6 +24,11 @@
  * and of g has sum |.| <= 65535, which keeps every accumulation inside int32 for
  * any int16 input; shifts in -31..31.
  *
+ * Saturation: an output beyond int32 clips to INT32_MIN/MAX with AC_SATURATED.
+ * If an intermediate clips first (acc - k, or a centripetal term that alone
+ * exceeds the int32 accumulator), the output is the clip in the direction of
+ * the clipped term, also flagged; flagged outputs are limits, not values.
+ *
  * Accuracy: the linear part is exact before the final rounding.  The squared
  * rates p_q are kept to 14 significant bits (a block exponent s shared by the
  * sample, s = max(0, bitlen(max_a w_a^2) - 14)), and T_j is rounded once more

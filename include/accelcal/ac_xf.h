@@ -18,7 +18,7 @@ typedef struct ac_xf {
     int16_t e;
 } ac_xf;
 
-/* *out = v * 2^-frac (exact). */
+/* *out = v * 2^-frac, exact when |v| < 2^30, else rounded to the 30-bit mantissa. */
 ac_status ac_xf_from_fixed(int32_t v, int16_t frac, ac_xf *out);
 /* *out = round(x * 2^frac), half up, clipped to int32. */
 ac_status ac_xf_to_fixed(ac_xf x, int16_t frac, int32_t *out);
