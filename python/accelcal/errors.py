@@ -1,0 +1,193 @@
+"""Exceptions and the atomic-write helper shared by every accelcal module.
+
+Every error the user can cause is an :class:`AccelcalError` whose ``str()`` is
+one complete line: the command line prints exactly that, with no traceback.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from typing import IO, Any, Callable
+
+__all__ = [
+    "AccelcalError",
+    "InputError",
+    "CoreError",
+    "NullError",
+    "SizeError",
+    "SingularError",
+    "IllConditionedError",
+    "RangeError",
+    "FormatError",
+    "core_error",
+    "atomic_write",
+]
+
+
+class AccelcalError(Exception):
+    """Base of all accelcal errors; ``str(e)`` is the full one-line message."""
+
+
+def _one_line(text: str) -> str:
+    # A message must stay on one line even if a cell or a path held a newline.
+    return " ".join(str(text).split("\n")).replace("\r", " ")
+
+
+class InputError(AccelcalError):
+    """Bad input file or value.
+
+    The message reads ``"<source>: row <row>, column <column>: <message>"`` or
+    ``"<source>: field <field>: <message>"``; parts that are ``None`` are left
+    out.  ``row`` is the 1-based line number in the file (comments and header
+    counted); ``field`` is a JSON path such as ``channels[2].axis``.
+    """
+
+    def __init__(
+        self,
+        source: Any,
+        message: str,
+        *,
+        row: int | None = None,
+        field: str | None = None,
+        column: str | None = None,
+    ) -> None:
+        self.source = str(source)
+        self.row = row
+        self.field = field
+        self.column = column
+        self.detail = message
+        where = []
+        if row is not None:
+            where.append(f"row {row}")
+        if column is not None:
+            where.append(f"column {column}")
+        if field is not None:
+            where.append(f"field {field}")
+        prefix = self.source + ": " + (", ".join(where) + ": " if where else "")
+        super().__init__(_one_line(prefix + message))
+
+    def __reduce__(self):  # keep pickling (multiprocessing) working with kw-only args
+        return (
+            _rebuild_input_error,
+            (self.source, self.detail, self.row, self.field, self.column),
+        )
+
+
+def _rebuild_input_error(source, detail, row, field, column):
+    return InputError(source, detail, row=row, field=field, column=column)
+
+
+class CoreError(AccelcalError):
+    """A negative status returned by the C core (see ``ac_status.h``)."""
+
+    status: int = 0
+    description: str = "C core error"
+
+    def __init__(self, status: int, context: str) -> None:
+        self.status = int(status)
+        self.context = context
+        super().__init__(_one_line(f"{context}: {self.description} (status {self.status})"))
+
+    def __reduce__(self):
+        return (type(self), (self.status, self.context))
+
+
+class NullError(CoreError):
+    """AC_ERR_NULL: a required pointer was NULL."""
+
+    description = "a required pointer was NULL"
+
+
+class SizeError(CoreError):
+    """AC_ERR_SIZE: channel or sample count out of range."""
+
+    description = "channel or sample count out of range"
+
+
+class SingularError(CoreError):
+    """AC_ERR_SINGULAR: the geometry does not determine f and alpha."""
+
+    description = "the geometry does not determine f and alpha (singular)"
+
+
+class IllConditionedError(CoreError):
+    """AC_ERR_ILL_COND: the geometry is too ill-conditioned to invert."""
+
+    description = "the geometry is too ill-conditioned for a trustworthy inverse"
+
+
+class RangeError(CoreError):
+    """AC_ERR_RANGE: a parameter is out of its representable range."""
+
+    description = "a parameter is out of its representable range"
+
+
+class FormatError(CoreError):
+    """AC_ERR_FORMAT: a table is inconsistent."""
+
+    description = "a table is inconsistent (e.g. a shift out of range)"
+
+
+_STATUS_CLASSES: dict[int, type[CoreError]] = {
+    -1: NullError,
+    -2: SizeError,
+    -3: SingularError,
+    -4: IllConditionedError,
+    -5: RangeError,
+    -6: FormatError,
+}
+
+
+def core_error(status: int, context: str) -> CoreError:
+    """Return (not raise) the CoreError subclass for a negative C status.
+
+    Unknown negative codes give a plain :class:`CoreError`.  0 (ok) and +1
+    (saturated: outputs valid but clipped) are not errors: passing them is a
+    programming mistake and raises ``ValueError``.
+    """
+    status = int(status)
+    if status >= 0:
+        raise ValueError(f"status {status} is not an error")
+    cls = _STATUS_CLASSES.get(status, CoreError)
+    return cls(status, context)
+
+
+def atomic_write(path: Any, write_fn: Callable[[IO[Any]], Any], mode: str = "w") -> None:
+    """Write ``path`` all-or-nothing.
+
+    ``write_fn(f)`` writes to a temporary file in the same directory (so the
+    final ``os.replace`` is atomic on one filesystem); on any exception the
+    temporary file is removed and the exception re-raised, leaving an existing
+    ``path`` untouched.  Text modes use UTF-8 and ``\\n`` line ends.
+    """
+    if mode not in ("w", "wb", "wt"):
+        raise ValueError(f"atomic_write mode must be 'w', 'wt' or 'wb', not {mode!r}")
+    path = os.fspath(path)
+    directory = os.path.dirname(os.path.abspath(path))
+    base = os.path.basename(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{base}.", suffix=".tmp", dir=directory)
+    try:
+        if "b" in mode:
+            f = os.fdopen(fd, "wb")
+        else:
+            f = os.fdopen(fd, "w", encoding="utf-8", newline="\n")
+        with f:
+            write_fn(f)
+            f.flush()
+            os.fsync(f.fileno())
+        # mkstemp makes the file 0600; give it the permissions a plain open() would.
+        try:
+            mode_bits = os.stat(path).st_mode & 0o777
+        except FileNotFoundError:
+            umask = os.umask(0)
+            os.umask(umask)
+            mode_bits = 0o666 & ~umask
+        os.chmod(tmp, mode_bits)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise

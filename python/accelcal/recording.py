@@ -1,0 +1,768 @@
+"""Recordings: raw channel readings over time plus optional reference columns,
+read from and written to CSV per the data contract.
+
+Reading is vectorised: the data section is tokenised once with numpy (cell
+boundaries from the positions of ',' and '\\n'), and numeric columns are
+converted as fixed-width byte matrices.  Only when a column holds something
+the fast path does not handle (spaces, '123.0', 'nan', a bad cell) is it
+re-scanned cell by cell in Python; that scan also produces the error message
+that names the row and column.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+import re
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+from .errors import InputError, atomic_write
+
+__all__ = ["Recording", "read_recording", "write_recording", "recording_from_arrays", "VECTOR_COLUMNS"]
+
+VECTOR_COLUMNS: dict[str, tuple[str, str, str]] = {
+    "f": ("f_x", "f_y", "f_z"),
+    "w": ("w_x", "w_y", "w_z"),
+    "dw": ("dw_x", "dw_y", "dw_z"),
+}
+_REFERENCE_NAMES = {c for cols in VECTOR_COLUMNS.values() for c in cols} | {"temp_c", "pose"}
+_RAW_RE = re.compile(r"raw_(\d+)")
+# "# key: value"; the key is a bare word so that "# taken at 12:30" stays a plain comment.
+_META_RE = re.compile(r"#\s*([A-Za-z_][A-Za-z0-9_.\-]*)\s*:(.*)", re.S)
+_META_KEY_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
+_INT_RE = re.compile(r"[+-]?[0-9]+")
+_FLOAT_RE = re.compile(
+    r"[+-]?(?:[0-9]+\.?[0-9]*(?:[eE][+-]?[0-9]+)?|\.[0-9]+(?:[eE][+-]?[0-9]+)?|nan|inf|infinity)",
+    re.I,
+)
+_NAN_WORDS = {"nan", "+nan", "-nan"}
+# Widest numeric cell handled by the fixed-width fast path; wider ones go slow.
+_FAST_WIDTH = 32
+_FLOAT_BYTES = np.zeros(256, dtype=bool)
+_FLOAT_BYTES[list(b"0123456789+-.eEnNaAiIfFtTyY \t\x00")] = True
+_INT_BYTES = np.zeros(256, dtype=bool)
+_INT_BYTES[list(b"0123456789+- \t\x00")] = True
+
+
+# --------------------------------------------------------------------------
+# Recording
+# --------------------------------------------------------------------------
+
+
+def _nan_array(value: Any, shape: tuple[int, ...], name: str) -> np.ndarray:
+    if value is None:
+        return np.full(shape, np.nan)
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.shape != shape:
+        raise ValueError(f"Recording.{name}: expected shape {shape}, got {arr.shape}")
+    return arr
+
+
+def _int_array(value: Any, shape: tuple[int, ...], name: str) -> np.ndarray:
+    arr = np.asarray(value)
+    if arr.shape != shape:
+        raise ValueError(f"Recording.{name}: expected shape {shape}, got {arr.shape}")
+    if arr.dtype.kind == "f":
+        if not np.all(np.isfinite(arr)) or np.any(arr != np.round(arr)):
+            raise ValueError(f"Recording.{name}: expected integers, got non-integral values")
+    elif arr.dtype.kind not in "iub":
+        raise ValueError(f"Recording.{name}: expected integers, got dtype {arr.dtype}")
+    return arr.astype(np.int64, copy=False)
+
+
+@dataclass(eq=False)
+class Recording:
+    """One recording: n samples of N raw channels plus reference columns.
+
+    Unknown reference values are NaN (``pose`` -1); absent columns are
+    all-NaN.  ``metadata`` holds ``# key: value`` comments, ``extra`` any
+    unknown columns as text.
+    """
+
+    t: np.ndarray  # (n,) s
+    raw: np.ndarray  # (n, N) int64
+    f: np.ndarray | None = None  # (n, 3) m/s^2, specific force at O
+    w: np.ndarray | None = None  # (n, 3) rad/s
+    dw: np.ndarray | None = None  # (n, 3) rad/s^2
+    temp_c: np.ndarray | None = None  # (n,) degC
+    pose: np.ndarray | None = None  # (n,) int64, -1 = moving/unknown
+    metadata: dict[str, str] = field(default_factory=dict)
+    extra: dict[str, list[str]] = field(default_factory=dict)
+    source: str = "<memory>"
+
+    def __post_init__(self) -> None:
+        self.t = np.asarray(self.t, dtype=np.float64)
+        if self.t.ndim != 1:
+            raise ValueError(f"Recording.t: expected shape (n,), got {self.t.shape}")
+        n = self.t.shape[0]
+        raw = np.asarray(self.raw)
+        if raw.ndim != 2 or raw.shape[0] != n:
+            raise ValueError(f"Recording.raw: expected shape ({n}, N), got {raw.shape}")
+        self.raw = _int_array(raw, raw.shape, "raw")
+        self.f = _nan_array(self.f, (n, 3), "f")
+        self.w = _nan_array(self.w, (n, 3), "w")
+        self.dw = _nan_array(self.dw, (n, 3), "dw")
+        self.temp_c = _nan_array(self.temp_c, (n,), "temp_c")
+        self.pose = np.full(n, -1, dtype=np.int64) if self.pose is None else _int_array(self.pose, (n,), "pose")
+        self.metadata = {str(k): str(v) for k, v in dict(self.metadata).items()}
+        extra = {}
+        for k, v in dict(self.extra).items():
+            vals = [str(x) for x in v]
+            if len(vals) != n:
+                raise ValueError(f"Recording.extra[{k!r}]: expected {n} values, got {len(vals)}")
+            extra[str(k)] = vals
+        self.extra = extra
+        self.source = str(self.source)
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.t.shape[0])
+
+    @property
+    def n_channels(self) -> int:
+        return int(self.raw.shape[1])
+
+    def has_f(self) -> bool:
+        """Any finite reference specific force."""
+        return bool(np.isfinite(self.f).any())
+
+    def has_omega(self) -> bool:
+        return bool(np.isfinite(self.w).any())
+
+    def has_alpha(self) -> bool:
+        return bool(np.isfinite(self.dw).any())
+
+    def has_temp(self) -> bool:
+        return bool(np.isfinite(self.temp_c).any())
+
+    def has_pose(self) -> bool:
+        return bool(np.any(self.pose >= 0))
+
+    def pose_labels(self) -> np.ndarray:
+        """Sorted unique static-pose labels (>= 0)."""
+        return np.unique(self.pose[self.pose >= 0])
+
+    def select(self, mask: Any) -> "Recording":
+        """New Recording with the samples picked by a boolean mask (n,) or by
+        strictly increasing indices (so t stays increasing)."""
+        m = np.asarray(mask)
+        if m.dtype == bool:
+            if m.shape != (self.n_samples,):
+                raise ValueError(f"select: mask must have shape ({self.n_samples},), got {m.shape}")
+            idx = np.flatnonzero(m)
+        elif m.dtype.kind in "iu" and m.ndim == 1:
+            idx = m.astype(np.int64)
+            if idx.size and (np.any(np.diff(idx) <= 0) or idx[0] < 0 or idx[-1] >= self.n_samples):
+                raise ValueError("select: indices must be strictly increasing and in range")
+        else:
+            raise ValueError("select: expected a boolean mask or an index array")
+        ilist = idx.tolist()
+        return Recording(
+            t=self.t[idx],
+            raw=self.raw[idx],
+            f=self.f[idx],
+            w=self.w[idx],
+            dw=self.dw[idx],
+            temp_c=self.temp_c[idx],
+            pose=self.pose[idx],
+            metadata=dict(self.metadata),
+            extra={k: [v[i] for i in ilist] for k, v in self.extra.items()},
+            source=self.source,
+        )
+
+    def __eq__(self, other: object) -> bool:
+        """Same samples, references (NaN equal to NaN), metadata and extras."""
+        if not isinstance(other, Recording):
+            return NotImplemented
+        return (
+            np.array_equal(self.t, other.t)
+            and self.raw.shape == other.raw.shape
+            and np.array_equal(self.raw, other.raw)
+            and all(
+                np.array_equal(getattr(self, k), getattr(other, k), equal_nan=True)
+                for k in ("f", "w", "dw", "temp_c")
+            )
+            and np.array_equal(self.pose, other.pose)
+            and self.metadata == other.metadata
+            and self.extra == other.extra
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+
+def _check_content(rec: Recording) -> None:
+    """Contract rules on a Recording built in memory (ValueError: a bug, not input)."""
+    if rec.n_samples == 0:
+        raise ValueError("Recording: no samples")
+    if rec.n_channels == 0:
+        raise ValueError("Recording: no raw channels")
+    if not np.all(np.isfinite(rec.t)):
+        raise ValueError(f"Recording.t: not finite at sample {int(np.flatnonzero(~np.isfinite(rec.t))[0])}")
+    bad = np.flatnonzero(~(np.diff(rec.t) > 0))
+    if bad.size:
+        raise ValueError(f"Recording.t: not strictly increasing at sample {int(bad[0]) + 1}")
+    for name in ("f", "w", "dw"):
+        arr = getattr(rec, name)
+        if np.isinf(arr).any():
+            raise ValueError(f"Recording.{name}: infinite value (use NaN for unknown)")
+        fin = np.isfinite(arr)
+        part = np.flatnonzero(fin.any(axis=1) & ~fin.all(axis=1))
+        if part.size:
+            raise ValueError(f"Recording.{name}: partly given vector at sample {int(part[0])}")
+    if np.isinf(rec.temp_c).any():
+        raise ValueError("Recording.temp_c: infinite value (use NaN for unknown)")
+    if np.any(rec.pose < -1):
+        raise ValueError("Recording.pose: labels must be >= 0, or -1 for moving/unknown")
+    for k in rec.extra:
+        if k in ("t",) or k in _REFERENCE_NAMES or _RAW_RE.fullmatch(k):
+            raise ValueError(f"Recording.extra: column name {k!r} is reserved")
+
+
+def recording_from_arrays(
+    t: Any,
+    raw: Any,
+    *,
+    f: Any = None,
+    w: Any = None,
+    dw: Any = None,
+    temp_c: Any = None,
+    pose: Any = None,
+    metadata: dict[str, str] | None = None,
+) -> Recording:
+    """Build a Recording from arrays, checking shapes and the contract rules
+    (finite, strictly increasing t; integral raw; whole vectors; pose >= -1).
+    Raises ValueError on a violation."""
+    raw = np.asarray(raw)
+    if raw.ndim == 1:
+        raise ValueError("recording_from_arrays: raw must be 2-D (n, N)")
+    rec = Recording(t=t, raw=raw, f=f, w=w, dw=dw, temp_c=temp_c, pose=pose, metadata=dict(metadata or {}))
+    _check_content(rec)
+    return rec
+
+
+# --------------------------------------------------------------------------
+# Reading
+# --------------------------------------------------------------------------
+
+
+class _CellError(Exception):
+    """Bad cell at data-row index ``i`` (converted to InputError by the reader)."""
+
+    def __init__(self, i: int, message: str) -> None:
+        super().__init__(message)
+        self.i = i
+        self.message = message
+
+
+def _quote(text: str) -> str:
+    shown = text if len(text) <= 40 else text[:37] + "..."
+    return repr(shown)
+
+
+def _got(text: str) -> str:
+    return "an empty cell" if not text.strip() else _quote(text)
+
+
+class _ByteTable:
+    """Data rows located in the raw bytes ``data[start:end]``: ``starts`` and
+    ``ends`` are (n, m) cell offsets into ``data``."""
+
+    def __init__(self, data: bytes, start: int, end: int, m: int, first_line: int, source: str) -> None:
+        self.data = data
+        self.first_line = first_line
+        view = np.frombuffer(data, dtype=np.uint8, count=end - start, offset=start)
+        seps = np.flatnonzero((view == 44) | (view == 10))
+        is_nl = view[seps] == 10
+        # The end of the data section terminates the last row.
+        seps = np.append(seps, view.size) + start
+        is_nl = np.append(is_nl, True)
+        nl = np.flatnonzero(is_nl)
+        counts = np.diff(nl, prepend=-1)
+        bad = np.flatnonzero(counts != m)
+        if bad.size:
+            i = int(bad[0])
+            line_start = start if i == 0 else int(seps[nl[i - 1]]) + 1
+            text = data[line_start : int(seps[nl[i]])].decode("utf-8", "replace")
+            if not text.strip():
+                what = "an empty line"
+            elif text.startswith("#"):
+                what = "a comment (comments are only allowed before the header)"
+            else:
+                what = f"{int(counts[i])}"
+            raise InputError(source, f"expected {m} cells as in the header, got {what}", row=first_line + i)
+        self.n = int(nl.size)
+        starts = np.empty(seps.size, dtype=np.int64)
+        starts[0] = start
+        starts[1:] = seps[:-1] + 1
+        self.starts = starts.reshape(self.n, m)
+        self.ends = seps.reshape(self.n, m)
+        self._window: np.ndarray | None = None
+        # NUL bytes are the padding of the fast path's fixed-width cells, so a
+        # file that contains any is converted by the slow path only.
+        self._fast = data.find(b"\x00", start, end) < 0
+
+    def line(self, i: int) -> int:
+        return self.first_line + i
+
+    def cell(self, i: int, j: int) -> str:
+        return self.data[self.starts[i, j] : self.ends[i, j]].decode("utf-8")
+
+    def strings(self, j: int) -> list[str]:
+        data = self.data
+        return [data[s:e].decode("utf-8") for s, e in zip(self.starts[:, j].tolist(), self.ends[:, j].tolist())]
+
+    def matrix(self, j: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """Column j as an (n, W) zero-padded byte matrix and the cell lengths;
+        None when a cell is too wide for the fast path."""
+        s = self.starts[:, j]
+        lens = self.ends[:, j] - s
+        width = int(lens.max(initial=0))
+        if width > _FAST_WIDTH or not self._fast:
+            return None
+        if self._window is None:
+            # A sliding (len, _FAST_WIDTH) view of the bytes: picking rows of it
+            # copies each cell's bytes in one go instead of gathering bytes singly.
+            padded = np.zeros(len(self.data) + _FAST_WIDTH, dtype=np.uint8)
+            padded[: len(self.data)] = np.frombuffer(self.data, dtype=np.uint8)
+            self._window = np.lib.stride_tricks.as_strided(
+                padded, shape=(len(self.data), _FAST_WIDTH), strides=(1, 1), writeable=False
+            )
+        width = max(width, 3)  # room for b"nan" in empty cells
+        mat = self._window[s, :width]
+        mat *= np.arange(width) < lens[:, None]
+        return mat, lens
+
+
+class _ListTable:
+    """Data rows parsed by the csv module (used when a cell is quoted)."""
+
+    def __init__(self, body: str, m: int, first_line: int, source: str) -> None:
+        reader = csv.reader(io.StringIO(body, newline=""), strict=True)
+        rows: list[list[str]] = []
+        lines: list[int] = []
+        before = 0
+        try:
+            for row in reader:
+                line = first_line + before
+                if len(row) != m:
+                    what = "an empty line" if not row or row == [""] else f"{len(row)}"
+                    raise InputError(source, f"expected {m} cells as in the header, got {what}", row=line)
+                rows.append(row)
+                lines.append(line)
+                before = reader.line_num
+        except csv.Error as e:
+            raise InputError(source, f"bad CSV quoting: {e}", row=first_line + before) from None
+        self.rows = rows
+        self.lines = lines
+        self.n = len(rows)
+
+    def line(self, i: int) -> int:
+        return self.lines[i]
+
+    def cell(self, i: int, j: int) -> str:
+        return self.rows[i][j]
+
+    def strings(self, j: int) -> list[str]:
+        return [r[j] for r in self.rows]
+
+    def matrix(self, j: int) -> None:
+        return None
+
+
+# -- fast converters: return None whenever the slow path must decide ---------
+
+
+def _fast_int(mb: tuple[np.ndarray, np.ndarray] | None, empty_value: int | None) -> np.ndarray | None:
+    if mb is None:
+        return None
+    mat, lens = mb
+    # Only digits, signs and blanks: numpy's parser would also take '1_0'.
+    if not _INT_BYTES[mat].all():
+        return None
+    empty = lens == 0
+    if empty.any():
+        if empty_value is None:
+            return None
+        mat[empty, : len(str(empty_value))] = np.frombuffer(str(empty_value).encode(), dtype=np.uint8)
+    strings = np.ascontiguousarray(mat).view(f"S{mat.shape[1]}").ravel()
+    try:
+        return strings.astype(np.int64)
+    except (ValueError, OverflowError):
+        return None
+
+
+def _fast_float(mb: tuple[np.ndarray, np.ndarray] | None, allow_empty: bool) -> np.ndarray | None:
+    if mb is None:
+        return None
+    mat, lens = mb
+    if not _FLOAT_BYTES[mat].all():
+        return None
+    empty = lens == 0
+    if empty.any():
+        if not allow_empty:
+            return None
+        mat[empty, :3] = np.frombuffer(b"nan", dtype=np.uint8)
+    strings = np.ascontiguousarray(mat).view(f"S{mat.shape[1]}").ravel()
+    try:
+        return strings.astype(np.float64)
+    except (ValueError, OverflowError):
+        return None
+
+
+# -- slow converters: per cell, with the exact message -----------------------
+
+
+def _slow_int(strings: Sequence[str], empty_value: int | None, what: str) -> np.ndarray:
+    out = np.empty(len(strings), dtype=np.int64)
+    for i, s in enumerate(strings):
+        c = s.strip()
+        if not c or c.lower() in _NAN_WORDS:
+            if empty_value is None:
+                raise _CellError(i, f"expected {what}, got {_got(s)}")
+            out[i] = empty_value
+            continue
+        if _INT_RE.fullmatch(c):
+            v = int(c)
+        elif _FLOAT_RE.fullmatch(c):
+            x = float(c)
+            if not math.isfinite(x) or not x.is_integer():
+                raise _CellError(i, f"expected {what}, got {_quote(s)}")
+            v = int(x)
+        else:
+            raise _CellError(i, f"expected {what}, got {_quote(s)}")
+        if not -(2**63) <= v < 2**63:
+            raise _CellError(i, f"expected {what} within 64 bits, got {_quote(s)}")
+        out[i] = v
+    return out
+
+
+def _slow_float(strings: Sequence[str], allow_unknown: bool) -> np.ndarray:
+    out = np.empty(len(strings), dtype=np.float64)
+    expect = "a finite number, or empty/nan for unknown" if allow_unknown else "a finite number"
+    for i, s in enumerate(strings):
+        c = s.strip()
+        if not c:
+            if not allow_unknown:
+                raise _CellError(i, f"expected {expect}, got an empty cell")
+            out[i] = np.nan
+            continue
+        if not _FLOAT_RE.fullmatch(c):
+            raise _CellError(i, f"expected {expect}, got {_quote(s)}")
+        x = float(c)
+        if math.isinf(x) or (math.isnan(x) and not allow_unknown):
+            raise _CellError(i, f"expected {expect}, got {_quote(s)}")
+        out[i] = x
+    return out
+
+
+def _convert(table: Any, j: int, kind: str) -> np.ndarray:
+    """Column j of the table as numbers; kinds: raw, pose, t, ref."""
+    if kind in ("raw", "pose"):
+        empty_value = -1 if kind == "pose" else None
+        vals = _fast_int(table.matrix(j), empty_value)
+        if vals is not None and (kind == "raw" or not np.any(vals < -1)):
+            return vals
+        what = "an integer" if kind == "raw" else "an integer pose label (>= 0, or -1/empty while moving)"
+        vals = _slow_int(table.strings(j), empty_value, what)
+        if kind == "pose":
+            bad = np.flatnonzero(vals < -1)
+            if bad.size:
+                i = int(bad[0])
+                raise _CellError(i, f"expected {what}, got {_quote(table.cell(i, j))}")
+        return vals
+    allow_unknown = kind == "ref"
+    vals = _fast_float(table.matrix(j), allow_unknown)
+    if vals is not None:
+        ok = ~np.isinf(vals) if allow_unknown else np.isfinite(vals)
+        if ok.all():
+            return vals
+    return _slow_float(table.strings(j), allow_unknown)
+
+
+def _split_header(line: str) -> list[str]:
+    if '"' in line:
+        cells = next(csv.reader([line]), [])
+    else:
+        cells = line.split(",")
+    return [c.strip() for c in cells]
+
+
+def read_recording(path: Any, n_channels: int | None = None) -> Recording:
+    """Read a recording CSV (see the data contract).
+
+    ``n_channels``: the device's channel count; raw_0..raw_{N-1} must then be
+    present and no other raw_k.  Without it, N is the number of contiguous
+    raw_k columns.  Any violation raises InputError naming the file, the
+    line and the column.
+    """
+    source = os.fspath(path) if not isinstance(path, str) else path
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read()
+    except OSError as e:
+        raise InputError(source, f"cannot read the file: {e.strerror or e}") from None
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = data.count(b"\n", 0, e.start) + 1
+        raise InputError(source, f"not valid UTF-8 text (byte {e.start})", row=line) from None
+    if data.startswith(b"\xef\xbb\xbf"):  # spreadsheet BOM: not data
+        data = data[3:]
+    if b"\r" in data:
+        data = data.replace(b"\r\n", b"\n")
+
+    # Preamble: comments (metadata) and blank lines, then the header.
+    metadata: dict[str, str] = {}
+    pos, line_no, header = 0, 0, None
+    while pos < len(data):
+        end = data.find(b"\n", pos)
+        end = len(data) if end < 0 else end
+        text = data[pos:end].decode("utf-8")
+        line_no += 1
+        pos = end + 1
+        if text.startswith("#"):
+            m = _META_RE.fullmatch(text)
+            if m:
+                metadata[m.group(1)] = m.group(2).strip()
+            continue
+        if not text.strip():
+            continue
+        header = text
+        break
+    if header is None:
+        what = "the file is empty" if not data.strip() else "no header row after the comments"
+        raise InputError(source, f"{what} (expected a header such as 't,raw_0,raw_1,...')")
+    header_line = line_no
+    names = _split_header(header)
+    cols = _classify(names, n_channels, source, header_line)
+
+    # Trailing blank lines are not rows; blank lines inside the data are errors.
+    # (Offsets, not slices: the data may be hundreds of MB.)
+    end = len(data)
+    while end > pos:
+        cut = data.rfind(b"\n", pos, end)
+        if data[cut + 1 if cut >= 0 else pos : end].strip():
+            break
+        end = max(cut, pos)
+    if end <= pos:
+        raise InputError(source, "no data rows after the header", row=header_line)
+    m = len(names)
+    first = header_line + 1
+    if data.find(b'"', pos, end) >= 0:
+        table: Any = _ListTable(data[pos:end].decode("utf-8"), m, first, source)
+    else:
+        table = _ByteTable(data, pos, end, m, first, source)
+    n = table.n
+
+    # Convert every column; report the earliest bad cell in the file.
+    errors: list[tuple[int, int, str]] = []
+    values: dict[str, np.ndarray] = {}
+    for name, (j, kind) in cols.items():
+        try:
+            values[name] = _convert(table, j, kind)
+        except _CellError as e:
+            errors.append((e.i, j, e.message))
+    if errors:
+        i, j, msg = min(errors)
+        raise InputError(source, msg, row=table.line(i), column=names[j])
+
+    t = values["t"]
+    dt_bad = np.flatnonzero(~(np.diff(t) > 0))
+    if dt_bad.size:
+        i = int(dt_bad[0]) + 1
+        jt = cols["t"][0]
+        raise InputError(
+            source,
+            f"t must be strictly increasing, got {_quote(table.cell(i, jt).strip())} "
+            f"after {_quote(table.cell(i - 1, jt).strip())}",
+            row=table.line(i),
+            column="t",
+        )
+
+    n_raw = sum(1 for k in cols.values() if k[1] == "raw")
+    raw = np.empty((n, n_raw), dtype=np.int64)
+    for k in range(n_raw):
+        raw[:, k] = values[f"raw_{k}"]
+    vecs: dict[str, np.ndarray | None] = {}
+    for vec, comps in VECTOR_COLUMNS.items():
+        if comps[0] not in values:
+            vecs[vec] = None
+            continue
+        arr = np.column_stack([values[c] for c in comps])
+        fin = np.isfinite(arr)
+        part = np.flatnonzero(fin.any(axis=1) & ~fin.all(axis=1))
+        if part.size:
+            i = int(part[0])
+            given = comps[int(np.flatnonzero(fin[i])[0])]
+            missing = comps[int(np.flatnonzero(~fin[i])[0])]
+            raise InputError(
+                source,
+                f"{given} is given but {missing} is not (give all of {', '.join(comps)} or none)",
+                row=table.line(i),
+                column=missing,
+            )
+        vecs[vec] = arr
+    extra: dict[str, list[str]] = {}
+    for j, name in enumerate(names):
+        if name and name not in cols and name not in extra:
+            extra[name] = table.strings(j)
+    return Recording(
+        t=t,
+        raw=raw,
+        f=vecs["f"],
+        w=vecs["w"],
+        dw=vecs["dw"],
+        temp_c=values.get("temp_c"),
+        pose=values.get("pose"),
+        metadata=metadata,
+        extra=extra,
+        source=source,
+    )
+
+
+def _classify(
+    names: list[str], n_channels: int | None, source: str, row: int
+) -> dict[str, tuple[int, str]]:
+    """Map known column names to (index, kind); check the header's rules."""
+    seen: dict[str, int] = {}
+    for j, name in enumerate(names):
+        known = name == "t" or name in _REFERENCE_NAMES or _RAW_RE.fullmatch(name)
+        # Unknown columns are never an error (contract): a repeated or empty
+        # unknown name is just not kept.  A repeated known name is ambiguous.
+        if known and name in seen:
+            raise InputError(
+                source, f"column name {name!r} appears twice (columns {seen[name] + 1} and {j + 1})", row=row
+            )
+        seen.setdefault(name, j)
+    cols: dict[str, tuple[int, str]] = {}
+    raw_idx: dict[int, int] = {}
+    for j, name in enumerate(names):
+        m = _RAW_RE.fullmatch(name)
+        if m:
+            digits = m.group(1)
+            if len(digits) > 1 and digits.startswith("0"):
+                raise InputError(source, f"column name {name!r}: expected raw_{int(digits)} (no leading zeros)", row=row)
+            raw_idx[int(digits)] = j
+        elif name == "t":
+            cols[name] = (j, "t")
+        elif name == "pose":
+            cols[name] = (j, "pose")
+        elif name in _REFERENCE_NAMES:
+            cols[name] = (j, "ref")
+    if "t" not in cols:
+        hint = next((f" (found {n!r}; names are case-sensitive)" for n in names if n.strip().lower() == "t"), "")
+        if len(names) == 1 and (";" in names[0] or "\t" in names[0]):
+            hint = " (cells must be separated by commas; this header uses ';' or tabs)"
+        raise InputError(source, f"the header has no 't' column{hint}", row=row)
+    if not raw_idx:
+        raise InputError(source, "the header has no raw_0, raw_1, ... columns", row=row)
+    if n_channels is not None:
+        extra_raw = sorted(k for k in raw_idx if k >= n_channels)
+        if extra_raw:
+            raise InputError(
+                source, f"recording has raw_{extra_raw[0]} but the device has {n_channels} channels", row=row
+            )
+        missing = [k for k in range(n_channels) if k not in raw_idx]
+        if missing:
+            raise InputError(
+                source,
+                f"the header has no raw_{missing[0]} column (the device has {n_channels} channels: "
+                f"raw_0..raw_{n_channels - 1})",
+                row=row,
+            )
+    else:
+        top = max(raw_idx)
+        missing = [k for k in range(top) if k not in raw_idx]
+        if missing:
+            raise InputError(
+                source, f"raw columns must be contiguous: raw_{top} is present but raw_{missing[0]} is not", row=row
+            )
+    for k in sorted(raw_idx):
+        cols[f"raw_{k}"] = (raw_idx[k], "raw")
+    for comps in VECTOR_COLUMNS.values():
+        present = [c for c in comps if c in cols]
+        if present and len(present) < 3:
+            absent = next(c for c in comps if c not in cols)
+            raise InputError(
+                source, f"the header has {present[0]} but no {absent} (vector columns come as a full triple)", row=row
+            )
+    return cols
+
+
+# --------------------------------------------------------------------------
+# Writing
+# --------------------------------------------------------------------------
+
+
+def _float_strings(values: np.ndarray, fmt: str) -> list[str]:
+    strs = list(map(fmt.__mod__, values.tolist()))
+    if np.isnan(values).any():
+        # NaN is written as an empty cell; dict.get keeps this a C-level map.
+        blank = {fmt % math.nan: ""}
+        strs = list(map(blank.get, strs, strs))
+    return strs
+
+
+def _csv_cell(text: str) -> str:
+    if any(ch in text for ch in ',"') or text != text.strip():
+        return '"' + text.replace('"', '""') + '"'
+    return text
+
+
+def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> None:
+    """Write ``rec`` as CSV, atomically.
+
+    Columns: t (shortest exact repr), raw_0..raw_{N-1}, then only the
+    reference columns with any known value (NaN as an empty cell), then the
+    extra columns.  Metadata become ``# key: value`` comments.
+    """
+    _check_content(rec)
+    try:
+        probe = float(float_format % 0.1)
+    except (TypeError, ValueError):
+        raise ValueError(f"float_format {float_format!r} does not format a float readably") from None
+    if not math.isfinite(probe) or "," in float_format % 0.1:
+        raise ValueError(f"float_format {float_format!r} does not format a float readably")
+    lines: list[str] = []
+    for k, v in rec.metadata.items():
+        if not _META_KEY_RE.fullmatch(k):
+            raise ValueError(f"metadata key {k!r}: expected a word of letters, digits, '_', '.', '-'")
+        if "\n" in v or "\r" in v:
+            raise ValueError(f"metadata {k!r}: the value must be one line")
+        lines.append(f"# {k}: {v.strip()}")
+    names = ["t"] + [f"raw_{k}" for k in range(rec.n_channels)]
+    # repr() is the shortest text that reads back to the same float.
+    cols: list[list[str]] = [list(map(repr, rec.t.tolist()))]
+    cols += [list(map(str, rec.raw[:, k].tolist())) for k in range(rec.n_channels)]
+    for vec, comps in VECTOR_COLUMNS.items():
+        arr = getattr(rec, vec)
+        if np.isfinite(arr).any():
+            names += list(comps)
+            cols += [_float_strings(arr[:, c], float_format) for c in range(3)]
+    if rec.has_temp():
+        names.append("temp_c")
+        cols.append(_float_strings(rec.temp_c, float_format))
+    if rec.has_pose():
+        names.append("pose")
+        cols.append(list(map(str, rec.pose.tolist())))
+    for name, vals in rec.extra.items():
+        if not name.strip() or name.strip() != name:
+            raise ValueError(f"extra column name {name!r}: expected a non-empty name without surrounding spaces")
+        if any("\n" in v or "\r" in v for v in vals):
+            raise ValueError(f"extra column {name!r}: values must not contain line breaks")
+        names.append(name)
+        cols.append(list(map(_csv_cell, vals)))
+    lines.append(",".join(map(_csv_cell, names)))
+
+    def write(f: Any) -> None:
+        f.write("\n".join(lines))
+        f.write("\n")
+        f.write("\n".join(map(",".join, zip(*cols))))
+        f.write("\n")
+
+    atomic_write(path, write)

@@ -1,0 +1,520 @@
+"""Tests of accelcal.calibrate: known poses, jig-free, static detection, lever arms,
+temperature, the real Xsens recording and bad input.
+
+Simulated data come from a small forward generator here (model.predict_counts +
+Gaussian noise + rounding), not from accelcal.simulate.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+
+import numpy as np
+import pytest
+
+from accelcal import model
+from accelcal.calibrate import (PoseSet, calibrate_jigfree, calibrate_known_poses, calibrate_positions,
+                                calibrate_recordings, detect_static, estimate_noise, fit_temperature,
+                                gauge_rotation, pose_means, poses_from_recording, static_force)
+from accelcal.device import default_device, default_triad
+from accelcal.errors import InputError
+from accelcal.recording import Recording, read_recording, recording_from_arrays, write_recording
+
+G = 9.80665
+HERE = os.path.dirname(os.path.abspath(__file__))
+XSENS = os.path.normpath(os.path.join(HERE, "..", "..", "..", "shared", "data", "imu_tk_xsens", "xsens_acc.txt.gz"))
+if not os.path.exists(XSENS):
+    XSENS = "/work/shared/data/imu_tk_xsens/xsens_acc.txt.gz"
+
+AXES6 = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1.0]])
+
+
+# ----------------------------------------------------------------------------- generator
+def fib_dirs(P):
+    i = np.arange(P) + 0.5
+    z = 1 - 2 * i / P
+    phi = np.pi * (1 + 5 ** 0.5) * i
+    r = np.sqrt(1 - z * z)
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], 1)
+
+
+def draw_truth(dev, rng, gain=(-0.007, 0.036), cross=0.0175, offset=0.28):
+    """Seed-prototype-like channel errors: gain, cross-axis (fraction of k), offset (fraction of g)."""
+    N = dev.n_channels
+    k = dev.counts_per_mps2
+    gn = rng.uniform(*gain, N)
+    cr = rng.uniform(-cross, cross, (N, 3))
+    cr -= np.sum(cr * dev.axes, axis=1, keepdims=True) * dev.axes
+    S = (k * (1 + gn))[:, None] * dev.axes + k[:, None] * cr
+    b = dev.zero_counts + rng.uniform(-offset, offset, N) * dev.gravity_mps2 * k
+    return b, S
+
+
+def make_recording(dev, b, S, F, rng, *, hold=60, move=30, labels=True, f_ref=None, temps=None,
+                   beta=None, gamma=None, clip=True):
+    """Static poses F (P,3) held ``hold`` samples, joined by ``move``-sample swings.
+    With ``labels``, pose labels and (f_ref or F) as the reference on static samples."""
+    P = len(F)
+    sig = dev.noise_mps2 * dev.counts_per_mps2
+    fs, pose, tc = [], [], []
+    for p in range(P):
+        fs.append(np.repeat(F[p][None], hold, 0))
+        pose.append(np.full(hold, p))
+        tc.append(np.full(hold, np.nan if temps is None else temps[p]))
+        if move:
+            u = np.linspace(0, 1, move + 2)[1:-1, None]
+            q = F[(p + 1) % P]
+            fs.append((1 - u) * F[p] + u * q + 4.0 * np.sin(np.pi * u) * np.array([1.0, -0.7, 0.4]))
+            pose.append(np.full(move, -1))
+            tc.append(np.full(move, np.nan if temps is None else temps[p]))
+    f = np.vstack(fs)
+    pose = np.concatenate(pose)
+    temp = np.concatenate(tc)
+    clean = model.predict_counts(b, S, dev.positions, f)
+    if temps is not None:
+        dT = temp - np.mean(temps)
+        clean = clean + dT[:, None] * (beta[None, :] + gamma[None, :] * (f @ S.T))
+    raw = np.round(clean + rng.normal(size=clean.shape) * sig)
+    if clip:
+        raw = np.clip(raw, dev.raw_min, dev.raw_max)
+    t = np.arange(len(f)) / dev.sample_rate_hz
+    kw = {}
+    if labels:
+        ref = F if f_ref is None else f_ref
+        kw["pose"] = pose
+        kw["f"] = np.where((pose >= 0)[:, None], ref[np.maximum(pose, 0)], np.nan)
+    if temps is not None:
+        kw["temp_c"] = temp
+    return recording_from_arrays(t, raw.astype(np.int64), **kw)
+
+
+def poseset_from(dev, b, S, F, rng, n=60, f_ref=True):
+    sig = dev.noise_mps2 * dev.counts_per_mps2
+    clean = model.predict_counts(b, S, dev.positions, F)
+    raw = np.round(clean[:, None, :] + rng.normal(size=(len(F), n, dev.n_channels)) * sig)
+    P = len(F)
+    return PoseSet(raw.mean(1), np.full(P, n), raw.std(1, ddof=1), F if f_ref else np.full((P, 3), np.nan),
+                   np.full(P, np.nan), [{"label": p} for p in range(P)])
+
+
+def z_scores(est, truth, sigma):
+    return (np.asarray(est) - np.asarray(truth)) / np.asarray(sigma)
+
+
+# ----------------------------------------------------------------------------- known poses
+def test_known_full_recording_recovers_parameters_within_uncertainty():
+    rng = np.random.default_rng(1)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    F = G * fib_dirs(12)
+    rec = make_recording(dev, b, S, F, rng)
+    cal = calibrate_recordings(dev, [rec])
+    assert cal.method == "full"
+    zb = z_scores(cal.offsets, b, cal.offset_sigma)
+    zs = z_scores(cal.sensitivity, S, cal.sensitivity_sigma)
+    z = np.concatenate([zb, zs.ravel()])
+    assert np.max(np.abs(z)) < 4.5
+    assert 0.6 < np.sqrt(np.mean(z ** 2)) < 1.5          # uncertainties are honest
+    # post-calibration errors, % of 1 g
+    k = dev.counts_per_mps2
+    assert np.max(np.abs(cal.offsets - b) / (k * G)) < 1e-3
+    assert np.max(np.abs(np.linalg.norm(cal.sensitivity, axis=1) / np.linalg.norm(S, axis=1) - 1)) < 1e-3
+    assert cal.poses_used == list(range(12))
+    assert set(cal.residual_rms_per_pose) == {str(p) for p in range(12)}
+    assert cal.residual_rms_per_channel.shape == (6,)
+    assert np.all(cal.residual_rms_per_channel < 1.0)   # counts; noise of a 60-sample mean is 0.33
+
+
+def test_known_four_poses_of_the_paper_is_exact_fit():
+    rng = np.random.default_rng(2)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    F = G * np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, -1.0]])
+    ps = poseset_from(dev, b, S, F, rng)
+    fit = calibrate_known_poses(dev, ps.means, F, "full", ps.sem(), poses=ps)
+    assert fit.dof == 0
+    assert np.max(np.abs(fit.residual)) < 1e-8
+    assert np.max(np.abs(z_scores(fit.offsets, b, fit.offset_sigma))) < 4.5
+    assert np.max(np.abs(z_scores(fit.sensitivity, S, fit.sensitivity_sigma))) < 4.5
+
+
+def test_three_pose_gain_method_matches_seed_formula():
+    """Seed doc 2: offsets = mean of the two poses where the axis sees 0 g, gain = AccX1 - Xofs."""
+    rng = np.random.default_rng(3)
+    dev = default_triad()
+    b, S = draw_truth(dev, rng, cross=0.0)
+    F = G * np.eye(3)
+    ps = poseset_from(dev, b, S, F, rng)
+    fit = calibrate_known_poses(dev, ps.means, F, "gain", ps.sem(), poses=ps)
+    m = ps.means
+    ofs = np.array([(m[1, 0] + m[2, 0]) / 2, (m[0, 1] + m[2, 1]) / 2, (m[0, 2] + m[1, 2]) / 2])
+    gain = np.array([m[0, 0], m[1, 1], m[2, 2]]) - ofs
+    np.testing.assert_allclose(fit.offsets, ofs, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(np.diag(fit.sensitivity) * G, gain, rtol=1e-12)
+    assert np.all(fit.sensitivity[~np.eye(3, dtype=bool)] == 0)
+    assert np.max(np.abs(z_scores(np.diag(fit.sensitivity), np.diag(S), np.diag(fit.sensitivity_sigma)))) < 4.5
+
+
+def test_one_pose_offset_method():
+    rng = np.random.default_rng(4)
+    dev = default_triad()
+    b, _ = draw_truth(dev, rng)
+    S = dev.nominal_sensitivity()
+    F = G * np.array([[0, 0, 1.0]])
+    ps = poseset_from(dev, b, S, F, rng)
+    fit = calibrate_known_poses(dev, ps.means, F, "offset", ps.sem(), poses=ps)
+    assert np.max(np.abs(z_scores(fit.offsets, b, fit.offset_sigma))) < 4.5
+    np.testing.assert_array_equal(fit.sensitivity, S)
+
+
+def test_gain_method_shows_model_error_full_removes_it():
+    """With cross-axis sensitivity in the truth, the gain model leaves residuals far
+    above the noise (and its uncertainties grow with them); full does not."""
+    rng = np.random.default_rng(5)
+    dev = default_triad()
+    b, S = draw_truth(dev, rng)
+    F = G * fib_dirs(12)
+    ps = poseset_from(dev, b, S, F, rng)
+    gain = calibrate_known_poses(dev, ps.means, F, "gain", ps.sem(), poses=ps)
+    full = calibrate_known_poses(dev, ps.means, F, "full", ps.sem(), poses=ps)
+    assert gain.chi2 / gain.dof > 100
+    assert full.chi2 / full.dof < 3
+
+
+# ----------------------------------------------------------------------------- identifiability
+def test_full_with_three_axis_poses_says_which_pose_to_add():
+    dev = default_device()
+    F = G * np.eye(3)
+    m = model.predict_counts(dev.nominal_offsets(), dev.nominal_sensitivity(), dev.positions, F)
+    with pytest.raises(InputError) as e:
+        calibrate_known_poses(dev, m, F, "full")
+    msg = str(e.value)
+    assert "only 3 poses" in msg and "add a pose with f along -z" in msg
+    assert "\n" not in msg
+    # four poses on one circle of the sphere (the plane x + y + z = g): still not enough
+    F4 = G * np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [2 / 3, 2 / 3, -1 / 3]])
+    m4 = model.predict_counts(dev.nominal_offsets(), dev.nominal_sensitivity(), dev.positions, F4)
+    with pytest.raises(InputError, match=r"all 4 pose forces lie in one plane .*add a pose with f along -[xyz]"):
+        calibrate_known_poses(dev, m4, F4, "full")
+
+
+def test_full_with_too_few_poses_is_an_error():
+    dev = default_triad()
+    F = G * np.array([[0, 0, 1.0], [0, 0, -1.0]])
+    m = model.predict_counts(dev.nominal_offsets(), dev.nominal_sensitivity(), dev.positions, F)
+    with pytest.raises(InputError, match=r"only 2 poses.*add a pose with f along"):
+        calibrate_known_poses(dev, m, F, "full")
+
+
+def test_gain_names_the_channel_that_is_not_excited():
+    dev = default_triad()
+    F = G * np.array([[0, 0, 1.0], [0, 0, -1.0], [0, 1.0, 0]])
+    m = model.predict_counts(dev.nominal_offsets(), dev.nominal_sensitivity(), dev.positions, F)
+    with pytest.raises(InputError, match=r"channel 0's gain.*add a pose with f along [+-]x"):
+        calibrate_known_poses(dev, m, F, "gain")
+
+
+def test_jigfree_needs_nine_poses():
+    rng = np.random.default_rng(6)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    ps = poseset_from(dev, b, S, G * fib_dirs(8), rng, f_ref=False)
+    with pytest.raises(InputError, match=r"needs at least 9 static poses in different orientations, got 8"):
+        calibrate_jigfree(dev, ps)
+
+
+def test_jigfree_degenerate_poses_is_an_error_not_a_solve():
+    """12 poses all tilted about one axis (a cone): the full jig-free model is not determined."""
+    rng = np.random.default_rng(7)
+    dev = default_triad()
+    b, S = draw_truth(dev, rng)
+    ang = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    F = G * np.stack([0.5 * np.cos(ang), 0.5 * np.sin(ang), np.full(12, math.sqrt(0.75))], 1)
+    ps = poseset_from(dev, b, S, F, rng, f_ref=False)
+    with pytest.raises(InputError, match=r"do not determine"):
+        calibrate_jigfree(dev, ps)
+
+
+# ----------------------------------------------------------------------------- static detection
+def test_detect_static_finds_synthetic_steps():
+    rng = np.random.default_rng(8)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    F = G * fib_dirs(10)
+    hold, move = 120, 45
+    rec = make_recording(dev, b, S, F, rng, hold=hold, move=move, labels=False)
+    iv = detect_static(rec, dev)
+    assert len(iv) == 10
+    w = int(round(0.5 * dev.sample_rate_hz))
+    for p, (a, z) in enumerate(iv):
+        t0, t1 = p * (hold + move), p * (hold + move) + hold
+        assert t0 <= a <= t0 + 2 and t1 - 2 <= z <= t1 + 1, (p, a, z, t0, t1)
+    # the same with the noise estimated from the data (device without noise_mps2)
+    est = estimate_noise(rec.raw, w)
+    np.testing.assert_allclose(est, np.sqrt((0.02 * dev.counts_per_mps2) ** 2 + 1 / 12), rtol=0.15)
+    assert len(detect_static(rec, dev, noise=est)) == 10
+
+
+def test_pose_means_matches_numpy():
+    rng = np.random.default_rng(9)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    rec = make_recording(dev, b, S, G * AXES6, rng, labels=False)
+    iv = detect_static(rec, dev)
+    m, n, sd = pose_means(rec, iv, dev)
+    for p, (a, z) in enumerate(iv):
+        np.testing.assert_allclose(m[p], rec.raw[a:z].mean(0), rtol=0, atol=1e-9)
+        np.testing.assert_allclose(sd[p], rec.raw[a:z].std(0, ddof=1), rtol=1e-9)
+        assert n[p] == z - a
+
+
+# ----------------------------------------------------------------------------- jig-free
+@pytest.mark.parametrize("dev_fn,P", [(default_triad, 24), (default_device, 12)])
+def test_jigfree_recovers_parameters_up_to_the_gauge(dev_fn, P):
+    rng = np.random.default_rng(10 + P)
+    dev = dev_fn()
+    b, S = draw_truth(dev, rng)
+    F = G * fib_dirs(P)
+    rec = make_recording(dev, b, S, F, rng, hold=int(1.5 * dev.sample_rate_hz), labels=False)
+    cal = calibrate_recordings(dev, [rec])
+    assert cal.method == "jigfree"
+    assert len(cal.poses_used) == P
+    # documented gauge: sum_i u_i x s_i/|s_i| = 0
+    sh = cal.sensitivity / np.linalg.norm(cal.sensitivity, axis=1, keepdims=True)
+    assert np.linalg.norm(np.sum(np.cross(dev.axes, sh), axis=0)) < 1e-9
+    R = gauge_rotation(dev, S)
+    z = np.concatenate([z_scores(cal.offsets, b, cal.offset_sigma),
+                        z_scores(cal.sensitivity, S @ R.T, cal.sensitivity_sigma).ravel()])
+    assert np.max(np.abs(z)) < 4.5
+    assert 0.5 < np.sqrt(np.mean(z ** 2)) < 1.6
+    f = static_force(cal.offsets, cal.sensitivity, poses_from_recording(rec, dev).means)
+    assert np.sqrt(np.mean((np.linalg.norm(f, axis=1) - G) ** 2)) < 2e-3
+
+
+def test_jigfree_is_immune_to_pose_errors_known_pose_is_not():
+    rng = np.random.default_rng(11)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    F_nom = G * fib_dirs(24)
+    ax = rng.normal(size=(24, 3))
+    ax /= np.linalg.norm(ax, axis=1, keepdims=True)
+    th = math.radians(2.0)
+    F_true = F_nom * math.cos(th) + np.cross(ax, F_nom) * math.sin(th) + ax * np.sum(ax * F_nom, 1)[:, None] * (1 - math.cos(th))
+    ps = poseset_from(dev, b, S, F_true, rng)
+    known = calibrate_known_poses(dev, ps.means, F_nom, "full", ps.sem(), poses=ps)
+    jf = calibrate_jigfree(dev, ps)
+    R = gauge_rotation(dev, S)
+    z_known = z_scores(known.sensitivity, S, known.sensitivity_sigma / math.sqrt(known.chi2 / known.dof))
+    z_jf = z_scores(jf.sensitivity, S @ R.T, jf.sensitivity_sigma)
+    assert np.sqrt(np.mean(z_known ** 2)) > 10       # far outside its noise-only uncertainty
+    assert np.sqrt(np.mean(z_jf ** 2)) < 1.6
+    # and the known-pose fit reports it: chi2/dof and the inflated uncertainties
+    assert known.chi2 / known.dof > 50
+
+
+# ----------------------------------------------------------------------------- temperature
+def test_temperature_coefficients_known_and_jigfree():
+    rng = np.random.default_rng(12)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    P = 24
+    F = G * fib_dirs(P)
+    temps = np.linspace(5, 45, P)
+    rng.shuffle(temps)
+    beta = rng.uniform(-2, 2, 6)              # counts per degC
+    gamma = rng.uniform(-3e-4, 3e-4, 6)       # per degC
+    rec = make_recording(dev, b, S, F, rng, temps=temps, beta=beta, gamma=gamma)
+    cal = calibrate_recordings(dev, [rec])
+    assert cal.temp_ref_c == pytest.approx(np.mean(temps))
+    ts = cal.extra["temperature_sigma"]
+    assert np.max(np.abs(z_scores(cal.offset_tc, beta, ts["offset_tc_counts_per_c"]))) < 4.5
+    assert np.max(np.abs(z_scores(cal.gain_tc, gamma, ts["gain_tc_per_c"]))) < 4.5
+    assert np.max(np.abs(z_scores(cal.offsets, b, cal.offset_sigma))) < 4.5
+    # jig-free with temperature
+    ps = poses_from_recording(rec, dev)
+    ps.f_ref[:] = np.nan
+    fit = calibrate_jigfree(dev, ps, temperature=True)
+    assert np.max(np.abs(z_scores(fit.offset_tc, beta, fit.offset_tc_sigma))) < 4.5
+    assert np.max(np.abs(z_scores(fit.gain_tc, gamma, fit.gain_tc_sigma))) < 4.5
+    # fit_temperature with the jig-free poses' forces agrees
+    ft = fit_temperature(dev, ps, f=fit.f)
+    np.testing.assert_allclose(ft.offset_tc, fit.offset_tc, atol=3 * np.max(fit.offset_tc_sigma))
+
+
+# ----------------------------------------------------------------------------- lever arms
+def _spin(dev, b, S, r_true, axis, rng, n=1200, W=5.0, fr=1.0):
+    t = np.arange(n) / dev.sample_rate_hz
+    w = W * np.sin(2 * np.pi * fr * t)[:, None] * axis
+    a = W * 2 * np.pi * fr * np.cos(2 * np.pi * fr * t)[:, None] * axis
+    f = np.repeat(G * axis[None], n, 0)
+    sig = dev.noise_mps2 * dev.counts_per_mps2
+    raw = np.round(model.predict_counts(b, S, r_true, f, a, w) + rng.normal(size=(n, dev.n_channels)) * sig)
+    return recording_from_arrays(t, raw.astype(np.int64), f=f, w=w, dw=a)
+
+
+def test_positions_from_rate_table_and_observability():
+    rng = np.random.default_rng(13)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    dr = rng.uniform(-1e-3, 1e-3, (6, 3))
+    r_true = dev.positions + dr
+    static = make_recording(dev, b, S, G * fib_dirs(12), rng)
+    yaw = _spin(dev, b, S, r_true, np.array([0, 0, 1.0]), rng)
+    # yaw only: z channels see nothing, tangential ones nothing along z
+    cal = calibrate_recordings(dev, [static, yaw])
+    rep = cal.extra["lever_arm"]["channels"]
+    assert [c["observable_directions"] for c in rep] == [2, 0, 2, 0, 2, 0]
+    assert np.all(np.isnan(cal.positions[1::2]))
+    # three axes: everything observable and recovered within its uncertainty
+    spins = [_spin(dev, b, S, r_true, ax, rng) for ax in np.eye(3)]
+    cal = calibrate_recordings(dev, [static] + spins)
+    rep = cal.extra["lever_arm"]["channels"]
+    assert all(c["observable_directions"] == 3 for c in rep)
+    z = z_scores(cal.positions, r_true, cal.position_sigma)
+    assert np.max(np.abs(z)) < 4.5
+    assert np.max(np.abs(cal.positions - r_true)) < 2e-4
+
+
+# ----------------------------------------------------------------------------- real data
+@pytest.mark.skipif(not os.path.exists(XSENS), reason="shared Xsens data not present")
+def test_xsens_jigfree_calibration():
+    from accelcal.xsens import load_xsens
+    dev, rec = load_xsens(XSENS)
+    ps = poses_from_recording(rec, dev)
+    assert 38 <= ps.n_poses <= 44                 # the README: about 40 poses (+ the initial rest)
+    cal = calibrate_recordings(dev, [rec])
+    f = static_force(cal.offsets, cal.sensitivity, ps.means)
+    rms = float(np.sqrt(np.mean((np.linalg.norm(f, axis=1) - dev.gravity_mps2) ** 2)))
+    assert rms <= 0.002                          # the issue's requirement
+    assert rms == pytest.approx(0.00108, abs=1.5e-4)   # measured: 0.00108 m/s^2 over 40 poses
+    assert cal.extra["fit"]["rms_norm_error_mps2"] == pytest.approx(rms, rel=1e-3)
+    # the offset + gain (3-pose) model on the same poses is far worse: cross-axis terms matter
+    gain = calibrate_jigfree(dev, ps, "gain")
+    f3 = static_force(gain.offsets, gain.sensitivity, ps.means)
+    assert np.sqrt(np.mean((np.linalg.norm(f3, axis=1) - dev.gravity_mps2) ** 2)) > 10 * rms
+
+
+# ----------------------------------------------------------------------------- files, CLI, bad input
+def test_csv_round_trip_and_calibration_json(tmp_path):
+    from accelcal.calibration import load_calibration, save_calibration
+    rng = np.random.default_rng(14)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    rec = make_recording(dev, b, S, G * AXES6, rng)
+    path = tmp_path / "rec.csv"
+    write_recording(path, rec)
+    cal = calibrate_recordings(dev, [read_recording(path, dev.n_channels)])
+    out = tmp_path / "cal.json"
+    save_calibration(cal, out)
+    back = load_calibration(out, dev)
+    np.testing.assert_array_equal(back.offsets, cal.offsets)
+    doc = json.loads(out.read_text())
+    assert doc["method"] == "full" and "offset_sigma_counts" in doc["channels"][0]
+    # a calibration for another device is refused, naming the field
+    other = default_triad()
+    with pytest.raises(InputError, match=r"cal\.json: field device"):
+        load_calibration(out, other)
+
+
+def test_recording_with_other_channel_count_is_refused():
+    rng = np.random.default_rng(15)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    rec = make_recording(dev, b, S, G * AXES6, rng)
+    with pytest.raises(InputError, match=r"6 raw channels but device 'triad-16bit' has 3"):
+        calibrate_recordings(default_triad(), [rec])
+
+
+def test_labelled_pose_that_moves_is_refused():
+    rng = np.random.default_rng(16)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    rec = make_recording(dev, b, S, G * AXES6, rng)
+    raw = rec.raw.copy()
+    idx = np.flatnonzero(rec.pose == 3)
+    raw[idx] += (np.linspace(-60, 60, len(idx))[:, None]).astype(np.int64)   # drifts during pose 3
+    bad = Recording(t=rec.t, raw=raw, f=rec.f, pose=rec.pose, source="moving.csv")
+    with pytest.raises(InputError, match=r"^moving\.csv: column pose: pose 3 .* is labelled static but moves"):
+        calibrate_recordings(dev, [bad])
+
+
+def test_reading_at_adc_limit_is_refused():
+    rng = np.random.default_rng(17)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    rec = make_recording(dev, b, S, G * AXES6, rng)
+    raw = rec.raw.copy()
+    i = int(np.flatnonzero(rec.pose == 2)[5])
+    raw[i, 4] = dev.raw_max
+    bad = Recording(t=rec.t, raw=raw, f=rec.f, pose=rec.pose, source="clip.csv")
+    with pytest.raises(InputError, match=rf"clip\.csv: column raw_4: pose 2: raw_4 = 10000 at sample {i} .*ADC limit raw_max"):
+        calibrate_recordings(dev, [bad])
+
+
+def test_non_increasing_time_is_refused():
+    rng = np.random.default_rng(18)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    rec = make_recording(dev, b, S, G * AXES6, rng)
+    t = rec.t.copy()
+    t[100] = t[99]
+    bad = Recording(t=t, raw=rec.raw, f=rec.f, pose=rec.pose, source="time.csv")
+    with pytest.raises(InputError, match=r"time\.csv: column t: t must be strictly increasing: sample 100"):
+        calibrate_recordings(dev, [bad])
+
+
+def test_nan_and_inf_in_arrays_are_refused():
+    dev = default_device()
+    F = G * AXES6
+    m = model.predict_counts(dev.nominal_offsets(), dev.nominal_sensitivity(), dev.positions, F)
+    m[2, 3] = np.nan
+    with pytest.raises(InputError, match=r"field means\[2\]\[3\]: not finite"):
+        calibrate_known_poses(dev, m, F)
+    m[2, 3] = 5000
+    F2 = F.copy()
+    F2[4, 0] = np.inf
+    with pytest.raises(InputError, match=r"field f_ref\[4\]"):
+        calibrate_known_poses(dev, m, F2)
+
+
+def test_too_few_known_poses_names_the_recording():
+    rng = np.random.default_rng(21)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    rec = make_recording(dev, b, S, G * np.eye(3), rng)
+    rec.source = "three.csv"
+    with pytest.raises(InputError, match=r"^three\.csv: field poses: .*only 3 poses.*add a pose with f along -z"):
+        calibrate_recordings(dev, [rec])
+
+
+def test_known_method_without_reference_is_refused():
+    rng = np.random.default_rng(19)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    rec = make_recording(dev, b, S, G * fib_dirs(12), rng, labels=False)
+    with pytest.raises(InputError, match=r"method 'full' needs the reference specific force.*jigfree"):
+        calibrate_recordings(dev, [rec], method="full")
+
+
+def test_bad_csv_cells_name_file_row_and_column(tmp_path):
+    """NaN/inf raw cells and missing columns are refused by the reader before calibration."""
+    rng = np.random.default_rng(20)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    rec = make_recording(dev, b, S, G * AXES6, rng)
+    path = tmp_path / "r.csv"
+    write_recording(path, rec)
+    lines = path.read_text().splitlines()
+    cells = lines[5].split(",")
+    cells[2] = "nan"
+    bad = tmp_path / "nan.csv"
+    bad.write_text("\n".join(lines[:5] + [",".join(cells)] + lines[6:]) + "\n")
+    with pytest.raises(InputError, match=r"nan\.csv: row 6, column raw_1"):
+        read_recording(bad, dev.n_channels)
+    hdr = lines[0].split(",")
+    keep = [j for j, h in enumerate(hdr) if h != "f_y"]
+    missing = tmp_path / "missing.csv"
+    missing.write_text("\n".join(",".join(l.split(",")[j] for j in keep) for l in lines) + "\n")
+    with pytest.raises(InputError, match=r"missing\.csv: row 1: .*f_y"):
+        read_recording(missing, dev.n_channels)
