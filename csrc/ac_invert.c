@@ -2,21 +2,15 @@
  * accelcal -- on-device build of the resolver table (see ac_invert.h).
  *
  * Everything here runs in ac_xf (29-bit mantissa, wide exponent), so column
- * scales (counts per m/s^2 against counts per rad/s^2) cost no precision.
- * Memory: the caller's ac_build_work; the columns of M are recomputed in a
- * second pass rather than stored, so N = 12 needs no more RAM than N = 6.
+ * scales (counts per m/s^2 against counts per rad/s^2) cost no precision.  It
+ * uses the pointer-based core (ac_xf_core.h) with a sticky invalid value,
+ * checked where results leave the xf domain.  Memory: the caller's
+ * ac_build_work; the columns of M are recomputed in a second pass rather than
+ * stored, so N = 12 needs no more RAM than N = 6.
  */
 #include "accelcal/ac_invert.h"
-#include "accelcal/ac_fixed.h"
+#include "ac_xf_core.h"
 #include "ac_internal.h"
-
-#define TRY(expr)                                                                                  \
-    do {                                                                                           \
-        ac_status try_st_ = (expr);                                                                \
-        if (try_st_ < 0) {                                                                         \
-            return try_st_;                                                                        \
-        }                                                                                          \
-    } while (0)
 
 #define PIVOT_TOL_LOG2 (-26)
 #define COEF_MAX 32767L
@@ -25,130 +19,133 @@
 static const ac_xf xf_zero = {0, 0};
 static const ac_xf xf_one = {0x20000000L, -29};
 
-static ac_status xf_mac(ac_xf *acc, ac_xf a, ac_xf b) /* acc += a b */
+static ac_status valid(const ac_xf *v, uint8_t count)
 {
-    ac_xf p;
-    TRY(ac_xf_mul(a, b, &p));
-    return ac_xf_add(*acc, p, acc);
+    while (count-- != 0u) {
+        if (v[count].e == AC_XF_BAD) {
+            return AC_ERR_RANGE;
+        }
+    }
+    return AC_OK;
 }
 
-static ac_status xf_acc_abs(ac_xf *max, ac_xf *sum, ac_xf v) /* max = max(max,|v|), sum += |v| */
+static void load_channel(const ac_channel_cal *cal, ac_xf s[3], ac_xf r[3])
 {
-    ac_xf av;
-    int8_t c;
-    TRY(ac_xf_abs(v, &av));
-    TRY(ac_xf_cmpabs(av, *max, &c));
-    if (c > 0) {
-        *max = av;
+    uint8_t a;
+    for (a = 0u; a < 3u; a++) {
+        ac_xfp_from_fixed(&s[a], cal->sens[a], AC_SENS_FRAC);
+        ac_xfp_from_fixed(&r[a], cal->pos[a], AC_POS_FRAC);
     }
-    return (sum != 0) ? ac_xf_add(*sum, av, sum) : AC_OK;
 }
 
 ac_status ac_sensor_row(const ac_channel_cal *cal, ac_xf row[6])
 {
-    ac_xf s[3], r[3], t1, t2;
+    ac_xf s[3], r[3], t;
     uint8_t a;
     if (cal == 0 || row == 0) {
         return AC_ERR_NULL;
     }
+    load_channel(cal, s, r);
     for (a = 0u; a < 3u; a++) {
-        TRY(ac_xf_from_fixed(cal->sens[a], AC_SENS_FRAC, &s[a]));
-        TRY(ac_xf_from_fixed(cal->pos[a], AC_POS_FRAC, &r[a]));
-        row[a] = s[a];
-    }
-    /* r x s: the channel's response to angular acceleration */
-    for (a = 0u; a < 3u; a++) {
+        /* r x s: the channel's response to angular acceleration */
         uint8_t b = (uint8_t)((a + 1u) % 3u), c = (uint8_t)((a + 2u) % 3u);
-        TRY(ac_xf_mul(r[b], s[c], &t1));
-        TRY(ac_xf_mul(r[c], s[b], &t2));
-        TRY(ac_xf_sub(t1, t2, &row[3u + a]));
+        row[a] = s[a];
+        ac_xfp_mul(&row[3u + a], &r[b], &s[c]);
+        ac_xfp_mul(&t, &r[c], &s[b]);
+        ac_xfp_sub(&row[3u + a], &row[3u + a], &t);
     }
-    return AC_OK;
+    return valid(row, 6u);
 }
 
 ac_status ac_centripetal_row(const ac_channel_cal *cal, ac_xf row[6])
 {
     /* s.(w (w.r) - r |w|^2) over p = (wx^2, wy^2, wz^2, wx wy, wy wz, wz wx) */
-    ac_xf s[3], r[3], sr = xf_zero, t1, t2;
+    ac_xf s[3], r[3], sr = xf_zero, t;
     uint8_t a;
     if (cal == 0 || row == 0) {
         return AC_ERR_NULL;
     }
+    load_channel(cal, s, r);
     for (a = 0u; a < 3u; a++) {
-        TRY(ac_xf_from_fixed(cal->sens[a], AC_SENS_FRAC, &s[a]));
-        TRY(ac_xf_from_fixed(cal->pos[a], AC_POS_FRAC, &r[a]));
-        TRY(xf_mac(&sr, s[a], r[a]));
+        ac_xfp_mac(&sr, &s[a], &r[a]);
     }
     for (a = 0u; a < 3u; a++) {
         uint8_t b = (uint8_t)((a + 1u) % 3u);
-        TRY(ac_xf_mul(s[a], r[a], &t1));
-        TRY(ac_xf_sub(t1, sr, &row[a]));
-        TRY(ac_xf_mul(s[a], r[b], &t1));
-        TRY(ac_xf_mul(s[b], r[a], &t2));
-        TRY(ac_xf_add(t1, t2, &row[3u + a]));
+        ac_xfp_mul(&row[a], &s[a], &r[a]);
+        ac_xfp_sub(&row[a], &row[a], &sr);
+        ac_xfp_mul(&row[3u + a], &s[a], &r[b]);
+        ac_xfp_mul(&t, &s[b], &r[a]);
+        ac_xfp_add(&row[3u + a], &row[3u + a], &t);
     }
-    return AC_OK;
+    return valid(row, 6u);
 }
 
-static ac_status norm1(ac_xf a[6][6], ac_xf *out) /* max column sum of |a| */
+static void norm1(ac_xf a[6][6], ac_xf *out) /* max column sum of |a| */
 {
     uint8_t i, j;
     *out = xf_zero;
     for (j = 0u; j < 6u; j++) {
         ac_xf sum = xf_zero, unused = xf_zero;
         for (i = 0u; i < 6u; i++) {
-            TRY(xf_acc_abs(&unused, &sum, a[i][j]));
+            ac_xfp_acc_abs(&unused, &sum, &a[i][j]);
         }
-        TRY(xf_acc_abs(out, 0, sum));
+        ac_xfp_acc_abs(out, 0, &sum);
     }
-    return AC_OK;
+}
+
+static void swap_xf(ac_xf *a, ac_xf *b)
+{
+    ac_xf t = *a;
+    *a = *b;
+    *b = t;
 }
 
 ac_status ac_invert6(ac_xf a[6][6], int8_t perm[6], int16_t *cond_log2)
 {
-    ac_xf na, ninv, amax = xf_zero, tol, cond;
+    ac_xf na, ninv, amax = xf_zero, cond;
     uint8_t i, j, k;
     int16_t cl2;
     if (a == 0 || perm == 0) {
         return AC_ERR_NULL;
     }
-    TRY(norm1(a, &na));
+    norm1(a, &na);
     for (i = 0u; i < 6u; i++) {
         for (j = 0u; j < 6u; j++) {
-            TRY(xf_acc_abs(&amax, 0, a[i][j]));
+            ac_xfp_acc_abs(&amax, 0, &a[i][j]);
         }
+    }
+    if (valid(&amax, 1u) != AC_OK || valid(&na, 1u) != AC_OK) {
+        return AC_ERR_RANGE;
     }
     if (amax.m == 0) {
         return AC_ERR_SINGULAR;
     }
-    TRY(ac_xf_ldexp(amax, PIVOT_TOL_LOG2, &tol));
+    ac_xfp_ldexp(&amax, PIVOT_TOL_LOG2); /* amax is the pivot tolerance from here on */
 
     for (k = 0u; k < 6u; k++) {
         uint8_t p = k;
         ac_xf inv;
-        int8_t c;
         for (i = (uint8_t)(k + 1u); i < 6u; i++) {
-            TRY(ac_xf_cmpabs(a[i][k], a[p][k], &c));
-            if (c > 0) {
+            if (ac_xfp_cmpabs(&a[i][k], &a[p][k]) > 0) {
                 p = i;
             }
         }
-        TRY(ac_xf_cmpabs(a[p][k], tol, &c));
-        if (c <= 0) {
+        if (valid(&a[p][k], 1u) != AC_OK) {
+            return AC_ERR_RANGE;
+        }
+        if (ac_xfp_cmpabs(&a[p][k], &amax) <= 0) {
             return AC_ERR_SINGULAR;
         }
         if (p != k) {
             for (j = 0u; j < 6u; j++) {
-                ac_xf t = a[k][j];
-                a[k][j] = a[p][j];
-                a[p][j] = t;
+                swap_xf(&a[k][j], &a[p][j]);
             }
         }
         perm[k] = (int8_t)p;
-        TRY(ac_xf_div(xf_one, a[k][k], &inv));
+        ac_xfp_div(&inv, &xf_one, &a[k][k]);
         a[k][k] = xf_one;
         for (j = 0u; j < 6u; j++) {
-            TRY(ac_xf_mul(a[k][j], inv, &a[k][j]));
+            ac_xfp_mul(&a[k][j], &a[k][j], &inv);
         }
         for (i = 0u; i < 6u; i++) {
             ac_xf f;
@@ -159,8 +156,8 @@ ac_status ac_invert6(ac_xf a[6][6], int8_t perm[6], int16_t *cond_log2)
             a[i][k] = xf_zero;
             for (j = 0u; j < 6u; j++) {
                 ac_xf t;
-                TRY(ac_xf_mul(f, a[k][j], &t));
-                TRY(ac_xf_sub(a[i][j], t, &a[i][j]));
+                ac_xfp_mul(&t, &f, &a[k][j]);
+                ac_xfp_sub(&a[i][j], &a[i][j], &t);
             }
         }
     }
@@ -169,14 +166,15 @@ ac_status ac_invert6(ac_xf a[6][6], int8_t perm[6], int16_t *cond_log2)
         uint8_t p = (uint8_t)perm[k];
         if (p != k) {
             for (i = 0u; i < 6u; i++) {
-                ac_xf t = a[i][k];
-                a[i][k] = a[i][p];
-                a[i][p] = t;
+                swap_xf(&a[i][k], &a[i][p]);
             }
         }
     }
-    TRY(norm1(a, &ninv));
-    TRY(ac_xf_mul(na, ninv, &cond));
+    norm1(a, &ninv);
+    ac_xfp_mul(&cond, &na, &ninv);
+    if (valid(&cond, 1u) != AC_OK) {
+        return AC_ERR_RANGE;
+    }
     /* cond = m 2^e with 2^29 <= m < 2^30 */
     cl2 = (int16_t)(cond.e + ((cond.m == 0x20000000L) ? 29 : 30));
     if (cond_log2 != 0) {
@@ -189,11 +187,11 @@ ac_status ac_invert6(ac_xf a[6][6], int8_t perm[6], int16_t *cond_log2)
 static ac_status scaled_row(const ac_channel_cal *cal, const int16_t colexp[6], ac_xf row[6])
 {
     uint8_t j;
-    TRY(ac_sensor_row(cal, row));
+    ac_status st = ac_sensor_row(cal, row);
     for (j = 0u; j < 6u; j++) {
-        TRY(ac_xf_ldexp(row[j], (int16_t)-colexp[j], &row[j]));
+        ac_xfp_ldexp(&row[j], (int16_t)-colexp[j]);
     }
-    return AC_OK;
+    return st;
 }
 
 /* Column i of M in output LSB per count (a holds the inverse). */
@@ -201,6 +199,7 @@ static ac_status m_column(const ac_build_work *w, const ac_channel_cal *cal, uin
                           uint16_t n, ac_xf col[6])
 {
     uint8_t j;
+    ac_status st = AC_OK;
     if (n == 6u) {
         for (j = 0u; j < 6u; j++) {
             col[j] = w->a[j][i];
@@ -208,60 +207,56 @@ static ac_status m_column(const ac_build_work *w, const ac_channel_cal *cal, uin
     } else {
         ac_xf rt[6];
         uint8_t l;
-        TRY(scaled_row(cal, w->colexp, rt));
+        st = scaled_row(cal, w->colexp, rt);
         for (j = 0u; j < 6u; j++) {
             col[j] = xf_zero;
             for (l = 0u; l < 6u; l++) {
-                TRY(xf_mac(&col[j], w->a[j][l], rt[l]));
+                ac_xfp_mac(&col[j], &w->a[j][l], &rt[l]);
             }
         }
     }
     for (j = 0u; j < 6u; j++) {
-        TRY(ac_xf_ldexp(col[j], (int16_t)(AC_OUT_FRAC - w->colexp[j]), &col[j]));
+        ac_xfp_ldexp(&col[j], (int16_t)(AC_OUT_FRAC - w->colexp[j]));
     }
-    return AC_OK;
+    return (st != AC_OK) ? st : valid(col, 6u);
 }
 
-/* Largest s <= 31 with vmax 2^s <= lim_each and vsum 2^s <= lim_sum (the
- * host quantizer's rule); AC_ERR_RANGE if that s is below -31. */
-static ac_status largest_shift(ac_xf v, uint32_t lim, int16_t *s)
+/* Largest s with |v| 2^s <= lim (the host quantizer's rule); 31 for v == 0. */
+static int16_t largest_shift(const ac_xf *v, uint32_t lim)
 {
-    uint32_t m = ac_abs_u(v.m);
+    uint32_t m = ac_abs_u(v->m);
     uint8_t k = 0u;
     if (m == 0u) {
-        *s = 31;
-        return AC_OK;
+        return 31;
     }
     while ((lim << k) < m) { /* stops before lim << k can reach 2^31 */
         k++;
     }
-    *s = (int16_t)(-(int16_t)k - v.e);
-    return AC_OK;
+    return (int16_t)(-(int16_t)k - v->e);
 }
 
-static ac_status row_shift(ac_xf vmax, ac_xf vsum, uint32_t count, int8_t *out)
+/* min(31, shift for the largest entry, shift for the row sum); AC_ERR_RANGE below -31 */
+static ac_status row_shift(const ac_xf *vmax, const ac_xf *vsum, uint32_t count, int8_t *out)
 {
-    int16_t s1, s2;
-    TRY(largest_shift(vmax, (uint32_t)COEF_MAX, &s1));
-    TRY(largest_shift(vsum, (uint32_t)ROW_L1_MAX - count, &s2));
+    int16_t s1 = largest_shift(vmax, (uint32_t)COEF_MAX);
+    int16_t s2 = largest_shift(vsum, (uint32_t)ROW_L1_MAX - count);
     if (s2 < s1) {
         s1 = s2;
     }
     if (s1 > 31) {
         s1 = 31;
     }
-    if (s1 < -31) {
+    if (s1 < -31 || valid(vmax, 1u) != AC_OK || valid(vsum, 1u) != AC_OK) {
         return AC_ERR_RANGE;
     }
     *out = (int8_t)s1;
     return AC_OK;
 }
 
-static ac_status to_i16(ac_xf v, int8_t shift, int16_t *out)
+static ac_status to_i16(const ac_xf *v, int8_t shift, int16_t *out)
 {
     int32_t q;
-    TRY(ac_xf_to_fixed(v, shift, &q));
-    if (q > COEF_MAX || q < -COEF_MAX) {
+    if (ac_xfp_to_fixed(v, shift, &q) != AC_OK || q > COEF_MAX || q < -COEF_MAX - 1) {
         return AC_ERR_RANGE; /* cannot happen with row_shift's shift */
     }
     *out = (int16_t)q;
@@ -271,12 +266,13 @@ static ac_status to_i16(ac_xf v, int8_t shift, int16_t *out)
 ac_status ac_resolver_build(const ac_channel_cal *cal, uint16_t n, ac_build_work *w,
                             ac_resolver *out, ac_build_info *info)
 {
-    ac_xf col[6], crow[6], o, colmax[6];
+    ac_xf col[6], crow[6], o;
     int8_t m_shift[6], g_shift[6];
     int32_t k[6];
     int16_t cl2 = 0;
     uint16_t i;
     uint8_t j, l;
+    ac_status st;
 
     if (cal == 0 || w == 0 || out == 0) {
         return AC_ERR_NULL;
@@ -285,21 +281,24 @@ ac_status ac_resolver_build(const ac_channel_cal *cal, uint16_t n, ac_build_work
         return AC_ERR_SIZE;
     }
 
-    /* 1. equilibrate the columns by powers of two */
+    /* 1. equilibrate the columns by powers of two (rmax holds the column maxima) */
     for (j = 0u; j < 6u; j++) {
-        colmax[j] = xf_zero;
+        w->rmax[j] = xf_zero;
     }
     for (i = 0u; i < n; i++) {
-        TRY(ac_sensor_row(&cal[i], col));
+        st = ac_sensor_row(&cal[i], col);
+        if (st != AC_OK) {
+            return st;
+        }
         for (j = 0u; j < 6u; j++) {
-            TRY(xf_acc_abs(&colmax[j], 0, col[j]));
+            ac_xfp_acc_abs(&w->rmax[j], 0, &col[j]);
         }
     }
     for (j = 0u; j < 6u; j++) {
-        if (colmax[j].m == 0) {
+        if (w->rmax[j].m == 0) {
             return AC_ERR_SINGULAR; /* nothing senses this degree of freedom */
         }
-        w->colexp[j] = (int16_t)(colmax[j].e + 30);
+        w->colexp[j] = (int16_t)(w->rmax[j].e + 30);
     }
 
     /* 2. the matrix to invert: R~ (N = 6) or R~^T R~ (N > 6) */
@@ -309,20 +308,23 @@ ac_status ac_resolver_build(const ac_channel_cal *cal, uint16_t n, ac_build_work
         }
     }
     for (i = 0u; i < n; i++) {
-        TRY(scaled_row(&cal[i], w->colexp, col));
+        (void)scaled_row(&cal[i], w->colexp, col); /* valid: checked in step 1 */
         for (j = 0u; j < 6u; j++) {
             if (n == 6u) {
                 w->a[i][j] = col[j];
             } else {
                 for (l = 0u; l < 6u; l++) {
-                    TRY(xf_mac(&w->a[j][l], col[j], col[l]));
+                    ac_xfp_mac(&w->a[j][l], &col[j], &col[l]);
                 }
             }
         }
     }
-    TRY(ac_invert6(w->a, w->perm, &cl2));
+    st = ac_invert6(w->a, w->perm, &cl2);
     if (info != 0) {
         info->cond_log2 = cl2;
+    }
+    if (st != AC_OK) {
+        return st;
     }
 
     /* 3. first pass over the columns of M: row scales, M o and M C */
@@ -335,14 +337,19 @@ ac_status ac_resolver_build(const ac_channel_cal *cal, uint16_t n, ac_build_work
         }
     }
     for (i = 0u; i < n; i++) {
-        TRY(m_column(w, &cal[i], i, n, col));
-        TRY(ac_centripetal_row(&cal[i], crow));
-        TRY(ac_xf_from_fixed(cal[i].offset, AC_OFFSET_FRAC, &o));
+        st = m_column(w, &cal[i], i, n, col);
+        if (st == AC_OK) {
+            st = ac_centripetal_row(&cal[i], crow);
+        }
+        if (st != AC_OK) {
+            return st;
+        }
+        ac_xfp_from_fixed(&o, cal[i].offset, AC_OFFSET_FRAC);
         for (j = 0u; j < 6u; j++) {
-            TRY(xf_acc_abs(&w->rmax[j], &w->rsum[j], col[j]));
-            TRY(xf_mac(&w->k[j], col[j], o));
+            ac_xfp_acc_abs(&w->rmax[j], &w->rsum[j], &col[j]);
+            ac_xfp_mac(&w->k[j], &col[j], &o);
             for (l = 0u; l < 6u; l++) {
-                TRY(xf_mac(&w->g[j][l], col[j], crow[l]));
+                ac_xfp_mac(&w->g[j][l], &col[j], &crow[l]);
             }
         }
     }
@@ -350,14 +357,20 @@ ac_status ac_resolver_build(const ac_channel_cal *cal, uint16_t n, ac_build_work
     /* 4. shifts and offset terms; every failure is found before out is touched */
     for (j = 0u; j < 6u; j++) {
         ac_xf gmax = xf_zero, gsum = xf_zero;
-        TRY(row_shift(w->rmax[j], w->rsum[j], n, &m_shift[j]));
-        if (ac_xf_to_fixed(w->k[j], m_shift[j], &k[j]) != AC_OK) {
+        st = row_shift(&w->rmax[j], &w->rsum[j], n, &m_shift[j]);
+        if (st != AC_OK) {
+            return st;
+        }
+        if (ac_xfp_to_fixed(&w->k[j], m_shift[j], &k[j]) != AC_OK) {
             return AC_ERR_RANGE;
         }
         for (l = 0u; l < 6u; l++) {
-            TRY(xf_acc_abs(&gmax, &gsum, w->g[j][l]));
+            ac_xfp_acc_abs(&gmax, &gsum, &w->g[j][l]);
         }
-        TRY(row_shift(gmax, gsum, 6u, &g_shift[j]));
+        st = row_shift(&gmax, &gsum, 6u, &g_shift[j]);
+        if (st != AC_OK) {
+            return st;
+        }
     }
 
     /* 5. write the table; the second pass recomputes the columns of M */
@@ -367,16 +380,21 @@ ac_status ac_resolver_build(const ac_channel_cal *cal, uint16_t n, ac_build_work
         out->g_shift[j] = g_shift[j];
         out->k[j] = k[j];
         for (l = 0u; l < 6u; l++) {
-            TRY(to_i16(w->g[j][l], g_shift[j], &out->g[j][l]));
+            if (to_i16(&w->g[j][l], g_shift[j], &out->g[j][l]) != AC_OK) {
+                return AC_ERR_RANGE;
+            }
         }
         for (i = n; i < (uint16_t)AC_MAX_CHANNELS; i++) {
             out->m[j][i] = 0;
         }
     }
     for (i = 0u; i < n; i++) {
-        TRY(m_column(w, &cal[i], i, n, col));
-        for (j = 0u; j < 6u; j++) {
-            TRY(to_i16(col[j], m_shift[j], &out->m[j][i]));
+        st = m_column(w, &cal[i], i, n, col);
+        for (j = 0u; j < 6u && st == AC_OK; j++) {
+            st = to_i16(&col[j], m_shift[j], &out->m[j][i]);
+        }
+        if (st != AC_OK) {
+            return st;
         }
     }
     return AC_OK;

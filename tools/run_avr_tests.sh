@@ -20,7 +20,8 @@ MCU=${AVR_MCU:-atmega328p}
 RAM=${AVR_RAM:-2048}
 FREQ=16000000
 TIMEOUT=${SIMAVR_TIMEOUT:-600}
-AVR_CFLAGS=(-mmcu="$MCU" -Os -std=c99 -Wall -Wextra -Werror -I"$ROOT/include")
+# gc-sections: firmware links only what it calls (the flash is 32 KB)
+AVR_CFLAGS=(-mmcu="$MCU" -Os -std=c99 -Wall -Wextra -Werror -ffunction-sections -fdata-sections -Wl,--gc-sections -I"$ROOT/include")
 HOST_CC=${CC:-cc}
 HOST_CFLAGS=(-std=c99 -O2 -Wall -Wextra -Werror -I"$ROOT/include")
 
