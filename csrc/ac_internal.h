@@ -21,6 +21,20 @@ typedef struct ac_u64 {
     uint32_t lo;
 } ac_u64;
 
+/* Inline the helpers where the compiler does it well; otherwise declare the
+ * single external copy that ac_ops.c defines. */
+#ifndef AC_INLINE_HELPERS
+#if (defined(__GNUC__) && __GNUC__ >= 4) || defined(__clang__)
+#define AC_INLINE_HELPERS 1
+#else
+#define AC_INLINE_HELPERS 0
+#endif
+#endif
+
+#if AC_INLINE_HELPERS
+#define AC_HELPER static inline
+#include "ac_ops_impl.h"
+#else
 /* Combine two statuses: the first error wins, otherwise any saturation. */
 ac_status ac_merge(ac_status a, ac_status b);
 
@@ -69,6 +83,8 @@ ac_u64 ac_u64_shr(ac_u64 a, uint8_t n); /* n <= 63 */
 
 /* number of significant bits of an unsigned 32-bit value */
 uint8_t ac_bitlen_u(uint32_t u);
+
+#endif /* AC_INLINE_HELPERS */
 
 /* acc + a * b (16 x 16 -> 32, wrapping in uint32).  On AVR the multiply-
  * accumulate is the Atmel AVR201 sequence (muls/mulsu/mul into the accumulator),

@@ -43,7 +43,10 @@ int main(void)
     int16_t omega[3];
     ac_rate rate;
     uint32_t c_process, c_process_now, c_build, c_rate;
-    uint16_t i, k;
+    uint16_t i;
+#ifdef BENCH_REPEAT
+    uint16_t k;
+#endif
     uint32_t check = 0;
     for (i = 0; i < AC_CAL_N_CHANNELS; i++) raw[i] = (uint16_t)(AC_CAL_TRIM[i] + 37u * i);
     (void)ac_rate_init(&rate, 34953u, 21u, 109u);
@@ -53,7 +56,7 @@ int main(void)
         (void)ac_process(&AC_CAL_RESOLVER, AC_CAL_TRIM, raw, w, out);
         check += (uint32_t)out[0];
     }
-    (void)k;
+
 #endif
     timer_start();
     (void)ac_process(&AC_CAL_RESOLVER, AC_CAL_TRIM, raw, w, out);

@@ -1,0 +1,268 @@
+/*
+ * accelcal -- definitions of the internal helpers (included, never compiled on
+ * its own).  ac_internal.h includes it with AC_HELPER = "static inline" where
+ * the compiler inlines well (GCC >= 4, clang), so the per-sample code pays no
+ * calls; older compilers (h8300-hms-gcc 3.4 emits a separate copy of every
+ * static inline function in every object) get one external copy from ac_ops.c.
+ */
+#ifndef AC_OPS_IMPL_H
+#define AC_OPS_IMPL_H
+
+/* Combine two statuses: the first error wins, otherwise any saturation. */
+AC_HELPER ac_status ac_merge(ac_status a, ac_status b)
+{
+    if (a < 0) {
+        return a;
+    }
+    if (b < 0) {
+        return b;
+    }
+    return (a == AC_SATURATED || b == AC_SATURATED) ? AC_SATURATED : AC_OK;
+}
+
+AC_HELPER int32_t ac_i_from_u(uint32_t u)
+{
+    if (u <= (uint32_t)INT32_MAX) {
+        return (int32_t)u;
+    }
+    /* u >= 2^31: value u - 2^32 = -(~u) - 1, and ~u <= INT32_MAX */
+    return -(int32_t)(~u) - 1;
+}
+
+/* |v| as uint32 (exact for INT32_MIN). */
+AC_HELPER uint32_t ac_abs_u(int32_t v)
+{
+    return (v < 0) ? (uint32_t)0u - (uint32_t)v : (uint32_t)v;
+}
+
+/* u >> n for 0 <= n <= 31, in whole-byte and whole-word steps first: 8-bit
+ * cores (AVR) have no barrel shifter and shift 32-bit values one bit a loop. */
+AC_HELPER uint32_t ac_shr_u(uint32_t u, uint8_t n)
+{
+    if ((n & 16u) != 0u) {
+        u >>= 16;
+    }
+    if ((n & 8u) != 0u) {
+        u >>= 8;
+    }
+    return u >> (n & 7u);
+}
+
+/* floor(v / 2^n), 0 <= n <= 31 */
+AC_HELPER int32_t ac_floor_shift(int32_t v, uint8_t n)
+{
+    if (v >= 0) {
+        return (int32_t)ac_shr_u((uint32_t)v, n);
+    }
+    return -1 - (int32_t)ac_shr_u((uint32_t)(-1 - v), n);
+}
+
+/* 1 << n for 0 <= n <= 31, in byte steps (see ac_shr_u). */
+AC_HELPER uint32_t ac_pow2_u(uint8_t n)
+{
+    uint32_t u = (uint32_t)1u << (n & 7u);
+    if ((n & 8u) != 0u) {
+        u <<= 8;
+    }
+    if ((n & 16u) != 0u) {
+        u <<= 16;
+    }
+    return u;
+}
+
+/* round(v / 2^n) half up, 1 <= n <= 31, without overflow. */
+AC_HELPER int32_t ac_round_shift(int32_t v, uint8_t n)
+{
+    uint32_t half = ac_pow2_u((uint8_t)(n - 1u));
+    int32_t w;
+    if (v >= 0) {
+        return (int32_t)ac_shr_u((uint32_t)v + half, n); /* < 2^31 + 2^30: fits uint32 */
+    }
+    w = v + (int32_t)half; /* v < 0 < half: no overflow */
+    if (w >= 0) {
+        return (int32_t)ac_shr_u((uint32_t)w, n);
+    }
+    return -1 - (int32_t)ac_shr_u((uint32_t)(-1 - w), n); /* floor of a negative */
+}
+
+AC_HELPER int32_t ac_sat_add(int32_t a, int32_t b, uint8_t *sat)
+{
+    if (b > 0 && a > INT32_MAX - b) {
+        *sat = 1u;
+        return INT32_MAX;
+    }
+    if (b < 0 && a < INT32_MIN - b) {
+        *sat = 1u;
+        return INT32_MIN;
+    }
+    return a + b;
+}
+
+AC_HELPER int32_t ac_sat_sub(int32_t a, int32_t b, uint8_t *sat)
+{
+    if (b < 0 && a > INT32_MAX + b) {
+        *sat = 1u;
+        return INT32_MAX;
+    }
+    if (b > 0 && a < INT32_MIN + b) {
+        *sat = 1u;
+        return INT32_MIN;
+    }
+    return a - b;
+}
+
+AC_HELPER int16_t ac_sat_to16(int32_t v, uint8_t *sat)
+{
+    if (v > INT16_MAX) {
+        *sat = 1u;
+        return INT16_MAX;
+    }
+    if (v < INT16_MIN) {
+        *sat = 1u;
+        return INT16_MIN;
+    }
+    return (int16_t)v;
+}
+
+/* v * 2^-shift, half up for shift > 0, exact (saturating) for shift <= 0. */
+AC_HELPER int32_t ac_scale_round(int32_t v, int16_t shift, uint8_t *sat)
+{
+    if (shift > 0) {
+        if (shift > 31) {
+            return 0; /* |v| / 2^shift < 1/2 */
+        }
+        return ac_round_shift(v, (uint8_t)shift);
+    }
+    if (shift < 0) {
+        uint8_t k;
+        if (v == 0) {
+            return 0;
+        }
+        if (shift < -31) {
+            *sat = 1u;
+            return (v > 0) ? INT32_MAX : INT32_MIN;
+        }
+        k = (uint8_t)(-shift);
+        if (v > (int32_t)ac_shr_u((uint32_t)INT32_MAX, k)) {
+            *sat = 1u;
+            return INT32_MAX;
+        }
+        if (v < ac_floor_shift(INT32_MIN, k)) {
+            *sat = 1u;
+            return INT32_MIN;
+        }
+        return ac_i_from_u((uint32_t)v << k);
+    }
+    return v;
+}
+
+/* 16 x 16 -> 32 unsigned: the widening multiply every target has. */
+AC_HELPER uint32_t ac_mul16u(uint16_t a, uint16_t b)
+{
+    return (uint32_t)a * (uint32_t)b;
+}
+
+
+/* a * b exactly, four 16 x 16 partial products. */
+AC_HELPER ac_u64 ac_mul32u(uint32_t a, uint32_t b)
+{
+    uint16_t al = (uint16_t)(a & 0xFFFFu), ah = (uint16_t)(a >> 16);
+    uint16_t bl = (uint16_t)(b & 0xFFFFu), bh = (uint16_t)(b >> 16);
+    uint32_t ll = ac_mul16u(al, bl);
+    uint32_t lh = ac_mul16u(al, bh);
+    uint32_t hl = ac_mul16u(ah, bl);
+    uint32_t hh = ac_mul16u(ah, bh);
+    ac_u64 r;
+    uint32_t t;
+    r.lo = ll;
+    r.hi = hh + (lh >> 16) + (hl >> 16);
+    t = r.lo + (lh << 16);
+    if (t < r.lo) {
+        r.hi++;
+    }
+    r.lo = t;
+    t = r.lo + (hl << 16);
+    if (t < r.lo) {
+        r.hi++;
+    }
+    r.lo = t;
+    return r;
+}
+
+AC_HELPER ac_u64 ac_u64_add(ac_u64 a, ac_u64 b)
+{
+    ac_u64 r;
+    r.lo = a.lo + b.lo;
+    r.hi = a.hi + b.hi + ((r.lo < a.lo) ? 1u : 0u);
+    return r;
+}
+
+AC_HELPER ac_u64 ac_u64_sub(ac_u64 a, ac_u64 b) /* requires a >= b */
+{
+    ac_u64 r;
+    r.lo = a.lo - b.lo;
+    r.hi = a.hi - b.hi - ((a.lo < b.lo) ? 1u : 0u);
+    return r;
+}
+
+AC_HELPER int ac_u64_lt(ac_u64 a, ac_u64 b)
+{
+    return (a.hi < b.hi) || (a.hi == b.hi && a.lo < b.lo);
+}
+
+AC_HELPER ac_u64 ac_u64_shl(ac_u64 a, uint8_t n) /* n <= 63 */
+{
+    ac_u64 r;
+    if (n == 0u) {
+        return a;
+    }
+    if (n >= 32u) {
+        r.hi = a.lo << (uint8_t)(n - 32u);
+        r.lo = 0u;
+    } else {
+        r.hi = (a.hi << n) | (a.lo >> (uint8_t)(32u - n));
+        r.lo = a.lo << n;
+    }
+    return r;
+}
+
+AC_HELPER ac_u64 ac_u64_shr(ac_u64 a, uint8_t n) /* n <= 63 */
+{
+    ac_u64 r;
+    if (n == 0u) {
+        return a;
+    }
+    if (n >= 32u) {
+        r.lo = a.hi >> (uint8_t)(n - 32u);
+        r.hi = 0u;
+    } else {
+        r.lo = (a.lo >> n) | (a.hi << (uint8_t)(32u - n));
+        r.hi = a.hi >> n;
+    }
+    return r;
+}
+
+/* number of significant bits of an unsigned 32-bit value */
+AC_HELPER uint8_t ac_bitlen_u(uint32_t u)
+{
+    uint8_t n = 0u;
+    if (u >= 0x10000u) {
+        n = 16u;
+        u >>= 16;
+    }
+    if (u >= 0x100u) {
+        n = (uint8_t)(n + 8u);
+        u >>= 8;
+    }
+    if (u >= 0x10u) {
+        n = (uint8_t)(n + 4u);
+        u >>= 4;
+    }
+    while (u != 0u) {
+        n++;
+        u >>= 1;
+    }
+    return n;
+}
+
+#endif /* AC_OPS_IMPL_H */
