@@ -40,8 +40,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "python"))
 
 from accelcal import model  # noqa: E402
-from accelcal.calibrate import (PoseSet, calibrate_jigfree, calibrate_known_poses,  # noqa: E402
-                                calibrate_recordings, gauge_rotation, poses_from_recording, static_force)
+from accelcal.calibrate import (PoseSet, calibrate_recordings, fit_known_poses, fit_static,  # noqa: E402
+                                gauge_rotation, poses_from_recording, static_force)
 from accelcal.device import default_device  # noqa: E402
 from accelcal.recording import recording_from_arrays  # noqa: E402
 from accelcal.xsens import load_xsens  # noqa: E402
@@ -175,12 +175,12 @@ def study(dev, P, jigfree, trials, rng, pose_err_deg=0.0, desc=""):
         F_true = F_nom if pose_err_deg == 0 else np.einsum("pij,pj->pi", random_rotations(P, pose_err_deg, rng), F_nom)
         raw = sample_poses(dev, b, S, F_true, rng)
         if jigfree:
-            fit = calibrate_jigfree(dev, to_poseset(raw))
+            fit = fit_static(dev, to_poseset(raw), jigfree=True)
             R = gauge_rotation(dev, S)
             S_ref, F_ref = S @ R.T, F_true @ R.T
         else:
             ps = to_poseset(raw, F_nom)
-            fit = calibrate_known_poses(dev, ps.means, F_nom, "full", ps.sem(), poses=ps)
+            fit = fit_known_poses(dev, ps.means, F_nom, "full", ps.sem(), poses=ps)
             S_ref, F_ref = S, F_true
         C = crb(dev, b, S_ref, F_ref, jigfree)
         var = np.diag(C).reshape(dev.n_channels, 4)
@@ -308,13 +308,13 @@ def main(argv=None):
         e = np.linalg.norm(f, axis=1) - g
         return float(np.sqrt(np.mean(e ** 2))), float(np.max(np.abs(e)))
 
-    full = calibrate_jigfree(xdev, ps, "full")
-    gain = calibrate_jigfree(xdev, ps, "gain")
+    full = fit_static(xdev, ps, "full", jigfree=True)
+    gain = fit_static(xdev, ps, "gain", jigfree=True)
     # seed doc 2, 3-pose: the detected poses nearest +x, +y, +z, assumed exactly aligned
     f_nom = static_force(xdev.nominal_offsets(), xdev.nominal_sensitivity(), ps.means)
     fh = f_nom / np.linalg.norm(f_nom, axis=1, keepdims=True)
     pick = [int(np.argmax(fh[:, k])) for k in range(3)]
-    three = calibrate_known_poses(xdev, ps.means[pick], g * np.eye(3), "gain")
+    three = fit_known_poses(xdev, ps.means[pick], g * np.eye(3), "gain")
     off_axis = [float(np.degrees(np.arccos(np.clip(fh[p, k], -1, 1)))) for k, p in enumerate(pick)]
     # leave-one-pose-out check of the full jig-free model
     loo = []
@@ -322,7 +322,7 @@ def main(argv=None):
         keep = np.arange(ps.n_poses) != p
         sub = PoseSet(ps.means[keep], ps.n[keep], ps.std[keep], ps.f_ref[keep], ps.temp[keep],
                       [ps.info[i] for i in np.flatnonzero(keep)])
-        fp = calibrate_jigfree(xdev, sub, "full")
+        fp = fit_static(xdev, sub, "full", jigfree=True)
         f = static_force(fp.offsets, fp.sensitivity, ps.means[p:p + 1])
         loo.append(np.linalg.norm(f) - g)
     loo = np.array(loo)

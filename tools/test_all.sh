@@ -30,4 +30,4 @@ echo "== C core: AVR (16-bit int) under simavr, bit for bit against the host"
 bash tools/run_avr_tests.sh
 
 echo "== Python suite"
-ACCELCAL_HYPOTHESIS="${ACCELCAL_HYPOTHESIS:-ci}" python3 -m pytest -q -p no:cacheprovider
+ACCELCAL_HYPOTHESIS="${ACCELCAL_HYPOTHESIS:-ci}" python3 -m pytest -q -p no:cacheprovider --durations=25

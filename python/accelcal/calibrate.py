@@ -75,6 +75,7 @@ __all__ = [
     "poses_from_recording",
     "calibrate_known_poses",
     "calibrate_jigfree",
+    "fit_known_poses",
     "fit_static",
     "fit_temperature",
     "calibrate_positions",
@@ -260,10 +261,10 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
         hi_lim = runs[r + 1][0] if r + 1 < len(runs) else n
         lo, hi = max(lo_lim, a - ext), min(hi_lim, b + ext)
         med = np.median(raw[a:b:max(1, (b - a) // 2000)], axis=0)
-        far = np.any(np.abs(raw[lo:hi] - med) > EDGE_SIGMA * sig, axis=1)
-        left = np.flatnonzero(far[: a + h - lo])
+        lim = EDGE_SIGMA * sig
+        left = np.flatnonzero(np.any(np.abs(raw[lo:a + h] - med) > lim, axis=1))
         start = lo + (int(left[-1]) + 1 if left.size else 0)
-        right = np.flatnonzero(far[b - h - lo:])
+        right = np.flatnonzero(np.any(np.abs(raw[b - h:hi] - med) > lim, axis=1))
         stop = b - h + int(right[0]) if right.size else hi
         if stop - start >= min_n:
             out.append((int(start), int(stop)))
@@ -552,6 +553,9 @@ def _identifiability(device, method: str, F: np.ndarray, min_rcond: float) -> No
                              f"f along {add} (body {add} axis up)", field=f"channels[{i}]")
         if P < 4:
             what = f"only {P} pose{'s' if P != 1 else ''}"
+        elif np.max(np.linalg.norm(F - F.mean(0), axis=1)) < 0.05 * g:
+            fm = F.mean(0) / g
+            what = f"all {P} poses have about the same f = [{fm[0]:+.2f}, {fm[1]:+.2f}, {fm[2]:+.2f}] g"
         else:
             A = _design("full", device, 0, F / g)
             v = np.linalg.svd(A)[2][-1]
@@ -568,13 +572,31 @@ def _birge(chi2: float, dof: int) -> float:
     return max(1.0, chi2 / dof) if dof > 0 else 1.0
 
 
-def calibrate_known_poses(device, means, f_ref, method: str = "full", sigma=None, *,
-                          poses: PoseSet | None = None, min_rcond: float = MIN_RCOND) -> StaticFit:
+def calibrate_known_poses(device, means, f_ref=None, method: str = "full", sigma=None, *,
+                          min_rcond: float = MIN_RCOND):
+    """Known-pose calibration (seed paper eqs. 16-19; seed doc 2's 1- and 3-pose
+    methods as ``offset`` and ``gain``) -> Calibration.
+
+    ``means``: a PoseSet (its f_ref is used when ``f_ref`` is None, its within-pose
+    scatter for the weights) or a (P,N) array of pose means in counts with ``f_ref``
+    (P,3) m/s^2.  See :func:`fit_known_poses`."""
+    poses = means if isinstance(means, PoseSet) else None
+    m = poses.means if poses is not None else means
+    F = poses.f_ref if (poses is not None and f_ref is None) else f_ref
+    if F is None:
+        raise ValueError("calibrate_known_poses: f_ref is required with a means array")
+    fit = fit_known_poses(device, m, F, method, sigma, poses=poses, min_rcond=min_rcond)
+    return to_calibration(device, fit, method)
+
+
+def fit_known_poses(device, means, f_ref, method: str = "full", sigma=None, *,
+                    poses: PoseSet | None = None, min_rcond: float = MIN_RCOND) -> StaticFit:
     """Per-channel weighted least squares for b_i (and k_i or s_i) from P known poses.
 
     means (P,N) counts, f_ref (P,3) m/s^2, sigma (P,N) 1-sigma of each mean (counts;
     default: ``poses.sem()`` when ``poses`` is given, else equal weights and the
-    covariance from the residuals).  Returns a :class:`StaticFit`.
+    covariance from the residuals).  Raises InputError (which pose to add) when the
+    poses cannot determine a free parameter.  Returns a :class:`StaticFit`.
     """
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
@@ -854,7 +876,9 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
     m = _as_means(device, poses.means)
     P, N = m.shape
-    sig = poses.sem() if sigma is None else np.asarray(sigma, float)
+    # bare means (no within-pose scatter, no sigma): equal weights, covariance from the residuals
+    sigma_known = sigma is not None or bool(np.any(poses.n > 1))
+    sig = np.asarray(sigma, float) if sigma is not None else (poses.sem() if sigma_known else np.ones((P, N)))
     g = device.gravity_mps2
     dT = None
     T0 = None
@@ -879,6 +903,12 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
         _identifiability(device, method, F, min_rcond)
     else:
         F = _initial_forces(device, m) if f_init is None else np.asarray(f_init, float)
+        fh = F / np.linalg.norm(F, axis=1, keepdims=True)
+        spread = float(np.degrees(np.arcsin(min(1.0, np.max(np.linalg.norm(np.cross(fh[0], fh), axis=1))))))
+        if spread < 5.0:
+            raise InputError("<poses>", f"the {P} static poses all have about the same orientation (within "
+                             f"{spread:.1f} deg of each other); jig-free calibration needs poses spread over the "
+                             f"sphere (e.g. add f along {_missing_direction(device, F)})", field="poses")
     gauge = jigfree and method == "full"
     prob = _StaticProblem(device, method, m, sig, dT, jigfree, None if jigfree else F)
     b0 = device.nominal_offsets()
@@ -921,7 +951,7 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
                              if (jigfree and method == "full") else None)
     if C is None:
         raise undetermined()
-    C *= _birge(chi2, dof)
+    C *= _birge(chi2, dof) if sigma_known else (chi2 / dof if dof > 0 else np.nan)
     cov = _channel_cov(device, method, temperature, C, cov_prob.q)
     pose_cov = None
     if jigfree:
@@ -1044,10 +1074,15 @@ def _channel_cov(device, method, temperature, C, q) -> np.ndarray:
     return out
 
 
-def calibrate_jigfree(device, poses: PoseSet, method: str = "full", *, temperature: bool = False,
-                      sigma: np.ndarray | None = None) -> StaticFit:
-    """Jig-free calibration: unknown pose directions under |f| = g (see module notes for the gauge)."""
-    return fit_static(device, poses, method, jigfree=True, temperature=temperature, sigma=sigma)
+def calibrate_jigfree(device, means, method: str = "full", *, sigma: np.ndarray | None = None,
+                      temperature: bool = False):
+    """Jig-free calibration -> Calibration: unknown pose directions under |f| = g
+    (gauge: see the module notes).  ``means``: a PoseSet (e.g. from
+    :func:`poses_from_recording`) or a (P,N) array of pose means in counts (then
+    ``sigma`` (P,N), or equal weights with the covariance from the residuals)."""
+    poses = means if isinstance(means, PoseSet) else _bare_poses(_as_means(device, means))
+    fit = fit_static(device, poses, method, jigfree=True, temperature=temperature, sigma=sigma)
+    return to_calibration(device, fit, "jigfree")
 
 
 def fit_temperature(device, poses: PoseSet, method: str = "full", *, f: np.ndarray | None = None,
@@ -1208,7 +1243,7 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
         elif temperature:
             fit = fit_static(device, poses, model_method, jigfree=False, temperature=True)
         else:
-            fit = calibrate_known_poses(device, poses.means, poses.f_ref, model_method, poses.sem(), poses=poses)
+            fit = fit_known_poses(device, poses.means, poses.f_ref, model_method, poses.sem(), poses=poses)
     except InputError as e:
         if e.source != "<poses>":
             raise

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from accelcal import model
-from accelcal.calibrate import (PoseSet, calibrate_jigfree, calibrate_known_poses, calibrate_positions,
-                                calibrate_recordings, detect_static, estimate_noise, fit_temperature,
+from accelcal.calibrate import (PoseSet, calibrate_jigfree, calibrate_known_poses, calibrate_recordings,
+                                detect_static, estimate_noise, fit_known_poses, fit_static, fit_temperature,
                                 gauge_rotation, pose_means, poses_from_recording, static_force)
 from accelcal.device import default_device, default_triad
 from accelcal.errors import InputError
@@ -132,7 +132,7 @@ def test_known_four_poses_of_the_paper_is_exact_fit():
     b, S = draw_truth(dev, rng)
     F = G * np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, -1.0]])
     ps = poseset_from(dev, b, S, F, rng)
-    fit = calibrate_known_poses(dev, ps.means, F, "full", ps.sem(), poses=ps)
+    fit = fit_known_poses(dev, ps.means, F, "full", ps.sem(), poses=ps)
     assert fit.dof == 0
     assert np.max(np.abs(fit.residual)) < 1e-8
     assert np.max(np.abs(z_scores(fit.offsets, b, fit.offset_sigma))) < 4.5
@@ -146,7 +146,7 @@ def test_three_pose_gain_method_matches_seed_formula():
     b, S = draw_truth(dev, rng, cross=0.0)
     F = G * np.eye(3)
     ps = poseset_from(dev, b, S, F, rng)
-    fit = calibrate_known_poses(dev, ps.means, F, "gain", ps.sem(), poses=ps)
+    fit = fit_known_poses(dev, ps.means, F, "gain", ps.sem(), poses=ps)
     m = ps.means
     ofs = np.array([(m[1, 0] + m[2, 0]) / 2, (m[0, 1] + m[2, 1]) / 2, (m[0, 2] + m[1, 2]) / 2])
     gain = np.array([m[0, 0], m[1, 1], m[2, 2]]) - ofs
@@ -163,9 +163,31 @@ def test_one_pose_offset_method():
     S = dev.nominal_sensitivity()
     F = G * np.array([[0, 0, 1.0]])
     ps = poseset_from(dev, b, S, F, rng)
-    fit = calibrate_known_poses(dev, ps.means, F, "offset", ps.sem(), poses=ps)
+    fit = fit_known_poses(dev, ps.means, F, "offset", ps.sem(), poses=ps)
     assert np.max(np.abs(z_scores(fit.offsets, b, fit.offset_sigma))) < 4.5
     np.testing.assert_array_equal(fit.sensitivity, S)
+
+
+def test_array_entry_points_return_calibrations():
+    """calibrate_known_poses / calibrate_jigfree on bare mean arrays (no scatter known):
+    equal weights, uncertainties from the residuals."""
+    rng = np.random.default_rng(22)
+    dev = default_triad()
+    b, S = draw_truth(dev, rng)
+    F = G * fib_dirs(16)
+    ps = poseset_from(dev, b, S, F, rng)
+    cal = calibrate_known_poses(dev, ps.means, F, "full")
+    assert cal.method == "full" and cal.device == dev.name
+    assert np.max(np.abs(z_scores(cal.offsets, b, cal.offset_sigma))) < 5
+    assert cal == calibrate_known_poses(dev, ps.means, F, "full")
+    jf = calibrate_jigfree(dev, ps.means)
+    assert jf.method == "jigfree"
+    R = gauge_rotation(dev, S)
+    assert np.max(np.abs(z_scores(jf.sensitivity, S @ R.T, jf.sensitivity_sigma))) < 5
+    # with the PoseSet: per-channel weights from the scatter; the same estimate to well within 1 sigma
+    jf2 = calibrate_jigfree(dev, ps)
+    assert np.all(np.abs(jf2.sensitivity - jf.sensitivity) < 0.5 * jf2.sensitivity_sigma)
+    assert len(jf2.extra["poses"]) == 16 and "f_mps2" in jf2.extra["poses"][0]
 
 
 def test_gain_method_shows_model_error_full_removes_it():
@@ -176,8 +198,8 @@ def test_gain_method_shows_model_error_full_removes_it():
     b, S = draw_truth(dev, rng)
     F = G * fib_dirs(12)
     ps = poseset_from(dev, b, S, F, rng)
-    gain = calibrate_known_poses(dev, ps.means, F, "gain", ps.sem(), poses=ps)
-    full = calibrate_known_poses(dev, ps.means, F, "full", ps.sem(), poses=ps)
+    gain = fit_known_poses(dev, ps.means, F, "gain", ps.sem(), poses=ps)
+    full = fit_known_poses(dev, ps.means, F, "full", ps.sem(), poses=ps)
     assert gain.chi2 / gain.dof > 100
     assert full.chi2 / full.dof < 3
 
@@ -205,6 +227,18 @@ def test_full_with_too_few_poses_is_an_error():
     m = model.predict_counts(dev.nominal_offsets(), dev.nominal_sensitivity(), dev.positions, F)
     with pytest.raises(InputError, match=r"only 2 poses.*add a pose with f along"):
         calibrate_known_poses(dev, m, F, "full")
+
+
+def test_repeated_pose_is_refused_by_both_methods():
+    rng = np.random.default_rng(23)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    F = np.repeat(G * np.array([[0, 0, 1.0]]), 12, 0)
+    ps = poseset_from(dev, b, S, F, rng)
+    with pytest.raises(InputError, match=r"all 12 poses have about the same f = \[\+0\.00, \+0\.00, \+1\.00\] g.*add a pose"):
+        calibrate_known_poses(dev, ps)
+    with pytest.raises(InputError, match=r"all have about the same orientation"):
+        calibrate_jigfree(dev, ps)
 
 
 def test_gain_names_the_channel_that_is_not_excited():
@@ -302,8 +336,8 @@ def test_jigfree_is_immune_to_pose_errors_known_pose_is_not():
     th = math.radians(2.0)
     F_true = F_nom * math.cos(th) + np.cross(ax, F_nom) * math.sin(th) + ax * np.sum(ax * F_nom, 1)[:, None] * (1 - math.cos(th))
     ps = poseset_from(dev, b, S, F_true, rng)
-    known = calibrate_known_poses(dev, ps.means, F_nom, "full", ps.sem(), poses=ps)
-    jf = calibrate_jigfree(dev, ps)
+    known = fit_known_poses(dev, ps.means, F_nom, "full", ps.sem(), poses=ps)
+    jf = fit_static(dev, ps, jigfree=True)
     R = gauge_rotation(dev, S)
     z_known = z_scores(known.sensitivity, S, known.sensitivity_sigma / math.sqrt(known.chi2 / known.dof))
     z_jf = z_scores(jf.sensitivity, S @ R.T, jf.sensitivity_sigma)
@@ -334,7 +368,7 @@ def test_temperature_coefficients_known_and_jigfree():
     # jig-free with temperature
     ps = poses_from_recording(rec, dev)
     ps.f_ref[:] = np.nan
-    fit = calibrate_jigfree(dev, ps, temperature=True)
+    fit = fit_static(dev, ps, jigfree=True, temperature=True)
     assert np.max(np.abs(z_scores(fit.offset_tc, beta, fit.offset_tc_sigma))) < 4.5
     assert np.max(np.abs(z_scores(fit.gain_tc, gamma, fit.gain_tc_sigma))) < 4.5
     # fit_temperature with the jig-free poses' forces agrees
@@ -390,7 +424,7 @@ def test_xsens_jigfree_calibration():
     assert rms == pytest.approx(0.00108, abs=1.5e-4)   # measured: 0.00108 m/s^2 over 40 poses
     assert cal.extra["fit"]["rms_norm_error_mps2"] == pytest.approx(rms, rel=1e-3)
     # the offset + gain (3-pose) model on the same poses is far worse: cross-axis terms matter
-    gain = calibrate_jigfree(dev, ps, "gain")
+    gain = fit_static(dev, ps, "gain", jigfree=True)
     f3 = static_force(gain.offsets, gain.sensitivity, ps.means)
     assert np.sqrt(np.mean((np.linalg.norm(f3, axis=1) - dev.gravity_mps2) ** 2)) > 10 * rms
 

@@ -94,3 +94,25 @@ def test_every_subcommand_has_help():
         with pytest.raises(SystemExit) as e:
             main([cmd, "--help"])
         assert e.value.code == 0
+
+
+def test_simulate_then_calibrate_commands(tmp_path):
+    rec = tmp_path / "poses.csv"
+    r = run("simulate", "--device", "default", "--motion", "static_poses", "--param", "poses=\"24\"",
+            "--effect", "offset:db=3", "--seed", "4", "-o", rec)
+    assert r.returncode == 0, r.stderr
+    cal = tmp_path / "cal.json"
+    r = run("calibrate", "--device", "default", rec, "--method", "full", "-o", cal)
+    assert r.returncode == 0, r.stderr
+    c = json.loads(cal.read_text())
+    assert c["method"] == "full" and len(c["channels"]) == 6
+    # the same data without any reference: jig-free is the default, and needs no jig
+    r = run("simulate", "--device", "default", "--motion", "handheld", "--param", "n_poses=16",
+            "--seed", "5", "-o", tmp_path / "hand.csv")
+    assert r.returncode == 0, r.stderr
+
+
+def test_simulate_rejects_unknown_effect(tmp_path):
+    out = tmp_path / "x.csv"
+    r = run("simulate", "--device", "default", "--motion", "rate_table", "--effect", "gian:scale=0.1", "-o", out)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and not out.exists()
