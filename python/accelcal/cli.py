@@ -112,6 +112,12 @@ def cmd_demo(a):
     return run_demo(out_dir=Path(a.out), seed=a.seed)
 
 
+def _simulate_epilog() -> str:
+    from .effects import describe_effects
+    from .motions import describe_motions
+    return "motions:\n" + describe_motions() + "\n\neffects:\n" + describe_effects()
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="accelcal", description=__doc__.splitlines()[0])
     from . import __version__
@@ -124,7 +130,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=int, default=1)
     s.set_defaults(func=cmd_demo)
 
-    s = sub.add_parser("simulate", help="simulate a recording")
+    s = sub.add_parser("simulate", help="simulate a recording", epilog=_simulate_epilog(),
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     s.add_argument("--device", required=True, help="device JSON ('default' = the seed prototype)")
     s.add_argument("--motion", required=True, help="motion profile name")
     s.add_argument("--effect", action="append", default=[], metavar="NAME[:k=v,...]",

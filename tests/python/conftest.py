@@ -2,9 +2,11 @@ import os
 
 from hypothesis import HealthCheck, settings
 
-# CI runs every core property with 10,000 examples; a quick local run uses fewer.
-settings.register_profile("ci", max_examples=10_000, deadline=None,
+# The C core's properties run 10,000 examples each in CI (tests/python/core_settings.py);
+# every other property test runs the profile's count.
+PROFILE = os.environ.get("ACCELCAL_HYPOTHESIS", "dev")
+settings.register_profile("ci", max_examples=200, deadline=None,
                           suppress_health_check=[HealthCheck.too_slow])
-settings.register_profile("dev", max_examples=300, deadline=None,
+settings.register_profile("dev", max_examples=100, deadline=None,
                           suppress_health_check=[HealthCheck.too_slow])
-settings.load_profile(os.environ.get("ACCELCAL_HYPOTHESIS", "dev"))
+settings.load_profile(PROFILE)

@@ -3,6 +3,7 @@ import math
 from fractions import Fraction
 
 import numpy as np
+from core_settings import core
 from hypothesis import given, strategies as st
 
 from accelcal._core import ffi, lib
@@ -20,6 +21,7 @@ def round_half_up(fr: Fraction) -> int:
     return math.floor(fr + Fraction(1, 2))
 
 
+@core
 @given(I32, st.integers(-40, 40))
 def test_scale_round32(v, shift):
     out = ffi.new("int32_t *")
@@ -29,6 +31,7 @@ def test_scale_round32(v, shift):
     assert (st_ == lib.AC_SATURATED) == (exact != clip32(exact))
 
 
+@core
 @given(I32, I32)
 def test_mul32x32_exact(a, b):
     out = ffi.new("ac_i64 *")
@@ -36,6 +39,7 @@ def test_mul32x32_exact(a, b):
     assert out.hi * 2**32 + out.lo == a * b
 
 
+@core
 @given(I32, I32, st.integers(0, 62))
 def test_mul32_shift(a, b, n):
     out = ffi.new("int32_t *")
@@ -45,6 +49,7 @@ def test_mul32_shift(a, b, n):
     assert (st_ == lib.AC_SATURATED) == (exact != clip32(exact))
 
 
+@core
 @given(I32, I32)
 def test_add32_sat(a, b):
     out = ffi.new("int32_t *")
@@ -53,6 +58,7 @@ def test_add32_sat(a, b):
     assert (st_ == lib.AC_SATURATED) == (a + b != clip32(a + b))
 
 
+@core
 @given(I32, st.integers(0, 31))
 def test_asr32_is_floor(v, n):
     out = ffi.new("int32_t *")
@@ -68,6 +74,7 @@ def test_sat16_exhaustive_band():
         assert out[0] == c and (st_ == lib.AC_SATURATED) == (c != v)
 
 
+@core
 @given(I32)
 def test_bitlen(v):
     out = ffi.new("uint8_t *")
@@ -102,6 +109,7 @@ def check_normalised(x):
     assert x.m == 0 or 2**29 <= abs(x.m) < 2**30
 
 
+@core
 @given(XF_IN)
 def test_xf_from_fixed_exact_or_rounded(v):
     x = xf_of(*v)
@@ -110,6 +118,7 @@ def test_xf_from_fixed_exact_or_rounded(v):
     assert abs(xf_value(x) - exact) <= abs(exact) * REL / 2
 
 
+@core
 @given(XF_IN, XF_IN, st.sampled_from(["add", "sub", "mul", "div"]))
 def test_xf_arithmetic_correctly_rounded(a, b, op):
     xa, xb = xf_of(*a), xf_of(*b)
@@ -127,6 +136,7 @@ def test_xf_div_by_zero():
     assert lib.ac_xf_div(xf_of(1, 0), xf_of(0, 0), out) == lib.AC_ERR_SINGULAR
 
 
+@core
 @given(XF_IN, st.integers(-60, 60))
 def test_xf_to_fixed(v, frac):
     x = xf_of(*v)

@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from core_settings import core
 from hypothesis import assume, given, strategies as st
 
 from accelcal import model, native
@@ -78,6 +79,7 @@ def intermediates_overflow(t, raw, w):
         (np.abs(acc.astype(float) - tacc) >= lim) | (np.abs(out) >= lim)
 
 
+@core
 @given(calibrated_arrays())
 def test_resolve_within_bound_of_exact(case):
     t, _, _, _, rng = case
@@ -93,6 +95,7 @@ def test_resolve_within_bound_of_exact(case):
         assert np.all(intermediates_overflow(t, raw[out_sat], w[out_sat]).any(axis=1))
 
 
+@core
 @given(calibrated_arrays())
 def test_resolve_without_rotation_is_correctly_rounded(case):
     """No omega: the linear path is exact before one rounding (half up)."""
@@ -104,6 +107,7 @@ def test_resolve_without_rotation_is_correctly_rounded(case):
     assert np.array_equal(out[clean], np.floor(exact[clean] + 0.5))
 
 
+@core
 @given(calibrated_arrays())
 def test_device_build_matches_host_quantizer(case):
     t, *_ = case
@@ -124,6 +128,7 @@ def test_device_build_matches_host_quantizer(case):
                   + np.abs(kb) * 2.0**-26 * 2.0 ** t.cond_log2)
 
 
+@core
 @given(calibrated_arrays())
 def test_fixed_path_tracks_float_reference(case):
     """Against the float reference: the core's arithmetic bound plus the rounding
@@ -159,6 +164,7 @@ def to_xf_matrix(A):
     return a, exact
 
 
+@core
 @given(st.integers(0, 2**32 - 1), st.floats(0, 15))
 def test_invert6_accuracy_scales_with_condition(seed, log2cond):
     rng = np.random.default_rng(seed)
@@ -226,6 +232,7 @@ def dt_fixed(dt):
     return dt_m, dt_shift
 
 
+@core
 @given(st.integers(0, 2**32 - 1), st.sampled_from([0, 1, 109, 1000, 65535]),
        st.sampled_from([2.5, 60.0, 100.0, 1000.0]))
 def test_rate_integrator_within_bound(seed, leak, rate_hz):
