@@ -219,11 +219,18 @@ def _frozen_array(value: Any, dtype: Any, shape: tuple, name: str) -> np.ndarray
 
 
 def _normalise_rows(axes: np.ndarray) -> np.ndarray:
-    norms = np.linalg.norm(axes, axis=1)
-    # Leave rows that are already unit to the last bits alone, so that loading
-    # a saved device gives back exactly the same axes.
-    scale = np.where(np.abs(norms - 1.0) <= 4 * np.finfo(float).eps, 1.0, norms)
-    return axes / scale[:, None]
+    """Rows scaled to unit length (rows of zeros or non-finite give NaN)."""
+    with np.errstate(all="ignore"):
+        norms = np.linalg.norm(axes, axis=1)
+        # Leave rows that are already unit to the last bits alone, so that
+        # loading a saved device gives back exactly the same axes.
+        done = np.abs(norms - 1.0) <= 4 * np.finfo(float).eps
+        # Divide by the largest component first: |a|^2 of 1e200 or 1e-320
+        # would overflow or underflow.
+        peak = np.max(np.abs(axes), axis=1, keepdims=True)
+        scaled = axes / peak
+        unit = scaled / np.linalg.norm(scaled, axis=1, keepdims=True)
+    return np.where(done[:, None], axes, unit)
 
 
 def _geometry_rank(positions: np.ndarray, axes: np.ndarray) -> int:
@@ -279,11 +286,9 @@ class Device:
             raise ValueError(f"Device.positions: expected shape (N, 3), got {pos.shape}")
         set_ = object.__setattr__
         set_(self, "positions", _frozen_array(pos, float, (n, 3), "positions"))
-        axes = _frozen_array(self.axes, float, (n, 3), "axes")
-        norms = np.linalg.norm(axes, axis=1)
-        if np.any(~np.isfinite(norms)) or np.any(norms == 0):
+        axes = _normalise_rows(_frozen_array(self.axes, float, (n, 3), "axes"))
+        if not np.all(np.isfinite(axes)):
             raise ValueError("Device.axes: every axis must be a finite non-zero vector")
-        axes = _normalise_rows(axes)
         axes.setflags(write=False)
         set_(self, "axes", axes)
         set_(self, "counts_per_mps2", _frozen_array(self.counts_per_mps2, float, (n,), "counts_per_mps2"))
@@ -420,12 +425,7 @@ def device_from_dict(d: Any, source: str = "<dict>") -> Device:
                 f"{p}.zero_counts",
                 f"expected a value in [raw_min, raw_max] = [{raw_min}, {raw_max}], got {_show(ch['zero_counts'])}",
             )
-    # Very small (denormal) axes overflow when normalised.
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        unit = _normalise_rows(axes)
-    bad = np.flatnonzero(~np.all(np.isfinite(unit), axis=1))
-    if bad.size:
-        raise v.fail(f"channels[{bad[0]}].axis", "expected a vector of usable length, got a vanishingly small one")
+    unit = _normalise_rows(axes)
     dev = Device(
         name=name,
         sample_rate_hz=rate,

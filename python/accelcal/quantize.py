@@ -153,7 +153,7 @@ def quantize(offsets, sensitivity, positions, device: str = "") -> FixedTables:
 
 def quantize_calibration(device, cal) -> FixedTables:
     """quantize() for a Device and a Calibration (positions default to the device's)."""
-    pos = cal.positions if cal.positions is not None else device.positions
+    pos = cal.positions_or_nominal(device)
     return quantize(cal.offsets, cal.sensitivity, pos, device.name)
 
 

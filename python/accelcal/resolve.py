@@ -35,7 +35,7 @@ def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str
         raise InputError(rec.source, f"recording has {rec.n_channels} channels but device "
                          f"'{device.name}' has {device.n_channels}")
     omega = omega_for(rec, omega_source)
-    pos = cal.positions if cal.positions is not None else device.positions
+    pos = cal.positions_or_nominal(device)
     if engine == "float":
         f, a = model.resolve(cal.offsets, cal.sensitivity, pos, rec.raw, omega)
         return f, a, None

@@ -6,7 +6,7 @@ import os
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given, settings, strategies as st
 
 from accelcal.calibration import (
     Calibration,
@@ -17,6 +17,10 @@ from accelcal.calibration import (
 )
 from accelcal.device import default_device, default_triad
 from accelcal.errors import InputError
+
+# Properties that touch files: capped so that the CI profile (10,000 examples)
+# stays within the CI time budget.
+IO = settings(max_examples=min(settings().max_examples, 1000))
 
 
 def full_cal(n=6, seed=0):
@@ -291,9 +295,10 @@ def calibrations(draw):
     )
 
 
+@IO
 @given(calibrations())
 def test_property_round_trip(tmp_path_factory, cal):
-    p = tmp_path_factory.mktemp("cal") / "c.json"
+    p = tmp_path_factory.getbasetemp() / "test_io_calibration_cal_c.json"
     save_calibration(cal, p)
     assert load_calibration(p) == cal
 
@@ -315,6 +320,7 @@ def _paths(obj, prefix=()):
             yield from _paths(v, prefix + (i,))
 
 
+@IO
 @given(st.data())
 def test_property_corruption_gives_input_error(tmp_path_factory, data):
     d = calibration_to_dict(full_cal())
@@ -326,7 +332,7 @@ def test_property_corruption_gives_input_error(tmp_path_factory, data):
         del target[path[-1]]
     else:
         target[path[-1]] = data.draw(json_values)
-    p = tmp_path_factory.mktemp("bad") / "c.json"
+    p = tmp_path_factory.getbasetemp() / "test_io_calibration_bad_c.json"
     p.write_text(json.dumps(d))
     dev = data.draw(st.sampled_from([None, default_device()]))
     try:
@@ -337,9 +343,10 @@ def test_property_corruption_gives_input_error(tmp_path_factory, data):
     assert isinstance(cal, Calibration)
 
 
+@IO
 @given(st.binary(max_size=200))
 def test_property_random_bytes(tmp_path_factory, blob):
-    p = tmp_path_factory.mktemp("junk") / "c.json"
+    p = tmp_path_factory.getbasetemp() / "test_io_calibration_junk_c.json"
     p.write_bytes(blob)
     try:
         load_calibration(p)

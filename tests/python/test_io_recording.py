@@ -6,7 +6,7 @@ import os
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, strategies as st
+from hypothesis import assume, given, settings, strategies as st
 
 from accelcal.errors import InputError
 from accelcal.recording import (
@@ -21,6 +21,10 @@ from accelcal.recording import (
 )
 
 HEADER = "t,raw_0,raw_1,raw_2"
+
+# Properties that touch files: capped so that the CI profile (10,000 examples)
+# stays within the CI time budget.
+IO = settings(max_examples=min(settings().max_examples, 1000))
 
 
 def write(tmp_path, text, name="rec.csv"):
@@ -444,9 +448,10 @@ def recordings(draw):
     return rec
 
 
+@IO
 @given(recordings())
 def test_property_round_trip(tmp_path_factory, rec):
-    p = tmp_path_factory.mktemp("rt") / "r.csv"
+    p = tmp_path_factory.getbasetemp() / "test_io_recording_rt_r.csv"
     write_recording(p, rec, float_format="%.17g")
     back = read_recording(p, rec.n_channels)
     assert back == rec, (rec, back)
@@ -463,6 +468,7 @@ numeric_cell = st.one_of(
 
 
 @pytest.mark.parametrize("kind", ["raw", "pose", "t", "ref"])
+@IO
 @given(cells=st.lists(numeric_cell, min_size=1, max_size=12))
 def test_property_fast_and_slow_paths_agree(kind, cells):
     """The vectorised byte path and the per-cell csv path accept exactly the
@@ -483,10 +489,11 @@ def test_property_fast_and_slow_paths_agree(kind, cells):
         assert results[0] == results[1]
 
 
+@IO
 @given(st.data())
 def test_property_corruption_gives_input_error(tmp_path_factory, data):
     rec = data.draw(recordings())
-    p = tmp_path_factory.mktemp("bad") / "r.csv"
+    p = tmp_path_factory.getbasetemp() / "test_io_recording_bad_r.csv"
     write_recording(p, rec)
     blob = bytearray(p.read_bytes())
     for _ in range(data.draw(st.integers(1, 3))):
