@@ -12,5 +12,9 @@
 #include "ac_resolve.h"
 #include "ac_invert.h"
 #include "ac_rate.h"
+#include "ac_trig.h"
+#include "ac_rest.h"
+#include "ac_attitude.h"
+#include "ac_displace.h"
 
 #endif /* ACCELCAL_H */

@@ -16,6 +16,7 @@ INCLUDE = ROOT / "include"
 CSRC = ROOT / "csrc"
 HEADERS = ["ac_status.h", "ac_fixed.h", "ac_xf.h", "ac_trim.h", "ac_resolve.h", "ac_invert.h",
            "ac_rate.h"]
+HEADERS += ["ac_trig.h", "ac_rest.h", "ac_attitude.h", "ac_displace.h"]  # motion estimators
 
 
 def config_constants(include_dir: Path = INCLUDE) -> dict[str, int]:

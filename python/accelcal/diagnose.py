@@ -1,0 +1,1906 @@
+"""Sim-to-real diagnosis: how far the data are from the calibrated model, where the gap
+lies, which unmodelled effect explains it, and how much of it that effect removes.
+
+    result = diagnose(device, calibration, [recording, ...])      # the JSON object (a dict)
+    write_report(result, "report/")                                # PNGs + summary.md
+
+Definitions (what every number in the output means)
+---------------------------------------------------
+**Model prediction.**  The calibrated model of the data contract driven by the reference:
+``pred_i = b_i(T) + g_i(T) s_i . f(r_i)`` with ``f(r) = f + alpha x r + m0 omega x (omega x r)``
+(b, s, r and the temperature terms from the calibration; ``m0`` = 1, the contract's model,
+or 0 with ``model_centripetal=False``), clipped to [raw_min, raw_max].  It is evaluated with
+the effect registry's own ``effects.evaluate``.
+
+* Reference mode (a recording with ``f_*``): every sample whose f (and, for a device with
+  channels off the origin, w and dw; static poses count as w = dw = 0) is known.
+* Jig-free mode (no recording has ``f_*``; e.g. the real Xsens recording): the static poses
+  (``pose`` labels, else ``calibrate.detect_static``) are the reference.  Each pose's specific
+  force ``f_p`` is estimated from the pose mean with the calibration under ``|f_p| = g``.  The
+  two pose angles are nuisance parameters, so the residual of every sample is projected on
+  the N - 2 directions of channel space they cannot explain (per pose, the orthogonal
+  complement of ``span(S e1, S e2)`` with e1, e2 across f_p; for a triad that is the one
+  direction that changes |f|).  Fits and held-out scores use these projected rows; the
+  breakdown ("where") uses the per-channel residual.
+
+**Residual (the gap)**: ``e = raw - pred`` (counts).
+
+**Noise floor** (from the data itself): per channel, the pooled within-segment standard
+deviation of e over the static segments (pose labels / detected static intervals: their means
+removed, so a constant model error does not count) when they give at least 30 degrees of
+freedom; otherwise ``1.4826 MAD(d) / sqrt(70)`` of the fourth differences
+``d = e[t-2] - 4 e[t-1] + 6 e[t] - 4 e[t+1] + e[t+2]`` inside contiguous segments (blind to any
+smooth model error).  Floored at 1/sqrt(12) count (rounding).  The pooled floor is the RMS
+over channels.
+
+**Blocked cross-validation.**  Usable samples are cut into contiguous segments (a recording,
+no time gap, one pose label).  Each segment is split into max(folds, ceil(length / 2 s))
+contiguous blocks (a segment shorter than ``folds`` samples is one block); block j of a segment
+goes to fold (j + o) mod folds with o a random offset per segment (``seed``).  So every static
+pose has samples in every fold (per-pose parameters such as ``pose_error`` can be validated)
+while neighbouring, correlated samples stay together.  A candidate's parameters are fitted on
+the other folds and the residual is scored on the held-out fold.
+
+**Scores.**  Weighted squares ``chi2 = sum w (residual)^2`` with w = 1 / noise_floor^2 of the
+channel (row).  For a candidate, ``gain_b = chi2_b(before) - chi2_b(after)`` per held-out block;
+``gain`` = its sum; ``t`` = mean(gain_b) / standard error over blocks (the blocks are the
+independent units: residuals are correlated in time); ``penalty`` = PENALTY_PER_PARAM x the
+number of parameters it adds; ``z = gain / (2 s2 sqrt(k K/(K-1)))`` compares the gain with its
+spread under the null (noise only: mean ~ -k K/(K-1), standard deviation ~ 2 sqrt(k K/(K-1)) in
+chi2 units), inflated by ``s2 = max(1, held-out chi2 after / rows)`` when the residual left is
+larger than the noise floor says.  A candidate is **significant** when gain - penalty > 0,
+(t >= T_MIN or z >= Z_MIN) and its shrink >= MIN_SHRINK -- or on proof from the raw values
+(``quantization``: a lattice beyond doubt; ``saturation``: a pile of readings at one extreme
+value while the model goes well beyond it).  The t route needs the gain in many blocks; the z
+route also finds effects that show in a few blocks only (a short rotation among many static
+poses).  Candidates are ranked by gain - penalty.
+
+**Stepwise.**  The best significant candidate is added to the model (its in-sample fit is
+subtracted from the residual) and every other candidate is scored again on what is left,
+until none is significant or MAX_STEPS effects are in.  The verdict is the first one, or
+``none``.  At the end the chosen effects are refitted jointly (backfitting) for the reported
+model parameters.
+
+**How far.**  ``heldout_rms_before`` / ``heldout_rms_after``: RMS (counts, over all held-out
+rows) of the residual without / with the effect, each sample scored with parameters fitted
+without its fold; ``shrink = 1 - after / before`` (0..1, clipped at 0): the fraction of the
+held-out gap that adding the effect removes.  The benchmark's true shrink is the same ratio
+with the true effect and its true parameters (tools/bench_diagnose.py).
+
+Candidates (the registry's effects; parameters in the registry's concrete form, so that
+``EFFECTS[name].apply(ctx, params)`` reproduces the fit):
+
+* linear in their parameters given the reference, per-channel least squares: ``offset``,
+  ``gain``, ``misalignment`` (first order in the rotation, 2 per channel), ``position_error``
+  (3 per channel, unobservable directions left at 0), ``centripetal`` (the multiplier),
+  ``nonlinearity``, ``bias_drift`` (a ramp in the recordings' time from the earliest first
+  sample: recordings that share a time base share the ramp; a random walk is not fitted), ``temperature_offset`` / ``temperature_gain`` (per-channel coefficients and
+  one shared reference temperature: the calibration's ``temperature_ref_c`` when it has one,
+  else fitted by a 1-D search);
+* ``pose_error``: two angles per static pose (across the stated f), shared by the channels;
+* 1-D nonlinear searches per channel: ``time_skew`` (the model's sensed signal shifted by tau
+  along a cubic spline per segment) and ``bandwidth`` (the registry's first-order low-pass on
+  the model prediction, parameterised by the delay 1 / (2 pi f_c)): a grid, then a parabolic
+  refinement, per fold;
+* from the raw values' distribution: ``saturation`` (a pile of readings at the extreme value
+  of a channel, inside [raw_min, raw_max], where the model predicts beyond it; the levels are
+  read from all the data and every block is scored with them, since the clipped samples
+  often sit in one block that no training fold would see) and ``quantization`` (the raw
+  values on a lattice of step q >= 2, per fold); their predictions are the registry's clip /
+  rounding of the model prediction.
+
+Also reported: the static poses' mean residual against what noise explains
+(``gap.pose_mean_*``), and the use of the raw values' low bits (``raw_values``; a note when
+codes are missing or doubled without forming a lattice).
+
+Candidates whose reference is missing are skipped with the reason (``skipped``).
+"""
+from __future__ import annotations
+
+import math
+import os
+import time
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+from .effects import EFFECT_NAMES, EFFECTS
+from .errors import AccelcalError, InputError
+
+__all__ = [
+    "diagnose",
+    "write_report",
+    "DiagnosisResult",
+    "FORMAT",
+    "T_MIN",
+    "Z_MIN",
+    "PENALTY_PER_PARAM",
+    "MIN_SHRINK",
+    "MAX_STEPS",
+]
+
+FORMAT = "accelcal-diagnosis/1"
+
+# --- documented defaults ------------------------------------------------------
+T_MIN = 4.0                # block t statistic a candidate's held-out gain must reach, or
+Z_MIN = 6.0                # ... its held-out chi2 gain in units of its null spread
+PENALTY_PER_PARAM = 2.0    # chi2 units per parameter an effect adds (AIC-like)
+MIN_SHRINK = 0.005         # a significant effect removes at least this fraction of the gap
+MAX_STEPS = 3              # effects found stepwise at most
+BLOCK_S = 2.0              # longest cross-validation block in a moving segment (s)
+MIN_NOISE_DOF = 30         # static samples needed for the static noise-floor estimate
+ROTATING_RADPS = 0.05      # |w| above this counts as rotating (regimes, position_error)
+TEMP_MIN_SPAN_C = 1.0      # temperature candidates need this span of temp_c
+POSITION_TOL_M = 1e-3      # position_error reports dr along directions with 1-sigma below this
+QUANT_MIN_FRAC = 0.99      # share of readings on the lattice to call a channel quantised
+QUANT_STRONG_FRAC = 0.999  # ... and to take the lattice alone as proof (with QUANT_STRONG_VALUES)
+QUANT_STRONG_VALUES = 20   # distinct lattice values needed for the proof (chance <= 2^-19)
+QUANT_MAX_STEP = 256
+SAT_PROOF_COUNT = 10       # readings at one extreme value, the model >= 5 sigma beyond: proof of a clip
+BACKFIT_PASSES = 3
+
+_ROUND_SIGMA = math.sqrt(1.0 / 12.0)
+_SKEW_GRID = np.array([0.0, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0])
+_SKEW_GRID = np.concatenate([-_SKEW_GRID[:0:-1], _SKEW_GRID])          # in samples
+_DELAY_GRID = np.array([0.0, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.5, 6.0, 8.0, 12.0, 16.0])  # samples
+
+
+class DiagnosisResult(dict):
+    """The diagnosis JSON object (a plain dict for ``json.dump``); ``series`` holds the
+    per-sample arrays (time, residual before/after, noise floor) that :func:`write_report`
+    plots.  It is not part of the JSON."""
+
+    series: dict | None = None
+
+
+# ==============================================================================
+# Inputs
+# ==============================================================================
+
+
+def _as_device(device: Any):
+    from .device import Device, load_device
+    if isinstance(device, Device):
+        return device
+    if isinstance(device, (str, os.PathLike)):
+        return load_device(device)
+    raise AccelcalError(f"diagnose: expected a Device or a device JSON path, got {type(device).__name__}")
+
+
+def _as_calibration(cal: Any, device) -> tuple[Any, str]:
+    from .calibration import Calibration, load_calibration
+    if isinstance(cal, (str, os.PathLike)):
+        return load_calibration(cal, device), os.fspath(cal)
+    if not isinstance(cal, Calibration):
+        raise AccelcalError(f"diagnose: expected a Calibration or a calibration JSON path, got {type(cal).__name__}")
+    src = str(cal.extra.get("source", "<calibration>")) if isinstance(cal.extra, dict) else "<calibration>"
+    if cal.device != device.name:
+        raise InputError(src, f"calibration is for {cal.device!r} but the device is {device.name!r}", field="device")
+    if cal.n_channels != device.n_channels:
+        raise InputError(src, f"calibration has {cal.n_channels} channels but the device {device.name!r} has "
+                         f"{device.n_channels}", field="channels")
+    if not (np.all(np.isfinite(cal.offsets)) and np.all(np.isfinite(cal.sensitivity))):
+        raise InputError(src, "offsets and sensitivities must be finite", field="channels")
+    return cal, src
+
+
+def _as_recordings(recordings: Any, device) -> list:
+    from .recording import Recording, read_recording
+    if isinstance(recordings, (Recording, str, os.PathLike)):
+        recordings = [recordings]
+    out = []
+    for r in recordings:
+        if isinstance(r, (str, os.PathLike)):
+            r = read_recording(r, device.n_channels)
+        if not isinstance(r, Recording):
+            raise AccelcalError(f"diagnose: expected Recordings or CSV paths, got {type(r).__name__}")
+        if r.n_channels != device.n_channels:
+            raise InputError(r.source, f"the recording has {r.n_channels} raw channels (raw_0..raw_{r.n_channels - 1}) "
+                             f"but device {device.name!r} has {device.n_channels}",
+                             column=f"raw_{min(r.n_channels, device.n_channels)}")
+        if r.n_samples < 2:
+            raise InputError(r.source, f"only {r.n_samples} sample(s): nothing to diagnose")
+        bad = np.flatnonzero(~(np.diff(r.t) > 0))
+        if bad.size:
+            raise InputError(r.source, f"t must be strictly increasing (sample {int(bad[0]) + 1})", column="t")
+        out.append(r)
+    if not out:
+        raise InputError("<command line>", "no recording given")
+    return out
+
+
+# ==============================================================================
+# The data the candidates work on
+# ==============================================================================
+
+
+@dataclass
+class _Data:
+    device: Any
+    cal: Any
+    mode: str                     # "reference" | "jigfree"
+    m0: float                     # centripetal multiplier of the model
+    K: int                        # folds
+    t: np.ndarray                 # (n,) recording time
+    tg: np.ndarray                # (n,) strictly increasing global time (recordings laid end to end)
+    rec: np.ndarray               # (n,) recording index
+    seg: np.ndarray               # (n,) segment index
+    seg_lo: np.ndarray            # (S,) first sample of each segment
+    seg_hi: np.ndarray            # (S,) one past the last
+    bstart: np.ndarray            # (B,) first sample of each block (blocks are contiguous)
+    bfold: np.ndarray             # (B,) fold of each block
+    bseg: np.ndarray              # (B,)
+    block: np.ndarray             # (n,)
+    raw: np.ndarray               # (n, N) float
+    pred: np.ndarray              # (n, N) model prediction, unclipped
+    p0: np.ndarray                # (n, N) clipped to the ADC range
+    offset_t: np.ndarray          # (n, N) b + bias(T)
+    gain_t: np.ndarray | None     # (n, N) temperature gain factor or None
+    sensed: np.ndarray            # (n, N) pred - offset_t
+    f: np.ndarray                 # (n, 3) reference (or estimated) specific force
+    w: np.ndarray                 # (n, 3)
+    dw: np.ndarray                # (n, 3)
+    temp: np.ndarray              # (n,) NaN unknown
+    pose: np.ndarray              # (n,) global pose index, -1 none
+    pose_labels: list             # [(recording index, label)] per global pose
+    pose_stated: np.ndarray       # (n,) pose with a stated (reference) f, for pose_error
+    static: np.ndarray            # (n,) bool
+    s: np.ndarray                 # (N, 3)
+    r: np.ndarray                 # (N, 3)
+    b: np.ndarray                 # (N,)
+    rec_t0: np.ndarray            # (n_rec,) first sample time of each recording
+    rec_info: list
+    notes: list
+    Qp: np.ndarray | None = None  # (P, M, N) jig-free projections per pose
+    sigma: np.ndarray | None = None   # (N,) noise floor
+    noise_method: str = ""
+    W: np.ndarray | None = None   # (n, R) row weights
+    h: float = 0.0                # sample period (s)
+
+    @property
+    def n(self) -> int:
+        return int(self.t.shape[0])
+
+    @property
+    def N(self) -> int:
+        return int(self.raw.shape[1])
+
+    @property
+    def B(self) -> int:
+        return int(self.bstart.shape[0])
+
+    def rows(self, A: np.ndarray) -> np.ndarray:
+        """Channel-space array (n, N) -> the rows that are fitted and scored (n, R)."""
+        if self.Qp is None:
+            return A
+        return np.einsum("tmn,tn->tm", self.Qp[self.pose], A)
+
+    @property
+    def R(self) -> int:
+        return self.N if self.Qp is None else int(self.Qp.shape[1])
+
+    def bsum(self, a: np.ndarray) -> np.ndarray:
+        """Per-block sums along axis 0."""
+        return np.add.reduceat(a, self.bstart, axis=0)
+
+
+def _tangent_basis(d: np.ndarray) -> np.ndarray:
+    """(..., 2, 3) two unit vectors across each unit row of d (..., 3)."""
+    d = np.asarray(d, float)
+    helper = np.where(np.abs(d[..., :1]) < 0.9, np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
+    e1 = np.cross(d, helper)
+    e1 /= np.linalg.norm(e1, axis=-1, keepdims=True)
+    e2 = np.cross(d, e1)
+    return np.stack([e1, e2], axis=-2)
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    return v / np.where(n > 0, n, 1.0)
+
+
+def _segments(t: np.ndarray, usable: np.ndarray, key: np.ndarray, h: float) -> list[tuple[int, int]]:
+    """Contiguous runs of usable samples with one key and no time gap (index pairs)."""
+    n = t.shape[0]
+    brk = np.zeros(n, bool)
+    brk[0] = True
+    brk[1:] = (np.diff(t) > 1.5 * h) | (key[1:] != key[:-1]) | (usable[1:] != usable[:-1])
+    starts = np.flatnonzero(brk)
+    ends = np.append(starts[1:], n)
+    return [(int(a), int(b)) for a, b in zip(starts, ends) if usable[a]]
+
+
+def _jigfree_poses(rec, device) -> list[np.ndarray]:
+    """Static poses of a recording without reference f: its pose labels, else detected."""
+    from .calibrate import detect_static
+    if rec.has_pose():
+        out = []
+        for lab in rec.pose_labels():
+            out.append(np.flatnonzero(rec.pose == lab))
+        return out
+    return [np.arange(a, b) for a, b in detect_static(rec, device)]
+
+
+def _pose_force(S: np.ndarray, ybar: np.ndarray, g: float, wch: np.ndarray) -> np.ndarray:
+    """f with |f| = g minimising sum_i w_i (ybar_i - s_i . f)^2 (Gauss-Newton on the sphere)."""
+    sw = np.sqrt(wch)
+    f = np.linalg.lstsq(S * sw[:, None], ybar * sw, rcond=None)[0]
+    nf = np.linalg.norm(f)
+    f = g * (f / nf if nf > 0 else np.array([0.0, 0.0, 1.0]))
+    for _ in range(8):
+        E = _tangent_basis(f / g)                        # (2,3)
+        J = (S @ E.T) * sw[:, None]                      # (N,2)
+        d = np.linalg.lstsq(J, (ybar - S @ f) * sw, rcond=None)[0]
+        f = f + E.T @ d
+        f = g * f / np.linalg.norm(f)
+        if np.max(np.abs(d)) < 1e-12 * g:
+            break
+    return f
+
+
+def _prepare(device, cal, recs: list, K: int, seed: int, m0: float, jig_noise_hint=None) -> _Data:
+    from .motions import Trajectory
+    from .simulate import true_state
+    from .effects import evaluate
+
+    N = device.n_channels
+    g = float(device.gravity_mps2)
+    b = np.asarray(cal.offsets, float)
+    S = np.asarray(cal.sensitivity, float)
+    r = cal.positions_or_nominal(device)
+    at_origin = bool(np.all(np.abs(r) < 1e-12))
+    h = 1.0 / float(device.sample_rate_hz)
+    has_f = [rec.has_f() for rec in recs]
+    notes: list[str] = []
+    if any(has_f):
+        mode = "reference"
+        keep = [i for i, hf in enumerate(has_f) if hf]
+        for i, hf in enumerate(has_f):
+            if not hf:
+                notes.append(f"{recs[i].source}: skipped: no reference f while other recordings have one "
+                             "(diagnose it on its own for a jig-free diagnosis)")
+    else:
+        mode = "jigfree"
+        keep = list(range(len(recs)))
+
+    parts = []
+    pose_labels: list = []
+    rec_info = []
+    for ri in keep:
+        rec = recs[ri]
+        n = rec.n_samples
+        T = np.asarray(rec.temp_c, float)
+        has_tc = cal.temp_ref_c is not None and (cal.offset_tc is not None or cal.gain_tc is not None)
+        state = true_state(device, cal, T if has_tc else None)
+        state = state.replace(centripetal=np.full(N, float(m0)))
+        pose_lab = np.asarray(rec.pose, np.int64)
+        if mode == "reference":
+            traj = Trajectory.from_recording(rec, g)
+            if at_origin:      # no rotation terms: w and dw are not needed
+                traj.omega = np.nan_to_num(traj.omega)
+                traj.alpha = np.nan_to_num(traj.alpha)
+            with np.errstate(invalid="ignore"):
+                pred = evaluate(traj, state)
+            usable = np.all(np.isfinite(pred), axis=1)
+            f, w, dw = traj.f, traj.omega, traj.alpha
+            stated = pose_lab >= 0
+            key = pose_lab.copy()
+            how = "reference f" + (", w, dw" if rec.has_omega() else "") + (", temp_c" if rec.has_temp() else "")
+        else:
+            poses = _jigfree_poses(rec, device)
+            off = state.total_offset()
+            off = np.broadcast_to(off, (n, N))
+            gain = np.ones((n, N)) if state.gain is None else state.gain
+            y = (np.asarray(rec.raw, float) - off) / gain
+            f = np.full((n, 3), np.nan)
+            key = np.full(n, -1, np.int64)
+            wch = 1.0 / np.maximum(np.asarray(device.noise_counts(), float), 1.0) ** 2 \
+                if np.all(device.noise_counts() > 0) else np.ones(N)
+            for p, idx in enumerate(poses):
+                f[idx] = _pose_force(S, y[idx].mean(axis=0), g, wch)
+                key[idx] = p
+            w = np.where(np.isfinite(f), 0.0, np.nan)
+            dw = w.copy()
+            usable = np.all(np.isfinite(f), axis=1)
+            pred = np.full((n, N), np.nan)
+            fu = np.nan_to_num(f)
+            pred[:] = off + gain * (fu @ S.T)
+            pred[~usable] = np.nan
+            stated = np.zeros(n, bool)
+            pose_lab = key
+            how = f"jig-free: {len(poses)} static poses, |f| = g"
+        if not usable.any():
+            if mode == "jigfree":
+                raise InputError(rec.source, "no reference to diagnose against: no f_x, f_y, f_z columns and no "
+                                 "static interval (at least 1 s at rest) whose |f| = g could serve instead")
+            raise InputError(rec.source, "no sample has a complete reference (f_x, f_y, f_z, and w_*, dw_* while "
+                             "moving) to predict the readings from", column="f_x")
+        if mode == "reference" and usable.sum() < 0.5 * n:
+            notes.append(f"{rec.source}: {int((~usable).sum())} of {n} samples lack part of the reference "
+                         "(f, or w/dw while moving) and are left out")
+        off = np.broadcast_to(state.total_offset(), (n, N))
+        gain_t = None if state.gain is None else np.asarray(state.gain, float)
+        parts.append(dict(ri=ri, rec=rec, usable=usable, pred=pred, off=off, gain=gain_t, f=f, w=w, dw=dw,
+                          T=T, key=key, stated=stated, pose_lab=pose_lab))
+        rec_info.append({"source": rec.source, "n_samples": int(n), "n_used": int(usable.sum()), "reference": how})
+
+    # --- concatenate the usable samples, segments, global pose indices -----------------
+    cols: dict[str, list] = {k: [] for k in ("t", "tg", "rec", "raw", "pred", "off", "gain", "f", "w", "dw", "T",
+                                             "pose", "stated")}
+    seg_lo, seg_hi = [], []
+    tg_off = 0.0
+    n_tot = 0
+    pose_map: dict = {}
+    rec_t0 = []
+    for k, pt in enumerate(parts):
+        rec, u = pt["rec"], pt["usable"]
+        t = np.asarray(rec.t, float)
+        rec_t0.append(float(t[0]))
+        segs = _segments(t, u, pt["key"], h)
+        idx = np.concatenate([np.arange(a, bb) for a, bb in segs])
+        # local positions of the segments in the concatenated arrays
+        pos = n_tot
+        for a, bb in segs:
+            seg_lo.append(pos)
+            seg_hi.append(pos + bb - a)
+            pos += bb - a
+        tt = t[idx]
+        cols["t"].append(tt)
+        cols["tg"].append(tt - t[0] + tg_off)
+        tg_off += float(t[-1] - t[0]) + 1000.0 * h + 1.0
+        cols["rec"].append(np.full(idx.size, k))
+        cols["raw"].append(np.asarray(rec.raw, float)[idx])
+        cols["pred"].append(pt["pred"][idx])
+        cols["off"].append(np.asarray(pt["off"], float)[idx])
+        cols["gain"].append(np.ones((idx.size, N)) if pt["gain"] is None else pt["gain"][idx])
+        for nm in ("f", "w", "dw"):
+            cols[nm].append(np.asarray(pt[nm], float)[idx])
+        cols["T"].append(pt["T"][idx])
+        lab = pt["pose_lab"][idx]
+        gp = np.full(idx.size, -1, np.int64)
+        for L in np.unique(lab[lab >= 0]):
+            keyp = (k, int(L))
+            if keyp not in pose_map:
+                pose_map[keyp] = len(pose_map)
+            gp[lab == L] = pose_map[keyp]
+        cols["pose"].append(gp)
+        cols["stated"].append(pt["stated"][idx])
+        n_tot += idx.size
+    cat = {k: np.concatenate(v) for k, v in cols.items()}
+    seg_lo = np.array(seg_lo, np.int64)
+    seg_hi = np.array(seg_hi, np.int64)
+    n = n_tot
+    seg = np.repeat(np.arange(seg_lo.size), seg_hi - seg_lo)
+
+    # --- blocks and folds -----------------------------------------------------------------
+    rng = np.random.default_rng(seed)
+    blen = max(1, int(round(BLOCK_S / h)))
+    bstart, bfold, bseg = [], [], []
+    for s_i, (a, bb) in enumerate(zip(seg_lo, seg_hi)):
+        L = int(bb - a)
+        nb = max(K, -(-L // blen)) if L >= K else 1
+        edges = a + (np.arange(nb) * L) // nb
+        o = int(rng.integers(K))
+        for j, e0 in enumerate(edges):
+            bstart.append(int(e0))
+            bfold.append((j + o) % K)
+            bseg.append(s_i)
+    bstart = np.array(bstart, np.int64)
+    bfold = np.array(bfold, np.int64)
+    if len(np.unique(bfold)) < K:
+        raise InputError(rec_info[0]["source"], f"too little data for {K}-fold cross-validation "
+                         f"({n} usable samples in {len(bstart)} blocks)")
+    block = np.repeat(np.arange(bstart.size), np.diff(np.append(bstart, n)))
+
+    pred = cat["pred"]
+    p0 = np.clip(pred, device.raw_min, device.raw_max)
+    gain_t = cat["gain"] if np.any(cat["gain"] != 1.0) else None
+    static = cat["pose"] >= 0
+    D = _Data(device=device, cal=cal, mode=mode, m0=float(m0), K=K, t=cat["t"], tg=cat["tg"], rec=cat["rec"],
+              seg=seg, seg_lo=seg_lo, seg_hi=seg_hi, bstart=bstart, bfold=bfold, bseg=np.array(bseg, np.int64),
+              block=block, raw=cat["raw"], pred=pred, p0=p0, offset_t=cat["off"], gain_t=gain_t,
+              sensed=pred - cat["off"], f=cat["f"], w=cat["w"], dw=cat["dw"], temp=cat["T"], pose=cat["pose"],
+              pose_labels=[kk for kk, _ in sorted(pose_map.items(), key=lambda kv: kv[1])],
+              pose_stated=np.where(cat["stated"], cat["pose"], -1), static=static, s=S, r=r, b=b,
+              rec_t0=np.array(rec_t0), rec_info=rec_info, notes=notes, h=h)
+    for i, pt in enumerate(parts):
+        D.rec_info[i]["t0"] = rec_t0[i]
+    return D
+
+
+# ==============================================================================
+# Noise floor and weights
+# ==============================================================================
+
+
+def _noise_floor(D: _Data, e: np.ndarray) -> tuple[np.ndarray, str]:
+    N = D.N
+    st = [(a, b) for a, b in zip(D.seg_lo, D.seg_hi) if D.static[a] and b - a >= 3]
+    if st:
+        var = np.array([np.var(e[a:b], axis=0, ddof=1) for a, b in st])      # (S, N)
+        nu = np.array([b - a - 1 for a, b in st], float)
+        dof = int(nu.sum())
+        if dof >= MIN_NOISE_DOF:
+            # the dof-weighted median of the segment variances (robust to a few segments that drift
+            # or flip between quantisation levels), corrected by the median of chi2_nu / nu
+            corr = (1.0 - 2.0 / (9.0 * nu)) ** 3
+            v = var / corr[:, None]
+            sig = np.empty(N)
+            for i in range(N):
+                o = np.argsort(v[:, i])
+                cw = np.cumsum(nu[o])
+                sig[i] = math.sqrt(v[o[np.searchsorted(cw, 0.5 * cw[-1])], i])
+            return (np.maximum(sig, _ROUND_SIGMA),
+                    f"median within-segment std of the residual over {len(st)} static segments ({dof} dof)")
+    # fourth differences inside segments
+    ok = np.zeros(D.n, bool)
+    for a, b in zip(D.seg_lo, D.seg_hi):
+        if b - a >= 5:
+            ok[a + 2:b - 2] = True
+    idx = np.flatnonzero(ok)
+    if idx.size < 10:
+        return np.full(N, max(_ROUND_SIGMA, float(np.std(e)) if e.size else 1.0)), "residual std (too few samples)"
+    d = e[idx - 2] - 4 * e[idx - 1] + 6 * e[idx] - 4 * e[idx + 1] + e[idx + 2]
+    mad = np.median(np.abs(d - np.median(d, axis=0)), axis=0)
+    sig = 1.4826 * mad / math.sqrt(70.0)
+    return np.maximum(sig, _ROUND_SIGMA), f"robust (MAD) fourth differences of the residual ({idx.size} samples)"
+
+
+def _setup_rows(D: _Data, e: np.ndarray) -> None:
+    sig, how = _noise_floor(D, e)
+    D.sigma, D.noise_method = sig, how
+    if D.mode == "jigfree":
+        P = len(D.pose_labels)
+        M = D.N - 2
+        Qp = np.zeros((P, M, D.N))
+        Wp = np.zeros((P, M))
+        for p in range(P):
+            sel = np.flatnonzero(D.pose == p)
+            fp = _unit(D.f[sel[0]])
+            E = _tangent_basis(fp)                       # (2,3)
+            J = D.s @ E.T                                # (N,2)
+            U, _, _ = np.linalg.svd(J, full_matrices=True)
+            Q = U[:, 2:].T                               # (M,N)
+            Qp[p] = Q
+            Wp[p] = 1.0 / np.maximum(Q ** 2 @ sig ** 2, 1e-300)
+        D.Qp = Qp
+        D.W = Wp[D.pose]
+    else:
+        D.W = np.broadcast_to(1.0 / sig ** 2, (D.n, D.N))
+
+
+# ==============================================================================
+# Scoring
+# ==============================================================================
+
+
+@dataclass
+class _Cand:
+    """One candidate's cross-validated result on a target residual."""
+
+    name: str
+    k: int                        # parameters it adds
+    Sw: np.ndarray                # (B,) held-out weighted chi2 after
+    Su: np.ndarray                # (B,) held-out sum of squares after (counts^2)
+    delta: np.ndarray             # (n, N) in-sample (all-data fit) change to the prediction
+    params: dict
+    sigma: dict
+    notes: list = field(default_factory=list)
+    evidence: str = "held-out gain"
+    proof: bool = False           # significant on its own evidence (quantization lattice)
+    # filled by _score
+    gain: float = 0.0
+    penalty: float = 0.0
+    t: float = 0.0
+    z: float = 0.0
+    before: float = 0.0
+    after: float = 0.0
+    shrink: float = 0.0
+    significant: bool = False
+
+
+def _block_ss(D: _Data, Rr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    sq = Rr * Rr
+    return D.bsum(np.sum(sq * D.W, axis=1)), D.bsum(sq.sum(axis=1))
+
+
+def _score(D: _Data, c: _Cand, S0w: np.ndarray, S0u: np.ndarray) -> _Cand:
+    gb = S0w - c.Sw
+    c.gain = float(gb.sum())
+    c.penalty = PENALTY_PER_PARAM * c.k
+    nb = gb.size
+    sd = float(np.std(gb, ddof=1)) if nb > 1 else 0.0
+    c.t = float(np.mean(gb) / (sd / math.sqrt(nb))) if sd > 0 else (math.inf if c.gain > 0 else 0.0)
+    rows = D.n * D.R
+    c.before = float(math.sqrt(max(S0u.sum(), 0.0) / rows))
+    c.after = float(math.sqrt(max(c.Su.sum(), 0.0) / rows))
+    c.shrink = float(max(0.0, 1.0 - c.after / c.before)) if c.before > 0 else 0.0
+    # chi2 route: under the null (noise only) the held-out gain has mean ~ -k K/(K-1) and spread
+    # ~ 2 sqrt(k K/(K-1)) in chi2 units; s2 >= 1 scales it up when the residual left is larger than
+    # the noise floor says (a low floor, correlated noise, other unmodelled effects).
+    s2 = max(1.0, float(c.Sw.sum()) / rows)
+    kk = max(c.k, 1) * D.K / (D.K - 1)
+    c.z = float(c.gain / (2.0 * s2 * math.sqrt(kk)))
+    c.significant = bool(c.proof or (c.gain - c.penalty > 0 and (c.t >= T_MIN or c.z >= Z_MIN)
+                                     and c.shrink >= MIN_SHRINK))
+    return c
+
+
+# ==============================================================================
+# Linear least squares by blocks
+# ==============================================================================
+
+
+def _solve_groups(G: np.ndarray, h: np.ndarray, rtol: float = 1e-10):
+    """Batched min-norm solve of G theta = h (G (g,k,k) symmetric PSD), with Jacobi scaling.
+    Returns theta (g,k), G^+ (g,k,k), rank (g,)."""
+    d = np.sqrt(np.maximum(np.einsum("gii->gi", G), 0.0))
+    d = np.where(d > 0, d, 1.0)
+    Gs = G / d[:, :, None] / d[:, None, :]
+    lam, V = np.linalg.eigh(Gs)
+    lmax = np.max(lam, axis=-1, keepdims=True)
+    keep = lam > rtol * np.maximum(lmax, 1e-300)
+    inv = np.where(keep, 1.0 / np.where(keep, lam, 1.0), 0.0)
+    Ginv = np.einsum("gij,gj,gkj->gik", V, inv, V) / d[:, :, None] / d[:, None, :]
+    theta = np.einsum("gij,gj->gi", Ginv, h)
+    return theta, Ginv, keep.sum(axis=-1)
+
+
+def _lin_cv(D: _Data, Gw, hw, Gu, hu, S0w, S0u):
+    """Fold fits and held-out block scores from block statistics (B, g, k, k) / (B, g, k)."""
+    K, bf = D.K, D.bfold
+    Gt, ht = Gw.sum(axis=0), hw.sum(axis=0)
+    theta = np.zeros((K,) + ht.shape)
+    for f in range(K):
+        m = bf == f
+        theta[f] = _solve_groups(Gt - Gw[m].sum(axis=0), ht - hw[m].sum(axis=0))[0]
+    tb = theta[bf]
+    Sw = S0w - 2 * np.einsum("bgk,bgk->b", tb, hw) + np.einsum("bgk,bgkl,bgl->b", tb, Gw, tb)
+    Su = S0u - 2 * np.einsum("bgk,bgk->b", tb, hu) + np.einsum("bgk,bgkl,bgl->b", tb, Gu, tb)
+    th_all, Ginv, rank = _solve_groups(Gt, ht)
+    Sall = float(S0w.sum() - 2 * np.einsum("gk,gk->", th_all, ht) + np.einsum("gk,gkl,gl->", th_all, Gt, th_all))
+    return Sw, Su, th_all, Ginv, rank, Sall
+
+
+def _sep_stats(D: _Data, X: np.ndarray, y: np.ndarray):
+    """Per-channel (separable) block statistics: X (n,N,k), y (n,N) -> Gw, hw, Gu, hu."""
+    k = X.shape[2]
+    B, N = D.B, D.N
+    Gu = np.empty((B, N, k, k))
+    for a in range(k):
+        for c in range(a, k):
+            v = D.bsum(X[:, :, a] * X[:, :, c])
+            Gu[:, :, a, c] = v
+            Gu[:, :, c, a] = v
+    hu = D.bsum(X * y[:, :, None])
+    wch = D.W[0]
+    return Gu * wch[None, :, None, None], hu * wch[None, :, None], Gu, hu
+
+
+def _joint_stats(D: _Data, Xr: np.ndarray, yr: np.ndarray):
+    """One group, rows (n, R, P) with weights D.W (n, R)."""
+    n, R, P = Xr.shape
+    sw = np.sqrt(D.W)
+    Xw = Xr * sw[:, :, None]
+    yw = yr * sw
+    Gw = np.empty((D.B, 1, P, P))
+    Gu = np.empty((D.B, 1, P, P))
+    hw = D.bsum(np.einsum("trp,tr->tp", Xw, yw))[:, None, :]
+    hu = D.bsum(np.einsum("trp,tr->tp", Xr, yr))[:, None, :]
+    ends = np.append(D.bstart[1:], n)
+    for bi, (a, e) in enumerate(zip(D.bstart, ends)):
+        A = Xw[a:e].reshape(-1, P)
+        Gw[bi, 0] = A.T @ A
+        A = Xr[a:e].reshape(-1, P)
+        Gu[bi, 0] = A.T @ A
+    return Gw, hw, Gu, hu
+
+
+def _jig_rows(D: _Data, X: np.ndarray) -> np.ndarray:
+    """Per-channel columns X (n,N,k) -> projected joint rows (n, M, N k)."""
+    Q = D.Qp[D.pose]                                     # (n,M,N)
+    n, N, k = X.shape
+    return np.einsum("tmi,tij->tmij", Q, X).reshape(n, Q.shape[1], N * k)
+
+
+def _linear_fit(D: _Data, X: np.ndarray, y: np.ndarray, S0w, S0u):
+    """CV of the per-channel linear columns X (n,N,k) on the target y (n,N).
+    Returns Sw, Su, theta (N,k), cov (N,k,k), n_params, delta (n,N)."""
+    n, N, k = X.shape
+    if D.Qp is None:
+        Gw, hw, Gu, hu = _sep_stats(D, X, y)
+        Sw, Su, th, Ginv, rank, Sall = _lin_cv(D, Gw, hw, Gu, hu, S0w, S0u)
+        theta, cov = th, Ginv
+        npar = int(rank.sum())
+    else:
+        Xr = _jig_rows(D, X)
+        yr = D.rows(y)
+        Gw, hw, Gu, hu = _joint_stats(D, Xr, yr)
+        Sw, Su, th, Ginv, rank, Sall = _lin_cv(D, Gw, hw, Gu, hu, S0w, S0u)
+        theta = th[0].reshape(N, k)
+        full = Ginv[0]
+        cov = np.stack([full[i * k:(i + 1) * k, i * k:(i + 1) * k] for i in range(N)])
+        npar = int(rank.sum())
+    dof = max(D.n * D.R - npar, 1)
+    cov = cov * max(1.0, Sall / dof)
+    delta = np.einsum("tnk,nk->tn", X, theta)
+    return Sw, Su, theta, cov, npar, delta
+
+
+# ==============================================================================
+# Candidates
+# ==============================================================================
+
+
+def _moving(D: _Data) -> bool:
+    mv = ~D.static
+    if not mv.any():
+        return False
+    x = D.sensed[mv]
+    return bool(np.any(np.ptp(x, axis=0) > 5 * D.sigma))
+
+
+def _rotating(D: _Data) -> np.ndarray:
+    return np.linalg.norm(D.w, axis=1) > ROTATING_RADPS
+
+
+def _f_at(D: _Data) -> np.ndarray:
+    """(n,N,3) specific force at each channel's position (model terms)."""
+    f = D.f[:, None, :]
+    if np.all(D.r == 0):
+        return np.broadcast_to(f, (D.n, D.N, 3))
+    r = D.r[None, :, :]
+    a = np.cross(D.dw[:, None, :], r)
+    w = D.w[:, None, :]
+    c = np.cross(w, np.cross(w, r)) * D.m0
+    return f + a + c
+
+
+def _temp_skip(D: _Data) -> str | None:
+    T = D.temp
+    if not np.all(np.isfinite(T)):
+        return "needs temp_c (the recordings have no temperature)" if not np.isfinite(T).any() else \
+            "needs temp_c on every sample used"
+    span = float(np.ptp(T))
+    if span < TEMP_MIN_SPAN_C:
+        return f"temp_c varies by only {span:.3g} degC (needs {TEMP_MIN_SPAN_C:g})"
+    return None
+
+
+def _t_ref_known(D: _Data) -> float | None:
+    cal = D.cal
+    if cal.temp_ref_c is not None:
+        return float(cal.temp_ref_c)
+    poses = cal.extra.get("poses") if isinstance(cal.extra, dict) else None
+    if isinstance(poses, list):
+        ts = [p.get("temp_c") for p in poses if isinstance(p, dict) and isinstance(p.get("temp_c"), (int, float))]
+        if ts:
+            return float(np.mean(ts))
+    return None
+
+
+class _Candidate:
+    name = ""
+
+    def skip(self, D: _Data) -> str | None:
+        return None
+
+    def cv(self, D: _Data, y: np.ndarray, pcur: np.ndarray, S0w, S0u) -> _Cand:
+        raise NotImplementedError
+
+
+class _LinearCandidate(_Candidate):
+    pname = ""
+
+    def columns(self, D: _Data) -> np.ndarray:
+        raise NotImplementedError
+
+    def to_params(self, D: _Data, theta: np.ndarray, cov: np.ndarray) -> tuple[dict, dict]:
+        sd = np.sqrt(np.maximum(np.einsum("nkk->nk", cov), 0.0))
+        return {self.pname: theta[:, 0]}, {self.pname: sd[:, 0]}
+
+    def cv(self, D, y, pcur, S0w, S0u):
+        X = self.columns(D)
+        Sw, Su, theta, cov, k, delta = _linear_fit(D, X, y, S0w, S0u)
+        p, s = self.to_params(D, theta, cov)
+        return _Cand(self.name, k, Sw, Su, delta, p, s)
+
+
+class _Offset(_LinearCandidate):
+    name, pname = "offset", "db"
+
+    def columns(self, D):
+        return np.ones((D.n, D.N, 1))
+
+
+class _Gain(_LinearCandidate):
+    name, pname = "gain", "scale"
+
+    def columns(self, D):
+        return D.sensed[:, :, None]
+
+
+class _Nonlinearity(_LinearCandidate):
+    name, pname = "nonlinearity", "k2"
+
+    def columns(self, D):
+        x = D.sensed / np.linalg.norm(D.s, axis=1)
+        return (x * x)[:, :, None]
+
+
+class _BiasDrift(_LinearCandidate):
+    name, pname = "bias_drift", "rate"
+
+    def columns(self, D):
+        dt = D.t - float(np.min(D.rec_t0))
+        return np.broadcast_to(dt[:, None, None], (D.n, D.N, 1)).copy()
+
+    def to_params(self, D, theta, cov):
+        p, s = super().to_params(D, theta, cov)
+        p.update(rw=np.zeros(D.N), seed=0, t0=float(np.min(D.rec_t0)))
+        return p, s
+
+
+class _Misalignment(_LinearCandidate):
+    name = "misalignment"
+
+    def _basis(self, D):
+        return _tangent_basis(_unit(D.s))                    # (N,2,3)
+
+    def columns(self, D):
+        E = self._basis(D)
+        fa = _f_at(D)                                        # (n,N,3)
+        sx = np.cross(D.s[None, :, :], fa)                   # s x f_at
+        X = np.einsum("nkc,tnc->tnk", E, sx)
+        if D.gain_t is not None:
+            X = X * D.gain_t[:, :, None]
+        return X
+
+    def to_params(self, D, theta, cov):
+        E = self._basis(D)
+        rot = np.einsum("nk,nkc->nc", theta, E)
+        sd = np.sqrt(np.einsum("nkc,nkl,nlc->nc", E, cov, E))
+        return {"rot": rot}, {"rot": sd}
+
+
+class _PositionError(_LinearCandidate):
+    name = "position_error"
+
+    def skip(self, D):
+        if D.mode == "jigfree":
+            return "jig-free: static poses only, no rotation reference (w, dw)"
+        if not _rotating(D).any() and not np.any(np.linalg.norm(D.dw, axis=1) > 10 * ROTATING_RADPS):
+            return "needs rotation in the reference (w_*, dw_*): none of the samples used rotates"
+        return None
+
+    def columns(self, D):
+        s = D.s[None, :, :]
+        w = D.w[:, None, :]
+        X = np.cross(s, D.dw[:, None, :])
+        if D.m0:
+            sw = np.einsum("nc,tc->tn", D.s, D.w)
+            X = X + D.m0 * (sw[:, :, None] * w - np.sum(D.w ** 2, axis=1)[:, None, None] * s)
+        if D.gain_t is not None:
+            X = X * D.gain_t[:, :, None]
+        return X
+
+    def cv(self, D, y, pcur, S0w, S0u):
+        X = self.columns(D)
+        Sw, Su, theta, cov, k, delta = _linear_fit(D, X, y, S0w, S0u)
+        # report dr only along the observable principal directions (1-sigma <= POSITION_TOL_M)
+        lam, V = np.linalg.eigh(cov)
+        obs = np.sqrt(np.maximum(lam, 0.0)) <= POSITION_TOL_M
+        coef = np.einsum("nji,nj->ni", V, theta) * obs
+        theta = np.einsum("nij,nj->ni", V, coef)
+        cov = np.einsum("nij,nj,nkj->nik", V, np.where(obs, lam, 0.0), V)
+        delta = np.einsum("tnk,nk->tn", X, theta)
+        sd = np.sqrt(np.maximum(np.einsum("nkk->nk", cov), 0.0))
+        c = _Cand(self.name, k, Sw, Su, delta, {"dr": theta}, {"dr": sd})
+        nobs = int(obs.sum())
+        if nobs < obs.size:
+            c.notes.append(f"dr kept along {nobs} of {obs.size} principal directions (the others have 1-sigma "
+                           f"> {1e3 * POSITION_TOL_M:g} mm with this motion; reported as 0)")
+        c.observable = obs
+        return c
+
+
+class _Centripetal(_LinearCandidate):
+    name, pname = "centripetal", "scale"
+
+    def skip(self, D):
+        if D.mode == "jigfree":
+            return "jig-free: static poses only, no rotation reference (w)"
+        if np.all(D.r == 0):
+            return "every channel is at the origin: there is no centripetal term"
+        if not _rotating(D).any():
+            return "needs rotation in the reference (w_*): none of the samples used rotates"
+        return None
+
+    def columns(self, D):
+        from .model import centripetal_matrix, omega_products
+        c = omega_products(D.w) @ centripetal_matrix(D.r, D.s).T
+        if D.gain_t is not None:
+            c = c * D.gain_t
+        return c[:, :, None]
+
+    def to_params(self, D, theta, cov):
+        sd = np.sqrt(np.maximum(cov[:, 0, 0], 0.0))
+        return {"scale": D.m0 + theta[:, 0]}, {"scale": sd}
+
+
+class _Temperature(_Candidate):
+    """c_i (T - t_ref) z_i with z = 1 (offset) or the sensed reading (gain); t_ref shared."""
+
+    def __init__(self, name: str, gain: bool):
+        self.name = name
+        self.gain = gain
+
+    def skip(self, D):
+        return _temp_skip(D)
+
+    def _z(self, D):
+        return D.sensed if self.gain else np.ones((D.n, D.N))
+
+    def cv(self, D, y, pcur, S0w, S0u):
+        z = self._z(D)
+        T = D.temp
+        X2 = np.stack([T[:, None] * z, z], axis=2)            # columns T z and z: c (T - t_ref) z = c (X2 . [1, -t_ref])
+        fixed = _t_ref_known(D)
+        if D.Qp is None:
+            Gw2, hw2, Gu2, hu2 = _sep_stats(D, X2, y)
+        else:
+            Gw2, hw2, Gu2, hu2 = _joint_stats(D, _jig_rows(D, X2), D.rows(y))
+        N = D.N
+        Tlo, Thi = float(T.min()), float(T.max())
+        span = max(Thi - Tlo, 1e-9)
+
+        def reduce(G2, h2, tr):
+            v = np.array([1.0, -tr])
+            if D.Qp is None:
+                return (np.einsum("...kl,k,l->...", G2, v, v)[..., None, None], np.einsum("...k,k->...", h2, v)[..., None])
+            P = N
+            Vm = np.zeros((2 * P, P))
+            for i in range(P):
+                Vm[2 * i:2 * i + 2, i] = v
+            return (np.einsum("...ab,ai,bj->...ij", G2, Vm, Vm), np.einsum("...a,ai->...i", h2, Vm))
+
+        def objective(G2, h2, tr):
+            G, hh = reduce(G2, h2, tr)
+            th = _solve_groups(G, hh)[0]
+            return -float(np.einsum("gk,gk->", th, hh))         # S = q - h' th at the optimum
+
+        def best_tref(G2, h2):
+            if fixed is not None:
+                return fixed
+            grid = np.linspace(Tlo - 5 * span - 20.0, Thi + 5 * span + 20.0, 61)
+            vals = [objective(G2, h2, tr) for tr in grid]
+            j = int(np.argmin(vals))
+            from scipy.optimize import minimize_scalar
+            lo, hi = grid[max(j - 1, 0)], grid[min(j + 1, grid.size - 1)]
+            res = minimize_scalar(lambda tr: objective(G2, h2, tr), bounds=(lo, hi), method="bounded",
+                                  options={"xatol": 1e-3 * span})
+            return float(res.x) if res.fun <= vals[j] else float(grid[j])
+
+        K, bf = D.K, D.bfold
+        Gt2, ht2 = Gw2.sum(0), hw2.sum(0)
+        Sw = np.empty(D.B)
+        Su = np.empty(D.B)
+        for f in range(K):
+            m = bf == f
+            Gtr, htr = Gt2 - Gw2[m].sum(0), ht2 - hw2[m].sum(0)
+            tr = best_tref(Gtr, htr)
+            G, hh = reduce(Gtr, htr, tr)
+            th = _solve_groups(G, hh)[0]
+            Gb, hb = reduce(Gw2[m], hw2[m], tr)
+            Gub, hub = reduce(Gu2[m], hu2[m], tr)
+            Sw[m] = S0w[m] - 2 * np.einsum("gk,bgk->b", th, hb) + np.einsum("gk,bgkl,gl->b", th, Gb, th)
+            Su[m] = S0u[m] - 2 * np.einsum("gk,bgk->b", th, hub) + np.einsum("gk,bgkl,gl->b", th, Gub, th)
+        tr = best_tref(Gt2, ht2)
+        G, hh = reduce(Gt2, ht2, tr)
+        th, Ginv, rank = _solve_groups(G, hh)
+        Sall = float(S0w.sum() - np.einsum("gk,gk->", th, hh))
+        npar = int(rank.sum()) + (0 if fixed is not None else 1)
+        scale = max(1.0, Sall / max(D.n * D.R - npar, 1))
+        if D.Qp is None:
+            coeff = th[:, 0]
+            sd = np.sqrt(np.maximum(Ginv[:, 0, 0] * scale, 0.0))
+        else:
+            coeff = th[0]
+            sd = np.sqrt(np.maximum(np.diag(Ginv[0]) * scale, 0.0))
+        delta = coeff[None, :] * (T - tr)[:, None] * z
+        params = {"coeff": coeff, "t_ref": tr}
+        sigma = {"coeff": sd, "t_ref": 0.0 if fixed is not None else math.nan}
+        notes = [] if fixed is None else [f"t_ref = {fixed:.4g} degC from the calibration"]
+        if fixed is None:
+            # 1-sigma of t_ref from the curvature of the profile objective
+            hstep = 0.05 * span + 0.5
+            o0, op, om = (objective(Gt2, ht2, tr + d) for d in (0.0, hstep, -hstep))
+            curv = (op + om - 2 * o0) / hstep ** 2
+            sigma["t_ref"] = float(math.sqrt(2.0 * scale / curv)) if curv > 0 else math.inf
+        return _Cand(self.name, npar, Sw, Su, delta, params, sigma, notes)
+
+
+class _PoseError(_Candidate):
+    name = "pose_error"
+
+    def skip(self, D):
+        if D.mode == "jigfree":
+            return "jig-free: the poses have no stated orientation"
+        if not np.any(D.pose_stated >= 0):
+            return "needs static poses with a stated reference f (pose labels and f_*)"
+        return None
+
+    def cv(self, D, y, pcur, S0w, S0u):
+        ps = D.pose_stated
+        P = len(D.pose_labels)
+        E = np.zeros((P, 2, 3))
+        for p in range(P):
+            sel = ps == p
+            if sel.any():
+                E[p] = _tangent_basis(_unit(D.f[sel].mean(axis=0)))
+        on = ps >= 0
+        X = np.zeros((D.n, D.N, 2))
+        fs = np.cross(D.f[on][:, None, :], D.s[None, :, :])       # f x s (m,N,3)
+        X[on] = np.einsum("tkc,tnc->tnk", E[ps[on]], fs)
+        if D.gain_t is not None:
+            X *= D.gain_t[:, :, None]
+        wch = D.W[0]
+        bp = np.full(D.B, -1)
+        first = D.bstart
+        bp = ps[first]
+        Gw = np.zeros((D.B, P, 2, 2))
+        Gu = np.zeros((D.B, P, 2, 2))
+        hw = np.zeros((D.B, P, 2))
+        hu = np.zeros((D.B, P, 2))
+        XXw = np.einsum("tnk,tnl,n->tkl", X, X, wch)
+        XXu = np.einsum("tnk,tnl->tkl", X, X)
+        Xyw = np.einsum("tnk,tn,n->tk", X, y, wch)
+        Xyu = np.einsum("tnk,tn->tk", X, y)
+        has = bp >= 0
+        bi = np.flatnonzero(has)
+        Gw[bi, bp[bi]] = D.bsum(XXw)[bi]
+        Gu[bi, bp[bi]] = D.bsum(XXu)[bi]
+        hw[bi, bp[bi]] = D.bsum(Xyw)[bi]
+        hu[bi, bp[bi]] = D.bsum(Xyu)[bi]
+        Sw, Su, th, Ginv, rank, Sall = _lin_cv(D, Gw, hw, Gu, hu, S0w, S0u)
+        npar = int(rank.sum())
+        scale = max(1.0, Sall / max(D.n * D.R - npar, 1))
+        rot = np.einsum("pk,pkc->pc", th, E)
+        sd = np.sqrt(np.maximum(np.einsum("pkc,pkl,plc->pc", E, Ginv * scale, E), 0.0))
+        delta = np.zeros((D.n, D.N))
+        delta[on] = np.einsum("tnk,tk->tn", X[on], th[ps[on]])
+        labels = [int(L) for _, L in D.pose_labels]
+        recs = [int(rr) for rr, _ in D.pose_labels]
+        keep = [p for p in range(P) if np.any(ps == p)]
+        params = {"labels": np.array([labels[p] for p in keep], np.int64), "rot": rot[keep],
+                  "recording": np.array([recs[p] for p in keep], np.int64)}
+        return _Cand(self.name, npar, Sw, Su, delta, params, {"rot": sd[keep]})
+
+
+# --- 1-D searches -----------------------------------------------------------------
+
+
+class _Shifter:
+    """x(t + tau) per channel along a cubic spline per segment (clamped at segment ends)."""
+
+    def __init__(self, D: _Data, x: np.ndarray):
+        from scipy.interpolate import CubicSpline
+        n, N = x.shape
+        self.x = x
+        self.tg = D.tg
+        C = np.zeros((4, n, N))
+        C[3] = x
+        self.ilo = np.repeat(D.seg_lo, D.seg_hi - D.seg_lo)
+        self.ihi = np.repeat(D.seg_hi, D.seg_hi - D.seg_lo) - 1      # last sample of the segment
+        for a, b in zip(D.seg_lo, D.seg_hi):
+            L = b - a
+            if L < 2:
+                continue
+            xs = x[a:b]
+            if np.all(xs == xs[0]):
+                continue
+            ts = D.tg[a:b]
+            if L >= 4:
+                C[:, a:b - 1] = CubicSpline(ts, xs, axis=0).c
+            else:
+                C[2, a:b - 1] = np.diff(xs, axis=0) / np.diff(ts)[:, None]
+        self.C = C
+        self.tlo = D.tg[self.ilo]
+        self.thi = D.tg[self.ihi]
+
+    def _eval(self, tt: np.ndarray, cols: np.ndarray | None) -> np.ndarray:
+        k = np.searchsorted(self.tg, tt, side="right") - 1
+        k = np.clip(k, self.ilo, np.maximum(self.ilo, self.ihi - 1))
+        dx = tt - self.tg[k]
+        if cols is None:
+            c = self.C[:, k, :]
+            dx = dx[:, None]
+        else:
+            c = self.C[:, k, cols]
+        return ((c[0] * dx + c[1]) * dx + c[2]) * dx + c[3]
+
+    def delta(self, tau: np.ndarray) -> np.ndarray:
+        tau = np.asarray(tau, float)
+        if tau.ndim == 0 or np.all(tau == tau.flat[0]):
+            tv = float(tau.flat[0])
+            if tv == 0:
+                return np.zeros_like(self.x)
+            tt = np.clip(self.tg + tv, self.tlo, self.thi)
+            return self._eval(tt, None) - self.x
+        n, N = self.x.shape
+        tt = np.clip(self.tg[:, None] + tau[None, :], self.tlo[:, None], self.thi[:, None])
+        k = np.searchsorted(self.tg, tt.ravel(), side="right").reshape(n, N) - 1
+        k = np.clip(k, self.ilo[:, None], np.maximum(self.ilo, self.ihi - 1)[:, None])
+        dx = tt - self.tg[k]
+        c = self.C[:, k, np.arange(N)[None, :]]
+        return ((c[0] * dx + c[1]) * dx + c[2]) * dx + c[3] - self.x
+
+
+class _SearchCandidate(_Candidate):
+    """One scalar parameter u per channel (in samples); delta(D, u (N,)) -> (n, N)."""
+
+    grid = _SKEW_GRID
+    lower = -math.inf
+
+    def skip(self, D):
+        if D.mode == "jigfree":
+            return "jig-free: static poses only, no reference of the motion"
+        if not _moving(D):
+            return "needs motion in the reference (time effects show only while the readings change)"
+        return None
+
+    def prepare(self, D: _Data, pcur: np.ndarray):
+        raise NotImplementedError
+
+    def delta(self, u: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def to_params(self, D, u, su) -> tuple[dict, dict]:
+        raise NotImplementedError
+
+    def cv(self, D, y, pcur, S0w, S0u):
+        self.prepare(D, pcur)
+        N, K, bf = D.N, D.K, D.bfold
+        wch = D.W[0]
+        grid = self.grid
+        Sg = np.empty((grid.size, D.B, N))                  # unweighted block SS per channel
+        for gi, u in enumerate(grid):
+            R = y - self.delta(np.full(N, u))
+            Sg[gi] = D.bsum(R * R)
+        fold_sum = np.stack([Sg[:, bf == f].sum(axis=1) for f in range(K)], axis=1)   # (G,K,N)
+        tot = Sg.sum(axis=1)                                                            # (G,N)
+
+        def pick(obj):                                       # obj (G,N) -> u (N,), curvature (N,)
+            j = np.argmin(obj, axis=0)
+            u = grid[j].astype(float)
+            curv = np.zeros(N)
+            for i in range(N):
+                jj = int(j[i])
+                if 0 < jj < grid.size - 1:
+                    x3 = grid[jj - 1:jj + 2]
+                    y3 = obj[jj - 1:jj + 2, i]
+                    A = np.vstack([x3 ** 2, x3, np.ones(3)]).T
+                    a2, a1, _ = np.linalg.solve(A, y3)
+                    if a2 > 0:
+                        u[i] = float(np.clip(-a1 / (2 * a2), x3[0], x3[2]))
+                        curv[i] = a2
+                elif jj == 0 and grid[0] == self.lower and grid.size >= 3:
+                    x3 = grid[:3]
+                    y3 = obj[:3, i]
+                    A = np.vstack([x3 ** 2, x3, np.ones(3)]).T
+                    a2, a1, _ = np.linalg.solve(A, y3)
+                    if a2 > 0:
+                        u[i] = float(np.clip(-a1 / (2 * a2), x3[0], x3[1]))
+                        curv[i] = a2
+            return u, j, curv
+
+        Sw = np.empty(D.B)
+        Su = np.empty(D.B)
+        for f in range(K):
+            obj = tot - fold_sum[:, f]                      # (G,N) training objective
+            u, j, _ = pick(obj)
+            R = y - self.delta(u)
+            Sr = D.bsum(R * R)                              # (B,N)
+            trn = bf != f
+            better = Sr[trn].sum(axis=0) <= obj[j, np.arange(N)]
+            Sb = np.where(better[None, :], Sr, Sg[j, :, np.arange(N)].T)
+            m = bf == f
+            Sw[m] = Sb[m] @ wch
+            Su[m] = Sb[m].sum(axis=1)
+        u, j, curv = pick(tot)
+        d_all = self.delta(u)
+        R = y - d_all
+        Sr = D.bsum(R * R).sum(axis=0)
+        worse = Sr > tot[j, np.arange(N)]
+        if np.any(worse):
+            u = np.where(worse, grid[j], u)
+            d_all = self.delta(u)
+        Sall = float(np.sum((y - d_all) ** 2 * D.W))
+        moved = u != (0.0 if self.lower != 0.0 else 0.0)
+        npar = int(np.count_nonzero(np.abs(u) > 0)) if np.any(u) else N
+        scale = max(1.0, Sall / max(D.n * N - npar, 1))
+        with np.errstate(divide="ignore"):
+            su = np.where(curv > 0, np.sqrt(scale / np.maximum(curv * wch, 1e-300)), math.inf)
+        p, s = self.to_params(D, u, su)
+        del moved
+        return _Cand(self.name, max(npar, 1), Sw, Su, d_all, p, s)
+
+
+class _TimeSkew(_SearchCandidate):
+    name = "time_skew"
+    grid = _SKEW_GRID
+
+    def prepare(self, D, pcur):
+        self.D = D
+        x = D.sensed
+        self.sh = _Shifter(D, x)
+
+    def delta(self, u):
+        return self.sh.delta(np.asarray(u, float) * self.D.h)
+
+    def to_params(self, D, u, su):
+        return {"tau": u * D.h}, {"tau": su * D.h}
+
+
+def _lowpass_runs(t: np.ndarray, x: np.ndarray, w: float, h: float) -> np.ndarray:
+    """The registry's first-order low-pass (effects.lowpass_first_order: exact for an input linear
+    between samples, steady state at the first sample) with angular cut-off w, computed with
+    lfilter over runs of samples at the nominal period h (gaps > 1.5 h get their exact update)."""
+    from scipy.signal import lfilter
+    n = t.shape[0]
+    y = np.empty_like(x)
+    gaps = np.flatnonzero(np.diff(t) > 1.5 * h) + 1
+    starts = np.concatenate([[0], gaps])
+    ends = np.append(gaps, n)
+    a = math.exp(-w * h)
+    beta = -math.expm1(-w * h) / (w * h)
+    b0, b1 = 1.0 - beta, beta - a
+    for a0, e0 in zip(starts, ends):
+        if a0 == 0:
+            y[0] = x[0]
+        else:
+            hg = float(t[a0] - t[a0 - 1])
+            ag = math.exp(-w * hg)
+            bg = -math.expm1(-w * hg) / (w * hg)
+            y[a0] = ag * y[a0 - 1] + (bg - ag) * x[a0 - 1] + (1.0 - bg) * x[a0]
+        if e0 - a0 > 1:
+            zi = (b1 * x[a0] + a * y[a0])[None, :]
+            y[a0 + 1:e0] = lfilter([b0, b1], [1.0, -a], x[a0 + 1:e0], axis=0, zi=zi)[0]
+    return y
+
+
+class _Bandwidth(_SearchCandidate):
+    name = "bandwidth"
+    grid = _DELAY_GRID
+    lower = 0.0
+
+    def prepare(self, D, pcur):
+        self.D = D
+        self.x = D.pred
+        self.recs = [np.flatnonzero(D.rec == k) for k in np.unique(D.rec)]
+
+    def delta(self, u):
+        u = np.broadcast_to(np.asarray(u, float), (self.D.N,))
+        out = np.zeros_like(self.x)
+        if not np.any(u > 0):
+            return out
+        for v in np.unique(u[u > 0]):
+            cols = np.flatnonzero(u == v)
+            for idx in self.recs:
+                xs = self.x[idx][:, cols]
+                out[np.ix_(idx, cols)] = _lowpass_runs(self.D.t[idx], xs, 1.0 / (v * self.D.h), self.D.h) - xs
+        return out
+
+    def to_params(self, D, u, su):
+        d = u * D.h
+        fc = np.where(d > 0, 1.0 / (2 * math.pi * np.maximum(d, 1e-300)), math.inf)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sfc = np.where(d > 0, fc * (su * D.h) / np.maximum(d, 1e-300), math.inf)
+        return {"fc_hz": fc}, {"fc_hz": sfc, "delay_s": su * D.h}
+
+
+# --- from the raw values ---------------------------------------------------------
+
+
+def _lattice(v: np.ndarray) -> tuple[int, float, float, int]:
+    """Best lattice of integer readings v: (step, phase, share of readings on it, distinct values on it).
+    Step 1 when none is found (share >= QUANT_MIN_FRAC with >= 6 distinct values)."""
+    u, cnt = np.unique(v.astype(np.int64), return_counts=True)
+    tot = float(cnt.sum())
+    best = (1, 0.0, 1.0, int(u.size))
+    if u.size < 6:
+        return best
+    span = int(u[-1] - u[0])
+    # exact lattice: the gcd of the differences of the values
+    gq = int(np.gcd.reduce(np.diff(u)))
+    if gq >= 2:
+        return (gq, float(u[0] % gq), 1.0, int(u.size))
+    # robust: a lattice that holds for QUANT_MIN_FRAC of the readings (a few strays allowed); dense
+    # readings (most neighbouring values one count apart) are on none
+    if np.mean(np.diff(u) == 1) > 0.3:
+        return best
+    for q in range(2, min(QUANT_MAX_STEP, max(span // 3, 2)) + 1):
+        res = u % q
+        bc = np.bincount(res, weights=cnt, minlength=q)
+        ph = int(np.argmax(bc))
+        frac = bc[ph] / tot
+        if frac >= QUANT_MIN_FRAC:
+            nd = int(np.count_nonzero(res == ph))
+            if nd >= 6:
+                best = (q, float(ph), float(frac), nd)
+    return best
+
+
+class _Quantization(_Candidate):
+    name = "quantization"
+
+    def _fit(self, D, mask):
+        N = D.N
+        step = np.zeros(N)
+        phase = np.zeros(N)
+        frac = np.ones(N)
+        nd = np.zeros(N, np.int64)
+        for i in range(N):
+            q, ph, fr, n_d = _lattice(D.raw[mask, i])
+            if q >= 2:
+                step[i], phase[i], frac[i], nd[i] = q, ph, fr, n_d
+        return step, phase, frac, nd
+
+    @staticmethod
+    def _delta(pcur, step, phase):
+        out = np.zeros_like(pcur)
+        on = step > 0
+        if np.any(on):
+            q, ph = step[on], phase[on]
+            x = pcur[:, on]
+            out[:, on] = q * np.round((x - ph) / q) + ph - x
+        return out
+
+    def cv(self, D, y, pcur, S0w, S0u):
+        Sw = np.empty(D.B)
+        Su = np.empty(D.B)
+        for f in range(D.K):
+            trn = D.bfold[D.block] != f
+            step, phase, _, _ = self._fit(D, trn)
+            R = D.rows(y - self._delta(pcur, step, phase))
+            sw, su = _block_ss(D, R)
+            m = D.bfold == f
+            Sw[m], Su[m] = sw[m], su[m]
+        step, phase, frac, nd = self._fit(D, np.ones(D.n, bool))
+        delta = self._delta(pcur, step, phase)
+        c = _Cand(self.name, int(np.count_nonzero(step)), Sw, Su, delta, {"step": step}, {"step": np.zeros(D.N)})
+        strong = (step > 0) & (frac >= QUANT_STRONG_FRAC) & (nd >= QUANT_STRONG_VALUES)
+        if np.any(strong):
+            c.proof = True
+            c.evidence = "lattice of the raw values"
+            c.notes.append("raw values on a lattice: " + ", ".join(
+                f"channel {i}: step {int(step[i])} ({100 * frac[i]:.2f} % of readings, {nd[i]} values)"
+                for i in np.flatnonzero(strong)))
+        c.params["phase"] = phase
+        return c
+
+
+class _Saturation(_Candidate):
+    name = "saturation"
+
+    def _fit(self, D, mask, pcur, with_proof=False):
+        N = D.N
+        lo = np.full(N, -math.inf)
+        hi = np.full(N, math.inf)
+        proof = []
+        for i in range(N):
+            v = D.raw[mask, i]
+            pc = pcur[mask, i]
+            sig = float(D.sigma[i])
+            band = max(4.0 * sig, 4.0)
+            for side in (1, -1):
+                ext = v.max() if side > 0 else v.min()
+                if (side > 0 and ext >= D.device.raw_max) or (side < 0 and ext <= D.device.raw_min):
+                    continue
+                at = v == ext
+                c = int(at.sum())
+                if c < 5:
+                    continue
+                near = (side * (ext - v) > 0) & (side * (ext - v) <= band)
+                dens = near.sum() / band
+                if c < 4.0 * dens + 5:
+                    continue
+                beyond = side * float(np.median(pc[at] - ext))
+                if beyond <= max(sig, 0.5):
+                    continue
+                if side > 0:
+                    hi[i] = ext
+                else:
+                    lo[i] = ext
+                if c >= SAT_PROOF_COUNT and beyond >= 5.0 * max(sig, 0.5):
+                    proof.append(f"channel {i}: {c} readings at {ext:g} while the model goes {beyond:.3g} counts "
+                                 "beyond (median)")
+        return (lo, hi, proof) if with_proof else (lo, hi)
+
+    @staticmethod
+    def _delta(pcur, lo, hi):
+        return np.clip(pcur, lo, hi) - pcur
+
+    def cv(self, D, y, pcur, S0w, S0u):
+        # The clip levels are read off the raw values (the pile), not fitted to the residual, and the
+        # clipped samples usually sit in one or two blocks, which no training fold would see: the
+        # levels come from all the data and every block is scored with them.
+        lo, hi, proof = self._fit(D, np.ones(D.n, bool), pcur, with_proof=True)
+        delta = self._delta(pcur, lo, hi)
+        Sw, Su = _block_ss(D, D.rows(y - delta))
+        k = int(np.count_nonzero(np.isfinite(lo)) + np.count_nonzero(np.isfinite(hi)))
+        sd = {"lo": np.where(np.isfinite(lo), 0.5, 0.0), "hi": np.where(np.isfinite(hi), 0.5, 0.0)}
+        c = _Cand(self.name, k, Sw, Su, delta, {"lo": lo, "hi": hi}, sd)
+        c.evidence = "pile of readings at the clip level (levels from all the data)"
+        if proof:
+            c.proof = True
+            c.notes.append("readings pile up at " + "; ".join(proof))
+        return c
+
+
+def _candidates() -> dict[str, _Candidate]:
+    c = [_Offset(), _Gain(), _Misalignment(), _PositionError(), _Centripetal(), _TimeSkew(), _Bandwidth(),
+         _Nonlinearity(), _Temperature("temperature_offset", False), _Temperature("temperature_gain", True),
+         _BiasDrift(), _Saturation(), _Quantization(), _PoseError()]
+    out = {x.name: x for x in c}
+    assert tuple(out) == EFFECT_NAMES, "diagnose: candidates out of step with the effect registry"
+    return out
+
+
+# ==============================================================================
+# Where: the gap broken down
+# ==============================================================================
+
+
+def _bin(label: str, mask: np.ndarray, e: np.ndarray, sigma: np.ndarray, **extra) -> dict:
+    n = int(mask.sum())
+    x = e[mask]
+    rms_ch = np.sqrt(np.mean(x * x, axis=0)) if n else np.zeros(e.shape[1])
+    rms = float(np.sqrt(np.mean(rms_ch ** 2))) if n else 0.0
+    floor = float(np.sqrt(np.mean(sigma ** 2)))
+    out = {"label": label, **extra, "n": n, "rms_counts": rms, "ratio_to_noise": rms / floor if floor > 0 else None,
+           "rms_per_channel": rms_ch.tolist(), "mean_per_channel": (x.mean(axis=0) if n else rms_ch * 0).tolist()}
+    return out
+
+
+def _bins_by(values: np.ndarray, edges: Sequence[float], unit: str, e, sigma) -> list[dict]:
+    out = []
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        m = (values >= lo) & (values < hi)
+        if m.any():
+            lab = f"{lo:g}-{hi:g} {unit}" if math.isfinite(hi) else f">= {lo:g} {unit}"
+            out.append(_bin(lab, m, e, sigma, lo=float(lo), hi=float(hi) if math.isfinite(hi) else None))
+    return out
+
+
+def _where(D: _Data, e: np.ndarray) -> dict:
+    sig = D.sigma
+    N = D.N
+    rms_ch = np.sqrt(np.mean(e * e, axis=0))
+    by_channel = [{"channel": i, "rms_counts": float(rms_ch[i]), "noise_floor_counts": float(sig[i]),
+                   "ratio_to_noise": float(rms_ch[i] / sig[i]), "mean_counts": float(e[:, i].mean()),
+                   "rms_mps2": float(rms_ch[i] / np.linalg.norm(D.s[i]))} for i in range(N)]
+    wn = np.linalg.norm(D.w, axis=1)
+    an = np.linalg.norm(D.dw, axis=1)
+    rot = wn > ROTATING_RADPS
+    regimes = []
+    for lab, m in (("static", D.static), ("rotating", rot & ~D.static), ("moving, not rotating", ~rot & ~D.static)):
+        if m.any():
+            regimes.append(_bin(lab, m, e, sig))
+    out: dict = {"by_channel": by_channel, "static_vs_rotating": regimes}
+    if D.mode == "reference":
+        out["omega_bins"] = _bins_by(wn, [0, ROTATING_RADPS, 0.5, 2.0, 5.0, math.inf], "rad/s", e, sig)
+        out["alpha_bins"] = _bins_by(an, [0, 0.5, 5.0, 20.0, 100.0, math.inf], "rad/s^2", e, sig)
+    # frequency bands (energy of the residual by FFT of each contiguous segment)
+    fs = 1.0 / D.h
+    edges = [0.0, 0.1, 1.0, 3.0, 10.0, 30.0, math.inf]
+    edges = [x for x in edges if x < fs / 2] + [math.inf]
+    E = np.zeros((len(edges) - 1, N))
+    for a, b in zip(D.seg_lo, D.seg_hi):
+        x = e[a:b]
+        L = b - a
+        if L < 8:
+            E[0] += np.sum(x * x, axis=0)
+            continue
+        X = np.fft.rfft(x, axis=0)
+        p = np.abs(X) ** 2 / L
+        p[1:] *= 2.0
+        if L % 2 == 0:
+            p[-1] /= 2.0
+        fr = np.fft.rfftfreq(L, d=D.h)
+        k = np.searchsorted(edges, fr, side="right") - 1
+        for j in range(len(edges) - 1):
+            E[j] += p[k == j].sum(axis=0)
+    floor = float(np.sqrt(np.mean(sig ** 2)))
+    bands = []
+    for j in range(len(edges) - 1):
+        rc = np.sqrt(E[j] / D.n)
+        rms = float(np.sqrt(np.mean(rc ** 2)))
+        hi = edges[j + 1]
+        lab = f"{edges[j]:g}-{hi:g} Hz" if math.isfinite(hi) else f">= {edges[j]:g} Hz"
+        # white noise spreads evenly up to fs/2: its share of the band
+        top = min(hi, fs / 2)
+        share = max(top - edges[j], 0.0) / (fs / 2)
+        wn = floor * math.sqrt(share)
+        bands.append({"label": lab, "lo_hz": edges[j], "hi_hz": top, "rms_counts": rms,
+                      "white_noise_rms_counts": wn, "ratio_to_white_noise": rms / wn if wn > 0 else None,
+                      "rms_per_channel": rc.tolist()})
+    out["frequency_bands"] = bands
+    T = D.temp
+    if np.all(np.isfinite(T)) and np.ptp(T) >= TEMP_MIN_SPAN_C:
+        q = np.quantile(T, np.linspace(0, 1, 6))
+        q[-1] = np.nextafter(q[-1], math.inf)
+        out["temperature_bins"] = _bins_by(T, list(q), "degC", e, sig)
+    tb = []
+    for k in np.unique(D.rec):
+        sel = D.rec == k
+        tt = D.t[sel]
+        ed = np.linspace(tt.min(), tt.max(), 11)
+        ed[-1] = np.nextafter(ed[-1], math.inf)
+        idx = np.flatnonzero(sel)
+        for lo, hi in zip(ed[:-1], ed[1:]):
+            m = np.zeros(D.n, bool)
+            m[idx[(tt >= lo) & (tt < hi)]] = True
+            if m.any():
+                tb.append(_bin(f"rec {int(k)}: {lo:.4g}-{hi:.4g} s", m, e, sig, recording=int(k),
+                               t0=float(lo), t1=float(hi)))
+    out["time_bins"] = tb
+    if len(D.pose_labels):
+        pl = []
+        for p, (rr, L) in enumerate(D.pose_labels):
+            m = D.pose == p
+            if m.any():
+                pl.append(_bin(f"rec {rr}: pose {L}", m, e, sig, recording=int(rr), pose=int(L)))
+        pl.sort(key=lambda d: -d["rms_counts"])
+        out["poses"] = pl[:200]
+    return out
+
+
+# ==============================================================================
+# JSON helpers and descriptions
+# ==============================================================================
+
+
+def _pose_mean_gap(D: _Data, e: np.ndarray) -> dict:
+    """RMS of the static poses' mean residual rows against what the noise alone gives them."""
+    P = len(D.pose_labels)
+    if P < 2:
+        return {}
+    Rr = D.rows(e)
+    cnt = np.bincount(D.pose[D.pose >= 0], minlength=P).astype(float)
+    on = D.pose >= 0
+    ms, vs = [], []
+    for j in range(Rr.shape[1]):
+        s1 = np.bincount(D.pose[on], weights=Rr[on, j], minlength=P)
+        iv = np.bincount(D.pose[on], weights=1.0 / D.W[on, j], minlength=P)
+        ok = cnt > 0
+        ms.append((s1[ok] / cnt[ok]) ** 2)
+        vs.append(iv[ok] / cnt[ok] ** 2)
+    rms = float(np.sqrt(np.mean(np.concatenate(ms))))
+    noise = float(np.sqrt(np.mean(np.concatenate(vs))))
+    return {"pose_mean_rms_counts": rms, "pose_mean_noise_counts": noise,
+            "pose_mean_ratio": rms / noise if noise > 0 else None, "n_poses": int(np.count_nonzero(cnt))}
+
+
+def _json(v: Any) -> Any:
+    if isinstance(v, dict):
+        return {str(k): _json(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_json(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return _json(v.tolist())
+    if isinstance(v, (np.integer,)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        x = float(v)
+        if math.isfinite(x):
+            return x
+        return "inf" if x > 0 else "-inf" if x < 0 else None
+    if isinstance(v, np.bool_):
+        return bool(v)
+    return v
+
+
+def _units(name: str) -> dict:
+    return {fp.name: fp.unit for fp in EFFECTS[name].fit}
+
+
+def _strongest(v: np.ndarray) -> int:
+    v = np.asarray(v, float)
+    a = np.where(np.isfinite(v), np.abs(v), -1.0)
+    return int(np.argmax(a))
+
+
+def _describe(name: str, p: dict, s: dict, D: _Data) -> str:
+    """One line in physical units for the summary."""
+    ks = np.linalg.norm(D.s, axis=1)
+    g = float(D.device.gravity_mps2)
+    try:
+        if name == "offset":
+            i = _strongest(p["db"])
+            return (f"offset change up to {p['db'][i]:+.4g} +- {s['db'][i]:.2g} counts "
+                    f"({p['db'][i] / ks[i]:+.4g} m/s^2) on channel {i}")
+        if name == "gain":
+            i = _strongest(p["scale"])
+            return f"gain error up to {100 * p['scale'][i]:+.4g} +- {100 * s['scale'][i]:.2g} % on channel {i}"
+        if name == "misalignment":
+            a = np.degrees(np.linalg.norm(p["rot"], axis=1))
+            i = int(np.argmax(a))
+            return f"axis tilt up to {a[i]:.3g} deg (+- {np.degrees(np.linalg.norm(s['rot'][i])):.2g}) on channel {i}"
+        if name == "position_error":
+            d = 1e3 * np.linalg.norm(p["dr"], axis=1)
+            i = int(np.argmax(d))
+            return f"position error up to {d[i]:.3g} mm (+- {1e3 * np.linalg.norm(s['dr'][i]):.2g}) on channel {i}"
+        if name == "centripetal":
+            return (f"centripetal term multiplier {np.mean(p['scale']):.3g} (model {D.m0:g}; per channel "
+                    f"{np.min(p['scale']):.3g}..{np.max(p['scale']):.3g})")
+        if name == "time_skew":
+            i = _strongest(p["tau"])
+            return f"time skew up to {1e3 * p['tau'][i]:+.4g} +- {1e3 * s['tau'][i]:.2g} ms on channel {i}"
+        if name == "bandwidth":
+            fc = np.asarray(p["fc_hz"], float)
+            i = int(np.argmin(fc))
+            return f"low-pass cut-off down to {fc[i]:.4g} Hz (delay {1e3 * s['delay_s'][i]:.2g} ms 1-sigma) on channel {i}"
+        if name == "nonlinearity":
+            i = _strongest(p["k2"])
+            return (f"quadratic term up to {p['k2'][i]:+.4g} counts/(m/s^2)^2 on channel {i} "
+                    f"({100 * p['k2'][i] * g / ks[i]:+.3g} % of the reading at 1 g)")
+        if name == "temperature_offset":
+            i = _strongest(p["coeff"])
+            return (f"offset tempco up to {p['coeff'][i]:+.4g} +- {s['coeff'][i]:.2g} counts/degC on channel {i} "
+                    f"(t_ref {p['t_ref']:.4g} degC)")
+        if name == "temperature_gain":
+            i = _strongest(p["coeff"])
+            return (f"gain tempco up to {1e6 * p['coeff'][i]:+.4g} +- {1e6 * s['coeff'][i]:.2g} ppm/degC on channel {i} "
+                    f"(t_ref {p['t_ref']:.4g} degC)")
+        if name == "bias_drift":
+            i = _strongest(p["rate"])
+            return (f"offset ramp up to {p['rate'][i]:+.4g} +- {s['rate'][i]:.2g} counts/s "
+                    f"({3600 * p['rate'][i] / ks[i]:+.3g} m/s^2 per hour) on channel {i}")
+        if name == "saturation":
+            parts = [f"ch {i}: " + "..".join(f"{x:g}" for x in (p["lo"][i], p["hi"][i]))
+                     for i in range(D.N) if np.isfinite(p["lo"][i]) or np.isfinite(p["hi"][i])]
+            return "readings clip at " + ("; ".join(parts) if parts else "(no limit found)")
+        if name == "quantization":
+            st = [f"ch {i}: {int(q)}" for i, q in enumerate(p["step"]) if q > 0]
+            return "quantisation steps (counts) " + (", ".join(st) if st else "(none found)")
+        if name == "pose_error":
+            a = np.degrees(np.linalg.norm(p["rot"], axis=1))
+            return f"stated pose orientations off by up to {a.max():.3g} deg (median {np.median(a):.3g} deg)" if a.size else ""
+    except (KeyError, ValueError, IndexError):
+        pass
+    return name
+
+
+def _entry(D: _Data, c: _Cand, *, step: int | None, selected: bool, baseline: str, alone: _Cand | None = None) -> dict:
+    e = {
+        "name": c.name,
+        "shrink": c.shrink,
+        "heldout_rms_before": c.before,
+        "heldout_rms_after": c.after,
+        "params": _json(c.params),
+        "params_sigma": _json(c.sigma),
+        "units": _units(c.name),
+        "n_params": int(c.k),
+        "significant": bool(c.significant),
+        "selected": bool(selected),
+        "step": step,
+        "baseline": baseline,
+        "score": {"gain_chi2": c.gain, "penalty_chi2": c.penalty, "penalised_gain_chi2": c.gain - c.penalty,
+                  "t": c.t if math.isfinite(c.t) else 1e9, "z": c.z, "evidence": c.evidence},
+        "summary": _describe(c.name, c.params, c.sigma, D),
+    }
+    if c.notes:
+        e["notes"] = list(c.notes)
+    a = alone if alone is not None else c
+    e["alone"] = {"shrink": a.shrink, "heldout_rms_before": a.before, "heldout_rms_after": a.after}
+    return e
+
+
+# ==============================================================================
+# The diagnosis
+# ==============================================================================
+
+
+def _run_candidates(D, cands, names, y, pcur, progress):
+    Rr = D.rows(y)
+    S0w, S0u = _block_ss(D, Rr)
+    out = {}
+    for nm in names:
+        c = cands[nm].cv(D, y, pcur, S0w, S0u)
+        out[nm] = _score(D, c, S0w, S0u)
+        if progress is not None:
+            progress(nm)
+    return out, S0w, S0u
+
+
+def _rank_key(c: _Cand):
+    return (-(c.gain - c.penalty), c.k)
+
+
+def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, seed: int = 0,
+             candidates: Sequence[str] | None = None, max_steps: int = MAX_STEPS, model_centripetal: bool = True,
+             progress: Any = None) -> DiagnosisResult:
+    """Diagnose the gap between recordings and a calibrated model (see the module doc).
+
+    ``device``, ``calibration``: objects or JSON paths; ``recordings``: Recordings or CSV
+    paths (one or several).  ``folds``: cross-validation folds; ``seed``: fold assignment.
+    ``candidates``: effect names to try (default: every effect of the registry).
+    ``model_centripetal``: False diagnoses a model without the omega x (omega x r) term.
+    ``progress``: optional callable(name) called after each candidate is scored.
+    Returns the JSON object of the data contract (a dict; see :class:`DiagnosisResult`).
+    Bad input raises :class:`~accelcal.errors.InputError` / AccelcalError (one line).
+    """
+    t_start = time.perf_counter()
+    if isinstance(folds, bool) or not isinstance(folds, (int, np.integer)) or folds < 2:
+        raise AccelcalError(f"diagnose: folds must be an integer >= 2, got {folds!r}")
+    dev = _as_device(device)
+    cal, cal_src = _as_calibration(calibration, dev)
+    recs = _as_recordings(recordings, dev)
+    cands = _candidates()
+    if candidates is None:
+        names = list(EFFECT_NAMES)
+    else:
+        names = []
+        for nm in candidates:
+            if nm not in cands:
+                raise AccelcalError(f"diagnose: unknown candidate effect {nm!r}; effects: {', '.join(EFFECT_NAMES)}")
+            names.append(nm)
+    D = _prepare(dev, cal, recs, int(folds), int(seed), 1.0 if model_centripetal else 0.0)
+    e = D.raw - D.p0
+    _setup_rows(D, e)
+
+    skipped = []
+    active = []
+    for nm in names:
+        why = cands[nm].skip(D)
+        if why is None:
+            active.append(nm)
+        else:
+            skipped.append({"name": nm, "reason": why})
+
+    # --- step 1: every candidate alone, then stepwise --------------------------------------------
+    y = e.copy()
+    pcur = D.p0.copy()
+    first, S0w, S0u = _run_candidates(D, cands, active, y, pcur, progress)
+    base_rms = float(math.sqrt(S0u.sum() / (D.n * D.R)))
+    steps: list[tuple[_Cand, str]] = []
+    results = first
+    remaining = list(active)
+    chosen: list[str] = []
+    while True:
+        sig = [c for c in results.values() if c.significant]
+        if not sig:
+            break
+        best = sorted(sig, key=_rank_key)[0]
+        baseline = "the calibrated model" + ("" if not chosen else " + " + " + ".join(chosen))
+        steps.append((best, baseline))
+        chosen.append(best.name)
+        remaining.remove(best.name)
+        if best.gain > 0:
+            y = y - best.delta
+            pcur = pcur + best.delta
+        if len(chosen) >= max_steps or not remaining:
+            break
+        results, _, _ = _run_candidates(D, cands, remaining, y, pcur, progress)
+
+    # --- joint refit of the chosen effects (backfitting) -----------------------------------------
+    joint: dict[str, _Cand] = {c.name: c for c, _ in steps}
+    if len(steps) > 1:
+        deltas = {c.name: (c.delta if c.gain > 0 else np.zeros_like(c.delta)) for c, _ in steps}
+        for _ in range(BACKFIT_PASSES):
+            for c, _ in steps:
+                if c.gain <= 0:
+                    continue
+                others = sum((deltas[o] for o in deltas if o != c.name), np.zeros_like(e))
+                yt = e - others
+                R0 = D.rows(yt)
+                s0w, s0u = _block_ss(D, R0)
+                cc = cands[c.name].cv(D, yt, D.p0 + others, s0w, s0u)
+                deltas[c.name] = cc.delta
+                joint[c.name] = cc
+    total_delta = np.zeros_like(e)
+    for c, _ in steps:
+        if c.gain > 0:
+            total_delta += joint[c.name].delta
+
+    # --- output ------------------------------------------------------------------------------------
+    effects = []
+    for k, (c, baseline) in enumerate(steps):
+        effects.append(_entry(D, c, step=k + 1, selected=True, baseline=baseline, alone=first.get(c.name)))
+    rest = sorted((c for nm, c in first.items() if nm not in chosen), key=_rank_key)
+    for c in rest:
+        effects.append(_entry(D, c, step=None, selected=False, baseline="the calibrated model"))
+    verdict = steps[0][0].name if steps else "none"
+    model_after = steps[-1][0].after if steps else base_rms
+    floor = float(np.sqrt(np.mean(D.sigma ** 2)))
+    rms_ch = np.sqrt(np.mean(e * e, axis=0))
+    gap_rms = float(np.sqrt(np.mean(rms_ch ** 2)))
+    notes = list(D.notes)
+    if D.mode == "jigfree":
+        notes.append("jig-free: the static poses with |f| = g are the reference; fitted and scored on the "
+                     f"{D.R} direction(s) per sample the pose angles cannot absorb")
+    if steps and len(steps) > 1:
+        notes.append("effects after the first were scored on the residual left by the ones before (their in-sample "
+                     "fits subtracted); 'model' gives the joint refit")
+    # near-ties for the verdict
+    ties = []
+    if steps:
+        b0 = steps[0][0]
+        for c in first.values():
+            if c.name != b0.name and c.significant and (b0.gain - c.gain) < 3.0 * math.sqrt(max(b0.gain, 1.0)) \
+                    and abs(c.shrink - b0.shrink) < 0.02:
+                ties.append(c.name)
+    if ties:
+        notes.append(f"{verdict} is barely ahead of {', '.join(ties)}: the data hardly tell them apart")
+    lattice = []
+    for i in range(D.N):
+        q, ph, fr, nd = _lattice(D.raw[:, i])
+        ent = {"channel": i, "step": int(q), "share_on_lattice": fr, "distinct_values": int(nd)}
+        if q == 1 and D.n >= 500:
+            # uneven use of the low bits (missing or doubled codes): the most used residue class mod m
+            v = D.raw[:, i].astype(np.int64)
+            best = None
+            for m in (2, 3, 4):
+                share = float(np.max(np.bincount(v % m, minlength=m))) / D.n
+                if best is None or share - 1.0 / m > best[1] - 1.0 / best[0]:
+                    best = (m, share)
+            ent["low_bits"] = {"modulus": best[0], "share_of_top_residue": best[1], "uniform_share": 1.0 / best[0]}
+            if best[1] - 1.0 / best[0] > 0.1:
+                notes.append(f"raw_{i}: {100 * best[1]:.0f} % of the readings fall in one residue class mod {best[0]} "
+                             f"({100 / best[0]:.0f} % for evenly used codes): the lowest bits are unevenly used "
+                             "(missing or doubled codes: a rescaled or differentially nonlinear ADC); not a lattice")
+        lattice.append(ent)
+    gap_extra = _pose_mean_gap(D, e)
+    result = DiagnosisResult({
+        "format": FORMAT,
+        "verdict": verdict,
+        "device": dev.name,
+        "calibration": {"source": cal_src, "method": cal.method},
+        "mode": D.mode,
+        "recordings": D.rec_info,
+        "n_samples": D.n,
+        "n_channels": D.N,
+        "gap": {
+            "rms_counts": gap_rms,
+            "noise_floor_counts": floor,
+            "ratio_to_noise": gap_rms / floor if floor > 0 else None,
+            "heldout_rms_counts": base_rms,
+            "noise_floor_per_channel": D.sigma.tolist(),
+            "rms_per_channel": rms_ch.tolist(),
+            "noise_method": D.noise_method,
+            **gap_extra,
+        },
+        "effects": effects,
+        "model": {
+            "effects": chosen,
+            "heldout_rms_before": base_rms,
+            "heldout_rms_after": model_after,
+            "shrink": float(max(0.0, 1.0 - model_after / base_rms)) if base_rms > 0 else 0.0,
+            "params": {nm: _json(joint[nm].params) for nm in chosen},
+            "params_sigma": {nm: _json(joint[nm].sigma) for nm in chosen},
+        },
+        "skipped": skipped,
+        "where": _json(_where(D, e)),
+        "raw_values": lattice,
+        "cv": {"folds": D.K, "blocks": D.B, "seed": int(seed), "block_s": BLOCK_S,
+               "t_min": T_MIN, "z_min": Z_MIN, "penalty_per_param_chi2": PENALTY_PER_PARAM, "min_shrink": MIN_SHRINK,
+               "rule": "significant: held-out chi2 gain > penalty, (block t >= t_min or chi2 z >= z_min), "
+                       "shrink >= min_shrink"},
+        "notes": notes,
+        "model_centripetal": bool(model_centripetal),
+        "elapsed_s": time.perf_counter() - t_start,
+    })
+    result["where"] = _json(result["where"])
+    result.series = {
+        "tg": D.tg, "t": D.t, "rec": D.rec, "residual": e, "residual_after": e - total_delta,
+        "noise_floor": D.sigma, "sources": [ri["source"] for ri in D.rec_info], "static": D.static,
+    }
+    return result
+
+
+def write_report(result: dict, out_dir: Any, **kw: Any) -> list[str]:
+    """Plots and a short written summary of a diagnosis into ``out_dir`` (see :mod:`accelcal.report`)."""
+    from .report import write_report as _wr
+    return _wr(result, out_dir, **kw)
