@@ -107,6 +107,66 @@ def cmd_calibrate(a):
     return 0
 
 
+def _write_columns(path, cols, comments):
+    names = list(cols)
+    _write_csv(path, names, [np.asarray(cols[k], float) for k in names], comments)
+
+
+def _estimator(a, fn, kind):
+    from .recording import read_recording
+    dev = _load_device(a.device)
+    cal = _load_cal(a.calibration, dev)
+    rec = read_recording(a.recording, dev.n_channels)
+    cols = fn(dev, cal, rec, a.engine)
+    meta = {"engine": a.engine, "device": dev.name, **getattr(cols, "meta", {})}
+    comments = [f"{k}: {v}" for k, v in meta.items()]
+    _write_columns(a.output, cols, comments)
+    for w in getattr(cols, "warnings", []):
+        print(f"accelcal {kind}: warning: {w}", file=sys.stderr)
+    if a.report:
+        from .estimators import report_plots
+        report_plots(a.report, cols, rec, kind)
+    return 0
+
+
+def cmd_attitude(a):
+    from .estimators import attitude_from_recording
+    return _estimator(a, attitude_from_recording, "attitude")
+
+
+def cmd_displacement(a):
+    from .estimators import displacement_from_recording
+    return _estimator(a, displacement_from_recording, "displacement")
+
+
+def cmd_rate(a):
+    from .estimators import rate_from_recording
+    return _estimator(a, rate_from_recording, "rate")
+
+
+def cmd_diagnose(a):
+    from .diagnose import diagnose, write_report
+    from .recording import read_recording
+    dev = _load_device(a.device)
+    cal = _load_cal(a.calibration, dev)
+    recs = [read_recording(p, dev.n_channels) for p in a.recordings]
+    result = diagnose(dev, cal, recs, folds=a.folds, seed=a.seed)
+    result = dict(result)
+    atomic_write(a.json, lambda f: json.dump(result, f, indent=2, default=_json_default))
+    if a.report:
+        write_report(result, a.report)
+    print(f"verdict: {result.get('verdict')}")
+    return 0
+
+
+def _json_default(o):
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
+
+
 def cmd_demo(a):
     from .demo import run_demo
     return run_demo(out_dir=Path(a.out), seed=a.seed)
@@ -166,6 +226,29 @@ def build_parser() -> argparse.ArgumentParser:
                    help="omega for the centripetal correction (auto: the w_* columns when complete)")
     s.add_argument("-o", "--output", required=True)
     s.set_defaults(func=cmd_resolve)
+
+    for name, func, what in (("attitude", cmd_attitude, "pendulum attitude from two triads: t, theta_rad, w_y, dw_y"),
+                             ("displacement", cmd_displacement, "stop-to-stop displacement: t, v_*, p_*"),
+                             ("rate", cmd_rate, "angular rate from alpha, leaky integration reset on rest")):
+        s = sub.add_parser(name, help=what)
+        s.add_argument("--device", required=True)
+        s.add_argument("--calibration", required=True)
+        s.add_argument("recording", metavar="REC.csv")
+        s.add_argument("--engine", choices=["float", "fixed"], default="float")
+        s.add_argument("--report", metavar="DIR", help="write plots into DIR")
+        s.add_argument("-o", "--output", required=True)
+        s.set_defaults(func=func)
+
+    s = sub.add_parser("diagnose", help="sim-to-real diagnosis: where the gap lies, which effect, how far "
+                       "it shrinks")
+    s.add_argument("--device", required=True)
+    s.add_argument("--calibration", required=True)
+    s.add_argument("recordings", nargs="+", metavar="REC.csv")
+    s.add_argument("--json", required=True, metavar="OUT.json")
+    s.add_argument("--report", metavar="DIR", help="plots and a written summary")
+    s.add_argument("--folds", type=int, default=5, help="blocked cross-validation folds")
+    s.add_argument("--seed", type=int, default=0)
+    s.set_defaults(func=cmd_diagnose)
     return p
 
 
