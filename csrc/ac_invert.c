@@ -108,6 +108,11 @@ ac_status ac_invert6(ac_xf a[6][6], int8_t perm[6], int16_t *cond_log2)
     if (a == 0 || perm == 0) {
         return AC_ERR_NULL;
     }
+    for (i = 0u; i < 6u; i++) {
+        for (j = 0u; j < 6u; j++) {
+            ac_xfp_normalize(&a[i][j]); /* the caller's values may be in any form */
+        }
+    }
     norm1(a, &na);
     for (i = 0u; i < 6u; i++) {
         for (j = 0u; j < 6u; j++) {

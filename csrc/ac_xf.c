@@ -70,6 +70,13 @@ static ac_u64 u64_of(uint32_t v)
     return r;
 }
 
+void ac_xfp_normalize(ac_xf *x)
+{
+    if (!bad(x)) {
+        pack(x, x->m < 0, u64_of(ac_abs_u(x->m)), (int32_t)x->e);
+    }
+}
+
 void ac_xfp_from_fixed(ac_xf *r, int32_t v, int16_t frac)
 {
     pack(r, v < 0, u64_of(ac_abs_u(v)), -(int32_t)frac);
@@ -247,7 +254,7 @@ void ac_xfp_acc_abs(ac_xf *max, ac_xf *sum, const ac_xf *v)
 {
     ac_xf av = *v;
     if (av.m < 0) {
-        av.m = -av.m;
+        av.m = -av.m; /* normalised: |m| < 2^30 */
     }
     if (bad(v)) {
         set_bad(max);

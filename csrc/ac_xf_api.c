@@ -25,6 +25,7 @@ ac_status ac_xf_to_fixed(ac_xf x, int16_t frac, int32_t *out)
     if (out == 0) {
         return AC_ERR_NULL;
     }
+    ac_xfp_normalize(&x);
     return ac_xfp_to_fixed(&x, frac, out);
 }
 
@@ -35,6 +36,8 @@ ac_status ac_xf_to_fixed(ac_xf x, int16_t frac, int32_t *out)
         if (out == 0) {                                                                            \
             return AC_ERR_NULL;                                                                    \
         }                                                                                          \
+        ac_xfp_normalize(&a);                                                                      \
+        ac_xfp_normalize(&b);                                                                      \
         op(&r, &a, &b);                                                                            \
         if (result(&r) != AC_OK) {                                                                 \
             return AC_ERR_RANGE;                                                                   \
@@ -56,6 +59,8 @@ ac_status ac_xf_div(ac_xf a, ac_xf b, ac_xf *out)
     if (b.m == 0) {
         return AC_ERR_SINGULAR;
     }
+    ac_xfp_normalize(&a);
+    ac_xfp_normalize(&b);
     ac_xfp_div(&r, &a, &b);
     if (result(&r) != AC_OK) {
         return AC_ERR_RANGE;
@@ -69,7 +74,11 @@ ac_status ac_xf_neg(ac_xf a, ac_xf *out)
     if (out == 0) {
         return AC_ERR_NULL;
     }
-    out->m = -a.m; /* |m| < 2^30: no overflow */
+    ac_xfp_normalize(&a);
+    if (a.e == AC_XF_BAD) {
+        return AC_ERR_RANGE;
+    }
+    out->m = -a.m; /* normalised: |m| < 2^30, no overflow */
     out->e = a.e;
     return AC_OK;
 }
@@ -78,6 +87,10 @@ ac_status ac_xf_abs(ac_xf a, ac_xf *out)
 {
     if (out == 0) {
         return AC_ERR_NULL;
+    }
+    ac_xfp_normalize(&a);
+    if (a.e == AC_XF_BAD) {
+        return AC_ERR_RANGE;
     }
     out->m = (a.m < 0) ? -a.m : a.m;
     out->e = a.e;
@@ -89,6 +102,8 @@ ac_status ac_xf_cmpabs(ac_xf a, ac_xf b, int8_t *out)
     if (out == 0) {
         return AC_ERR_NULL;
     }
+    ac_xfp_normalize(&a);
+    ac_xfp_normalize(&b);
     *out = ac_xfp_cmpabs(&a, &b);
     return AC_OK;
 }
@@ -98,6 +113,7 @@ ac_status ac_xf_ldexp(ac_xf x, int16_t k, ac_xf *out)
     if (out == 0) {
         return AC_ERR_NULL;
     }
+    ac_xfp_normalize(&x);
     ac_xfp_ldexp(&x, k);
     if (result(&x) != AC_OK) {
         return AC_ERR_RANGE;

@@ -1326,7 +1326,13 @@ static void target_xf(rd *r)
         st = ac_xf_ldexp(a, k16, &res);
         CHECK_STATUS(st);
         e = (int32_t)a.e + k16;
-        if (a.m == 0) {
+        if (a.e == -32768) { /* the reserved invalid exponent (ac_xf.h) */
+            CHECK(st == AC_ERR_RANGE, "ldexp of the invalid value gave %d", st);
+        } else if (a.m != 0 && a.e > 30000) { /* outside the kept range already */
+            CHECK(st == AC_ERR_RANGE, "ldexp of an out-of-range input gave %d", st);
+        } else if (a.m != 0 && a.e < -30000) { /* flushed to zero when normalised */
+            CHECK(st == AC_OK && res.m == 0, "ldexp of an underflowed input");
+        } else if (a.m == 0) {
             CHECK(st == AC_OK && res.m == 0, "ldexp of 0");
         } else if (e > 30000) {
             CHECK(st == AC_ERR_RANGE, "ldexp overflow gave %d", st);
@@ -1675,12 +1681,10 @@ static void target_null(rd *r)
     ac_build_work w;
     ac_rate rs;
     ac_xf x = {0, 0}, a66[6][6], row[6];
-    int8_t perm[6], c;
-    int16_t x16[12] = {0}, i16;
+    int8_t perm[6];
+    int16_t x16[12] = {0};
     uint16_t u16[12] = {0};
     int32_t out[6];
-    uint8_t u8v;
-    ac_i64 i64;
     (void)r;
     memset(&t, 0, sizeof t);
     t.n = 6;
@@ -1735,11 +1739,74 @@ static void target_null(rd *r)
     NUL(ac_xf_abs(x, NULL));
     NUL(ac_xf_cmpabs(x, x, NULL));
     NUL(ac_xf_ldexp(x, 0, NULL));
+    {
+        ac_rest_cfg rc = {100, 0u, UINT32_MAX, 100, 100, 3u, 2u};
+        ac_rest rest;
+        ac_triad tri;
+        ac_att att;
+        ac_att_out ao;
+        ac_disp_cfg dc;
+        ac_disp disp;
+        ac_disp_out dout;
+        uint32_t q;
+        int16_t rot[3][3];
+        uint8_t fl;
+        int32_t f3[6] = {0, 0, 10042, 0, 0, 10042};
+        memset(&tri, 0, sizeof tri);
+        NUL(ac_isqrt32(4u, NULL));
+        NUL(ac_udiv64(0u, 1u, 1u, NULL));
+        NUL(ac_mul32x16_shift(1, 1u, 0u, NULL));
+        NUL(ac_atan2(1, 1, NULL, &q));
+        NUL(ac_rest_init(NULL, &rc));
+        NUL(ac_rest_init(&rest, NULL));
+        NUL(ac_rest_reset(NULL));
+        CHECK(ac_rest_init(&rest, &rc) == AC_OK, "ac_rest_init");
+        NUL(ac_rest_step(NULL, f3, NULL, &fl));
+        NUL(ac_rest_step(&rest, NULL, NULL, &fl));
+        NUL(ac_rest_step(&rest, f3, NULL, NULL));
+        NUL(ac_rest_step_ref(&rest, NULL, NULL, f3, &fl));
+        NUL(ac_rest_batch(NULL, f3, NULL, 1u, &fl));
+        NUL(ac_rest_batch(&rest, NULL, NULL, 1u, &fl));
+        NUL(ac_rest_batch(&rest, f3, NULL, 1u, NULL));
+        NUL(ac_rest_rate_step(NULL, &rs, f3, f3, x16, &fl));
+        NUL(ac_rest_rate_step(&rest, NULL, f3, f3, x16, &fl));
+        NUL(ac_rest_rate_step(&rest, &rs, NULL, f3, x16, &fl));
+        NUL(ac_rest_rate_step(&rest, &rs, f3, NULL, x16, &fl));
+        NUL(ac_rest_rate_step(&rest, &rs, f3, f3, NULL, &fl));
+        NUL(ac_triad_check(NULL));
+        NUL(ac_triad_apply(NULL, u16, out));
+        NUL(ac_triad_apply(&tri, NULL, out));
+        NUL(ac_triad_apply(&tri, u16, NULL));
+        NUL(ac_att_init(NULL, 1000, 2000, 41943u, 22u, 512u, 0, 0u));
+        NUL(ac_att_reset(NULL));
+        CHECK(ac_att_init(&att, 100L << 10, 300L << 10, 41943u, 22u, 512u, 0, 0u) == AC_OK, "ac_att_init");
+        NUL(ac_att_step(NULL, f3, f3 + 3, &ao));
+        NUL(ac_att_step(&att, NULL, f3 + 3, &ao));
+        NUL(ac_att_step(&att, f3, NULL, &ao));
+        NUL(ac_att_step(&att, f3, f3 + 3, NULL));
+        NUL(ac_att_batch(NULL, f3, 1u, &ao));
+        NUL(ac_att_batch(&att, NULL, 1u, &ao));
+        NUL(ac_att_batch(&att, f3, 1u, NULL));
+        dc.rest = rc;
+        dc.dt_m = 41943u;
+        dc.dt_shift = 22u;
+        dc.axis = -1;
+        NUL(ac_disp_init(NULL, &dc));
+        NUL(ac_disp_init(&disp, NULL));
+        NUL(ac_disp_reset(NULL));
+        CHECK(ac_disp_init(&disp, &dc) == AC_OK, "ac_disp_init");
+        NUL(ac_disp_step(NULL, f3, &dout));
+        NUL(ac_disp_step(&disp, NULL, &dout));
+        NUL(ac_disp_step(&disp, f3, NULL));
+        NUL(ac_disp_finish(NULL, &dout));
+        NUL(ac_disp_finish(&disp, NULL));
+        NUL(ac_disp_batch(NULL, f3, 1u, &dout));
+        NUL(ac_disp_batch(&disp, NULL, 1u, &dout));
+        NUL(ac_disp_batch(&disp, f3, 1u, NULL));
+        NUL(ac_tilt_frame(NULL, rot));
+        NUL(ac_tilt_frame(f3, NULL));
+    }
 #undef NUL
-    (void)c;
-    (void)i16;
-    (void)u8v;
-    (void)i64;
 }
 
 /* ========================================================================= */

@@ -71,11 +71,12 @@ def seeds(rng: random.Random):
     for mode in (1, 3, 0, 2, 4, 8, 12):
         yield f"disp_m{mode}", bytes([DISP, mode, 60]) + payload(700)
     # a displacement stream: rest, motion, rest (plausible config, 1-D and 3-axis)
+    # (ema_shift 1 or 3: the running mean must settle on the final rest within the stream)
     for axis_sel in (0, 1, 2, 3):
-        cfg = bytes([DISP, 0, 63, 10, 40, 2, 2, axis_sel])
-        rest = bytes([0] + [0, 0, 0]) * 20
-        move = bytes([1] + [rng.randrange(256) for _ in range(3)]) * 20
-        yield f"disp_stream{axis_sel}", cfg + rest + move + rest
+        for ema in (0, 2):
+            cfg = bytes([DISP, 0, 63, 10, 40, 2, ema, axis_sel])
+            move = b"".join(bytes([1] + [rng.randrange(256) for _ in range(3)]) for _ in range(12))
+            yield f"disp_stream{axis_sel}_e{ema}", cfg + bytes(4) * 10 + move + bytes(4) * 41
 
 
 def main() -> int:

@@ -33,10 +33,13 @@ their size are drawn directly).  Definitions (on all samples):
 
 Reported: confusion matrix (truth rows, verdict columns), top-1 accuracy (all, rho >= 3),
 false-positive rate on none, |estimated - true shrink| (the true effect's entry, alone),
-parameter errors against the truth, and the time to diagnose 100,000 samples x 12
-channels with every candidate.
+parameter errors against the truth, the time to diagnose 100,000 samples x 12
+channels with every candidate, and the diagnosis of the real Xsens recording (jig-free) with
+three models: its own jig-free calibration, a calibration from the first half applied to the
+second, and the nominal calibration.
 
-Usage: python tools/bench_diagnose.py [--per-effect N] [--quick] [--seed S] [--jobs J]
+Usage: python tools/bench_diagnose.py [--per-effect N] [--per-none M] [--quick] [--seed S] [--jobs J]
+       [--effects a,b,...] [--no-timing] [--rows ROWS.json] [-o OUT.md]
 Writes build/bench_diagnose.md.
 """
 from __future__ import annotations
@@ -114,12 +117,10 @@ class _Concat:
         for tr in parts:
             if np.all(tr.pose >= 0):
                 lab = tr.pose
-                first = np.searchsorted(np.r_[True, lab[1:] != lab[:-1]].cumsum(), np.arange(1, len(tr.t) + 1))
                 brk = np.flatnonzero(np.r_[True, lab[1:] != lab[:-1]])
                 ends = np.append(brk[1:], len(tr.t)) - 1
                 seg = np.repeat(np.arange(brk.size), np.diff(np.append(brk, len(tr.t))))
                 self.hold.append((tr.t, tr.t[brk][seg], tr.t[ends][seg]))
-                del first
             else:
                 self.hold.append(None)
 
@@ -317,7 +318,8 @@ def make_dataset(effect: str, seed: int, rho: float | None = None) -> dict:
         specs = [("quantization", {"step": step})]
     elif effect == "saturation":
         S = np.asarray(cal.sensitivity)
-        amax = np.max(np.abs(base_clean - np.asarray(cal.offsets)), axis=0) / (dev.gravity_mps2 * np.linalg.norm(S, axis=1))
+        amax = (np.max(np.abs(base_clean - np.asarray(cal.offsets)), axis=0)
+                / (dev.gravity_mps2 * np.linalg.norm(S, axis=1)))
         chans = np.sort(rng.choice(N, size=int(rng.integers(1, N + 1)), replace=False))
         lim = amax * (1.0 - np.exp(rng.uniform(np.log(0.002), np.log(0.45), N)))
         specs = [("saturation", {"limit_g": _fmt(lim[chans]), "channel": [int(c) for c in chans]})]
@@ -449,18 +451,23 @@ def run_one(args):
     dt = time.perf_counter() - t0
     entry = next((e for e in res["effects"] if e["name"] == effect), None)
     est_shrink = entry["alone"]["shrink"] if entry else 0.0
-    perr = param_error(effect, entry["params"], ds["truth"], entry["params_sigma"]) if (entry and ds["truth"] is not None) else None
+    perr = None
+    if entry and ds["truth"] is not None:
+        perr = param_error(effect, entry["params"], ds["truth"], entry["params_sigma"])
+    if effect == "none":
+        est_shrink = res["effects"][0]["shrink"] if res["verdict"] != "none" else 0.0
     return {"effect": effect, "seed": seed, "verdict": res["verdict"], "rho": ds["rho"],
             "true_shrink": ds["true_shrink"] if effect != "none" else 0.0,
-            "est_shrink": est_shrink if effect != "none" else (res["effects"][0]["shrink"] if res["verdict"] != "none" else 0.0),
+            "est_shrink": est_shrink,
             "param_err": perr, "time_s": dt, "n": res["n_samples"], "N": res["n_channels"],
             "chosen": res["model"]["effects"], "device": ds["device"].name,
             "motion": f"{ds['layout']}: {ds['motion'].get('jig')} + {ds['motion'].get('motion')}",
             "skipped": [s["name"] for s in res["skipped"]], "spec": ds["spec"]}
 
 
-def timing_run(n: int = 100_000, seed: int = 1) -> dict:
-    """Diagnose n samples x 12 channels with every candidate active."""
+def timing_run(n: int = 100_000, seed: int = 1, effects=("time_skew:tau=0.002",)) -> dict:
+    """Diagnose n samples x 12 channels with every candidate active (a jig part with 26 poses, a
+    random 6-DOF motion, a temperature sine), the given effects in the data."""
     from accelcal.diagnose import diagnose
     rng = np.random.default_rng(seed)
     dev = random_array(rng, 4)
@@ -472,7 +479,7 @@ def timing_run(n: int = 100_000, seed: int = 1) -> dict:
     mv = MOTIONS["random_6dof"](dev, rng, duration_s=(n - jig.n_samples) / 100.0 - 1.0, bandwidth_hz=1.5)
     tr = concat([jig, mv], 1.0, dev.gravity_mps2)
     tr.temp_c = temperature_profile(tr.t, "sine", temp_c=25.0, temp_amplitude_c=10.0, temp_period_s=300.0)
-    sim = run_simulation(dev, tr, seed=seed, calibration=cal, effects=["time_skew:tau=0.002"])
+    sim = run_simulation(dev, tr, seed=seed, calibration=cal, effects=list(effects))
     t0 = time.perf_counter()
     res = diagnose(dev, cal, [sim.recording], seed=seed)
     dt = time.perf_counter() - t0
@@ -488,6 +495,55 @@ def _pct(m):
     return f"{100 * np.mean(m):.1f} %" if np.size(m) else "-"
 
 
+XSENS = os.path.join(os.path.dirname(ROOT), "shared", "data", "imu_tk_xsens", "xsens_acc.txt.gz")
+if not os.path.exists(XSENS):
+    XSENS = "/work/shared/data/imu_tk_xsens/xsens_acc.txt.gz"
+
+
+def xsens_section() -> list[str]:
+    """The diagnosis of the real Xsens recording (no reference: its static poses, |f| = g)."""
+    from accelcal.calibrate import calibrate_recordings
+    from accelcal.calibration import Calibration
+    from accelcal.diagnose import diagnose
+    from accelcal.xsens import load_xsens
+    if not os.path.exists(XSENS):
+        return ["", "### Real Xsens recording", "", f"(not found: {XSENS})"]
+    dev, rec = load_xsens(XSENS)
+    half = rec.t < rec.t[0] + 0.5 * (rec.t[-1] - rec.t[0])
+    r1, r2 = rec.select(half), rec.select(~half)
+    r1.source, r2.source = "xsens first half", "xsens second half"
+    runs = [("jig-free calibration of the whole recording", calibrate_recordings(dev, [rec], "jigfree"), rec),
+            ("calibration from the first half, diagnosis of the second", calibrate_recordings(dev, [r1], "jigfree"),
+             r2),
+            ("the nominal calibration (zero 32768, 410.1 counts per m/s^2)", Calibration.nominal(dev), rec)]
+    out = ["", "### Real Xsens recording (imu_tk; jig-free: the static poses with |f| = g are the reference)", "",
+           "| model | verdict | chosen effects | held-out RMS before -> after (counts) | gap / noise floor | "
+           "pose means / noise | next candidates (shrink %, z) | time |",
+           "| --- | --- | --- | --- | ---: | ---: | --- | ---: |"]
+    notes = []
+    for title, cal, r in runs:
+        t0 = time.perf_counter()
+        res = diagnose(dev, cal, [r])
+        dt = time.perf_counter() - t0
+        g, m = res["gap"], res["model"]
+        chosen = ", ".join(f"{e['name']} ({e['summary']})" for e in res["effects"] if e["selected"]) or "-"
+        nxt = ", ".join(f"{e['name']} ({100 * e['shrink']:.2f}, {e['score']['z']:.3g})"
+                        for e in res["effects"] if not e["selected"])[:200]
+        out.append(f"| {title} | **{res['verdict']}** | {chosen} | {m['heldout_rms_before']:.3f} -> "
+                   f"{m['heldout_rms_after']:.3f} | {g['ratio_to_noise']:.3f} | {g.get('pose_mean_ratio', 0):.2f} | "
+                   f"{nxt} | {dt:.1f} s |")
+        if not notes:
+            notes = [n for n in res["notes"] if "residue" in n]
+            bands = res["where"]["frequency_bands"]
+            notes.append("residual by frequency band (counts; white noise at the floor in brackets): " + ", ".join(
+                f"{b['label']} {b['rms_counts']:.2f} ({b['white_noise_rms_counts']:.2f})" for b in bands))
+            notes.append(f"noise floor {g['noise_floor_counts']:.2f} counts ({g['noise_method']}); "
+                         f"{res['recordings'][0]['n_used']} of {res['recordings'][0]['n_samples']} samples in "
+                         f"{g.get('n_poses')} static poses")
+    out += [""] + [f"- {n}" for n in notes]
+    return out
+
+
 def summarise(rows: list[dict]) -> str:
     lines = []
     idx = {n: i for i, n in enumerate(LABELS)}
@@ -498,8 +554,13 @@ def summarise(rows: list[dict]) -> str:
             M[idx[r["effect"]], idx[r["verdict"]]] += 1
         return M
 
-    short = {n: n.replace("temperature_", "temp_").replace("position_error", "position").replace(
-        "misalignment", "misalign").replace("quantization", "quantiz").replace("nonlinearity", "nonlin") for n in LABELS}
+    abbrev = (("temperature_", "temp_"), ("position_error", "position"), ("misalignment", "misalign"),
+              ("quantization", "quantiz"), ("nonlinearity", "nonlin"))
+    short = {}
+    for n in LABELS:
+        short[n] = n
+        for a, b in abbrev:
+            short[n] = short[n].replace(a, b)
 
     def table(M, title):
         out = [f"### {title}", "", "| truth \\ verdict | " + " | ".join(short[n] for n in LABELS) + " |",
@@ -515,7 +576,8 @@ def summarise(rows: list[dict]) -> str:
     lines += table(conf(rows), "Confusion matrix, all datasets") + [""]
     lines += ["### Per effect", "",
               "| effect | datasets | top-1 all | datasets rho>=3 | top-1 rho>=3 | top-1 1<=rho<3 | top-1 rho<1 | "
-              "|shrink err| median (rho>=3) | |shrink err| 95 % (rho>=3) | within 0.1 (rho>=3) | param rel err median (rho>=3) |",
+              "|shrink err| median (rho>=3) | |shrink err| 95 % (rho>=3) | within 0.1 (rho>=3) | "
+              "param rel err median (rho>=3) |",
               "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     tot_strong = tot_ok = 0
     all_err = []
@@ -543,7 +605,8 @@ def summarise(rows: list[dict]) -> str:
     lines += ["", "### Goals", "",
               f"- top-1 accuracy, contribution >= 3x noise floor: **{100 * tot_ok / max(tot_strong, 1):.1f} %** "
               f"({tot_ok}/{tot_strong}; goal >= 95 %)",
-              f"- false positives on none: **{100 * fp:.1f} %** ({sum(r['verdict'] != 'none' for r in none)}/{len(none)}; "
+              f"- false positives on none: **{100 * fp:.1f} %** "
+              f"({sum(r['verdict'] != 'none' for r in none)}/{len(none)}; "
               "goal <= 5 %)",
               f"- |estimated - true shrink| (true effect's entry, rho >= 3): median {_q(all_err, 50)}, "
               f"95th percentile {_q(all_err, 95)}, within 0.1: "
@@ -554,7 +617,8 @@ def summarise(rows: list[dict]) -> str:
     wrong = [r for r in rows if r["verdict"] != r["effect"] and (r["effect"] == "none" or r["rho"] >= 3)]
     if wrong:
         lines += ["", "### Misses (contribution >= 3x noise floor, and false positives)", "",
-                  "| truth | verdict | rho | seed | device | motion | spec |", "| --- | --- | ---: | ---: | --- | --- | --- |"]
+                  "| truth | verdict | rho | seed | device | motion | spec |",
+                  "| --- | --- | ---: | ---: | --- | --- | --- |"]
         for r in wrong[:60]:
             lines.append(f"| {r['effect']} | {r['verdict']} | {r['rho']:.2f} | {r['seed']} | {r['device']} | "
                          f"{r['motion']} | {r['spec'][:80]} |")
@@ -563,8 +627,9 @@ def summarise(rows: list[dict]) -> str:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--per-effect", type=int, default=20, help="datasets per effect and for none (default 20)")
-    ap.add_argument("--quick", action="store_true", help="4 datasets per effect, no timing run")
+    ap.add_argument("--per-effect", type=int, default=30, help="datasets per effect (default 30)")
+    ap.add_argument("--per-none", type=int, default=100, help="datasets without an effect (default 100)")
+    ap.add_argument("--quick", action="store_true", help="4 datasets per effect and for none, no Xsens or timing run")
     ap.add_argument("--seed", type=int, default=1000)
     ap.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1))
     ap.add_argument("--effects", default=",".join(LABELS), help="comma-separated subset")
@@ -575,12 +640,16 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     from tqdm import tqdm
     per = 4 if a.quick else a.per_effect
+    per_none = 4 if a.quick else a.per_none
     effects = [e.strip() for e in a.effects.split(",") if e.strip()]
+    bad = [e for e in effects if e not in LABELS]
+    if bad:
+        ap.error(f"unknown effect {bad[0]!r}; effects: {', '.join(LABELS)}")
     # stratified magnitudes: dataset k of an effect gets a target rho in the k-th of `per` equal
     # slices of [log RHO_LO, log RHO_HI] (position inside the slice from the seed)
     jobs = []
     for e in effects:
-        for k in range(per):
+        for k in range(per_none if e == "none" else per):
             u = np.random.default_rng([a.seed + k, LABELS.index(e), 7]).random()
             rho = float(np.exp(np.log(RHO_LO) + (np.log(RHO_HI) - np.log(RHO_LO)) * (k + u) / per))
             jobs.append((e, a.seed + k, rho))
@@ -600,15 +669,20 @@ def main(argv=None) -> int:
         import json
         with open(a.rows, "w") as f:
             json.dump(rows, f, indent=0, default=float)
-    text = [f"# Diagnosis benchmark (withheld effects)", "",
-            f"{len(rows)} datasets ({per} per effect and for none), seed {a.seed}, {wall:.0f} s wall on {a.jobs} "
+    text = ["# Diagnosis benchmark (withheld effects)", "",
+            f"{len(rows)} datasets ({per} per effect, {per_none} without), seed {a.seed}, {wall:.0f} s wall on {a.jobs} "
             f"process(es).  rho = true contribution / noise floor, log-uniform target in [{RHO_LO}, {RHO_HI}].", ""]
     text.append(summarise(rows))
+    if not a.quick:
+        text += xsens_section()
     if not (a.quick or a.no_timing):
-        tr = timing_run(a.timing_samples)
-        text += ["", "### Timing", "",
-                 f"- {tr['n']} samples x {tr['N']} channels, every candidate (skipped: {tr['skipped'] or 'none'}): "
-                 f"**{tr['time_s']:.1f} s** (goal <= 20 s); verdict {tr['verdict']}, effects {tr['steps']}"]
+        text += ["", "### Timing", ""]
+        for effs in (("time_skew:tau=0.002",),
+                     ("time_skew:tau=0.002", "offset:db=5", "temperature_gain:coeff=0.0002")):
+            tr = timing_run(a.timing_samples, effects=effs)
+            text.append(f"- {tr['n']} samples x {tr['N']} channels, every candidate (skipped: "
+                        f"{tr['skipped'] or 'none'}), data with {', '.join(effs)}: **{tr['time_s']:.1f} s** "
+                        f"(goal <= 20 s); verdict {tr['verdict']}, effects found {tr['steps']}")
     out = "\n".join(text) + "\n"
     os.makedirs(os.path.dirname(os.path.abspath(a.output)), exist_ok=True)
     with open(a.output, "w") as f:

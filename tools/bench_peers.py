@@ -409,8 +409,8 @@ def main(argv=None) -> int:
     emit(f"On the poses it was fitted on, accelcal's jig-free fit gives {xs['full_rms']:.5f} m/s^2, the same as "
          f"imu_tk's reported ~0.001 to the precision that figure is given; held out (leave one pose out) it "
          f"gives {xs['loo_rms']:.5f} m/s^2"
-         + (", i.e. worse than 0.001: that is the honest figure for poses the fit has not seen (imu_tk's "
-            "number is an in-sample one)." if xs["loo_rms"] > 0.001 else ".")
+         + (", i.e. worse than 0.001: that is the honest figure for poses the fit has not "
+            "seen; the in-sample figure above is the one to set beside imu_tk's if that is in-sample too." if xs["loo_rms"] > 0.001 else ".")
          + "  The two are not measured on identical pose sets (imu_tk uses its own static detector and "
            "pose list), so differences below ~0.0003 m/s^2 are ties.  Ferraris without a jig (poses 6 to "
            "16 deg off the axes) is two orders of magnitude worse: the six-pose method needs the jig.")

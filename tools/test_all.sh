@@ -7,16 +7,18 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 need_apt=0
-for tool in h8300-hms-gcc avr-gcc simavr cppcheck cmake valgrind; do
+for tool in h8300-hms-gcc avr-gcc simavr cppcheck cmake valgrind clang clang-tidy; do
     command -v "$tool" >/dev/null 2>&1 || need_apt=1
 done
 [ -f /usr/lib/avr/include/avr/io.h ] || need_apt=1
+ls /usr/lib/llvm-*/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a >/dev/null 2>&1 || need_apt=1
 if [ "$need_apt" = 1 ]; then
     echo "== installing Debian packages"
     SUDO=""; [ "$(id -u)" = 0 ] || SUDO="sudo"
     $SUDO apt-get update -qq
     DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq \
-        gcc-h8300-hms binutils-h8300-hms gcc-avr avr-libc simavr cppcheck cmake valgrind >/dev/null
+        gcc-h8300-hms binutils-h8300-hms gcc-avr avr-libc simavr cppcheck cmake valgrind \
+        clang clang-tidy libclang-rt-14-dev >/dev/null
 fi
 
 echo "== installing the Python package"
@@ -28,6 +30,11 @@ echo "== C core: H8/300H (h8300-hms-gcc -mh -mn) build and link without libgcc"
 bash tools/build_h8.sh
 echo "== C core: AVR (16-bit int) under simavr, bit for bit against the host"
 bash tools/run_avr_tests.sh
+
+echo "== C core: clang-tidy (zero findings)"
+bash tools/tidy.sh
+echo "== C core: libFuzzer over the whole API, bounded run"
+bash tools/fuzz.sh "${ACCELCAL_FUZZ_SECONDS:-45}"
 
 echo "== Python suite"
 ACCELCAL_HYPOTHESIS="${ACCELCAL_HYPOTHESIS:-ci}" python3 -m pytest -q -p no:cacheprovider --durations=25

@@ -38,7 +38,9 @@
  *   g:      int32 Q.16 m/s^2 = round(sum f 2^6 / count)        (exact mean to 0.5 LSB), both modes
  *   R:      int16 Q.14, entries within 2 LSB of the exact rotation of g
  *   a:      int32 Q.16 m/s^2: 3-axis round(R f 2^-8) - round(R g 2^-14); 1-D f[axis] 2^6 (exact)
- *   v:      int32 Q.24 m/s (+-128 m/s)    v += round((a' + a) dt_m 2^-(dt_shift - 7))
+ *   v:      int32 Q.24 m/s (+-128 m/s; the p step adds two velocities, so |v| < 64 m/s
+ *           is the working range, beyond it the step saturates with AC_DISP_SAT)
+ *                                         v += round((a' + a) dt_m 2^-(dt_shift - 7))
  *   p:      int32 Q.20 m  (+-2048 m)     p += round((v' + v) dt_m 2^-(dt_shift + 5))
  *   T:      round(n dt 2^16) s Q.16; p -= round(v T 2^-21); zp = round(v 2^8 / T) Q.16 m/s^2
  *   dt = dt_m 2^-dt_shift s as ac_rate (dt_shift 16..46).

@@ -6,6 +6,12 @@
  * inversion about 29 bits of relative precision over any scale, using only
  * integer arithmetic (no FPU, no soft-float library).  It is meant for the
  * rarely-run matrix build, not the per-sample path.
+ *
+ * Every function accepts any mantissa (it normalises its inputs first, so
+ * INT32_MIN or an unnormalised value is fine).  Exponents are kept within
+ * +-30000; a result beyond that is AC_ERR_RANGE.  The exponent -32768 is
+ * reserved: it marks an invalid value, and any operation on it gives
+ * AC_ERR_RANGE.
  */
 #ifndef AC_XF_H
 #define AC_XF_H

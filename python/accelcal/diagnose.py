@@ -25,13 +25,16 @@ the effect registry's own ``effects.evaluate``.
 
 **Residual (the gap)**: ``e = raw - pred`` (counts).
 
-**Noise floor** (from the data itself): per channel, the pooled within-segment standard
-deviation of e over the static segments (pose labels / detected static intervals: their means
-removed, so a constant model error does not count) when they give at least 30 degrees of
-freedom; otherwise ``1.4826 MAD(d) / sqrt(70)`` of the fourth differences
+**Noise floor** (from the data itself): per channel, from the static segments (pose labels /
+detected static intervals) when they give at least MIN_NOISE_DOF degrees of freedom: the
+dof-weighted median of the segments' residual variances (each segment's mean removed, so a
+constant model error does not count; the median so that a few segments that drift or flip
+between quantisation levels do not), corrected by the median of chi2_nu / nu; otherwise
+``1.4826 MAD(d) / sqrt(70)`` of the fourth differences
 ``d = e[t-2] - 4 e[t-1] + 6 e[t] - 4 e[t+1] + e[t+2]`` inside contiguous segments (blind to any
 smooth model error).  Floored at 1/sqrt(12) count (rounding).  The pooled floor is the RMS
-over channels.
+over channels.  Both assume the noise is white at the sample rate; ``where.frequency_bands``
+shows how far it is.
 
 **Blocked cross-validation.**  Usable samples are cut into contiguous segments (a recording,
 no time gap, one pose label).  Each segment is split into max(folds, ceil(length / 2 s))
@@ -72,21 +75,25 @@ Candidates (the registry's effects; parameters in the registry's concrete form, 
 
 * linear in their parameters given the reference, per-channel least squares: ``offset``,
   ``gain``, ``misalignment`` (first order in the rotation, 2 per channel), ``position_error``
-  (3 per channel, unobservable directions left at 0), ``centripetal`` (the multiplier),
-  ``nonlinearity``, ``bias_drift`` (a ramp in the recordings' time from the earliest first
-  sample: recordings that share a time base share the ramp; a random walk is not fitted), ``temperature_offset`` / ``temperature_gain`` (per-channel coefficients and
-  one shared reference temperature: the calibration's ``temperature_ref_c`` when it has one,
-  else fitted by a 1-D search);
+  (3 per channel, kept along the principal directions with 1-sigma <= POSITION_TOL_M, 0 along
+  the others), ``centripetal`` (the multiplier), ``nonlinearity``, ``bias_drift`` (a ramp in
+  the recordings' own time from the earliest first sample: recordings that share a time base
+  share the ramp; a random walk is not fitted), ``temperature_offset`` / ``temperature_gain``
+  (per-channel coefficients and one shared reference temperature: the calibration's
+  ``temperature_ref_c`` when it has one, else fitted by a 1-D search within T_REF_SPANS spans of
+  the recorded temperatures -- further out ``c (T - t_ref)`` would be an offset change in
+  disguise);
 * ``pose_error``: two angles per static pose (across the stated f), shared by the channels;
 * 1-D nonlinear searches per channel: ``time_skew`` (the model's sensed signal shifted by tau
-  along a cubic spline per segment) and ``bandwidth`` (the registry's first-order low-pass on
-  the model prediction, parameterised by the delay 1 / (2 pi f_c)): a grid, then a parabolic
-  refinement, per fold;
+  along a cubic spline per run of samples contiguous in time, clamped at its ends) and
+  ``bandwidth`` (the registry's first-order low-pass of the model prediction, run with lfilter,
+  parameterised by the delay 1 / (2 pi f_c) >= 0): a grid, then two parabolic steps, per fold;
 * from the raw values' distribution: ``saturation`` (a pile of readings at the extreme value
   of a channel, inside [raw_min, raw_max], where the model predicts beyond it; the levels are
   read from all the data and every block is scored with them, since the clipped samples
   often sit in one block that no training fold would see) and ``quantization`` (the raw
-  values on a lattice of step q >= 2, per fold); their predictions are the registry's clip /
+  values on a lattice of step q >= 2, likewise from all the data: a fold can miss the lattice
+  on a channel with few distinct values); their predictions are the registry's clip /
   rounding of the model prediction.
 
 Also reported: the static poses' mean residual against what noise explains
@@ -94,6 +101,26 @@ Also reported: the static poses' mean residual against what noise explains
 codes are missing or doubled without forming a lattice).
 
 Candidates whose reference is missing are skipped with the reason (``skipped``).
+
+The JSON object (``FORMAT``; arrays as lists, infinities as the strings "inf" / "-inf")
+--------------------------------------------------------------------------------------
+``verdict`` (an effect name or "none"); ``effects``: every candidate tried, the chosen ones
+first in the order they were added, then the others by penalised gain, each with ``name``,
+``shrink``, ``heldout_rms_before``, ``heldout_rms_after`` (counts), ``params`` (the registry's
+concrete parameters), ``params_sigma`` (1-sigma, same shapes), ``units``, ``n_params``,
+``significant``, ``selected``, ``step`` (1, 2, ... or null), ``baseline`` (what it was added to),
+``alone`` (its figures when added alone to the calibrated model), ``score`` (``gain_chi2``,
+``penalty_chi2``, ``penalised_gain_chi2``, ``t``, ``z``, ``evidence``), ``summary`` (one line in
+physical units), ``notes``; the verdict's entry also ``ambiguous_with``.  ``model``: the chosen
+effects refitted jointly (``params``, ``params_sigma``) with the held-out RMS before the first
+and after the last and the total ``shrink``.  ``gap``: ``rms_counts``, ``noise_floor_counts``,
+``ratio_to_noise``, per-channel figures, ``noise_method``, and for static poses
+``pose_mean_rms_counts`` / ``pose_mean_noise_counts`` / ``pose_mean_ratio``.  ``where``:
+``by_channel``, ``static_vs_rotating``, ``omega_bins``, ``alpha_bins`` (reference mode),
+``frequency_bands`` (with the white-noise share of each band), ``temperature_bins`` (when
+temp_c varies), ``time_bins``, ``poses``; each bin with ``n``, ``rms_counts``,
+``ratio_to_noise``, ``rms_per_channel``, ``mean_per_channel``.  Also ``mode``, ``recordings``,
+``skipped``, ``raw_values``, ``cv``, ``notes``, ``elapsed_s``.
 """
 from __future__ import annotations
 
@@ -132,6 +159,8 @@ BLOCK_S = 2.0              # longest cross-validation block in a moving segment 
 MIN_NOISE_DOF = 30         # static samples needed for the static noise-floor estimate
 ROTATING_RADPS = 0.05      # |w| above this counts as rotating (regimes, position_error)
 TEMP_MIN_SPAN_C = 1.0      # temperature candidates need this span of temp_c
+T_REF_SPANS = 2.0          # a fitted reference temperature stays within this many spans of temp_c
+MISALIGN_MAX_RAD = 0.35     # relinearised misalignment fits stay below ~20 deg
 POSITION_TOL_M = 1e-3      # position_error reports dr along directions with 1-sigma below this
 QUANT_MIN_FRAC = 0.99      # share of readings on the lattice to call a channel quantised
 QUANT_STRONG_FRAC = 0.999  # ... and to take the lattice alone as proof (with QUANT_STRONG_VALUES)
@@ -141,9 +170,9 @@ SAT_PROOF_COUNT = 10       # readings at one extreme value, the model >= 5 sigma
 BACKFIT_PASSES = 3
 
 _ROUND_SIGMA = math.sqrt(1.0 / 12.0)
-_SKEW_GRID = np.array([0.0, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0])
+_SKEW_GRID = np.array([0.0, 0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 12.0])
 _SKEW_GRID = np.concatenate([-_SKEW_GRID[:0:-1], _SKEW_GRID])          # in samples
-_DELAY_GRID = np.array([0.0, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.5, 6.0, 8.0, 12.0, 16.0])  # samples
+_DELAY_GRID = np.array([0.0, 0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0])  # samples
 
 
 class DiagnosisResult(dict):
@@ -339,7 +368,7 @@ def _pose_force(S: np.ndarray, ybar: np.ndarray, g: float, wch: np.ndarray) -> n
     return f
 
 
-def _prepare(device, cal, recs: list, K: int, seed: int, m0: float, jig_noise_hint=None) -> _Data:
+def _prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> _Data:
     from .motions import Trajectory
     from .simulate import true_state
     from .effects import evaluate
@@ -365,7 +394,6 @@ def _prepare(device, cal, recs: list, K: int, seed: int, m0: float, jig_noise_hi
         keep = list(range(len(recs)))
 
     parts = []
-    pose_labels: list = []
     rec_info = []
     for ri in keep:
         rec = recs[ri]
@@ -410,6 +438,12 @@ def _prepare(device, cal, recs: list, K: int, seed: int, m0: float, jig_noise_hi
             stated = np.zeros(n, bool)
             pose_lab = key
             how = f"jig-free: {len(poses)} static poses, |f| = g"
+        # readings at the ADC limits carry no information about the model (they would answer no effect)
+        at_limit = np.any((rec.raw <= device.raw_min) | (rec.raw >= device.raw_max), axis=1)
+        if np.any(at_limit & usable):
+            notes.append(f"{rec.source}: {int(np.count_nonzero(at_limit & usable))} samples with a reading at the "
+                         f"ADC limits ({device.raw_min} / {device.raw_max}) are left out")
+            usable = usable & ~at_limit
         if not usable.any():
             if mode == "jigfree":
                 raise InputError(rec.source, "no reference to diagnose against: no f_x, f_y, f_z columns and no "
@@ -800,7 +834,7 @@ class _LinearCandidate(_Candidate):
         sd = np.sqrt(np.maximum(np.einsum("nkk->nk", cov), 0.0))
         return {self.pname: theta[:, 0]}, {self.pname: sd[:, 0]}
 
-    def cv(self, D, y, pcur, S0w, S0u):
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
         X = self.columns(D)
         Sw, Su, theta, cov, k, delta = _linear_fit(D, X, y, S0w, S0u)
         p, s = self.to_params(D, theta, cov)
@@ -843,25 +877,55 @@ class _BiasDrift(_LinearCandidate):
 
 
 class _Misalignment(_LinearCandidate):
+    """s_i -> Exp(rot_i) s_i.  Linear to first order; for tilts of more than a few tenths of a
+    degree the fit is relinearised (Gauss-Newton) about the all-data estimate rot0, and every
+    fold fits the increment about it: delta = exact(rot0) + X(rot0) d."""
+
     name = "misalignment"
 
-    def _basis(self, D):
-        return _tangent_basis(_unit(D.s))                    # (N,2,3)
-
-    def columns(self, D):
-        E = self._basis(D)
-        fa = _f_at(D)                                        # (n,N,3)
-        sx = np.cross(D.s[None, :, :], fa)                   # s x f_at
-        X = np.einsum("nkc,tnc->tnk", E, sx)
+    def _cols(self, D, fa, S):
+        E = _tangent_basis(_unit(S))                        # (N,2,3)
+        X = np.einsum("nkc,tnc->tnk", E, np.cross(S[None, :, :], fa))    # rot . (s x f_at)
         if D.gain_t is not None:
             X = X * D.gain_t[:, :, None]
-        return X
+        return X, E
 
-    def to_params(self, D, theta, cov):
-        E = self._basis(D)
+    def _exact(self, D, fa, rot):
+        from .effects import rotation_matrix
+        S1 = np.einsum("nij,nj->ni", rotation_matrix(rot), D.s)
+        d = np.einsum("tnc,nc->tn", fa, S1 - D.s)
+        return d * D.gain_t if D.gain_t is not None else d, S1
+
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
+        fa = _f_at(D)
+        X, E = self._cols(D, fa, D.s)
+        Sw, Su, theta, cov, k, delta = _linear_fit(D, X, y, S0w, S0u)
         rot = np.einsum("nk,nkc->nc", theta, E)
-        sd = np.sqrt(np.einsum("nkc,nkl,nlc->nc", E, cov, E))
-        return {"rot": rot}, {"rot": sd}
+        # Gauss-Newton when second order matters (> ~0.1 deg), in reference mode only (jig-free, a
+        # common rotation is absorbed by the poses and the steps could wander along it); a step is
+        # kept only when it lowers the all-data chi2, and tilts stay below MISALIGN_MAX_RAD
+        if D.Qp is None and 2e-3 < np.max(np.linalg.norm(rot, axis=1)) < MISALIGN_MAX_RAD:
+            best = float(np.sum(D.W * (y - delta) ** 2))
+            for _ in range(3):
+                d0, S1 = self._exact(D, fa, rot)
+                X1, E1 = self._cols(D, fa, S1)
+                yr = y - d0
+                s0w, s0u = _block_ss(D, yr)
+                Sw1, Su1, th1, cov1, k1, dlin = _linear_fit(D, X1, yr, s0w, s0u)
+                step = np.einsum("nk,nkc->nc", th1, E1)
+                new_rot = rot + step             # Exp(step) Exp(rot) ~ Exp(rot + step) for small steps
+                if np.max(np.linalg.norm(new_rot, axis=1)) > MISALIGN_MAX_RAD:
+                    break
+                d_new, _ = self._exact(D, fa, new_rot)
+                obj = float(np.sum(D.W * (y - d_new) ** 2))
+                if obj >= best:
+                    break
+                best, rot, delta = obj, new_rot, d_new
+                Sw, Su, cov, k, E = Sw1, Su1, cov1, k1, E1
+                if np.max(np.linalg.norm(step, axis=1)) < 1e-6:
+                    break
+        sd = np.sqrt(np.maximum(np.einsum("nkc,nkl,nlc->nc", E, cov, E), 0.0))
+        return _Cand(self.name, k, Sw, Su, delta, {"rot": rot}, {"rot": sd})
 
 
 class _PositionError(_LinearCandidate):
@@ -885,7 +949,7 @@ class _PositionError(_LinearCandidate):
             X = X * D.gain_t[:, :, None]
         return X
 
-    def cv(self, D, y, pcur, S0w, S0u):
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
         X = self.columns(D)
         Sw, Su, theta, cov, k, delta = _linear_fit(D, X, y, S0w, S0u)
         # report dr only along the observable principal directions (1-sigma <= POSITION_TOL_M)
@@ -942,10 +1006,11 @@ class _Temperature(_Candidate):
     def _z(self, D):
         return D.sensed if self.gain else np.ones((D.n, D.N))
 
-    def cv(self, D, y, pcur, S0w, S0u):
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
         z = self._z(D)
         T = D.temp
-        X2 = np.stack([T[:, None] * z, z], axis=2)            # columns T z and z: c (T - t_ref) z = c (X2 . [1, -t_ref])
+        # columns T z and z: c (T - t_ref) z = c (X2 . [1, -t_ref])
+        X2 = np.stack([T[:, None] * z, z], axis=2)
         fixed = _t_ref_known(D)
         if D.Qp is None:
             Gw2, hw2, Gu2, hu2 = _sep_stats(D, X2, y)
@@ -958,7 +1023,8 @@ class _Temperature(_Candidate):
         def reduce(G2, h2, tr):
             v = np.array([1.0, -tr])
             if D.Qp is None:
-                return (np.einsum("...kl,k,l->...", G2, v, v)[..., None, None], np.einsum("...k,k->...", h2, v)[..., None])
+                return (np.einsum("...kl,k,l->...", G2, v, v)[..., None, None],
+                        np.einsum("...k,k->...", h2, v)[..., None])
             P = N
             Vm = np.zeros((2 * P, P))
             for i in range(P):
@@ -973,7 +1039,8 @@ class _Temperature(_Candidate):
         def best_tref(G2, h2):
             if fixed is not None:
                 return fixed
-            grid = np.linspace(Tlo - 5 * span - 20.0, Thi + 5 * span + 20.0, 61)
+            # within two spans of the data: further out, c (T - t_ref) is an offset change in disguise
+            grid = np.linspace(Tlo - T_REF_SPANS * span, Thi + T_REF_SPANS * span, 41)
             vals = [objective(G2, h2, tr) for tr in grid]
             j = int(np.argmin(vals))
             from scipy.optimize import minimize_scalar
@@ -1031,7 +1098,7 @@ class _PoseError(_Candidate):
             return "needs static poses with a stated reference f (pose labels and f_*)"
         return None
 
-    def cv(self, D, y, pcur, S0w, S0u):
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
         ps = D.pose_stated
         P = len(D.pose_labels)
         E = np.zeros((P, 2, 3))
@@ -1046,9 +1113,7 @@ class _PoseError(_Candidate):
         if D.gain_t is not None:
             X *= D.gain_t[:, :, None]
         wch = D.W[0]
-        bp = np.full(D.B, -1)
-        first = D.bstart
-        bp = ps[first]
+        bp = ps[D.bstart]                                           # each block lies in one pose (or none)
         Gw = np.zeros((D.B, P, 2, 2))
         Gu = np.zeros((D.B, P, 2, 2))
         hw = np.zeros((D.B, P, 2))
@@ -1082,7 +1147,8 @@ class _PoseError(_Candidate):
 
 
 class _Shifter:
-    """x(t + tau) per channel along a cubic spline per segment (clamped at segment ends)."""
+    """x(t + tau) per channel along a cubic spline per run of samples contiguous in time
+    (clamped at the run's ends)."""
 
     def __init__(self, D: _Data, x: np.ndarray):
         from scipy.interpolate import CubicSpline
@@ -1091,9 +1157,14 @@ class _Shifter:
         self.tg = D.tg
         C = np.zeros((4, n, N))
         C[3] = x
-        self.ilo = np.repeat(D.seg_lo, D.seg_hi - D.seg_lo)
-        self.ihi = np.repeat(D.seg_hi, D.seg_hi - D.seg_lo) - 1      # last sample of the segment
-        for a, b in zip(D.seg_lo, D.seg_hi):
+        # runs of samples contiguous in time (a pose label change without a time gap is motion
+        # going on: the rest -> travel of a linear actuator)
+        brk = np.flatnonzero(np.diff(D.tg) > 1.5 * D.h) + 1
+        lo = np.r_[0, brk]
+        hi = np.r_[brk, n]
+        self.ilo = np.repeat(lo, hi - lo)
+        self.ihi = np.repeat(hi, hi - lo) - 1                        # last sample of the run
+        for a, b in zip(lo, hi):
             L = b - a
             if L < 2:
                 continue
@@ -1159,7 +1230,7 @@ class _SearchCandidate(_Candidate):
     def to_params(self, D, u, su) -> tuple[dict, dict]:
         raise NotImplementedError
 
-    def cv(self, D, y, pcur, S0w, S0u):
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
         self.prepare(D, pcur)
         N, K, bf = D.N, D.K, D.bfold
         wch = D.W[0]
@@ -1168,63 +1239,78 @@ class _SearchCandidate(_Candidate):
         for gi, u in enumerate(grid):
             R = y - self.delta(np.full(N, u))
             Sg[gi] = D.bsum(R * R)
-        fold_sum = np.stack([Sg[:, bf == f].sum(axis=1) for f in range(K)], axis=1)   # (G,K,N)
-        tot = Sg.sum(axis=1)                                                            # (G,N)
+        tot = Sg.sum(axis=1)                                # (G,N)
+        cols = np.arange(N)
 
-        def pick(obj):                                       # obj (G,N) -> u (N,), curvature (N,)
+        def parabola(x3, y3):
+            A = np.vstack([x3 ** 2, x3, np.ones(3)]).T
+            try:
+                a2, a1, _ = np.linalg.solve(A, y3)
+            except np.linalg.LinAlgError:
+                return None, 0.0
+            if not a2 > 0:
+                return None, 0.0
+            return float(np.clip(-a1 / (2 * a2), x3.min(), x3.max())), float(a2)
+
+        def refine(mask_blocks, obj):
+            """Grid minimum, then two parabolic steps, per channel, on the blocks in mask_blocks.
+            Returns u (N,), block SS at u (B,N), curvature (N,)."""
             j = np.argmin(obj, axis=0)
             u = grid[j].astype(float)
+            best_obj = obj[j, cols].copy()
+            best_S = Sg[j, :, cols].T.copy()                # (B,N)
             curv = np.zeros(N)
-            for i in range(N):
-                jj = int(j[i])
-                if 0 < jj < grid.size - 1:
-                    x3 = grid[jj - 1:jj + 2]
-                    y3 = obj[jj - 1:jj + 2, i]
-                    A = np.vstack([x3 ** 2, x3, np.ones(3)]).T
-                    a2, a1, _ = np.linalg.solve(A, y3)
-                    if a2 > 0:
-                        u[i] = float(np.clip(-a1 / (2 * a2), x3[0], x3[2]))
+            # three distinct grid points around the minimum (at an end of the grid: the end and its
+            # two neighbours)
+            c0 = np.clip(j - 1, 0, grid.size - 3)
+            pts = [[(float(grid[c]), float(obj[c, i])) for c in range(c0[i], c0[i] + 3)] for i in range(N)]
+            for _ in range(2):
+                cand = u.copy()
+                for i in range(N):
+                    near = []
+                    for p in sorted(pts[i], key=lambda p: p[1]):
+                        if all(abs(p[0] - q[0]) > 1e-12 for q in near):
+                            near.append(p)
+                        if len(near) == 3:
+                            break
+                    if len(near) < 3:
+                        continue
+                    x3 = np.array([p[0] for p in near])
+                    v, a2 = parabola(x3, np.array([p[1] for p in near]))
+                    if v is not None:
+                        cand[i] = max(v, self.lower)
                         curv[i] = a2
-                elif jj == 0 and grid[0] == self.lower and grid.size >= 3:
-                    x3 = grid[:3]
-                    y3 = obj[:3, i]
-                    A = np.vstack([x3 ** 2, x3, np.ones(3)]).T
-                    a2, a1, _ = np.linalg.solve(A, y3)
-                    if a2 > 0:
-                        u[i] = float(np.clip(-a1 / (2 * a2), x3[0], x3[1]))
-                        curv[i] = a2
-            return u, j, curv
+                if np.all(cand == u):
+                    break
+                R = y - self.delta(cand)
+                Sr = D.bsum(R * R)
+                o = Sr[mask_blocks].sum(axis=0)
+                for i in range(N):
+                    pts[i].append((float(cand[i]), float(o[i])))
+                better = o < best_obj
+                u = np.where(better, cand, u)
+                best_obj = np.where(better, o, best_obj)
+                best_S[:, better] = Sr[:, better]
+            return u, best_S, curv
 
-        Sw = np.empty(D.B)
-        Su = np.empty(D.B)
-        for f in range(K):
-            obj = tot - fold_sum[:, f]                      # (G,N) training objective
-            u, j, _ = pick(obj)
-            R = y - self.delta(u)
-            Sr = D.bsum(R * R)                              # (B,N)
-            trn = bf != f
-            better = Sr[trn].sum(axis=0) <= obj[j, np.arange(N)]
-            Sb = np.where(better[None, :], Sr, Sg[j, :, np.arange(N)].T)
-            m = bf == f
-            Sw[m] = Sb[m] @ wch
-            Su[m] = Sb[m].sum(axis=1)
-        u, j, curv = pick(tot)
+        Sw = np.full(D.B, np.nan)
+        Su = np.full(D.B, np.nan)
+        if folds:
+            for f in range(K):
+                trn = bf != f
+                _, Sb, _ = refine(trn, Sg[:, trn].sum(axis=1))
+                m = bf == f
+                Sw[m] = Sb[m] @ wch
+                Su[m] = Sb[m].sum(axis=1)
+        u, Sb_all, curv = refine(np.ones(D.B, bool), tot)
         d_all = self.delta(u)
-        R = y - d_all
-        Sr = D.bsum(R * R).sum(axis=0)
-        worse = Sr > tot[j, np.arange(N)]
-        if np.any(worse):
-            u = np.where(worse, grid[j], u)
-            d_all = self.delta(u)
-        Sall = float(np.sum((y - d_all) ** 2 * D.W))
-        moved = u != (0.0 if self.lower != 0.0 else 0.0)
-        npar = int(np.count_nonzero(np.abs(u) > 0)) if np.any(u) else N
+        Sall = float(Sb_all.sum(axis=0) @ wch)
+        npar = N
         scale = max(1.0, Sall / max(D.n * N - npar, 1))
         with np.errstate(divide="ignore"):
             su = np.where(curv > 0, np.sqrt(scale / np.maximum(curv * wch, 1e-300)), math.inf)
         p, s = self.to_params(D, u, su)
-        del moved
-        return _Cand(self.name, max(npar, 1), Sw, Su, d_all, p, s)
+        return _Cand(self.name, npar, Sw, Su, d_all, p, s)
 
 
 class _TimeSkew(_SearchCandidate):
@@ -1233,8 +1319,9 @@ class _TimeSkew(_SearchCandidate):
 
     def prepare(self, D, pcur):
         self.D = D
-        x = D.sensed
-        self.sh = _Shifter(D, x)
+        if getattr(D, "_shifter", None) is None:
+            D._shifter = _Shifter(D, D.sensed)
+        self.sh = D._shifter
 
     def delta(self, u):
         return self.sh.delta(np.asarray(u, float) * self.D.h)
@@ -1345,6 +1432,20 @@ class _Quantization(_Candidate):
             q, ph, fr, n_d = _lattice(D.raw[mask, i])
             if q >= 2:
                 step[i], phase[i], frac[i], nd[i] = q, ph, fr, n_d
+        # one converter, one lattice: the gcd of the steps found is tried on every channel (a channel
+        # that sits on a few levels shows no lattice, or a multiple of the step, on its own)
+        found = step[step >= 2].astype(np.int64)
+        if found.size:
+            qc = int(np.gcd.reduce(found))
+            if qc >= 2:
+                for i in range(N):
+                    v = D.raw[mask, i].astype(np.int64)
+                    u, cnt = np.unique(v, return_counts=True)
+                    bc = np.bincount(u % qc, weights=cnt, minlength=qc)
+                    ph = int(np.argmax(bc))
+                    share = float(bc[ph] / cnt.sum())
+                    if u.size >= 2 and share >= QUANT_MIN_FRAC:
+                        step[i], phase[i], frac[i], nd[i] = qc, ph, share, int(np.count_nonzero(u % qc == ph))
         return step, phase, frac, nd
 
     @staticmethod
@@ -1357,23 +1458,18 @@ class _Quantization(_Candidate):
             out[:, on] = q * np.round((x - ph) / q) + ph - x
         return out
 
-    def cv(self, D, y, pcur, S0w, S0u):
-        Sw = np.empty(D.B)
-        Su = np.empty(D.B)
-        for f in range(D.K):
-            trn = D.bfold[D.block] != f
-            step, phase, _, _ = self._fit(D, trn)
-            R = D.rows(y - self._delta(pcur, step, phase))
-            sw, su = _block_ss(D, R)
-            m = D.bfold == f
-            Sw[m], Su[m] = sw[m], su[m]
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
+        # The lattice is read off the raw values, not fitted to the residual; a training fold can
+        # miss it on a channel with few distinct values (static poses): the lattice comes from all
+        # the data and every block is scored with it.
         step, phase, frac, nd = self._fit(D, np.ones(D.n, bool))
         delta = self._delta(pcur, step, phase)
+        Sw, Su = _block_ss(D, D.rows(y - delta))
         c = _Cand(self.name, int(np.count_nonzero(step)), Sw, Su, delta, {"step": step}, {"step": np.zeros(D.N)})
         strong = (step > 0) & (frac >= QUANT_STRONG_FRAC) & (nd >= QUANT_STRONG_VALUES)
         if np.any(strong):
             c.proof = True
-            c.evidence = "lattice of the raw values"
+            c.evidence = "lattice of the raw values (read from all the data)"
             c.notes.append("raw values on a lattice: " + ", ".join(
                 f"channel {i}: step {int(step[i])} ({100 * frac[i]:.2f} % of readings, {nd[i]} values)"
                 for i in np.flatnonzero(strong)))
@@ -1422,7 +1518,7 @@ class _Saturation(_Candidate):
     def _delta(pcur, lo, hi):
         return np.clip(pcur, lo, hi) - pcur
 
-    def cv(self, D, y, pcur, S0w, S0u):
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
         # The clip levels are read off the raw values (the pile), not fitted to the residual, and the
         # clipped samples usually sit in one or two blocks, which no training fold would see: the
         # levels come from all the data and every block is scored with them.
@@ -1432,7 +1528,7 @@ class _Saturation(_Candidate):
         k = int(np.count_nonzero(np.isfinite(lo)) + np.count_nonzero(np.isfinite(hi)))
         sd = {"lo": np.where(np.isfinite(lo), 0.5, 0.0), "hi": np.where(np.isfinite(hi), 0.5, 0.0)}
         c = _Cand(self.name, k, Sw, Su, delta, {"lo": lo, "hi": hi}, sd)
-        c.evidence = "pile of readings at the clip level (levels from all the data)"
+        c.evidence = "pile of readings at the clip level (levels read from all the data)"
         if proof:
             c.proof = True
             c.notes.append("readings pile up at " + "; ".join(proof))
@@ -1641,7 +1737,8 @@ def _describe(name: str, p: dict, s: dict, D: _Data) -> str:
         if name == "bandwidth":
             fc = np.asarray(p["fc_hz"], float)
             i = int(np.argmin(fc))
-            return f"low-pass cut-off down to {fc[i]:.4g} Hz (delay {1e3 * s['delay_s'][i]:.2g} ms 1-sigma) on channel {i}"
+            return (f"low-pass cut-off down to {fc[i]:.4g} Hz (delay {1e3 * s['delay_s'][i]:.2g} ms 1-sigma) "
+                    f"on channel {i}")
         if name == "nonlinearity":
             i = _strongest(p["k2"])
             return (f"quadratic term up to {p['k2'][i]:+.4g} counts/(m/s^2)^2 on channel {i} "
@@ -1652,7 +1749,8 @@ def _describe(name: str, p: dict, s: dict, D: _Data) -> str:
                     f"(t_ref {p['t_ref']:.4g} degC)")
         if name == "temperature_gain":
             i = _strongest(p["coeff"])
-            return (f"gain tempco up to {1e6 * p['coeff'][i]:+.4g} +- {1e6 * s['coeff'][i]:.2g} ppm/degC on channel {i} "
+            return (f"gain tempco up to {1e6 * p['coeff'][i]:+.4g} +- {1e6 * s['coeff'][i]:.2g} ppm/degC "
+                    f"on channel {i} "
                     f"(t_ref {p['t_ref']:.4g} degC)")
         if name == "bias_drift":
             i = _strongest(p["rate"])
@@ -1667,7 +1765,9 @@ def _describe(name: str, p: dict, s: dict, D: _Data) -> str:
             return "quantisation steps (counts) " + (", ".join(st) if st else "(none found)")
         if name == "pose_error":
             a = np.degrees(np.linalg.norm(p["rot"], axis=1))
-            return f"stated pose orientations off by up to {a.max():.3g} deg (median {np.median(a):.3g} deg)" if a.size else ""
+            if not a.size:
+                return "no stated pose"
+            return f"stated pose orientations off by up to {a.max():.3g} deg (median {np.median(a):.3g} deg)"
     except (KeyError, ValueError, IndexError):
         pass
     return name
@@ -1763,7 +1863,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     # --- step 1: every candidate alone, then stepwise --------------------------------------------
     y = e.copy()
     pcur = D.p0.copy()
-    first, S0w, S0u = _run_candidates(D, cands, active, y, pcur, progress)
+    first, _, S0u = _run_candidates(D, cands, active, y, pcur, progress)
     base_rms = float(math.sqrt(S0u.sum() / (D.n * D.R)))
     steps: list[tuple[_Cand, str]] = []
     results = first
@@ -1797,7 +1897,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
                 yt = e - others
                 R0 = D.rows(yt)
                 s0w, s0u = _block_ss(D, R0)
-                cc = cands[c.name].cv(D, yt, D.p0 + others, s0w, s0u)
+                cc = cands[c.name].cv(D, yt, D.p0 + others, s0w, s0u, folds=False)
                 deltas[c.name] = cc.delta
                 joint[c.name] = cc
     total_delta = np.zeros_like(e)
@@ -1824,7 +1924,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     if steps and len(steps) > 1:
         notes.append("effects after the first were scored on the residual left by the ones before (their in-sample "
                      "fits subtracted); 'model' gives the joint refit")
-    # near-ties for the verdict
+    # near-ties for the verdict: candidates whose held-out gain is within a few null spreads of it
     ties = []
     if steps:
         b0 = steps[0][0]
@@ -1832,8 +1932,12 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
             if c.name != b0.name and c.significant and (b0.gain - c.gain) < 3.0 * math.sqrt(max(b0.gain, 1.0)) \
                     and abs(c.shrink - b0.shrink) < 0.02:
                 ties.append(c.name)
+        effects[0]["ambiguous_with"] = ties
     if ties:
         notes.append(f"{verdict} is barely ahead of {', '.join(ties)}: the data hardly tell them apart")
+    if D.mode == "jigfree" and len(D.pose_labels) < 6:
+        notes.append(f"only {len(D.pose_labels)} static pose(s) found: effects that are constant within a pose "
+                     "(offset, gain, misalignment, nonlinearity) can hardly be told apart")
     lattice = []
     for i in range(D.N):
         q, ph, fr, nd = _lattice(D.raw[:, i])

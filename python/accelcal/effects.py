@@ -1007,9 +1007,9 @@ class _Centripetal(Effect):
     summary = "the model leaves out the omega x (omega x r_i) term"
     doc = ("Sets the multiplier of s_i . (omega x (omega x r_i)) in the readings to scale_i.  The physical "
            "truth always has the term (multiplier 1), so in the simulator the default scale=1 changes "
-           "nothing and scale=0 withholds the term from the data.  In the diagnosis the base model is "
-           "the one without the term (multiplier 0, as in the paper's calibration model) and the fit "
-           "recovers scale ~ 1 when the data contain it.")
+           "nothing and scale<1 withholds (part of) the term from the data.  The diagnosis's base model "
+           "is the contract's, with the term (multiplier 1), and the fit recovers the data's scale; "
+           "diagnose(model_centripetal=False) starts from the paper's model without it (multiplier 0).")
     stage = "state"
     linear = True
     params = (

@@ -182,7 +182,7 @@ def _plot_candidates(res: dict, path: str, dpi: int) -> None:
     ax.set_yticks(y)
     ax.set_yticklabels(names, fontsize=8)
     ax.set_xlabel("counts (RMS over held-out samples)", fontsize=8)
-    ax.legend(fontsize=7, loc="lower right")
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.6 / max(len(eff), 1) - 0.08), ncol=3)
     ax.set_title(f"Candidates (red: chosen, orange: significant); verdict: {res.get('verdict')}", fontsize=10)
     _save(fig, path, dpi)
     plt.close(fig)
@@ -256,7 +256,8 @@ def summary_text(res: dict, images: list[str] = ()) -> str:
                  f"(shrink {100 * m['shrink']:.1f} %).")
         L.append("")
         for e in chosen:
-            L.append(f"- step {e['step']}: **{e['name']}** -- {e['summary']}; held-out RMS {e['heldout_rms_before']:.4g} "
+            L.append(f"- step {e['step']}: **{e['name']}** -- {e['summary']}; "
+                     f"held-out RMS {e['heldout_rms_before']:.4g} "
                      f"-> {e['heldout_rms_after']:.4g} counts, shrink {100 * e['shrink']:.1f} % "
                      f"(chi2 gain {e['score']['gain_chi2']:.4g}, t {e['score']['t']:.3g}, z {e['score']['z']:.3g}; "
                      f"{e['score']['evidence']})")
@@ -264,7 +265,8 @@ def summary_text(res: dict, images: list[str] = ()) -> str:
             for n in e.get("notes", []):
                 L.append(f"  - note: {n}")
     L += ["", "All candidates (alone on the calibrated model unless a step is given):", "",
-          "| rank | effect | significant | shrink | held-out RMS before | after | params | penalised chi2 gain | t | z |",
+          "| rank | effect | significant | shrink | held-out RMS before | after | params | penalised chi2 gain "
+          "| t | z |",
           "| ---: | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for k, e in enumerate(res.get("effects", [])):
         s = e["score"]
@@ -282,7 +284,8 @@ def summary_text(res: dict, images: list[str] = ()) -> str:
     if w.get("by_channel"):
         worst = sorted(w["by_channel"], key=lambda d: -d["ratio_to_noise"])[:3]
         L.append("Worst channels: " + ", ".join(f"ch {d['channel']} {d['rms_counts']:.3g} counts "
-                                                  f"({d['ratio_to_noise']:.2g} x its noise, mean {d['mean_counts']:+.3g})"
+                                                  f"({d['ratio_to_noise']:.2g} x its noise, "
+                                                  f"mean {d['mean_counts']:+.3g})"
                                                   for d in worst) + ".")
     for key, title in (("static_vs_rotating", "Regimes"), ("omega_bins", "|w| bins"), ("alpha_bins", "|alpha| bins"),
                        ("temperature_bins", "Temperature bins"), ("frequency_bands", "Frequency bands")):
@@ -299,7 +302,8 @@ def summary_text(res: dict, images: list[str] = ()) -> str:
         tb = w["time_bins"]
         hi = max(tb, key=lambda d: d["rms_counts"])
         lo = min(tb, key=lambda d: d["rms_counts"])
-        L.append(f"Time: RMS from {lo['rms_counts']:.3g} ({lo['label']}) to {hi['rms_counts']:.3g} counts ({hi['label']}).")
+        L.append(f"Time: RMS from {lo['rms_counts']:.3g} ({lo['label']}) to {hi['rms_counts']:.3g} counts "
+                 f"({hi['label']}).")
     if res.get("notes"):
         L += ["", "## Notes", ""]
         L += [f"- {n}" for n in res["notes"]]
@@ -307,8 +311,9 @@ def summary_text(res: dict, images: list[str] = ()) -> str:
         L += ["", "## Plots", ""]
         L += [f"![{os.path.splitext(im)[0]}]({im})" for im in images]
     cv = res.get("cv", {})
-    L += ["", f"Method: blocked {cv.get('folds')}-fold cross-validation over {cv.get('blocks')} blocks; {cv.get('rule')} "
-          f"(t_min {cv.get('t_min')}, z_min {cv.get('z_min')}, penalty {cv.get('penalty_per_param_chi2')} per parameter, "
+    L += ["", f"Method: blocked {cv.get('folds')}-fold cross-validation over {cv.get('blocks')} blocks; "
+          f"{cv.get('rule')} (t_min {cv.get('t_min')}, z_min {cv.get('z_min')}, "
+          f"penalty {cv.get('penalty_per_param_chi2')} per parameter, "
           f"min shrink {cv.get('min_shrink')}). See `accelcal.diagnose` for the definitions.", ""]
     return "\n".join(L)
 

@@ -41,14 +41,15 @@ def _entry(res, name):
 
 
 # ---------------------------------------------------------------- the withheld-effect check, small
-# (effect, seed) pairs; each dataset has the effect at 6x the noise floor (saturation and
-# quantization: as drawn), the model is the true calibration.
-CASES = [(e, 7) for e in EFFECT_NAMES if e != "saturation"] + [("saturation", 3)]
+# two datasets per effect: contribution 6x and 3.5x the noise floor (saturation: as drawn); the
+# model is the true calibration.
+CASES = [(e, 7, 6.0) for e in EFFECT_NAMES if e != "saturation"] + [("saturation", 3, 6.0)] + \
+        [(e, 8, 3.5) for e in EFFECT_NAMES if e != "saturation"] + [("saturation", 5, 3.5)]
 
 
-@pytest.mark.parametrize("effect,seed", CASES)
-def test_withheld_effect_is_named(effect, seed):
-    ds = B.make_dataset(effect, seed, rho=6.0)
+@pytest.mark.parametrize("effect,seed,rho", CASES)
+def test_withheld_effect_is_named(effect, seed, rho):
+    ds = B.make_dataset(effect, seed, rho=rho)
     assert ds["rho"] >= 3.0, "test dataset must be clearly detectable"
     res = diagnose(ds["device"], ds["cal"], ds["recordings"], seed=seed)
     assert res["verdict"] == effect
@@ -156,8 +157,8 @@ def test_two_effects_stepwise():
     dev = default_device()
     cal = seed_prototype_truth(dev, 6)
     traj = B.concat([B.MOTIONS["static_poses"](dev, np.random.default_rng(1), poses="18"),
-                     B.MOTIONS["rate_table"](dev, np.random.default_rng(2), amplitude_deg=30.0, axis=[1, 1, 1], ramp_s=0.5,
-                                             duration_s=10.0)], 1.0, dev.gravity_mps2)
+                     B.MOTIONS["rate_table"](dev, np.random.default_rng(2), amplitude_deg=30.0, axis=[1, 1, 1],
+                                             ramp_s=0.5, duration_s=10.0)], 1.0, dev.gravity_mps2)
     sim = run_simulation(dev, traj, seed=6, calibration=cal,
                          effects=["offset:db=[12,-15,9,-10,14,-8]", "time_skew:tau=0.002"])
     res = diagnose(dev, cal, [sim.recording])

@@ -493,12 +493,15 @@ def test_displacement_fixed_vs_twin(run):
     tw = E.displace_twin(f_q, fx, p)
     assert np.array_equal(fx["flags"] & ~E.DISP_SAT, tw["flags"])
     assert np.array_equal(fx["nseg"], tw["nseg"])
-    if (fx["flags"] & E.DISP_SAT).any() and np.any(np.abs(tw["p"]) > 2000):
-        return
+    # the working range is |v| < 64 m/s, |p| < 2048 m (AC_DISP_SAT beyond): compare up to there
+    over = (np.abs(tw["v"]).max(axis=1) > 63.9) | (np.abs(tw["p"]).max(axis=1) > 2047.0)
+    m = int(np.argmax(over)) if over.any() else len(over)
     bv, bp = E.displace_error_bound(fx, tw, p.axis is None)
-    assert np.all(np.abs(fx["v"] / 2.0**24 - tw["v"]) <= bv[:, None])
-    assert np.all(np.abs(fx["p"] / 2.0**20 - tw["p"]) <= bp[:, None])
+    assert np.all(np.abs(fx["v"] / 2.0**24 - tw["v"])[:m] <= bv[:m, None])
+    assert np.all(np.abs(fx["p"] / 2.0**20 - tw["p"])[:m] <= bp[:m, None])
     for i in np.flatnonzero((fx["flags"] & E.DISP_SEG_END) & ~(fx["flags"] & E.DISP_LONG)):
+        if i >= m:
+            break
         T = fx["nseg"][i] * fx["dt"]
         zb = bv[i - 1] / T + np.abs(tw["zp"][i]) * 2.0**-17 / T + 2.0**-17 + 2.0**-25 / T
         assert np.all(np.abs(fx["zp"][i] / 2.0**16 - tw["zp"][i]) <= zb)
