@@ -72,8 +72,10 @@ static ac_u64 u64_of(uint32_t v)
 
 void ac_xfp_normalize(ac_xf *x)
 {
-    if (!bad(x)) {
-        pack(x, x->m < 0, u64_of(ac_abs_u(x->m)), (int32_t)x->e);
+    uint32_t m = ac_abs_u(x->m);
+    /* zero and normalised values pass unchanged (whatever their exponent) */
+    if (!bad(x) && m != 0u && (m < 0x20000000UL || m >= XF_HI)) {
+        pack(x, x->m < 0, u64_of(m), (int32_t)x->e);
     }
 }
 

@@ -16,8 +16,9 @@
 #define AC_XF_BAD (-32767 - 1)
 
 /* Bring any mantissa (even INT32_MIN, or one below 2^29) into the normalised
- * form every other function assumes; the public API and ac_invert6 call it on
- * every value that comes from outside. */
+ * form every other function assumes (zero and normalised values are left as
+ * they are); the public API and ac_invert6 call it on every value that comes
+ * from outside. */
 void ac_xfp_normalize(ac_xf *x);
 void ac_xfp_from_fixed(ac_xf *r, int32_t v, int16_t frac);
 void ac_xfp_add(ac_xf *r, const ac_xf *a, const ac_xf *b);

@@ -1326,13 +1326,7 @@ static void target_xf(rd *r)
         st = ac_xf_ldexp(a, k16, &res);
         CHECK_STATUS(st);
         e = (int32_t)a.e + k16;
-        if (a.e == -32768) { /* the reserved invalid exponent (ac_xf.h) */
-            CHECK(st == AC_ERR_RANGE, "ldexp of the invalid value gave %d", st);
-        } else if (a.m != 0 && a.e > 30000) { /* outside the kept range already */
-            CHECK(st == AC_ERR_RANGE, "ldexp of an out-of-range input gave %d", st);
-        } else if (a.m != 0 && a.e < -30000) { /* flushed to zero when normalised */
-            CHECK(st == AC_OK && res.m == 0, "ldexp of an underflowed input");
-        } else if (a.m == 0) {
+        if (a.m == 0) {
             CHECK(st == AC_OK && res.m == 0, "ldexp of 0");
         } else if (e > 30000) {
             CHECK(st == AC_ERR_RANGE, "ldexp overflow gave %d", st);

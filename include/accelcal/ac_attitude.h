@@ -35,12 +35,13 @@
  * Sign resolution: a wrong sign can only come from the start.  Started inside the
  * gated band (at rest, at a turning point) w is the integral of a from a small
  * known rate and is settled at once.  Started outside it, the first sample takes
- * the sign of wp (that of a) and K = 1, and AC_ATT_UNSETTLED is set: the sign is
+ * w = +m (wp = 0: a guess) with K = 1, and AC_ATT_UNSETTLED is set: the sign is
  * right from the first pass through the band on (there w is carried by the
  * integral of a alone and the true rate crosses 0), and on leaving the band the
  * magnitude is taken once with K = 1 (a mirrored start would otherwise leave an
- * error of about 2 sqrt(w2_gate) to decay); from then on the flag is clear.  A body at rest: w^2 is noise around 0,
- * gated, and the leak pulls w to 0 (time constant dt 2^16 / leak).
+ * error of about 2 sqrt(w2_gate) to decay); from then on the flag is clear.
+ * A body at rest: w^2 is noise around 0, gated, and the leak pulls w to 0
+ * (time constant dt 2^16 / leak).
  *
  * ---- Formats and rounding (half up everywhere) --------------------------------
  *   f1, f2 in:     int32 Q.AC_OUT_FRAC m/s^2, each component clipped to int16

@@ -29,15 +29,9 @@ def _load_cal(path, device):
     return load_calibration(path, device)
 
 
-def _write_csv(path, header: list[str], columns: list[np.ndarray], comments: list[str] = ()):
-    data = np.column_stack(columns)
-
-    def write(f):
-        for c in comments:
-            f.write(f"# {c}\n")
-        f.write(",".join(header) + "\n")
-        np.savetxt(f, data, delimiter=",", fmt="%.9g")
-    atomic_write(path, write)
+def _write_csv(path, header: list[str], columns: list[np.ndarray], comments: dict):
+    from .estimators import Columns, write_columns_csv
+    write_columns_csv(path, Columns(zip(header, columns), meta=comments))
 
 
 # ---- subcommands -------------------------------------------------------------
@@ -49,7 +43,7 @@ def cmd_resolve(a):
     cal = _load_cal(a.calibration, dev)
     rec = read_recording(a.recording, dev.n_channels)
     f, al, flags = resolve_recording(dev, cal, rec, a.engine, a.omega)
-    comments = [f"engine: {a.engine}", f"device: {dev.name}"]
+    comments = {"engine": a.engine, "device": dev.name}
     if flags is not None and flags.any():
         print(f"accelcal resolve: warning: {int(np.count_nonzero(flags))} samples saturated in the "
               "fixed-point core (see column saturated)", file=sys.stderr)
@@ -107,41 +101,26 @@ def cmd_calibrate(a):
     return 0
 
 
-def _write_columns(path, cols, comments):
-    names = list(cols)
-    _write_csv(path, names, [np.asarray(cols[k], float) for k in names], comments)
-
-
-def _estimator(a, fn, kind):
-    from .recording import read_recording
-    dev = _load_device(a.device)
-    cal = _load_cal(a.calibration, dev)
-    rec = read_recording(a.recording, dev.n_channels)
-    cols = fn(dev, cal, rec, a.engine)
-    meta = {"engine": a.engine, "device": dev.name, **getattr(cols, "meta", {})}
-    comments = [f"{k}: {v}" for k, v in meta.items()]
-    _write_columns(a.output, cols, comments)
-    for w in getattr(cols, "warnings", []):
-        print(f"accelcal {kind}: warning: {w}", file=sys.stderr)
-    if a.report:
-        from .estimators import report_plots
-        report_plots(a.report, cols, rec, kind)
+def _estimator(a, kind):
+    from .estimators import run_command
+    options = {k: v for k, v in (("axis", getattr(a, "axis", None)), ("form", getattr(a, "form", None)))
+               if v is not None}
+    for w in run_command(kind, a.device, a.calibration, a.recording, a.output, engine=a.engine,
+                         report=a.report, **options):
+        print(w, file=sys.stderr)
     return 0
 
 
 def cmd_attitude(a):
-    from .estimators import attitude_from_recording
-    return _estimator(a, attitude_from_recording, "attitude")
+    return _estimator(a, "attitude")
 
 
 def cmd_displacement(a):
-    from .estimators import displacement_from_recording
-    return _estimator(a, displacement_from_recording, "displacement")
+    return _estimator(a, "displacement")
 
 
 def cmd_rate(a):
-    from .estimators import rate_from_recording
-    return _estimator(a, rate_from_recording, "rate")
+    return _estimator(a, "rate")
 
 
 def cmd_diagnose(a):
@@ -238,6 +217,11 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--engine", choices=["float", "fixed"], default="float")
         s.add_argument("--report", metavar="DIR", help="write plots into DIR")
         s.add_argument("-o", "--output", required=True)
+        if name == "displacement":
+            s.add_argument("--axis", choices=["x", "y", "z"],
+                           help="1-D along this body axis (the seed's actuator; nothing removed)")
+            s.add_argument("--form", choices=["offline", "stream"],
+                           help="float engine: offline (default) or the firmware's streaming form")
         s.set_defaults(func=func)
 
     s = sub.add_parser("diagnose", help="sim-to-real diagnosis: where the gap lies, which effect, how far "

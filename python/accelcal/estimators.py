@@ -1159,7 +1159,9 @@ def _axis_arg(axis) -> int | None:
 def displacement_from_recording(device, cal, rec, engine: str = "float", *, form: str | None = None,
                                 axis=None, rest: RestParams | None = None) -> Columns:
     """`accelcal displacement`: columns t, v_x, v_y, v_z, p_x, p_y, p_z (frame of the first rest,
-    z up, gravity removed; corrected between rests) plus p_raw_* (uncorrected), rest, corrected.
+    z up, gravity removed; corrected between rests) plus p_raw_* (the same without the zero-point
+    correction), rest (1 at rest) and corrected (1 on the samples of a motion closed by a rest,
+    whose correction was applied; 0 at rest and on a motion that never stopped).
 
     engine "float": form "offline" (default) or "stream" (the float twin of the firmware form);
     engine "fixed": the C streaming form (ac_disp), with the path between rests corrected on the

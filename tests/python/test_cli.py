@@ -116,3 +116,61 @@ def test_simulate_rejects_unknown_effect(tmp_path):
     out = tmp_path / "x.csv"
     r = run("simulate", "--device", "default", "--motion", "rate_table", "--effect", "gian:scale=0.1", "-o", out)
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and not out.exists()
+
+
+def test_attitude_command_tracks_the_pendulum(tmp_path):
+    from accelcal.calibration import Calibration, save_calibration
+    from accelcal.device import pendulum_device, save_device
+    from accelcal.recording import read_recording
+    d = pendulum_device()
+    save_device(d, tmp_path / "dev.json")
+    save_calibration(Calibration.nominal(d), tmp_path / "cal.json")
+    rec = tmp_path / "p.csv"
+    assert run("simulate", "--device", tmp_path / "dev.json", "--motion", "pendulum", "--seed", 3,
+               "-o", rec).returncode == 0
+    out = tmp_path / "att.csv"
+    r = run("attitude", "--device", tmp_path / "dev.json", "--calibration", tmp_path / "cal.json", rec,
+            "--engine", "fixed", "-o", out)
+    assert r.returncode == 0, r.stderr
+    lines = [ln for ln in out.read_text().splitlines() if not ln.startswith("#")]
+    assert lines[0].startswith("t,theta_rad,w_y,dw_y")
+    theta = np.array([float(ln.split(",")[1]) for ln in lines[1:]])
+    truth = read_recording(rec)
+    theta_true = np.arctan2(-truth.f[:, 0], truth.f[:, 2])
+    assert np.degrees(np.sqrt(np.mean((theta - theta_true) ** 2))) < 0.3
+
+
+def test_pendulum_with_equal_radii_is_refused(tmp_path):
+    d = {"name": "bad-pendulum", "sample_rate_hz": 100.0, "gravity_mps2": 9.80665, "raw_min": 0,
+         "raw_max": 65535, "channels": [
+             {"position_m": [0.2, 0, 0], "axis": ax, "counts_per_mps2": 1670.0, "zero_counts": 32768}
+             for ax in ([1, 0, 0], [0, 1, 0], [0, 0, 1])] * 2}
+    (tmp_path / "dev.json").write_text(json.dumps(d))
+    from accelcal.calibration import Calibration, save_calibration
+    from accelcal.device import load_device
+    save_calibration(Calibration.nominal(load_device(tmp_path / "dev.json")), tmp_path / "cal.json")
+    rec = tmp_path / "p.csv"
+    rec.write_text("t," + ",".join(f"raw_{i}" for i in range(6)) + "\n" +
+                   "".join(f"{k / 100},32768,32768,49152,32768,32768,49152\n" for k in range(50)))
+    out = tmp_path / "att.csv"
+    r = run("attitude", "--device", tmp_path / "dev.json", "--calibration", tmp_path / "cal.json", rec,
+            "-o", out)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and not out.exists(), r.stderr
+
+
+def test_diagnose_command_finds_a_withheld_gain(tmp_path, demo_dir):
+    out, _ = demo_dir
+    rec = tmp_path / "r.csv"
+    truth = out / "calibration.json"  # simulate with the calibrated parameters as the truth
+    r = run("simulate", "--device", out / "device.json", "--calibration", truth, "--motion", "rate_table",
+            "--param", "amplitude_deg=30", "--param", "rest_s=2", "--effect", "gain:scale=0.03,channel=0",
+            "--seed", 2, "-o", rec)
+    assert r.returncode == 0, r.stderr
+    j = tmp_path / "d.json"
+    r = run("diagnose", "--device", out / "device.json", "--calibration", truth, rec, "--json", j,
+            "--report", tmp_path / "rep")
+    assert r.returncode == 0, r.stderr
+    d = json.loads(j.read_text())
+    assert d["verdict"] == "gain"
+    assert d["effects"][0]["shrink"] > 0.5
+    assert (tmp_path / "rep" / "summary.md").exists()
