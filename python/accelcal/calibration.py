@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from .device import Device, _Fields, _json_number, _read_json, _show
+from .device import Device, _Fields, _json_number, _read_json, _show, check_limits
 from .errors import atomic_write
 
 __all__ = ["Calibration", "load_calibration", "save_calibration", "calibration_from_dict", "calibration_to_dict"]
@@ -223,7 +223,9 @@ def calibration_from_dict(d: Any, source: str = "<dict>", device: Device | None 
         p = f"channels[{i}]"
         ch = v.obj(ch, p)
         offsets[i] = v.number(v.get(ch, "offset_counts", p), f"{p}.offset_counts")
+        check_limits(v, f"{p}.offset_counts", offsets[i], "offset_counts")
         sens[i] = v.vector(v.get(ch, "sensitivity", p), f"{p}.sensitivity")
+        check_limits(v, f"{p}.sensitivity", sens[i], "sensitivity")
         if not np.any(sens[i]):
             raise v.fail(f"{p}.sensitivity", "expected a non-zero vector, got [0, 0, 0]")
         for attr, key, width in _OPTIONAL_CHANNEL_FIELDS:
@@ -234,6 +236,8 @@ def calibration_from_dict(d: Any, source: str = "<dict>", device: Device | None 
                 value = v.vector(ch[key], fp)
             else:
                 value = np.array([v.number(ch[key], fp)])
+            if key == "position_m":
+                check_limits(v, fp, value, "position_m")
             if attr in _NONNEGATIVE and np.any(value < 0):
                 raise v.fail(fp, f"expected values >= 0 (an uncertainty), got {_show(ch[key])}")
             if attr not in opt:

@@ -245,6 +245,10 @@ def main(argv=None) -> int:
     except AccelcalError as e:
         print(f"accelcal {a.command}: error: {e}", file=sys.stderr)
         return EXIT_INPUT
+    except np.linalg.LinAlgError as e:
+        # a degenerate calibration or geometry that no loader check could see
+        print(f"accelcal {a.command}: error: the inputs are numerically degenerate ({e})", file=sys.stderr)
+        return EXIT_INPUT
     except KeyboardInterrupt:
         print(f"accelcal {a.command}: interrupted", file=sys.stderr)
         return 130

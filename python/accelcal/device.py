@@ -373,6 +373,29 @@ class Device:
         }
 
 
+# The ranges a file may use.  Far wider than any real sensor, they keep absurd values
+# (1e300 m, 1e30 Hz) out of the numerics, where they would overflow or underflow and
+# surface as a numerical failure instead of a message that names the field.
+LIMITS = {
+    "sample_rate_hz": (1e-3, 1e6, "Hz"),
+    "gravity_mps2": (1e-2, 1e3, "m/s^2"),
+    "noise_mps2": (0.0, 1e3, "m/s^2"),
+    "position_m": (-1e3, 1e3, "m"),
+    "counts_per_mps2": (1e-6, 1e9, "counts per m/s^2"),
+    "raw": (-(2.0**53), 2.0**53, "counts"),
+    "sensitivity": (-1e9, 1e9, "counts per m/s^2"),
+    "offset_counts": (-(2.0**53), 2.0**53, "counts"),
+}
+
+
+def check_limits(fields: Any, field: str, value: Any, kind: str) -> None:
+    """Raise the field's InputError when value (scalar or vector) leaves LIMITS[kind]."""
+    lo, hi, unit = LIMITS[kind]
+    a = np.atleast_1d(np.asarray(value, float))
+    if np.any(a < lo) or np.any(a > hi):
+        raise fields.fail(field, f"expected values in [{lo:g}, {hi:g}] {unit}, got {_show(value)}")
+
+
 def device_from_dict(d: Any, source: str = "<dict>") -> Device:
     """Validate a parsed device description and build the Device.
 
@@ -385,18 +408,23 @@ def device_from_dict(d: Any, source: str = "<dict>") -> Device:
     rate = v.number(v.get(d, "sample_rate_hz", ""), "sample_rate_hz")
     if rate <= 0:
         raise v.fail("sample_rate_hz", f"expected a number > 0, got {_show(d['sample_rate_hz'])}")
+    check_limits(v, "sample_rate_hz", rate, "sample_rate_hz")
     grav = v.number(v.get(d, "gravity_mps2", ""), "gravity_mps2")
     if grav <= 0:
         raise v.fail("gravity_mps2", f"expected a number > 0, got {_show(d['gravity_mps2'])}")
+    check_limits(v, "gravity_mps2", grav, "gravity_mps2")
     raw_min = v.integer(v.get(d, "raw_min", ""), "raw_min")
     raw_max = v.integer(v.get(d, "raw_max", ""), "raw_max")
     if raw_min >= raw_max:
         raise v.fail("raw_max", f"expected raw_max > raw_min ({raw_min}), got {raw_max}")
+    check_limits(v, "raw_min", raw_min, "raw")
+    check_limits(v, "raw_max", raw_max, "raw")
     noise = 0.0
     if "noise_mps2" in d:
         noise = v.number(d["noise_mps2"], "noise_mps2")
         if noise < 0:
             raise v.fail("noise_mps2", f"expected a number >= 0, got {_show(d['noise_mps2'])}")
+        check_limits(v, "noise_mps2", noise, "noise_mps2")
     chans = v.get(d, "channels", "")
     if not isinstance(chans, list):
         raise v.fail("channels", f"expected a list of channel objects, got {_show(chans)}")
@@ -413,12 +441,14 @@ def device_from_dict(d: Any, source: str = "<dict>") -> Device:
         p = f"channels[{i}]"
         ch = v.obj(ch, p)
         pos[i] = v.vector(v.get(ch, "position_m", p), f"{p}.position_m")
+        check_limits(v, f"{p}.position_m", pos[i], "position_m")
         axes[i] = v.vector(v.get(ch, "axis", p), f"{p}.axis")
         if not np.any(axes[i]):
             raise v.fail(f"{p}.axis", "expected a non-zero vector, got [0, 0, 0]")
         k[i] = v.number(v.get(ch, "counts_per_mps2", p), f"{p}.counts_per_mps2")
         if k[i] <= 0:
             raise v.fail(f"{p}.counts_per_mps2", f"expected a number > 0, got {_show(ch['counts_per_mps2'])}")
+        check_limits(v, f"{p}.counts_per_mps2", k[i], "counts_per_mps2")
         z[i] = v.number(v.get(ch, "zero_counts", p), f"{p}.zero_counts")
         if not raw_min <= z[i] <= raw_max:
             raise v.fail(

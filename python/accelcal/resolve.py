@@ -37,7 +37,12 @@ def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str
     omega = omega_for(rec, omega_source)
     pos = cal.positions_or_nominal(device)
     if engine == "float":
-        f, a = model.resolve(cal.offsets, cal.sensitivity, pos, rec.raw, omega)
+        try:
+            f, a = model.resolve(cal.offsets, cal.sensitivity, pos, rec.raw, omega)
+        except np.linalg.LinAlgError as e:
+            raise InputError(getattr(cal, "source", "calibration"),
+                             f"the calibrated sensor matrix cannot be inverted ({e})",
+                             field="channels") from None
         return f, a, None
     if engine != "fixed":
         raise ValueError(f"unknown engine {engine!r}")

@@ -16,9 +16,11 @@ the contract and are checked to be accepted.  The CLI runs in-process through
 """
 from __future__ import annotations
 
+import contextlib
 import copy
 import json
-import math
+import os
+import tempfile
 import warnings
 from pathlib import Path
 
@@ -28,7 +30,8 @@ from hypothesis import strategies as st
 
 from accelcal.cli import main
 
-EXAMPLES = 20          # per (command, file kind); ~50-60 runs per command in all
+# per (command, file kind): 3 kinds x 40 = ~120 runs per command; raise it to hunt
+EXAMPLES = int(os.environ.get("ACCELCAL_BAD_INPUT_EXAMPLES", "40"))
 SETTINGS = settings(max_examples=EXAMPLES, deadline=None, derandomize=False,
                     suppress_health_check=[HealthCheck.function_scoped_fixture,
                                            HealthCheck.too_slow])
@@ -40,7 +43,6 @@ SIX = {"dev": "device.json", "cal": "calibration.json", "rec": "small.csv", "pos
 
 @pytest.fixture(scope="module")
 def good(tmp_path_factory):
-    import contextlib
     import io
 
     from accelcal.calibration import Calibration, save_calibration
@@ -66,7 +68,7 @@ def good(tmp_path_factory):
     save_device(pd, pend / "device.json")
     save_calibration(Calibration.nominal(pd), pend / "calibration.json")
     write_recording(pend / "small.csv", run_simulation(pd, "pendulum", seed=5, duration_s=3.0).recording)
-    return {"six": demo, "pend": pend}
+    return {"six": demo, "pend": pend, "root": d}
 
 
 def argv_for(cmd: str, dev: Path, cal: Path, rec: Path, out: Path, engine: str = "float") -> list[str]:
@@ -113,8 +115,15 @@ def run_cli(argv, capfd):
     return rc, err, [f"{w.category.__name__}: {w.message}" for w in caught]
 
 
-def fresh_out(tmp_path_factory) -> Path:
-    return tmp_path_factory.mktemp("out")
+@contextlib.contextmanager
+def scratch(good):
+    """(input dir, empty output dir), removed afterwards (tmp_path_factory's
+    numbered directories get slower to make with every example)."""
+    with tempfile.TemporaryDirectory(dir=good["root"]) as d:
+        d = Path(d)
+        (d / "in").mkdir()
+        (d / "out").mkdir()
+        yield d / "in", d / "out"
 
 
 def check_rejected(rc, err, caught, out: Path, what: str):
@@ -128,10 +137,11 @@ def check_rejected(rc, err, caught, out: Path, what: str):
 
 
 def check_clean(rc, err, caught, out: Path, what: str):
-    """Either a success (exit 0, output written) or a clean rejection."""
+    """Either a success (exit 0, output written) or a clean rejection.  (On
+    success the contract does not limit stderr: warnings are allowed.)"""
     if rc == 0:
         assert any(out.iterdir()), f"{what}: exit 0 but no output"
-        assert "Traceback" not in err and not caught, f"{what}: {err!r} {caught}"
+        assert "Traceback" not in err, f"{what}: {err!r}"
     else:
         check_rejected(rc, err, caught, out, what)
 
@@ -314,7 +324,7 @@ def bad_calibration(draw, valid: dict):
 # ---- CSV mutations -----------------------------------------------------------
 
 RAW_BAD = ["nan", "inf", "-inf", "abc", "1.5", "", "1e30", "0x10", "--1", "99999999999999999999999",
-           "-5", "1 2", '"', "NaN"]
+           "1 2", '"', "NaN"]
 T_BAD = ["nan", "inf", "-inf", "abc", "", "1e400", "0..1"]
 REF_BAD = ["abc", "1.2.3", "--", "0x"]
 
@@ -339,7 +349,7 @@ def bad_recording(draw, valid: str, n_channels: int, raw_max: int):
 def _bad_recording(draw, valid, n_channels, raw_max, notes):
     comments, header, rows = _split_csv(valid)
     n = len(rows)
-    kind = draw(st.sampled_from(["raw_cell", "t_cell", "ref_cell", "raw_range", "t_order", "drop_column",
+    kind = draw(st.sampled_from(["raw_cell", "t_cell", "ref_cell", "t_order", "drop_column",
                                  "cell_count", "truncate", "no_rows", "text", "bad_utf8"]))
     r = draw(st.integers(1, n - 2))
     if kind == "raw_cell":
@@ -386,7 +396,7 @@ def _bad_recording(draw, valid, n_channels, raw_max, notes):
     elif kind == "truncate":
         # cut inside a row, before its last separator, so the row is short
         line = ",".join(rows[r])
-        cut = draw(st.integers(0, line.rfind(",") - 1))
+        cut = draw(st.integers(1, line.rfind(",") - 1))
         notes.append(f"truncated in row {r} at char {cut}")
         return _join_csv(comments, header, rows[:r]).encode() + line[:cut].encode()
     elif kind == "no_rows":
@@ -431,73 +441,155 @@ def _write(path: Path, data):
 @pytest.mark.parametrize("cmd", ALL)
 @SETTINGS
 @given(data=st.data())
-def test_bad_device_json(good, cmd, data, capfd, tmp_path_factory):
+def test_bad_device_json(good, cmd, data, capfd):
     f = inputs_for(good, cmd)
     text = data.draw(bad_device(json.loads(f["dev"].read_text()), cmd), label="device")
-    src = tmp_path_factory.mktemp("in") / "device.json"
-    _write(src, text)
-    out = fresh_out(tmp_path_factory)
-    rc, err, caught = run_cli(argv_for(cmd, src, f["cal"], f["rec"], out, data.draw(ENGINES)), capfd)
-    check_rejected(rc, err, caught, out, f"{cmd} with {text!r}")
+    with scratch(good) as (ind, out):
+        _write(ind / "device.json", text)
+        rc, err, caught = run_cli(argv_for(cmd, ind / "device.json", f["cal"], f["rec"], out,
+                                           data.draw(ENGINES)), capfd)
+        check_rejected(rc, err, caught, out, f"{cmd} with {text!r}")
 
 
 @pytest.mark.parametrize("cmd", WITH_CAL)
 @SETTINGS
 @given(data=st.data())
-def test_bad_calibration_json(good, cmd, data, capfd, tmp_path_factory):
+def test_bad_calibration_json(good, cmd, data, capfd):
     f = inputs_for(good, cmd)
     text = data.draw(bad_calibration(json.loads(f["cal"].read_text())), label="calibration")
-    src = tmp_path_factory.mktemp("in") / "calibration.json"
-    _write(src, text)
-    out = fresh_out(tmp_path_factory)
-    rc, err, caught = run_cli(argv_for(cmd, f["dev"], src, f["rec"], out, data.draw(ENGINES)), capfd)
-    check_rejected(rc, err, caught, out, f"{cmd} with {text!r}")
+    with scratch(good) as (ind, out):
+        _write(ind / "calibration.json", text)
+        rc, err, caught = run_cli(argv_for(cmd, f["dev"], ind / "calibration.json", f["rec"], out,
+                                           data.draw(ENGINES)), capfd)
+        check_rejected(rc, err, caught, out, f"{cmd} with {text!r}")
 
 
 @pytest.mark.parametrize("cmd", WITH_REC)
 @SETTINGS
 @given(data=st.data())
-def test_bad_recording_csv(good, cmd, data, capfd, tmp_path_factory):
+def test_bad_recording_csv(good, cmd, data, capfd):
     f = inputs_for(good, cmd)
     dev = json.loads(f["dev"].read_text())
     blob = data.draw(bad_recording(f["rec"].read_text(), len(dev["channels"]), dev["raw_max"]),
                      label="recording")
-    src = tmp_path_factory.mktemp("in") / "rec.csv"
-    _write(src, blob)
-    out = fresh_out(tmp_path_factory)
-    rc, err, caught = run_cli(argv_for(cmd, f["dev"], f["cal"], src, out, data.draw(ENGINES)), capfd)
-    check_rejected(rc, err, caught, out, f"{cmd} with {blob!r}")
+    with scratch(good) as (ind, out):
+        _write(ind / "rec.csv", blob)
+        rc, err, caught = run_cli(argv_for(cmd, f["dev"], f["cal"], ind / "rec.csv", out,
+                                           data.draw(ENGINES)), capfd)
+        check_rejected(rc, err, caught, out, f"{cmd} with {blob!r}")
+
+
+# A raw reading outside the device's [raw_min, raw_max] (or outside the core's
+# uint16) is well-formed; the contract does not say whether it is an error.
+# Today the float engine accepts it and the fixed engine refuses values beyond
+# uint16.  Either is fine here, as long as a refusal is clean.
+@pytest.mark.parametrize("cmd", WITH_REC)
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_raw_out_of_range_clean(good, cmd, data, capfd):
+    f = inputs_for(good, cmd)
+    dev = json.loads(f["dev"].read_text())
+    comments, header, rows = _split_csv(f["rec"].read_text())
+    r = data.draw(st.integers(0, len(rows) - 1))
+    j = header.index(f"raw_{data.draw(st.integers(0, len(dev['channels']) - 1))}")
+    rows[r][j] = str(data.draw(st.sampled_from([-1, dev["raw_max"] + 1, 65536, 2**31, -2**31])))
+    with scratch(good) as (ind, out):
+        _write(ind / "rec.csv", _join_csv(comments, header, rows))
+        rc, err, caught = run_cli(argv_for(cmd, f["dev"], f["cal"], ind / "rec.csv", out,
+                                           data.draw(ENGINES)), capfd)
+        check_clean(rc, err, caught, out, f"{cmd} with row {r} {header[j]}={rows[r][j]}")
+
+
+# ---- extreme (well-formed but absurd) values -------------------------------------
+
+EXTREME = [1e300, -1e300, 1e30, 1e-300, 5e-324, 2.0**63, 1e9]
+DEV_EXTREME_KEYS = DEVICE_CHANNEL_KEYS + ("sample_rate_hz", "gravity_mps2", "raw_max")
+CAL_EXTREME_KEYS = CAL_CHANNEL_KEYS + ("position_m",)
+
+
+def with_extreme(obj: dict, key: str, value: float, channel: int = 0, index: int = 0) -> dict:
+    obj = copy.deepcopy(obj)
+    ch = obj["channels"][channel]
+    if key in ("sample_rate_hz", "gravity_mps2", "raw_max"):
+        obj[key] = value
+    elif isinstance(ch.get(key), list) or key == "position_m":
+        v = list(ch.get(key) or [0.0, 0.0, 0.0])
+        v[index] = value
+        ch[key] = v
+    else:
+        ch[key] = value
+    return obj
 
 
 # Values that are legal in form but extreme: the command may run or refuse, but
 # a refusal must be clean (exit 2, one line, no output) -- never exit 3.
-@pytest.mark.parametrize("cmd", WITH_CAL)
-@SETTINGS
+@pytest.mark.parametrize("cmd", WITH_CAL + ["calibrate"])
+@settings(max_examples=max(15, EXAMPLES // 3), deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
-def test_extreme_values_clean(good, cmd, data, capfd, tmp_path_factory):
+def test_extreme_values_clean(good, cmd, data, capfd):
     f = inputs_for(good, cmd)
-    which = data.draw(st.sampled_from(["dev", "cal"]))
+    which = "dev" if cmd == "calibrate" else data.draw(st.sampled_from(["dev", "cal"]))
+    key = data.draw(st.sampled_from(DEV_EXTREME_KEYS if which == "dev" else CAL_EXTREME_KEYS))
+    value = data.draw(st.sampled_from(EXTREME))
     obj = json.loads(f[which].read_text())
-    big = data.draw(st.sampled_from([1e300, -1e300, 1e30, 1e-300, 5e-324, 2.0**63, 1e9]))
-    i = data.draw(st.integers(0, len(obj["channels"]) - 1))
-    key = data.draw(st.sampled_from(DEVICE_CHANNEL_KEYS + ("sample_rate_hz", "gravity_mps2", "raw_max")
-                                    if which == "dev" else CAL_CHANNEL_KEYS + ("position_m",)))
-    ch = obj["channels"][i]
-    if key in ("sample_rate_hz", "gravity_mps2", "raw_max"):
-        obj[key] = big
-    elif isinstance(ch.get(key), list) or key == "position_m":
-        v = list(ch.get(key) or [0.0, 0.0, 0.0])
-        v[data.draw(st.integers(0, 2))] = big
-        ch[key] = v
-    else:
-        ch[key] = big
-    src = tmp_path_factory.mktemp("in") / f"{which}.json"
-    _write(src, dump_json(obj))
-    files = dict(f, **{which: src})
-    out = fresh_out(tmp_path_factory)
-    rc, err, caught = run_cli(argv_for(cmd, files["dev"], files["cal"], files["rec"], out,
-                                       data.draw(ENGINES)), capfd)
-    check_clean(rc, err, caught, out, f"{cmd} with {which} {key}={big!r} (channel {i})")
+    channel = data.draw(st.integers(0, len(obj["channels"]) - 1))
+    index = data.draw(st.integers(0, 2))
+    obj = with_extreme(obj, key, value, channel, index)
+    with scratch(good) as (ind, out):
+        _write(ind / f"{which}.json", dump_json(obj))
+        files = dict(f, **{which: ind / f"{which}.json"})
+        rc, err, caught = run_cli(argv_for(cmd, files["dev"], files["cal"], files["rec"], out,
+                                           data.draw(ENGINES)), capfd)
+        check_clean(rc, err, caught, out, f"{cmd} with {which} channels[{channel}].{key}[{index}]={value!r}")
+
+
+def _bug(cmd, which, key, value, engine, reason):
+    """A bad-input bug found by this file and fixed (field limits in the loaders, numerical
+    failures turned into input errors): kept as a regression test."""
+    return pytest.param(cmd, which, key, value, engine, id=f"{cmd}-{which}-{key}-{value:g}-{engine}")
+
+
+B1 = ("B1: device position_m of 1e300 overflows in the 6-DOF rank check: numpy RuntimeWarnings "
+      "(2 lines each) go to stderr before the one-line error")
+FIXED_BUGS = [
+    *[_bug(c, "dev", "position_m", 1e300, "float", B1) for c in ALL],
+    _bug("simulate", "dev", "sample_rate_hz", 1e30, "float",
+         "B2: simulate with sample_rate_hz=1e30: exit 3, internal error: ValueError: Recording.t: "
+         "not strictly increasing at sample 61"),
+    _bug("calibrate", "dev", "gravity_mps2", 5e-324, "float",
+         "B3: calibrate with gravity_mps2=5e-324: exit 3, internal error: LinAlgError: SVD did not "
+         "converge, LAPACK '** On entry to DLASCL' lines and RuntimeWarnings on stderr"),
+    *[_bug(c, "dev", "gravity_mps2", 1e300, "float",
+           f"B4: {c} with gravity_mps2=1e300: exit 3, internal error: OverflowError: (34, "
+           "'Numerical result out of range')") for c in ("displacement", "rate")],
+    *[_bug(c, "cal", k, 1e30, "float",
+           f"B5: {c} --engine float with calibration channels[0].{k}[0]=1e30: exit 3, internal "
+           "error: LinAlgError: sensor matrix has rank < 6")
+      for c in ("resolve", "displacement", "rate") for k in ("sensitivity", "position_m")],
+    _bug("rate", "cal", "sensitivity", 1e30, "fixed",
+         "B5: rate --engine fixed with calibration sensitivity 1e30: exit 3, LinAlgError"),
+    _bug("attitude", "cal", "sensitivity", 1e300, "float",
+         "B6: attitude with calibration sensitivity 1e300: RuntimeWarning 'overflow encountered in "
+         "scalar power' on stderr before the one-line error"),
+    _bug("diagnose", "cal", "sensitivity", 1e300, "float",
+         "B7: diagnose with calibration sensitivity 1e300: exit 3, internal error: LinAlgError: "
+         "Eigenvalues did not converge (plus RuntimeWarnings)"),
+]
+
+
+@pytest.mark.parametrize("cmd, which, key, value, engine", FIXED_BUGS)
+def test_fixed_bad_input_bugs(good, cmd, which, key, value, engine, capfd):
+    """Regression tests of the bad-input bugs found here (B1-B7): each must now refuse cleanly."""
+    f = inputs_for(good, cmd)
+    obj = with_extreme(json.loads(f[which].read_text()), key, value)
+    with scratch(good) as (ind, out):
+        _write(ind / f"{which}.json", dump_json(obj))
+        files = dict(f, **{which: ind / f"{which}.json"})
+        rc, err, caught = run_cli(argv_for(cmd, files["dev"], files["cal"], files["rec"], out, engine),
+                                  capfd)
+        check_clean(rc, err, caught, out, f"{cmd} with {which} {key}={value!r}")
+        # rc 0 with RuntimeWarnings is allowed by check_clean; these cases refuse
+        assert rc == 2
 
 
 # Unknown keys and columns are the contract's extension point: never an error.
@@ -505,22 +597,22 @@ def test_extreme_values_clean(good, cmd, data, capfd, tmp_path_factory):
 @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(key=st.text("abcdefghijklmnopqrstuvwxyz_", min_size=3, max_size=12).map(lambda s: "x_" + s),
        value=st.sampled_from([1, "text", [1, 2], {"a": None}, None]))
-def test_unknown_fields_accepted(good, cmd, key, value, capfd, tmp_path_factory):
+def test_unknown_fields_accepted(good, cmd, key, value, capfd):
     f = inputs_for(good, cmd)
-    d = tmp_path_factory.mktemp("in")
     dev, cal = json.loads(f["dev"].read_text()), json.loads(f["cal"].read_text())
     dev[key] = value
     dev["channels"][0][key] = value
     cal[key] = value
     cal["channels"][1][key] = value
-    _write(d / "dev.json", json.dumps(dev))
-    _write(d / "cal.json", json.dumps(cal))
     comments, header, rows = _split_csv(f["rec"].read_text())
     header = header[:1] + [key] + header[1:]
     rows = [row[:1] + ["hello"] + row[1:] for row in rows]
-    _write(d / "rec.csv", _join_csv(comments, header, rows))
-    out = fresh_out(tmp_path_factory)
-    rc, err, caught = run_cli(argv_for(cmd, d / "dev.json", d / "cal.json", d / "rec.csv", out), capfd)
-    assert rc == 0, err
-    assert any(out.iterdir())
-    assert "Traceback" not in err
+    with scratch(good) as (ind, out):
+        _write(ind / "dev.json", json.dumps(dev))
+        _write(ind / "cal.json", json.dumps(cal))
+        _write(ind / "rec.csv", _join_csv(comments, header, rows))
+        rc, err, caught = run_cli(argv_for(cmd, ind / "dev.json", ind / "cal.json", ind / "rec.csv", out),
+                                  capfd)
+        assert rc == 0, err
+        assert any(out.iterdir())
+        assert "Traceback" not in err

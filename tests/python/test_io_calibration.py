@@ -269,7 +269,7 @@ def calibrations(draw):
 
     sens = arr((n, 3), optional=False)
     sens[np.all(sens == 0, axis=1)] = [1.0, 0, 0]
-    pos = arr((n, 3))
+    pos = arr((n, 3), st.floats(-1e3, 1e3, allow_nan=False))  # device.LIMITS["position_m"]
     if pos is not None and n > 1:
         pos[0] = np.nan  # channel 0 at nominal
     off_tc, gain_tc = arr((n,)), arr((n,))
@@ -352,3 +352,17 @@ def test_property_random_bytes(tmp_path_factory, blob):
         load_calibration(p)
     except InputError:
         pass
+
+
+@pytest.mark.parametrize("field, value", [("sensitivity", [1e30, 0, 0]), ("position_m", [0, 0, 1e300]),
+                                          ("offset_counts", 1e300)])
+def test_values_beyond_the_limits_are_refused(tmp_path, field, value):
+    from accelcal.calibration import load_calibration
+    d = {"device": "x", "method": "full", "channels": [
+        {"offset_counts": 5000.0, "sensitivity": [127.0, 0, 0]} for _ in range(3)]}
+    d["channels"][1][field] = value
+    p = tmp_path / "c.json"
+    p.write_text(json.dumps(d))
+    with pytest.raises(InputError) as e:
+        load_calibration(p)
+    assert f"channels[1].{field}" in str(e.value) and "expected values in" in str(e.value)

@@ -5,31 +5,7 @@
 #define AC_CAL_IMPLEMENTATION
 #include "cal.h"
 
-#ifdef __AVR__
-#include <avr/io.h>
-#include <avr/interrupt.h>
-#include <avr/sleep.h>
-static volatile uint16_t overflows;
-ISR(TIMER1_OVF_vect) { overflows++; }
-static void out_char(char c) { while (!(UCSR0A & (1 << UDRE0))) {} UDR0 = (uint8_t)c; }
-static void timer_start(void) { TCCR1A = 0; TCCR1B = 0; TCNT1 = 0; overflows = 0; TIFR1 = 0xFF; TIMSK1 = 1 << TOIE1; sei(); TCCR1B = 1 << CS10; }
-static uint32_t timer_stop(void) { uint16_t t = TCNT1; TCCR1B = 0; cli(); return ((uint32_t)overflows << 16) + t; }
-#else
-#include <stdio.h>
-static void out_char(char c) { putchar(c); }
-static void timer_start(void) {}
-static uint32_t timer_stop(void) { return 0; }
-#endif
-
-static void out_str(const char *s) { while (*s) out_char(*s++); }
-static void out_u32(uint32_t v)
-{
-    char buf[11];
-    int i = 10;
-    buf[i] = 0;
-    do { buf[--i] = (char)('0' + (v % 10u)); v /= 10u; } while (v != 0u && i > 0);
-    out_str(&buf[i]);
-}
+#include "bench_io.h"
 
 static ac_build_work work;
 static ac_resolver built;
@@ -76,10 +52,6 @@ int main(void)
     out_str(" resolver_build="); out_u32(c_build);
     out_str(" check="); out_u32(check + (uint32_t)out[0]);
     out_str("\n");
-#ifdef __AVR__
-    cli();
-    sleep_enable();
-    sleep_cpu();
-#endif
+    bench_end();
     return 0;
 }
