@@ -37,4 +37,4 @@ echo "== C core: libFuzzer over the whole API, bounded run"
 bash tools/fuzz.sh "${ACCELCAL_FUZZ_SECONDS:-45}"
 
 echo "== Python suite"
-ACCELCAL_HYPOTHESIS="${ACCELCAL_HYPOTHESIS:-ci}" python3 -m pytest -q -p no:cacheprovider --durations=25
+ACCELCAL_HYPOTHESIS="${ACCELCAL_HYPOTHESIS:-ci}" python3 -m pytest -q -p no:cacheprovider --durations=25 -n "${ACCELCAL_TEST_JOBS:-2}"

@@ -376,8 +376,8 @@ def _bad_recording(draw, valid, n_channels, raw_max, notes):
             rows[r][jt] = rows[r - 1][jt]
         elif how == "swap":
             rows[r][jt], rows[r + 1][jt] = rows[r + 1][jt], rows[r][jt]
-        elif how == "back":
-            rows[r][jt] = repr(float(rows[r][jt]) - 1.0)
+        elif how == "back":  # below the previous row's t (a fixed step back could land in a gap)
+            rows[r][jt] = repr(float(rows[r - 1][jt]) - 0.5)
         else:
             for row in rows:
                 row[jt] = "0"
