@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Installs everything the test suite needs and runs every test: the C core on the
-# host (warnings as errors, ctest, ASan/UBSan, cppcheck), the H8/300H build and
-# link without libgcc, the AVR (16-bit int) run under simavr bit-for-bit against the
-# host, and the Python suite (property tests at 10,000 examples each).
+# host (warnings as errors, ctest, ASan/UBSan, cppcheck, valgrind), the H8/300H
+# build and link without libgcc, the AVR (16-bit int) run under simavr bit for bit
+# against the host, clang-tidy, a bounded libFuzzer run, and the Python suite (the
+# core's properties at 10,000 examples each, the estimators' at 2,000).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -37,4 +38,4 @@ echo "== C core: libFuzzer over the whole API, bounded run"
 bash tools/fuzz.sh "${ACCELCAL_FUZZ_SECONDS:-45}"
 
 echo "== Python suite"
-ACCELCAL_HYPOTHESIS="${ACCELCAL_HYPOTHESIS:-ci}" python3 -m pytest -q -p no:cacheprovider --durations=25 -n "${ACCELCAL_TEST_JOBS:-2}"
+ACCELCAL_HYPOTHESIS="${ACCELCAL_HYPOTHESIS:-ci}" python3 -m pytest -q -p no:cacheprovider --durations=25 -n "${ACCELCAL_TEST_JOBS:-2}" --dist worksteal

@@ -22,48 +22,36 @@ def round_half_up(fr: Fraction) -> int:
 
 
 @core
-@given(I32, st.integers(-40, 40))
-def test_scale_round32(v, shift):
+@given(I32, I32, st.integers(-40, 40), st.integers(0, 62))
+def test_int32_primitives_exact(a, b, shift, n):
+    """ac_scale_round32, ac_mul32x32, ac_mul32_shift, ac_add32_sat, ac_asr32 and
+    ac_bitlen32 against Python's exact integers (one draw feeds all six, so each
+    property gets every example)."""
     out = ffi.new("int32_t *")
-    st_ = lib.ac_scale_round32(v, shift, out)
-    exact = round_half_up(Fraction(v) / Fraction(2) ** shift)
+    st_ = lib.ac_scale_round32(a, shift, out)
+    exact = round_half_up(Fraction(a) / Fraction(2) ** shift)
     assert out[0] == clip32(exact)
     assert (st_ == lib.AC_SATURATED) == (exact != clip32(exact))
 
+    o64 = ffi.new("ac_i64 *")
+    assert lib.ac_mul32x32(a, b, o64) == lib.AC_OK
+    assert o64.hi * 2**32 + o64.lo == a * b
 
-@core
-@given(I32, I32)
-def test_mul32x32_exact(a, b):
-    out = ffi.new("ac_i64 *")
-    assert lib.ac_mul32x32(a, b, out) == lib.AC_OK
-    assert out.hi * 2**32 + out.lo == a * b
-
-
-@core
-@given(I32, I32, st.integers(0, 62))
-def test_mul32_shift(a, b, n):
-    out = ffi.new("int32_t *")
     st_ = lib.ac_mul32_shift(a, b, n, out)
     exact = round_half_up(Fraction(a * b, 2**n))
     assert out[0] == clip32(exact)
     assert (st_ == lib.AC_SATURATED) == (exact != clip32(exact))
 
-
-@core
-@given(I32, I32)
-def test_add32_sat(a, b):
-    out = ffi.new("int32_t *")
     st_ = lib.ac_add32_sat(a, b, out)
     assert out[0] == clip32(a + b)
     assert (st_ == lib.AC_SATURATED) == (a + b != clip32(a + b))
 
+    assert lib.ac_asr32(a, n % 32, out) == lib.AC_OK
+    assert out[0] == a >> (n % 32)  # Python's >> is floor division by 2^n
 
-@core
-@given(I32, st.integers(0, 31))
-def test_asr32_is_floor(v, n):
-    out = ffi.new("int32_t *")
-    assert lib.ac_asr32(v, n, out) == lib.AC_OK
-    assert out[0] == v >> n  # Python's >> is floor division by 2^n
+    o8 = ffi.new("uint8_t *")
+    lib.ac_bitlen32(b, o8)
+    assert o8[0] == abs(b).bit_length()
 
 
 def test_sat16_exhaustive_band():
@@ -72,14 +60,6 @@ def test_sat16_exhaustive_band():
         st_ = lib.ac_sat16(v, out)
         c = max(-32768, min(32767, v))
         assert out[0] == c and (st_ == lib.AC_SATURATED) == (c != v)
-
-
-@core
-@given(I32)
-def test_bitlen(v):
-    out = ffi.new("uint8_t *")
-    lib.ac_bitlen32(v, out)
-    assert out[0] == abs(v).bit_length()
 
 
 def test_null_pointers_give_status():
@@ -110,15 +90,6 @@ def check_normalised(x):
 
 
 @core
-@given(XF_IN)
-def test_xf_from_fixed_exact_or_rounded(v):
-    x = xf_of(*v)
-    check_normalised(x)
-    exact = Fraction(v[0]) / Fraction(2) ** v[1]
-    assert abs(xf_value(x) - exact) <= abs(exact) * REL / 2
-
-
-@core
 @given(XF_IN, XF_IN, st.sampled_from(["add", "sub", "mul", "div"]))
 def test_xf_arithmetic_correctly_rounded(a, b, op):
     xa, xb = xf_of(*a), xf_of(*b)
@@ -138,8 +109,13 @@ def test_xf_div_by_zero():
 
 @core
 @given(XF_IN, st.integers(-60, 60))
-def test_xf_to_fixed(v, frac):
+def test_xf_from_and_to_fixed(v, frac):
+    """ac_xf_from_fixed (exact, or rounded to the 30-bit mantissa) and ac_xf_to_fixed
+    (correctly rounded, saturating) on the same draw."""
     x = xf_of(*v)
+    check_normalised(x)
+    exact = Fraction(v[0]) / Fraction(2) ** v[1]
+    assert abs(xf_value(x) - exact) <= abs(exact) * REL / 2
     out = ffi.new("int32_t *")
     st_ = lib.ac_xf_to_fixed(x, frac, out)
     exact = round_half_up(xf_value(x) * Fraction(2) ** frac)

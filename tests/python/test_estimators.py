@@ -15,7 +15,7 @@ from accelcal.device import Device, default_device, default_triad
 from accelcal.errors import AccelcalError, InputError, RangeError, SingularError, IllConditionedError
 from accelcal.recording import recording_from_arrays
 from accelcal.simulate import run_simulation
-from core_settings import core
+from core_settings import estimator
 
 U32 = st.integers(0, 2**32 - 1)
 I32 = st.one_of(st.integers(-2**31, 2**31 - 1),
@@ -47,7 +47,7 @@ def test_flag_constants_match_headers():
          lib.AC_DISP_ROT_FRAC, lib.AC_DISP_GSUM_MAX)
 
 
-@core
+@estimator
 @given(st.one_of(U32, st.integers(0, 2**20), st.sampled_from([0, 1, 2, 3, 4294901760, 4294901761, 2**32 - 1])))
 def test_isqrt32_is_round_sqrt(v):
     out = ffi.new("uint16_t *")
@@ -60,7 +60,7 @@ def test_isqrt32_is_round_sqrt(v):
         assert s == lib.AC_SATURATED and out[0] == 65535
 
 
-@core
+@estimator
 @given(U32, U32, st.integers(1, 2**32 - 1))
 def test_udiv64_rounds_half_up(hi, lo, den):
     q = ffi.new("uint32_t *")
@@ -78,7 +78,7 @@ def test_udiv64_zero_divisor():
     assert lib.ac_udiv64(0, 5, 0, q) == lib.AC_ERR_RANGE
 
 
-@core
+@estimator
 @given(I32, st.integers(0, 65535), st.integers(0, 47))
 def test_mul32x16_shift_exact(a, b, n):
     out = ffi.new("int32_t *")
@@ -102,13 +102,13 @@ def check_atan2(y, x):
     assert abs(mag[0] - h) <= 2**-14 * h + 1
 
 
-@core
+@estimator
 @given(I32, I32)
 def test_atan2_within_stated_bound(y, x):
     check_atan2(y, x)
 
 
-@core
+@estimator
 @given(st.integers(-40000, 40000), st.integers(-40000, 40000))
 def test_atan2_small_operands(y, x):
     check_atan2(y, x)
@@ -128,7 +128,7 @@ def triads(draw):
     return b, S
 
 
-@core
+@estimator
 @given(triads(), st.lists(st.integers(0, 65535), min_size=3, max_size=3))
 def test_triad_apply_exact_and_float(tri, raw):
     b, S = tri
@@ -186,7 +186,7 @@ def rest_inputs(draw):
     return E._q10(f), p, (None if alpha is None else E._q10(alpha))
 
 
-@core
+@estimator
 @given(rest_inputs())
 def test_rest_fixed_vs_twin(inp):
     f_q, p, a_q = inp
@@ -257,7 +257,7 @@ def pendulum_runs(draw):
     return E._q10(f1), E._q10(f2), p
 
 
-@core
+@estimator
 @given(pendulum_runs())
 def test_attitude_fixed_vs_twin(run):
     f1, f2, p = run
@@ -428,7 +428,7 @@ def test_attitude_flags_pivot_that_moves():
 # displacement
 # ---------------------------------------------------------------------------------
 
-@core
+@estimator
 @given(st.lists(st.floats(-1, 1), min_size=3, max_size=3), st.floats(0.2, 40.0))
 def test_tilt_frame_fixed_vs_float(d, mag):
     v = np.array(d)
@@ -485,7 +485,7 @@ def displacement_runs(draw):
     return E._q10(f), E.DisplaceParams(dt=dt, axis=axis, rest=rp)
 
 
-@core
+@estimator
 @given(displacement_runs())
 def test_displacement_fixed_vs_twin(run):
     f_q, p = run
@@ -626,7 +626,7 @@ def rate_runs(draw):
     return E._q10(alpha), E._q10(f), 1 / draw(st.sampled_from([60.0, 100.0])), draw(st.integers(0, 2000)), rest
 
 
-@core
+@estimator
 @given(rate_runs())
 def test_rate_rest_fixed_vs_twin(run):
     a_q, f_q, dt, leak_q, rest = run
