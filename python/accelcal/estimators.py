@@ -29,6 +29,8 @@ from typing import Any
 import numpy as np
 
 from .errors import AccelcalError, InputError
+from .native import cptr
+from .quantize import round_half_up
 
 __all__ = [
     "Columns", "RestParams", "AttitudeParams", "DisplaceParams",
@@ -81,10 +83,6 @@ class Columns(dict):
 # small fixed-point helpers
 # =============================================================================
 
-def round_half_up(x):
-    return np.floor(np.asarray(x, float) + 0.5)
-
-
 def dt_fixed(dt: float) -> tuple[int, int]:
     """dt -> (dt_m, dt_shift) with dt_m in [2^15, 2^16) and dt = dt_m 2^-dt_shift
     (the ac_rate convention; 1/60 s -> 34953, 21).  dt_shift must be 16..46."""
@@ -111,11 +109,6 @@ def _i16(x):
 def _q10(f) -> np.ndarray:
     """m/s^2 -> int32 Q.10 (half up), saturating (used only to feed the fixed engine)."""
     return np.clip(round_half_up(np.asarray(f, float) * 1024.0), -2**31, 2**31 - 1).astype(np.int32)
-
-
-def _ptr(ctype, arr):
-    ffi, _ = _lib()
-    return ffi.cast(ctype, ffi.from_buffer(arr))
 
 
 def atan2_fixed(y, x) -> tuple[np.ndarray, np.ndarray]:
@@ -189,7 +182,7 @@ def triad_apply_fixed(table: TriadTable, raw) -> tuple[np.ndarray, np.ndarray]:
     sat = np.zeros(raw.shape[0], bool)
     fo = ffi.new("int32_t[3]")
     for n in range(raw.shape[0]):
-        sat[n] = _check(lib.ac_triad_apply(t, _ptr("uint16_t *", raw[n]), fo), "ac_triad_apply")
+        sat[n] = _check(lib.ac_triad_apply(t, cptr("uint16_t *", raw[n]), fo), "ac_triad_apply")
         out[n] = (fo[0], fo[1], fo[2])
     return out, sat
 
@@ -352,8 +345,8 @@ def rest_fixed(f_q, p: RestParams, alpha_q=None) -> np.ndarray:
     st = ffi.new("ac_rest *")
     _check(lib.ac_rest_init(st, rest_cfg_fixed(p)), "ac_rest_init")
     flags = np.zeros(f_q.shape[0], np.uint8)
-    ap = ffi.NULL if alpha_q is None else _ptr("int32_t *", np.ascontiguousarray(alpha_q, dtype=np.int32))
-    _check(lib.ac_rest_batch(st, _ptr("int32_t *", f_q), ap, f_q.shape[0], _ptr("uint8_t *", flags)),
+    ap = ffi.NULL if alpha_q is None else cptr("int32_t *", np.ascontiguousarray(alpha_q, dtype=np.int32))
+    _check(lib.ac_rest_batch(st, cptr("int32_t *", f_q), ap, f_q.shape[0], cptr("uint8_t *", flags)),
            "ac_rest_batch")
     return flags
 
@@ -505,7 +498,7 @@ def attitude_fixed(f1_q, f2_q, p: AttitudeParams) -> dict:
     f = np.ascontiguousarray(np.hstack([np.asarray(f1_q, np.int32), np.asarray(f2_q, np.int32)]), dtype=np.int32)
     n = f.shape[0]
     out = ffi.new("ac_att_out[]", max(n, 1))
-    _check(lib.ac_att_batch(st, _ptr("int32_t *", f), n, out), "ac_att_batch")
+    _check(lib.ac_att_batch(st, cptr("int32_t *", f), n, out), "ac_att_batch")
     buf = ffi.buffer(out, ffi.sizeof("ac_att_out") * n)
     dt = np.dtype([("theta", "<i2"), ("w", "<i2"), ("dw", "<i4"), ("w2", "<i4"), ("gmag", "<i4"), ("flags", "u1")],
                   align=True)
@@ -747,7 +740,7 @@ def displace_fixed(f_q, p: DisplaceParams) -> dict:
     cfg = disp_cfg_fixed(p)
     _check(lib.ac_disp_init(st, cfg), "ac_disp_init")
     out = ffi.new("ac_disp_out[]", max(n, 1))
-    _check(lib.ac_disp_batch(st, _ptr("int32_t *", f_q), n, out), "ac_disp_batch")
+    _check(lib.ac_disp_batch(st, cptr("int32_t *", f_q), n, out), "ac_disp_batch")
     fin = ffi.new("ac_disp_out *")
     _check(lib.ac_disp_finish(st, fin), "ac_disp_finish")
     dt = np.dtype([("v", "<i4", 3), ("p", "<i4", 3), ("zp", "<i4", 3), ("nseg", "<u2"), ("flags", "<u2"),
@@ -973,7 +966,7 @@ def rate_rest_fixed(alpha_q, f_q, dt: float, leak_q16: int, rest: RestParams):
     flags = np.zeros(n, np.int64)
     sat = np.zeros(n, bool)
     for i in range(n):
-        sat[i] = _check(lib.ac_rest_rate_step(rs, rt, _ptr("int32_t *", f_q[i]), _ptr("int32_t *", alpha_q[i]),
+        sat[i] = _check(lib.ac_rest_rate_step(rs, rt, cptr("int32_t *", f_q[i]), cptr("int32_t *", alpha_q[i]),
                                               w, fl), "ac_rest_rate_step")
         om[i] = (w[0], w[1], w[2])
         flags[i] = fl[0]

@@ -39,7 +39,8 @@ def check(status: int, context: str) -> bool:
     return status == lib.AC_SATURATED
 
 
-def _ptr(ctype: str, arr: np.ndarray):
+def cptr(ctype: str, arr: np.ndarray):
+    """A C pointer of type ctype into a contiguous numpy array (no copy)."""
     return ffi.cast(ctype, ffi.from_buffer(arr))
 
 
@@ -86,11 +87,11 @@ def process_batch(resolver, trim: np.ndarray, raw: np.ndarray,
         omega_q = np.ascontiguousarray(omega_q, dtype=np.int16)
         if omega_q.shape != (n, 3):
             raise ValueError("omega must be (n, 3)")
-        wp = _ptr("int16_t *", omega_q)
+        wp = cptr("int16_t *", omega_q)
     else:
         wp = ffi.NULL
-    st = lib.ac_process_batch(resolver, _ptr("uint16_t *", trim), _ptr("uint16_t *", raw), n, wp,
-                              _ptr("int32_t *", out), _ptr("uint8_t *", flags))
+    st = lib.ac_process_batch(resolver, cptr("uint16_t *", trim), cptr("uint16_t *", raw), n, wp,
+                              cptr("int32_t *", out), cptr("uint8_t *", flags))
     check(st, "ac_process_batch")
     return out, flags
 
@@ -99,8 +100,8 @@ def resolve_one(resolver, x: np.ndarray, omega_q: np.ndarray | None = None) -> t
     """ac_resolve on one sample of trimmed readings; returns (out (6,), saturated)."""
     x = np.ascontiguousarray(x, dtype=np.int16)
     out = np.zeros(6, dtype=np.int32)
-    wp = ffi.NULL if omega_q is None else _ptr("int16_t *", np.ascontiguousarray(omega_q, dtype=np.int16))
-    sat = check(lib.ac_resolve(resolver, _ptr("int16_t *", x), wp, _ptr("int32_t *", out)), "ac_resolve")
+    wp = ffi.NULL if omega_q is None else cptr("int16_t *", np.ascontiguousarray(omega_q, dtype=np.int16))
+    sat = check(lib.ac_resolve(resolver, cptr("int16_t *", x), wp, cptr("int32_t *", out)), "ac_resolve")
     return out, sat
 
 
