@@ -8,6 +8,7 @@ from core_settings import core
 from hypothesis import assume, given, strategies as st
 
 from accelcal import model, native
+from accelcal.estimators import dt_fixed
 from accelcal._core import ffi, lib
 from accelcal.errors import IllConditionedError, SingularError
 from accelcal.quantize import (FORMATS, QuantizeError, exact_fixed_semantics, quantize,
@@ -224,14 +225,6 @@ def test_build_rejects_bad_sizes():
 
 # ---- rate integrator --------------------------------------------------------
 
-def dt_fixed(dt):
-    frac, ex = math.frexp(dt)
-    dt_m, dt_shift = int(round(frac * 2**16)), 16 - ex
-    if dt_m == 2**16:
-        dt_m, dt_shift = dt_m // 2, dt_shift - 1
-    return dt_m, dt_shift
-
-
 @core
 @given(st.integers(0, 2**32 - 1), st.sampled_from([0, 1, 109, 1000, 65535]),
        st.sampled_from([2.5, 60.0, 100.0, 1000.0]))
@@ -260,5 +253,5 @@ def test_rate_bad_init():
     assert lib.ac_rate_init(stt, 0, 20, 0) == lib.AC_ERR_RANGE
     assert lib.ac_rate_init(stt, 100, 15, 0) == lib.AC_ERR_RANGE
     assert lib.ac_rate_init(ffi.NULL, 100, 20, 0) == lib.AC_ERR_NULL
-    dt_m, dt_shift = dt_fixed(1.0)  # 1 s steps: dt = 2^-15 * 32768 is outside 2^-16 scaling
-    assert lib.ac_rate_init(stt, dt_m, dt_shift, 0) == lib.AC_ERR_RANGE
+    # 1 s steps: dt = 32768 * 2^-15 needs dt_shift 15, below the core's 16
+    assert lib.ac_rate_init(stt, 32768, 15, 0) == lib.AC_ERR_RANGE
