@@ -801,6 +801,15 @@ def displace_error_bound(fixed: dict, twin: dict, three_axis: bool) -> tuple[np.
     return bv, bp
 
 
+def _motion_runs(at_rest, start: int = 0) -> list[tuple[int, int]]:
+    """Maximal runs [s, e) of not-at-rest samples from index start on (e = n when the
+    recording ends in motion)."""
+    moving = ~np.asarray(at_rest, bool)[start:]
+    edges = np.diff(np.concatenate(([0], moving.astype(np.int8), [0])))
+    return [(int(s) + start, int(e) + start)
+            for s, e in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1))]
+
+
 def _segments_from_flags(flags) -> list[tuple[int, int]]:
     """(first moving sample, end sample (rest declared) or -1 if open) from displacement flags."""
     segs, start = [], None
@@ -861,16 +870,7 @@ def displace_offline(f, p: DisplaceParams, rest_flags=None) -> dict:
         return res
     first_rest = int(np.argmax(at))
     # motions: maximal runs of not-at-rest samples after the first rest
-    runs = []
-    i = first_rest
-    while i < n:
-        if at[i]:
-            i += 1
-            continue
-        s = i
-        while i < n and not at[i]:
-            i += 1
-        runs.append((s, i if i < n else -1))
+    runs = [(s, e if e < n else -1) for s, e in _motion_runs(at, first_rest)]
     # the first rest: from the start of its quiet run to the first motion
     rs = first_rest
     while rs > 0 and quiet[rs - 1]:
@@ -1122,21 +1122,14 @@ def _max_rotation_deg(device, cal, rec, at_rest, dt) -> float:
     _, a = model.resolve(cal.offsets, cal.sensitivity, pos, rec.raw, None)
     M = model.resolve_matrix(pos, cal.sensitivity)
     sig_a = float(np.max(np.sqrt(np.sum((M[3:] * device.noise_counts()[None, :]) ** 2, axis=1))))
-    worst, i, n = 0.0, 0, len(at_rest)
-    while i < n:
-        if at_rest[i]:
-            i += 1
-            continue
-        j = i
-        while j < n and not at_rest[j]:
-            j += 1
+    worst = 0.0
+    for i, j in _motion_runs(at_rest):
         w = np.cumsum(a[i:j] * dt, axis=0)
         ang = np.linalg.norm(np.cumsum(w * dt, axis=0), axis=1)
         # noise alone: a double random walk, sigma = sigma_alpha dt^2 sqrt(k^3 / 3) after k steps
         k = np.arange(1, j - i + 1, dtype=float)
         sig = sig_a * dt * dt * np.sqrt(k**3 / 3.0)
         worst = max(worst, float(np.max(np.where(ang > 5.0 * sig, ang, 0.0))))
-        i = j
     return math.degrees(worst)
 
 
