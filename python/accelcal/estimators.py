@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from .errors import AccelcalError, InputError
-from .native import cptr
+from .native import FORMATS, cptr
 from .quantize import round_half_up
 
 __all__ = [
@@ -43,8 +43,8 @@ __all__ = [
     "report_plots",
 ]
 
-OUT_FRAC = 10       # AC_OUT_FRAC: f, alpha Q21.10
-OMEGA_FRAC = 10     # AC_OMEGA_FRAC
+OUT_FRAC = FORMATS.out_frac        # AC_OUT_FRAC: f, alpha (from the compiled core)
+OMEGA_FRAC = FORMATS.omega_frac    # AC_OMEGA_FRAC
 ANGLE_FRAC = 13     # AC_ANGLE_FRAC
 W_FRAC = 20         # AC_ATT_W_FRAC, AC_ATT_W2_FRAC
 A_FRAC, V_FRAC, P_FRAC, ROT_FRAC, G_FRAC = 16, 24, 20, 14, 16
