@@ -31,8 +31,17 @@ typedef struct ac_u64 {
 #endif
 #endif
 
+/* Small helpers on the per-sample path are always inlined where the compiler
+ * can be told so: avr-gcc otherwise calls them (and spills around the call)
+ * once a function uses them twice. */
+#if defined(__GNUC__) && __GNUC__ >= 4
+#define AC_ALWAYS_INLINE static inline __attribute__((always_inline))
+#else
+#define AC_ALWAYS_INLINE static inline
+#endif
+
 #if AC_INLINE_HELPERS
-#define AC_HELPER static inline
+#define AC_HELPER AC_ALWAYS_INLINE
 #include "ac_ops_impl.h"
 #else
 /* Combine two statuses: the first error wins, otherwise any saturation. */
@@ -90,7 +99,7 @@ uint8_t ac_bitlen_u(uint32_t u);
  * accumulate is the Atmel AVR201 sequence (muls/mulsu/mul into the accumulator),
  * about a third of the cycles of avr-gcc's __mulhisi3 call plus a 32-bit add;
  * elsewhere plain C, which compilers turn into one widening multiply. */
-static inline uint32_t ac_mac16(uint32_t acc, int16_t a, int16_t b)
+AC_ALWAYS_INLINE uint32_t ac_mac16(uint32_t acc, int16_t a, int16_t b)
 {
 #if defined(__AVR__) && defined(__AVR_HAVE_MUL__) && !defined(AC_NO_ASM)
     uint8_t zero;
@@ -120,6 +129,109 @@ static inline uint32_t ac_mac16(uint32_t acc, int16_t a, int16_t b)
     return acc;
 #else
     return acc + (uint32_t)((int32_t)a * b);
+#endif
+}
+
+/* acc + sum_{i<n} a[i] b[i] (16 x 16 -> 32 each, wrapping in uint32), n >= 1.
+ * On AVR the whole loop is one asm block around the AVR201 multiply-
+ * accumulate: operands stream through X and Z with post-increment, nothing
+ * is spilled, about 33 cycles an element against ~60 for the C loop that
+ * avr-gcc makes of ac_mac16.  Elsewhere plain C. */
+AC_ALWAYS_INLINE uint32_t ac_dot16(uint32_t acc, const int16_t *a, const int16_t *b, uint8_t n)
+{
+#if defined(__AVR__) && defined(__AVR_HAVE_MUL__) && !defined(AC_NO_ASM)
+    uint8_t zero;
+    int16_t ta, tb;
+    __asm__("clr  %[z]          \n\t"
+            "1:                 \n\t"
+            "ld   %A[ta], X+    \n\t"
+            "ld   %B[ta], X+    \n\t"
+            "ld   %A[tb], Z+    \n\t"
+            "ld   %B[tb], Z+    \n\t"
+            "muls %B[ta], %B[tb] \n\t"
+            "add  %C[acc], r0   \n\t"
+            "adc  %D[acc], r1   \n\t"
+            "mul  %A[ta], %A[tb] \n\t"
+            "add  %A[acc], r0   \n\t"
+            "adc  %B[acc], r1   \n\t"
+            "adc  %C[acc], %[z] \n\t"
+            "adc  %D[acc], %[z] \n\t"
+            "mulsu %B[ta], %A[tb] \n\t"
+            "sbc  %D[acc], %[z] \n\t"
+            "add  %B[acc], r0   \n\t"
+            "adc  %C[acc], r1   \n\t"
+            "adc  %D[acc], %[z] \n\t"
+            "mulsu %B[tb], %A[ta] \n\t"
+            "sbc  %D[acc], %[z] \n\t"
+            "add  %B[acc], r0   \n\t"
+            "adc  %C[acc], r1   \n\t"
+            "adc  %D[acc], %[z] \n\t"
+            "dec  %[n]          \n\t"
+            "brne 1b            \n\t"
+            "clr  r1            \n\t"
+            : [acc] "+r"(acc), [n] "+r"(n), [z] "=&r"(zero), [ta] "=&a"(ta), [tb] "=&a"(tb),
+              "+x"(a), "+z"(b)
+            :
+            : "r0", "r1", "memory");
+    return acc;
+#else
+    do {
+        acc = ac_mac16(acc, *a++, *b++);
+    } while (--n != 0u);
+    return acc;
+#endif
+}
+
+/* ac_dot16 that skips the terms whose a[i] is zero: the centripetal table of
+ * a planar layout (the seed's) has whole zero columns, a third of its terms.
+ * Elsewhere the plain loop (a branch there costs more than it saves). */
+AC_ALWAYS_INLINE uint32_t ac_dot16_sparse(uint32_t acc, const int16_t *a, const int16_t *b,
+                                          uint8_t n)
+{
+#if defined(__AVR__) && defined(__AVR_HAVE_MUL__) && !defined(AC_NO_ASM)
+    uint8_t zero;
+    int16_t ta, tb;
+    __asm__("clr  %[z]          \n\t"
+            "1:                 \n\t"
+            "ld   %A[ta], X+    \n\t"
+            "ld   %B[ta], X+    \n\t"
+            "mov  r0, %A[ta]    \n\t"
+            "or   r0, %B[ta]    \n\t"
+            "brne 2f            \n\t"
+            "adiw r30, 2        \n\t"
+            "rjmp 3f            \n\t"
+            "2:                 \n\t"
+            "ld   %A[tb], Z+    \n\t"
+            "ld   %B[tb], Z+    \n\t"
+            "muls %B[ta], %B[tb] \n\t"
+            "add  %C[acc], r0   \n\t"
+            "adc  %D[acc], r1   \n\t"
+            "mul  %A[ta], %A[tb] \n\t"
+            "add  %A[acc], r0   \n\t"
+            "adc  %B[acc], r1   \n\t"
+            "adc  %C[acc], %[z] \n\t"
+            "adc  %D[acc], %[z] \n\t"
+            "mulsu %B[ta], %A[tb] \n\t"
+            "sbc  %D[acc], %[z] \n\t"
+            "add  %B[acc], r0   \n\t"
+            "adc  %C[acc], r1   \n\t"
+            "adc  %D[acc], %[z] \n\t"
+            "mulsu %B[tb], %A[ta] \n\t"
+            "sbc  %D[acc], %[z] \n\t"
+            "add  %B[acc], r0   \n\t"
+            "adc  %C[acc], r1   \n\t"
+            "adc  %D[acc], %[z] \n\t"
+            "3:                 \n\t"
+            "dec  %[n]          \n\t"
+            "brne 1b            \n\t"
+            "clr  r1            \n\t"
+            : [acc] "+r"(acc), [n] "+r"(n), [z] "=&r"(zero), [ta] "=&a"(ta), [tb] "=&a"(tb),
+              "+x"(a), "+z"(b)
+            :
+            : "r0", "r1", "memory");
+    return acc;
+#else
+    return ac_dot16(acc, a, b, n);
 #endif
 }
 

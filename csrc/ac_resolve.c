@@ -69,62 +69,48 @@ static ac_status resolve_checked(const ac_resolver *r, const int16_t *x, const i
                                  int32_t *out)
 {
     uint8_t sat = 0u;
-    uint8_t j, q;
-    uint16_t i;
+    uint8_t j;
+    const uint8_t n = (uint8_t)r->n;
     int16_t p[6];
-    uint8_t s = 0u;
+    int16_t d0 = 0; /* s - 2 AC_OMEGA_FRAC: the exponent of p */
 
     if (omega != 0) {
+        const int16_t wx = omega[0], wy = omega[1], wz = omega[2];
         int32_t sq[6];
-        uint8_t len;
-        int32_t maxsq;
-        sq[0] = (int32_t)omega[0] * omega[0];
-        sq[1] = (int32_t)omega[1] * omega[1];
-        sq[2] = (int32_t)omega[2] * omega[2];
-        sq[3] = (int32_t)omega[0] * omega[1];
-        sq[4] = (int32_t)omega[1] * omega[2];
-        sq[5] = (int32_t)omega[2] * omega[0];
+        uint32_t maxsq;
+        uint8_t s, q;
+        sq[0] = ac_i_from_u(ac_mac16(0u, wx, wx));
+        sq[1] = ac_i_from_u(ac_mac16(0u, wy, wy));
+        sq[2] = ac_i_from_u(ac_mac16(0u, wz, wz));
+        sq[3] = ac_i_from_u(ac_mac16(0u, wx, wy));
+        sq[4] = ac_i_from_u(ac_mac16(0u, wy, wz));
+        sq[5] = ac_i_from_u(ac_mac16(0u, wz, wx));
         /* |w_a w_b| <= max(w_a^2, w_b^2): one block exponent for all six */
-        maxsq = sq[0];
-        if (sq[1] > maxsq) {
-            maxsq = sq[1];
+        maxsq = (uint32_t)sq[0];
+        if ((uint32_t)sq[1] > maxsq) {
+            maxsq = (uint32_t)sq[1];
         }
-        if (sq[2] > maxsq) {
-            maxsq = sq[2];
+        if ((uint32_t)sq[2] > maxsq) {
+            maxsq = (uint32_t)sq[2];
         }
-        len = ac_bitlen_u((uint32_t)maxsq);
-        s = (len > 14u) ? (uint8_t)(len - 14u) : 0u;
+        s = ac_bitlen_u(maxsq);
+        s = (s > 14u) ? (uint8_t)(s - 14u) : 0u;
         for (q = 0u; q < 6u; q++) {
             /* |p| <= 2^14 after rounding: fits int16 */
-            p[q] = (int16_t)ac_scale_round(sq[q], (int16_t)s, &sat);
+            p[q] = (int16_t)((s != 0u) ? ac_round_shift(sq[q], s) : sq[q]);
         }
+        d0 = (int16_t)((int16_t)s - 2 * AC_OMEGA_FRAC);
     }
 
     for (j = 0u; j < 6u; j++) {
-        uint32_t uacc = 0u;
-        int32_t acc;
-        const int16_t *mp = r->m[j];
-        const int16_t *xp = x;
         /* row L1 <= 65535 and |x| <= 32768 keep every partial sum in int32 */
-        for (i = r->n; i != 0u; i--) {
-            uacc = ac_mac16(uacc, *mp++, *xp++);
-        }
-        acc = ac_sat_sub(ac_i_from_u(uacc), r->k[j], &sat);
+        int32_t acc = ac_sat_sub(ac_i_from_u(ac_dot16(0u, r->m[j], x, n)), r->k[j], &sat);
         if (omega != 0) {
-            uint32_t ut = 0u;
-            const int16_t *gp = r->g[j];
-            int16_t d;
-            int32_t t;
-            uint8_t tsat;
-            for (q = 0u; q < 6u; q++) {
-                if (gp[q] != 0) { /* planar layouts leave whole columns zero */
-                    ut = ac_mac16(ut, gp[q], p[q]);
-                }
-            }
             /* T (units 2^(s - 2 W - g_shift) LSB) -> accumulator units 2^-m_shift LSB */
-            d = (int16_t)((int16_t)s - 2 * AC_OMEGA_FRAC - r->g_shift[j] + r->m_shift[j]);
-            tsat = 0u;
-            t = ac_scale_round(ac_i_from_u(ut), (int16_t)-d, &tsat);
+            int32_t t = ac_i_from_u(ac_dot16_sparse(0u, r->g[j], p, 6u));
+            int16_t d = (int16_t)(d0 - r->g_shift[j] + r->m_shift[j]);
+            uint8_t tsat = 0u;
+            t = ac_scale_round(t, (int16_t)-d, &tsat);
             if (tsat != 0u) {
                 /* the centripetal term alone exceeds int32 accumulator units: it
                  * dominates, so the output clips in its (negated) direction */

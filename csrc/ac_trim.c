@@ -13,8 +13,25 @@ ac_status ac_trim(const uint16_t *raw, const uint16_t *trim, uint16_t n, int16_t
         return AC_ERR_SIZE;
     }
     for (i = 0u; i < n; i++) {
-        /* int32 keeps the difference exact where int is 16 bits */
-        x[i] = ac_sat_to16((int32_t)raw[i] - (int32_t)trim[i], &sat);
+        /* in 16 bits (one register pair on 8- and 16-bit cores): the
+         * difference is in int16 iff it is below 2^15 in magnitude */
+        uint16_t r = raw[i], t = trim[i];
+        if (r >= t) {
+            uint16_t d = (uint16_t)(r - t);
+            if (d > 32767u) {
+                d = 32767u;
+                sat = 1u;
+            }
+            x[i] = (int16_t)d;
+        } else {
+            uint16_t d = (uint16_t)(t - r);
+            if (d > 32768u) {
+                d = 32768u;
+                sat = 1u;
+            }
+            /* -d = -(d - 1) - 1, where d - 1 <= 32767 fits int16 */
+            x[i] = (int16_t)(-(int16_t)(d - 1u) - 1);
+        }
     }
     return sat ? AC_SATURATED : AC_OK;
 }

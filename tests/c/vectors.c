@@ -222,6 +222,41 @@ static union {
 
 /* ---- fixed ----------------------------------------------------------------------- */
 
+/* every rounding shift at its edges: the values around 0, +-2^(n-1) (the
+ * rounding ties) and the int32 limits, for each shift 1..31 and a few left
+ * shifts; AVR has its own assembly for these, the host plain C */
+static void vec_shift_edges(void)
+{
+    int16_t sh;
+    for (sh = -3; sh <= 31; sh++) {
+        uint32_t half = (sh > 0) ? (uint32_t)1u << (uint8_t)(sh - 1) : 1u;
+        int32_t v[12];
+        uint8_t k;
+        v[0] = INT32_MIN;
+        v[1] = INT32_MIN + 1;
+        v[2] = -(int32_t)(half - 1u) - 2;
+        v[3] = -(int32_t)(half - 1u) - 1; /* -half */
+        v[4] = -(int32_t)(half - 1u);
+        v[5] = -1;
+        v[6] = 0;
+        v[7] = 1;
+        v[8] = (int32_t)(half - 1u);
+        v[9] = (int32_t)half;
+        v[10] = (int32_t)(half | (half << 1u)) & INT32_MAX;
+        v[11] = INT32_MAX;
+        for (k = 0u; k < 12u; k++) {
+            int32_t o32 = 0;
+            ac_status s = ac_scale_round32(v[k], sh, &o32);
+            TAG("SCE");
+            h32(v[k]);
+            h16(sh);
+            st(s);
+            h32(o32);
+            nl();
+        }
+    }
+}
+
 static void vec_fixed(void)
 {
     uint16_t i;
@@ -935,6 +970,7 @@ int main(void)
     ac_test_platform_init();
     OUT_S("BEGIN accelcal-vectors 1\n");
     framing = 1u;
+    vec_shift_edges();
     vec_fixed();
     vec_xf();
     vec_trim();
