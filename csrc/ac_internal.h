@@ -14,6 +14,7 @@
 #include "accelcal/ac_config.h"
 #include "accelcal/ac_status.h"
 #include "accelcal/ac_fixed.h"
+#include "accelcal/ac_resolve.h"
 
 /* Unsigned 64-bit value as two halves. */
 typedef struct ac_u64 {
@@ -43,6 +44,7 @@ typedef struct ac_u64 {
 #if AC_INLINE_HELPERS
 #define AC_HELPER AC_ALWAYS_INLINE
 #include "ac_ops_impl.h"
+#include "ac_u64_impl.h"
 #else
 /* Combine two statuses: the first error wins, otherwise any saturation. */
 ac_status ac_merge(ac_status a, ac_status b);
@@ -73,6 +75,8 @@ int16_t ac_sat_to16(int32_t v, uint8_t *sat);
 
 /* v * 2^-shift, half up for shift > 0, exact (saturating) for shift <= 0. */
 int32_t ac_scale_round(int32_t v, int16_t shift, uint8_t *sat);
+
+/* ---- ac_ops64.c (ac_u64_impl.h) ---- */
 
 /* 16 x 16 -> 32 unsigned: the widening multiply every target has. */
 uint32_t ac_mul16u(uint16_t a, uint16_t b);
@@ -234,5 +238,14 @@ AC_ALWAYS_INLINE uint32_t ac_dot16_sparse(uint32_t acc, const int16_t *a, const 
     return ac_dot16(acc, a, b, n);
 #endif
 }
+
+/* ac_resolve.c: AC_OK if the table's n and shifts are in range (the cheap
+ * part of ac_resolver_check, done on every call). */
+ac_status ac_resolver_shape(const ac_resolver *r);
+
+/* ac_resolve.c's per-sample arithmetic on trimmed readings, for a table whose
+ * shape (n, shifts) has been checked; shared with ac_resolve_batch.c. */
+ac_status ac_resolve_kernel(const ac_resolver *r, const int16_t *x, const int16_t *omega,
+                            int32_t *out);
 
 #endif /* AC_INTERNAL_H */

@@ -3,49 +3,13 @@
 #include "accelcal/ac_trim.h"
 #include "ac_internal.h"
 
-#define ROW_L1_MAX 65535L
-
 static int shift_ok(int8_t s)
 {
     return s >= -31 && s <= 31;
 }
 
-ac_status ac_resolver_check(const ac_resolver *r)
-{
-    uint8_t j;
-    uint16_t i;
-    if (r == 0) {
-        return AC_ERR_NULL;
-    }
-    if (r->n < 6u || r->n > (uint16_t)AC_MAX_CHANNELS) {
-        return AC_ERR_SIZE;
-    }
-    for (j = 0u; j < 6u; j++) {
-        int32_t l1 = 0;
-        if (!shift_ok(r->m_shift[j]) || !shift_ok(r->g_shift[j])) {
-            return AC_ERR_FORMAT;
-        }
-        for (i = 0u; i < r->n; i++) {
-            int16_t v = r->m[j][i];
-            l1 += (v < 0) ? -(int32_t)v : (int32_t)v;
-        }
-        if (l1 > ROW_L1_MAX) {
-            return AC_ERR_FORMAT;
-        }
-        l1 = 0;
-        for (i = 0u; i < 6u; i++) {
-            int16_t v = r->g[j][i];
-            l1 += (v < 0) ? -(int32_t)v : (int32_t)v;
-        }
-        if (l1 > ROW_L1_MAX) {
-            return AC_ERR_FORMAT;
-        }
-    }
-    return AC_OK;
-}
-
 /* Cheap per-call checks; the row sums are ac_resolver_check's job (once per table). */
-static ac_status resolver_shape_ok(const ac_resolver *r)
+ac_status ac_resolver_shape(const ac_resolver *r)
 {
     uint8_t j;
     if (r == 0) {
@@ -65,8 +29,8 @@ static ac_status resolver_shape_ok(const ac_resolver *r)
 /* The per-sample arithmetic.  With a table that passed ac_resolver_check the
  * sums below cannot overflow; they are done in uint32 (defined wrap-around) so
  * that even an unchecked, corrupt table cannot cause undefined behaviour. */
-static ac_status resolve_checked(const ac_resolver *r, const int16_t *x, const int16_t *omega,
-                                 int32_t *out)
+ac_status ac_resolve_kernel(const ac_resolver *r, const int16_t *x, const int16_t *omega,
+                            int32_t *out)
 {
     uint8_t sat = 0u;
     uint8_t j;
@@ -131,11 +95,11 @@ ac_status ac_resolve(const ac_resolver *r, const int16_t *x, const int16_t *omeg
     if (x == 0 || out == 0) {
         return AC_ERR_NULL;
     }
-    st = resolver_shape_ok(r);
+    st = ac_resolver_shape(r);
     if (st != AC_OK) {
         return st;
     }
-    return resolve_checked(r, x, omega, out);
+    return ac_resolve_kernel(r, x, omega, out);
 }
 
 ac_status ac_process(const ac_resolver *r, const uint16_t *trim, const uint16_t *raw,
@@ -146,7 +110,7 @@ ac_status ac_process(const ac_resolver *r, const uint16_t *trim, const uint16_t 
     if (raw == 0 || trim == 0 || out == 0) {
         return AC_ERR_NULL;
     }
-    st = resolver_shape_ok(r);
+    st = ac_resolver_shape(r);
     if (st != AC_OK) {
         return st;
     }
@@ -154,43 +118,5 @@ ac_status ac_process(const ac_resolver *r, const uint16_t *trim, const uint16_t 
     if (st_trim < 0) {
         return st_trim;
     }
-    return ac_merge(st_trim, resolve_checked(r, x, omega, out));
-}
-
-ac_status ac_process_batch(const ac_resolver *r, const uint16_t *trim, const uint16_t *raw,
-                           uint32_t count, const int16_t *omega, int32_t *out, uint8_t *flags)
-{
-    int16_t x[AC_MAX_CHANNELS];
-    ac_status st, any = AC_OK;
-    uint32_t k;
-    if (raw == 0 || trim == 0 || out == 0) {
-        return AC_ERR_NULL;
-    }
-    st = ac_resolver_check(r);
-    if (st != AC_OK) {
-        return st;
-    }
-    for (k = 0u; k < count; k++) {
-        uint8_t f = 0u;
-        ac_status s1 = ac_trim(raw, trim, r->n, x);
-        ac_status s2 = resolve_checked(r, x, omega, out);
-        if (s1 == AC_SATURATED) {
-            f |= AC_FLAG_TRIM_SAT;
-        }
-        if (s2 == AC_SATURATED) {
-            f |= AC_FLAG_OUT_SAT;
-        }
-        if (f != 0u) {
-            any = AC_SATURATED;
-        }
-        if (flags != 0) {
-            flags[k] = f;
-        }
-        raw += r->n;
-        out += 6;
-        if (omega != 0) {
-            omega += 3;
-        }
-    }
-    return any;
+    return ac_merge(st_trim, ac_resolve_kernel(r, x, omega, out));
 }
