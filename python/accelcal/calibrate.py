@@ -19,6 +19,25 @@ Known poses (f_p given): per-channel weighted least squares, closed form.  A pos
 set that cannot determine a parameter raises :class:`InputError` naming the
 channel and the pose to add.
 
+Jig accuracy (known poses): a real jig holds pose p not at the stated f_p but
+rotated from it by a small error delta_p.  ``jig_accuracy_deg`` = theta states
+the rms angle of that rotation (about a random axis; each axis component of
+delta_p then has rms theta/sqrt(3)).  To first order the reading of channel i
+moves by s_i . (delta_p x f_p), of variance (theta^2/3) |s_i x f_p|^2, so each
+(pose, channel) is weighted by
+
+    1 / (sigma_pi^2 + (theta^2/3) |s_i x f_p|^2)        sigma_pi: 1-sigma of the pose mean
+
+(JIG_PASSES passes, s_i from the previous one; the nominal s_i to start).  A
+pose along a channel's own axis (s_i x f_p small) then dominates its offset:
+for the six poses +-x, +-y, +-z and jig errors well above the noise, channel i's
+offset comes from the +-i pair (as in Ferraris's method), instead of absorbing
+g sin(error) from the four cross poses.  theta = 0 (the default) is ordinary
+weighted least squares, efficient (at the Cramer-Rao bound) when the references
+are exact.  The same variance enters the covariance and chi^2, so stated jig
+errors no longer show up as a Birge inflation.  Jig-free fits ignore it (they
+use no reference).
+
 Jig-free (f_p unknown, ``|f_p| = g``): one nonlinear least-squares problem over
 the channel parameters and two tangent-plane angles per pose (Levenberg-Marquardt
 with an analytic Jacobian), started from an offset + gain fit.  It needs at
@@ -99,6 +118,12 @@ MIN_RCOND_JAC = 1e-4       # nonlinear fits: column-normalised Jacobian with a s
 TEMP_MIN_SPAN_C = 1.0      # fit temperature coefficients when pose temperatures span this much
 ROTATION_MIN_RADPS = 0.05  # samples with |w| above this count as rotating (lever-arm data)
 POSITION_TOL_M = 1e-3      # a lever-arm direction is "observable" when its 1-sigma is below this
+
+JIG_ACCURACY_DEG = 0.0     # stated jig accuracy of known poses (rms rotation angle of a pose error, deg):
+                           # 0 = the references are exact (ordinary weighted least squares); see _jig_sigma
+JIG_PASSES = 3             # weighted passes when the jig accuracy is nonzero (the weights use the estimated s_i)
+JIG_HINT_CHI2 = 4.0        # known poses with jig accuracy 0: above this chi2/dof, report the jig accuracy
+                           # that would explain the scatter (chi2/dof = 1); the CLI prints it as a warning
 
 _QUANT_VAR = 1.0 / 12.0    # variance of rounding to integer counts
 
@@ -435,6 +460,8 @@ class StaticFit:
     offset_tc: np.ndarray | None = None
     gain_tc: np.ndarray | None = None
     pose_cov: np.ndarray | None = None   # (P, 2, 2) tangent-plane covariance of estimated pose directions (rad^2)
+    jig_accuracy_deg: float = 0.0        # stated jig accuracy the known-pose weights assumed (0: exact references)
+    jig_hint_deg: float | None = None    # jig accuracy 0 but chi2/dof > JIG_HINT_CHI2: the one that gives chi2/dof = 1
 
     @property
     def offset_sigma(self) -> np.ndarray:
@@ -568,38 +595,67 @@ def _identifiability(device, method: str, F: np.ndarray, min_rcond: float) -> No
                          f"pose with f along {add} (body {add} axis up)", field="poses")
 
 
+def jig_accuracy_rad(jig_accuracy_deg: Any) -> float:
+    """Validate a stated jig accuracy (degrees, finite, >= 0) and return it in radians."""
+    try:
+        v = float(jig_accuracy_deg)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if not (math.isfinite(v) and v >= 0.0):
+        raise InputError("<arguments>", f"jig accuracy must be a finite angle >= 0 degrees, got {jig_accuracy_deg!r}",
+                         field="jig_accuracy_deg")
+    return math.radians(v)
+
+
+def _jig_sigma(sigma: np.ndarray, S: np.ndarray, F: np.ndarray, jig_rad: float) -> np.ndarray:
+    """(P,N) 1-sigma of each pose mean with a jig error of rms rotation angle jig_rad:
+    sqrt(sigma_pi^2 + (jig_rad^2 / 3) |s_i x f_p|^2) (first order; see the module notes)."""
+    cr = np.cross(np.asarray(S, float)[None, :, :], np.asarray(F, float)[:, None, :])     # (P,N,3)
+    return np.sqrt(np.asarray(sigma, float) ** 2 + (jig_rad ** 2 / 3.0) * np.sum(cr * cr, axis=2))
+
+
 def _birge(chi2: float, dof: int) -> float:
     return max(1.0, chi2 / dof) if dof > 0 else 1.0
 
 
 def calibrate_known_poses(device, means, f_ref=None, method: str = "full", sigma=None, *,
-                          min_rcond: float = MIN_RCOND):
+                          min_rcond: float = MIN_RCOND, jig_accuracy_deg: float = JIG_ACCURACY_DEG):
     """Known-pose calibration (seed paper eqs. 16-19; seed doc 2's 1- and 3-pose
     methods as ``offset`` and ``gain``) -> Calibration.
 
     ``means``: a PoseSet (its f_ref is used when ``f_ref`` is None, its within-pose
     scatter for the weights) or a (P,N) array of pose means in counts with ``f_ref``
-    (P,3) m/s^2.  See :func:`fit_known_poses`."""
+    (P,3) m/s^2.  ``jig_accuracy_deg``: rms rotation angle of the pose errors (see
+    the module notes).  See :func:`fit_known_poses`."""
     poses = means if isinstance(means, PoseSet) else None
     m = poses.means if poses is not None else means
     F = poses.f_ref if (poses is not None and f_ref is None) else f_ref
     if F is None:
         raise ValueError("calibrate_known_poses: f_ref is required with a means array")
-    fit = fit_known_poses(device, m, F, method, sigma, poses=poses, min_rcond=min_rcond)
+    fit = fit_known_poses(device, m, F, method, sigma, poses=poses, min_rcond=min_rcond,
+                          jig_accuracy_deg=jig_accuracy_deg)
     return to_calibration(device, fit, method)
 
 
 def fit_known_poses(device, means, f_ref, method: str = "full", sigma=None, *,
-                    poses: PoseSet | None = None, min_rcond: float = MIN_RCOND) -> StaticFit:
+                    poses: PoseSet | None = None, min_rcond: float = MIN_RCOND,
+                    jig_accuracy_deg: float = JIG_ACCURACY_DEG) -> StaticFit:
     """Per-channel weighted least squares for b_i (and k_i or s_i) from P known poses.
 
     means (P,N) counts, f_ref (P,3) m/s^2, sigma (P,N) 1-sigma of each mean (counts;
     default: ``poses.sem()`` when ``poses`` is given, else equal weights and the
-    covariance from the residuals).  Raises InputError (which pose to add) when the
-    poses cannot determine a free parameter.  Returns a :class:`StaticFit`.
+    covariance from the residuals).  ``jig_accuracy_deg`` (theta, default
+    JIG_ACCURACY_DEG = 0): the references are uncertain by a pose rotation of rms
+    angle theta; each (pose, channel) is then weighted by 1/(sigma_pi^2 + (theta^2/3)
+    |s_i x f_p|^2) over JIG_PASSES passes, and that variance enters the covariance
+    and chi^2 (module notes).  Without sigma the noise part is the rounding floor
+    1/12 count^2 and the covariance is inflated by chi2/dof when > 1.  Raises
+    InputError (which pose to add) when the poses cannot determine a free
+    parameter.  Returns a :class:`StaticFit`.
     """
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
+    jig = jig_accuracy_rad(jig_accuracy_deg)
     m = _as_means(device, means)
     F = np.asarray(f_ref, float)
     if F.shape != (m.shape[0], 3):
@@ -613,26 +669,30 @@ def fit_known_poses(device, means, f_ref, method: str = "full", sigma=None, *,
         sigma = poses.sem()
     _identifiability(device, method, F, min_rcond)
     P, N = m.shape
+    # with a stated jig accuracy the variance model is absolute even without sigma
+    # (noise floor: rounding), so chi2 counts and the covariance gets the Birge rule
+    sigma_known = sigma is not None or jig > 0
+    sig = (np.asarray(sigma, float) if sigma is not None else np.full((P, N), math.sqrt(_QUANT_VAR))) \
+        if sigma_known else None
     k_nom = device.counts_per_mps2
     offsets = np.empty(N)
     sens = np.empty((N, 3))
     cov = np.zeros((N, 6, 6))
     resid = np.empty((P, N))
     chi2_tot, dof_tot = 0.0, 0
+    passes = JIG_PASSES if (jig > 0 and method != "offset") else 1
     for i in range(N):
         A = _design(method, device, i, F)
         y = m[:, i].copy()
         if method == "offset":
             y -= F @ (k_nom[i] * device.axes[i])
-        w = np.ones(P) if sigma is None else 1.0 / np.asarray(sigma, float)[:, i]
-        Aw = A * w[:, None]
-        x, *_ = np.linalg.lstsq(Aw, y * w, rcond=None)
+        x, w, Aw = _solve_channel(device, method, i, A, y, F, None if sig is None else sig[:, i], jig, passes)
         r = y - A @ x
         q = A.shape[1]
         dof = P - q
         chi2 = float(np.sum((r * w) ** 2))
         C = np.linalg.inv(Aw.T @ Aw)
-        if sigma is None:
+        if not sigma_known:
             C *= chi2 / dof if dof > 0 else np.nan
         else:
             C *= _birge(chi2, dof)
@@ -653,8 +713,67 @@ def fit_known_poses(device, means, f_ref, method: str = "full", sigma=None, *,
             cov[i, :4, :4] = C
         resid[:, i] = r
     ps = poses if poses is not None else _bare_poses(m, F)
+    hint = None
+    if jig == 0 and sigma_known and dof_tot > 0 and chi2_tot / dof_tot > JIG_HINT_CHI2:
+        hint = _implied_jig_deg(device, method, m, F, sig, k_nom)
     return StaticFit(method=method, jigfree=False, offsets=offsets, sensitivity=sens, f=F.copy(), cov=cov,
-                     residual=resid, chi2=chi2_tot, dof=dof_tot, poses=ps)
+                     residual=resid, chi2=chi2_tot, dof=dof_tot, poses=ps,
+                     jig_accuracy_deg=math.degrees(jig), jig_hint_deg=hint)
+
+
+def _solve_channel(device, method, i, A, y, F, sig_i, jig, passes):
+    """Weighted least squares of one channel: (x, w, A w).  sig_i (P,) 1-sigma of the
+    pose means (None: equal weights); with jig > 0 (rad) the weights include the jig
+    term with s_i from the previous pass (the nominal s_i in the first)."""
+    s_i = device.nominal_sensitivity()[i]
+    for _ in range(passes):
+        if sig_i is None:
+            w = np.ones(A.shape[0])
+        elif jig > 0:
+            w = 1.0 / _jig_sigma(sig_i[:, None], s_i[None, :], F, jig)[:, 0]
+        else:
+            w = 1.0 / sig_i
+        Aw = A * w[:, None]
+        x, *_ = np.linalg.lstsq(Aw, y * w, rcond=None)
+        if method == "gain":
+            s_i = x[1] * device.axes[i]
+        elif method == "full":
+            s_i = x[1:]
+    return x, w, Aw
+
+
+def _implied_jig_deg(device, method, m, F, sig, k_nom) -> float | None:
+    """The jig accuracy (deg) at which the known-pose fit's chi2/dof is 1: what pose
+    errors alone would explain the scatter of the poses about the fit (bisection
+    on a log scale; None when even 30 deg leaves chi2/dof > 1, i.e. not a jig error)."""
+    P, N = m.shape
+    passes = JIG_PASSES if method != "offset" else 1
+    systems = []
+    for i in range(N):
+        A = _design(method, device, i, F)
+        y = m[:, i] - (F @ (k_nom[i] * device.axes[i]) if method == "offset" else 0.0)
+        systems.append((i, A, y))
+    dof = sum(P - A.shape[1] for _, A, _ in systems)
+
+    def chi2_per_dof(deg: float) -> float:
+        tot = 0.0
+        for i, A, y in systems:
+            x, w, _ = _solve_channel(device, method, i, A, y, F, sig[:, i], math.radians(deg), passes)
+            tot += float(np.sum(((y - A @ x) * w) ** 2))
+        return tot / dof
+
+    lo, hi = 1e-4, 30.0
+    if chi2_per_dof(hi) > 1.0:
+        return None
+    for _ in range(40):
+        mid = math.sqrt(lo * hi)
+        if chi2_per_dof(mid) > 1.0:
+            lo = mid
+        else:
+            hi = mid
+        if hi / lo < 1.01:
+            break
+    return float(math.sqrt(lo * hi))
 
 
 def _bare_poses(m: np.ndarray, F: np.ndarray | None = None) -> PoseSet:
@@ -866,19 +985,25 @@ def _missing_direction(device, F: np.ndarray) -> str:
 
 def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, temperature: bool = False,
                sigma: np.ndarray | None = None, f_init: np.ndarray | None = None,
-               min_rcond: float = MIN_RCOND) -> StaticFit:
+               min_rcond: float = MIN_RCOND, jig_accuracy_deg: float = JIG_ACCURACY_DEG) -> StaticFit:
     """Nonlinear static fit: channel parameters (``method``), optionally temperature
     coefficients beta_i (counts/degC) and gamma_i (1/degC) about T0 = mean pose
     temperature, and, with ``jigfree``, the pose directions under |f| = g (gauge:
-    see the module notes).  Known poses use ``poses.f_ref``.
+    see the module notes).  Known poses use ``poses.f_ref``, uncertain by
+    ``jig_accuracy_deg`` (weights as in :func:`fit_known_poses`; ignored jig-free).
     """
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
+    jig = 0.0 if jigfree else jig_accuracy_rad(jig_accuracy_deg)
     m = _as_means(device, poses.means)
     P, N = m.shape
     # bare means (no within-pose scatter, no sigma): equal weights, covariance from the residuals
+    # (with a stated jig accuracy: the rounding floor as the noise, and the Birge rule)
     sigma_known = sigma is not None or bool(np.any(poses.n > 1))
     sig = np.asarray(sigma, float) if sigma is not None else (poses.sem() if sigma_known else np.ones((P, N)))
+    if jig > 0 and not sigma_known:
+        sig = np.full((P, N), math.sqrt(_QUANT_VAR))
+        sigma_known = True
     g = device.gravity_mps2
     dT = None
     T0 = None
@@ -910,9 +1035,12 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
                              f"{spread:.1f} deg of each other); jig-free calibration needs poses spread over the "
                              f"sphere (e.g. add f along {_missing_direction(device, F)})", field="poses")
     gauge = jigfree and method == "full"
-    prob = _StaticProblem(device, method, m, sig, dT, jigfree, None if jigfree else F)
+    sig_noise = sig
     b0 = device.nominal_offsets()
     s0 = device.nominal_sensitivity()
+    if jig > 0:
+        sig = _jig_sigma(sig_noise, s0, F, jig)
+    prob = _StaticProblem(device, method, m, sig, dT, jigfree, None if jigfree else F)
     if jigfree:
         if method != "offset":
             # start: offsets and gains along the nominal axes with free poses (no gauge
@@ -929,6 +1057,11 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
     if _constrained_inverse(prob.jacobian(x0), None) is None:     # gauge already fixed in prob
         raise undetermined()
     x, converged = _levenberg_marquardt(prob.residual, prob.jacobian, x0)
+    for _ in range(JIG_PASSES - 1 if (jig > 0 and method != "offset" and converged) else 0):
+        # reweight with the estimated s_i (module notes: jig accuracy)
+        sig = _jig_sigma(sig_noise, prob.unpack(x)[1], F, jig)
+        prob = _StaticProblem(device, method, m, sig, dT, jigfree, F)
+        x, converged = _levenberg_marquardt(prob.residual, prob.jacobian, x)
     if not converged:
         raise InputError("<poses>", f"the {'jig-free ' if jigfree else ''}'{method}' fit did not converge in 100 "
                          "iterations: the static poses do not fit the model (moving poses, or another device?)",
@@ -961,7 +1094,8 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
     return StaticFit(method=method, jigfree=jigfree, offsets=b, sensitivity=s, f=F, cov=cov, residual=resid,
                      chi2=chi2, dof=int(dof), poses=poses, temp_ref_c=T0,
                      offset_tc=None if beta is None else np.array(beta),
-                     gain_tc=None if gamma is None else np.array(gamma), pose_cov=pose_cov)
+                     gain_tc=None if gamma is None else np.array(gamma), pose_cov=pose_cov,
+                     jig_accuracy_deg=math.degrees(jig))
 
 
 def _levenberg_marquardt(fun, jac, x0: np.ndarray, max_iter: int = 100,
@@ -1086,13 +1220,15 @@ def calibrate_jigfree(device, means, method: str = "full", *, sigma: np.ndarray 
 
 
 def fit_temperature(device, poses: PoseSet, method: str = "full", *, f: np.ndarray | None = None,
-                    sigma: np.ndarray | None = None) -> StaticFit:
+                    sigma: np.ndarray | None = None, jig_accuracy_deg: float = JIG_ACCURACY_DEG) -> StaticFit:
     """Offset and gain against temperature (first order about the mean pose
     temperature) jointly with the channel parameters, for known pose forces
-    ``f`` (default ``poses.f_ref``; pass a jig-free fit's ``f`` for hand-held data)."""
+    ``f`` (default ``poses.f_ref``; pass a jig-free fit's ``f`` for hand-held data),
+    uncertain by ``jig_accuracy_deg`` (see :func:`fit_known_poses`)."""
     ps = poses if f is None else PoseSet(poses.means, poses.n, poses.std, np.asarray(f, float), poses.temp,
                                          poses.info)
-    return fit_static(device, ps, method, jigfree=False, temperature=True, sigma=sigma)
+    return fit_static(device, ps, method, jigfree=False, temperature=True, sigma=sigma,
+                      jig_accuracy_deg=jig_accuracy_deg)
 
 
 def static_force(offsets, sensitivity, means, sigma=None) -> np.ndarray:
@@ -1193,16 +1329,21 @@ def calibrate_positions(device, offsets, sensitivity, raw, f, w, dw, *, segments
 # ==============================================================================
 
 
-def calibrate_recordings(device, recordings: Sequence[Any], method: str | None = None):
+def calibrate_recordings(device, recordings: Sequence[Any], method: str | None = None, *,
+                         jig_accuracy_deg: float = JIG_ACCURACY_DEG):
     """Calibrate ``device`` from recordings and return a Calibration.
 
     Static poses: a recording's ``pose`` labels when present, else automatic static
     detection.  Method: ``offset``/``gain``/``full`` need reference f_* on the poses
     (known poses); ``jigfree`` ignores any reference.  Default: ``full`` when every
-    pose has a reference, ``jigfree`` when none has.  Temperature coefficients are
-    fitted when the pose temperatures span at least TEMP_MIN_SPAN_C; lever arms when
-    samples rotate (|w| > ROTATION_MIN_RADPS) with reference f, w and dw.
+    pose has a reference, ``jigfree`` when none has.  ``jig_accuracy_deg``: rms
+    rotation angle by which the jig's poses may differ from their references
+    (known poses only; see the module notes; default 0 = exact references).
+    Temperature coefficients are fitted when the pose temperatures span at least
+    TEMP_MIN_SPAN_C; lever arms when samples rotate (|w| > ROTATION_MIN_RADPS) with
+    reference f, w and dw.
     """
+    jig_accuracy_rad(jig_accuracy_deg)
     if method is not None and method not in METHODS + ("jigfree",):
         raise InputError("<command line>", f"unknown method {method!r}; expected one of "
                          f"{', '.join(METHODS + ('jigfree',))}", field="method")
@@ -1241,9 +1382,11 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
         if jigfree:
             fit = fit_static(device, poses, model_method, jigfree=True, temperature=temperature)
         elif temperature:
-            fit = fit_static(device, poses, model_method, jigfree=False, temperature=True)
+            fit = fit_static(device, poses, model_method, jigfree=False, temperature=True,
+                             jig_accuracy_deg=jig_accuracy_deg)
         else:
-            fit = fit_known_poses(device, poses.means, poses.f_ref, model_method, poses.sem(), poses=poses)
+            fit = fit_known_poses(device, poses.means, poses.f_ref, model_method, poses.sem(), poses=poses,
+                                  jig_accuracy_deg=jig_accuracy_deg)
     except InputError as e:
         if e.source != "<poses>":
             raise
@@ -1323,6 +1466,14 @@ def to_calibration(device, fit: StaticFit, method: str, positions: PositionFit |
         },
         "poses": pose_detail,
     }
+    if not fit.jigfree:
+        extra["fit"]["jig_accuracy_deg"] = float(fit.jig_accuracy_deg)
+        if fit.jig_hint_deg is not None:
+            extra["fit"]["jig_accuracy_consistent_with_scatter_deg"] = float(fit.jig_hint_deg)
+        if fit.jig_accuracy_deg > 0:
+            extra["fit"]["uncertainty"] = (
+                "1-sigma from the Fisher information with each pose mean's variance = noise^2 + "
+                f"(jig accuracy {fit.jig_accuracy_deg:g} deg)^2/3 |s_i x f_p|^2 (rad), inflated by chi2/dof when > 1")
     if fit.jigfree:
         g = device.gravity_mps2
         fh = static_force(fit.offsets, fit.sensitivity, fit.poses.means, fit.poses.sem())
