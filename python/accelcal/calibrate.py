@@ -417,18 +417,8 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
 
 
 def _check_recording(rec, device) -> None:
-    if rec.n_channels != device.n_channels:
-        raise InputError(rec.source, f"the recording has {rec.n_channels} raw channels but device "
-                         f"'{device.name}' has {device.n_channels}")
-    if rec.n_samples < 1:
-        raise InputError(rec.source, "no samples")
-    bad = np.flatnonzero(~np.isfinite(rec.t))
-    if bad.size:
-        raise InputError(rec.source, f"t is not finite at sample {int(bad[0])}", column="t")
-    bad = np.flatnonzero(~(np.diff(rec.t) > 0))
-    if bad.size:
-        raise InputError(rec.source, f"t must be strictly increasing: {_where(rec, int(bad[0]) + 1)} follows "
-                         f"t = {float(rec.t[bad[0]]):.6g} s", column="t")
+    from .recording import check_for_device
+    check_for_device(rec, device)
 
 
 # ==============================================================================

@@ -215,7 +215,7 @@ def _as_calibration(cal: Any, device) -> tuple[Any, str]:
 
 
 def _as_recordings(recordings: Any, device) -> list:
-    from .recording import Recording, read_recording
+    from .recording import Recording, check_for_device, read_recording
     if isinstance(recordings, (Recording, str, os.PathLike)):
         recordings = [recordings]
     out = []
@@ -224,15 +224,7 @@ def _as_recordings(recordings: Any, device) -> list:
             r = read_recording(r, device.n_channels)
         if not isinstance(r, Recording):
             raise AccelcalError(f"diagnose: expected Recordings or CSV paths, got {type(r).__name__}")
-        if r.n_channels != device.n_channels:
-            raise InputError(r.source, f"the recording has {r.n_channels} raw channels (raw_0..raw_{r.n_channels - 1}) "
-                             f"but device {device.name!r} has {device.n_channels}",
-                             column=f"raw_{min(r.n_channels, device.n_channels)}")
-        if r.n_samples < 2:
-            raise InputError(r.source, f"only {r.n_samples} sample(s): nothing to diagnose")
-        bad = np.flatnonzero(~(np.diff(r.t) > 0))
-        if bad.size:
-            raise InputError(r.source, f"t must be strictly increasing (sample {int(bad[0]) + 1})", column="t")
+        check_for_device(r, device, min_samples=2)
         out.append(r)
     if not out:
         raise InputError("<command line>", "no recording given")

@@ -31,6 +31,8 @@ import numpy as np
 from .errors import AccelcalError, InputError
 from .native import FORMATS, cptr
 from .quantize import round_half_up
+from .recording import check_for_device
+from .resolve import check_core_input
 
 __all__ = [
     "Columns", "RestParams", "AttitudeParams", "DisplaceParams",
@@ -987,16 +989,8 @@ def _uniform_dt(rec) -> float:
     if bad.size:
         i = int(bad[0])
         raise InputError(rec.source, f"sample times are not uniform (step {d[i]:.6g} s against {dt:.6g} s): "
-                         "the integrators need a constant rate", row=i + 2, column="t")
+                         "the integrators need a constant rate", row=rec.line(i + 1), column="t")
     return dt
-
-
-def _check_raw16(rec) -> None:
-    bad = np.argwhere((rec.raw < 0) | (rec.raw > 65535))
-    if bad.size:
-        r, c = (int(v) for v in bad[0])
-        raise InputError(rec.source, f"raw reading {int(rec.raw[r, c])} does not fit the core's uint16 input",
-                         row=r + 1, column=f"raw_{c}")
 
 
 def _triad_geometry(device, cal) -> tuple[float, float]:
@@ -1037,9 +1031,7 @@ def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: fl
     saturated.  Warnings for: unsettled samples, |g| far from gravity, saturation."""
     if engine not in ("float", "fixed"):
         raise ValueError(f"unknown engine {engine!r}")
-    if rec.n_channels != device.n_channels:
-        raise InputError(rec.source, f"recording has {rec.n_channels} channels but device '{device.name}' "
-                         f"has {device.n_channels}")
+    check_for_device(rec, device, min_samples=2)
     r1, r2 = _triad_geometry(device, cal)
     dt = _uniform_dt(rec)
     p = AttitudeParams(r1=r1, r2=r2, dt=dt, gain=gain, w2_gate=w2_gate,
@@ -1057,7 +1049,7 @@ def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: fl
         gated, unsettled = r["gated"], ~r["settled"]
         sat = np.zeros(rec.n_samples, bool)
     else:
-        _check_raw16(rec)
+        check_core_input(rec)
         f1, s1 = _triad_forces(cal, rec, (0, 1, 2), "fixed")
         f2, s2 = _triad_forces(cal, rec, (3, 4, 5), "fixed")
         r = attitude_fixed(f1, f2, p)
@@ -1160,15 +1152,13 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     form = form or ("offline" if engine == "float" else "stream")
     if form not in ("offline", "stream") or (engine == "fixed" and form != "stream"):
         raise ValueError(f"form {form!r} with engine {engine!r}: fixed has only 'stream'")
-    if rec.n_channels != device.n_channels:
-        raise InputError(rec.source, f"recording has {rec.n_channels} channels but device '{device.name}' "
-                         f"has {device.n_channels}")
+    check_for_device(rec, device, min_samples=2)
     ax = _axis_arg(axis)
     dt = _uniform_dt(rec)
     rp = rest or default_rest_params(device, 1.0 / dt)
     p = DisplaceParams(dt=dt, axis=ax, rest=rp)
     if engine == "fixed":
-        _check_raw16(rec)
+        check_core_input(rec)
     f, note = _body_forces(device, cal, rec, engine)
     t = np.asarray(rec.t, float)
     n = len(t)
@@ -1251,6 +1241,7 @@ def rate_from_recording(device, cal, rec, engine: str = "float", *, leak_tau_s: 
     from . import model
     if not device.is_array():
         raise InputError(device.name, "rate needs a 6-DOF array (alpha from the resolver)")
+    check_for_device(rec, device, min_samples=2)
     dt = _uniform_dt(rec)
     pos = cal.positions_or_nominal(device)
     M = model.resolve_matrix(pos, cal.sensitivity)
@@ -1263,7 +1254,7 @@ def rate_from_recording(device, cal, rec, engine: str = "float", *, leak_tau_s: 
     elif engine == "fixed":
         from . import native
         from .quantize import quantize_calibration
-        _check_raw16(rec)
+        check_core_input(rec)
         t = quantize_calibration(device, cal)
         out, _ = native.process_batch(t.resolver(), t.trim, rec.raw, None)
         wq, fl, _ = rate_rest_fixed(out[:, 3:], out[:, :3], dt, int(round_half_up(leak * 65536)), rp)

@@ -23,7 +23,7 @@ import numpy as np
 
 from .errors import InputError, atomic_write
 
-__all__ = ["Recording", "read_recording", "write_recording", "recording_from_arrays", "VECTOR_COLUMNS"]
+__all__ = ["Recording", "check_for_device", "read_recording", "write_recording", "recording_from_arrays", "VECTOR_COLUMNS"]
 
 VECTOR_COLUMNS: dict[str, tuple[str, str, str]] = {
     "f": ("f_x", "f_y", "f_z"),
@@ -94,6 +94,8 @@ class Recording:
     metadata: dict[str, str] = field(default_factory=dict)
     extra: dict[str, list[str]] = field(default_factory=dict)
     source: str = "<memory>"
+    # file line of each sample when read from CSV (see line())
+    lines: Any = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         self.t = np.asarray(self.t, dtype=np.float64)
@@ -126,6 +128,15 @@ class Recording:
     @property
     def n_channels(self) -> int:
         return int(self.raw.shape[1])
+
+    def line(self, i: int) -> int:
+        """Where sample i is, as InputError's ``row``: its line in the CSV file
+        (comments and header counted) when read from one, else i + 1."""
+        if self.lines is None:
+            return int(i) + 1
+        if isinstance(self.lines, int):
+            return self.lines + int(i)
+        return int(self.lines[int(i)])
 
     def has_f(self) -> bool:
         """Any finite reference specific force."""
@@ -622,7 +633,36 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
         metadata=metadata,
         extra=extra,
         source=source,
+        lines=table.first_line if isinstance(table, _ByteTable) else table.lines,
     )
+
+
+def check_for_device(rec: Recording, device, *, min_samples: int = 1) -> None:
+    """One check, for every command, that a recording can be used with a device:
+    its raw channel count, at least ``min_samples`` samples, finite strictly
+    increasing t, and every raw reading inside the device's [raw_min, raw_max]
+    (the device clips there, so a reading outside means the wrong device file
+    or a damaged recording).  InputError names the file, row and column."""
+    if rec.n_channels != device.n_channels:
+        raise InputError(rec.source, f"the recording has {rec.n_channels} raw channels "
+                         f"(raw_0..raw_{rec.n_channels - 1}) but device {device.name!r} has {device.n_channels}",
+                         column=f"raw_{min(rec.n_channels, device.n_channels)}")
+    if rec.n_samples < min_samples:
+        raise InputError(rec.source, f"{rec.n_samples} sample(s), at least {min_samples} needed")
+    bad = np.flatnonzero(~np.isfinite(rec.t))
+    if bad.size:
+        raise InputError(rec.source, "t is not finite", row=rec.line(int(bad[0])), column="t")
+    bad = np.flatnonzero(~(np.diff(rec.t) > 0))
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise InputError(rec.source, f"t must be strictly increasing: t = {float(rec.t[i]):.6g} s follows "
+                         f"t = {float(rec.t[i - 1]):.6g} s", row=rec.line(i), column="t")
+    out = (rec.raw < device.raw_min) | (rec.raw > device.raw_max)
+    if out.any():
+        i, c = (int(v) for v in np.argwhere(out)[0])
+        raise InputError(rec.source, f"raw reading {int(rec.raw[i, c])} is outside device {device.name!r}'s "
+                         f"[raw_min, raw_max] = [{device.raw_min}, {device.raw_max}]",
+                         row=rec.line(i), column=f"raw_{c}")
 
 
 def _classify(

@@ -22,18 +22,27 @@ def omega_for(rec, source: str) -> np.ndarray | None:
         if not have.all():
             row = int(np.argmin(have))
             raise InputError(rec.source, "omega source 'reference' needs w_x, w_y, w_z on every sample",
-                             row=row + 1, field="w_x")
+                             row=rec.line(row), column="w_x")
         return rec.w
     if source == "auto":
         return rec.w if have.all() else None
     raise ValueError(f"unknown omega source {source!r}")
 
 
+def check_core_input(rec) -> None:
+    """The C core reads raw counts as uint16: a reading outside 0..65535 is an
+    InputError naming its row and column (never clipped)."""
+    bad = np.argwhere((rec.raw < 0) | (rec.raw > 65535))
+    if bad.size:
+        r, c = (int(v) for v in bad[0])
+        raise InputError(rec.source, f"raw reading {int(rec.raw[r, c])} does not fit the C core's uint16 input "
+                         "(0..65535)", row=rec.line(r), column=f"raw_{c}")
+
+
 def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str = "auto"):
     """Returns (f (n,3) m/s^2, alpha (n,3) rad/s^2, flags (n,) uint8 or None)."""
-    if rec.n_channels != device.n_channels:
-        raise InputError(rec.source, f"recording has {rec.n_channels} channels but device "
-                         f"'{device.name}' has {device.n_channels}")
+    from .recording import check_for_device
+    check_for_device(rec, device)
     omega = omega_for(rec, omega_source)
     pos = cal.positions_or_nominal(device)
     if engine == "float":
@@ -48,11 +57,7 @@ def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str
         raise ValueError(f"unknown engine {engine!r}")
     from . import native
     from .quantize import omega_to_fixed
-    bad = np.argwhere((rec.raw < 0) | (rec.raw > 65535))
-    if bad.size:
-        r, c = (int(v) for v in bad[0])
-        raise InputError(rec.source, f"raw reading {int(rec.raw[r, c])} does not fit the core's "
-                         "uint16 input", row=r + 1, field=f"raw_{c}")
+    check_core_input(rec)
     t = quantize_calibration(device, cal)
     w_q = None if omega is None else omega_to_fixed(omega)
     out, flags = native.process_batch(t.resolver(), t.trim, rec.raw, w_q)

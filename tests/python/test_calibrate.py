@@ -456,7 +456,7 @@ def test_recording_with_other_channel_count_is_refused():
     dev = default_device()
     b, S = draw_truth(dev, rng)
     rec = make_recording(dev, b, S, G * AXES6, rng)
-    with pytest.raises(InputError, match=r"6 raw channels but device 'triad-16bit' has 3"):
+    with pytest.raises(InputError, match=r"6 raw channels \(raw_0..raw_5\) but device 'triad-16bit' has 3"):
         calibrate_recordings(default_triad(), [rec])
 
 
@@ -494,7 +494,7 @@ def test_non_increasing_time_is_refused():
     t = rec.t.copy()
     t[100] = t[99]
     bad = Recording(t=t, raw=rec.raw, f=rec.f, pose=rec.pose, source="time.csv")
-    with pytest.raises(InputError, match=r"time\.csv: column t: t must be strictly increasing: sample 100"):
+    with pytest.raises(InputError, match=r"time\.csv: row 101, column t: t must be strictly increasing: t = 1.65 s follows"):
         calibrate_recordings(dev, [bad])
 
 

@@ -479,25 +479,28 @@ def test_bad_recording_csv(good, cmd, data, capfd):
         check_rejected(rc, err, caught, out, f"{cmd} with {blob!r}")
 
 
-# A raw reading outside the device's [raw_min, raw_max] (or outside the core's
-# uint16) is well-formed; the contract does not say whether it is an error.
-# Today the float engine accepts it and the fixed engine refuses values beyond
-# uint16.  Either is fine here, as long as a refusal is clean.
+# A raw reading outside the device's [raw_min, raw_max] cannot come from that
+# device (it clips there, data contract "Sensor model"): every command refuses
+# it, naming the file line (comments and header counted) and the column.
 @pytest.mark.parametrize("cmd", WITH_REC)
 @settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
-def test_raw_out_of_range_clean(good, cmd, data, capfd):
+def test_raw_out_of_range_refused(good, cmd, data, capfd):
     f = inputs_for(good, cmd)
     dev = json.loads(f["dev"].read_text())
     comments, header, rows = _split_csv(f["rec"].read_text())
     r = data.draw(st.integers(0, len(rows) - 1))
-    j = header.index(f"raw_{data.draw(st.integers(0, len(dev['channels']) - 1))}")
-    rows[r][j] = str(data.draw(st.sampled_from([-1, dev["raw_max"] + 1, 65536, 2**31, -2**31])))
+    col = f"raw_{data.draw(st.integers(0, len(dev['channels']) - 1))}"
+    j = header.index(col)
+    rows[r][j] = str(data.draw(st.sampled_from([dev["raw_min"] - 1, dev["raw_max"] + 1, 65536, 2**31, -2**31])))
+    line = len(comments) + 1 + r + 1
     with scratch(good) as (ind, out):
         _write(ind / "rec.csv", _join_csv(comments, header, rows))
         rc, err, caught = run_cli(argv_for(cmd, f["dev"], f["cal"], ind / "rec.csv", out,
                                            data.draw(ENGINES)), capfd)
-        check_clean(rc, err, caught, out, f"{cmd} with row {r} {header[j]}={rows[r][j]}")
+        what = f"{cmd} with row {r} {col}={rows[r][j]}"
+        check_rejected(rc, err, caught, out, what)
+        assert f"row {line}, column {col}:" in err and "[raw_min, raw_max]" in err, f"{what}: {err!r}"
 
 
 # ---- extreme (well-formed but absurd) values -------------------------------------
