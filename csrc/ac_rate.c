@@ -43,10 +43,10 @@ ac_status ac_rate_step(ac_rate *st, const int32_t *alpha, int16_t *omega)
         ac_status s;
         if (st->leak != 0u) {
             /* |w * leak / 2^16| < |w|: cannot saturate */
-            (void)ac_mul32_shift(st->w[a], (int32_t)st->leak, 16u, &dec);
+            (void)ac_mul32x16_shift(st->w[a], st->leak, 16u, &dec);
         }
         /* alpha [2^-OUT rad/s^2] * dt_m 2^-dt_shift [s] -> 2^-26 rad/s */
-        s = ac_mul32_shift(alpha[a], (int32_t)st->dt_m,
+        s = ac_mul32x16_shift(alpha[a], st->dt_m,
                            (uint8_t)(st->dt_shift - (AC_RATE_STATE_FRAC - AC_OUT_FRAC)), &inc);
         if (s == AC_SATURATED) {
             sat = 1u;

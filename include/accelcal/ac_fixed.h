@@ -40,6 +40,11 @@ ac_status ac_mul32x32(int32_t a, int32_t b, ac_i64 *out);
 /* *out = round(a * b / 2^n), half up, for 0 <= n <= 62, clipped to int32. */
 ac_status ac_mul32_shift(int32_t a, int32_t b, uint8_t n, int32_t *out);
 
+/* *out = round(a * b / 2^n), half up (ties towards +inf), for 0 <= n <= 47: exact
+ * (two 16 x 16 partial products, the cheap case of ac_mul32_shift), clipped to
+ * int32 (AC_SATURATED). */
+ac_status ac_mul32x16_shift(int32_t a, uint16_t b, uint8_t n, int32_t *out);
+
 /* Two's-complement reinterpretation of u as int32, without relying on the
  * implementation-defined conversion of out-of-range unsigned values. */
 ac_status ac_u32_to_i32(uint32_t u, int32_t *out);

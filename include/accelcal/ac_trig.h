@@ -1,5 +1,5 @@
 /*
- * accelcal -- integer square root, division, 32x16 multiply and atan2 for
+ * accelcal -- integer square root, division and atan2 for
  * the motion estimators (no libm, no libgcc: shifts, adds and 16 x 16-bit
  * multiplies only).
  *
@@ -11,8 +11,6 @@
  *                to 65535 (AC_SATURATED).
  *   ac_udiv64    q = round(num / den) half up, num = num_hi 2^32 + num_lo:
  *                exact; q > UINT32_MAX saturates; den == 0 is AC_ERR_RANGE.
- *   ac_mul32x16_shift  out = round(a b 2^-n) half up (ties towards +inf), 0 <= n <= 47:
- *                exact, clipped to int32 (AC_SATURATED).
  *   ac_atan2     angle = atan2(y, x) in rad, int16 Q2.13 (AC_ANGLE_FRAC;
  *                1 LSB = 2^-13 rad = 1.22e-4 rad = 0.0070 deg), range
  *                -pi..pi (pi = 25736 LSB; y = 0, x < 0 gives +pi).
@@ -32,6 +30,7 @@
 
 #include "ac_config.h"
 #include "ac_status.h"
+#include "ac_fixed.h" /* ac_mul32x16_shift, which the estimators use, lives there */
 
 /* Angles: rad, int16 Q2.13. */
 #ifndef AC_ANGLE_FRAC
@@ -58,7 +57,6 @@
 
 ac_status ac_isqrt32(uint32_t v, uint16_t *out);
 ac_status ac_udiv64(uint32_t num_hi, uint32_t num_lo, uint32_t den, uint32_t *q);
-ac_status ac_mul32x16_shift(int32_t a, uint16_t b, uint8_t n, int32_t *out);
 ac_status ac_atan2(int32_t y, int32_t x, int16_t *angle, uint32_t *mag);
 
 #endif /* AC_TRIG_H */
