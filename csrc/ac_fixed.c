@@ -2,6 +2,19 @@
 #include "accelcal/ac_fixed.h"
 #include "ac_internal.h"
 
+/* 1 << n for 0 <= n <= 31, in byte steps (see ac_shr_u). */
+static uint32_t ac_pow2_u(uint8_t n)
+{
+    uint32_t u = (uint32_t)1u << (n & 7u);
+    if ((n & 8u) != 0u) {
+        u <<= 8;
+    }
+    if ((n & 16u) != 0u) {
+        u <<= 16;
+    }
+    return u;
+}
+
 ac_status ac_sat16(int32_t v, int16_t *out)
 {
     uint8_t sat = 0u;

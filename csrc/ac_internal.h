@@ -61,8 +61,6 @@ uint32_t ac_shr_u(uint32_t u, uint8_t n);
 /* floor(v / 2^n), 0 <= n <= 31 */
 int32_t ac_floor_shift(int32_t v, uint8_t n);
 
-/* 1 << n for 0 <= n <= 31, in byte steps (see ac_shr_u). */
-uint32_t ac_pow2_u(uint8_t n);
 
 /* round(v / 2^n) half up, 1 <= n <= 31, without overflow. */
 int32_t ac_round_shift(int32_t v, uint8_t n);

@@ -82,19 +82,6 @@ AC_HELPER int32_t ac_floor_shift(int32_t v, uint8_t n)
     return ac_i_from_u(ac_shr_u((uint32_t)v ^ sign, n) ^ sign);
 }
 
-/* 1 << n for 0 <= n <= 31, in byte steps (see ac_shr_u). */
-AC_HELPER uint32_t ac_pow2_u(uint8_t n)
-{
-    uint32_t u = (uint32_t)1u << (n & 7u);
-    if ((n & 8u) != 0u) {
-        u <<= 8;
-    }
-    if ((n & 16u) != 0u) {
-        u <<= 16;
-    }
-    return u;
-}
-
 /* round(v / 2^n) half up, 1 <= n <= 31, without overflow: floor(v / 2^n)
  * plus bit n-1 of v (the bit just below the point), taken from the same
  * shift; the sum cannot overflow because |floor(v / 2^n)| <= 2^30.  For

@@ -3,9 +3,10 @@
 #include "accelcal/ac_trim.h"
 #include "ac_internal.h"
 
+/* -31 <= s <= 31 */
 static int shift_ok(int8_t s)
 {
-    return s >= -31 && s <= 31;
+    return (uint8_t)(s + 31) <= 62u;
 }
 
 /* Cheap per-call checks; the row sums are ac_resolver_check's job (once per table). */
