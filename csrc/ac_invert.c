@@ -104,7 +104,7 @@ static void mac(xf *r, const xf *a, const xf *b, unsigned sub)
     uint32_t x = mag(a->m), y = mag(b->m), z = mag(r->m) << 1;
     uint16_t xh = (uint16_t)(x >> 16), xl = (uint16_t)x, yh = (uint16_t)(y >> 16), yl = (uint16_t)y;
     uint32_t p = (uint32_t)xh * yl + (uint32_t)xl * yh + (((uint32_t)xl * yl) >> 16);
-    unsigned np = ((a->m < 0) != (b->m < 0)) ^ sub, nz = r->m < 0;
+    unsigned sp = (unsigned)(a->m < 0) ^ (unsigned)(b->m < 0) ^ sub, sz = r->m < 0;
     int32_t ep = (int32_t)a->e + b->e + 28, ez = (int32_t)r->e - 1, d;
     p = (((uint32_t)xh * yh) << 4) + (p >> 12);
     if (p >= 0x80000000UL) {
@@ -117,31 +117,22 @@ static void mac(xf *r, const xf *a, const xf *b, unsigned sub)
     if (z == 0u) {
         ez = ep;
     }
-    d = ez - ep; /* align the one with the smaller exponent */
+    d = ez - ep; /* shift the one with the smaller exponent */
     if (d >= 0) {
         p >>= (d > 31) ? 31u : (unsigned)d;
     } else {
         z >>= (d < -31) ? 31u : (unsigned)-d;
         ez = ep;
     }
-    if (np == nz) {
+    if (sp == sz) {
         z += p; /* < 2^32 */
     } else if (z >= p) {
         z -= p;
     } else {
         z = p - z;
-        nz = np;
+        sz = sp;
     }
-    pack(r, nz, z, ez);
-}
-
-/* r = a b (r may alias a or b) */
-static void mul(xf *r, const xf *a, const xf *b)
-{
-    xf t;
-    clear(&t, sizeof t);
-    mac(&t, a, b, 0u);
-    *r = t;
+    pack(r, sz, z, ez);
 }
 
 /* y[0..5] += alpha x[0..5] */
@@ -166,12 +157,11 @@ static unsigned gtabs(const xf *a, const xf *b)
 /* max = max(max, |v|); sum += |v| */
 static void acc_abs(xf *max, xf *sum, const xf *v)
 {
-    xf av = *v;
-    av.m = (int32_t)mag(av.m);
-    if (gtabs(&av, max)) {
-        *max = av;
+    if (gtabs(v, max)) {
+        *max = *v;
+        max->m = (int32_t)mag(max->m);
     }
-    mac(sum, &av, &xf_one, 0u);
+    mac(sum, v, &xf_one, v->m < 0);
 }
 
 /* round(v 2^s) half up (floor(x + 1/2)); 1 if that does not fit int32 */
@@ -206,19 +196,15 @@ static int16_t largest_shift(const xf *v, uint32_t lim)
     return (int16_t)(-k - v->e);
 }
 
-/* min(31, shift for the largest entry, shift for the row sum); 1 below -31 */
-static unsigned row_shift(const xf *vmax, const xf *vsum, uint16_t count, int8_t *out)
+/* min(31, shift for max |v| (in mm[0]), shift for sum |v| (in mm[1])) over count values */
+static int16_t row_shift(const xf mm[2], uint16_t count)
 {
-    int16_t s1 = largest_shift(vmax, (uint32_t)COEF_MAX);
-    int16_t s2 = largest_shift(vsum, (uint32_t)ROW_L1_MAX - count);
+    int16_t s1 = largest_shift(&mm[0], (uint32_t)COEF_MAX);
+    int16_t s2 = largest_shift(&mm[1], (uint32_t)ROW_L1_MAX - count);
     if (s2 < s1) {
         s1 = s2;
     }
-    if (s1 > 31) {
-        s1 = 31;
-    }
-    *out = (int8_t)s1;
-    return s1 < -31;
+    return (s1 > 31) ? 31 : s1;
 }
 
 /* to_fixed into int16, saturated (the shifts make it fit) */
@@ -258,29 +244,28 @@ void ac_inv_rows(const ac_channel_cal *cal, xf v[15])
 
 /* ---- the 6x6 inverse -------------------------------------------------------------- */
 
-/* norm = max row sum of |a| (the 1-norm of a^T); amax = max(amax, max |a_ij|) */
-static void norm_rows(xf a[6][6], xf *norm, xf *amax)
+/* norm = max column sum of |a|; amax = max(amax, max |a_ij|) */
+static void norm1(xf a[6][6], xf *norm, xf *amax)
 {
     unsigned i, j;
     clear(norm, sizeof *norm);
-    for (i = 0u; i < 6u; i++) {
+    for (j = 0u; j < 6u; j++) {
         xf sum, unused;
-        const xf *p = a[i];
+        const xf *p = &a[0][j];
         clear(&sum, sizeof sum);
-        for (j = 0u; j < 6u; j++) {
-            acc_abs(amax, &sum, &p[j]);
+        for (i = 0u; i < 6u; i++, p += 6) {
+            acc_abs(amax, &sum, p);
         }
         acc_abs(norm, &unused, &sum);
     }
 }
 
-/* In place; a^T's 1-norm condition number (the row sums are a^T's column sums). */
 ac_status ac_inv_gauss_jordan(xf a[6][6], int8_t perm[6], int16_t *cond_log2)
 {
     xf na, ninv, tol;
     unsigned i, k;
     clear(&tol, sizeof tol);
-    norm_rows(a, &na, &tol);
+    norm1(a, &na, &tol);
     tol.e = (int16_t)(tol.e + PIVOT_TOL_LOG2);
     for (k = 0u; k < 6u; k++) {
         xf *rk = a[k], *piv = &rk[k], *best = piv, *c = piv, inv;
@@ -311,7 +296,9 @@ ac_status ac_inv_gauss_jordan(xf a[6][6], int8_t perm[6], int16_t *cond_log2)
         pack(&inv, piv->m < 0, q, (int32_t)-60 - piv->e);
         *piv = xf_one;
         for (i = 0u; i < 6u; i++) {
-            mul(&rk[i], &rk[i], &inv);
+            xf t = rk[i];
+            clear(&rk[i], sizeof t);
+            mac(&rk[i], &t, &inv, 0u);
         }
         for (i = 0u; i < 6u; i++) {
             xf *ri = a[i], f = ri[k];
@@ -330,8 +317,10 @@ ac_status ac_inv_gauss_jordan(xf a[6][6], int8_t perm[6], int16_t *cond_log2)
             swap(x, y, sizeof *x);
         }
     }
-    norm_rows(a, &ninv, &tol);
-    mul(&na, &na, &ninv);
+    norm1(a, &ninv, &tol);
+    clear(&tol, sizeof tol);
+    mac(&tol, &na, &ninv, 0u);
+    na = tol;
     /* cond = m 2^e with 2^29 <= m < 2^30: ceil(log2) is e + 29 for m == 2^29, else e + 30 */
     *cond_log2 = (int16_t)(na.e + ((na.m == (int32_t)XF_LO) ? 29 : 30));
     return (*cond_log2 > AC_COND_LOG2_MAX) ? AC_ERR_ILL_COND : AC_OK;
@@ -339,35 +328,31 @@ ac_status ac_inv_gauss_jordan(xf a[6][6], int8_t perm[6], int16_t *cond_log2)
 
 /* ---- the table build ---------------------------------------------------------------- */
 
-/* The rows of channel i (ac_inv_rows), R_i scaled by 2^-colexp when colexp is not
- * NULL, and u = R_i (N > 6) or e_i (N = 6).  The build works on a = R^T (N = 6)
- * or R^T R (N > 6), so that (a^-1)^T u is column i of M in both cases. */
-static void channel(const ac_channel_cal *cal, uint16_t i, uint16_t n, const int16_t *colexp,
-                    xf v[15], xf u[6])
+/* a_jl *= 2^(off - colexp_l - colexp_j) for N > 6; for N = 6 only colexp_l (off == 0:
+ * R~ = R 2^-colexp) or only colexp_j (off != 0: M's rows, 2^(off - colexp_j) R~^-1). */
+static void rescale(ac_build_work *w, uint16_t n, int16_t off)
 {
-    unsigned j;
-    ac_inv_rows(&cal[i], v);
+    unsigned j, l;
     for (j = 0u; j < 6u; j++) {
-        if (colexp != 0) {
-            ac_inv_scale(&v[j], -colexp[j]);
+        for (l = 0u; l < 6u; l++) {
+            int32_t e = (int32_t)off - w->colexp[(off != 0 || n != 6u) ? j : l];
+            if (n != 6u) {
+                e -= w->colexp[l];
+            }
+            ac_inv_scale(&w->a[j][l], e);
         }
-        u[j] = v[j];
-    }
-    if (n == 6u) {
-        clear(u, 6u * sizeof *u);
-        u[i] = xf_one;
     }
 }
 
 ac_status ac_resolver_build(const ac_channel_cal *cal, uint16_t n, ac_build_work *w,
                             ac_resolver *out, ac_build_info *info)
 {
-    xf v[15], u[6], c, o;
+    xf v[15], e[6], c, o;
     int8_t m_shift[6], g_shift[6];
     int32_t k[6];
     int16_t cl2 = 0;
     uint16_t i;
-    unsigned j, l;
+    unsigned j, l, pass;
     ac_status st;
 
     if (cal == 0 || w == 0 || out == 0) {
@@ -377,92 +362,89 @@ ac_status ac_resolver_build(const ac_channel_cal *cal, uint16_t n, ac_build_work
         return AC_ERR_SIZE;
     }
     clear(w, sizeof *w);
+    clear(e, sizeof e);
 
-    /* 1. a = R^T (N = 6) or R^T R (N > 6), and the column maxima of R (in rmax) */
-    for (i = 0u; i < n; i++) {
-        channel(cal, i, n, 0, v, u);
-        for (j = 0u; j < 6u; j++) {
-            acc_abs(&w->rmax[j], &w->rsum[j], &v[j]);
-            axpy(w->a[j], &v[j], u);
-        }
-    }
-    /* 2. equilibrate the columns of R by powers of two (exactly): R~ = R 2^-colexp,
-     * i.e. scale row j of a (and column j for N > 6) */
-    for (j = 0u; j < 6u; j++) {
-        int16_t e = (int16_t)(w->rmax[j].e + 30);
-        if (w->rmax[j].m == 0) {
-            return AC_ERR_SINGULAR; /* nothing senses this degree of freedom */
-        }
-        w->colexp[j] = e;
-        for (l = 0u; l < 6u; l++) {
-            ac_inv_scale(&w->a[j][l], -e);
-            if (n != 6u) {
-                ac_inv_scale(&w->a[l][j], -e);
+    /* Three passes over the channels, with u = R_i for N > 6 and u = e_i for N = 6:
+     *  0: a = R (N = 6) or R^T R (N > 6), as a_j += u_j R_i; column maxima of R;
+     *  1: after the inverse, M_ji = (a^-1 u)_j scaled (rescale): the row scales,
+     *     M o and M C;
+     *  2: with the shifts known, the table. */
+    for (pass = 0u; pass < 3u; pass++) {
+        if (pass == 1u) {
+            /* equilibrate the columns of R by powers of two (exactly) */
+            for (j = 0u; j < 6u; j++) {
+                xf *r = w->acc[j];
+                if (r[7].m == 0) {
+                    return AC_ERR_SINGULAR; /* nothing senses this degree of freedom */
+                }
+                w->colexp[j] = (int16_t)(r[7].e + 30);
+                clear(&r[7], 2u * sizeof *r);
             }
+            rescale(w, n, 0);
+            st = ac_inv_gauss_jordan(w->a, w->perm, &cl2);
+            if (info != 0) {
+                info->cond_log2 = cl2;
+            }
+            if (st != AC_OK) {
+                return st;
+            }
+            rescale(w, n, AC_OUT_FRAC);
         }
-    }
-    clear(w->rmax, sizeof w->rmax);
-    clear(w->rsum, sizeof w->rsum);
-    /* a^T's 1-norm condition number is R~'s (N = 6); a is symmetric for N > 6 */
-    st = ac_inv_gauss_jordan(w->a, w->perm, &cl2);
-    if (info != 0) {
-        info->cond_log2 = cl2;
-    }
-    if (st != AC_OK) {
-        return st;
-    }
-
-    /* 3. two passes over the columns of M, M_ji = 2^(OUT_FRAC - colexp_j) sum_l a^-1_lj u_l
-     * (a^-1 is symmetric for N > 6): first the row scales, M o and M C; then, with
-     * the shifts known, the entries of m */
-    for (l = 0u; l < 2u; l++) {
+        if (pass == 2u) {
+            /* shifts and offset terms: every failure is found before out is touched */
+            for (j = 0u; j < 6u; j++) {
+                xf *r = w->acc[j], gm[2];
+                int16_t ms, gs;
+                clear(gm, sizeof gm);
+                for (l = 0u; l < 6u; l++) {
+                    acc_abs(&gm[0], &gm[1], &r[l]);
+                }
+                ms = row_shift(&r[7], n);
+                gs = row_shift(gm, 6u);
+                if (ms < -31 || gs < -31 || to_fixed(&r[6], ms, &k[j]) != 0u) {
+                    return AC_ERR_RANGE;
+                }
+                m_shift[j] = (int8_t)ms;
+                g_shift[j] = (int8_t)gs;
+            }
+            clear(out->m, sizeof out->m);
+            out->n = n;
+        }
         for (i = 0u; i < n; i++) {
-            channel(cal, i, n, w->colexp, v, u);
+            const xf *u = v;
+            ac_inv_rows(&cal[i], v);
+            if (n == 6u) {
+                e[i].m = (int32_t)XF_LO; /* 1 */
+                e[i].e = -29;
+                u = e;
+            }
             from_fixed(&o, cal[i].offset, AC_OFFSET_FRAC);
             for (j = 0u; j < 6u; j++) {
-                const xf *p = &w->a[0][j];
-                unsigned q;
-                clear(&c, sizeof c);
-                for (q = 0u; q < 6u; q++, p += 6) {
-                    mac(&c, &u[q], p, 0u);
+                xf *r = w->acc[j], *aj = w->a[j];
+                if (pass == 0u) {
+                    acc_abs(&r[7], &r[8], &v[j]);
+                    axpy(aj, &u[j], v);
+                    continue;
                 }
-                ac_inv_scale(&c, AC_OUT_FRAC - w->colexp[j]);
-                if (l == 0u) {
-                    acc_abs(&w->rmax[j], &w->rsum[j], &c);
-                    mac(&w->k[j], &c, &o, 0u);
-                    axpy(w->g[j], &c, &v[9]);
+                clear(&c, sizeof c);
+                for (l = 0u; l < 6u; l++) {
+                    mac(&c, &aj[l], &u[l], 0u);
+                }
+                if (pass == 1u) {
+                    acc_abs(&r[7], &r[8], &c);
+                    mac(&r[6], &c, &o, 0u);
+                    axpy(r, &c, &v[9]);
                 } else {
                     out->m[j][i] = to_i16(&c, m_shift[j]);
+                    out->m_shift[j] = m_shift[j];
+                    out->g_shift[j] = g_shift[j];
+                    out->k[j] = k[j];
+                    for (l = 0u; l < 6u; l++) {
+                        out->g[j][l] = to_i16(&r[l], g_shift[j]);
+                    }
                 }
             }
-        }
-        if (l != 0u) {
-            break;
-        }
-        /* 4. shifts and offset terms: every failure is found before out is touched */
-        for (j = 0u; j < 6u; j++) {
-            xf gmax, gsum;
-            clear(&gmax, sizeof gmax);
-            clear(&gsum, sizeof gsum);
-            for (i = 0u; i < 6u; i++) {
-                acc_abs(&gmax, &gsum, &w->g[j][i]);
-            }
-            if (row_shift(&w->rmax[j], &w->rsum[j], n, &m_shift[j]) != 0u ||
-                to_fixed(&w->k[j], m_shift[j], &k[j]) != 0u ||
-                row_shift(&gmax, &gsum, 6u, &g_shift[j]) != 0u) {
-                return AC_ERR_RANGE;
-            }
-        }
-        /* 5. the table but for the entries of m (the second pass writes those) */
-        clear(out->m, sizeof out->m);
-        out->n = n;
-        for (j = 0u; j < 6u; j++) {
-            out->m_shift[j] = m_shift[j];
-            out->g_shift[j] = g_shift[j];
-            out->k[j] = k[j];
-            for (i = 0u; i < 6u; i++) {
-                out->g[j][i] = to_i16(&w->g[j][i], g_shift[j]);
-            }
+            clear(e, sizeof e);
         }
     }
     return AC_OK;

@@ -31,22 +31,6 @@ ac_status ac_centripetal_row(const ac_channel_cal *cal, ac_xf row[6])
     return row_out(cal, row, 9u);
 }
 
-/* a = a^T */
-static void transpose(ac_xf a[6][6])
-{
-    unsigned i, j;
-    for (i = 0u; i < 6u; i++) {
-        for (j = i + 1u; j < 6u; j++) {
-            ac_xf t = a[i][j];
-            a[i][j] = a[j][i];
-            a[j][i] = t;
-        }
-    }
-}
-
-/* The shared elimination measures the condition number of the transpose of
- * what it inverts (the build's matrix is R^T), so a is inverted transposed:
- * (a^T)^-1 = (a^-1)^T, and cond_1(a^T) in its row sums is cond_1(a). */
 ac_status ac_invert6(ac_xf a[6][6], int8_t perm[6], int16_t *cond_log2)
 {
     int32_t sh = AC_INV_EMIN;
@@ -76,9 +60,7 @@ ac_status ac_invert6(ac_xf a[6][6], int8_t perm[6], int16_t *cond_log2)
             ac_inv_scale(&a[i][j], -sh);
         }
     }
-    transpose(a);
     st = ac_inv_gauss_jordan(a, perm, &cl2);
-    transpose(a);
     if (st == AC_ERR_SINGULAR) {
         return st;
     }

@@ -29,11 +29,8 @@ typedef struct ac_channel_cal {
 /* Caller-owned scratch memory for ac_resolver_build (may live in a union
  * with other buffers; nothing in it is needed afterwards). */
 typedef struct ac_build_work {
-    ac_xf a[6][6];   /* equilibrated R (N = 6) or R^T R (N > 6), then its inverse */
-    ac_xf g[6][6];   /* M C */
-    ac_xf k[6];      /* M o */
-    ac_xf rmax[6];   /* per output row: max |M_ji| */
-    ac_xf rsum[6];   /* per output row: sum |M_ji| */
+    ac_xf a[6][6];   /* R (N = 6) or R^T R (N > 6), equilibrated, then its inverse */
+    ac_xf acc[6][9]; /* per output row j: (M C)_j. [0..5], (M o)_j [6], max_i |.| [7], sum_i |.| [8] */
     int16_t colexp[6];
     int8_t perm[6];
 } ac_build_work;
