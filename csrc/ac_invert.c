@@ -55,8 +55,8 @@ static void swap(void *a, void *b, unsigned bytes)
 /* r = (neg ? -1 : 1) * mag 2^e, normalised and rounded half away from zero */
 static void pack(xf *r, unsigned neg, uint32_t mag_, int32_t e)
 {
-    unsigned k = 0u;
     if (mag_ != 0u) {
+        unsigned k = 0u;
         while ((mag_ >> k) >= XF_HI) {
             k++;
         }
@@ -80,7 +80,7 @@ static void pack(xf *r, unsigned neg, uint32_t mag_, int32_t e)
     if (neg) {
         r->m = -r->m;
     }
-    r->e = (mag_ == 0u) ? 0 : (int16_t)e;
+    r->e = (int16_t)((mag_ == 0u) ? 0 : e);
 }
 
 void ac_inv_scale(xf *v, int32_t k)
@@ -181,30 +181,26 @@ static unsigned to_fixed(const xf *v, int16_t s, int32_t *out)
     return 0u;
 }
 
-/* largest s with |v| 2^s <= lim (the host quantizer's rule); 31 for v == 0 */
-static int16_t largest_shift(const xf *v, uint32_t lim)
-{
-    uint32_t m = mag(v->m);
-    int16_t k = 0;
-    if (m == 0u) {
-        return 31;
-    }
-    while (lim < m) { /* lim < 2^16, m < 2^30: 15 steps at most */
-        lim <<= 1;
-        k++;
-    }
-    return (int16_t)(-k - v->e);
-}
-
-/* min(31, shift for max |v| (in mm[0]), shift for sum |v| (in mm[1])) over count values */
+/* The host quantizer's rule: the largest s <= 31 with max |v| 2^s <= 32767 and
+ * sum |v| 2^s <= 65535 - count (mm[0] = max |v|, mm[1] = sum |v|). */
 static int16_t row_shift(const xf mm[2], uint16_t count)
 {
-    int16_t s1 = largest_shift(&mm[0], (uint32_t)COEF_MAX);
-    int16_t s2 = largest_shift(&mm[1], (uint32_t)ROW_L1_MAX - count);
-    if (s2 < s1) {
-        s1 = s2;
+    int16_t best = 31;
+    unsigned q;
+    for (q = 0u; q < 2u; q++) {
+        uint32_t m = mag(mm[q].m), lim = (q != 0u) ? (uint32_t)ROW_L1_MAX - count : (uint32_t)COEF_MAX;
+        int16_t s = (int16_t)-mm[q].e;
+        if (m != 0u) {
+            while (lim < m) { /* lim < 2^16, m < 2^30: 15 steps at most */
+                lim <<= 1;
+                s--;
+            }
+            if (s < best) {
+                best = s;
+            }
+        }
     }
-    return (s1 > 31) ? 31 : s1;
+    return best;
 }
 
 /* to_fixed into int16, saturated (the shifts make it fit) */
@@ -217,16 +213,19 @@ static int16_t to_i16(const xf *v, int16_t s)
 
 /* ---- rows of the sensor and centripetal matrices ---------------------------------- */
 
-/* v[d] -= or += v[a] v[b], as (d | sub << 4, a | b << 4), from v = 0 but for s and r:
+/* v[d] += v[a] v[b] (sub = 0) or v[d] -= v[a] v[b] (sub = 1), from v = 0 but for s, r:
  *   R_i[3..5] = r x s          (r_b s_c - r_c s_b)
  *   C_i[0..2] = s_a r_a - s.r  (= -(s_b r_b + s_c r_c), no cancellation)
- *   C_i[3..5] = s_a r_b + s_b r_a,  (a, b, c) = (0, 1, 2), (1, 2, 0), (2, 0, 1) */
+ *   C_i[3..5] = s_a r_b + s_b r_a,  (a, b, c) = (0, 1, 2), (1, 2, 0), (2, 0, 1)
+ * with v[0..2] = s, v[6..8] = r. */
+#define OP(d, sub, a, b) (unsigned char)((d) + 16 * (sub)), (unsigned char)((a) + 16 * (b))
 static const unsigned char row_program[36] = {
-    3, 2 << 4 | 7,  3 | 16, 1 << 4 | 8,   4, 0 << 4 | 8,  4 | 16, 2 << 4 | 6,
-    5, 1 << 4 | 6,  5 | 16, 0 << 4 | 7,   9 | 16, 7 << 4 | 1,  9 | 16, 8 << 4 | 2,
-    10 | 16, 6 << 4 | 0,  10 | 16, 8 << 4 | 2,  11 | 16, 6 << 4 | 0,  11 | 16, 7 << 4 | 1,
-    12, 7 << 4 | 0,  12, 6 << 4 | 1,  13, 8 << 4 | 1,  13, 7 << 4 | 2,
-    14, 6 << 4 | 2,  14, 8 << 4 | 0};
+    OP(3, 0, 7, 2),  OP(3, 1, 8, 1),  OP(4, 0, 8, 0),  OP(4, 1, 6, 2),
+    OP(5, 0, 6, 1),  OP(5, 1, 7, 0),  OP(9, 1, 1, 7),  OP(9, 1, 2, 8),
+    OP(10, 1, 0, 6), OP(10, 1, 2, 8), OP(11, 1, 0, 6), OP(11, 1, 1, 7),
+    OP(12, 0, 0, 7), OP(12, 0, 1, 6), OP(13, 0, 1, 8), OP(13, 0, 2, 7),
+    OP(14, 0, 2, 6), OP(14, 0, 0, 8)};
+#undef OP
 
 void ac_inv_rows(const ac_channel_cal *cal, xf v[15])
 {
@@ -250,13 +249,13 @@ static void norm1(xf a[6][6], xf *norm, xf *amax)
     unsigned i, j;
     clear(norm, sizeof *norm);
     for (j = 0u; j < 6u; j++) {
-        xf sum, unused;
+        xf sum[2]; /* the column's sum, and a sum of sums nobody needs */
         const xf *p = &a[0][j];
-        clear(&sum, sizeof sum);
+        clear(sum, sizeof sum);
         for (i = 0u; i < 6u; i++, p += 6) {
-            acc_abs(amax, &sum, p);
+            acc_abs(amax, &sum[0], p);
         }
-        acc_abs(norm, &unused, &sum);
+        acc_abs(norm, &sum[1], &sum[0]);
     }
 }
 
@@ -328,18 +327,24 @@ ac_status ac_inv_gauss_jordan(xf a[6][6], int8_t perm[6], int16_t *cond_log2)
 
 /* ---- the table build ---------------------------------------------------------------- */
 
-/* a_jl *= 2^(off - colexp_l - colexp_j) for N > 6; for N = 6 only colexp_l (off == 0:
- * R~ = R 2^-colexp) or only colexp_j (off != 0: M's rows, 2^(off - colexp_j) R~^-1). */
+static const int16_t no_exp[6] = {0, 0, 0, 0, 0, 0};
+
+/* a_jl *= 2^(off - re_j - ce_l) with re = ce = colexp for N > 6; for N = 6
+ * re = 0 when off == 0 (R~ = R 2^-colexp), ce = 0 otherwise (M = 2^(off - colexp) R~^-1) */
 static void rescale(ac_build_work *w, uint16_t n, int16_t off)
 {
+    const int16_t *re = w->colexp, *ce = w->colexp;
     unsigned j, l;
+    if (n == 6u) {
+        if (off != 0) {
+            ce = no_exp;
+        } else {
+            re = no_exp;
+        }
+    }
     for (j = 0u; j < 6u; j++) {
         for (l = 0u; l < 6u; l++) {
-            int32_t e = (int32_t)off - w->colexp[(off != 0 || n != 6u) ? j : l];
-            if (n != 6u) {
-                e -= w->colexp[l];
-            }
-            ac_inv_scale(&w->a[j][l], e);
+            ac_inv_scale(&w->a[j][l], (int32_t)off - re[j] - ce[l]);
         }
     }
 }
