@@ -1,282 +1,363 @@
 /*
  * accelcal -- on-device build of the resolver table (see ac_invert.h).
  *
- * Everything here runs in ac_xf (29-bit mantissa, wide exponent), so column
- * scales (counts per m/s^2 against counts per rad/s^2) cost no precision.  It
- * uses the pointer-based core (ac_xf_core.h) with a sticky invalid value,
- * checked where results leave the xf domain.  Memory: the caller's
- * ac_build_work; the columns of M are recomputed in a second pass rather than
- * stored, so N = 12 needs no more RAM than N = 6.
+ * Self-contained and small (the H8/300H budget): a private soft-float on the
+ * ac_xf layout (value m 2^e, 2^29 <= |m| < 2^30, or m == 0 and e == 0) with
+ * only what the build needs -- normalise-and-round, accumulate, multiply,
+ * reciprocal, compare -- in 32-bit integers and 16 x 16 -> 32 multiplies (no
+ * 64-bit arithmetic, nothing from ac_xf.c or ac_ops.c).  Every result is
+ * rounded to 30 bits, to nearest (ties away from zero); a difference whose
+ * smaller operand is more than one binade below the larger may be off by one
+ * more half unit (one guard bit).
+ *
+ * Exponents stay far inside +-30000: the build's inputs are int32 fixed point
+ * and its matrix is equilibrated, and ac_invert6 scales its input so that the
+ * largest entry is about 1 (and the inverse back), so pivots are at least
+ * 2^-27 and nothing can overflow.  Values below 2^-30000 flush to zero.
+ * Memory: the caller's ac_build_work; the columns of M are recomputed in a
+ * second pass rather than stored, so N = 12 needs no more RAM than N = 6.
  */
-#include "accelcal/ac_invert.h"
-#include "ac_xf_core.h"
-#include "ac_internal.h"
+#include "ac_invert_core.h"
 
+#define XF_LO 0x20000000UL /* 2^29: smallest normalised |m| */
+#define XF_HI 0x40000000UL /* 2^30 */
 #define PIVOT_TOL_LOG2 (-26)
 #define COEF_MAX 32767L
 #define ROW_L1_MAX 65535L
 
-static const ac_xf xf_zero = {0, 0};
-static const ac_xf xf_one = {0x20000000L, -29};
+typedef ac_xf xf;
 
-static ac_status valid(const ac_xf *v, uint8_t count)
+/* ---- arithmetic -------------------------------------------------------------------- */
+
+static uint32_t mag(int32_t m)
 {
-    while (count-- != 0u) {
-        if (v[count].e == AC_XF_BAD) {
-            return AC_ERR_RANGE;
+    return (m < 0) ? 0u - (uint32_t)m : (uint32_t)m;
+}
+
+static void clear(void *p, unsigned bytes)
+{
+    unsigned char *c = (unsigned char *)p;
+    while (bytes-- != 0u) {
+        c[bytes] = 0u;
+    }
+}
+
+static void swap(void *a, void *b, unsigned bytes)
+{
+    unsigned char *x = (unsigned char *)a, *y = (unsigned char *)b;
+    while (bytes-- != 0u) {
+        unsigned char t = x[bytes];
+        x[bytes] = y[bytes];
+        y[bytes] = t;
+    }
+}
+
+/* r = (neg ? -1 : 1) * mag 2^e, normalised and rounded half away from zero */
+static void pack(xf *r, unsigned neg, uint32_t mag_, int32_t e)
+{
+    if (mag_ != 0u) {
+        unsigned k = 0u;
+        while ((mag_ >> k) >= XF_HI) {
+            k++;
+        }
+        if (k != 0u) {
+            mag_ = ((mag_ >> (k - 1u)) + 1u) >> 1; /* < 2^30, or 2^30 after a carry */
+            e += (int32_t)k;
+        }
+        while (mag_ < XF_LO) {
+            mag_ <<= 1;
+            e--;
+        }
+        if (mag_ == XF_HI) {
+            mag_ = XF_LO;
+            e++;
         }
     }
-    return AC_OK;
+    if (e < AC_INV_EMIN) {
+        mag_ = 0u;
+    }
+    r->m = (int32_t)mag_;
+    if (neg) {
+        r->m = -r->m;
+    }
+    r->e = (int16_t)((mag_ == 0u) ? 0 : e);
 }
 
-static void load_channel(const ac_channel_cal *cal, ac_xf s[3], ac_xf r[3])
+void ac_inv_scale(xf *v, int32_t k)
 {
-    uint8_t a;
-    for (a = 0u; a < 3u; a++) {
-        ac_xfp_from_fixed(&s[a], cal->sens[a], AC_SENS_FRAC);
-        ac_xfp_from_fixed(&r[a], cal->pos[a], AC_POS_FRAC);
-    }
+    pack(v, v->m < 0, mag(v->m), (int32_t)v->e + k);
 }
 
-ac_status ac_sensor_row(const ac_channel_cal *cal, ac_xf row[6])
+static void from_fixed(xf *r, int32_t v, int16_t frac)
 {
-    ac_xf s[3], r[3], t;
-    uint8_t a;
-    if (cal == 0 || row == 0) {
-        return AC_ERR_NULL;
-    }
-    load_channel(cal, s, r);
-    for (a = 0u; a < 3u; a++) {
-        /* r x s: the channel's response to angular acceleration */
-        uint8_t b = (uint8_t)((a + 1u) % 3u), c = (uint8_t)((a + 2u) % 3u);
-        row[a] = s[a];
-        ac_xfp_mul(&row[3u + a], &r[b], &s[c]);
-        ac_xfp_mul(&t, &r[c], &s[b]);
-        ac_xfp_sub(&row[3u + a], &row[3u + a], &t);
-    }
-    return valid(row, 6u);
+    pack(r, v < 0, mag(v), -frac);
 }
 
-ac_status ac_centripetal_row(const ac_channel_cal *cal, ac_xf row[6])
+static const xf xf_one = {0x20000000L, -29};
+
+/* r = r + a b, or r - a b when sub != 0.  The product is kept to 31 bits
+ * (floor(|a||b| / 2^28) from four 16 x 16 products, halved if it reaches 2^31),
+ * r to 31 bits (one guard bit); the sum is rounded once.  r may alias a or b
+ * only if it is not zero on entry (use mul() for r = a b). */
+static void mac(xf *r, const xf *a, const xf *b, unsigned sub)
 {
-    /* s.(w (w.r) - r |w|^2) over p = (wx^2, wy^2, wz^2, wx wy, wy wz, wz wx) */
-    ac_xf s[3], r[3], sr = xf_zero, t;
-    uint8_t a;
-    if (cal == 0 || row == 0) {
-        return AC_ERR_NULL;
+    uint32_t x = mag(a->m), y = mag(b->m), z = mag(r->m) << 1;
+    uint16_t xh = (uint16_t)(x >> 16), xl = (uint16_t)x, yh = (uint16_t)(y >> 16), yl = (uint16_t)y;
+    uint32_t p = (uint32_t)xh * yl + (uint32_t)xl * yh + (((uint32_t)xl * yl) >> 16);
+    unsigned sp = (unsigned)(a->m < 0) ^ (unsigned)(b->m < 0) ^ sub, sz = r->m < 0;
+    int32_t ep = (int32_t)a->e + b->e + 28, ez = (int32_t)r->e - 1, d;
+    p = (((uint32_t)xh * yh) << 4) + (p >> 12);
+    if (p >= 0x80000000UL) {
+        p >>= 1;
+        ep++;
     }
-    load_channel(cal, s, r);
-    for (a = 0u; a < 3u; a++) {
-        ac_xfp_mac(&sr, &s[a], &r[a]);
+    if (p == 0u) {
+        ep = ez;
     }
-    for (a = 0u; a < 3u; a++) {
-        uint8_t b = (uint8_t)((a + 1u) % 3u);
-        ac_xfp_mul(&row[a], &s[a], &r[a]);
-        ac_xfp_sub(&row[a], &row[a], &sr);
-        ac_xfp_mul(&row[3u + a], &s[a], &r[b]);
-        ac_xfp_mul(&t, &s[b], &r[a]);
-        ac_xfp_add(&row[3u + a], &row[3u + a], &t);
+    if (z == 0u) {
+        ez = ep;
     }
-    return valid(row, 6u);
+    d = ez - ep; /* shift the one with the smaller exponent */
+    if (d >= 0) {
+        p >>= (d > 31) ? 31u : (unsigned)d;
+    } else {
+        z >>= (d < -31) ? 31u : (unsigned)-d;
+        ez = ep;
+    }
+    if (sp == sz) {
+        z += p; /* < 2^32 */
+    } else if (z >= p) {
+        z -= p;
+    } else {
+        z = p - z;
+        sz = sp;
+    }
+    pack(r, sz, z, ez);
 }
 
-static void norm1(ac_xf a[6][6], ac_xf *out) /* max column sum of |a| */
+/* y[0..5] += alpha x[0..5] */
+static void axpy(xf *y, const xf *alpha, const xf *x)
 {
-    uint8_t i, j;
-    *out = xf_zero;
+    unsigned j;
     for (j = 0u; j < 6u; j++) {
-        ac_xf sum = xf_zero, unused = xf_zero;
-        for (i = 0u; i < 6u; i++) {
-            ac_xfp_acc_abs(&unused, &sum, &a[i][j]);
-        }
-        ac_xfp_acc_abs(out, 0, &sum);
+        mac(&y[j], alpha, &x[j], 0u);
     }
 }
 
-static void swap_xf(ac_xf *a, ac_xf *b)
+/* |a| > |b| */
+static unsigned gtabs(const xf *a, const xf *b)
 {
-    ac_xf t = *a;
-    *a = *b;
-    *b = t;
+    uint32_t x = mag(a->m), y = mag(b->m);
+    if (x != 0u && y != 0u && a->e != b->e) {
+        return a->e > b->e;
+    }
+    return x > y;
 }
 
-ac_status ac_invert6(ac_xf a[6][6], int8_t perm[6], int16_t *cond_log2)
+/* max = max(max, |v|); sum += |v| */
+static void acc_abs(xf *max, xf *sum, const xf *v)
 {
-    ac_xf na, ninv, amax = xf_zero, cond;
-    uint8_t i, j, k;
-    int16_t cl2;
-    if (a == 0 || perm == 0) {
-        return AC_ERR_NULL;
+    if (gtabs(v, max)) {
+        *max = *v;
+        max->m = (int32_t)mag(max->m);
     }
-    for (i = 0u; i < 6u; i++) {
-        for (j = 0u; j < 6u; j++) {
-            ac_xfp_normalize(&a[i][j]); /* the caller's values may be in any form */
-        }
-    }
-    norm1(a, &na);
-    for (i = 0u; i < 6u; i++) {
-        for (j = 0u; j < 6u; j++) {
-            ac_xfp_acc_abs(&amax, 0, &a[i][j]);
-        }
-    }
-    if (valid(&amax, 1u) != AC_OK || valid(&na, 1u) != AC_OK) {
-        return AC_ERR_RANGE;
-    }
-    if (amax.m == 0) {
-        return AC_ERR_SINGULAR;
-    }
-    ac_xfp_ldexp(&amax, PIVOT_TOL_LOG2); /* amax is the pivot tolerance from here on */
+    mac(sum, v, &xf_one, v->m < 0);
+}
 
+/* round(v 2^s) half up (floor(x + 1/2)); 1 if that does not fit int32 */
+static unsigned to_fixed(const xf *v, int16_t s, int32_t *out)
+{
+    int32_t k = (v->m == 0) ? (int32_t)-31 : (int32_t)v->e + s; /* v 2^s = m 2^k */
+    uint32_t u;
+    unsigned n;
+    if (k >= 0) {
+        *out = (k != 0) ? v->m + v->m : v->m; /* |m| 2 < 2^31 */
+        return k > 1;
+    }
+    n = (k < -31) ? 31u : (unsigned)-k; /* below 2^-31 |m| < 2^-2 rounds to 0 */
+    /* floor((m + 2^(n-1)) / 2^n), offset by 2^31 to stay unsigned */
+    u = (uint32_t)v->m + ((uint32_t)1 << (n - 1u)) + (uint32_t)0x80000000UL;
+    *out = (int32_t)(u >> n) - (int32_t)((uint32_t)0x80000000UL >> n);
+    return 0u;
+}
+
+/* The host quantizer's rule: the largest s <= 31 with max |v| 2^s <= 32767 and
+ * sum |v| 2^s <= 65535 - count (mm[0] = max |v|, mm[1] = sum |v|). */
+static int16_t row_shift(const xf mm[2], uint16_t count)
+{
+    int16_t best = 31;
+    unsigned q;
+    for (q = 0u; q < 2u; q++) {
+        uint32_t m = mag(mm[q].m), lim = (q != 0u) ? (uint32_t)ROW_L1_MAX - count : (uint32_t)COEF_MAX;
+        int16_t s = (int16_t)-mm[q].e;
+        if (m != 0u) {
+            while (lim < m) { /* lim < 2^16, m < 2^30: 15 steps at most */
+                lim <<= 1;
+                s--;
+            }
+            if (s < best) {
+                best = s;
+            }
+        }
+    }
+    return best;
+}
+
+/* to_fixed into int16, saturated (the shifts make it fit) */
+static int16_t to_i16(const xf *v, int16_t s)
+{
+    int32_t q = 0;
+    (void)to_fixed(v, s, &q);
+    return (int16_t)((q > COEF_MAX) ? COEF_MAX : ((q < -COEF_MAX) ? -COEF_MAX : q));
+}
+
+/* ---- rows of the sensor and centripetal matrices ---------------------------------- */
+
+/* v[d] += v[a] v[b] (sub = 0) or v[d] -= v[a] v[b] (sub = 1), from v = 0 but for s, r:
+ *   R_i[3..5] = r x s          (r_b s_c - r_c s_b)
+ *   C_i[0..2] = s_a r_a - s.r  (= -(s_b r_b + s_c r_c), no cancellation)
+ *   C_i[3..5] = s_a r_b + s_b r_a,  (a, b, c) = (0, 1, 2), (1, 2, 0), (2, 0, 1)
+ * with v[0..2] = s, v[6..8] = r. */
+#define OP(d, sub, a, b) (unsigned char)((d) + 16 * (sub)), (unsigned char)((a) + 16 * (b))
+static const unsigned char row_program[36] = {
+    OP(3, 0, 7, 2),  OP(3, 1, 8, 1),  OP(4, 0, 8, 0),  OP(4, 1, 6, 2),
+    OP(5, 0, 6, 1),  OP(5, 1, 7, 0),  OP(9, 1, 1, 7),  OP(9, 1, 2, 8),
+    OP(10, 1, 0, 6), OP(10, 1, 2, 8), OP(11, 1, 0, 6), OP(11, 1, 1, 7),
+    OP(12, 0, 0, 7), OP(12, 0, 1, 6), OP(13, 0, 1, 8), OP(13, 0, 2, 7),
+    OP(14, 0, 2, 6), OP(14, 0, 0, 8)};
+#undef OP
+
+void ac_inv_rows(const ac_channel_cal *cal, xf v[15])
+{
+    const unsigned char *p;
+    unsigned a;
+    clear(v, 15u * sizeof *v);
+    for (a = 0u; a < 3u; a++) {
+        from_fixed(&v[a], cal->sens[a], AC_SENS_FRAC);
+        from_fixed(&v[6u + a], cal->pos[a], AC_POS_FRAC);
+    }
+    for (p = row_program; p < row_program + sizeof row_program; p += 2) {
+        mac(&v[p[0] & 15u], &v[p[1] & 15u], &v[p[1] >> 4], (unsigned)p[0] >> 4);
+    }
+}
+
+/* ---- the 6x6 inverse -------------------------------------------------------------- */
+
+/* norm = max column sum of |a|; amax = max(amax, max |a_ij|) */
+static void norm1(xf a[6][6], xf *norm, xf *amax)
+{
+    unsigned i, j;
+    clear(norm, sizeof *norm);
+    for (j = 0u; j < 6u; j++) {
+        xf sum[2]; /* the column's sum, and a sum of sums nobody needs */
+        const xf *p = &a[0][j];
+        clear(sum, sizeof sum);
+        for (i = 0u; i < 6u; i++, p += 6) {
+            acc_abs(amax, &sum[0], p);
+        }
+        acc_abs(norm, &sum[1], &sum[0]);
+    }
+}
+
+ac_status ac_inv_gauss_jordan(xf a[6][6], int8_t perm[6], int16_t *cond_log2)
+{
+    xf na, ninv, tol;
+    unsigned i, k;
+    clear(&tol, sizeof tol);
+    norm1(a, &na, &tol);
+    tol.e = (int16_t)(tol.e + PIVOT_TOL_LOG2);
     for (k = 0u; k < 6u; k++) {
-        uint8_t p = k;
-        ac_xf inv;
-        for (i = (uint8_t)(k + 1u); i < 6u; i++) {
-            if (ac_xfp_cmpabs(&a[i][k], &a[p][k]) > 0) {
+        xf *rk = a[k], *piv = &rk[k], *best = piv, *c = piv, inv;
+        unsigned p = k;
+        uint32_t n = XF_LO, d, q = 0u;
+        for (i = k + 1u; i < 6u; i++) {
+            c += 6;
+            if (gtabs(c, best)) {
+                best = c;
                 p = i;
             }
         }
-        if (valid(&a[p][k], 1u) != AC_OK) {
-            return AC_ERR_RANGE;
-        }
-        if (ac_xfp_cmpabs(&a[p][k], &amax) <= 0) {
+        if (!gtabs(best, &tol)) { /* also when a == 0 */
             return AC_ERR_SINGULAR;
         }
-        if (p != k) {
-            for (j = 0u; j < 6u; j++) {
-                swap_xf(&a[k][j], &a[p][j]);
-            }
-        }
         perm[k] = (int8_t)p;
-        ac_xfp_div(&inv, &xf_one, &a[k][k]);
-        a[k][k] = xf_one;
-        for (j = 0u; j < 6u; j++) {
-            ac_xfp_mul(&a[k][j], &a[k][j], &inv);
+        swap(rk, a[p], sizeof a[0]);
+        /* 1 / pivot: restoring division floor(2^29 2^31 / |m|), n < 2 |m| throughout */
+        d = mag(piv->m);
+        for (i = 0u; i < 32u; i++) {
+            q <<= 1;
+            if (n >= d) {
+                n -= d;
+                q |= 1u;
+            }
+            n <<= 1;
+        }
+        pack(&inv, piv->m < 0, q, (int32_t)-60 - piv->e);
+        *piv = xf_one;
+        for (i = 0u; i < 6u; i++) {
+            xf t = rk[i];
+            clear(&rk[i], sizeof t);
+            mac(&rk[i], &t, &inv, 0u);
         }
         for (i = 0u; i < 6u; i++) {
-            ac_xf f;
-            if (i == k || a[i][k].m == 0) {
-                continue;
-            }
-            f = a[i][k];
-            a[i][k] = xf_zero;
-            for (j = 0u; j < 6u; j++) {
-                ac_xf t;
-                ac_xfp_mul(&t, &f, &a[k][j]);
-                ac_xfp_sub(&a[i][j], &a[i][j], &t);
+            xf *ri = a[i], f = ri[k];
+            if (i != k) {
+                clear(&ri[k], sizeof f);
+                for (p = 0u; p < 6u; p++) {
+                    mac(&ri[p], &f, &rk[p], 1u);
+                }
             }
         }
     }
     /* undo the row interchanges as column interchanges, last first */
-    for (k = 6u; k-- > 0u;) {
-        uint8_t p = (uint8_t)perm[k];
-        if (p != k) {
-            for (i = 0u; i < 6u; i++) {
-                swap_xf(&a[i][k], &a[i][p]);
-            }
+    while (k-- != 0u) {
+        xf *x = &a[0][k], *y = &a[0][(unsigned)perm[k]];
+        for (i = 0u; i < 6u; i++, x += 6, y += 6) {
+            swap(x, y, sizeof *x);
         }
     }
-    norm1(a, &ninv);
-    ac_xfp_mul(&cond, &na, &ninv);
-    if (valid(&cond, 1u) != AC_OK) {
-        return AC_ERR_RANGE;
-    }
-    /* cond = m 2^e with 2^29 <= m < 2^30 */
-    cl2 = (int16_t)(cond.e + ((cond.m == 0x20000000L) ? 29 : 30));
-    if (cond_log2 != 0) {
-        *cond_log2 = cl2;
-    }
-    return (cl2 > AC_COND_LOG2_MAX) ? AC_ERR_ILL_COND : AC_OK;
+    norm1(a, &ninv, &tol);
+    clear(&tol, sizeof tol);
+    mac(&tol, &na, &ninv, 0u);
+    na = tol;
+    /* cond = m 2^e with 2^29 <= m < 2^30: ceil(log2) is e + 29 for m == 2^29, else e + 30 */
+    *cond_log2 = (int16_t)(na.e + ((na.m == (int32_t)XF_LO) ? 29 : 30));
+    return (*cond_log2 > AC_COND_LOG2_MAX) ? AC_ERR_ILL_COND : AC_OK;
 }
 
-/* Row i of R with columns scaled by 2^-colexp (equilibrated). */
-static ac_status scaled_row(const ac_channel_cal *cal, const int16_t colexp[6], ac_xf row[6])
-{
-    uint8_t j;
-    ac_status st = ac_sensor_row(cal, row);
-    for (j = 0u; j < 6u; j++) {
-        ac_xfp_ldexp(&row[j], (int16_t)-colexp[j]);
-    }
-    return st;
-}
+/* ---- the table build ---------------------------------------------------------------- */
 
-/* Column i of M in output LSB per count (a holds the inverse). */
-static ac_status m_column(const ac_build_work *w, const ac_channel_cal *cal, uint16_t i,
-                          uint16_t n, ac_xf col[6])
+static const int16_t no_exp[6] = {0, 0, 0, 0, 0, 0};
+
+/* a_jl *= 2^(off - re_j - ce_l) with re = ce = colexp for N > 6; for N = 6
+ * re = 0 when off == 0 (R~ = R 2^-colexp), ce = 0 otherwise (M = 2^(off - colexp) R~^-1) */
+static void rescale(ac_build_work *w, uint16_t n, int16_t off)
 {
-    uint8_t j;
-    ac_status st = AC_OK;
+    const int16_t *re = w->colexp, *ce = w->colexp;
+    unsigned j, l;
     if (n == 6u) {
-        for (j = 0u; j < 6u; j++) {
-            col[j] = w->a[j][i];
-        }
-    } else {
-        ac_xf rt[6];
-        uint8_t l;
-        st = scaled_row(cal, w->colexp, rt);
-        for (j = 0u; j < 6u; j++) {
-            col[j] = xf_zero;
-            for (l = 0u; l < 6u; l++) {
-                ac_xfp_mac(&col[j], &w->a[j][l], &rt[l]);
-            }
+        if (off != 0) {
+            ce = no_exp;
+        } else {
+            re = no_exp;
         }
     }
     for (j = 0u; j < 6u; j++) {
-        ac_xfp_ldexp(&col[j], (int16_t)(AC_OUT_FRAC - w->colexp[j]));
+        for (l = 0u; l < 6u; l++) {
+            ac_inv_scale(&w->a[j][l], (int32_t)off - re[j] - ce[l]);
+        }
     }
-    return (st != AC_OK) ? st : valid(col, 6u);
-}
-
-/* Largest s with |v| 2^s <= lim (the host quantizer's rule); 31 for v == 0. */
-static int16_t largest_shift(const ac_xf *v, uint32_t lim)
-{
-    uint32_t m = ac_abs_u(v->m);
-    uint8_t k = 0u;
-    if (m == 0u) {
-        return 31;
-    }
-    while ((lim << k) < m) { /* stops before lim << k can reach 2^31 */
-        k++;
-    }
-    return (int16_t)(-(int16_t)k - v->e);
-}
-
-/* min(31, shift for the largest entry, shift for the row sum); AC_ERR_RANGE below -31 */
-static ac_status row_shift(const ac_xf *vmax, const ac_xf *vsum, uint32_t count, int8_t *out)
-{
-    int16_t s1 = largest_shift(vmax, (uint32_t)COEF_MAX);
-    int16_t s2 = largest_shift(vsum, (uint32_t)ROW_L1_MAX - count);
-    if (s2 < s1) {
-        s1 = s2;
-    }
-    if (s1 > 31) {
-        s1 = 31;
-    }
-    if (s1 < -31 || valid(vmax, 1u) != AC_OK || valid(vsum, 1u) != AC_OK) {
-        return AC_ERR_RANGE;
-    }
-    *out = (int8_t)s1;
-    return AC_OK;
-}
-
-static ac_status to_i16(const ac_xf *v, int8_t shift, int16_t *out)
-{
-    int32_t q;
-    if (ac_xfp_to_fixed(v, shift, &q) != AC_OK || q > COEF_MAX || q < -COEF_MAX - 1) {
-        return AC_ERR_RANGE; /* cannot happen with row_shift's shift */
-    }
-    *out = (int16_t)q;
-    return AC_OK;
 }
 
 ac_status ac_resolver_build(const ac_channel_cal *cal, uint16_t n, ac_build_work *w,
                             ac_resolver *out, ac_build_info *info)
 {
-    ac_xf col[6], crow[6], o;
+    xf v[15], e[6], c, o;
     int8_t m_shift[6], g_shift[6];
     int32_t k[6];
     int16_t cl2 = 0;
     uint16_t i;
-    uint8_t j, l;
+    unsigned j, l, pass;
     ac_status st;
 
     if (cal == 0 || w == 0 || out == 0) {
@@ -285,121 +366,90 @@ ac_status ac_resolver_build(const ac_channel_cal *cal, uint16_t n, ac_build_work
     if (n < 6u || n > (uint16_t)AC_MAX_CHANNELS) {
         return AC_ERR_SIZE;
     }
+    clear(w, sizeof *w);
+    clear(e, sizeof e);
 
-    /* 1. equilibrate the columns by powers of two (rmax holds the column maxima) */
-    for (j = 0u; j < 6u; j++) {
-        w->rmax[j] = xf_zero;
-    }
-    for (i = 0u; i < n; i++) {
-        st = ac_sensor_row(&cal[i], col);
-        if (st != AC_OK) {
-            return st;
+    /* Three passes over the channels, with u = R_i for N > 6 and u = e_i for N = 6:
+     *  0: a = R (N = 6) or R^T R (N > 6), as a_j += u_j R_i; column maxima of R;
+     *  1: after the inverse, M_ji = (a^-1 u)_j scaled (rescale): the row scales,
+     *     M o and M C;
+     *  2: with the shifts known, the table. */
+    for (pass = 0u; pass < 3u; pass++) {
+        if (pass == 1u) {
+            /* equilibrate the columns of R by powers of two (exactly) */
+            for (j = 0u; j < 6u; j++) {
+                xf *r = w->acc[j];
+                if (r[7].m == 0) {
+                    return AC_ERR_SINGULAR; /* nothing senses this degree of freedom */
+                }
+                w->colexp[j] = (int16_t)(r[7].e + 30);
+                clear(&r[7], 2u * sizeof *r);
+            }
+            rescale(w, n, 0);
+            st = ac_inv_gauss_jordan(w->a, w->perm, &cl2);
+            if (info != 0) {
+                info->cond_log2 = cl2;
+            }
+            if (st != AC_OK) {
+                return st;
+            }
+            rescale(w, n, AC_OUT_FRAC);
         }
-        for (j = 0u; j < 6u; j++) {
-            ac_xfp_acc_abs(&w->rmax[j], 0, &col[j]);
-        }
-    }
-    for (j = 0u; j < 6u; j++) {
-        if (w->rmax[j].m == 0) {
-            return AC_ERR_SINGULAR; /* nothing senses this degree of freedom */
-        }
-        w->colexp[j] = (int16_t)(w->rmax[j].e + 30);
-    }
-
-    /* 2. the matrix to invert: R~ (N = 6) or R~^T R~ (N > 6) */
-    for (j = 0u; j < 6u; j++) {
-        for (l = 0u; l < 6u; l++) {
-            w->a[j][l] = xf_zero;
-        }
-    }
-    for (i = 0u; i < n; i++) {
-        (void)scaled_row(&cal[i], w->colexp, col); /* valid: checked in step 1 */
-        for (j = 0u; j < 6u; j++) {
-            if (n == 6u) {
-                w->a[i][j] = col[j];
-            } else {
+        if (pass == 2u) {
+            /* shifts and offset terms: every failure is found before out is touched */
+            for (j = 0u; j < 6u; j++) {
+                xf *r = w->acc[j], gm[2];
+                int16_t ms, gs;
+                clear(gm, sizeof gm);
                 for (l = 0u; l < 6u; l++) {
-                    ac_xfp_mac(&w->a[j][l], &col[j], &col[l]);
+                    acc_abs(&gm[0], &gm[1], &r[l]);
+                }
+                ms = row_shift(&r[7], n);
+                gs = row_shift(gm, 6u);
+                if (ms < -31 || gs < -31 || to_fixed(&r[6], ms, &k[j]) != 0u) {
+                    return AC_ERR_RANGE;
+                }
+                m_shift[j] = (int8_t)ms;
+                g_shift[j] = (int8_t)gs;
+            }
+            clear(out->m, sizeof out->m);
+            out->n = n;
+        }
+        for (i = 0u; i < n; i++) {
+            const xf *u = v;
+            ac_inv_rows(&cal[i], v);
+            if (n == 6u) {
+                e[i].m = (int32_t)XF_LO; /* 1 */
+                e[i].e = -29;
+                u = e;
+            }
+            from_fixed(&o, cal[i].offset, AC_OFFSET_FRAC);
+            for (j = 0u; j < 6u; j++) {
+                xf *r = w->acc[j], *aj = w->a[j];
+                if (pass == 0u) {
+                    acc_abs(&r[7], &r[8], &v[j]);
+                    axpy(aj, &u[j], v);
+                    continue;
+                }
+                clear(&c, sizeof c);
+                for (l = 0u; l < 6u; l++) {
+                    mac(&c, &aj[l], &u[l], 0u);
+                }
+                if (pass == 1u) {
+                    acc_abs(&r[7], &r[8], &c);
+                    mac(&r[6], &c, &o, 0u);
+                    axpy(r, &c, &v[9]);
+                } else {
+                    out->m[j][i] = to_i16(&c, m_shift[j]);
+                    out->m_shift[j] = m_shift[j];
+                    out->g_shift[j] = g_shift[j];
+                    out->k[j] = k[j];
+                    for (l = 0u; l < 6u; l++) {
+                        out->g[j][l] = to_i16(&r[l], g_shift[j]);
+                    }
                 }
             }
-        }
-    }
-    st = ac_invert6(w->a, w->perm, &cl2);
-    if (info != 0) {
-        info->cond_log2 = cl2;
-    }
-    if (st != AC_OK) {
-        return st;
-    }
-
-    /* 3. first pass over the columns of M: row scales, M o and M C */
-    for (j = 0u; j < 6u; j++) {
-        w->rmax[j] = xf_zero;
-        w->rsum[j] = xf_zero;
-        w->k[j] = xf_zero;
-        for (l = 0u; l < 6u; l++) {
-            w->g[j][l] = xf_zero;
-        }
-    }
-    for (i = 0u; i < n; i++) {
-        st = m_column(w, &cal[i], i, n, col);
-        if (st == AC_OK) {
-            st = ac_centripetal_row(&cal[i], crow);
-        }
-        if (st != AC_OK) {
-            return st;
-        }
-        ac_xfp_from_fixed(&o, cal[i].offset, AC_OFFSET_FRAC);
-        for (j = 0u; j < 6u; j++) {
-            ac_xfp_acc_abs(&w->rmax[j], &w->rsum[j], &col[j]);
-            ac_xfp_mac(&w->k[j], &col[j], &o);
-            for (l = 0u; l < 6u; l++) {
-                ac_xfp_mac(&w->g[j][l], &col[j], &crow[l]);
-            }
-        }
-    }
-
-    /* 4. shifts and offset terms; every failure is found before out is touched */
-    for (j = 0u; j < 6u; j++) {
-        ac_xf gmax = xf_zero, gsum = xf_zero;
-        st = row_shift(&w->rmax[j], &w->rsum[j], n, &m_shift[j]);
-        if (st != AC_OK) {
-            return st;
-        }
-        if (ac_xfp_to_fixed(&w->k[j], m_shift[j], &k[j]) != AC_OK) {
-            return AC_ERR_RANGE;
-        }
-        for (l = 0u; l < 6u; l++) {
-            ac_xfp_acc_abs(&gmax, &gsum, &w->g[j][l]);
-        }
-        st = row_shift(&gmax, &gsum, 6u, &g_shift[j]);
-        if (st != AC_OK) {
-            return st;
-        }
-    }
-
-    /* 5. write the table; the second pass recomputes the columns of M */
-    out->n = n;
-    for (j = 0u; j < 6u; j++) {
-        out->m_shift[j] = m_shift[j];
-        out->g_shift[j] = g_shift[j];
-        out->k[j] = k[j];
-        for (l = 0u; l < 6u; l++) {
-            if (to_i16(&w->g[j][l], g_shift[j], &out->g[j][l]) != AC_OK) {
-                return AC_ERR_RANGE;
-            }
-        }
-        for (i = n; i < (uint16_t)AC_MAX_CHANNELS; i++) {
-            out->m[j][i] = 0;
-        }
-    }
-    for (i = 0u; i < n; i++) {
-        st = m_column(w, &cal[i], i, n, col);
-        for (j = 0u; j < 6u && st == AC_OK; j++) {
-            st = to_i16(&col[j], m_shift[j], &out->m[j][i]);
-        }
-        if (st != AC_OK) {
-            return st;
+            clear(e, sizeof e);
         }
     }
     return AC_OK;

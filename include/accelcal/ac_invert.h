@@ -3,8 +3,11 @@
  * parameters, with no host: after a field recalibration firmware re-derives
  * M (the 6x6 inverse for N = 6, the least-squares pseudo-inverse
  * (R^T R)^-1 R^T for 6 < N <= AC_MAX_CHANNELS), the offset term and the
- * centripetal table, in integer arithmetic (ac_xf), and quantises them with
- * the same rule as the host's quantizer (python/accelcal/quantize.py).
+ * centripetal table, in integer arithmetic (a compact private soft-float on
+ * the ac_xf layout, csrc/ac_invert.c: 30-bit mantissas, 32-bit integer and
+ * 16 x 16 multiplies only), and quantises them with the same rule as the
+ * host's quantizer (python/accelcal/quantize.py).  Firmware that calls only
+ * ac_resolver_build links ac_invert.o alone (no ac_xf.o, no ac_invert_api.o).
  *
  * Columns of R are equilibrated by powers of two; Gauss-Jordan elimination
  * uses partial pivoting.  A pivot below 2^-26 of the largest matrix entry
@@ -27,13 +30,11 @@ typedef struct ac_channel_cal {
 } ac_channel_cal;
 
 /* Caller-owned scratch memory for ac_resolver_build (may live in a union
- * with other buffers; nothing in it is needed afterwards). */
+ * with other buffers; nothing in it is needed afterwards).  Its layout is
+ * private to the build. */
 typedef struct ac_build_work {
-    ac_xf a[6][6];   /* equilibrated R (N = 6) or R^T R (N > 6), then its inverse */
-    ac_xf g[6][6];   /* M C */
-    ac_xf k[6];      /* M o */
-    ac_xf rmax[6];   /* per output row: max |M_ji| */
-    ac_xf rsum[6];   /* per output row: sum |M_ji| */
+    ac_xf a[6][6];   /* R (N = 6) or R^T R (N > 6), equilibrated, then its inverse */
+    ac_xf acc[6][9]; /* per output row j: (M C)_j. [0..5], (M o)_j [6], max_i |.| [7], sum_i |.| [8] */
     int16_t colexp[6];
     int8_t perm[6];
 } ac_build_work;
@@ -51,8 +52,11 @@ ac_status ac_resolver_build(const ac_channel_cal *cal, uint16_t n, ac_build_work
 ac_status ac_sensor_row(const ac_channel_cal *cal, ac_xf row[6]);
 ac_status ac_centripetal_row(const ac_channel_cal *cal, ac_xf row[6]);
 
-/* In-place inverse of the 6x6 matrix a by Gauss-Jordan with partial pivoting;
- * cond_log2 (may be NULL) receives ceil(log2(||a||_1 ||a^-1||_1)). */
+/* In-place inverse of the 6x6 matrix a by Gauss-Jordan with partial pivoting
+ * (the build's own elimination, on a scaled by a power of two so that its
+ * largest entry is about 1); cond_log2 (may be NULL) receives
+ * ceil(log2(||a||_1 ||a^-1||_1)).  Exponents of a must be within +-30000
+ * (AC_ERR_RANGE otherwise, and when the inverse would leave that range). */
 ac_status ac_invert6(ac_xf a[6][6], int8_t perm[6], int16_t *cond_log2);
 
 #endif /* AC_INVERT_H */
