@@ -115,9 +115,15 @@ def _tangent(d):
     return np.stack([e1, np.cross(d, e1)], 1)
 
 
-def crb(dev, b, S, F, jigfree, n=N_PER_POSE):
+def crb(dev, b, S, F, jigfree, n=N_PER_POSE, prior_deg=0.0):
     """CRB covariance of the channel parameters [b_i, s_i] (N*4, N*4), by finite
-    differences of model.predict_counts (independent of calibrate.py)."""
+    differences of model.predict_counts (independent of calibrate.py).
+
+    ``prior_deg`` > 0 (known poses with a jig error): the bound for a jig whose
+    poses are off by a random rotation of that rms angle, i.e. the Bayesian
+    (Van Trees) bound: the pose directions are unknowns too (two tangent angles a
+    pose, as jig-free) with the prior information 3/prior^2 (rad) on each angle,
+    no gauge (the prior fixes the frame), in the jig's frame."""
     N = dev.n_channels
     P = len(F)
     g = np.linalg.norm(F, axis=1)
@@ -125,16 +131,18 @@ def crb(dev, b, S, F, jigfree, n=N_PER_POSE):
     T = _tangent(d)
     sig2 = (dev.noise_mps2 * dev.counts_per_mps2) ** 2 + 1 / 12
 
+    free = jigfree or prior_deg > 0
+
     def fwd(th):
         c = th[:4 * N].reshape(N, 4)
         Fp = F
-        if jigfree:
+        if free:
             a = th[4 * N:].reshape(P, 2)
             v = d + np.einsum("pk,pkj->pj", a, T)
             Fp = g[:, None] * v / np.linalg.norm(v, axis=1, keepdims=True)
         return (model.predict_counts(c[:, 0], c[:, 1:], dev.positions, Fp) / np.sqrt(sig2)).ravel()
 
-    th0 = np.concatenate([np.hstack([b[:, None], S]).ravel(), np.zeros(2 * P if jigfree else 0)])
+    th0 = np.concatenate([np.hstack([b[:, None], S]).ravel(), np.zeros(2 * P if free else 0)])
     J = np.empty((P * N, th0.size))
     for j in range(th0.size):
         h = 1e-6 * max(1.0, abs(th0[j]))
@@ -143,6 +151,9 @@ def crb(dev, b, S, F, jigfree, n=N_PER_POSE):
         tm[j] -= h
         J[:, j] = (fwd(tp) - fwd(tm)) / (2 * h)
     info = n * J.T @ J
+    if prior_deg > 0 and not jigfree:
+        info[4 * N:, 4 * N:] += np.eye(2 * P) * 3.0 / np.radians(prior_deg) ** 2
+        return np.linalg.inv(info)[:4 * N, :4 * N]
     if not jigfree:
         return np.linalg.inv(info)
 
@@ -169,7 +180,7 @@ def study(dev, P, jigfree, trials, rng, pose_err_deg=0.0, desc="", jig_accuracy_
     ``jig_accuracy_deg``: the jig accuracy the known-pose fit is told (0: exact references)."""
     g = dev.gravity_mps2
     F_nom = g * POSE_SETS[P]
-    errs_b, errs_s, crb_b, crb_s = [], [], [], []
+    errs_b, errs_s, crb_b, crb_s, crbj_b, crbj_s = [], [], [], [], [], []
     off_pct, gain_pct, axis_pct = [], [], []
     for _ in tqdm(range(trials), desc=desc, leave=False, file=sys.stderr):
         b, S = draw_truth(dev, rng)
@@ -185,6 +196,12 @@ def study(dev, P, jigfree, trials, rng, pose_err_deg=0.0, desc="", jig_accuracy_
             S_ref, F_ref = S, F_true
         C = crb(dev, b, S_ref, F_ref, jigfree)
         var = np.diag(C).reshape(dev.n_channels, 4)
+        if pose_err_deg > 0 and not jigfree:
+            # the bound at the nominal poses (the true ones differ by the jig error: second order)
+            Cj = crb(dev, b, S_ref, F_nom, False, prior_deg=pose_err_deg)
+            vj = np.diag(Cj).reshape(dev.n_channels, 4)
+            crbj_b.append(vj[:, 0])
+            crbj_s.append(vj[:, 1:])
         errs_b.append(fit.offsets - b)
         errs_s.append(fit.sensitivity - S_ref)
         crb_b.append(var[:, 0])
@@ -203,6 +220,11 @@ def study(dev, P, jigfree, trials, rng, pose_err_deg=0.0, desc="", jig_accuracy_
     }
     out["ratio_b"] = out["rms_b"] / out["crb_b"]
     out["ratio_s"] = out["rms_s"] / out["crb_s"]
+    if crbj_b:
+        out["crbj_b"] = np.sqrt(np.mean(crbj_b))
+        out["crbj_s"] = np.sqrt(np.mean(crbj_s))
+        out["ratioj_b"] = out["rms_b"] / out["crbj_b"]
+        out["ratioj_s"] = out["rms_s"] / out["crbj_s"]
     for name, arr in (("off", off_pct), ("gain", gain_pct), ("axis", axis_pct)):
         a = np.concatenate(arr)
         out[f"{name}_rms"] = float(np.sqrt(np.mean(a ** 2)))
@@ -285,28 +307,36 @@ def main(argv=None):
     emit()
     emit("Known-pose uses the nominal pose directions; jig-free ignores them.  Ratio = RMS error / the "
          "method's own noise-only CRB.  \"jig accuracy stated\": fit_known_poses(..., jig_accuracy_deg=...) "
-         "told the true pose error (weights 1/(noise^2 + (theta^2/3) |s_i x f_p|^2)); the last rows state "
-         "0.5 deg for a perfect jig (the cost of a nonzero default).")
+         "told the true pose error (the pose directions estimated jointly, the references as priors of that "
+         "accuracy); the last rows state 0.5 deg for a perfect jig (the cost of a nonzero default).  \"jig "
+         "CRB\": the bound for a jig whose poses are off by a random rotation of the given rms angle (the "
+         "Bayesian bound with that prior on the pose directions, in the jig's frame): no estimator that is "
+         "told the jig's accuracy can do better on average; n/a for jig-free (own gauge) and for a perfect jig "
+         "(the bound is the CRB).")
     emit()
-    emit("| pose error | method | offset RMS err | ratio to CRB | sens RMS err | ratio to CRB "
-         "| offset err % g (rms / max) | gain err % (rms / max) | axis err % (rms / max) |")
-    emit("|" + "---|" * 9)
+    emit("| pose error | method | offset RMS err | ratio to CRB | ratio to jig CRB | sens RMS err | ratio to CRB "
+         "| ratio to jig CRB | offset err % g (rms / max) | gain err % (rms / max) | axis err % (rms / max) |")
+    emit("|" + "---|" * 11)
+
+    def jrow(tag, name, r):
+        jb = f"{r['ratioj_b']:.2f}" if "ratioj_b" in r else "n/a"
+        js = f"{r['ratioj_s']:.2f}" if "ratioj_s" in r else "n/a"
+        emit(f"| {tag} | {name} | {r['rms_b']:.4f} | {r['ratio_b']:.2f} | {jb} | {r['rms_s']:.5f} "
+             f"| {r['ratio_s']:.2f} | {js} | {r['off_rms']:.4f} / {r['off_max']:.4f} "
+             f"| {r['gain_rms']:.4f} / {r['gain_max']:.4f} | {r['axis_rms']:.4f} / {r['axis_max']:.4f} |")
+
     for deg in (0.5, 1.0, 2.0):
         # the stated-jig-accuracy row draws from its own generator, so the other rows are as before
         for name, jf, jig, r_ in (("known-pose full", False, 0.0, rng), ("jig-free full", True, 0.0, rng),
                                   (f"known-pose full, jig accuracy {deg:g} deg stated", False, deg,
                                    np.random.default_rng(a.seed + int(10 * deg)))):
             r = study(dev, 24, jf, trials, r_, pose_err_deg=deg, desc=f"{name} {deg} deg", jig_accuracy_deg=jig)
-            emit(f"| {deg:.1f} deg | {name} | {r['rms_b']:.4f} | {r['ratio_b']:.2f} | {r['rms_s']:.5f} "
-                 f"| {r['ratio_s']:.2f} | {r['off_rms']:.4f} / {r['off_max']:.4f} "
-                 f"| {r['gain_rms']:.4f} / {r['gain_max']:.4f} | {r['axis_rms']:.4f} / {r['axis_max']:.4f} |")
+            jrow(f"{deg:.1f} deg", name, r)
     # the cost of stating a jig accuracy for a perfect jig (own generator, as above)
     for P in (6, 24):
         r = study(dev, P, False, trials, np.random.default_rng(a.seed + 100 + P), desc=f"perfect jig, 0.5 stated, {P}",
                   jig_accuracy_deg=0.5)
-        emit(f"| 0 deg ({P} poses) | known-pose full, jig accuracy 0.5 deg stated | {r['rms_b']:.4f} "
-             f"| {r['ratio_b']:.2f} | {r['rms_s']:.5f} | {r['ratio_s']:.2f} | {r['off_rms']:.4f} / {r['off_max']:.4f} "
-             f"| {r['gain_rms']:.4f} / {r['gain_max']:.4f} | {r['axis_rms']:.4f} / {r['axis_max']:.4f} |")
+        jrow(f"0 deg ({P} poses)", "known-pose full, jig accuracy 0.5 deg stated", r)
 
     # ---------------- Xsens
     emit()

@@ -22,21 +22,36 @@ channel and the pose to add.
 Jig accuracy (known poses): a real jig holds pose p not at the stated f_p but
 rotated from it by a small error delta_p.  ``jig_accuracy_deg`` = theta states
 the rms angle of that rotation (about a random axis; each axis component of
-delta_p then has rms theta/sqrt(3)).  To first order the reading of channel i
-moves by s_i . (delta_p x f_p), of variance (theta^2/3) |s_i x f_p|^2, so each
-(pose, channel) is weighted by
+delta_p then has rms theta/sqrt(3)).  With theta > 0 the pose directions are
+estimated jointly with every channel's parameters, as in the jig-free model
+below, but each with its reference as a prior: per pose, the two tangent-plane
+coordinates a_p of the estimated direction about the reference direction
+(f_p = |f_ref,p| (d_p + T_p a_p)/|d_p + T_p a_p|, T_p an orthonormal basis
+across d_p) enter as two extra residuals
 
-    1 / (sigma_pi^2 + (theta^2/3) |s_i x f_p|^2)        sigma_pi: 1-sigma of the pose mean
+    a_p / (theta / sqrt(3))
 
-(JIG_PASSES passes, s_i from the previous one; the nominal s_i to start).  A
-pose along a channel's own axis (s_i x f_p small) then dominates its offset:
-for the six poses +-x, +-y, +-z and jig errors well above the noise, channel i's
-offset comes from the +-i pair (as in Ferraris's method), instead of absorbing
-g sin(error) from the four cross poses.  theta = 0 (the default) is ordinary
-weighted least squares, efficient (at the Cramer-Rao bound) when the references
-are exact.  The same variance enters the covariance and chi^2, so stated jig
-errors no longer show up as a Birge inflation.  Jig-free fits ignore it (they
-use no reference).
+(the magnitude |f_ref,p| is kept).  One pose error then moves all of a pose's
+channels together, as it does in the sensor, and the channels that see it
+determine it: on the six poses +-x, +-y, +-z channel i's offset comes
+essentially from the +-i pair (as in Ferraris's method) instead of absorbing
+g sin(error) from the four cross poses, and on general pose sets (no pose along
+most channel axes) the errors are at the bound for a jig of that accuracy
+(tools/bench_calibration.py; on the six-pose set at 2 deg and more the offsets
+are somewhat worse than the +-i pair mean: second-order terms from pose tilts
+that only the priors set).  The priors fix the common rotation (no gauge
+constraint: the result is in the jig's frame, known to about theta/sqrt(3 P)
+per axis) and keep the model determined by every pose set the known-pose fit
+accepts (the prior rows make the pose coordinates full rank; the channel
+parameters need what they need with the poses fixed).  The
+covariance is the inverse of J^T J over the reading and prior rows, chi^2 sums
+both, and dof = P N - (channel parameters) as for fixed poses (2 rows and 2
+parameters a pose).  As theta -> 0 the fit tends to the known-pose fit; theta =
+0 (the default) is that fit exactly: ordinary weighted least squares, efficient
+(at the Cramer-Rao bound) when the references are exact.  With theta = 0 and
+chi^2/dof > JIG_HINT_CHI2 the fit reports the theta at which the prior model's
+chi^2/dof is 1 (StaticFit.jig_hint_deg; the CLI warns with it).  Jig-free fits
+ignore theta (they use no reference).
 
 Jig-free (f_p unknown, ``|f_p| = g``): one nonlinear least-squares problem over
 the channel parameters and two tangent-plane angles per pose (Levenberg-Marquardt
@@ -59,9 +74,10 @@ nominal, which fixes the frame, and no gauge is needed.
 
 Uncertainties: the covariance of the estimate is the inverse Fisher information
 of the model (weights = 1/variance of each pose mean, the variance from the
-pooled within-pose scatter of each channel), restricted to the gauge for
-jig-free ``full``.  When the fit is worse than the noise (chi^2/dof > 1, e.g.
-pose errors of a jig), the covariance is inflated by chi^2/dof (Birge ratio).
+pooled within-pose scatter of each channel; with a stated jig accuracy, plus the
+prior rows), restricted to the gauge for jig-free ``full``.  When the fit is
+worse than the noise (chi^2/dof > 1, e.g. pose errors of a jig), the covariance
+is inflated by chi^2/dof (Birge ratio).
 
 Temperature: first order about T0 = the mean pose temperature, fitted jointly with
 the channel parameters (and the poses, jig-free) when the pose temperatures span
@@ -120,8 +136,8 @@ ROTATION_MIN_RADPS = 0.05  # samples with |w| above this count as rotating (leve
 POSITION_TOL_M = 1e-3      # a lever-arm direction is "observable" when its 1-sigma is below this
 
 JIG_ACCURACY_DEG = 0.0     # stated jig accuracy of known poses (rms rotation angle of a pose error, deg):
-                           # 0 = the references are exact (ordinary weighted least squares); see _jig_sigma
-JIG_PASSES = 3             # weighted passes when the jig accuracy is nonzero (the weights use the estimated s_i)
+                           # 0 = the references are exact (ordinary weighted least squares); > 0: the
+                           # references are priors of that accuracy (module notes)
 JIG_HINT_CHI2 = 4.0        # known poses with jig accuracy 0: above this chi2/dof, report the jig accuracy
                            # that would explain the scatter (chi2/dof = 1); the CLI prints it as a warning
 
@@ -450,7 +466,7 @@ class StaticFit:
     offset_tc: np.ndarray | None = None
     gain_tc: np.ndarray | None = None
     pose_cov: np.ndarray | None = None   # (P, 2, 2) tangent-plane covariance of estimated pose directions (rad^2)
-    jig_accuracy_deg: float = 0.0        # stated jig accuracy the known-pose weights assumed (0: exact references)
+    jig_accuracy_deg: float = 0.0        # stated jig accuracy of the references' priors (0: exact references)
     jig_hint_deg: float | None = None    # jig accuracy 0 but chi2/dof > JIG_HINT_CHI2: the one that gives chi2/dof = 1
 
     @property
@@ -597,13 +613,6 @@ def jig_accuracy_rad(jig_accuracy_deg: Any) -> float:
     return math.radians(v)
 
 
-def _jig_sigma(sigma: np.ndarray, S: np.ndarray, F: np.ndarray, jig_rad: float) -> np.ndarray:
-    """(P,N) 1-sigma of each pose mean with a jig error of rms rotation angle jig_rad:
-    sqrt(sigma_pi^2 + (jig_rad^2 / 3) |s_i x f_p|^2) (first order; see the module notes)."""
-    cr = np.cross(np.asarray(S, float)[None, :, :], np.asarray(F, float)[:, None, :])     # (P,N,3)
-    return np.sqrt(np.asarray(sigma, float) ** 2 + (jig_rad ** 2 / 3.0) * np.sum(cr * cr, axis=2))
-
-
 def _birge(chi2: float, dof: int) -> float:
     return max(1.0, chi2 / dof) if dof > 0 else 1.0
 
@@ -636,12 +645,13 @@ def fit_known_poses(device, means, f_ref, method: str = "full", sigma=None, *,
     default: ``poses.sem()`` when ``poses`` is given, else equal weights and the
     covariance from the residuals).  ``jig_accuracy_deg`` (theta, default
     JIG_ACCURACY_DEG = 0): the references are uncertain by a pose rotation of rms
-    angle theta; each (pose, channel) is then weighted by 1/(sigma_pi^2 + (theta^2/3)
-    |s_i x f_p|^2) over JIG_PASSES passes, and that variance enters the covariance
-    and chi^2 (module notes).  Without sigma the noise part is the rounding floor
-    1/12 count^2 and the covariance is inflated by chi2/dof when > 1.  Raises
-    InputError (which pose to add) when the poses cannot determine a free
-    parameter.  Returns a :class:`StaticFit`.
+    angle theta; the pose directions are then estimated jointly with every
+    channel's parameters, each with its reference as a prior of that accuracy
+    (:func:`fit_static`; module notes), and ``StaticFit.f`` holds the estimated pose
+    forces.  Without sigma the noise is then the rounding floor 1/12 count^2 and
+    the covariance is inflated by chi2/dof when > 1.  Raises InputError (which pose
+    to add) when the poses cannot determine a free parameter.  Returns a
+    :class:`StaticFit`.
     """
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
@@ -659,24 +669,30 @@ def fit_known_poses(device, means, f_ref, method: str = "full", sigma=None, *,
         sigma = poses.sem()
     _identifiability(device, method, F, min_rcond)
     P, N = m.shape
-    # with a stated jig accuracy the variance model is absolute even without sigma
-    # (noise floor: rounding), so chi2 counts and the covariance gets the Birge rule
-    sigma_known = sigma is not None or jig > 0
-    sig = (np.asarray(sigma, float) if sigma is not None else np.full((P, N), math.sqrt(_QUANT_VAR))) \
-        if sigma_known else None
+    if jig > 0:
+        # the references as priors of the stated accuracy: the nonlinear model with free poses
+        # (with a stated jig accuracy the variance model is absolute even without sigma: the
+        # rounding floor as the noise, so chi2 counts and the covariance gets the Birge rule)
+        sig = np.asarray(sigma, float) if sigma is not None else np.full((P, N), math.sqrt(_QUANT_VAR))
+        ps = _bare_poses(m, F) if poses is None else PoseSet(m, poses.n, poses.std, F, poses.temp, poses.info)
+        return fit_static(device, ps, method, jigfree=False, temperature=False, sigma=sig, min_rcond=min_rcond,
+                          jig_accuracy_deg=jig_accuracy_deg)
+    sigma_known = sigma is not None
+    sig = np.asarray(sigma, float) if sigma_known else None
     k_nom = device.counts_per_mps2
     offsets = np.empty(N)
     sens = np.empty((N, 3))
     cov = np.zeros((N, 6, 6))
     resid = np.empty((P, N))
     chi2_tot, dof_tot = 0.0, 0
-    passes = JIG_PASSES if (jig > 0 and method != "offset") else 1
     for i in range(N):
         A = _design(method, device, i, F)
         y = m[:, i].copy()
         if method == "offset":
             y -= F @ (k_nom[i] * device.axes[i])
-        x, w, Aw = _solve_channel(device, method, i, A, y, F, None if sig is None else sig[:, i], jig, passes)
+        w = np.ones(P) if sig is None else 1.0 / sig[:, i]
+        Aw = A * w[:, None]
+        x, *_ = np.linalg.lstsq(Aw, y * w, rcond=None)
         r = y - A @ x
         q = A.shape[1]
         dof = P - q
@@ -704,53 +720,28 @@ def fit_known_poses(device, means, f_ref, method: str = "full", sigma=None, *,
         resid[:, i] = r
     ps = poses if poses is not None else _bare_poses(m, F)
     hint = None
-    if jig == 0 and sigma_known and dof_tot > 0 and chi2_tot / dof_tot > JIG_HINT_CHI2:
-        hint = _implied_jig_deg(device, method, m, F, sig, k_nom)
+    if sigma_known and dof_tot > 0 and chi2_tot / dof_tot > JIG_HINT_CHI2:
+        hint = _implied_jig_deg(device, method, m, F, sig, (offsets, sens, None, None))
     return StaticFit(method=method, jigfree=False, offsets=offsets, sensitivity=sens, f=F.copy(), cov=cov,
-                     residual=resid, chi2=chi2_tot, dof=dof_tot, poses=ps,
-                     jig_accuracy_deg=math.degrees(jig), jig_hint_deg=hint)
+                     residual=resid, chi2=chi2_tot, dof=dof_tot, poses=ps, jig_accuracy_deg=0.0, jig_hint_deg=hint)
 
 
-def _solve_channel(device, method, i, A, y, F, sig_i, jig, passes):
-    """Weighted least squares of one channel: (x, w, A w).  sig_i (P,) 1-sigma of the
-    pose means (None: equal weights); with jig > 0 (rad) the weights include the jig
-    term with s_i from the previous pass (the nominal s_i in the first)."""
-    s_i = device.nominal_sensitivity()[i]
-    for _ in range(passes):
-        if sig_i is None:
-            w = np.ones(A.shape[0])
-        elif jig > 0:
-            w = 1.0 / _jig_sigma(sig_i[:, None], s_i[None, :], F, jig)[:, 0]
-        else:
-            w = 1.0 / sig_i
-        Aw = A * w[:, None]
-        x, *_ = np.linalg.lstsq(Aw, y * w, rcond=None)
-        if method == "gain":
-            s_i = x[1] * device.axes[i]
-        elif method == "full":
-            s_i = x[1:]
-    return x, w, Aw
-
-
-def _implied_jig_deg(device, method, m, F, sig, k_nom) -> float | None:
-    """The jig accuracy (deg) at which the known-pose fit's chi2/dof is 1: what pose
-    errors alone would explain the scatter of the poses about the fit (bisection
-    on a log scale; None when even 30 deg leaves chi2/dof > 1, i.e. not a jig error)."""
+def _implied_jig_deg(device, method, m, F, sig, start) -> float | None:
+    """The jig accuracy (deg) at which the known-pose fit with the references as
+    priors of that accuracy has chi2/dof = 1: what pose errors alone would explain
+    the scatter of the poses about the fit (bisection on a log scale, each fit
+    started from the previous one; None when even 30 deg leaves chi2/dof > 1, i.e.
+    not a jig error)."""
     P, N = m.shape
-    passes = JIG_PASSES if method != "offset" else 1
-    systems = []
-    for i in range(N):
-        A = _design(method, device, i, F)
-        y = m[:, i] - (F @ (k_nom[i] * device.axes[i]) if method == "offset" else 0.0)
-        systems.append((i, A, y))
-    dof = sum(P - A.shape[1] for _, A, _ in systems)
+    q = {"offset": 1, "gain": 2, "full": 4}[method]
+    dof = P * N - q * N
+    x_prev = [None]
 
     def chi2_per_dof(deg: float) -> float:
-        tot = 0.0
-        for i, A, y in systems:
-            x, w, _ = _solve_channel(device, method, i, A, y, F, sig[:, i], math.radians(deg), passes)
-            tot += float(np.sum(((y - A @ x) * w) ** 2))
-        return tot / dof
+        prob, x, _ = _prior_solve(device, method, m, sig, None, F, math.radians(deg), start, x_prev[0])
+        x_prev[0] = x
+        r = prob.residual(x)
+        return float(r @ r) / dof
 
     lo, hi = 1e-4, 30.0
     if chi2_per_dof(hi) > 1.0:
@@ -802,9 +793,14 @@ def gauge_rotation(device, sensitivity: np.ndarray) -> np.ndarray:
 
 class _StaticProblem:
     """Residuals and Jacobian of m_pi = b_i + beta_i dT_p + (1 + gamma_i dT_p) s_i . f_p,
-    weighted by 1/sigma_pi, over channel parameters and (optionally) pose tangent coordinates."""
+    weighted by 1/sigma_pi, over channel parameters and (optionally) pose tangent coordinates.
 
-    def __init__(self, device, method, means, sigma, dT, free_poses, F=None, gauge=False):
+    ``prior_rad`` (known poses with a stated jig accuracy theta, radians): the pose
+    directions are free about the reference forces F (magnitude |F_p| kept) and
+    2 rows a pose are appended, the tangent coordinates a_p / (theta / sqrt(3))
+    (the prior: each component of a pose's rotation error has rms theta/sqrt(3))."""
+
+    def __init__(self, device, method, means, sigma, dT, free_poses, F=None, gauge=False, prior_rad=None):
         self.dev = device
         self.method = method
         self.m = means
@@ -813,16 +809,24 @@ class _StaticProblem:
         self.temp = dT is not None
         self.g = device.gravity_mps2
         self.P, self.N = means.shape
-        self.free_poses = free_poses
+        self.free_poses = free_poses or prior_rad is not None
+        self.prior_w = None if prior_rad is None else math.sqrt(3.0) / prior_rad
         self.q = {"offset": 1, "gain": 2, "full": 4}[method] + (2 if self.temp else 0)
         self.n_ch = self.q * self.N
         self.n_pose = 0
-        self.F_fixed = None if free_poses else np.asarray(F, float)
-        if free_poses and F is not None:
-            self.set_pose_frame(F, gauge)
+        self.F_fixed = None if self.free_poses else np.asarray(F, float)
+        self.fmag = np.full(self.P, self.g)
+        if self.free_poses and F is not None:
+            if prior_rad is not None:
+                self.fmag = np.linalg.norm(np.asarray(F, float), axis=1)
+            self.set_pose_frame(F, gauge and prior_rad is None)
+
+    @property
+    def n_prior(self) -> int:
+        return self.n_pose if self.prior_w is not None else 0
 
     def set_pose_frame(self, F: np.ndarray, gauge: bool) -> None:
-        """Linearise the pose directions about F: f_p = g (d_p + T_p a_p)/|..|, a_p free
+        """Linearise the pose directions about F: f_p = |f_p| (d_p + T_p a_p)/|..|, a_p free
         where ``mask``.  With ``gauge``, the common rotation is held fixed during the
         solve: pose 0 entirely, and the pose most perpendicular to it may only move
         in the plane it spans with pose 0 (3 constraints)."""
@@ -874,7 +878,7 @@ class _StaticProblem:
         a = np.zeros((self.P, 2))
         a[self.mask] = x[self.n_ch:]
         v = self.d + np.einsum("pk,pkj->pj", a, self.T)
-        return self.g * v / np.linalg.norm(v, axis=1, keepdims=True), v
+        return self.fmag[:, None] * v / np.linalg.norm(v, axis=1, keepdims=True), v
 
     def residual(self, x):
         b, s, beta, gamma = self.unpack(x)
@@ -883,7 +887,10 @@ class _StaticProblem:
         pred = b[None, :] + sf
         if self.temp:
             pred = pred + self.dT[:, None] * (beta[None, :] + gamma[None, :] * sf)
-        return ((self.m - pred) * self.w).ravel()
+        r = ((self.m - pred) * self.w).ravel()
+        if self.prior_w is None:
+            return r
+        return np.concatenate([r, x[self.n_ch:] * self.prior_w])
 
     def jacobian(self, x):
         P, N, q = self.P, self.N, self.q
@@ -909,15 +916,25 @@ class _StaticProblem:
         if self.free_poses and self.n_pose:
             nv = np.linalg.norm(v, axis=1)
             fh = v / nv[:, None]
-            # dF/da_k = g/|v| (I - fh fh^T) T_k
-            dF = self.g / nv[:, None, None] * (self.T - np.einsum("pk,pj->pkj", np.einsum("pkj,pj->pk", self.T, fh), fh))
+            # dF/da_k = |f|/|v| (I - fh fh^T) T_k
+            dF = (self.fmag / nv)[:, None, None] * (
+                self.T - np.einsum("pk,pj->pkj", np.einsum("pkj,pj->pk", self.T, fh), fh))
             ds = np.einsum("pkj,nj->pnk", dF, s) * gain[:, :, None]     # (P,N,2)
             cols = np.cumsum(self.mask.ravel()).reshape(P, 2) - 1 + self.n_ch
             for k in range(2):
                 pk = np.flatnonzero(self.mask[:, k])
                 J[pk[:, None], ch[None, :], cols[pk, k][:, None]] = -ds[pk, :, k]
         J *= self.w[:, :, None]
-        return J.reshape(P * N, -1)
+        J = J.reshape(P * N, -1)
+        if self.prior_w is None:
+            return J
+        Jp = np.zeros((self.n_pose, J.shape[1]))
+        Jp[:, self.n_ch:] = np.eye(self.n_pose) * self.prior_w
+        return np.vstack([J, Jp])
+
+    def reading_residual(self, r: np.ndarray) -> np.ndarray:
+        """(P,N) reading residuals in counts from a residual vector (prior rows dropped)."""
+        return r[: self.P * self.N].reshape(self.P, self.N) / self.w
 
 
 def _gauge_constraint(device, s: np.ndarray, n_par: int, q: int) -> np.ndarray:
@@ -979,8 +996,9 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
     """Nonlinear static fit: channel parameters (``method``), optionally temperature
     coefficients beta_i (counts/degC) and gamma_i (1/degC) about T0 = mean pose
     temperature, and, with ``jigfree``, the pose directions under |f| = g (gauge:
-    see the module notes).  Known poses use ``poses.f_ref``, uncertain by
-    ``jig_accuracy_deg`` (weights as in :func:`fit_known_poses`; ignored jig-free).
+    see the module notes).  Known poses use ``poses.f_ref``; with ``jig_accuracy_deg``
+    theta > 0 the pose directions are estimated too, with the references as priors
+    of rms rotation theta (module notes: jig accuracy; ignored jig-free).
     """
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
@@ -1016,6 +1034,10 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
             raise InputError("<poses>", f"{_pose_label(poses.info, p)} has no reference f; use the jig-free "
                              "method", field="f_ref")
         _identifiability(device, method, F, min_rcond)
+        if jig > 0 and np.any(np.linalg.norm(F, axis=1) <= 0.0):
+            p = int(np.flatnonzero(np.linalg.norm(F, axis=1) <= 0.0)[0])
+            raise InputError("<poses>", f"{_pose_label(poses.info, p)} has reference f = 0, which has no direction "
+                             "for a jig accuracy to rotate; state jig accuracy 0 or give the pose's f", field="f_ref")
     else:
         F = _initial_forces(device, m) if f_init is None else np.asarray(f_init, float)
         fh = F / np.linalg.norm(F, axis=1, keepdims=True)
@@ -1025,11 +1047,8 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
                              f"{spread:.1f} deg of each other); jig-free calibration needs poses spread over the "
                              f"sphere (e.g. add f along {_missing_direction(device, F)})", field="poses")
     gauge = jigfree and method == "full"
-    sig_noise = sig
     b0 = device.nominal_offsets()
     s0 = device.nominal_sensitivity()
-    if jig > 0:
-        sig = _jig_sigma(sig_noise, s0, F, jig)
     prob = _StaticProblem(device, method, m, sig, dT, jigfree, None if jigfree else F)
     if jigfree:
         if method != "offset":
@@ -1037,55 +1056,74 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
             # needed), which takes out the large offsets before the full model
             b0, s0, F = _refine_start(device, m, sig, F, b0, s0)
         prob.set_pose_frame(F, gauge)
+
     def undetermined() -> InputError:
         return InputError("<poses>", f"the {P} poses do not determine every parameter of the "
                           f"{'jig-free ' if jigfree else ''}'{method}'{' + temperature' if temperature else ''} model; "
                           f"add poses in other orientations (e.g. f along {_missing_direction(device, F)})"
                           + ("" if not temperature else " and at other temperatures"), field="poses")
 
+    def not_converged() -> InputError:
+        return InputError("<poses>", f"the {'jig-free ' if jigfree else ''}'{method}' fit did not converge in 100 "
+                          "iterations: the static poses do not fit the model (moving poses, or another device?)",
+                          field="poses")
+
     x0 = prob.pack(b0, s0)
     if _constrained_inverse(prob.jacobian(x0), None) is None:     # gauge already fixed in prob
         raise undetermined()
     x, converged = _levenberg_marquardt(prob.residual, prob.jacobian, x0)
-    for _ in range(JIG_PASSES - 1 if (jig > 0 and method != "offset" and converged) else 0):
-        # reweight with the estimated s_i (module notes: jig accuracy)
-        sig = _jig_sigma(sig_noise, prob.unpack(x)[1], F, jig)
-        prob = _StaticProblem(device, method, m, sig, dT, jigfree, F)
-        x, converged = _levenberg_marquardt(prob.residual, prob.jacobian, x)
     if not converged:
-        raise InputError("<poses>", f"the {'jig-free ' if jigfree else ''}'{method}' fit did not converge in 100 "
-                         "iterations: the static poses do not fit the model (moving poses, or another device?)",
-                         field="poses")
+        raise not_converged()
+    if jig > 0:
+        # the references as priors: start from the fit with the poses at their references
+        prob, x, converged = _prior_solve(device, method, m, sig, dT, F, jig, prob.unpack(x))
+        if not converged:
+            raise not_converged()
     b, s, beta, gamma = prob.unpack(x)
     F, _ = prob.forces(x)
     if gauge:
         R = gauge_rotation(device, s)
         s = s @ R.T
         F = F @ R.T
-    # covariance in the final gauge: every pose free (2 tangent coordinates), gauge constraint if needed
-    cov_prob = _StaticProblem(device, method, m, sig, dT, jigfree, F, gauge=False)
-    xf = cov_prob.pack(b, s, beta, gamma)
+    # covariance in the final gauge: every pose free (2 tangent coordinates), gauge constraint if needed;
+    # with the prior, at the solution in the reference's linearisation (prior rows included)
+    cov_prob = prob if jig > 0 else _StaticProblem(device, method, m, sig, dT, jigfree, F, gauge=False)
+    xf = x if jig > 0 else cov_prob.pack(b, s, beta, gamma)
     r = cov_prob.residual(xf)
     J = cov_prob.jacobian(xf)
     chi2 = float(r @ r)
-    n_par = J.shape[1] - (3 if (jigfree and method == "full") else 0)
-    dof = P * N - n_par
-    C = _constrained_inverse(J, _gauge_constraint(device, s, J.shape[1], cov_prob.q)
-                             if (jigfree and method == "full") else None)
+    n_par = J.shape[1] - (3 if gauge else 0)
+    dof = P * N + cov_prob.n_prior - n_par
+    # with the prior the rank was checked with the poses fixed (the prior rows make the pose
+    # coordinates full rank), and pose directions the readings barely see are normal there:
+    # only an exactly singular system is refused
+    C = _constrained_inverse(J, _gauge_constraint(device, s, J.shape[1], cov_prob.q) if gauge else None,
+                             rtol=1e-13 if jig > 0 else MIN_RCOND_JAC)
     if C is None:
         raise undetermined()
     C *= _birge(chi2, dof) if sigma_known else (chi2 / dof if dof > 0 else np.nan)
     cov = _channel_cov(device, method, temperature, C, cov_prob.q)
     pose_cov = None
-    if jigfree:
+    if cov_prob.free_poses:
         idx = cov_prob.n_ch + np.arange(2 * P).reshape(P, 2)
         pose_cov = C[idx[:, :, None], idx[:, None, :]]      # tangent coordinates are radians
-    resid = r.reshape(P, N) / cov_prob.w
+    resid = cov_prob.reading_residual(r)
     return StaticFit(method=method, jigfree=jigfree, offsets=b, sensitivity=s, f=F, cov=cov, residual=resid,
                      chi2=chi2, dof=int(dof), poses=poses, temp_ref_c=T0,
                      offset_tc=None if beta is None else np.array(beta),
                      gain_tc=None if gamma is None else np.array(gamma), pose_cov=pose_cov,
                      jig_accuracy_deg=math.degrees(jig))
+
+
+def _prior_solve(device, method, m, sig, dT, F, jig, start, x_start=None):
+    """The known-pose model with the references F as priors of rms rotation ``jig``
+    (rad): (problem, x, converged), started from channel parameters ``start`` =
+    (b, s, beta, gamma) with the poses at their references, or from ``x_start`` (a
+    previous solution of the same parameterisation)."""
+    prob = _StaticProblem(device, method, m, sig, dT, True, F, prior_rad=jig)
+    x0 = prob.pack(*start) if x_start is None else x_start
+    x, converged = _levenberg_marquardt(prob.residual, prob.jacobian, x0)
+    return prob, x, converged
 
 
 def _levenberg_marquardt(fun, jac, x0: np.ndarray, max_iter: int = 100,
@@ -1164,11 +1202,12 @@ def _constrained_inverse(J: np.ndarray, C: np.ndarray | None, rtol: float = MIN_
     cn = np.linalg.norm(A, axis=0)
     if np.any(cn == 0):
         return None
-    sv = np.linalg.svd(A / cn, compute_uv=False)
-    if sv[-1] < rtol * sv[0] or A.shape[0] < A.shape[1]:
+    if A.shape[0] < A.shape[1]:
         return None
-    An = A / cn
-    Ci = np.linalg.inv(An.T @ An) / np.outer(cn, cn)
+    _, sv, Vt = np.linalg.svd(A / cn, full_matrices=False)
+    if not sv[-1] > rtol * sv[0]:
+        return None
+    Ci = ((Vt.T / sv ** 2) @ Vt) / np.outer(cn, cn)
     return Ci if Z is None else Z @ Ci @ Z.T
 
 
@@ -1448,9 +1487,13 @@ def to_calibration(device, fit: StaticFit, method: str, positions: PositionFit |
     extra: dict = {
         "fit": {
             "model": fit.method,
-            "poses": "estimated (jig-free, |f| = g)" if fit.jigfree else "reference f",
+            "poses": "estimated (jig-free, |f| = g)" if fit.jigfree else (
+                f"estimated, the reference f as a prior (rms rotation {fit.jig_accuracy_deg:g} deg, |f| = |f_ref|)"
+                if fit.jig_accuracy_deg > 0 else "reference f"),
             "gauge": ("sum_i u_i x s_i/|s_i| = 0 (Procrustes: estimated axes rotated as little as possible "
-                      "from the nominal ones)") if (fit.jigfree and fit.method == "full") else "fixed by the reference",
+                      "from the nominal ones)") if (fit.jigfree and fit.method == "full") else (
+                "fixed by the references' priors (the jig's frame)" if fit.jig_accuracy_deg > 0
+                else "fixed by the reference"),
             "chi2": float(fit.chi2), "dof": int(fit.dof),
             "uncertainty": "1-sigma from the Fisher information, inflated by chi2/dof when > 1",
         },
@@ -1462,8 +1505,9 @@ def to_calibration(device, fit: StaticFit, method: str, positions: PositionFit |
             extra["fit"]["jig_accuracy_consistent_with_scatter_deg"] = float(fit.jig_hint_deg)
         if fit.jig_accuracy_deg > 0:
             extra["fit"]["uncertainty"] = (
-                "1-sigma from the Fisher information with each pose mean's variance = noise^2 + "
-                f"(jig accuracy {fit.jig_accuracy_deg:g} deg)^2/3 |s_i x f_p|^2 (rad), inflated by chi2/dof when > 1")
+                "1-sigma from the Fisher information of the readings and of the pose priors (each pose "
+                f"direction within jig accuracy {fit.jig_accuracy_deg:g} deg rms of its reference; chi2 and dof "
+                "include the prior terms), inflated by chi2/dof when > 1")
     if fit.jigfree:
         g = device.gravity_mps2
         fh = static_force(fit.offsets, fit.sensitivity, fit.poses.means, fit.poses.sem())

@@ -209,14 +209,15 @@ def build_parser() -> argparse.ArgumentParser:
     from .calibrate import JIG_ACCURACY_DEG
     s.add_argument("--jig-accuracy", metavar="DEG", default=f"{JIG_ACCURACY_DEG:g}",
                    help="known poses: the jig's accuracy, as the rms angle (deg) by which a pose may be rotated "
-                   "from its reference f.  Each (pose, channel) is then weighted by 1/(noise^2 + (DEG^2/3) "
-                   "|s_i x f_p|^2), so a channel's offset comes mostly from the poses along its own axis, and the "
-                   "uncertainties and chi2 include the jig error.  Default %(default)s: the references are exact "
-                   "(ordinary least squares, at the Cramer-Rao bound with honest uncertainties for a perfect jig; "
-                   "stating 0.5 deg there costs 1.6-1.7x the bound in offset error and overstates the "
-                   "uncertainties).  On a jig that is really off by 0.5-2 deg, 0 gives 18-30x larger offset "
-                   "errors on +-x,+-y,+-z than stating it (a warning names the accuracy the residuals imply): "
-                   "state your jig's accuracy.  Ignored by jigfree")
+                   "from its reference f.  The pose directions are then estimated jointly with the channel "
+                   "parameters, each reference a prior of that accuracy (one pose error moves all of a pose's "
+                   "channels together), and the uncertainties and chi2 include the priors; the result stays in "
+                   "the jig's frame.  Default %(default)s: the references are exact (ordinary least squares, at "
+                   "the Cramer-Rao bound with honest uncertainties for a perfect jig; stating 0.5 deg there costs "
+                   "1.4x the bound in offset error).  On a jig that is really off by 0.5-2 deg, 0 gives 18-30x "
+                   "larger offset errors on +-x,+-y,+-z than stating it, and 16-61x the bound on 24 general "
+                   "poses (a warning names the accuracy the residuals imply): state your jig's accuracy.  "
+                   "Ignored by jigfree")
     s.add_argument("-o", "--output", required=True)
     s.set_defaults(func=cmd_calibrate)
 
