@@ -81,7 +81,6 @@ ac_status ac_mul32x32(int32_t a, int32_t b, ac_i64 *out)
 ac_status ac_mul32_shift(int32_t a, int32_t b, uint8_t n, int32_t *out)
 {
     ac_u64 m;
-    uint32_t mag_floor;
     int neg;
     if (out == 0) {
         return AC_ERR_NULL;
@@ -109,25 +108,7 @@ ac_status ac_mul32_shift(int32_t a, int32_t b, uint8_t n, int32_t *out)
         }
     }
     /* m is now the magnitude of the result */
-    if (m.hi != 0u) {
-        *out = neg ? INT32_MIN : INT32_MAX;
-        return AC_SATURATED;
-    }
-    mag_floor = m.lo;
-    if (!neg) {
-        if (mag_floor > (uint32_t)INT32_MAX) {
-            *out = INT32_MAX;
-            return AC_SATURATED;
-        }
-        *out = (int32_t)mag_floor;
-        return AC_OK;
-    }
-    if (mag_floor > (uint32_t)INT32_MAX + 1u) {
-        *out = INT32_MIN;
-        return AC_SATURATED;
-    }
-    *out = ac_i_from_u((uint32_t)0u - mag_floor);
-    return AC_OK;
+    return ac_from_sign_mag(neg, m.hi, m.lo, out);
 }
 
 ac_status ac_bitlen32(int32_t v, uint8_t *out)

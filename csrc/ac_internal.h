@@ -92,10 +92,38 @@ ac_u64 ac_u64_shl(ac_u64 a, uint8_t n); /* n <= 63 */
 
 ac_u64 ac_u64_shr(ac_u64 a, uint8_t n); /* n <= 63 */
 
+/* The int32 with sign neg and 64-bit magnitude hi 2^32 + lo, clipped to int32. */
+ac_status ac_from_sign_mag(int neg, uint32_t hi, uint32_t lo, int32_t *out);
+
 /* number of significant bits of an unsigned 32-bit value */
 uint8_t ac_bitlen_u(uint32_t u);
 
 #endif /* AC_INLINE_HELPERS */
+
+#if defined(__AVR__) && defined(__AVR_HAVE_MUL__) && !defined(AC_NO_ASM)
+/* The Atmel AVR201 signed 16 x 16 multiply-accumulate into a 32-bit
+ * register operand [acc], with operands [a], [b] in r16..r23 (muls/mulsu
+ * need them there) and a zero register [z]; clobbers r0, r1. */
+#define AC_AVR_MAC16                  \
+    "muls %B[a], %B[b]      \n\t"     \
+    "add  %C[acc], r0       \n\t"     \
+    "adc  %D[acc], r1       \n\t"     \
+    "mul  %A[a], %A[b]      \n\t"     \
+    "add  %A[acc], r0       \n\t"     \
+    "adc  %B[acc], r1       \n\t"     \
+    "adc  %C[acc], %[z]     \n\t"     \
+    "adc  %D[acc], %[z]     \n\t"     \
+    "mulsu %B[a], %A[b]     \n\t"     \
+    "sbc  %D[acc], %[z]     \n\t"     \
+    "add  %B[acc], r0       \n\t"     \
+    "adc  %C[acc], r1       \n\t"     \
+    "adc  %D[acc], %[z]     \n\t"     \
+    "mulsu %B[b], %A[a]     \n\t"     \
+    "sbc  %D[acc], %[z]     \n\t"     \
+    "add  %B[acc], r0       \n\t"     \
+    "adc  %C[acc], r1       \n\t"     \
+    "adc  %D[acc], %[z]     \n\t"
+#endif
 
 /* acc + a * b (16 x 16 -> 32, wrapping in uint32).  On AVR the multiply-
  * accumulate is the Atmel AVR201 sequence (muls/mulsu/mul into the accumulator),
@@ -106,24 +134,7 @@ AC_ALWAYS_INLINE uint32_t ac_mac16(uint32_t acc, int16_t a, int16_t b)
 #if defined(__AVR__) && defined(__AVR_HAVE_MUL__) && !defined(AC_NO_ASM)
     uint8_t zero;
     __asm__("clr  %[z]         \n\t"
-            "muls %B[a], %B[b] \n\t"
-            "add  %C[acc], r0  \n\t"
-            "adc  %D[acc], r1  \n\t"
-            "mul  %A[a], %A[b] \n\t"
-            "add  %A[acc], r0  \n\t"
-            "adc  %B[acc], r1  \n\t"
-            "adc  %C[acc], %[z] \n\t"
-            "adc  %D[acc], %[z] \n\t"
-            "mulsu %B[a], %A[b] \n\t"
-            "sbc  %D[acc], %[z] \n\t"
-            "add  %B[acc], r0  \n\t"
-            "adc  %C[acc], r1  \n\t"
-            "adc  %D[acc], %[z] \n\t"
-            "mulsu %B[b], %A[a] \n\t"
-            "sbc  %D[acc], %[z] \n\t"
-            "add  %B[acc], r0  \n\t"
-            "adc  %C[acc], r1  \n\t"
-            "adc  %D[acc], %[z] \n\t"
+            AC_AVR_MAC16
             "clr  r1           \n\t"
             : [acc] "+r"(acc), [z] "=&r"(zero)
             : [a] "a"(a), [b] "a"(b)
@@ -143,35 +154,18 @@ AC_ALWAYS_INLINE uint32_t ac_dot16(uint32_t acc, const int16_t *a, const int16_t
 {
 #if defined(__AVR__) && defined(__AVR_HAVE_MUL__) && !defined(AC_NO_ASM)
     uint8_t zero;
-    int16_t ta, tb;
+    int16_t ta, tb; /* the asm operands [a], [b]: the current pair */
     __asm__("clr  %[z]          \n\t"
             "1:                 \n\t"
-            "ld   %A[ta], X+    \n\t"
-            "ld   %B[ta], X+    \n\t"
-            "ld   %A[tb], Z+    \n\t"
-            "ld   %B[tb], Z+    \n\t"
-            "muls %B[ta], %B[tb] \n\t"
-            "add  %C[acc], r0   \n\t"
-            "adc  %D[acc], r1   \n\t"
-            "mul  %A[ta], %A[tb] \n\t"
-            "add  %A[acc], r0   \n\t"
-            "adc  %B[acc], r1   \n\t"
-            "adc  %C[acc], %[z] \n\t"
-            "adc  %D[acc], %[z] \n\t"
-            "mulsu %B[ta], %A[tb] \n\t"
-            "sbc  %D[acc], %[z] \n\t"
-            "add  %B[acc], r0   \n\t"
-            "adc  %C[acc], r1   \n\t"
-            "adc  %D[acc], %[z] \n\t"
-            "mulsu %B[tb], %A[ta] \n\t"
-            "sbc  %D[acc], %[z] \n\t"
-            "add  %B[acc], r0   \n\t"
-            "adc  %C[acc], r1   \n\t"
-            "adc  %D[acc], %[z] \n\t"
+            "ld   %A[a], X+    \n\t"
+            "ld   %B[a], X+    \n\t"
+            "ld   %A[b], Z+    \n\t"
+            "ld   %B[b], Z+    \n\t"
+            AC_AVR_MAC16
             "dec  %[n]          \n\t"
             "brne 1b            \n\t"
             "clr  r1            \n\t"
-            : [acc] "+r"(acc), [n] "+r"(n), [z] "=&r"(zero), [ta] "=&a"(ta), [tb] "=&a"(tb),
+            : [acc] "+r"(acc), [n] "+r"(n), [z] "=&r"(zero), [a] "=&a"(ta), [b] "=&a"(tb),
               "+x"(a), "+z"(b)
             :
             : "r0", "r1", "memory");
@@ -192,42 +186,25 @@ AC_ALWAYS_INLINE uint32_t ac_dot16_sparse(uint32_t acc, const int16_t *a, const 
 {
 #if defined(__AVR__) && defined(__AVR_HAVE_MUL__) && !defined(AC_NO_ASM)
     uint8_t zero;
-    int16_t ta, tb;
+    int16_t ta, tb; /* the asm operands [a], [b]: the current pair */
     __asm__("clr  %[z]          \n\t"
             "1:                 \n\t"
-            "ld   %A[ta], X+    \n\t"
-            "ld   %B[ta], X+    \n\t"
-            "mov  r0, %A[ta]    \n\t"
-            "or   r0, %B[ta]    \n\t"
+            "ld   %A[a], X+    \n\t"
+            "ld   %B[a], X+    \n\t"
+            "mov  r0, %A[a]    \n\t"
+            "or   r0, %B[a]    \n\t"
             "brne 2f            \n\t"
             "adiw r30, 2        \n\t"
             "rjmp 3f            \n\t"
             "2:                 \n\t"
-            "ld   %A[tb], Z+    \n\t"
-            "ld   %B[tb], Z+    \n\t"
-            "muls %B[ta], %B[tb] \n\t"
-            "add  %C[acc], r0   \n\t"
-            "adc  %D[acc], r1   \n\t"
-            "mul  %A[ta], %A[tb] \n\t"
-            "add  %A[acc], r0   \n\t"
-            "adc  %B[acc], r1   \n\t"
-            "adc  %C[acc], %[z] \n\t"
-            "adc  %D[acc], %[z] \n\t"
-            "mulsu %B[ta], %A[tb] \n\t"
-            "sbc  %D[acc], %[z] \n\t"
-            "add  %B[acc], r0   \n\t"
-            "adc  %C[acc], r1   \n\t"
-            "adc  %D[acc], %[z] \n\t"
-            "mulsu %B[tb], %A[ta] \n\t"
-            "sbc  %D[acc], %[z] \n\t"
-            "add  %B[acc], r0   \n\t"
-            "adc  %C[acc], r1   \n\t"
-            "adc  %D[acc], %[z] \n\t"
+            "ld   %A[b], Z+    \n\t"
+            "ld   %B[b], Z+    \n\t"
+            AC_AVR_MAC16
             "3:                 \n\t"
             "dec  %[n]          \n\t"
             "brne 1b            \n\t"
             "clr  r1            \n\t"
-            : [acc] "+r"(acc), [n] "+r"(n), [z] "=&r"(zero), [ta] "=&a"(ta), [tb] "=&a"(tb),
+            : [acc] "+r"(acc), [n] "+r"(n), [z] "=&r"(zero), [a] "=&a"(ta), [b] "=&a"(tb),
               "+x"(a), "+z"(b)
             :
             : "r0", "r1", "memory");

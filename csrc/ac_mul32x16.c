@@ -76,22 +76,5 @@ ac_status ac_mul32x16_shift(int32_t a, uint16_t b, uint8_t n, int32_t *out)
             rhi = ac_shr_u(hi, n);
         }
     }
-    if (rhi != 0u) {
-        *out = neg ? INT32_MIN : INT32_MAX;
-        return AC_SATURATED;
-    }
-    if (!neg) {
-        if (rlo > (uint32_t)INT32_MAX) {
-            *out = INT32_MAX;
-            return AC_SATURATED;
-        }
-        *out = (int32_t)rlo;
-        return AC_OK;
-    }
-    if (rlo > (uint32_t)INT32_MAX + 1u) {
-        *out = INT32_MIN;
-        return AC_SATURATED;
-    }
-    *out = ac_i_from_u((uint32_t)0u - rlo);
-    return AC_OK;
+    return ac_from_sign_mag(neg, rhi, rlo, out);
 }
