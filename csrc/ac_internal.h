@@ -92,9 +92,6 @@ ac_u64 ac_u64_shl(ac_u64 a, uint8_t n); /* n <= 63 */
 
 ac_u64 ac_u64_shr(ac_u64 a, uint8_t n); /* n <= 63 */
 
-/* The int32 with sign neg and 64-bit magnitude hi 2^32 + lo, clipped to int32. */
-ac_status ac_from_sign_mag(int neg, uint32_t hi, uint32_t lo, int32_t *out);
-
 /* number of significant bits of an unsigned 32-bit value */
 uint8_t ac_bitlen_u(uint32_t u);
 
@@ -213,6 +210,10 @@ AC_ALWAYS_INLINE uint32_t ac_dot16_sparse(uint32_t acc, const int16_t *a, const 
     return ac_dot16(acc, a, b, n);
 #endif
 }
+
+/* ac_mul32x16.c: the int32 with sign neg and 64-bit magnitude hi 2^32 + lo,
+ * clipped to int32 (then AC_SATURATED); shared with ac_fixed.c's multiply. */
+ac_status ac_from_sign_mag(int neg, uint32_t hi, uint32_t lo, int32_t *out);
 
 /* ac_resolve.c: AC_OK if the table's n and shifts are in range (the cheap
  * part of ac_resolver_check, done on every call). */

@@ -28,6 +28,18 @@ static uint32_t shl_u(uint32_t u, uint8_t n)
     return u << (n & 7u);
 }
 
+/* The int32 with sign neg and 64-bit magnitude hi 2^32 + lo, clipped to
+ * int32 (then AC_SATURATED): the last step of the rounding multiplies. */
+ac_status ac_from_sign_mag(int neg, uint32_t hi, uint32_t lo, int32_t *out)
+{
+    if (hi != 0u || lo > (uint32_t)INT32_MAX + (neg ? 1u : 0u)) {
+        *out = neg ? INT32_MIN : INT32_MAX;
+        return AC_SATURATED;
+    }
+    *out = neg ? ac_i_from_u((uint32_t)0u - lo) : (int32_t)lo;
+    return AC_OK;
+}
+
 ac_status ac_mul32x16_shift(int32_t a, uint16_t b, uint8_t n, int32_t *out)
 {
     uint32_t ua, ll, hl, lo, hi, rlo, rhi;

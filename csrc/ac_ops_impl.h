@@ -214,18 +214,6 @@ AC_HELPER int32_t ac_scale_round(int32_t v, int16_t shift, uint8_t *sat)
     return v;
 }
 
-/* The int32 with sign neg and 64-bit magnitude hi 2^32 + lo, clipped to
- * int32 (then AC_SATURATED): the last step of the rounding multiplies. */
-AC_HELPER ac_status ac_from_sign_mag(int neg, uint32_t hi, uint32_t lo, int32_t *out)
-{
-    if (hi != 0u || lo > (uint32_t)INT32_MAX + (neg ? 1u : 0u)) {
-        *out = neg ? INT32_MIN : INT32_MAX;
-        return AC_SATURATED;
-    }
-    *out = neg ? ac_i_from_u((uint32_t)0u - lo) : (int32_t)lo;
-    return AC_OK;
-}
-
 /* number of significant bits of an unsigned 32-bit value: the top non-zero
  * byte is found first, so at most 8 one-bit steps (on 8 bits) follow. */
 AC_HELPER uint8_t ac_bitlen_u(uint32_t u)
