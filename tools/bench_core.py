@@ -111,7 +111,7 @@ def avr_mul_bench(opt="-Os"):
 PER_SAMPLE = ("ac_trim", "ac_process", "ac_rate_step", "ac_resolver_build")
 
 
-def avr_stack_ram(elf):
+def avr_stack_ram(elf, functions=PER_SAMPLE):
     """Static RAM (data + bss) per module and worst-case stack of the public
     routines on AVR (-Os): frames from -fstack-usage, the call graph from
     avr-objdump -d of the linked bench (call/rcall, and jmp/rjmp to another
@@ -171,7 +171,7 @@ def avr_stack_ram(elf):
         memo[f] = best
         return best
 
-    stack = {f: (worst(f), f in indirect) for f in PER_SAMPLE if f in edges}
+    stack = {f: (worst(f), f in indirect) for f in functions if f in edges}
     return ram, stack
 
 

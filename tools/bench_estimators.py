@@ -32,8 +32,11 @@ G = 9.80665
 SEEDS = range(1, 11)
 
 
-def run(cmd, **kw):
-    return subprocess.run(cmd, check=True, capture_output=True, text=True, **kw)
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_core import avr_stack_ram, parse_bench, run  # noqa: E402  (the shared bench helpers)
+
+# the estimators' per-sample routines, for the worst-case stack
+PER_SAMPLE = ("ac_triad_apply", "ac_att_step", "ac_disp_step", "ac_rest_step", "ac_rest_rate_step")
 
 
 def adxl_triads(r1=0.1, r2=0.3):
@@ -216,15 +219,8 @@ def make_data(n=16):
     (BUILD / "est_data.h").write_text("\n".join(lines) + "\n")
 
 
-def parse_bench(text):
-    text = re.sub(r"\x1b\[[0-9;]*m", "", text)
-    m = re.search(r"BENCH ([^\n]*?)\.?\s*$", text, re.M)
-    if not m:
-        raise RuntimeError(f"no BENCH line in: {text[-500:]}")
-    return {k: int(v) for k, v in (kv.split("=") for kv in m.group(1).split())}
-
-
 def avr_cycles():
+    """Cycles from the AVR bench and the worst-case stack of PER_SAMPLE in it."""
     elf = BUILD / "bench_est.elf"
     run(["avr-gcc", "-mmcu=atmega328p", "-Os", "-std=c99", "-Wall", "-Wextra", "-DF_CPU=16000000UL",
          "-ffunction-sections", "-fdata-sections", "-Wl,--gc-sections",
@@ -232,7 +228,8 @@ def avr_cycles():
          *map(str, sorted((ROOT / "csrc").glob("*.c"))), "-o", str(elf)])
     res = subprocess.run(["simavr", "-m", "atmega328p", "-f", "16000000", str(elf)],
                          capture_output=True, text=True, timeout=300)
-    return parse_bench(res.stdout + res.stderr)
+    _, stack = avr_stack_ram(elf, PER_SAMPLE)
+    return parse_bench(res.stdout + res.stderr), stack
 
 
 def host_smoke():
@@ -351,7 +348,7 @@ def main():
              f"| fixed vs float reference (streaming, float triad): p, max | {dref * 1e6:.1f} um | |"]
     make_data()
     if shutil.which("simavr") and shutil.which("avr-gcc"):
-        c = avr_cycles()
+        c, stack = avr_cycles()
         rows += [f"| AVR cycles per sample, attitude: 2 x `ac_triad_apply` + `ac_att_step` | "
                  f"{c['triad_apply_x2']} + {c['att_step']} = {c['triad_apply_x2'] + c['att_step']} | |",
                  f"| AVR cycles, `ac_atan2` / `ac_isqrt32` alone | {c['atan2']} / {c['isqrt32']} | |",
@@ -361,6 +358,10 @@ def main():
                  f"{c['disp_segment_end']} / {c['tilt_frame']} | |",
                  f"| AVR cycles per sample, `ac_rest_step` / rate with rest reset `ac_rest_rate_step` (3 axes) | "
                  f"{c['rest_step']} / {c['rest_rate_step']} | |"]
+        for f in PER_SAMPLE:
+            w, indirect = stack.get(f, (None, False))
+            rows.append(f"| AVR worst-case stack (-Os), `{f}` (bytes, incl. its return address) | "
+                        f"{'unbounded (recursion)' if w is None else w}{' (+ indirect calls)' if indirect else ''} | |")
     host_smoke()
     if shutil.which("h8300-hms-gcc"):
         sizes, fw, external = h8_sizes()
