@@ -288,11 +288,40 @@ def _pred_base(dev, cal, rec):
 
 
 def _pred_true(dev, sim, name):
+    """The readings the true effect predicts from the clean ones.  Quantization: its expected
+    error given the simulated noise before the quantiser (the best prediction there is; the
+    noise-free sawtooth overstates it once the step is within a few noise floors)."""
     clean = sim.clean_counts
-    if name in ("saturation", "quantization"):
-        eff = EFFECTS[name]
-        clean = eff.apply_signal(clean, sim.effects[name], sim.context)
+    if name == "saturation":
+        clean = EFFECTS[name].apply_signal(clean, sim.effects[name], sim.context)
+    elif name == "quantization":
+        step = np.broadcast_to(np.asarray(sim.effects[name]["step"], float), (dev.n_channels,))
+        clean = clean + EFFECTS[name].expected_error(clean, step, np.zeros(dev.n_channels), dev.noise_counts())
     return np.clip(clean, dev.raw_min, dev.raw_max)
+
+
+def _quantization_step(clean, sigma, target):
+    """The smallest step (>= 2 counts) whose predictable error, the expected error of the
+    quantiser given the noise before it, has rms >= target on the clean readings (bisection:
+    it grows with the step, towards step / sqrt(12) once the noise no longer dithers)."""
+    N = clean.shape[1]
+    eff = EFFECTS["quantization"]
+
+    def contrib(q):
+        return float(np.sqrt(np.mean(eff.expected_error(clean, np.full(N, float(q)), np.zeros(N), sigma) ** 2)))
+    hi = 2
+    while contrib(hi) < target and hi < 4096:
+        hi *= 2
+    lo = hi // 2
+    if hi == 2:
+        return 2
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if contrib(mid) < target:
+            lo = mid
+        else:
+            hi = mid
+    return hi
 
 
 def make_dataset(effect: str, seed: int, rho: float | None = None) -> dict:
@@ -314,8 +343,7 @@ def make_dataset(effect: str, seed: int, rho: float | None = None) -> dict:
     if effect == "none":
         pass
     elif effect == "quantization":
-        step = max(2.0, round(math.sqrt(12.0) * rho * noise))
-        specs = [("quantization", {"step": step})]
+        specs = [("quantization", {"step": float(_quantization_step(base_clean, dev.noise_counts(), rho * noise))})]
     elif effect == "saturation":
         S = np.asarray(cal.sensitivity)
         amax = (np.max(np.abs(base_clean - np.asarray(cal.offsets)), axis=0)

@@ -93,8 +93,12 @@ Candidates (the registry's effects; parameters in the registry's concrete form, 
   read from all the data and every block is scored with them, since the clipped samples
   often sit in one block that no training fold would see) and ``quantization`` (the raw
   values on a lattice of step q >= 2, likewise from all the data: a fold can miss the lattice
-  on a channel with few distinct values); their predictions are the registry's clip /
-  rounding of the model prediction.
+  on a channel with few distinct values); their predictions are the registry's clip of the
+  model prediction, and the quantiser's expected error at it
+  (``EFFECTS["quantization"].expected_error``) with the noise before the quantiser (``dither``,
+  per channel, on the grid QUANT_DITHER_GRID of step fractions, chosen on all the data): with a
+  step of a few noise floors the readings are dithered and the error averages into small
+  per-pose biases, which the noise-free rounding (dither 0) would overstate.
 
 Also reported: the static poses' mean residual against what noise explains
 (``gap.pose_mean_*``), and the use of the raw values' low bits (``raw_values``; a note when
@@ -166,6 +170,8 @@ QUANT_MIN_FRAC = 0.99      # share of readings on the lattice to call a channel 
 QUANT_STRONG_FRAC = 0.999  # ... and to take the lattice alone as proof (with QUANT_STRONG_VALUES)
 QUANT_STRONG_VALUES = 20   # distinct lattice values needed for the proof (chance <= 2^-19)
 QUANT_MAX_STEP = 256
+# noise before the quantiser, as a fraction of the step, tried for each quantised channel
+QUANT_DITHER_GRID = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4)
 SAT_PROOF_COUNT = 10       # readings at one extreme value, the model >= 5 sigma beyond: proof of a clip
 BACKFIT_PASSES = 3
 
@@ -1441,21 +1447,28 @@ class _Quantization(_Candidate):
         return step, phase, frac, nd
 
     @staticmethod
-    def _delta(pcur, step, phase):
-        out = np.zeros_like(pcur)
-        on = step > 0
-        if np.any(on):
-            q, ph = step[on], phase[on]
-            x = pcur[:, on]
-            out[:, on] = q * np.round((x - ph) / q) + ph - x
-        return out
+    def _delta(pcur, step, phase, dither):
+        return EFFECTS["quantization"].expected_error(pcur, step, phase, dither)
+
+    def _dither(self, y, pcur, step, phase):
+        """Per channel, the dither s (as a fraction of the step, on a grid) whose expected error
+        best matches the residual: a step of a few noise floors is neither a sawtooth nor noise."""
+        best = np.zeros(step.size)
+        sse = np.full(step.size, np.inf)
+        for r in QUANT_DITHER_GRID:
+            d = self._delta(pcur, step, phase, r * step)
+            e = np.sum((y - d) ** 2, axis=0)
+            better = e < sse
+            best[better], sse[better] = r * step[better], e[better]
+        return best
 
     def cv(self, D, y, pcur, S0w, S0u, folds=True):
         # The lattice is read off the raw values, not fitted to the residual; a training fold can
         # miss it on a channel with few distinct values (static poses): the lattice comes from all
         # the data and every block is scored with it.
         step, phase, frac, nd = self._fit(D, np.ones(D.n, bool))
-        delta = self._delta(pcur, step, phase)
+        dither = self._dither(y, pcur, step, phase)
+        delta = self._delta(pcur, step, phase, dither)
         Sw, Su = _block_ss(D, D.rows(y - delta))
         c = _Cand(self.name, int(np.count_nonzero(step)), Sw, Su, delta, {"step": step}, {"step": np.zeros(D.N)})
         strong = (step > 0) & (frac >= QUANT_STRONG_FRAC) & (nd >= QUANT_STRONG_VALUES)
@@ -1466,6 +1479,7 @@ class _Quantization(_Candidate):
                 f"channel {i}: step {int(step[i])} ({100 * frac[i]:.2f} % of readings, {nd[i]} values)"
                 for i in np.flatnonzero(strong)))
         c.params["phase"] = phase
+        c.params["dither"] = dither
         return c
 
 

@@ -1280,6 +1280,14 @@ class _Saturation(Effect):
         return np.clip(counts, np.asarray(p["lo"], float), np.asarray(p["hi"], float))
 
 
+_ERFC = np.frompyfunc(math.erfc, 1, 1)
+
+
+def _normal_tail(z: np.ndarray) -> np.ndarray:
+    """P(N(0, 1) > z), elementwise."""
+    return 0.5 * _ERFC(np.asarray(z, float) / math.sqrt(2.0)).astype(float)
+
+
 class _Quantization(Effect):
     name = "quantization"
     summary = "readings are quantised in steps coarser than one count"
@@ -1307,6 +1315,37 @@ class _Quantization(Effect):
             return counts
         out = np.array(counts, float, copy=True)
         out[:, on] = step[on] * np.round(out[:, on] / step[on])
+        return out
+
+    @staticmethod
+    def expected_error(x, step, phase, dither):
+        """E[Q(x + n) - (x + n)] for readings x (n, N) before the noise, quantiser steps and phases
+        (N,; step 0 = channel not quantised) and noise n ~ N(0, dither^2) reaching the quantiser:
+        q sum_k (-1)^k / (pi k) sin(2 pi k (x - phase) / q) exp(-2 pi^2 k^2 dither^2 / q^2).
+        dither 0 gives the sawtooth q round((x - phase)/q) - (x - phase) of a noise-free reading;
+        with a dither of a quarter step it is a small smooth bias, which averages over a static
+        pose into a per-pose offset that the sawtooth overstates.  This is the part of the effect
+        a model of the clean readings can predict (the rest is noise)."""
+        x = np.asarray(x, float)
+        out = np.zeros_like(x)
+        for i in np.flatnonzero(np.asarray(step) > 0):
+            q, ph = float(step[i]), float(phase[i])
+            u = (x[:, i] - ph) / q
+            r = float(dither[i]) / q
+            if r == 0.0:  # noise-free: the quantiser itself (apply_signal's rounding)
+                out[:, i] = q * (np.round(u) - u)
+                continue
+            if r < 0.02:
+                # the series would need > 40 terms; the noise reaches only the nearest cell
+                # boundaries: crossing up (down) with probability Phi(-distance / noise)
+                k0 = np.floor(u + 0.5)
+                up = _normal_tail((k0 + 0.5 - u) / r)
+                down = _normal_tail((u - k0 + 0.5) / r)
+                out[:, i] = q * (k0 - u + up - down)
+                continue
+            k = np.arange(1, int(math.ceil(0.84 / r)) + 1)  # exp(-2 pi^2 k^2 r^2) < 1e-6 beyond
+            coef = (-1.0) ** k / (math.pi * k) * np.exp(-2.0 * math.pi ** 2 * k ** 2 * r * r)
+            out[:, i] = q * (np.sin(2.0 * math.pi * np.outer(u, k)) @ coef)
         return out
 
 

@@ -267,3 +267,15 @@ def test_jigfree_labels_without_f():
     res = diagnose(dev, cal, [rec])
     assert res["mode"] == "jigfree"
     assert res["verdict"] == "nonlinearity"
+
+
+@pytest.mark.parametrize("seed", [11, 12, 13])
+def test_weak_quantization_is_named(seed):
+    """A step of a few noise floors (1 <= rho < 3) dithers the readings: its predictable part is
+    the quantiser's expected error, small per-pose biases that pose_error could otherwise take."""
+    ds = B.make_dataset("quantization", seed, rho=1.5)
+    assert 1.0 <= ds["rho"] < 3.0
+    res = diagnose(ds["device"], ds["cal"], ds["recordings"], seed=seed)
+    assert res["verdict"] == "quantization", [(e["name"], e["shrink"]) for e in res["effects"][:3]]
+    e = _entry(res, "quantization")
+    assert abs(e["alone"]["shrink"] - ds["true_shrink"]) < 0.1

@@ -652,3 +652,22 @@ def test_vectorised_speed():
     cpu = time.process_time() - c0
     assert rec.raw.shape == (200000, 12)
     assert cpu < 4.0  # ~0.5 s on one core: 1e6 x 12 takes a few seconds
+
+
+@given(x0=st.floats(-50.0, 50.0), q=st.integers(2, 40),
+       r=st.one_of(st.just(0.0), st.floats(1e-3, 0.6)), phase=st.integers(0, 39))
+def test_quantization_expected_error_matches_monte_carlo(x0, q, r, phase):
+    """EFFECTS['quantization'].expected_error is E[Q(x + n) - (x + n)] for n ~ N(0, (r q)^2):
+    checked against 20,000 draws of the simulator's own quantiser (apply_signal) per point."""
+    eff = EFFECTS["quantization"]
+    rng = np.random.default_rng(abs(hash((x0, q, r, phase))) % 2**32)
+    x = x0 + np.linspace(0.0, q, 7)[:, None] + phase % q
+    sigma = r * q
+    n = rng.standard_normal((x.shape[0], 20000)) * sigma
+    y = x + n                                    # the readings before the quantiser
+    shifted = y - (phase % q)                    # a phase: quantise on the lattice phase + k q
+    qy = eff.apply_signal(shifted.reshape(-1, 1), {"step": np.array([float(q)])}, None).reshape(y.shape)
+    mc = np.mean(qy - shifted, axis=1)
+    se = np.std(qy - shifted, axis=1) / math.sqrt(y.shape[1])
+    got = eff.expected_error(x, np.full(1, float(q)), np.full(1, float(phase % q)), np.full(1, sigma))[:, 0]
+    assert np.all(np.abs(got - mc) <= 5.0 * se + 1e-3 * q), (got, mc, se)
