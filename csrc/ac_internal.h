@@ -168,9 +168,10 @@ AC_ALWAYS_INLINE uint32_t ac_dot16(uint32_t acc, const int16_t *a, const int16_t
             : "r0", "r1", "memory");
     return acc;
 #else
-    do {
-        acc = ac_mac16(acc, *a++, *b++);
-    } while (--n != 0u);
+    uint8_t i;
+    for (i = 0u; i < n; i++) {
+        acc = ac_mac16(acc, a[i], b[i]);
+    }
     return acc;
 #endif
 }

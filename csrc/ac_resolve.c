@@ -27,6 +27,32 @@ ac_status ac_resolver_shape(const ac_resolver *r)
     return AC_OK;
 }
 
+/* Output j: round((M x - k - T) 2^-m_shift) (p = 0: no rotation).  A function of
+ * its own: it keeps the row's working set small (avr-gcc 5.4 at -Os misplaces
+ * stack slots when the whole loop is inlined into the kernel, with the plain C
+ * helpers). */
+static int32_t resolve_row(const ac_resolver *r, uint8_t j, const int16_t *x, const int16_t *p,
+                           int16_t d0, uint8_t *sat)
+{
+    /* row L1 <= 65535 and |x| <= 32768 keep every partial sum in int32 */
+    int32_t acc = ac_sat_sub(ac_i_from_u(ac_dot16(0u, r->m[j], x, (uint8_t)r->n)), r->k[j], sat);
+    if (p != 0) {
+        /* T (units 2^(s - 2 W - g_shift) LSB) -> accumulator units 2^-m_shift LSB */
+        int32_t t = ac_i_from_u(ac_dot16_sparse(0u, r->g[j], p, 6u));
+        int16_t d = (int16_t)(d0 - r->g_shift[j] + r->m_shift[j]);
+        uint8_t tsat = 0u;
+        t = ac_scale_round(t, (int16_t)-d, &tsat);
+        if (tsat != 0u) {
+            /* the centripetal term alone exceeds int32 accumulator units: it
+             * dominates, so the output clips in its (negated) direction */
+            *sat = 1u;
+            return (t > 0) ? INT32_MIN : INT32_MAX;
+        }
+        acc = ac_sat_sub(acc, t, sat);
+    }
+    return ac_scale_round(acc, r->m_shift[j], sat);
+}
+
 /* The per-sample arithmetic.  With a table that passed ac_resolver_check the
  * sums below cannot overflow; they are done in uint32 (defined wrap-around) so
  * that even an unchecked, corrupt table cannot cause undefined behaviour. */
@@ -35,7 +61,6 @@ ac_status ac_resolve_kernel(const ac_resolver *r, const int16_t *x, const int16_
 {
     uint8_t sat = 0u;
     uint8_t j;
-    const uint8_t n = (uint8_t)r->n;
     int16_t p[6];
     int16_t d0 = 0; /* s - 2 AC_OMEGA_FRAC: the exponent of p */
 
@@ -68,24 +93,7 @@ ac_status ac_resolve_kernel(const ac_resolver *r, const int16_t *x, const int16_
     }
 
     for (j = 0u; j < 6u; j++) {
-        /* row L1 <= 65535 and |x| <= 32768 keep every partial sum in int32 */
-        int32_t acc = ac_sat_sub(ac_i_from_u(ac_dot16(0u, r->m[j], x, n)), r->k[j], &sat);
-        if (omega != 0) {
-            /* T (units 2^(s - 2 W - g_shift) LSB) -> accumulator units 2^-m_shift LSB */
-            int32_t t = ac_i_from_u(ac_dot16_sparse(0u, r->g[j], p, 6u));
-            int16_t d = (int16_t)(d0 - r->g_shift[j] + r->m_shift[j]);
-            uint8_t tsat = 0u;
-            t = ac_scale_round(t, (int16_t)-d, &tsat);
-            if (tsat != 0u) {
-                /* the centripetal term alone exceeds int32 accumulator units: it
-                 * dominates, so the output clips in its (negated) direction */
-                sat = 1u;
-                out[j] = (t > 0) ? INT32_MIN : INT32_MAX;
-                continue;
-            }
-            acc = ac_sat_sub(acc, t, &sat);
-        }
-        out[j] = ac_scale_round(acc, r->m_shift[j], &sat);
+        out[j] = resolve_row(r, j, x, omega != 0 ? p : 0, d0, &sat);
     }
     return sat ? AC_SATURATED : AC_OK;
 }

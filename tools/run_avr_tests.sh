@@ -22,6 +22,10 @@ FREQ=16000000
 TIMEOUT=${SIMAVR_TIMEOUT:-600}
 # gc-sections: firmware links only what it calls (the flash is 32 KB)
 AVR_CFLAGS=(-mmcu="$MCU" -Os -std=c99 -Wall -Wextra -Werror -ffunction-sections -fdata-sections -Wl,--gc-sections -I"$ROOT/include")
+# AVR_EXTRA_CFLAGS=-DAC_NO_ASM runs the plain C of the AVR assembly kernels (the C that the
+# H8 and every other target compile) with 16-bit int
+read -r -a extra <<< "${AVR_EXTRA_CFLAGS:-}"
+AVR_CFLAGS+=("${extra[@]}")
 HOST_CC=${CC:-cc}
 HOST_CFLAGS=(-std=c99 -O2 -Wall -Wextra -Werror -I"$ROOT/include")
 

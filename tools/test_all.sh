@@ -31,6 +31,8 @@ echo "== C core: H8/300H (h8300-hms-gcc -mh -mn) build and link without libgcc"
 bash tools/build_h8.sh
 echo "== C core: AVR (16-bit int) under simavr, bit for bit against the host"
 bash tools/run_avr_tests.sh
+echo "== C core: the same on AVR with the plain C instead of the AVR assembly kernels (-DAC_NO_ASM)"
+AVR_EXTRA_CFLAGS=-DAC_NO_ASM bash tools/run_avr_tests.sh
 
 echo "== C core: clang-tidy (zero findings)"
 bash tools/tidy.sh
