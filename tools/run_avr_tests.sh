@@ -34,7 +34,7 @@ fail() {
     exit 1
 }
 
-for tool in avr-gcc avr-size simavr "$HOST_CC" perl diff timeout; do
+for tool in avr-gcc avr-size simavr "$HOST_CC" perl diff; do
     command -v "$tool" > /dev/null || fail "'$tool' not found"
 done
 shopt -s nullglob
@@ -70,12 +70,29 @@ done
 
 # ---- 2. run under simavr -------------------------------------------------------------
 echo "== simavr -m $MCU -f $FREQ (timeout ${TIMEOUT}s)"
+# -v makes simavr report a crashed core ("avr_sadly_crashed"); it then waits for a
+# debugger instead of exiting, so watch for that rather than sit out the timeout.
+simavr -v -m "$MCU" -f "$FREQ" "$OUT/vectors_avr.elf" \
+    > "$OUT/simavr_stdout.log" 2> "$OUT/simavr_stderr.log" &
+sim=$!
+waited=0
+while kill -0 "$sim" 2> /dev/null; do
+    if grep -q "sadly_crashed" "$OUT/simavr_stderr.log"; then
+        kill "$sim" 2> /dev/null || true
+        why=$(grep -a -m 1 "CORE:" "$OUT/simavr_stderr.log" | sed 's/\x1b\[[0-9;]*m//g')
+        fail "the AVR program crashed: ${why:-see $OUT/simavr_stderr.log}"
+    fi
+    if [ "$waited" -ge "$TIMEOUT" ]; then
+        kill "$sim" 2> /dev/null || true
+        fail "simavr timed out after ${TIMEOUT}s (see $OUT/simavr_stderr.log)"
+    fi
+    sleep 1
+    waited=$((waited + 1))
+done
 set +e
-timeout "$TIMEOUT" simavr -m "$MCU" -f "$FREQ" "$OUT/vectors_avr.elf" \
-    > "$OUT/simavr_stdout.log" 2> "$OUT/simavr_stderr.log"
+wait "$sim"
 rc=$?
 set -e
-[ $rc -ne 124 ] || fail "simavr timed out after ${TIMEOUT}s (see $OUT/simavr_stderr.log)"
 [ $rc -eq 0 ] || echo "warning: simavr exited with status $rc"
 
 # simavr prints UART0 output line by line as ESC[32m<text><newline shown as '.'>ESC[0m;
