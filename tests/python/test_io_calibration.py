@@ -18,6 +18,8 @@ from accelcal.calibration import (
 from accelcal.device import default_device, default_triad
 from accelcal.errors import InputError
 
+from json_strategies import json_paths, json_values
+
 # Properties that touch files: capped so that the CI profile (10,000 examples)
 # stays within the CI time budget.
 IO = settings(max_examples=min(settings().max_examples, 1000))
@@ -303,28 +305,11 @@ def test_property_round_trip(tmp_path_factory, cal):
     assert load_calibration(p) == cal
 
 
-json_values = st.recursive(
-    st.none() | st.booleans() | st.integers(-(10**6), 10**6) | st.floats() | st.text(max_size=5),
-    lambda children: st.lists(children, max_size=4) | st.dictionaries(st.text(max_size=5), children, max_size=4),
-    max_leaves=8,
-)
-
-
-def _paths(obj, prefix=()):
-    yield prefix
-    if isinstance(obj, dict):
-        for k, v in obj.items():
-            yield from _paths(v, prefix + (k,))
-    elif isinstance(obj, list):
-        for i, v in enumerate(obj):
-            yield from _paths(v, prefix + (i,))
-
-
 @IO
 @given(st.data())
 def test_property_corruption_gives_input_error(tmp_path_factory, data):
     d = calibration_to_dict(full_cal())
-    path = data.draw(st.sampled_from([p for p in _paths(d) if p]))
+    path = data.draw(st.sampled_from([p for p in json_paths(d) if p]))
     target = d
     for k in path[:-1]:
         target = target[k]
