@@ -3,7 +3,7 @@
 
 * AVR (atmega328p, 16-bit int): exact cycles from Timer1 under simavr.
 * Host x86-64: instructions per call from valgrind --tool=callgrind.
-* H8/300H (h8300-hms-gcc -mh -mn -O2): text/data/bss per module and for the
+* H8/300H (h8300-hms-gcc -mh -mn -O2 -fomit-frame-pointer): text/data/bss per module and for the
   firmware subset (pre-trim + apply + centripetal + inversion).
 * Host throughput of the C batch path through cffi against numpy float64.
 Writes build/bench_core.md.
@@ -244,7 +244,7 @@ def h8_sizes():
     linked text minus the probe's own main."""
     sizes = {}
     objs = []
-    flags = ["-mh", "-mn", "-O2", "-std=c99", f"-I{INC}", f"-I{ROOT / 'csrc'}"]
+    flags = ["-mh", "-mn", "-O2", "-fomit-frame-pointer", "-std=c99", f"-I{INC}", f"-I{ROOT / 'csrc'}"]
     for c in CSRC:
         o = BUILD / f"h8_{c.stem}.o"
         run(["h8300-hms-gcc", *flags, "-c", str(c), "-o", str(o)])

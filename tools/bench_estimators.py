@@ -266,7 +266,7 @@ int main(void) { ac_rest_cfg c; int32_t f[3], a[3]; int16_t w[3]; uint8_t fl;
 
 
 def h8_sizes():
-    cc = ["h8300-hms-gcc", "-mh", "-mn", "-O2", "-std=c99", "-Wall", "-Wextra", "-Werror", f"-I{INC}",
+    cc = ["h8300-hms-gcc", "-mh", "-mn", "-O2", "-fomit-frame-pointer", "-std=c99", "-Wall", "-Wextra", "-Werror", f"-I{INC}",
           f"-I{ROOT / 'csrc'}"]
     objdir = BUILD / "h8"
     objdir.mkdir(parents=True, exist_ok=True)

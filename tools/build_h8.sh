@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # accelcal -- H8/300H build of the C core (the seed's MCU, H8/3664 in normal mode).
 #
-#  1. compiles every csrc/*.c with h8300-hms-gcc -mh -mn -O2 -std=c99 -Wall -Wextra -Werror;
+#  1. compiles every csrc/*.c with h8300-hms-gcc -mh -mn -O2 -fomit-frame-pointer -std=c99 -Wall -Wextra -Werror;
 #  2. checks that the objects together need NO external symbol at all: the
 #     H8/300H has no usable libgcc, so any ___mulsi3 / ___divsi3 / ___udivsi3 /
 #     ___modsi3 / ___muldi3 / soft-float (___adddf3 ...) / memcpy / memset
@@ -22,7 +22,7 @@ ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 OUT="$ROOT/build/h8"
 CROSS=${H8_CROSS:-h8300-hms-}
 CC="${CROSS}gcc"
-CFLAGS=(-mh -mn -O2 -std=c99 -Wall -Wextra -Werror -I"$ROOT/include")
+CFLAGS=(-mh -mn -O2 -fomit-frame-pointer -std=c99 -Wall -Wextra -Werror -I"$ROOT/include")
 LDFLAGS=(-mh -mn -nostdlib -nostartfiles -Wl,-e,_main)
 
 fail() {

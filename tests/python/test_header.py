@@ -109,7 +109,7 @@ def test_cross_compiles_warning_free(case, target):
                    "    return (int)ac_process(&AC_CAL_RESOLVER, AC_CAL_TRIM, raw, 0, out);\n}\n")
     if target == "h8":
         need("h8300-hms-gcc")
-        cmd = ["h8300-hms-gcc", "-mh", "-mn", "-O2", *WARN]
+        cmd = ["h8300-hms-gcc", "-mh", "-mn", "-O2", "-fomit-frame-pointer", *WARN]
     else:
         need("avr-gcc")
         cmd = ["avr-gcc", "-mmcu=atmega328p", "-Os", *WARN]
