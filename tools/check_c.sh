@@ -11,7 +11,9 @@
 #  e. packaging: install, then a consumer using find_package(accelcal), and a
 #     consumer using add_subdirectory(); both build and run;
 #  f. valgrind (memcheck) over the vector program and the small unit tests, if
-#     valgrind is installed.
+#     valgrind is installed;
+#  g. the Python extension's host-only C (python/accelcal/_csv_scan.c: libc and
+#     double, not firmware) with the same strict warnings and -Werror.
 #
 # Usage:  tools/check_c.sh [step ...]     steps: build sanitize cppcheck grep package valgrind
 #         (default: all, in that order; build dirs under build/)
@@ -23,7 +25,7 @@ ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 B="$ROOT/build"
 JOBS=${JOBS:-2}
 STEPS=("$@")
-[ ${#STEPS[@]} -gt 0 ] || STEPS=(build sanitize cppcheck grep package valgrind)
+[ ${#STEPS[@]} -gt 0 ] || STEPS=(build sanitize cppcheck grep package valgrind hostc)
 declare -a RESULTS=()
 failed=0
 
@@ -218,11 +220,21 @@ step_valgrind() {
     if [ $ok -eq 1 ]; then pass "valgrind"; else flop "valgrind"; fi
 }
 
+step_hostc() {
+    hdr "g. host-only C of the Python extension (strict warnings, -Werror)"
+    local f ok=1
+    for f in "$ROOT"/python/accelcal/*.c; do
+        "${CC:-cc}" -std=c99 -Wall -Wextra -Wpedantic -Wconversion -Wsign-conversion -Wshadow -Werror \
+            -fsyntax-only "$f" || ok=0
+    done
+    if [ $ok -eq 1 ]; then pass "host C of the extension"; else flop "host C of the extension"; fi
+}
+
 for s in "${STEPS[@]}"; do
     case $s in
-    build | sanitize | cppcheck | grep | package | valgrind) "step_$s" ;;
+    build | sanitize | cppcheck | grep | package | valgrind | hostc) "step_$s" ;;
     *)
-        echo "check_c: unknown step '$s' (build sanitize cppcheck grep package valgrind)" >&2
+        echo "check_c: unknown step '$s' (build sanitize cppcheck grep package valgrind hostc)" >&2
         exit 2
         ;;
     esac

@@ -14,6 +14,7 @@ from cffi import FFI
 ROOT = Path(__file__).resolve().parents[2]
 INCLUDE = ROOT / "include"
 CSRC = ROOT / "csrc"
+HOST_DIR = Path(__file__).resolve().parent  # host-only C (libc, double): not firmware
 HEADERS = ["ac_status.h", "ac_fixed.h", "ac_xf.h", "ac_trim.h", "ac_resolve.h", "ac_invert.h",
            "ac_rate.h"]
 HEADERS += ["ac_trig.h", "ac_rest.h", "ac_attitude.h", "ac_displace.h"]  # motion estimators
@@ -26,24 +27,29 @@ def config_constants(include_dir: Path = INCLUDE) -> dict[str, int]:
             for m in re.finditer(r"^#define\s+(AC_[A-Z0-9_]+)\s+(-?\d+)\s*$", text, re.M)}
 
 
+def _cdef_of(header: Path, consts: dict[str, int]) -> str:
+    """One header as cdef text: comments and preprocessor lines dropped, integer
+    #defines kept, the config constants substituted."""
+    text = re.sub(r"/\*.*?\*/", "", header.read_text(), flags=re.S)
+    text = re.sub(r"//[^\n]*", "", text)
+    lines = []
+    for line in text.splitlines():
+        m = re.match(r"#define\s+(AC[A-Z0-9_]*_[A-Z0-9_]+)\s+\(?(0x[0-9A-Fa-f]+|-?\d+)u?\)?\s*$", line.strip())
+        if m:
+            lines.append(f"#define {m.group(1)} {int(m.group(2), 0)}")
+        elif not line.lstrip().startswith("#"):
+            lines.append(line)
+    body = "\n".join(lines)
+    for k, v in consts.items():
+        body = re.sub(rf"\b{k}\b", str(v), body)
+    return body
+
+
 def cdef_from_headers(include_dir: Path = INCLUDE) -> str:
     consts = config_constants(include_dir)
     out = [f"#define {k} {v}" for k, v in consts.items() if k != "AC_NO_STDINT"]
-    for name in HEADERS:
-        text = (include_dir / "accelcal" / name).read_text()
-        text = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
-        text = re.sub(r"//[^\n]*", "", text)
-        lines = []
-        for line in text.splitlines():
-            m = re.match(r"#define\s+(AC_[A-Z0-9_]+)\s+\(?(0x[0-9A-Fa-f]+|-?\d+)u?\)?\s*$", line.strip())
-            if m:
-                lines.append(f"#define {m.group(1)} {int(m.group(2), 0)}")
-            elif not line.lstrip().startswith("#"):
-                lines.append(line)
-        body = "\n".join(lines)
-        for k, v in consts.items():
-            body = re.sub(rf"\b{k}\b", str(v), body)
-        out.append(body)
+    out += [_cdef_of(include_dir / "accelcal" / name, consts) for name in HEADERS]
+    out.append(_cdef_of(HOST_DIR / "_csv_scan.h", consts))
     return "\n".join(out)
 
 
@@ -51,9 +57,9 @@ ffibuilder = FFI()
 ffibuilder.cdef(cdef_from_headers())
 ffibuilder.set_source(
     "accelcal._core",
-    '#include "accelcal/accelcal.h"',
-    sources=[str(p.relative_to(ROOT)) for p in sorted(CSRC.glob("*.c"))],
-    include_dirs=[str(INCLUDE), str(CSRC)],
+    '#include "accelcal/accelcal.h"\n#include "_csv_scan.h"',
+    sources=[str(p.relative_to(ROOT)) for p in [*sorted(CSRC.glob("*.c")), HOST_DIR / "_csv_scan.c"]],
+    include_dirs=[str(INCLUDE), str(CSRC), str(HOST_DIR)],
     extra_compile_args=["-std=c99", "-O2"],
 )
 

@@ -495,6 +495,47 @@ def _convert(table: Any, j: int, kind: str) -> np.ndarray:
     return _slow_float(table.strings(j), allow_unknown)
 
 
+_SCAN_KIND = {"raw": 1, "pose": 2, "t": 3, "ref": 4}  # _csv_scan.h: ACX_INT ... (0: ACX_SKIP)
+
+
+def _scan_fast(data: bytes, pos: int, end: int, names: list[str], cols: dict[str, tuple[int, str]]
+               ) -> dict[str, np.ndarray] | None:
+    """The columns of cols from the data rows data[pos:end] by the C scanner
+    (_csv_scan.c), or None when it stops at a row: then the slow path decides."""
+    from ._core import ffi, lib
+
+    m = len(names)
+    kind = np.zeros(m, dtype=np.int8)
+    slot = np.zeros(m, dtype=np.int16)
+    n_int = n_float = 0
+    for j, k in cols.values():
+        kind[j] = _SCAN_KIND[k]
+        if k in ("raw", "pose"):
+            slot[j], n_int = n_int, n_int + 1
+        else:
+            slot[j], n_float = n_float, n_float + 1
+    n = data.count(b"\n", pos, end) + 1
+    ints = np.empty((n_int, n), dtype=np.int64)
+    floats = np.empty((n_float, n), dtype=np.float64)
+    view = memoryview(data)[pos:end]
+    done = lib.acx_scan_rows(ffi.from_buffer(view), end - pos, n, m,
+                             ffi.cast("const int8_t *", ffi.from_buffer(kind)),
+                             ffi.cast("const int16_t *", ffi.from_buffer(slot)),
+                             ffi.cast("int64_t *", ffi.from_buffer(ints)),
+                             ffi.cast("double *", ffi.from_buffer(floats)))
+    if done != n:
+        return None
+    return {name: (ints if k in ("raw", "pose") else floats)[slot[j]] for name, (j, k) in cols.items()}
+
+
+def _line_cells(data: bytes, pos: int, end: int, i: int) -> list[str]:
+    """The cells of data row i (for a message; rows are single lines here)."""
+    nl = np.flatnonzero(np.frombuffer(data, dtype=np.uint8, count=end - pos, offset=pos) == 10)
+    start = pos if i == 0 else pos + int(nl[i - 1]) + 1
+    stop = pos + int(nl[i]) if i < nl.size else end
+    return data[start:stop].decode("utf-8").split(",")
+
+
 def _split_header(line: str) -> list[str]:
     if '"' in line:
         cells = next(csv.reader([line]), [])
@@ -564,23 +605,32 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
         raise InputError(source, "no data rows after the header", row=header_line)
     m = len(names)
     first = header_line + 1
-    if data.find(b'"', pos, end) >= 0:
-        table: Any = _ListTable(data[pos:end].decode("utf-8"), m, first, source)
-    else:
-        table = _ByteTable(data, pos, end, m, first, source)
-    n = table.n
+    table: Any = None
+    values = _scan_fast(data, pos, end, names, cols)
+    if values is None:
+        # Anything the C scanner did not take (quotes, blanks, words, an error):
+        # the numpy/Python path decides, with the exact message.
+        if data.find(b'"', pos, end) >= 0:
+            table = _ListTable(data[pos:end].decode("utf-8"), m, first, source)
+        else:
+            table = _ByteTable(data, pos, end, m, first, source)
+        # Convert every column; report the earliest bad cell in the file.
+        errors: list[tuple[int, int, str]] = []
+        values = {}
+        for name, (j, kind) in cols.items():
+            try:
+                values[name] = _convert(table, j, kind)
+            except _CellError as e:
+                errors.append((e.i, j, e.message))
+        if errors:
+            i, j, msg = min(errors)
+            raise InputError(source, msg, row=table.line(i), column=names[j])
+    n = len(values["t"])
 
-    # Convert every column; report the earliest bad cell in the file.
-    errors: list[tuple[int, int, str]] = []
-    values: dict[str, np.ndarray] = {}
-    for name, (j, kind) in cols.items():
-        try:
-            values[name] = _convert(table, j, kind)
-        except _CellError as e:
-            errors.append((e.i, j, e.message))
-    if errors:
-        i, j, msg = min(errors)
-        raise InputError(source, msg, row=table.line(i), column=names[j])
+    def cell(i: int, j: int) -> str:
+        if table is not None:
+            return table.cell(i, j)
+        return _line_cells(data, pos, end, i)[j]
 
     t = values["t"]
     dt_bad = np.flatnonzero(~(np.diff(t) > 0))
@@ -589,9 +639,9 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
         jt = cols["t"][0]
         raise InputError(
             source,
-            f"t must be strictly increasing, got {_quote(table.cell(i, jt).strip())} "
-            f"after {_quote(table.cell(i - 1, jt).strip())}",
-            row=table.line(i),
+            f"t must be strictly increasing, got {_quote(cell(i, jt).strip())} "
+            f"after {_quote(cell(i - 1, jt).strip())}",
+            row=first + i if table is None else table.line(i),
             column="t",
         )
 
@@ -614,13 +664,15 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
             raise InputError(
                 source,
                 f"{given} is given but {missing} is not (give all of {', '.join(comps)} or none)",
-                row=table.line(i),
+                row=first + i if table is None else table.line(i),
                 column=missing,
             )
         vecs[vec] = arr
     extra: dict[str, list[str]] = {}
     for j, name in enumerate(names):
         if name and name not in cols and name not in extra:
+            if table is None:
+                table = _ByteTable(data, pos, end, m, first, source)
             extra[name] = table.strings(j)
     return Recording(
         t=t,
@@ -633,7 +685,7 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
         metadata=metadata,
         extra=extra,
         source=source,
-        lines=table.first_line if isinstance(table, _ByteTable) else table.lines,
+        lines=first if not isinstance(table, _ListTable) else table.lines,
     )
 
 

@@ -15,6 +15,7 @@ from accelcal.recording import (
     _CellError,
     _convert,
     _ListTable,
+    _scan_fast,
     read_recording,
     recording_from_arrays,
     write_recording,
@@ -459,6 +460,8 @@ def test_property_round_trip(tmp_path_factory, rec):
 
 numeric_cell = st.one_of(
     st.integers(-(10**20), 10**20).map(str),
+    st.floats(allow_nan=False).map(lambda x: "%.17g" % x),
+    st.from_regex(r"[+-]?[0-9]{0,18}\.?[0-9]{0,18}([eE][+-]?[0-9]{1,3})?", fullmatch=True),
     st.floats().map(repr),
     st.floats(allow_nan=False).map(lambda x: "%.9g" % x),
     st.sampled_from(["", " ", "nan", "NaN", "+nan", "inf", "-Infinity", "1.", ".5", "+.5e-3", "1e", "--1", "1_0",
@@ -487,6 +490,64 @@ def test_property_fast_and_slow_paths_agree(kind, cells):
         assert np.array_equal(results[0][1], results[1][1], equal_nan=True)
     else:
         assert results[0] == results[1]
+
+
+def same_numbers(a, b):
+    """Equal arrays, bit for bit (the sign of zero included), NaN where NaN."""
+    a, b = np.asarray(a), np.asarray(b)
+    if a.dtype != b.dtype or a.shape != b.shape:
+        return False
+    if a.dtype.kind == "f":
+        nan = np.isnan(a)
+        return bool(np.array_equal(nan, np.isnan(b)) and np.array_equal(a[~nan].view(np.int64), b[~nan].view(np.int64)))
+    return bool(np.array_equal(a, b))
+
+
+@pytest.mark.parametrize("kind", ["raw", "pose", "t", "ref"])
+@IO
+@given(cells=st.lists(numeric_cell, min_size=1, max_size=12), last=st.booleans())
+def test_property_c_scanner_takes_only_valid_cells(kind, cells, last):
+    """The C scanner (_csv_scan.c) converts a column only if the per-cell
+    Python path accepts every cell, and then to the same numbers, bit for bit;
+    it never decides an error itself (it hands the file back)."""
+    rows = [(f"0,{c}" if last else f"{c},0") for c in cells]
+    text = "\n".join(rows)
+    j = 1 if last else 0
+    fast = _scan_fast(text.encode(), 0, len(text.encode()), ["a", "b"], {"c": (j, kind)})
+    try:
+        slow = _convert(_ListTable(text + "\n", 2, 2, "x"), j, kind)
+    except _CellError:
+        slow = None
+    if fast is not None:
+        assert slow is not None, cells
+        assert same_numbers(fast["c"], slow), (cells, fast["c"], slow)
+
+
+@IO
+@given(recordings())
+def test_property_c_scanner_reads_as_the_python_path(tmp_path_factory, rec):
+    """Whole files: read with the C scanner and with it switched off, the same
+    Recording, bit for bit."""
+    p = tmp_path_factory.getbasetemp() / "test_io_recording_scan_r.csv"
+    write_recording(p, rec, float_format="%.17g")
+    a = read_recording(p, rec.n_channels)
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr("accelcal.recording._scan_fast", lambda *args: None)
+        b = read_recording(p, rec.n_channels)
+    assert a == b
+    for name in ("t", "raw", "f", "w", "dw", "temp_c", "pose"):
+        va, vb = getattr(a, name), getattr(b, name)
+        assert (va is None) == (vb is None) and (va is None or same_numbers(va, vb)), name
+
+
+def test_c_scanner_hands_back_irregular_rows():
+    """Quotes, a missing or an extra cell, blanks and words: the scanner stops
+    and the Python path decides."""
+    cols = {"t": (0, "t"), "raw_0": (1, "raw")}
+    for text in ["1,2\n2,3,4", "1,2\n2", '1,"2"', "1, 2", "nan,2", "1,2\n\n3,4", "1,2\r", "1,2.0", "1,2\n"]:
+        assert _scan_fast(text.encode(), 0, len(text), ["t", "raw_0"], cols) is None, text
+    good = _scan_fast(b"1,2\n2.5e-1,-3", 0, 13, ["t", "raw_0"], cols)
+    assert good["t"].tolist() == [1.0, 0.25] and good["raw_0"].tolist() == [2, -3]
 
 
 @IO
