@@ -34,6 +34,15 @@ def _write_csv(path, header: list[str], columns: list[np.ndarray], comments: dic
     write_columns_csv(path, Columns(zip(header, columns), meta=comments))
 
 
+def _progress(desc: str, total: int | None = None, unit: str = " steps"):
+    """A progress bar on stderr for work that takes seconds on long recordings.  Off when
+    stderr is not a terminal (tqdm's disable=None): pipes, logs and scripts see only the
+    one-line messages."""
+    from tqdm import tqdm
+    return tqdm(desc=desc, total=total, unit=unit, file=sys.stderr, disable=None, leave=False,
+                dynamic_ncols=True)
+
+
 # ---- subcommands -------------------------------------------------------------
 
 def cmd_resolve(a):
@@ -148,12 +157,18 @@ def cmd_diagnose(a):
     dev = _load_device(a.device)
     cal = _load_cal(a.calibration, dev)
     recs = [read_recording(p, dev.n_channels) for p in a.recordings]
-    result = diagnose(dev, cal, recs, folds=a.folds, seed=a.seed)
+    with _progress("diagnose: scoring candidates", unit=" fits") as bar:
+        def scored(name):
+            bar.set_postfix_str(name, refresh=False)
+            bar.update()
+        result = diagnose(dev, cal, recs, folds=a.folds, seed=a.seed, progress=scored)
     # the result is the contract's JSON object; it also carries the per-sample
     # series the report plots, so it goes to write_report as it is
     atomic_write(a.json, lambda f: json.dump(result, f, indent=2, default=_json_default))
     if a.report:
-        write_report(result, a.report)
+        from .report import REPORT_FILES
+        with _progress("diagnose: writing the report", total=REPORT_FILES, unit=" files") as bar:
+            write_report(result, a.report, progress=lambda path: bar.update())
     print(f"verdict: {result.get('verdict')}")
     return 0
 

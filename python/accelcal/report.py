@@ -318,8 +318,12 @@ def summary_text(res: dict, images: list[str] = ()) -> str:
     return "\n".join(L)
 
 
-def write_report(result: dict, out_dir: Any, *, dpi: int = 110) -> list[str]:
+REPORT_FILES = 4  # residual_time.png (when there is a residual), breakdown.png, candidates.png, summary.md
+
+
+def write_report(result: dict, out_dir: Any, *, dpi: int = 110, progress: Any = None) -> list[str]:
     """Write the plots and summary.md of ``result`` into ``out_dir`` (created if needed).
+    ``progress``: optional callable(path) called after each file (at most REPORT_FILES).
     Returns the paths written."""
     if not isinstance(result, dict) or "gap" not in result or "effects" not in result:
         raise AccelcalError("write_report: expected a diagnosis result (the dict diagnose() returns)")
@@ -328,23 +332,28 @@ def write_report(result: dict, out_dir: Any, *, dpi: int = 110) -> list[str]:
         os.makedirs(out_dir, exist_ok=True)
     except OSError as e:
         raise AccelcalError(f"{out_dir}: cannot create the report directory: {e.strerror or e}") from None
-    written = []
-    images = []
+    written: list[str] = []
+    images: list[str] = []
+
+    def done(path: str, image: bool = True) -> None:
+        written.append(path)
+        if image:
+            images.append(os.path.basename(path))
+        if progress is not None:
+            progress(path)
+
     p = os.path.join(out_dir, "residual_time.png")
     if _plot_residual_time(result, p, dpi):
-        written.append(p)
-        images.append("residual_time.png")
+        done(p)
     p = os.path.join(out_dir, "breakdown.png")
     _plot_breakdown(result, p, dpi)
-    written.append(p)
-    images.append("breakdown.png")
+    done(p)
     if result.get("effects"):
         p = os.path.join(out_dir, "candidates.png")
         _plot_candidates(result, p, dpi)
-        written.append(p)
-        images.append("candidates.png")
+        done(p)
     p = os.path.join(out_dir, "summary.md")
     text = summary_text(result, images)
     atomic_write(p, lambda f: f.write(text))
-    written.append(p)
+    done(p, image=False)
     return written

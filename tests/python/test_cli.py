@@ -170,7 +170,38 @@ def test_diagnose_command_finds_a_withheld_gain(tmp_path, demo_dir):
     r = run("diagnose", "--device", out / "device.json", "--calibration", truth, rec, "--json", j,
             "--report", tmp_path / "rep")
     assert r.returncode == 0, r.stderr
+    assert r.stderr == ""  # no progress bar when stderr is not a terminal
     d = json.loads(j.read_text())
     assert d["verdict"] == "gain"
     assert d["effects"][0]["shrink"] > 0.5
     assert (tmp_path / "rep" / "summary.md").exists()
+    # on a terminal: progress bars for the candidate fits and the report's files
+    import os
+    import pty
+    import fcntl
+    import struct
+    import termios
+    master, slave = pty.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))  # a pty starts 0 columns wide
+    chunks = []
+    try:
+        p = subprocess.Popen([sys.executable, "-m", "accelcal.cli", "diagnose", "--device", str(out / "device.json"),
+                              "--calibration", str(truth), str(rec), "--json", str(tmp_path / "d2.json"),
+                              "--report", str(tmp_path / "rep2")], stdout=subprocess.DEVNULL, stderr=slave)
+        os.close(slave)
+        while True:  # read while it runs: a pty drops what is unread when the child side closes
+            try:
+                b = os.read(master, 65536)
+            except OSError:  # EIO: the child side is closed
+                break
+            if not b:
+                break
+            chunks.append(b)
+        p.wait(timeout=300)
+    finally:
+        os.close(master)
+    tty = b"".join(chunks).decode("utf-8", "replace")
+    assert p.returncode == 0, tty
+    assert "diagnose: scoring candidates" in tty and "fits" in tty, tty
+    assert "diagnose: writing the report" in tty and "/4 " in tty, tty
+    assert json.loads((tmp_path / "d2.json").read_text())["verdict"] == "gain"
