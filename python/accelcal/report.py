@@ -47,6 +47,10 @@ def _save(fig, path: str, dpi: int) -> None:
     atomic_write(path, lambda f: f.write(data), mode="wb")
 
 
+MEAN_BINS = 300  # running means per residual trace (long recordings) ...
+MEAN_MIN = 10    # ... each of at least this many samples
+
+
 def _decimate(x: np.ndarray, y: np.ndarray, m: int = _MAX_POINTS) -> tuple[np.ndarray, np.ndarray]:
     """Min/max envelope decimation so spikes stay visible."""
     n = x.shape[0]
@@ -66,7 +70,20 @@ def _decimate(x: np.ndarray, y: np.ndarray, m: int = _MAX_POINTS) -> tuple[np.nd
     return xx, yy
 
 
+def _bin_means(x: np.ndarray, y: np.ndarray, w: int) -> tuple[np.ndarray, np.ndarray]:
+    """Means of consecutive runs of w samples (the last, shorter run included)."""
+    if w <= 1:
+        return x, y
+    edges = np.arange(0, x.shape[0], w)
+    counts = np.diff(np.append(edges, x.shape[0]))
+    return np.add.reduceat(x, edges) / counts, np.add.reduceat(y, edges) / counts
+
+
 def _plot_residual_time(res: dict, path: str, dpi: int) -> bool:
+    """Per channel: the residual (faint, min/max envelope) and its running mean over w samples
+    (bold) before and after the chosen effects, on the noise floor's 1-sigma band and the
+    running mean's 2-sigma band: on a long recording the samples fill the axes, and what the
+    model misses shows in the mean leaving its band."""
     ser = getattr(res, "series", None)
     if not ser:
         return False
@@ -80,27 +97,39 @@ def _plot_residual_time(res: dict, path: str, dpi: int) -> bool:
     rows = int(math.ceil(N / cols))
     fig, axes = plt.subplots(rows, cols, figsize=(11 if cols == 2 else 9, 1.7 * rows + 0.8), sharex=True,
                              squeeze=False)
-    # break the line where recordings or time gaps change
+    # break the lines where recordings or time gaps change
     gap = np.flatnonzero(np.diff(tg) > 5 * np.median(np.diff(tg))) + 1 if tg.size > 1 else np.array([], int)
+    w = tg.size // MEAN_BINS
+    w = w if w >= MEAN_MIN else 1  # a short recording: the samples themselves
+    after_label = "after " + " + ".join(chosen)
     for i in range(N):
         ax = axes[i // cols][i % cols]
         for a, b in zip(np.r_[0, gap], np.r_[gap, tg.size]):
-            x, y = _decimate(tg[a:b], e[a:b, i])
-            ax.plot(x, y, lw=0.5, color="C0", label="residual" if a == 0 else None)
-            if chosen:
-                x2, y2 = _decimate(tg[a:b], after[a:b, i])
-                ax.plot(x2, y2, lw=0.5, color="C3", alpha=0.8,
-                        label=("after " + " + ".join(chosen)) if a == 0 else None)
-        ax.axhspan(-sig[i], sig[i], color="0.8", alpha=0.6, lw=0, label="noise floor (1 sigma)")
+            first = a == 0
+            for y, color, name in ((e, "C0", "residual"), (after, "C3", after_label)):
+                if name != "residual" and not chosen:
+                    continue
+                x, v = _decimate(tg[a:b], y[a:b, i])
+                ax.plot(x, v, lw=0.4 if w > 1 else 0.6, color=color, alpha=0.25 if w > 1 else 0.85,
+                        label=name if first and w == 1 else None)
+                if w > 1:
+                    xm, vm = _bin_means(tg[a:b], y[a:b, i], w)
+                    ax.plot(xm, vm, lw=1.3, color=color, label=f"{name}, mean of {w}" if first else None)
+        ax.axhspan(-sig[i], sig[i], color="0.88", lw=0, zorder=0, label="noise floor (1 sigma)")
+        if w > 1:
+            band = 2.0 * sig[i] / math.sqrt(w)
+            ax.axhspan(-band, band, color="0.55", alpha=0.5, lw=0, zorder=0.5, label="mean's 2-sigma band")
         ax.set_ylabel(f"ch {i}\ncounts", fontsize=8)
         ax.tick_params(labelsize=7)
-        if i == 0:
-            ax.legend(fontsize=7, loc="upper right", ncol=3)
     for j in range(N, rows * cols):
         axes[j // cols][j % cols].set_visible(False)
     for ax in axes[-1]:
         ax.set_xlabel("time (s; recordings laid end to end)", fontsize=8)
     fig.suptitle(f"Residual = measured - model ({res.get('device', '')}); verdict: {res.get('verdict')}", fontsize=10)
+    # one legend above the panels, where it hides no data
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=7, loc="upper center", ncol=4, bbox_to_anchor=(0.5, 0.955), frameon=False)
+    fig.subplots_adjust(top=1.0 - 0.95 / (1.7 * rows + 0.8))
     _save(fig, path, dpi)
     plt.close(fig)
     return True
