@@ -153,8 +153,6 @@ int64_t acx_scan_rows(const char *data, size_t len, int64_t n_rows, int m, const
         int j;
         for (j = 0; j < m; j++) {
             const char *e = p;
-            int64_t v = 0;
-            double x = 0.0;
             while (e < end && *e != ',' && *e != '\n' && *e != '"') {
                 e++;
             }
@@ -165,38 +163,25 @@ int64_t acx_scan_rows(const char *data, size_t len, int64_t n_rows, int m, const
             switch (kind[j]) {
             case ACX_SKIP:
                 break;
-            case ACX_INT_OR_EMPTY:
-                if (e == p) {
-                    ints[slot[j] * n_rows + i] = -1;
-                    break;
-                }
-                if (!parse_int(p, e, &v) || v < -1) {
-                    return i;
-                }
-                ints[slot[j] * n_rows + i] = v;
-                break;
             case ACX_INT:
-                if (!parse_int(p, e, &v)) {
+            case ACX_INT_OR_EMPTY: {
+                const int empty_ok = kind[j] == ACX_INT_OR_EMPTY; /* the pose column: -1 while moving */
+                int64_t v = -1;
+                if (!(empty_ok && e == p) && (!parse_int(p, e, &v) || (empty_ok && v < -1))) {
                     return i;
                 }
                 ints[slot[j] * n_rows + i] = v;
                 break;
-            case ACX_FLOAT_OR_EMPTY:
-                if (e == p) {
-                    floats[slot[j] * n_rows + i] = NAN;
-                    break;
-                }
-                if (!parse_float(p, e, &x)) {
-                    return i;
-                }
-                floats[slot[j] * n_rows + i] = x;
-                break;
+            }
             case ACX_FLOAT:
-                if (!parse_float(p, e, &x)) {
+            case ACX_FLOAT_OR_EMPTY: {
+                double x = NAN;
+                if (!(kind[j] == ACX_FLOAT_OR_EMPTY && e == p) && !parse_float(p, e, &x)) {
                     return i;
                 }
                 floats[slot[j] * n_rows + i] = x;
                 break;
+            }
             default:
                 return i;
             }

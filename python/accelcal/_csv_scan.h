@@ -23,8 +23,10 @@
 
 /* Rows are data[0..len), separated by '\n', n_rows of them, each of m cells
  * separated by ','.  Column j goes to ints[slot[j] * n_rows + i] or
- * floats[slot[j] * n_rows + i] (one contiguous array a column).  Returns the number of leading rows converted: n_rows when all were,
- * otherwise the index of the first row that was not (its outputs are partial). */
+ * floats[slot[j] * n_rows + i] (one contiguous array a column).  Returns n_rows
+ * when every row was converted and the data end with the last; otherwise a
+ * smaller number (the index of the first row not converted, or n_rows - 1 when
+ * data are left after n_rows rows), and the outputs are partial. */
 int64_t acx_scan_rows(const char *data, size_t len, int64_t n_rows, int m, const int8_t *kind,
                       const int16_t *slot, int64_t *ints, double *floats);
 
