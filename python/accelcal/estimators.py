@@ -1284,14 +1284,20 @@ def report_plots(out_dir, columns: Columns, rec=None, kind: str | None = None) -
     kind = kind or ("attitude" if "theta_rad" in columns else "displacement" if "p_x" in columns else "rate")
     files = []
     if kind == "attitude":
-        fig, axs = plt.subplots(3, 1, figsize=(9, 8), sharex=True)
-        axs[0].plot(t, np.degrees(columns["theta_rad"]), label="theta (estimate)")
+        ref_theta = ref_w = None
         if rec is not None and np.isfinite(rec.f).all():
-            axs[0].plot(t, np.degrees(np.arctan2(-rec.f[:, 0], rec.f[:, 2])), "--", label="reference (from f)")
+            ref_theta = np.arctan2(-rec.f[:, 0], rec.f[:, 2])
+        if rec is not None and np.isfinite(rec.w[:, 1]).all():
+            ref_w = rec.w[:, 1]
+        has_ref = ref_theta is not None or ref_w is not None
+        fig, axs = plt.subplots(4 if has_ref else 3, 1, figsize=(9, 10 if has_ref else 8), sharex=True)
+        axs[0].plot(t, np.degrees(columns["theta_rad"]), label="theta (estimate)")
+        if ref_theta is not None:
+            axs[0].plot(t, np.degrees(ref_theta), "--", label="reference (from f)")
         axs[0].set_ylabel("theta [deg]")
         axs[1].plot(t, columns["w_y"], label="w_y (estimate)")
-        if rec is not None and np.isfinite(rec.w[:, 1]).all():
-            axs[1].plot(t, rec.w[:, 1], "--", label="w_y reference")
+        if ref_w is not None:
+            axs[1].plot(t, ref_w, "--", label="w_y reference")
         g = columns.get("gated")
         if g is not None and np.any(g > 0):
             axs[1].fill_between(t, 0, 1, where=g > 0, transform=axs[1].get_xaxis_transform(), alpha=0.15,
@@ -1301,7 +1307,23 @@ def report_plots(out_dir, columns: Columns, rec=None, kind: str | None = None) -
         if rec is not None and np.isfinite(rec.dw[:, 1]).all():
             axs[2].plot(t, rec.dw[:, 1], "--", label="dw_y reference")
         axs[2].set_ylabel("dw_y [rad/s^2]")
-        axs[2].set_xlabel("t [s]")
+        if has_ref:
+            # the estimate and its reference overlap on the panels above: their difference shows
+            # how good the estimate is at a glance
+            ax = axs[3]
+            if ref_theta is not None:
+                d = np.degrees(np.angle(np.exp(1j * (columns["theta_rad"] - ref_theta))))
+                ax.plot(t, d, color="C0", lw=0.8, label=f"theta error (rms {np.sqrt(np.mean(d * d)):.3g} deg)")
+            ax.set_ylabel("theta error [deg]")
+            if ref_w is not None:
+                ax2 = ax.twinx()
+                d = columns["w_y"] - ref_w
+                ax2.plot(t, d, color="C3", lw=0.8, label=f"w_y error (rms {np.sqrt(np.mean(d * d)):.3g} rad/s)")
+                ax2.set_ylabel("w_y error [rad/s]", color="C3")
+                ax2.tick_params(axis="y", colors="C3")
+                ax2.legend(loc="lower right", fontsize=8)
+            ax.axhline(0.0, color="k", lw=0.5)
+        axs[-1].set_xlabel("t [s]")
         for a in axs:
             a.legend(loc="upper right", fontsize=8)
             a.grid(alpha=0.3)
@@ -1331,9 +1353,14 @@ def report_plots(out_dir, columns: Columns, rec=None, kind: str | None = None) -
         fig, ax = plt.subplots(1, 1, figsize=(9, 4))
         for c in "xyz":
             ax.plot(t, columns[f"w_{c}"], label=f"w_{c}")
-        if rec is not None and np.isfinite(rec.w).all():
+        ref = rec is not None and np.isfinite(rec.w).all()
+        if ref:
             for i, c in enumerate("xyz"):
                 ax.plot(t, rec.w[:, i], "--", label=f"w_{c} reference")
+            err = np.column_stack([columns[f"w_{c}"] for c in "xyz"]) - rec.w
+            rms = np.sqrt(np.mean(err * err, axis=0))
+            ax.set_title("error rms " + ", ".join(f"w_{c} {v:.3g}" for c, v in zip("xyz", rms)) + " rad/s",
+                         fontsize=9)
         ax.set_ylabel("rad/s")
         ax.set_xlabel("t [s]")
         ax.legend(fontsize=8)
