@@ -12,7 +12,7 @@
 #     consumer using add_subdirectory(); both build and run;
 #  f. valgrind (memcheck) over the vector program and the small unit tests, if
 #     valgrind is installed;
-#  g. the Python extension's host-only C (python/accelcal/_csv_scan.c: libc and
+#  g. the Python extension's host-only C (python/accelcal/_csv_fast.c: libc and
 #     double, not firmware) with the same strict warnings and -Werror.
 #
 # Usage:  tools/check_c.sh [step ...]     steps: build sanitize cppcheck grep package valgrind

@@ -49,7 +49,7 @@ def cdef_from_headers(include_dir: Path = INCLUDE) -> str:
     consts = config_constants(include_dir)
     out = [f"#define {k} {v}" for k, v in consts.items() if k != "AC_NO_STDINT"]
     out += [_cdef_of(include_dir / "accelcal" / name, consts) for name in HEADERS]
-    out.append(_cdef_of(HOST_DIR / "_csv_scan.h", consts))
+    out.append(_cdef_of(HOST_DIR / "_csv_fast.h", consts))
     return "\n".join(out)
 
 
@@ -57,8 +57,8 @@ ffibuilder = FFI()
 ffibuilder.cdef(cdef_from_headers())
 ffibuilder.set_source(
     "accelcal._core",
-    '#include "accelcal/accelcal.h"\n#include "_csv_scan.h"',
-    sources=[str(p.relative_to(ROOT)) for p in [*sorted(CSRC.glob("*.c")), HOST_DIR / "_csv_scan.c"]],
+    '#include "accelcal/accelcal.h"\n#include "_csv_fast.h"',
+    sources=[str(p.relative_to(ROOT)) for p in [*sorted(CSRC.glob("*.c")), HOST_DIR / "_csv_fast.c"]],
     include_dirs=[str(INCLUDE), str(CSRC), str(HOST_DIR)],
     extra_compile_args=["-std=c99", "-O2"],
 )

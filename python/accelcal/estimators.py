@@ -1380,14 +1380,16 @@ def report_plots(out_dir, columns: Columns, rec=None, kind: str | None = None) -
 def write_columns_csv(path, cols: Columns) -> None:
     """CSV with '# key: value' comments from cols.meta, the header, then the rows (atomic)."""
     from .errors import atomic_write
+    from .recording import CSV_G_NAN, csv_rows
     names = list(cols)
-    data = np.column_stack([np.asarray(cols[k], float) for k in names]) if names else np.zeros((0, 0))
 
     def write(f):
         for k, v in cols.meta.items():
             f.write(f"# {k}: {v}\n")
         f.write(",".join(names) + "\n")
-        np.savetxt(f, data, delimiter=",", fmt="%.9g")
+        if names:  # '%.9g' % x per cell, as numpy.savetxt(fmt="%.9g") writes it
+            for chunk in csv_rows([np.asarray(cols[k], float) for k in names], [CSV_G_NAN] * len(names), 9):
+                f.write(chunk)
     atomic_write(path, write)
 
 

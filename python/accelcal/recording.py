@@ -17,7 +17,7 @@ import math
 import os
 import re
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any, Iterator, Sequence
 
 import numpy as np
 
@@ -495,13 +495,13 @@ def _convert(table: Any, j: int, kind: str) -> np.ndarray:
     return _slow_float(table.strings(j), allow_unknown)
 
 
-_SCAN_KIND = {"raw": 1, "pose": 2, "t": 3, "ref": 4}  # _csv_scan.h: ACX_INT ... (0: ACX_SKIP)
+_SCAN_KIND = {"raw": 1, "pose": 2, "t": 3, "ref": 4}  # _csv_fast.h: ACX_INT ... (0: ACX_SKIP)
 
 
 def _scan_fast(data: bytes, pos: int, end: int, names: list[str], cols: dict[str, tuple[int, str]]
                ) -> dict[str, np.ndarray] | None:
     """The columns of cols from the data rows data[pos:end] by the C scanner
-    (_csv_scan.c), or None when it stops at a row: then the slow path decides."""
+    (_csv_fast.c), or None when it stops at a row: then the slow path decides."""
     from ._core import ffi, lib
 
     m = len(names)
@@ -800,6 +800,39 @@ def _float_strings(values: np.ndarray, fmt: str) -> list[str]:
     return strs
 
 
+_G_FORMAT_RE = re.compile(r"%\.([1-9]|1[0-7])g")
+_FORMAT_CHUNK_ROWS = 65536
+# _csv_fast.h: ACX_OUT_INT, ACX_OUT_REPR, ACX_OUT_G (NaN: empty cell), ACX_OUT_G_NAN (NaN: 'nan'), ACX_CELL_MAX
+CSV_INT, CSV_REPR, CSV_G, CSV_G_NAN = 1, 2, 3, 4
+_CELL_MAX = 32
+
+
+def csv_rows(columns: Sequence[np.ndarray], kinds: Sequence[int], precision: int = 9) -> Iterator[str]:
+    """The CSV rows of equal-length columns, in chunks of text (each ending with a newline):
+    CSV_INT columns as str(v), CSV_REPR as repr(x), CSV_G as '%.<precision>g' % x with NaN as
+    an empty cell, CSV_G_NAN likewise with NaN as 'nan'.  Formatted by the extension's C
+    (_csv_fast.c), which writes exactly what those Python expressions give."""
+    from ._core import ffi, lib
+
+    m = len(columns)
+    arrs = [np.ascontiguousarray(c, dtype=np.int64 if k == CSV_INT else np.float64) for c, k in zip(columns, kinds)]
+    n = arrs[0].shape[0] if arrs else 0
+    kind = np.asarray(kinds, dtype=np.int8)
+    prec = np.full(m, precision, dtype=np.int8)
+    ptrs = ffi.new("void *[]", [ffi.from_buffer(a) for a in arrs])
+    kp = ffi.cast("const int8_t *", ffi.from_buffer(kind))
+    pp = ffi.cast("const int8_t *", ffi.from_buffer(prec))
+    rows = min(n, _FORMAT_CHUNK_ROWS)
+    cap = max(rows, 1) * m * (_CELL_MAX + 1)
+    buf = ffi.new("char[]", cap)
+    for row0 in range(0, n, _FORMAT_CHUNK_ROWS):
+        k = min(_FORMAT_CHUNK_ROWS, n - row0)
+        size = lib.acx_format_rows(row0, k, m, kp, pp, ptrs, buf, cap)
+        if size < 0:
+            raise ValueError("csv_rows: bad column kind or precision")
+        yield ffi.unpack(buf, size).decode("ascii")
+
+
 def _csv_cell(text: str) -> str:
     if any(ch in text for ch in ',"') or text != text.strip():
         return '"' + text.replace('"', '""') + '"'
@@ -828,6 +861,35 @@ def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> No
             raise ValueError(f"metadata {k!r}: the value must be one line")
         lines.append(f"# {k}: {v.strip()}")
     names = ["t"] + [f"raw_{k}" for k in range(rec.n_channels)]
+    g = _G_FORMAT_RE.fullmatch(float_format)
+    if g and not rec.extra:
+        # every cell is a number: the C formatter writes the same text as the code below
+        arrays: list[np.ndarray] = [rec.t] + [rec.raw[:, k] for k in range(rec.n_channels)]
+        kinds = [CSV_REPR] + [CSV_INT] * rec.n_channels
+        for vec, comps in VECTOR_COLUMNS.items():
+            arr = getattr(rec, vec)
+            if np.isfinite(arr).any():
+                names += list(comps)
+                arrays += [arr[:, c] for c in range(3)]
+                kinds += [CSV_G] * 3
+        if rec.has_temp():
+            names.append("temp_c")
+            arrays.append(rec.temp_c)
+            kinds.append(CSV_G)
+        if rec.has_pose():
+            names.append("pose")
+            arrays.append(rec.pose)
+            kinds.append(CSV_INT)
+        lines.append(",".join(map(_csv_cell, names)))
+
+        def write_fast(f: Any) -> None:
+            f.write("\n".join(lines))
+            f.write("\n")
+            for chunk in csv_rows(arrays, kinds, int(g.group(1))):
+                f.write(chunk)
+
+        atomic_write(path, write_fast)
+        return
     # repr() is the shortest text that reads back to the same float.
     cols: list[list[str]] = [list(map(repr, rec.t.tolist()))]
     cols += [list(map(str, rec.raw[:, k].tolist())) for k in range(rec.n_channels)]

@@ -15,7 +15,12 @@ from accelcal.recording import (
     _CellError,
     _convert,
     _ListTable,
+    CSV_G,
+    CSV_G_NAN,
+    CSV_INT,
+    CSV_REPR,
     _scan_fast,
+    csv_rows,
     read_recording,
     recording_from_arrays,
     write_recording,
@@ -507,7 +512,7 @@ def same_numbers(a, b):
 @IO
 @given(cells=st.lists(numeric_cell, min_size=1, max_size=12), last=st.booleans())
 def test_property_c_scanner_takes_only_valid_cells(kind, cells, last):
-    """The C scanner (_csv_scan.c) converts a column only if the per-cell
+    """The C scanner (_csv_fast.c) converts a column only if the per-cell
     Python path accepts every cell, and then to the same numbers, bit for bit;
     it never decides an error itself (it hands the file back)."""
     rows = [(f"0,{c}" if last else f"{c},0") for c in cells]
@@ -538,6 +543,35 @@ def test_property_c_scanner_reads_as_the_python_path(tmp_path_factory, rec):
     for name in ("t", "raw", "f", "w", "dw", "temp_c", "pose"):
         va, vb = getattr(a, name), getattr(b, name)
         assert (va is None) == (vb is None) and (va is None or same_numbers(va, vb)), name
+
+
+@IO
+@given(x=st.lists(st.floats(), min_size=1, max_size=40), v=st.data(), p=st.integers(1, 17))
+def test_property_c_formatter_writes_what_python_writes(x, v, p):
+    """csv_rows (_csv_fast.c) gives repr(x), '%.<p>g' % x (NaN empty or 'nan') and str(i),
+    byte for byte, over every double (subnormals, signed zeros, the extremes) and int64."""
+    n = len(x)
+    ints = v.draw(st.lists(st.integers(-(2**63), 2**63 - 1), min_size=n, max_size=n))
+    xf = np.array(x, dtype=float)
+    fin = np.where(np.isfinite(xf), xf, 0.0)
+    text = "".join(csv_rows([fin, xf, xf, np.array(ints, dtype=np.int64)], [CSV_REPR, CSV_G, CSV_G_NAN, CSV_INT], p))
+    want = "".join(f"{a!r},{'' if math.isnan(b) else ('%.*g' % (p, b))},{'%.*g' % (p, b)},{i}\n"
+                   for a, b, i in zip(fin.tolist(), xf.tolist(), ints))
+    assert text == want
+
+
+@IO
+@given(recordings(), st.sampled_from(["%.9g", "%.17g", "%.3g"]))
+def test_property_c_formatter_file_is_the_python_file(tmp_path_factory, rec, fmt):
+    """write_recording through the C formatter and through the Python path (forced by an extra
+    column, then dropped): the same bytes."""
+    rec.extra = {}
+    d = tmp_path_factory.getbasetemp()
+    write_recording(d / "fast.csv", rec, float_format=fmt)
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr("accelcal.recording._G_FORMAT_RE", __import__("re").compile(r"(?!)"))  # matches nothing
+        write_recording(d / "slow.csv", rec, float_format=fmt)
+    assert (d / "fast.csv").read_bytes() == (d / "slow.csv").read_bytes()
 
 
 def test_c_scanner_hands_back_irregular_rows():
