@@ -12,6 +12,7 @@ for tool in h8300-hms-gcc avr-gcc simavr cppcheck cmake valgrind clang clang-tid
     command -v "$tool" >/dev/null 2>&1 || need_apt=1
 done
 [ -f /usr/lib/avr/include/avr/io.h ] || need_apt=1
+[ -f /usr/share/i18n/locales/de_DE ] || need_apt=1  # a comma-decimal locale for the CSV locale test
 ls /usr/lib/llvm-*/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a >/dev/null 2>&1 || need_apt=1
 if [ "$need_apt" = 1 ]; then
     echo "== installing Debian packages"
@@ -19,7 +20,7 @@ if [ "$need_apt" = 1 ]; then
     $SUDO apt-get update -qq
     DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq \
         gcc-h8300-hms binutils-h8300-hms gcc-avr avr-libc simavr cppcheck cmake valgrind \
-        clang clang-tidy libclang-rt-14-dev >/dev/null
+        clang clang-tidy libclang-rt-14-dev locales >/dev/null
 fi
 
 echo "== installing the Python package"

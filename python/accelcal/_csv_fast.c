@@ -2,12 +2,22 @@
 #include "_csv_fast.h"
 
 #include <float.h>
+#include <locale.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #define CELL_MAX 63 /* longer numbers go the slow way */
+
+/* strtod and snprintf follow the C library's numeric locale: the fast paths run
+ * only while its decimal point is '.', as in the "C" locale (a program may have
+ * set another; Python itself never depends on it). */
+static int c_numeric_locale(void)
+{
+    const char *d = localeconv()->decimal_point;
+    return d[0] == '.' && d[1] == '\0';
+}
 
 static int is_digit(char c)
 {
@@ -151,6 +161,9 @@ int64_t acx_scan_rows(const char *data, size_t len, int64_t n_rows, int m, const
 {
     const char *p = data, *end = data + len;
     int64_t i;
+    if (!c_numeric_locale()) {
+        return 0;
+    }
     for (i = 0; i < n_rows; i++) {
         int j;
         for (j = 0; j < m; j++) {
@@ -361,6 +374,9 @@ int64_t acx_format_rows(int64_t row0, int64_t n, int m, const int8_t *kind, cons
     int j;
     if (n < 0 || m < 1 || (size_t)n * (size_t)m * (ACX_CELL_MAX + 1u) > cap) {
         return -1;
+    }
+    if (!c_numeric_locale()) {
+        return -2;
     }
     for (j = 0; j < m; j++) {
         if (kind[j] < ACX_OUT_INT || kind[j] > ACX_OUT_G_NAN

@@ -43,7 +43,9 @@ int64_t acx_scan_rows(const char *data, size_t len, int64_t n_rows, int m, const
 /* Rows [row0, row0 + n) of the m columns cols[j] (int64 or double arrays of
  * at least row0 + n values), cells separated by ',' and every row ended by '\n',
  * into buf.  cap must be at least n * m * (ACX_CELL_MAX + 1); returns the
- * number of bytes written, or -1 for a bad kind or precision (1..17). */
+ * number of bytes written, -1 for a bad kind or precision (1..17), or -2 (nothing
+ * written) while the C library's numeric locale has a decimal point other than '.'
+ * (acx_scan_rows then converts no row either). */
 int64_t acx_format_rows(int64_t row0, int64_t n, int m, const int8_t *kind, const int8_t *prec,
                         const void *const *cols, char *buf, size_t cap);
 

@@ -828,9 +828,25 @@ def csv_rows(columns: Sequence[np.ndarray], kinds: Sequence[int], precision: int
     for row0 in range(0, n, _FORMAT_CHUNK_ROWS):
         k = min(_FORMAT_CHUNK_ROWS, n - row0)
         size = lib.acx_format_rows(row0, k, m, kp, pp, ptrs, buf, cap)
+        if size == -2:  # a program set a numeric locale without '.': Python's own formatting
+            yield _python_rows(arrs, kinds, precision, row0, k)
+            continue
         if size < 0:
             raise ValueError("csv_rows: bad column kind or precision")
         yield ffi.unpack(buf, size).decode("ascii")
+
+
+def _python_rows(arrs: Sequence[np.ndarray], kinds: Sequence[int], precision: int, row0: int, k: int) -> str:
+    """What acx_format_rows writes, in Python (locale-independent): the definition it follows."""
+    def cell(kind: int, v: Any) -> str:
+        if kind == CSV_INT:
+            return str(v)
+        if kind == CSV_REPR:
+            return repr(v)
+        return "" if kind == CSV_G and math.isnan(v) else "%.*g" % (precision, v)
+
+    cols = [[cell(kd, v) for v in a[row0 : row0 + k].tolist()] for a, kd in zip(arrs, kinds)]
+    return "".join(",".join(row) + "\n" for row in zip(*cols))
 
 
 def _csv_cell(text: str) -> str:

@@ -19,6 +19,7 @@ from accelcal.recording import (
     CSV_G_NAN,
     CSV_INT,
     CSV_REPR,
+    _python_rows,
     _scan_fast,
     csv_rows,
     read_recording,
@@ -558,6 +559,9 @@ def test_property_c_formatter_writes_what_python_writes(x, v, p):
     want = "".join(f"{a!r},{'' if math.isnan(b) else ('%.*g' % (p, b))},{'%.*g' % (p, b)},{i}\n"
                    for a, b, i in zip(fin.tolist(), xf.tolist(), ints))
     assert text == want
+    # the locale fallback is the same definition
+    cols = [fin, xf, xf, np.array(ints, dtype=np.int64)]
+    assert _python_rows(cols, [CSV_REPR, CSV_G, CSV_G_NAN, CSV_INT], p, 0, n) == want
 
 
 @IO
@@ -572,6 +576,41 @@ def test_property_c_formatter_file_is_the_python_file(tmp_path_factory, rec, fmt
         m.setattr("accelcal.recording._G_FORMAT_RE", __import__("re").compile(r"(?!)"))  # matches nothing
         write_recording(d / "slow.csv", rec, float_format=fmt)
     assert (d / "fast.csv").read_bytes() == (d / "slow.csv").read_bytes()
+
+
+def test_csv_under_a_comma_decimal_locale(tmp_path):
+    """A program that sets LC_NUMERIC to a locale with a decimal comma (C's strtod and
+    snprintf follow it; Python's float() and '%' do not) reads and writes the same numbers and
+    the same text: the C fast paths stand aside (the Python paths take over)."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+    src = "/usr/share/i18n/locales/de_DE"
+    if shutil.which("localedef") is None or not os.path.exists(src):
+        if os.environ.get("CI"):
+            pytest.fail("localedef and the Debian package locales are required in CI (tools/test_all.sh installs them)")
+        pytest.skip("localedef / locales not installed")
+    loc = tmp_path / "loc"
+    loc.mkdir()
+    subprocess.run(["localedef", "-i", "de_DE", "-f", "UTF-8", str(loc / "de_DE.UTF-8")], check=True,
+                   capture_output=True)
+    rec = make_rec(50)
+    write_recording(tmp_path / "ref.csv", rec)
+    code = (
+        "import locale, sys\n"
+        "locale.setlocale(locale.LC_NUMERIC, 'de_DE.UTF-8')\n"
+        "assert locale.localeconv()['decimal_point'] == ','\n"
+        "from accelcal.recording import read_recording, write_recording\n"
+        "r = read_recording(sys.argv[1])\n"
+        "write_recording(sys.argv[2], r)\n"
+    )
+    env = dict(os.environ, LOCPATH=str(loc))
+    r = subprocess.run([sys.executable, "-c", code, str(tmp_path / "ref.csv"), str(tmp_path / "out.csv")], env=env,
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "out.csv").read_bytes() == (tmp_path / "ref.csv").read_bytes()
+    assert read_recording(tmp_path / "out.csv") == read_recording(tmp_path / "ref.csv")
 
 
 def test_c_scanner_hands_back_irregular_rows():
