@@ -13,7 +13,8 @@
 #  f. valgrind (memcheck) over the vector program and the small unit tests, if
 #     valgrind is installed;
 #  g. the Python extension's host-only C (python/accelcal/_csv_fast.c: libc and
-#     double, not firmware) with the same strict warnings and -Werror.
+#     double, not firmware) with the same strict warnings and -Werror, and cppcheck
+#     over it and its fuzz harness: zero findings.
 #
 # Usage:  tools/check_c.sh [step ...]     steps: build sanitize cppcheck grep package valgrind
 #         (default: all, in that order; build dirs under build/)
@@ -227,6 +228,10 @@ step_hostc() {
         "${CC:-cc}" -std=c99 -Wall -Wextra -Wpedantic -Wconversion -Wsign-conversion -Wshadow -Werror \
             -fsyntax-only "$f" || ok=0
     done
+    if command -v cppcheck > /dev/null; then
+        cppcheck --enable=warning,style,performance,portability --std=c99 --quiet --error-exitcode=1 \
+            --inline-suppr -I "$ROOT/python/accelcal" "$ROOT"/python/accelcal/*.c "$ROOT/fuzz/fuzz_csv.c" || ok=0
+    fi
     if [ $ok -eq 1 ]; then pass "host C of the extension"; else flop "host C of the extension"; fi
 }
 

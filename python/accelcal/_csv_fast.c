@@ -25,7 +25,7 @@ static int is_digit(char c)
 }
 
 /* The digits of [p, e) from *q on: their count, *q moved past them. */
-static size_t digits(const char *e, const char **q)
+static size_t skip_digits(const char *e, const char **q)
 {
     const char *s = *q;
     while (*q < e && is_digit(**q)) {
@@ -45,7 +45,7 @@ static int parse_int(const char *p, const char *e, int64_t *out)
         p++;
     }
     q = p;
-    if (digits(e, &q) - 1u >= 18u || q != e) { /* none, more than 18, or anything after */
+    if (skip_digits(e, &q) - 1u >= 18u || q != e) { /* none, more than 18, or anything after */
         return 0;
     }
     for (; p < e; p++) {
@@ -66,7 +66,7 @@ static int fast_decimal(const char *p, const char *e, double *out)
                                      1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
                                      1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
     uint64_t mant = 0u;
-    int neg = 0, n_sig = 0, k = 0, ek = 0, eneg = 0, seen_point = 0;
+    int neg = 0, n_sig = 0, k = 0, seen_point = 0;
     if (*p == '+' || *p == '-') {
         neg = *p == '-';
         p++;
@@ -87,6 +87,7 @@ static int fast_decimal(const char *p, const char *e, double *out)
         }
     }
     if (p < e) { /* the exponent */
+        int ek = 0, eneg = 0;
         p++;
         if (*p == '+' || *p == '-') {
             eneg = *p == '-';
@@ -114,7 +115,6 @@ static int fast_decimal(const char *p, const char *e, double *out)
  * [+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?, finite. */
 static int parse_float(const char *p, const char *e, double *out)
 {
-    char buf[CELL_MAX + 1];
     const char *q = p;
     size_t n = (size_t)(e - p);
     if (n == 0u || n > CELL_MAX) {
@@ -123,14 +123,14 @@ static int parse_float(const char *p, const char *e, double *out)
     if (*q == '+' || *q == '-') {
         q++;
     }
-    if (digits(e, &q) != 0u) {
+    if (skip_digits(e, &q) != 0u) {
         if (q < e && *q == '.') {
             q++;
-            (void)digits(e, &q);
+            (void)skip_digits(e, &q);
         }
     } else if (q < e && *q == '.') {
         q++;
-        if (digits(e, &q) == 0u) {
+        if (skip_digits(e, &q) == 0u) {
             return 0;
         }
     } else {
@@ -141,7 +141,7 @@ static int parse_float(const char *p, const char *e, double *out)
         if (q < e && (*q == '+' || *q == '-')) {
             q++;
         }
-        if (digits(e, &q) == 0u) {
+        if (skip_digits(e, &q) == 0u) {
             return 0;
         }
     }
@@ -149,6 +149,7 @@ static int parse_float(const char *p, const char *e, double *out)
         return 0;
     }
     if (!fast_decimal(p, e, out)) {
+        char buf[CELL_MAX + 1];
         memcpy(buf, p, n);
         buf[n] = '\0';
         *out = strtod(buf, NULL); /* correctly rounded, as Python's float() */
