@@ -270,6 +270,8 @@ def effect_spec(name: str, m: float, z: np.ndarray, aux: dict) -> tuple[str, dic
     if name in ("temperature_offset", "temperature_gain"):
         return name, {"coeff": _fmt(m * z)}
     if name == "bias_drift":
+        if aux.get("walk"):  # a random walk (rw counts/sqrt(s)) instead of a ramp
+            return name, {"rate": _fmt(0.0 * z), "rw": _fmt(m * np.abs(z))}
         return name, {"rate": _fmt(m * z)}
     if name == "pose_error":
         return name, {"angle_deg": float(m)}
@@ -324,8 +326,9 @@ def _quantization_step(clean, sigma, target):
     return hi
 
 
-def make_dataset(effect: str, seed: int, rho: float | None = None) -> dict:
-    """One benchmark dataset: device, truth calibration, recording, effect truth and figures."""
+def make_dataset(effect: str, seed: int, rho: float | None = None, walk: bool | None = None) -> dict:
+    """One benchmark dataset: device, truth calibration, recording, effect truth and figures.
+    bias_drift is a random walk for odd seeds and a ramp for even ones (``walk`` overrides)."""
     rng = np.random.default_rng([seed, LABELS.index(effect), 0xD1A6])
     need_lever = effect in ("centripetal",)
     dev = random_device(rng, need_lever=need_lever)
@@ -352,7 +355,8 @@ def make_dataset(effect: str, seed: int, rho: float | None = None) -> dict:
         lim = amax * (1.0 - np.exp(rng.uniform(np.log(0.002), np.log(0.45), N)))
         specs = [("saturation", {"limit_g": _fmt(lim[chans]), "channel": [int(c) for c in chans]})]
     else:
-        aux = {"u": rng.uniform(0.6, 1.4, N)}
+        aux = {"u": rng.uniform(0.6, 1.4, N),
+               "walk": effect == "bias_drift" and (seed % 2 == 1 if walk is None else walk)}
         m_ref = REF_SIZE[effect]
         sim1 = run_simulation(dev, traj, seed=sim_seed, calibration=cal, effects=[effect_spec(effect, m_ref, z, aux)])
         if effect == "pose_error":
@@ -395,6 +399,32 @@ def _arr(v):
     a = np.asarray([np.inf if x == "inf" else (-np.inf if x == "-inf" else (np.nan if x is None else x))
                     for x in np.asarray(v, dtype=object).ravel()], float)
     return a.reshape(np.shape(v)) if np.ndim(v) else a
+
+
+def _drift(p: dict, t: np.ndarray) -> np.ndarray:
+    """(n, N) bias change of bias_drift params (the registry's formula: ramp + seeded walk + path)."""
+    from accelcal.effects import random_walk
+    rate = _arr(p["rate"])
+    out = (t - float(p["t0"]))[:, None] * rate[None, :]
+    rw = _arr(p.get("rw", np.zeros_like(rate)))
+    if np.any(rw):
+        out = out + random_walk(t, rw, int(p["seed"]))
+    knots = _arr(p.get("path_t", [])).ravel()
+    if knots.size:
+        path = _arr(p["path"]).reshape(-1, knots.size)
+        out = out + np.stack([np.interp(t, knots, v) for v in path], axis=1)
+    return out
+
+
+def drift_error(est: dict, truth: dict, t: np.ndarray) -> float | None:
+    """bias_drift (ramp or random walk): RMS of the fitted minus the true bias change over the
+    recording, relative to the RMS of the true change."""
+    try:
+        e, tr = _drift(est, t), _drift(truth, t)
+    except (KeyError, ValueError, TypeError):
+        return None
+    nt = float(np.sqrt(np.mean(tr ** 2)))
+    return None if nt == 0 else float(np.sqrt(np.mean((e - tr) ** 2)) / nt)
 
 
 def param_error(name: str, est: dict, truth: dict, sig: dict | None = None) -> float | None:
@@ -481,7 +511,8 @@ def run_one(args):
     est_shrink = entry["alone"]["shrink"] if entry else 0.0
     perr = None
     if entry and ds["truth"] is not None:
-        perr = param_error(effect, entry["params"], ds["truth"], entry["params_sigma"])
+        perr = (drift_error(entry["params"], ds["truth"], ds["recording"].t) if effect == "bias_drift"
+                else param_error(effect, entry["params"], ds["truth"], entry["params_sigma"]))
     if effect == "none":
         est_shrink = res["effects"][0]["shrink"] if res["verdict"] != "none" else 0.0
     return {"effect": effect, "seed": seed, "verdict": res["verdict"], "rho": ds["rho"],

@@ -78,7 +78,8 @@ Candidates (the registry's effects; parameters in the registry's concrete form, 
   (3 per channel, kept along the principal directions with 1-sigma <= POSITION_TOL_M, 0 along
   the others), ``centripetal`` (the multiplier), ``nonlinearity``, ``bias_drift`` (a ramp in
   the recordings' own time from the earliest first sample: recordings that share a time base
-  share the ramp; a random walk is not fitted), ``temperature_offset`` / ``temperature_gain``
+  share it; with a reference f also a random walk's path, piecewise linear between knots, when
+  it beats the ramp also with the orientation-dependent effects fitted alongside: _BiasDrift), ``temperature_offset`` / ``temperature_gain``
   (per-channel coefficients and one shared reference temperature: the calibration's
   ``temperature_ref_c`` when it has one, else fitted by a 1-D search within T_REF_SPANS spans of
   the recorded temperatures -- further out ``c (T - t_ref)`` would be an offset change in
@@ -174,6 +175,8 @@ QUANT_MAX_STEP = 256
 QUANT_DITHER_GRID = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4)
 SAT_PROOF_COUNT = 10       # readings at one extreme value, the model >= 5 sigma beyond: proof of a clip
 BACKFIT_PASSES = 3
+DRIFT_KNOT_FRACTIONS = (1 / 2, 1 / 4, 1 / 8, 1 / 16)  # bias_drift paths: knot spacing / time span
+DRIFT_MIN_BLOCKS = 2       # ... each knot interval at least this many CV blocks long
 
 _ROUND_SIGMA = math.sqrt(1.0 / 12.0)
 _SKEW_GRID = np.array([0.0, 0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 12.0])
@@ -700,12 +703,22 @@ def _sep_stats(D: _Data, X: np.ndarray, y: np.ndarray):
     k = X.shape[2]
     B, N = D.B, D.N
     Gu = np.empty((B, N, k, k))
-    for a in range(k):
-        for c in range(a, k):
-            v = D.bsum(X[:, :, a] * X[:, :, c])
-            Gu[:, :, a, c] = v
-            Gu[:, :, c, a] = v
-    hu = D.bsum(X * y[:, :, None])
+    if k <= 3:
+        for a in range(k):
+            for c in range(a, k):
+                v = D.bsum(X[:, :, a] * X[:, :, c])
+                Gu[:, :, a, c] = v
+                Gu[:, :, c, a] = v
+        hu = D.bsum(X * y[:, :, None])
+    else:
+        # many columns: a batched matrix product per block (the k^2 / 2 column products over
+        # all samples would dominate a long recording)
+        hu = np.empty((B, N, k))
+        ends = np.append(D.bstart[1:], D.n)
+        for bi, (a, e) in enumerate(zip(D.bstart, ends)):
+            Xb = X[a:e].transpose(1, 2, 0)                      # (N, k, n_b)
+            Gu[bi] = Xb @ Xb.transpose(0, 2, 1)
+            hu[bi] = (Xb @ y[a:e].T[:, :, None])[:, :, 0]
     wch = D.W[0]
     return Gu * wch[None, :, None, None], hu * wch[None, :, None], Gu, hu
 
@@ -861,7 +874,31 @@ class _Nonlinearity(_LinearCandidate):
         return (x * x)[:, :, None]
 
 
+def _hat_basis(t: np.ndarray, t0: float, spacing: float, K: int) -> np.ndarray:
+    """(n, K) piecewise-linear interpolation weights of the knots t0 + k spacing, k = 1..K (the
+    knot at t0 is pinned at 0, as the ramp is, so that a path is no offset in disguise); beyond
+    the last knot a path holds its last value."""
+    u = np.clip((t - t0) / spacing, 0.0, float(K))
+    k = np.minimum(np.floor(u).astype(np.int64), K - 1)
+    fr = u - k
+    X = np.zeros((t.size, K + 1))
+    rows = np.arange(t.size)
+    X[rows, k] = 1.0 - fr
+    X[rows, k + 1] = fr
+    return X[:, 1:]
+
+
 class _BiasDrift(_LinearCandidate):
+    """A ramp (one rate per channel) or, with a reference f, a bias path: piecewise linear in
+    time through knots every ``spacing`` seconds (a random walk's path, estimated at the knots),
+    for the spacings DRIFT_KNOT_FRACTIONS of the time span whose intervals hold DRIFT_MIN_BLOCKS
+    CV blocks.  A path is the fit only if its penalised held-out gain beats the ramp's both
+    alone and with the other linear effects that a path could pass for fitted alongside in
+    either (offset, gain, misalignment, nonlinearity, and the temperature terms: a constant, a
+    pose-wise pattern of poses visited in turn, a temperature that changes with time).  Jig-free, where every pose's orientation is fitted too, only the ramp is tried (on
+    the real Xsens recording a path there took over a 0.5 % gain error).  Both are in recording
+    time from the earliest first sample (recordings that share a time base share the drift)."""
+
     name, pname = "bias_drift", "rate"
 
     def columns(self, D):
@@ -870,8 +907,57 @@ class _BiasDrift(_LinearCandidate):
 
     def to_params(self, D, theta, cov):
         p, s = super().to_params(D, theta, cov)
-        p.update(rw=np.zeros(D.N), seed=0, t0=float(np.min(D.rec_t0)))
+        p.update(rw=np.zeros(D.N), seed=0, t0=float(np.min(D.rec_t0)), path_t=np.zeros(0),
+                 path=np.zeros((D.N, 0)))
+        s.update(path=np.zeros((D.N, 0)))
         return p, s
+
+    def _spacings(self, D) -> list[tuple[float, int]]:
+        span = float(np.max(D.t)) - float(np.min(D.rec_t0))
+        return [(span * frac, int(round(1.0 / frac))) for frac in DRIFT_KNOT_FRACTIONS
+                if span * frac >= DRIFT_MIN_BLOCKS * BLOCK_S]
+
+    @staticmethod
+    def _nuisance(D) -> np.ndarray:
+        """(n, N, 5 or 7): the columns of offset, gain, misalignment (2), nonlinearity and, with
+        a usable temperature, temperature offset and gain (T and T times the reading)."""
+        Xm, _ = _Misalignment()._cols(D, _f_at(D), D.s)
+        x = D.sensed / np.linalg.norm(D.s, axis=1)
+        cols = [np.ones((D.n, D.N, 1)), D.sensed[:, :, None], Xm, (x * x)[:, :, None]]
+        if _temp_skip(D) is None:
+            cols += [np.broadcast_to(D.temp[:, None, None], (D.n, D.N, 1)), (D.temp[:, None] * D.sensed)[:, :, None]]
+        return np.concatenate(cols, axis=2)
+
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
+        ramp = super().cv(D, y, pcur, S0w, S0u, folds)
+        spacings = self._spacings(D) if D.mode == "reference" else []
+
+        def pgain(Sw, k):
+            return float((S0w - Sw).sum()) - PENALTY_PER_PARAM * k
+
+        def pgain_of(X):
+            fit = _linear_fit(D, X, y, S0w, S0u)
+            return pgain(fit[0], fit[4])
+
+        best, best_pg, best_X = ramp, pgain(ramp.Sw, ramp.k), None
+        t0 = float(np.min(D.rec_t0))
+        for spacing, K in spacings:
+            X = np.broadcast_to(_hat_basis(D.t, t0, spacing, K)[:, None, :], (D.n, D.N, K))
+            Sw, Su, theta, cov, k, delta = _linear_fit(D, X, y, S0w, S0u)
+            if pgain(Sw, k) <= best_pg:
+                continue
+            sd = np.sqrt(np.maximum(np.einsum("nkk->nk", cov), 0.0))
+            zero = np.zeros(D.N)
+            p = {"rate": zero, "rw": zero, "seed": 0, "t0": t0, "path_t": t0 + spacing * np.arange(K + 1),
+                 "path": np.concatenate([np.zeros((D.N, 1)), theta], axis=1)}
+            s = {"rate": zero, "rw": zero, "path": np.concatenate([np.zeros((D.N, 1)), sd], axis=1)}
+            best, best_pg, best_X = _Cand(self.name, k, Sw, Su, delta, p, s), pgain(Sw, k), X
+        if best_X is not None:
+            # the path must also win with every other smooth or pose-wise linear effect alongside
+            Z = self._nuisance(D)
+            if pgain_of(np.concatenate([best_X, Z], axis=2)) <= pgain_of(np.concatenate([self.columns(D), Z], axis=2)):
+                return ramp
+        return best
 
 
 class _Misalignment(_LinearCandidate):
@@ -1758,6 +1844,13 @@ def _describe(name: str, p: dict, s: dict, D: _Data) -> str:
             return (f"gain tempco up to {1e6 * p['coeff'][i]:+.4g} +- {1e6 * s['coeff'][i]:.2g} ppm/degC "
                     f"on channel {i} "
                     f"(t_ref {p['t_ref']:.4g} degC)")
+        if name == "bias_drift" and np.size(p.get("path_t", ())):
+            path = np.asarray(p["path"], float)
+            i, j = np.unravel_index(int(np.argmax(np.abs(path))), path.shape)
+            kt = np.asarray(p["path_t"], float)
+            return (f"offset wanders (random-walk path, knots every {kt[1] - kt[0]:.3g} s) up to "
+                    f"{path[i, j]:+.4g} +- {s['path'][i, j]:.2g} counts ({path[i, j] / ks[i]:+.4g} m/s^2) "
+                    f"on channel {i}")
         if name == "bias_drift":
             i = _strongest(p["rate"])
             return (f"offset ramp up to {p['rate'][i]:+.4g} +- {s['rate'][i]:.2g} counts/s "

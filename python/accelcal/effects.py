@@ -715,7 +715,8 @@ def _lowpass_one(t: np.ndarray, x: np.ndarray, w: float) -> np.ndarray:
 @dataclass(frozen=True)
 class FitParam:
     """One concrete (fitted) parameter: ``shape`` is 'channel' (N,),
-    'channel3' (N, 3), 'pose' (P,), 'pose3' (P, 3) or 'scalar'; ``free`` False
+    'channel3' (N, 3), 'pose' (P,), 'pose3' (P, 3), 'knot' (K,), 'channel_knot' (N, K) or
+    'scalar'; ``free`` False
     for bookkeeping values a fit keeps fixed (reference temperature, seeds)."""
 
     name: str
@@ -1139,9 +1140,10 @@ def random_walk(t: np.ndarray, sigma: np.ndarray, seed: int) -> np.ndarray:
 class _BiasDrift(Effect):
     name = "bias_drift"
     summary = "b_i changes with time (ramp or random walk)"
-    doc = ("bias_i(t) += rate_i (t - t0) + rw_i W(t): a ramp (counts/s) plus a random walk of rw_i "
-           "counts per sqrt(s) (W standard Brownian, from a fixed seed; W(t0) = 0); t0 is the first "
-           "sample time.")
+    doc = ("bias_i(t) += rate_i (t - t0) + rw_i W(t) + path_i(t): a ramp (counts/s) plus a random walk of "
+           "rw_i counts per sqrt(s) (W standard Brownian, from a fixed seed; W(t0) = 0); t0 is the first "
+           "sample time.  path_i (fitted only): the piecewise-linear bias path through the knots path_t, "
+           "held at its end values outside them (a random walk the diagnosis has estimated).")
     stage = "state"
     linear = True  # in rate and rw for a fixed path
     params = (
@@ -1155,6 +1157,8 @@ class _BiasDrift(Effect):
         FitParam("rw", "channel", "counts/sqrt(s)", "random-walk intensity (path from seed)"),
         FitParam("seed", "scalar", "-", "seed of the random-walk path", free=False),
         FitParam("t0", "scalar", "s", "start of the ramp", free=False),
+        FitParam("path_t", "knot", "s", "knot times of the bias path (empty: none)", free=False),
+        FitParam("path", "channel_knot", "counts", "bias path at the knots (N, knots)"),
     )
 
     def _resolve(self, spec, ctx, rng):
@@ -1166,7 +1170,8 @@ class _BiasDrift(Effect):
 
     def identity(self, ctx):
         N = ctx.n_channels
-        return {"rate": np.zeros(N), "rw": np.zeros(N), "seed": 0, "t0": _t0(ctx)}
+        return {"rate": np.zeros(N), "rw": np.zeros(N), "seed": 0, "t0": _t0(ctx), "path_t": np.zeros(0),
+                "path": np.zeros((N, 0))}
 
     def modify_state(self, state, p, ctx):
         t = np.asarray(ctx.truth.t, float)
@@ -1174,6 +1179,10 @@ class _BiasDrift(Effect):
         rw = np.asarray(p["rw"], float)
         if np.any(rw):
             add = add + random_walk(t, rw, int(p["seed"]))
+        knots = np.asarray(p.get("path_t", ()), float).ravel()
+        if knots.size:
+            path = np.asarray(p["path"], float).reshape(-1, knots.size)
+            add = add + np.stack([np.interp(t, knots, v) for v in path], axis=1)
         return state.replace(bias=add if state.bias is None else state.bias + add)
 
 
