@@ -5,10 +5,14 @@
  * ac_xf layout (value m 2^e, 2^29 <= |m| < 2^30, or m == 0 and e == 0) with
  * only what the build needs -- normalise-and-round, accumulate, multiply,
  * reciprocal, compare -- in 32-bit integers and 16 x 16 -> 32 multiplies (no
- * 64-bit arithmetic, nothing from ac_xf.c or ac_ops.c).  Every result is
- * rounded to 30 bits, to nearest (ties away from zero); a difference whose
- * smaller operand is more than one binade below the larger may be off by one
- * more half unit (one guard bit).
+ * 64-bit C type, nothing from ac_xf.c or ac_ops.c).  Every result is rounded to
+ * 30 bits, to nearest (ties away from zero); a difference whose smaller operand
+ * is more than one binade below the larger may be off by one more half unit (one
+ * guard bit).  The products of s and r in a channel's rows (r x s and the
+ * centripetal terms) are exact, as 64-bit magnitudes in two 32-bit halves, and
+ * rounded once: a cross product that is small next to its two products keeps its
+ * digits, which equilibrating its column would otherwise magnify (found by the
+ * fuzzer: r parallel to s on some channels, a tiny column elsewhere).
  *
  * Exponents stay far inside +-30000: the build's inputs are int32 fixed point
  * and its matrix is equilibrated, and ac_invert6 scales its input so that the
@@ -213,11 +217,41 @@ static int16_t to_i16(const xf *v, int16_t s)
 
 /* ---- rows of the sensor and centripetal matrices ---------------------------------- */
 
-/* v[d] += v[a] v[b] (sub = 0) or v[d] -= v[a] v[b] (sub = 1), from v = 0 but for s, r:
+/* |x| |y| as a 64-bit magnitude hi 2^32 + lo, from four 16 x 16 products */
+static void mul64(uint32_t x, uint32_t y, uint32_t *hi, uint32_t *lo)
+{
+    uint16_t xl = (uint16_t)x, xh = (uint16_t)(x >> 16), yl = (uint16_t)y, yh = (uint16_t)(y >> 16);
+    uint32_t ll = (uint32_t)xl * yl, lh = (uint32_t)xl * yh, hl = (uint32_t)xh * yl;
+    uint32_t mid = (ll >> 16) + (lh & 0xFFFFu) + (hl & 0xFFFFu);
+    *lo = (mid << 16) | (ll & 0xFFFFu);
+    *hi = (uint32_t)xh * yh + (lh >> 16) + (hl >> 16) + (mid >> 16);
+}
+
+/* r = (neg ? -1 : 1) (hi 2^32 + lo) 2^e, rounded once: the bits below the 32 kept do not
+ * matter to pack's rounding (half away from zero looks at the half bit only) */
+static void pack64(xf *r, unsigned neg, uint32_t hi, uint32_t lo, int32_t e)
+{
+    unsigned k = 0u;
+    while (k < 32u && (hi >> k) != 0u) {
+        k++;
+    }
+    if (k == 32u) {
+        lo = hi;
+    } else if (k != 0u) {
+        lo = (hi << (32u - k)) | (lo >> k);
+    }
+    pack(r, neg, lo, e + (int32_t)k);
+}
+
+/* The rows' products of s and r, each destination the sum of two signed products of the
+ * channel's integers (sens Q.AC_SENS_FRAC, pos Q.AC_POS_FRAC), computed exactly in 64 bits and
+ * rounded once -- so that r x s is 0 for r parallel to s, and a small cross product keeps
+ * its digits however large the products it is the difference of (equilibration would
+ * magnify their rounding otherwise).  Pairs (d, sub, a, b): v[d] +- v[a] v[b], v = 0 but
+ * for s (v[0..2]) and r (v[6..8]):
  *   R_i[3..5] = r x s          (r_b s_c - r_c s_b)
- *   C_i[0..2] = s_a r_a - s.r  (= -(s_b r_b + s_c r_c), no cancellation)
- *   C_i[3..5] = s_a r_b + s_b r_a,  (a, b, c) = (0, 1, 2), (1, 2, 0), (2, 0, 1)
- * with v[0..2] = s, v[6..8] = r. */
+ *   C_i[0..2] = s_a r_a - s.r  (= -(s_b r_b + s_c r_c))
+ *   C_i[3..5] = s_a r_b + s_b r_a,  (a, b, c) = (0, 1, 2), (1, 2, 0), (2, 0, 1) */
 #define OP(d, sub, a, b) (unsigned char)((d) + 16 * (sub)), (unsigned char)((a) + 16 * (b))
 static const unsigned char row_program[36] = {
     OP(3, 0, 7, 2),  OP(3, 1, 8, 1),  OP(4, 0, 8, 0),  OP(4, 1, 6, 2),
@@ -226,6 +260,11 @@ static const unsigned char row_program[36] = {
     OP(12, 0, 0, 7), OP(12, 0, 1, 6), OP(13, 0, 1, 8), OP(13, 0, 2, 7),
     OP(14, 0, 2, 6), OP(14, 0, 0, 8)};
 #undef OP
+
+static int32_t chan_int(const ac_channel_cal *cal, unsigned k)
+{
+    return (k < 3u) ? cal->sens[k] : cal->pos[k - 6u];
+}
 
 void ac_inv_rows(const ac_channel_cal *cal, xf v[15])
 {
@@ -236,8 +275,32 @@ void ac_inv_rows(const ac_channel_cal *cal, xf v[15])
         from_fixed(&v[a], cal->sens[a], AC_SENS_FRAC);
         from_fixed(&v[6u + a], cal->pos[a], AC_POS_FRAC);
     }
-    for (p = row_program; p < row_program + sizeof row_program; p += 2) {
-        mac(&v[p[0] & 15u], &v[p[1] & 15u], &v[p[1] >> 4], (unsigned)p[0] >> 4);
+    for (p = row_program; p < row_program + sizeof row_program; p += 4) {
+        uint32_t hi[2], lo[2];
+        unsigned neg[2], q;
+        for (q = 0u; q < 2u; q++) {
+            const unsigned char *op = (q != 0u) ? p + 2 : p;
+            int32_t x = chan_int(cal, op[1] & 15u), y = chan_int(cal, (unsigned)op[1] >> 4);
+            mul64(mag(x), mag(y), &hi[q], &lo[q]);
+            neg[q] = (unsigned)(x < 0) ^ (unsigned)(y < 0) ^ ((unsigned)op[0] >> 4);
+        }
+        if (neg[0] == neg[1]) { /* |sum| = |p0| + |p1| < 2^63 */
+            lo[0] += lo[1];
+            hi[0] += hi[1] + (uint32_t)(lo[0] < lo[1]);
+        } else { /* |sum| = ||p0| - |p1||, the sign of the larger */
+            if (hi[0] < hi[1] || (hi[0] == hi[1] && lo[0] < lo[1])) {
+                uint32_t t = hi[0];
+                hi[0] = hi[1];
+                hi[1] = t;
+                t = lo[0];
+                lo[0] = lo[1];
+                lo[1] = t;
+                neg[0] = neg[1];
+            }
+            hi[0] -= hi[1] + (uint32_t)(lo[0] < lo[1]);
+            lo[0] -= lo[1];
+        }
+        pack64(&v[p[0] & 15u], neg[0], hi[0], lo[0], -(int32_t)(AC_SENS_FRAC + AC_POS_FRAC));
     }
 }
 
