@@ -5,14 +5,16 @@
  * ac_xf layout (value m 2^e, 2^29 <= |m| < 2^30, or m == 0 and e == 0) with
  * only what the build needs -- normalise-and-round, accumulate, multiply,
  * reciprocal, compare -- in 32-bit integers and 16 x 16 -> 32 multiplies (no
- * 64-bit C type, nothing from ac_xf.c or ac_ops.c).  Every result is rounded to
- * 30 bits, to nearest (ties away from zero); a difference whose smaller operand
- * is more than one binade below the larger may be off by one more half unit (one
- * guard bit).  The products of s and r in a channel's rows (r x s and the
- * centripetal terms) are exact, as 64-bit magnitudes in two 32-bit halves, and
- * rounded once: a cross product that is small next to its two products keeps its
- * digits, which equilibrating its column would otherwise magnify (found by the
- * fuzzer: r parallel to s on some channels, a tiny column elsewhere).
+ * 64-bit C type; nothing from ac_xf.c or ac_ops.c, and from ac_ops64.c only the
+ * exact 32 x 32 multiply with its add, subtract and compare, for the rows).
+ * Every result is rounded to 30 bits, to nearest (ties away from zero); a
+ * difference whose smaller operand is more than one binade below the larger may
+ * be off by one more half unit (one guard bit).  The products of s and r in a
+ * channel's rows (r x s and the centripetal terms) are exact, as 64-bit
+ * magnitudes in two 32-bit halves (ac_u64), and rounded once: a cross product
+ * that is small next to its two products keeps its digits, which equilibrating
+ * its column would otherwise magnify (found by the fuzzer: r parallel to s on
+ * some channels, a tiny column elsewhere).
  *
  * Exponents stay far inside +-30000: the build's inputs are int32 fixed point
  * and its matrix is equilibrated, and ac_invert6 scales its input so that the
@@ -22,6 +24,7 @@
  * second pass rather than stored, so N = 12 needs no more RAM than N = 6.
  */
 #include "ac_invert_core.h"
+#include "ac_internal.h"
 
 #define XF_LO 0x20000000UL /* 2^29: smallest normalised |m| */
 #define XF_HI 0x40000000UL /* 2^30 */
@@ -217,16 +220,6 @@ static int16_t to_i16(const xf *v, int16_t s)
 
 /* ---- rows of the sensor and centripetal matrices ---------------------------------- */
 
-/* |x| |y| as a 64-bit magnitude hi 2^32 + lo, from four 16 x 16 products */
-static void mul64(uint32_t x, uint32_t y, uint32_t *hi, uint32_t *lo)
-{
-    uint16_t xl = (uint16_t)x, xh = (uint16_t)(x >> 16), yl = (uint16_t)y, yh = (uint16_t)(y >> 16);
-    uint32_t ll = (uint32_t)xl * yl, lh = (uint32_t)xl * yh, hl = (uint32_t)xh * yl;
-    uint32_t mid = (ll >> 16) + (lh & 0xFFFFu) + (hl & 0xFFFFu);
-    *lo = (mid << 16) | (ll & 0xFFFFu);
-    *hi = (uint32_t)xh * yh + (lh >> 16) + (hl >> 16) + (mid >> 16);
-}
-
 /* r = (neg ? -1 : 1) (hi 2^32 + lo) 2^e, rounded once: the bits below the 32 kept do not
  * matter to pack's rounding (half away from zero looks at the half bit only) */
 static void pack64(xf *r, unsigned neg, uint32_t hi, uint32_t lo, int32_t e)
@@ -276,31 +269,26 @@ void ac_inv_rows(const ac_channel_cal *cal, xf v[15])
         from_fixed(&v[6u + a], cal->pos[a], AC_POS_FRAC);
     }
     for (p = row_program; p < row_program + sizeof row_program; p += 4) {
-        uint32_t hi[2], lo[2];
+        ac_u64 m[2];
         unsigned neg[2], q;
         for (q = 0u; q < 2u; q++) {
             const unsigned char *op = (q != 0u) ? p + 2 : p;
             int32_t x = chan_int(cal, op[1] & 15u), y = chan_int(cal, (unsigned)op[1] >> 4);
-            mul64(mag(x), mag(y), &hi[q], &lo[q]);
+            m[q] = ac_mul32u(mag(x), mag(y)); /* < 2^62 */
             neg[q] = (unsigned)(x < 0) ^ (unsigned)(y < 0) ^ ((unsigned)op[0] >> 4);
         }
-        if (neg[0] == neg[1]) { /* |sum| = |p0| + |p1| < 2^63 */
-            lo[0] += lo[1];
-            hi[0] += hi[1] + (uint32_t)(lo[0] < lo[1]);
-        } else { /* |sum| = ||p0| - |p1||, the sign of the larger */
-            if (hi[0] < hi[1] || (hi[0] == hi[1] && lo[0] < lo[1])) {
-                uint32_t t = hi[0];
-                hi[0] = hi[1];
-                hi[1] = t;
-                t = lo[0];
-                lo[0] = lo[1];
-                lo[1] = t;
+        if (neg[0] == neg[1]) {
+            m[0] = ac_u64_add(m[0], m[1]); /* < 2^63 */
+        } else { /* the difference, with the sign of the larger */
+            if (ac_u64_lt(m[0], m[1])) {
+                ac_u64 t = m[0];
+                m[0] = m[1];
+                m[1] = t;
                 neg[0] = neg[1];
             }
-            hi[0] -= hi[1] + (uint32_t)(lo[0] < lo[1]);
-            lo[0] -= lo[1];
+            m[0] = ac_u64_sub(m[0], m[1]);
         }
-        pack64(&v[p[0] & 15u], neg[0], hi[0], lo[0], -(int32_t)(AC_SENS_FRAC + AC_POS_FRAC));
+        pack64(&v[p[0] & 15u], neg[0], m[0].hi, m[0].lo, -(int32_t)(AC_SENS_FRAC + AC_POS_FRAC));
     }
 }
 

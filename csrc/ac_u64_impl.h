@@ -8,6 +8,11 @@
 #ifndef AC_U64_IMPL_H
 #define AC_U64_IMPL_H
 
+/* The external copies come in two objects, so that old-compiler firmware links only
+ * what it calls: the arithmetic (ac_ops64.c, AC_U64_ARITH_ONLY) and the shifts
+ * (ac_ops64_shift.c, AC_U64_SHIFTS_ONLY); inlined, both parts are here. */
+#ifndef AC_U64_SHIFTS_ONLY
+
 /* 16 x 16 -> 32 unsigned: the widening multiply every target has. */
 AC_HELPER uint32_t ac_mul16u(uint16_t a, uint16_t b)
 {
@@ -62,6 +67,9 @@ AC_HELPER int ac_u64_lt(ac_u64 a, ac_u64 b)
     return (a.hi < b.hi) || (a.hi == b.hi && a.lo < b.lo);
 }
 
+#endif /* !AC_U64_SHIFTS_ONLY */
+
+#ifndef AC_U64_ARITH_ONLY
 AC_HELPER ac_u64 ac_u64_shl(ac_u64 a, uint8_t n) /* n <= 63 */
 {
     ac_u64 r;
@@ -93,5 +101,7 @@ AC_HELPER ac_u64 ac_u64_shr(ac_u64 a, uint8_t n) /* n <= 63 */
     }
     return r;
 }
+
+#endif /* !AC_U64_ARITH_ONLY */
 
 #endif /* AC_U64_IMPL_H */

@@ -66,13 +66,18 @@ rc=$?
 if [ "$JOBS" -gt 1 ]; then
     cat "$OUT"/fuzz-*.log >> "$OUT/fuzz.log" 2> /dev/null
 fi
-grep -E '^stat::number_of_executed_units|^Done [0-9]+ runs|^#[0-9]+[[:space:]]+DONE' "$OUT/fuzz.log" | tail -n 3
-if [ $rc -ne 0 ] || grep -qE 'ERROR: (libFuzzer|AddressSanitizer)|runtime error:|property failed' "$OUT/fuzz.log"; then
-    echo "fuzz.sh: FINDING (exit $rc):" >&2
-    grep -E 'property failed|runtime error:|ERROR:|SUMMARY:|Test unit written' -A1 "$OUT/fuzz.log" | head -n 30 >&2
-    [ $rc -ne 0 ] || rc=1
-    exit $rc
-fi
+# a run's verdict from its exit code and its log: exits with the finding, if any
+check_run() { # rc log name
+    local rc=$1 log=$2 name=$3
+    grep -E '^stat::number_of_executed_units|^Done [0-9]+ runs|^#[0-9]+[[:space:]]+DONE' "$log" | tail -n 3
+    if [ "$rc" -ne 0 ] || grep -qE 'ERROR: (libFuzzer|AddressSanitizer)|runtime error:|property failed' "$log"; then
+        echo "fuzz.sh: FINDING in $name (exit $rc):" >&2
+        grep -E 'property failed|runtime error:|ERROR:|SUMMARY:|Test unit written' -A1 "$log" | head -n 30 >&2
+        [ "$rc" -ne 0 ] || rc=1
+        exit "$rc"
+    fi
+}
+check_run $rc "$OUT/fuzz.log" fuzz_core
 
 # ---- the host-side CSV fast paths (python/accelcal/_csv_fast.c): files from outside ------------
 CSV_SECS=$(( SECS / 4 > 5 ? SECS / 4 : 5 ))
@@ -90,13 +95,6 @@ printf '\001\002-1\n\n3\n' > "$OUT/corpus_csv/seed_pose"
 (cd "$OUT" && UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ASAN_OPTIONS=detect_leaks=1 \
     ./fuzz_csv -max_total_time="$CSV_SECS" -max_len=512 -timeout=20 -print_final_stats=1 \
     -artifact_prefix="$OUT/artifacts/" "$OUT/corpus_csv") > "$OUT/fuzz_csv.log" 2>&1
-rc=$?
-grep -E '^stat::number_of_executed_units' "$OUT/fuzz_csv.log" | tail -n 1
-if [ $rc -ne 0 ] || grep -qE 'ERROR: (libFuzzer|AddressSanitizer)|runtime error:|property failed' "$OUT/fuzz_csv.log"; then
-    echo "fuzz.sh: FINDING in fuzz_csv (exit $rc):" >&2
-    grep -E 'property failed|runtime error:|ERROR:|SUMMARY:|Test unit written' -A1 "$OUT/fuzz_csv.log" | head -n 30 >&2
-    [ $rc -ne 0 ] || rc=1
-    exit $rc
-fi
+check_run $? "$OUT/fuzz_csv.log" fuzz_csv
 echo "fuzz.sh: no crash in ${SECS} s (core) + ${CSV_SECS} s (CSV)"
 exit 0
