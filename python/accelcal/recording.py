@@ -528,14 +528,6 @@ def _scan_fast(data: bytes, pos: int, end: int, names: list[str], cols: dict[str
     return {name: (ints if k in ("raw", "pose") else floats)[slot[j]] for name, (j, k) in cols.items()}
 
 
-def _line_cells(data: bytes, pos: int, end: int, i: int) -> list[str]:
-    """The cells of data row i (for a message; rows are single lines here)."""
-    nl = np.flatnonzero(np.frombuffer(data, dtype=np.uint8, count=end - pos, offset=pos) == 10)
-    start = pos if i == 0 else pos + int(nl[i - 1]) + 1
-    stop = pos + int(nl[i]) if i < nl.size else end
-    return data[start:stop].decode("utf-8").split(",")
-
-
 def _split_header(line: str) -> list[str]:
     if '"' in line:
         cells = next(csv.reader([line]), [])
@@ -627,10 +619,13 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
             raise InputError(source, msg, row=table.line(i), column=names[j])
     n = len(values["t"])
 
-    def cell(i: int, j: int) -> str:
-        if table is not None:
-            return table.cell(i, j)
-        return _line_cells(data, pos, end, i)[j]
+    def located() -> Any:
+        """The table that locates cells and lines; after the C scanner (no quotes in the
+        file) built only when a message or an extra column needs it."""
+        nonlocal table
+        if table is None:
+            table = _ByteTable(data, pos, end, m, first, source)
+        return table
 
     t = values["t"]
     dt_bad = np.flatnonzero(~(np.diff(t) > 0))
@@ -639,9 +634,9 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
         jt = cols["t"][0]
         raise InputError(
             source,
-            f"t must be strictly increasing, got {_quote(cell(i, jt).strip())} "
-            f"after {_quote(cell(i - 1, jt).strip())}",
-            row=first + i if table is None else table.line(i),
+            f"t must be strictly increasing, got {_quote(located().cell(i, jt).strip())} "
+            f"after {_quote(located().cell(i - 1, jt).strip())}",
+            row=located().line(i),
             column="t",
         )
 
@@ -664,16 +659,14 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
             raise InputError(
                 source,
                 f"{given} is given but {missing} is not (give all of {', '.join(comps)} or none)",
-                row=first + i if table is None else table.line(i),
+                row=located().line(i),
                 column=missing,
             )
         vecs[vec] = arr
     extra: dict[str, list[str]] = {}
     for j, name in enumerate(names):
         if name and name not in cols and name not in extra:
-            if table is None:
-                table = _ByteTable(data, pos, end, m, first, source)
-            extra[name] = table.strings(j)
+            extra[name] = located().strings(j)
     return Recording(
         t=t,
         raw=raw,
@@ -877,49 +870,37 @@ def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> No
             raise ValueError(f"metadata {k!r}: the value must be one line")
         lines.append(f"# {k}: {v.strip()}")
     names = ["t"] + [f"raw_{k}" for k in range(rec.n_channels)]
+    # the numeric columns and how each is written (csv_rows' kinds); repr() is the
+    # shortest text that reads back to the same float
+    numeric: list[tuple[np.ndarray, int]] = [(rec.t, CSV_REPR)] + [(rec.raw[:, k], CSV_INT)
+                                                                  for k in range(rec.n_channels)]
+    for vec, comps in VECTOR_COLUMNS.items():
+        arr = getattr(rec, vec)
+        if np.isfinite(arr).any():
+            names += list(comps)
+            numeric += [(arr[:, c], CSV_G) for c in range(3)]
+    if rec.has_temp():
+        names.append("temp_c")
+        numeric.append((rec.temp_c, CSV_G))
+    if rec.has_pose():
+        names.append("pose")
+        numeric.append((rec.pose, CSV_INT))
     g = _G_FORMAT_RE.fullmatch(float_format)
     if g and not rec.extra:
-        # every cell is a number: the C formatter writes the same text as the code below
-        arrays: list[np.ndarray] = [rec.t] + [rec.raw[:, k] for k in range(rec.n_channels)]
-        kinds = [CSV_REPR] + [CSV_INT] * rec.n_channels
-        for vec, comps in VECTOR_COLUMNS.items():
-            arr = getattr(rec, vec)
-            if np.isfinite(arr).any():
-                names += list(comps)
-                arrays += [arr[:, c] for c in range(3)]
-                kinds += [CSV_G] * 3
-        if rec.has_temp():
-            names.append("temp_c")
-            arrays.append(rec.temp_c)
-            kinds.append(CSV_G)
-        if rec.has_pose():
-            names.append("pose")
-            arrays.append(rec.pose)
-            kinds.append(CSV_INT)
+        # every cell is a number in a '%.<p>g' format: the extension's C writes the same text
         lines.append(",".join(map(_csv_cell, names)))
 
         def write_fast(f: Any) -> None:
             f.write("\n".join(lines))
             f.write("\n")
-            for chunk in csv_rows(arrays, kinds, int(g.group(1))):
+            for chunk in csv_rows([a for a, _ in numeric], [k for _, k in numeric], int(g.group(1))):
                 f.write(chunk)
 
         atomic_write(path, write_fast)
         return
-    # repr() is the shortest text that reads back to the same float.
-    cols: list[list[str]] = [list(map(repr, rec.t.tolist()))]
-    cols += [list(map(str, rec.raw[:, k].tolist())) for k in range(rec.n_channels)]
-    for vec, comps in VECTOR_COLUMNS.items():
-        arr = getattr(rec, vec)
-        if np.isfinite(arr).any():
-            names += list(comps)
-            cols += [_float_strings(arr[:, c], float_format) for c in range(3)]
-    if rec.has_temp():
-        names.append("temp_c")
-        cols.append(_float_strings(rec.temp_c, float_format))
-    if rec.has_pose():
-        names.append("pose")
-        cols.append(list(map(str, rec.pose.tolist())))
+    cols: list[list[str]] = [list(map(repr, a.tolist())) if k == CSV_REPR
+                             else list(map(str, a.tolist())) if k == CSV_INT
+                             else _float_strings(a, float_format) for a, k in numeric]
     for name, vals in rec.extra.items():
         if not name.strip() or name.strip() != name:
             raise ValueError(f"extra column name {name!r}: expected a non-empty name without surrounding spaces")
