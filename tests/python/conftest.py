@@ -10,3 +10,21 @@ settings.register_profile("ci", max_examples=200, deadline=None,
 settings.register_profile("dev", max_examples=100, deadline=None,
                           suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile(PROFILE)
+
+
+import pytest  # noqa: E402
+
+from shared_data import SHARED_DATA, shared_data_dir  # noqa: E402
+
+
+@pytest.fixture(scope="session")
+def shared_data():
+    """The real recordings' directory (``../shared/data`` beside the repository).
+
+    Skips, naming the path it looked for, when this checkout has none beside it.
+    """
+    base = shared_data_dir()
+    if base is None:
+        pytest.skip(f"real recordings not found: {SHARED_DATA} does not exist "
+                    "(CI has it; a bare clone skips the tests that need it)")
+    return base
