@@ -14,6 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from .errors import AccelcalError, atomic_write
+from .estimators import attitude_from_recording, displacement_from_recording, rate_from_recording, report_plots
+from .recording import read_recording, write_columns_csv
 
 EXIT_INPUT = 2
 EXIT_INTERNAL = 3
@@ -30,8 +32,7 @@ def _load_cal(path, device):
 
 
 def _write_csv(path, header: list[str], columns: list[np.ndarray], comments: dict):
-    from .estimators import Columns, write_columns_csv
-    write_columns_csv(path, Columns(zip(header, columns), meta=comments))
+    write_columns_csv(path, dict(zip(header, columns)), comments)
 
 
 def _progress(desc: str, total: int | None = None, unit: str = " steps"):
@@ -129,12 +130,58 @@ def cmd_calibrate(a):
     return 0
 
 
+ESTIMATORS = {"attitude": attitude_from_recording, "displacement": displacement_from_recording,
+              "rate": rate_from_recording}
+
+
+def run_estimator(kind: str, device_path, calibration_path, recording_path, output, *, engine: str = "float",
+                  report=None, **options) -> list[str]:
+    """`accelcal attitude|displacement|rate --device D --calibration C REC -o OUT [--engine] [--report DIR]`.
+
+    Load, estimate, write the CSV (atomically) and, with ``report``, the plots.
+
+    Parameters
+    ----------
+    kind : {"attitude", "displacement", "rate"}
+    device_path, calibration_path, recording_path : path
+        Inputs (device "default" or None: the seed prototype).
+    output : path
+        The result CSV.
+    engine : {"float", "fixed"}
+    report : path, optional
+        Directory for the plots.
+    **options
+        To the estimator (attitude: gain, w2_gate, leak_tau_s; displacement: form, axis;
+        rate: leak_tau_s).
+
+    Returns
+    -------
+    list of str
+        The warnings, one line each, for the caller to print to stderr.
+
+    Raises
+    ------
+    AccelcalError
+        Bad input (one line), before anything is written.
+    """
+    fn = ESTIMATORS.get(kind)
+    if fn is None:
+        raise ValueError(f"unknown estimator {kind!r}")
+    dev = _load_device(device_path)
+    cal = _load_cal(calibration_path, dev)
+    rec = read_recording(recording_path, dev.n_channels)
+    cols = fn(dev, cal, rec, engine, **options)
+    write_columns_csv(output, cols, cols.meta)
+    if report is not None:
+        report_plots(report, cols, rec, kind)
+    return [f"accelcal {kind}: warning: {w}" for w in cols.warnings]
+
+
 def _estimator(a, kind):
-    from .estimators import run_command
     options = {k: v for k, v in (("axis", getattr(a, "axis", None)), ("form", getattr(a, "form", None)))
                if v is not None}
-    for w in run_command(kind, a.device, a.calibration, a.recording, a.output, engine=a.engine,
-                         report=a.report, **options):
+    for w in run_estimator(kind, a.device, a.calibration, a.recording, a.output, engine=a.engine,
+                           report=a.report, **options):
         print(w, file=sys.stderr)
     return 0
 

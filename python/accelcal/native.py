@@ -15,21 +15,38 @@ from .errors import core_error
 
 @dataclass(frozen=True)
 class Formats:
-    """Fixed-point formats of the compiled core (from ac_config.h, the single source)."""
-    out_frac: int
-    omega_frac: int
-    sens_frac: int
-    pos_frac: int
-    offset_frac: int
-    max_channels: int
-    cond_log2_max: int
-    rate_state_frac: int
+    """Fixed-point formats of the compiled core, read from its constants (the headers are
+    the single source: ac_config.h for the resolver, ac_rate.h, and the estimators' ac_trig.h,
+    ac_rest.h, ac_attitude.h, ac_displace.h).  ``*_frac`` are fraction bits of Q formats."""
+    out_frac: int          # AC_OUT_FRAC: f (m/s^2), alpha (rad/s^2)
+    omega_frac: int        # AC_OMEGA_FRAC: omega (rad/s)
+    sens_frac: int         # AC_SENS_FRAC
+    pos_frac: int          # AC_POS_FRAC: positions (m), also the attitude's r1, r2
+    offset_frac: int       # AC_OFFSET_FRAC
+    max_channels: int      # AC_MAX_CHANNELS
+    cond_log2_max: int     # AC_COND_LOG2_MAX
+    rate_state_frac: int   # AC_RATE_STATE_FRAC
+    angle_frac: int        # AC_ANGLE_FRAC: ac_atan2's angle (rad)
+    rest_extra_frac: int   # AC_REST_EXTRA_FRAC: the rest mean is Q.(out_frac + this)
+    att_w_frac: int        # AC_ATT_W_FRAC: the attitude's rate state (rad/s)
+    att_w2_frac: int       # AC_ATT_W2_FRAC: w^2 and its gate ((rad/s)^2)
+    disp_a_frac: int       # AC_DISP_A_FRAC: acceleration, zero point (m/s^2)
+    disp_v_frac: int       # AC_DISP_V_FRAC: velocity (m/s)
+    disp_p_frac: int       # AC_DISP_P_FRAC: position (m)
+    disp_rot_frac: int     # AC_DISP_ROT_FRAC: the rest frame's rotation
+    disp_g_frac: int       # AC_DISP_G_FRAC: the first rest's mean f (m/s^2)
+    disp_gsum_max: int     # AC_DISP_GSUM_MAX: samples of the first rest averaged for g
 
 
 FORMATS = Formats(out_frac=lib.AC_OUT_FRAC, omega_frac=lib.AC_OMEGA_FRAC,
                   sens_frac=lib.AC_SENS_FRAC, pos_frac=lib.AC_POS_FRAC,
                   offset_frac=lib.AC_OFFSET_FRAC, max_channels=lib.AC_MAX_CHANNELS,
-                  cond_log2_max=lib.AC_COND_LOG2_MAX, rate_state_frac=lib.AC_RATE_STATE_FRAC)
+                  cond_log2_max=lib.AC_COND_LOG2_MAX, rate_state_frac=lib.AC_RATE_STATE_FRAC,
+                  angle_frac=lib.AC_ANGLE_FRAC, rest_extra_frac=lib.AC_REST_EXTRA_FRAC,
+                  att_w_frac=lib.AC_ATT_W_FRAC, att_w2_frac=lib.AC_ATT_W2_FRAC,
+                  disp_a_frac=lib.AC_DISP_A_FRAC, disp_v_frac=lib.AC_DISP_V_FRAC,
+                  disp_p_frac=lib.AC_DISP_P_FRAC, disp_rot_frac=lib.AC_DISP_ROT_FRAC,
+                  disp_g_frac=lib.AC_DISP_G_FRAC, disp_gsum_max=lib.AC_DISP_GSUM_MAX)
 
 
 def check(status: int, context: str) -> bool:

@@ -59,7 +59,9 @@ def row_shift(row: np.ndarray, what: str) -> int:
     return s
 
 
-def _fixed(x, frac: int, what: str, lo: int = -2**31, hi: int = 2**31 - 1) -> np.ndarray:
+def to_fixed(x, frac: int, what: str, lo: int = -2**31, hi: int = 2**31 - 1) -> np.ndarray:
+    """x in Q.frac, rounded half up, as int64; QuantizeError naming ``what`` and the index of
+    the first value outside [lo, hi] (or not finite)."""
     q = round_half_up(np.asarray(x, float) * 2.0**frac)
     bad = np.argwhere((q < lo) | (q > hi) | ~np.isfinite(q))
     if bad.size:
@@ -122,10 +124,10 @@ def quantize(offsets, sensitivity, positions, device: str = "") -> FixedTables:
     n = len(b)
     if not 6 <= n <= f.max_channels:
         raise QuantizeError(f"{n} channels: the resolver takes 6..{f.max_channels}")
-    trim = _fixed(b, 0, "offset_counts", 0, 65535)
-    sens_q = _fixed(sensitivity, f.sens_frac, "sensitivity")
-    pos_q = _fixed(positions, f.pos_frac, "position_m")
-    offset_q = _fixed(b - trim, f.offset_frac, "residual offset")
+    trim = to_fixed(b, 0, "offset_counts", 0, 65535)
+    sens_q = to_fixed(sensitivity, f.sens_frac, "sensitivity")
+    pos_q = to_fixed(positions, f.pos_frac, "position_m")
+    offset_q = to_fixed(b - trim, f.offset_frac, "residual offset")
     s_t = sens_q / 2.0**f.sens_frac
     r_t = pos_q / 2.0**f.pos_frac
     o_t = offset_q / 2.0**f.offset_frac
@@ -144,7 +146,7 @@ def quantize(offsets, sensitivity, positions, device: str = "") -> FixedTables:
     g_shift = np.array([row_shift(G[j], f"centripetal table row {j}") for j in range(6)])
     m = round_half_up(M * 2.0 ** m_shift[:, None]).astype(np.int16)
     g = round_half_up(G * 2.0 ** g_shift[:, None]).astype(np.int16)
-    k = _fixed(kv * 2.0 ** m_shift, 0, "offset term k")
+    k = to_fixed(kv * 2.0 ** m_shift, 0, "offset term k")
     return FixedTables(device=device, trim=trim.astype(np.uint16), sens_q=sens_q.astype(np.int32),
                        pos_q=pos_q.astype(np.int32), offset_q=offset_q.astype(np.int32),
                        m=m, m_shift=m_shift.astype(np.int8), k=k.astype(np.int32), g=g,
@@ -159,7 +161,7 @@ def quantize_calibration(device, cal) -> FixedTables:
 
 def omega_to_fixed(omega) -> np.ndarray:
     """rad/s -> int16 Q.AC_OMEGA_FRAC, refusing values outside the range (no silent clipping)."""
-    return _fixed(omega, FORMATS.omega_frac, "omega", -32768, 32767).astype(np.int16)
+    return to_fixed(omega, FORMATS.omega_frac, "omega", -32768, 32767).astype(np.int16)
 
 
 def exact_fixed_semantics(t: FixedTables, raw: np.ndarray, omega_q: np.ndarray | None = None):

@@ -917,3 +917,48 @@ def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> No
         f.write("\n")
 
     atomic_write(path, write)
+
+
+# ---- result columns and the C core's input range (moved from estimators.py / resolve.py) ----
+
+def write_columns_csv(path: Any, columns: Any, meta: dict | None = None) -> None:
+    """Write result columns as CSV, atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Destination file; replaced only once the whole text is written.
+    columns : mapping of str to array_like
+        Column name -> (n,) values, in output order (any unit; written as ``'%.9g' % x``
+        per cell, NaN as ``nan``, as ``numpy.savetxt(fmt="%.9g")`` writes them).
+    meta : dict, optional
+        Written first, one ``# key: value`` comment line per item.
+    """
+    names = list(columns)
+    arrays = [np.asarray(columns[k], float) for k in names]
+
+    def write(f: Any) -> None:
+        for k, v in (meta or {}).items():
+            f.write(f"# {k}: {v}\n")
+        f.write(",".join(names) + "\n")
+        if names:
+            for chunk in csv_rows(arrays, [CSV_G_NAN] * len(names), 9):
+                f.write(chunk)
+
+    atomic_write(path, write)
+
+
+def check_core_input(rec: Recording) -> None:
+    """Refuse raw counts the C core cannot take (it reads them as uint16).
+
+    Raises
+    ------
+    InputError
+        For the first reading outside 0..65535 (counts), naming its row and column;
+        nothing is ever clipped.
+    """
+    bad = np.argwhere((rec.raw < 0) | (rec.raw > 65535))
+    if bad.size:
+        r, c = (int(v) for v in bad[0])
+        raise InputError(rec.source, f"raw reading {int(rec.raw[r, c])} does not fit the C core's uint16 input "
+                         "(0..65535)", row=rec.line(r), column=f"raw_{c}")

@@ -7,9 +7,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import model
+from . import model, native
 from .errors import InputError
-from .quantize import FORMATS, quantize_calibration
+from .native import FORMATS
+from .quantize import omega_to_fixed, quantize_calibration
+from .recording import check_core_input, check_for_device
 
 
 def omega_for(rec, source: str) -> np.ndarray | None:
@@ -29,19 +31,8 @@ def omega_for(rec, source: str) -> np.ndarray | None:
     raise ValueError(f"unknown omega source {source!r}")
 
 
-def check_core_input(rec) -> None:
-    """The C core reads raw counts as uint16: a reading outside 0..65535 is an
-    InputError naming its row and column (never clipped)."""
-    bad = np.argwhere((rec.raw < 0) | (rec.raw > 65535))
-    if bad.size:
-        r, c = (int(v) for v in bad[0])
-        raise InputError(rec.source, f"raw reading {int(rec.raw[r, c])} does not fit the C core's uint16 input "
-                         "(0..65535)", row=rec.line(r), column=f"raw_{c}")
-
-
 def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str = "auto"):
     """Returns (f (n,3) m/s^2, alpha (n,3) rad/s^2, flags (n,) uint8 or None)."""
-    from .recording import check_for_device
     check_for_device(rec, device)
     omega = omega_for(rec, omega_source)
     pos = cal.positions_or_nominal(device)
@@ -55,8 +46,6 @@ def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str
         return f, a, None
     if engine != "fixed":
         raise ValueError(f"unknown engine {engine!r}")
-    from . import native
-    from .quantize import omega_to_fixed
     check_core_input(rec)
     t = quantize_calibration(device, cal)
     w_q = None if omega is None else omega_to_fixed(omega)

@@ -1,0 +1,129 @@
+"""What every estimator shares: the result object, the fixed-point input conventions
+(Q formats from the compiled core through ``native.FORMATS``), the sample interval of
+a recording, and the resolved f / alpha of a 6-DOF array."""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from .. import model, native
+from ..errors import AccelcalError, InputError
+from ..native import FORMATS
+from ..quantize import quantize_calibration, round_half_up
+from ..recording import check_core_input
+
+__all__ = ["Columns", "OUT_FRAC", "OMEGA_FRAC", "CLIP", "CLIP_LO", "dt_fixed", "clip_i16", "q_out",
+           "uniform_dt", "alpha_noise", "resolve_array"]
+
+OUT_FRAC = FORMATS.out_frac        # AC_OUT_FRAC: f (m/s^2), alpha (rad/s^2)
+OMEGA_FRAC = FORMATS.omega_frac    # AC_OMEGA_FRAC: omega (rad/s)
+I16_MIN, I16_MAX = -32768, 32767
+# the core clips f to int16 Q.AC_OUT_FRAC for its tests and sums: +-32 m/s^2
+CLIP = I16_MAX / 2.0**OUT_FRAC
+CLIP_LO = I16_MIN / 2.0**OUT_FRAC
+
+
+class Columns(dict):
+    """Output columns (name -> (n,) float array) in CSV order, with ``warnings``
+    (one-line strings for the user: flagged, not fatal) and ``meta`` (comments)."""
+
+    def __init__(self, *args: Any, warnings: list[str] | None = None, meta: dict | None = None, **kw: Any):
+        super().__init__(*args, **kw)
+        self.warnings: list[str] = list(warnings or [])
+        self.meta: dict = dict(meta or {})
+
+
+def dt_fixed(dt: float) -> tuple[int, int]:
+    """The sample interval in the ac_rate convention.
+
+    Parameters
+    ----------
+    dt : float
+        Sample interval, s.
+
+    Returns
+    -------
+    dt_m, dt_shift : int
+        dt = dt_m 2^-dt_shift with dt_m in [2^15, 2^16) and dt_shift in 16..46
+        (1/60 s -> 34953, 21).
+
+    Raises
+    ------
+    AccelcalError
+        dt not a positive number, or outside about 15 us .. 0.5 s.
+    """
+    if not (math.isfinite(dt) and dt > 0):
+        raise AccelcalError(f"sample interval {dt!r} s is not a positive number")
+    sh = 15 - math.floor(math.log2(dt))
+    m = int(round_half_up(dt * 2.0 ** sh))
+    if m >= 65536:
+        sh -= 1
+        m = int(round_half_up(dt * 2.0 ** sh))
+    if m < 32768:
+        sh += 1
+        m = int(round_half_up(dt * 2.0 ** sh))
+    if not 16 <= sh <= 46:
+        raise AccelcalError(f"sample interval {dt:.6g} s is outside the fixed-point integrators' range "
+                            "(about 15 us .. 0.5 s)")
+    return m, sh
+
+
+def clip_i16(x) -> np.ndarray:
+    """Integers clipped to int16 (as int64): what the core's tests and sums see of its inputs."""
+    return np.clip(np.asarray(x, np.int64), I16_MIN, I16_MAX)
+
+
+def q_out(x) -> np.ndarray:
+    """m/s^2 (or rad/s^2) -> int32 Q.AC_OUT_FRAC, rounded half up, saturating (feeds the fixed engine)."""
+    return np.clip(round_half_up(np.asarray(x, float) * 2.0**OUT_FRAC), -2**31, 2**31 - 1).astype(np.int32)
+
+
+def uniform_dt(rec) -> float:
+    """The sample interval (s) of a recording, the median step.
+
+    Raises
+    ------
+    InputError
+        Fewer than 2 samples, or a step more than 25 % off the median (naming its row):
+        the integrators need a constant rate.
+    """
+    t = np.asarray(rec.t, float)
+    if t.size < 2:
+        raise InputError(rec.source, "the recording needs at least 2 samples")
+    d = np.diff(t)
+    dt = float(np.median(d))
+    bad = np.flatnonzero(np.abs(d - dt) > 0.25 * dt)
+    if bad.size:
+        i = int(bad[0])
+        raise InputError(rec.source, f"sample times are not uniform (step {d[i]:.6g} s against {dt:.6g} s): "
+                         "the integrators need a constant rate", row=rec.line(i + 1), column="t")
+    return dt
+
+
+def alpha_noise(device, cal) -> float:
+    """The largest per-axis standard deviation (rad/s^2) of the resolved alpha that the
+    channels' noise alone gives (device noise through the resolve matrix)."""
+    pos = cal.positions_or_nominal(device)
+    M = model.resolve_matrix(pos, cal.sensitivity)
+    return float(np.max(np.sqrt(np.sum((M[3:] * device.noise_counts()[None, :]) ** 2, axis=1))))
+
+
+def resolve_array(device, cal, rec, engine: str) -> tuple[np.ndarray, np.ndarray]:
+    """f and alpha of a 6-DOF array at the body origin, without the centripetal term.
+
+    Returns
+    -------
+    f, alpha : ndarray (n, 3)
+        engine "float": m/s^2 and rad/s^2 (float reference); engine "fixed": int32
+        Q.AC_OUT_FRAC from the C core with the header's tables.
+    """
+    if engine == "float":
+        return model.resolve(cal.offsets, cal.sensitivity, cal.positions_or_nominal(device), rec.raw, None)
+    if engine != "fixed":
+        raise ValueError(f"unknown engine {engine!r}")
+    check_core_input(rec)
+    t = quantize_calibration(device, cal)
+    out, _ = native.process_batch(t.resolver(), t.trim, rec.raw, None)
+    return out[:, :3].astype(np.int32), out[:, 3:].astype(np.int32)

@@ -1,0 +1,286 @@
+"""The displacement's host forms: the offline estimator (:func:`displace_offline`), the
+seed's correction applied to the streamed path between rests (:func:`retro_correct`), and
+the recording form behind ``accelcal displacement`` (:func:`displacement_from_recording`).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import AccelcalError, InputError
+from ..recording import check_core_input, check_for_device
+from .common import CLIP, CLIP_LO, Columns, alpha_noise, resolve_array, uniform_dt
+from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
+                           DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
+                           tilt_frame)
+from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params
+from .triad import triad_forces
+
+__all__ = ["retro_correct", "displace_offline", "displacement_from_recording"]
+
+
+def _motion_runs(at_rest, start: int = 0) -> list[tuple[int, int]]:
+    """Maximal runs [s, e) of not-at-rest samples from index start on (e = n when the
+    recording ends in motion)."""
+    moving = ~np.asarray(at_rest, bool)[start:]
+    edges = np.diff(np.concatenate(([0], moving.astype(np.int8), [0])))
+    return [(int(s) + start, int(e) + start)
+            for s, e in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1))]
+
+
+def _segments_from_flags(flags) -> list[tuple[int, int]]:
+    """(first moving sample, end sample (rest declared) or -1 if open) from displacement flags."""
+    segs, start = [], None
+    for i, fl in enumerate(np.asarray(flags).tolist()):
+        if fl & DISP_MOVING and start is None:
+            start = i
+        if fl & DISP_SEG_END:
+            segs.append((start if start is not None else i, i))
+            start = None
+    if start is not None:
+        segs.append((start, -1))
+    return segs
+
+
+def retro_correct(t, v, p, flags, zp) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The seed's correction applied to the whole path of each closed motion (host side):
+    v(t) - zp t', p(t) - zp t'^2 / 2 with t' from the anchor (the sample before the motion).
+    Returns (v, p, corrected (n,) bool).  End points already carry the core's correction."""
+    t = np.asarray(t, float)
+    v, p = np.array(v, float), np.array(p, float)
+    corrected = np.zeros(len(t), bool)
+    for s, e in _segments_from_flags(flags):
+        if e < 0:
+            continue
+        corrected[s:e + 1] = True
+        if flags[e] & DISP_LONG:
+            corrected[s:e + 1] = False
+            continue
+        a = s - 1
+        z = np.asarray(zp[e], float)
+        tp = t[s:e] - t[a]
+        v[s:e] -= z * tp[:, None]
+        p[s:e] -= 0.5 * z * tp[:, None] ** 2
+    return v, p, corrected
+
+
+def displace_offline(f, p: DisplaceParams, rest_flags=None) -> dict:
+    """Host offline form (float): the rest detector's segments, each widened by ``pad``
+    samples at the start (the detector lags a smooth start) and ending ``pad`` samples
+    after the first quiet sample of the final rest (not at the declaration); gravity and
+    the frame from the mean of the whole first rest; the correction over the whole path.
+    Returns v, p (corrected), v_raw, p_raw (uncorrected: same segments, no zero-point
+    correction), rest (n,) bool, corrected (n,) bool, segments [(anchor, end, zp)], frame,
+    open (a motion still going at the end), no_rest."""
+    f = np.clip(np.asarray(f, float), CLIP_LO, CLIP)
+    n = f.shape[0]
+    dt = p.dt
+    if rest_flags is None:
+        # the streaming detector (with its reference test once the first rest is known)
+        rest_flags = displace_stream(f, p)["rest"]
+    at = (np.asarray(rest_flags) & REST_AT_REST) != 0
+    quiet = (np.asarray(rest_flags) & REST_QUIET) != 0
+    pad = (2 ** p.rest.ema_shift) if p.pad is None else int(p.pad)
+    res = dict(v=np.zeros((n, 3)), p=np.zeros((n, 3)), v_raw=np.zeros((n, 3)), p_raw=np.zeros((n, 3)),
+               rest=at.copy(), corrected=np.zeros(n, bool), segments=[], frame=None, open=False,
+               no_rest=not at.any())
+    if not at.any():
+        return res
+    first_rest = int(np.argmax(at))
+    # motions: maximal runs of not-at-rest samples after the first rest
+    runs = [(s, e if e < n else -1) for s, e in _motion_runs(at, first_rest)]
+    # the first rest: from the start of its quiet run to the first motion
+    rs = first_rest
+    while rs > 0 and quiet[rs - 1]:
+        rs -= 1
+    re_ = runs[0][0] if runs else n
+    if p.axis is None:
+        g = f[rs:re_].mean(axis=0)
+        R = tilt_frame(g)
+        acc = (f - g) @ R.T
+        res["frame"] = (g, R, R @ g)
+    else:
+        acc = np.zeros((n, 3))
+        acc[:, p.axis] = f[:, p.axis]
+    pos, pos_raw = np.zeros(3), np.zeros(3)
+    prev_end = re_ - 1
+    last = first_rest
+    for s, e in runs:
+        a_idx = max(s - 1 - pad, prev_end)          # anchor: at rest, before the motion
+        if e < 0:
+            end, closed = n - 1, False
+        else:
+            fq = e - p.rest.hold + 1                # first quiet sample of the final rest
+            end, closed = min(max(fq + pad, s), e), True
+        res["p"][last:a_idx + 1] = pos
+        res["p_raw"][last:a_idx + 1] = pos_raw
+        idx = np.arange(a_idx, end + 1)
+        a = acc[idx]
+        vv = np.vstack([np.zeros(3), np.cumsum(0.5 * dt * (a[1:] + a[:-1]), axis=0)])
+        pp = np.vstack([np.zeros(3), np.cumsum(0.5 * dt * (vv[1:] + vv[:-1]), axis=0)])
+        res["v_raw"][idx] = vv
+        res["p_raw"][idx] = pos_raw + pp
+        if closed:
+            T = (end - a_idx) * dt
+            zp = vv[-1] / T
+            tp = (idx - a_idx) * dt
+            res["v"][idx] = vv - zp * tp[:, None]
+            res["p"][idx] = pos + pp - 0.5 * zp * tp[:, None] ** 2
+            res["corrected"][idx] = True
+            res["segments"].append((int(a_idx), int(end), zp))
+            pos = res["p"][end].copy()
+            pos_raw = res["p_raw"][end].copy()
+            res["v"][end] = 0.0
+            last = end + 1
+            prev_end = end
+        else:
+            res["v"][idx] = vv
+            res["p"][idx] = pos + pp
+            res["segments"].append((int(a_idx), int(end), None))
+            res["open"] = True
+            last = n
+            break
+    if last < n:
+        res["p"][last:] = pos
+        res["p_raw"][last:] = pos_raw
+    return res
+
+
+def _body_forces(device, cal, rec, engine):
+    """f at the origin (6-DOF array, no rotation assumed) or at the first triad: (n,3) float
+    m/s^2 (float) or int32 Q.10 (fixed), and a note for the metadata."""
+    if device.is_array():
+        f, _ = resolve_array(device, cal, rec, engine)
+        return f, "resolved f at the body origin" + (" (C core)" if engine == "fixed" else "")
+    tri = device.triads()
+    if tri:
+        f, _ = triad_forces(cal, rec, tri[0], engine)
+        return f, "f of the triad at channels 0-2"
+    raise InputError(device.name, "displacement needs a 6-DOF array or a device with a 3-axis sensor "
+                     "(a triad at channels 0-2)")
+
+
+def _max_rotation_deg(device, cal, rec, at_rest, dt) -> float:
+    """Largest angle (deg) turned within any run of not-at-rest samples, integrating the
+    resolved alpha twice from rest (omega = 0 at rest); angles within 5 sigma of what the
+    alpha noise alone integrates to are not counted."""
+    _, a = resolve_array(device, cal, rec, "float")
+    sig_a = alpha_noise(device, cal)
+    worst = 0.0
+    for i, j in _motion_runs(at_rest):
+        w = np.cumsum(a[i:j] * dt, axis=0)
+        ang = np.linalg.norm(np.cumsum(w * dt, axis=0), axis=1)
+        # noise alone: a double random walk, sigma = sigma_alpha dt^2 sqrt(k^3 / 3) after k steps
+        k = np.arange(1, j - i + 1, dtype=float)
+        sig = sig_a * dt * dt * np.sqrt(k**3 / 3.0)
+        worst = max(worst, float(np.max(np.where(ang > 5.0 * sig, ang, 0.0))))
+    return math.degrees(worst)
+
+
+def _axis_arg(axis) -> int | None:
+    if axis is None or axis in ("3d", "xyz", "all"):
+        return None
+    m = {"x": 0, "y": 1, "z": 2, 0: 0, 1: 1, 2: 2}
+    if axis not in m:
+        raise AccelcalError(f"displacement axis {axis!r}: expected x, y, z or none (3-axis)")
+    return m[axis]
+
+
+def displacement_from_recording(device, cal, rec, engine: str = "float", *, form: str | None = None,
+                                axis=None, rest: RestParams | None = None) -> Columns:
+    """`accelcal displacement`: columns t, v_x, v_y, v_z, p_x, p_y, p_z (frame of the first rest,
+    z up, gravity removed; corrected between rests) plus p_raw_* (the same without the zero-point
+    correction), rest (1 at rest) and corrected (1 on the samples of a motion closed by a rest,
+    whose correction was applied; 0 at rest and on a motion that never stopped).
+
+    engine "float": form "offline" (default) or "stream" (the float twin of the firmware form);
+    engine "fixed": the C streaming form (ac_disp), with the path between rests corrected on the
+    host from the core's per-motion zero-point estimate.  ``axis`` x/y/z: 1-D along that body
+    axis (the seed's case: nothing removed).  Errors: no rest at all (nothing can be anchored).
+    Flagged (warnings, column corrected = 0): a recording that does not start at rest (the part
+    before the first rest is not estimated), a motion that does not end at rest (uncorrected)."""
+    if engine not in ("float", "fixed"):
+        raise ValueError(f"unknown engine {engine!r}")
+    form = form or ("offline" if engine == "float" else "stream")
+    if form not in ("offline", "stream") or (engine == "fixed" and form != "stream"):
+        raise ValueError(f"form {form!r} with engine {engine!r}: fixed has only 'stream'")
+    check_for_device(rec, device, min_samples=2)
+    ax = _axis_arg(axis)
+    dt = uniform_dt(rec)
+    rp = rest or default_rest_params(device, 1.0 / dt)
+    p = DisplaceParams(dt=dt, axis=ax, rest=rp)
+    if engine == "fixed":
+        check_core_input(rec)
+    f, note = _body_forces(device, cal, rec, engine)
+    t = np.asarray(rec.t, float)
+    n = len(t)
+    warnings = []
+    if engine == "float" and form == "offline":
+        r = displace_offline(f, p)
+        if r["no_rest"]:
+            raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording "
+                             f"(rest = |f - mean| <= {rp.dev_max:.3g} m/s^2 for {rp.hold} samples"
+                             + (f" with |f| within {rp.g_tol:g} of {rp.g:g} m/s^2" if rp.g is not None else "")
+                             + "): the stop-to-stop method needs a rest at both ends of each motion")
+        v, pp, p_raw = r["v"], r["p"], r["p_raw"]
+        at, corrected = r["rest"], r["corrected"]
+        is_open = r["open"]
+        zps = [s[2] for s in r["segments"] if s[2] is not None]
+    else:
+        if engine == "float":
+            r = displace_stream(f, p)
+            vq, pq, zq, fl = r["v"], r["p"], r["zp"], r["flags"]
+            fin_open = r["phase"] == 2
+            no_rest = not (fl & DISP_REST).any()
+        else:
+            r = displace_fixed(f, p)
+            vq, pq = r["v"] / 2.0**V_FRAC, r["p"] / 2.0**P_FRAC
+            zq, fl = r["zp"] / 2.0**A_FRAC, r["flags"]
+            fin_open = bool(r["finish"] & DISP_OPEN)
+            no_rest = bool(r["finish"] & DISP_NO_REST)
+            if (fl & DISP_SAT).any():
+                warnings.append(f"displacement: {int(np.count_nonzero(fl & DISP_SAT))} samples clipped in the "
+                                "fixed-point core")
+        if no_rest:
+            raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording: the "
+                             "stop-to-stop method needs a rest at both ends of each motion")
+        v, pp, corrected = retro_correct(t, vq, pq, fl, zq)
+        # uncorrected path: add back each end correction zp T^2 / 2 from its sample on
+        D = np.zeros((n, 3))
+        step_dt = r["dt"] if engine == "fixed" else dt
+        for s_, e in _segments_from_flags(fl):
+            if e >= 0 and not fl[e] & DISP_LONG:
+                T = int(r["nseg"][e]) * step_dt
+                D[e] = 0.5 * np.asarray(zq[e], float) * T * T
+        p_raw = np.array(pq, float) + np.cumsum(D, axis=0)
+        at = (fl & DISP_REST) != 0
+        is_open = fin_open
+        zps = [zq[e] for s, e in _segments_from_flags(fl) if e >= 0 and not fl[e] & DISP_LONG]
+        if (fl & DISP_LONG).any():
+            warnings.append("displacement: a motion longer than 65535 samples was not corrected")
+    first_at = int(np.argmax(at)) if np.any(at) else n
+    if first_at > rp.hold - 1:
+        # the first rest's quiet run did not begin with the recording
+        warnings.append(f"displacement: the recording does not start at rest: nothing is estimated before the "
+                        f"first rest (declared at t = {t[min(first_at, n - 1)]:.3f} s; rows before are 0)")
+    if is_open:
+        warnings.append("displacement: the last motion does not end at rest: it is NOT corrected "
+                        "(column corrected = 0 there) and its drift grows with time squared")
+    if device.is_array():
+        # the rail assumption: no rotation between rests (checked from the resolved alpha)
+        rot = _max_rotation_deg(device, cal, rec, np.asarray(at, bool), dt)
+        if rot > 3.0:
+            warnings.append(f"displacement: the body turned by up to {rot:.1f} deg during a motion (from the "
+                            "resolved alpha): gravity removal assumes no rotation between rests (a rail), so "
+                            "the result is doubtful")
+    meta = {"engine": engine, "form": form, "device": device.name, "signal": note,
+            "mode": "3-axis, gravity removed in the frame of the first rest" if ax is None else
+            f"1-D along body {'xyz'[ax]}", "segments": str(len(zps))}
+    if zps:
+        meta["zero_point_mps2"] = "; ".join("(" + ", ".join(f"{c:.4g}" for c in np.atleast_1d(z)) + ")" for z in zps)
+    cols = Columns(t=t, v_x=v[:, 0], v_y=v[:, 1], v_z=v[:, 2], p_x=pp[:, 0], p_y=pp[:, 1], p_z=pp[:, 2],
+                   p_raw_x=p_raw[:, 0], p_raw_y=p_raw[:, 1], p_raw_z=p_raw[:, 2],
+                   rest=np.asarray(at, float), corrected=np.asarray(corrected, float),
+                   warnings=warnings, meta=meta)
+    return cols

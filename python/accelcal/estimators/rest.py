@@ -1,0 +1,191 @@
+"""The rest detector: the float twin of the firmware's ac_rest (include/accelcal/ac_rest.h).
+
+It stays here as the C core's reference: :func:`rest_detect` decides as ``ac_rest``
+does, sample by sample (with ``as_stored`` on the thresholds as the C config holds
+them), and the property tests hold :func:`rest_fixed` (the C core) to it.  The
+displacement (its reference test) and the rate's reset use the same state machine
+(:class:`RestState`).  An offline static detector for calibration and diagnosis is
+``accelcal.static``, not this one.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..native import check, cptr, ffi, lib
+from ..quantize import round_half_up
+from .common import CLIP, CLIP_LO, OUT_FRAC
+
+__all__ = ["REST_QUIET", "REST_AT_REST", "REST_ENTER", "REST_LEAVE", "REST_CLIP", "RestParams",
+           "default_rest_params", "rest_cfg_fixed", "RestThresholds", "rest_params_as_stored", "RestState",
+           "rest_detect", "rest_fixed"]
+
+# flag bits, from the compiled core (include/accelcal/ac_rest.h)
+REST_QUIET, REST_AT_REST, REST_ENTER, REST_LEAVE, REST_CLIP = (
+    lib.AC_REST_QUIET, lib.AC_REST_AT_REST, lib.AC_REST_ENTER, lib.AC_REST_LEAVE, lib.AC_REST_CLIP)
+THR_SCALE = 2.0 ** OUT_FRAC          # dev_max, alpha_max, ref_max: Q.AC_OUT_FRAC
+G2_SCALE = 2.0 ** (2 * OUT_FRAC)     # g2_lo, g2_hi: Q.(2 AC_OUT_FRAC) (m/s^2)^2
+
+
+@dataclass
+class RestParams:
+    """Rest test (see include/accelcal/ac_rest.h).  ``g`` None switches the |f| test off;
+    ``ref_max`` bounds |f - (the first rest's mean f)| once the displacement knows it."""
+    dev_max: float = 0.1            # m/s^2, max_k |f_k - mean_k|
+    g: float | None = 9.80665       # m/s^2
+    g_tol: float = 0.5              # |f| within g +- g_tol
+    alpha_max: float = math.inf     # rad/s^2 (only when alpha is given)
+    hold: int = 25                  # samples
+    ema_shift: int = 3              # mean weight 2^-ema_shift
+    ref_max: float = 0.15           # m/s^2 (only when a reference is given)
+
+    def g2_bounds(self) -> tuple[float, float]:
+        if self.g is None:
+            return 0.0, math.inf
+        return max(self.g - self.g_tol, 0.0) ** 2, (self.g + self.g_tol) ** 2
+
+
+def default_rest_params(device, rate_hz: float | None = None, alpha_sigma: float | None = None) -> RestParams:
+    """dev_max = 5 sigma (device noise; at least 0.01 m/s^2), ref_max = dev_max + 0.05 m/s^2
+    (room for a zero-point drift between rests), hold = 0.25 s, mean over ~0.1 s, |f| within
+    0.5 m/s^2 of g, |alpha| <= 5 sigma_alpha when given."""
+    rate = float(rate_hz or device.sample_rate_hz)
+    noise = float(getattr(device, "noise_mps2", 0.0) or 0.0)
+    k = int(min(12, max(1, round(math.log2(max(2.0, 0.1 * rate))))))
+    dev = max(5.0 * noise, 0.01)
+    return RestParams(dev_max=dev, g=float(device.gravity_mps2), g_tol=0.5,
+                      alpha_max=math.inf if alpha_sigma is None else max(5.0 * alpha_sigma, 0.05),
+                      hold=max(4, int(round(0.25 * rate))), ema_shift=k, ref_max=dev + 0.05)
+
+
+def _q_thr(x: float) -> int:
+    return int(min(round_half_up(x * THR_SCALE), 2**31 - 1)) if math.isfinite(x) else 2**31 - 1
+
+
+def rest_cfg_fixed(p: RestParams):
+    """The ac_rest_cfg for p (thresholds rounded half up to their Q formats)."""
+    c = ffi.new("ac_rest_cfg *")
+    c.dev_max = _q_thr(p.dev_max)
+    lo, hi = p.g2_bounds()
+    c.g2_lo = int(min(round_half_up(lo * G2_SCALE), 2**32 - 1))
+    c.g2_hi = int(min(round_half_up(hi * G2_SCALE), 2**32 - 1)) if math.isfinite(hi) else 2**32 - 1
+    c.alpha_max = _q_thr(p.alpha_max)
+    c.ref_max = _q_thr(p.ref_max)
+    c.hold = int(p.hold)
+    c.ema_shift = int(p.ema_shift)
+    return c
+
+
+@dataclass
+class RestThresholds:
+    """The rest test's thresholds as floats (m/s^2, (m/s^2)^2, rad/s^2): exact, or as the C
+    config stores them (``of(p, as_stored=True)``, the twin's)."""
+    dev_max: float
+    g2_lo: float
+    g2_hi: float
+    alpha_max: float
+    ref_max: float
+    hold: int
+    ema_shift: int
+
+    @classmethod
+    def of(cls, p: RestParams, as_stored: bool = False) -> "RestThresholds":
+        if as_stored:
+            c = rest_cfg_fixed(p)
+            return cls(c.dev_max / THR_SCALE, c.g2_lo / G2_SCALE, c.g2_hi / G2_SCALE, c.alpha_max / THR_SCALE,
+                       c.ref_max / THR_SCALE, p.hold, p.ema_shift)
+        lo, hi = p.g2_bounds()
+        return cls(p.dev_max, lo, hi, p.alpha_max, p.ref_max, p.hold, p.ema_shift)
+
+
+def rest_params_as_stored(p: RestParams) -> tuple[float, float, float, float]:
+    """(dev_max, g2_lo, g2_hi, alpha_max) exactly as the fixed cfg holds them."""
+    t = RestThresholds.of(p, True)
+    return t.dev_max, t.g2_lo, t.g2_hi, t.alpha_max
+
+
+class RestState:
+    """The float twin of ac_rest (one sample at a time, on clipped inputs)."""
+
+    def __init__(self, th: RestThresholds):
+        self.th = th
+        self.w = 2.0 ** -th.ema_shift
+        self.m = None
+        self.run = 0
+        self.at = False
+
+    def step(self, x, alpha=None, ref=None) -> tuple[int, float, float]:
+        """flags (REST_*), the deviation from the mean, the deviation from ref (0 without)."""
+        th = self.th
+        if self.m is None:
+            self.m = [x[0], x[1], x[2]]
+        m = self.m
+        d0, d1, d2 = x[0] - m[0], x[1] - m[1], x[2] - m[2]
+        dev = max(abs(d0), abs(d1), abs(d2))
+        m[0] += d0 * self.w
+        m[1] += d1 * self.w
+        m[2] += d2 * self.w
+        g2 = x[0] * x[0] + x[1] * x[1] + x[2] * x[2]
+        quiet = dev <= th.dev_max and th.g2_lo <= g2 <= th.g2_hi
+        if alpha is not None and max(abs(alpha[0]), abs(alpha[1]), abs(alpha[2])) > th.alpha_max:
+            quiet = False
+        dref = 0.0
+        if ref is not None:
+            dref = max(abs(x[0] - ref[0]), abs(x[1] - ref[1]), abs(x[2] - ref[2]))
+            if dref > th.ref_max:
+                quiet = False
+        self.run = min(self.run + 1, 65535) if quiet else 0
+        was, self.at = self.at, self.run >= th.hold
+        fl = REST_QUIET if quiet else 0
+        if self.at:
+            fl |= REST_AT_REST | (0 if was else REST_ENTER)
+        elif was:
+            fl |= REST_LEAVE
+        return fl, dev, dref
+
+
+def rest_detect(f, p: RestParams, alpha=None, *, as_stored: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Float rest detector, sample by sample.
+
+    Parameters
+    ----------
+    f : array_like (n, 3)
+        Specific force, m/s^2 (clipped to the core's +-32 m/s^2).
+    p : RestParams
+    alpha : array_like (n, 3), optional
+        Angular acceleration, rad/s^2 (the |alpha| test only when given).
+    as_stored : bool
+        Use the thresholds as the fixed cfg stores them: the twin of ac_rest (f should
+        then be the Q.AC_OUT_FRAC inputs / 2^AC_OUT_FRAC).
+
+    Returns
+    -------
+    flags : ndarray (n,) uint8
+        REST_* bits.
+    dev : ndarray (n,)
+        max_k |f_k - mean_k| before the mean's update, m/s^2.
+    """
+    f = np.clip(np.asarray(f, float), CLIP_LO, CLIP)
+    n = f.shape[0]
+    flags = np.zeros(n, np.uint8)
+    dev = np.zeros(n)
+    rs = RestState(RestThresholds.of(p, as_stored))
+    fl = f.tolist()
+    al = None if alpha is None else np.asarray(alpha, float).tolist()
+    for i in range(n):
+        flags[i], dev[i], _ = rs.step(fl[i], None if al is None else al[i])
+    return flags, dev
+
+
+def rest_fixed(f_q, p: RestParams, alpha_q=None) -> np.ndarray:
+    """ac_rest_batch: f (n, 3) and alpha (n, 3) int32 Q.AC_OUT_FRAC -> REST_* flags (n,) uint8."""
+    f_q = np.ascontiguousarray(f_q, dtype=np.int32)
+    st = ffi.new("ac_rest *")
+    check(lib.ac_rest_init(st, rest_cfg_fixed(p)), "ac_rest_init")
+    flags = np.zeros(f_q.shape[0], np.uint8)
+    ap = ffi.NULL if alpha_q is None else cptr("int32_t *", np.ascontiguousarray(alpha_q, dtype=np.int32))
+    check(lib.ac_rest_batch(st, cptr("int32_t *", f_q), ap, f_q.shape[0], cptr("uint8_t *", flags)),
+          "ac_rest_batch")
+    return flags

@@ -1,0 +1,136 @@
+"""One triad: raw counts -> calibrated specific force at its point, f = S^-1 (raw - b).
+
+Float reference (:func:`triad_apply_float`), the fixed-point table by the quantizer's
+rules (:func:`quantize_triad`), the C core's ``ac_triad_apply`` on arrays
+(:func:`triad_apply_fixed`) with its exact semantics (:func:`triad_exact`), and the
+recording form (:func:`triad_forces`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import AccelcalError
+from ..native import check, cptr, ffi, lib
+from ..quantize import round_half_up, row_shift, to_fixed
+from .common import OUT_FRAC, I16_MAX, I16_MIN
+
+__all__ = ["TriadTable", "triad_matrix", "quantize_triad", "triad_apply_fixed", "triad_exact",
+           "triad_apply_float", "triad_forces"]
+
+
+@dataclass
+class TriadTable:
+    """One triad's fixed-point table (ac_triad): f = round((m x - k) 2^-shift), x = raw - trim."""
+    trim: np.ndarray   # (3,) uint16 counts
+    m: np.ndarray      # (3,3) int16
+    shift: np.ndarray  # (3,) int8
+    k: np.ndarray      # (3,) int32
+
+    def cdata(self):
+        """The table as a C ``ac_triad``."""
+        t = ffi.new("ac_triad *")
+        for j in range(3):
+            t.trim[j] = int(self.trim[j])
+            t.shift[j] = int(self.shift[j])
+            t.k[j] = int(self.k[j])
+            for i in range(3):
+                t.m[j][i] = int(self.m[j, i])
+        return t
+
+
+def triad_matrix(sens3: np.ndarray) -> np.ndarray:
+    """M = S^-1 (3x3, m/s^2 per count) of a triad whose rows are s_i (counts per m/s^2).
+
+    Raises
+    ------
+    AccelcalError
+        S singular (its three axes do not span 3-D) or not finite.
+    """
+    S = np.asarray(sens3, float)
+    if S.shape != (3, 3) or not np.all(np.isfinite(S)) or abs(np.linalg.det(S)) <= 1e-12 * np.abs(S).max() ** 3:
+        raise AccelcalError("a triad's sensitivity matrix is singular: its three axes do not span 3-D")
+    return np.linalg.inv(S)
+
+
+def quantize_triad(offsets3, sens3) -> TriadTable:
+    """The triad's table by the rules of quantize.quantize.
+
+    Parameters
+    ----------
+    offsets3 : array_like (3,)
+        Offsets b, counts.
+    sens3 : array_like (3, 3)
+        Sensitivity rows s_i, counts per m/s^2.
+
+    Returns
+    -------
+    TriadTable
+        trim = round(b), the residual folded into k; each row's shift the largest with
+        max |m| <= 32767 and sum |m| <= 65535 - 3; output Q.AC_OUT_FRAC m/s^2.
+    """
+    b = np.asarray(offsets3, float)
+    trim = to_fixed(b, 0, "offset_counts", 0, 65535)
+    M = triad_matrix(sens3) * 2.0 ** OUT_FRAC       # output LSB per count
+    o = b - trim
+    shift = np.array([row_shift(M[j], f"triad matrix row {j}") for j in range(3)])
+    m = round_half_up(M * 2.0 ** shift[:, None]).astype(np.int16)
+    k = to_fixed((M @ o) * 2.0 ** shift, 0, "triad offset term k")
+    return TriadTable(trim=trim.astype(np.uint16), m=m, shift=shift.astype(np.int8), k=k.astype(np.int32))
+
+
+def triad_apply_fixed(table: TriadTable, raw) -> tuple[np.ndarray, np.ndarray]:
+    """ac_triad_apply on every sample.
+
+    Parameters
+    ----------
+    table : TriadTable
+    raw : array_like (n, 3)
+        Counts (uint16).
+
+    Returns
+    -------
+    f : ndarray (n, 3) int32
+        Q.AC_OUT_FRAC m/s^2.
+    saturated : ndarray (n,) bool
+    """
+    raw = np.ascontiguousarray(raw, dtype=np.uint16)
+    t = table.cdata()
+    check(lib.ac_triad_check(t), "ac_triad_check")
+    out = np.zeros((raw.shape[0], 3), np.int32)
+    sat = np.zeros(raw.shape[0], bool)
+    fo = ffi.new("int32_t[3]")
+    for n in range(raw.shape[0]):
+        sat[n] = check(lib.ac_triad_apply(t, cptr("uint16_t *", raw[n]), fo), "ac_triad_apply")
+        out[n] = (fo[0], fo[1], fo[2])
+    return out, sat
+
+
+def triad_exact(table: TriadTable, raw) -> np.ndarray:
+    """The triad table's exact result in output LSB (before the final rounding), (n, 3)."""
+    x = np.clip(np.asarray(raw, np.int64) - table.trim.astype(np.int64), I16_MIN, I16_MAX)
+    return (x @ table.m.T.astype(float) - table.k) * 2.0 ** (-table.shift.astype(float))
+
+
+def triad_apply_float(offsets3, sens3, raw) -> np.ndarray:
+    """Float reference: f = S^-1 (raw - b), (n, 3) m/s^2 from (n, 3) counts."""
+    return (np.asarray(raw, float) - np.asarray(offsets3, float)) @ triad_matrix(sens3).T
+
+
+def triad_forces(cal, rec, chans, engine: str) -> tuple[np.ndarray, np.ndarray | None]:
+    """f of the triad at channels ``chans`` of a recording.
+
+    Returns
+    -------
+    f : ndarray (n, 3)
+        engine "float": m/s^2; "fixed": int32 Q.AC_OUT_FRAC from the C core.
+    saturated : ndarray (n,) bool or None
+        The core's saturation per sample (None for "float").
+    """
+    b = np.asarray(cal.offsets, float)[list(chans)]
+    s = np.asarray(cal.sensitivity, float)[list(chans)]
+    raw = np.asarray(rec.raw)[:, list(chans)]
+    if engine == "float":
+        return triad_apply_float(b, s, raw), None
+    return triad_apply_fixed(quantize_triad(b, s), raw)

@@ -1,0 +1,217 @@
+"""Stop-to-stop displacement: the C core (ac_displace, ac_tilt_frame) against its float
+twin within the bounds of ac_displace.h, and the estimator's forms against the simulator's
+truth and on bad recordings."""
+import numpy as np
+import pytest
+from hypothesis import assume, given, strategies as st
+
+from accelcal import estimators as E
+from accelcal.calibration import Calibration
+from accelcal.device import default_device, default_triad
+from accelcal.errors import InputError
+from accelcal.native import ffi, lib
+from accelcal.recording import recording_from_arrays
+from accelcal.simulate import run_simulation
+from core_settings import estimator
+from estimator_devices import G
+
+
+@estimator
+@given(st.lists(st.floats(-1, 1), min_size=3, max_size=3), st.floats(0.2, 40.0))
+def test_tilt_frame_fixed_vs_float(d, mag):
+    v = np.array(d)
+    assume(np.linalg.norm(v) > 1e-3)
+    g = v / np.linalg.norm(v) * mag
+    gq = np.round(g * 2**16).astype(np.int64)
+    rot = ffi.new("int16_t[3][3]")
+    gc = ffi.new("int32_t[3]", [int(x) for x in gq])
+    assert lib.ac_tilt_frame(gc, rot) == lib.AC_OK
+    R = np.array([[rot[j][k] for k in range(3)] for j in range(3)]) / 2**14
+    Rf = E.tilt_frame(gq / 2**16)
+    u = gq / np.linalg.norm(gq)
+    near = abs(u[1] ** 2 + u[2] ** 2 - 0.25) < 1e-3    # branch boundary: both frames are valid
+    if not near:
+        assert np.max(np.abs(R - Rf)) <= 2 * 2**-14
+    assert np.max(np.abs(R @ R.T - np.eye(3))) <= 6 * 2**-14
+    assert np.max(np.abs(Rf @ (gq / 2**16) / np.linalg.norm(gq / 2**16) - [0, 0, 1])) < 1e-12
+    assert np.linalg.det(Rf) > 0.999
+
+
+def test_tilt_frame_zero():
+    rot = ffi.new("int16_t[3][3]")
+    assert lib.ac_tilt_frame(ffi.new("int32_t[3]"), rot) == lib.AC_ERR_SINGULAR
+
+
+def minjerk_acc(n_rest1, n_move, n_rest2, dist, dt):
+    a = np.zeros(n_rest1 + n_move + n_rest2)
+    T = n_move * dt
+    u = np.arange(n_move) * dt / T
+    a[n_rest1:n_rest1 + n_move] = dist / T**2 * 60 * (u - 3 * u**2 + 2 * u**3)
+    return a
+
+
+@st.composite
+def displacement_runs(draw):
+    rate = draw(st.sampled_from([60.0, 100.0]))
+    dt = 1 / rate
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    parts = [minjerk_acc(draw(st.integers(0, 60)), draw(st.integers(5, 150)), 0, draw(st.floats(-1, 1)), dt)
+             for _ in range(draw(st.integers(1, 3)))]
+    a = np.concatenate(parts + [np.zeros(draw(st.integers(0, 60)))])
+    n = len(a)
+    d = rng.normal(size=3)
+    d /= np.linalg.norm(d)
+    up = rng.normal(size=3)
+    up /= np.linalg.norm(up)
+    noise = draw(st.sampled_from([0.0, 0.005, 0.02]))
+    f = G * up + a[:, None] * d + rng.normal(0, noise, (n, 3)) + rng.normal(0, 0.05, 3)
+    if draw(st.booleans()):
+        f[int(rng.integers(0, n))] += 50.0        # a clipped sample
+    axis = draw(st.sampled_from([None, None, 0, 1, 2]))
+    rp = E.RestParams(dev_max=max(5 * noise, 0.01), hold=draw(st.integers(1, 30)),
+                      ema_shift=draw(st.integers(1, 6)), g=draw(st.sampled_from([None, G])))
+    return E.q_out(f), E.DisplaceParams(dt=dt, axis=axis, rest=rp)
+
+
+@estimator
+@given(displacement_runs())
+def test_displacement_fixed_vs_twin(run):
+    f_q, p = run
+    fx = E.displace_fixed(f_q, p)
+    tw = E.displace_twin(f_q, fx, p)
+    assert np.array_equal(fx["flags"] & ~E.DISP_SAT, tw["flags"])
+    assert np.array_equal(fx["nseg"], tw["nseg"])
+    # the working range is |v| < 64 m/s, |p| < 2048 m (AC_DISP_SAT beyond): compare up to there
+    over = (np.abs(tw["v"]).max(axis=1) > 63.9) | (np.abs(tw["p"]).max(axis=1) > 2047.0)
+    m = int(np.argmax(over)) if over.any() else len(over)
+    bv, bp = E.displace_error_bound(fx, tw, p.axis is None)
+    assert np.all(np.abs(fx["v"] / 2.0**24 - tw["v"])[:m] <= bv[:m, None])
+    assert np.all(np.abs(fx["p"] / 2.0**20 - tw["p"])[:m] <= bp[:m, None])
+    for i in np.flatnonzero((fx["flags"] & E.DISP_SEG_END) & ~(fx["flags"] & E.DISP_LONG)):
+        if i >= m:
+            break
+        T = fx["nseg"][i] * fx["dt"]
+        zb = bv[i - 1] / T + np.abs(tw["zp"][i]) * 2.0**-17 / T + 2.0**-17 + 2.0**-25 / T
+        assert np.all(np.abs(fx["zp"][i] / 2.0**16 - tw["zp"][i]) <= zb)
+    # the core's rest decisions against the twin's own: only the floor-rounded mean differs
+    th = E.RestThresholds.of(p.rest, True)
+    differ = ((fx["rest"] & E.REST_QUIET) != 0) != tw["own_quiet"]
+    assert np.all(np.abs(tw["dev"][differ] - th.dev_max) <= 2.0 ** (p.rest.ema_shift - 18))
+    if fx["frame"] is not None and fx["frame"][1] is not None:
+        g, rot, c = fx["frame"]
+        assert np.max(np.abs(rot / 2**14 - E.tilt_frame(g / 2**16))) <= 2 * 2**-14 or \
+            abs((g[1] ** 2 + g[2] ** 2) / np.sum(g.astype(float) ** 2) - 0.25) < 1e-3
+        # c = round(R g) exactly (Q.16)
+        exact = rot.astype(np.int64) @ g.astype(np.int64)          # Q.30
+        assert np.array_equal(c, (exact + 2**13) >> 14)
+
+
+def test_displacement_gravity_mean_is_exact():
+    rng = np.random.default_rng(0)
+    f = np.vstack([G * np.array([0.1, -0.2, 0.97]) + rng.normal(0, 0.01, (50, 3)),
+                   np.tile([3.0, 0, 9.8], (10, 1)), np.tile([0.0, 0, 9.8], (40, 1))])
+    fq = E.q_out(f)
+    p = E.DisplaceParams(dt=0.01, rest=E.RestParams(dev_max=0.06, hold=10, ema_shift=2))
+    fx = E.displace_fixed(fq, p)
+    g, _, _ = fx["frame"]
+    rf = E.rest_fixed(fq, p.rest)
+    k = int(np.argmax(~(rf & E.REST_AT_REST).astype(bool)[10:])) + 10   # first motion sample
+    quiet = (rf & E.REST_QUIET).astype(bool)
+    s = k
+    while s > 0 and quiet[s - 1]:
+        s -= 1
+    mean = fq[s:k].astype(np.int64).sum(axis=0) * 64
+    assert np.all(np.abs(g * (k - s) - mean) <= (k - s) / 2)
+
+
+def test_stop_to_stop_1d_zero_point_correction():
+    """The seed's case: 0.5 m in 2 s with a 0.05 m/s^2 zero-point error: <= 0.5 % corrected,
+    tens of % uncorrected, for every engine and form."""
+    d = default_triad()
+    k = float(d.counts_per_mps2[0])
+    sim = run_simulation(d, "linear_actuator", seed=21, distance_m=0.5, travel_s=2.0, rest_s=2.0,
+                         effects=[f"offset:db={0.05 * k},channel=0"])
+    cal = Calibration.nominal(d)
+    for engine, form in (("float", "offline"), ("float", "stream"), ("fixed", "stream")):
+        c = E.displacement_from_recording(d, cal, sim.recording, engine, form=form, axis="x")
+        assert abs(c["p_x"][-1] - 0.5) <= 0.005 * 0.5
+        assert abs(c["p_raw_x"][-1] - 0.5) >= 0.1 * 0.5
+        assert abs(float(c.meta["zero_point_mps2"].strip("()").split(",")[0]) - 0.05) < 0.005
+        assert c["corrected"].any() and not c.warnings
+
+
+def test_stop_to_stop_tilted_rail_3axis():
+    d = default_triad()
+    sim = run_simulation(d, "linear_actuator", seed=22, distance_m=0.5, travel_s=2.0, rest_s=2.0,
+                         tilt_deg=20.0, strokes=2)
+    cal = Calibration.nominal(d)
+    R = E.tilt_frame(sim.trajectory.f[0])
+    truth = (sim.trajectory.position @ sim.trajectory.attitude[0]) @ R.T   # world -> body -> rest frame
+    for engine in ("float", "fixed"):
+        c = E.displacement_from_recording(d, cal, sim.recording, engine)
+        p = np.column_stack([c["p_x"], c["p_y"], c["p_z"]])
+        mid = np.argmin(np.abs(sim.recording.t - 5.0))   # resting after the first stroke
+        assert np.linalg.norm(p[mid] - truth[mid]) <= 0.005 * 0.5
+        assert np.linalg.norm(p[-1] - truth[-1]) <= 0.005 * 0.5
+        assert abs(c["v_x"][mid]) < 1e-9 and c["rest"][mid] == 1
+
+
+def test_displacement_no_rest_is_an_error():
+    d = default_device()
+    rec = run_simulation(d, "random_6dof", seed=1, duration_s=5.0).recording
+    for engine in ("float", "fixed"):
+        with pytest.raises(InputError, match="no rest"):
+            E.displacement_from_recording(d, Calibration.nominal(d), rec, engine)
+
+
+def test_displacement_motion_not_ending_at_rest_is_flagged():
+    d = default_triad()
+    sim = run_simulation(d, "linear_actuator", seed=2, distance_m=0.5, travel_s=2.0, rest_s=2.0)
+    rec = sim.recording.select(sim.recording.t < 3.0)      # cut in the middle of the stroke
+    for engine in ("float", "fixed"):
+        c = E.displacement_from_recording(d, Calibration.nominal(d), rec, engine)
+        assert any("does not end at rest" in w for w in c.warnings)
+        assert c["corrected"][-1] == 0
+    fx = E.displace_fixed(E.q_out(E.triad_apply_float(d.zero_counts, d.nominal_sensitivity(), rec.raw)),
+                          E.DisplaceParams(dt=0.01, rest=E.default_rest_params(d)))
+    assert fx["finish"] & E.DISP_OPEN
+
+
+def test_displacement_not_starting_at_rest_is_flagged():
+    d = default_triad()
+    sim = run_simulation(d, "linear_actuator", seed=2, distance_m=0.5, travel_s=2.0, rest_s=2.0, strokes=2)
+    rec = sim.recording.select(sim.recording.t > 3.0)      # starts in the middle of the first stroke
+    c = E.displacement_from_recording(d, Calibration.nominal(d), rec, "fixed")
+    assert any("does not start at rest" in w for w in c.warnings)
+
+
+def test_displacement_long_motion_not_corrected():
+    p = E.DisplaceParams(dt=0.01, axis=0, rest=E.RestParams(g=None, dev_max=0.01, hold=2, ema_shift=1))
+    n = 65540 + 40
+    f = np.zeros((n, 3))
+    f[5:65545, 0] = np.where(np.arange(65540) % 2, 0.5, -0.5)   # never quiet
+    fx = E.displace_fixed(E.q_out(f), p)
+    ends = np.flatnonzero(fx["flags"] & E.DISP_SEG_END)
+    assert len(ends) == 1 and fx["flags"][ends[0]] & E.DISP_LONG
+    assert np.all(fx["zp"][ends[0]] == 0)
+
+
+def test_nonuniform_time_is_an_error():
+    d = default_triad()
+    rec = run_simulation(d, "linear_actuator", seed=2).recording
+    t = rec.t.copy()
+    t[100:] += 0.5
+    bad = recording_from_arrays(t, rec.raw)
+    with pytest.raises(InputError, match="not uniform"):
+        E.displacement_from_recording(d, Calibration.nominal(d), bad)
+
+
+def test_displacement_flags_rotation_between_rests():
+    """A lane change is no rail: the array's alpha shows the turn and the result is flagged;
+    a rail gives no such warning."""
+    d = default_device()
+    cal = Calibration.nominal(d)
+    c = E.displacement_from_recording(d, cal, run_simulation(d, "lane_change", seed=4).recording, "fixed")
+    assert any("turned" in w for w in c.warnings)
+    c = E.displacement_from_recording(d, cal, run_simulation(d, "linear_actuator", seed=4).recording, "fixed")
+    assert not any("turned" in w for w in c.warnings)
