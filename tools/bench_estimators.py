@@ -28,30 +28,23 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 BUILD = ROOT / "build" / "bench_est"
 INC = ROOT / "include"
-G = 9.80665
 SEEDS = range(1, 11)
 
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_core import avr_stack_ram, parse_bench, run  # noqa: E402  (the shared bench helpers)
+sys.path[:0] = [str(Path(__file__).resolve().parent), str(ROOT / "python"), str(ROOT / "tests" / "python")]
+# the shared bench helpers, the package, and the devices of the estimators' tests
+from accelcal import estimators as E, model  # noqa: E402
+from accelcal.calibration import Calibration  # noqa: E402
+from accelcal.device import default_device, default_triad  # noqa: E402
+from accelcal.estimators.attitude import LEAK_FRAC  # noqa: E402
+from accelcal.native import FORMATS  # noqa: E402
+from accelcal.quantize import round_half_up  # noqa: E402
+from accelcal.simulate import run_simulation  # noqa: E402
+from bench_core import avr_stack_ram, parse_bench, run  # noqa: E402
+from estimator_devices import adxl_pendulum_device as adxl_triads, adxl_triad  # noqa: E402
 
 # the estimators' per-sample routines, for the worst-case stack
 PER_SAMPLE = ("ac_triad_apply", "ac_att_step", "ac_disp_step", "ac_rest_step", "ac_rest_rate_step")
-
-
-def adxl_triads(r1=0.1, r2=0.3):
-    from accelcal.device import Device
-    pos = np.array([[r1, 0, 0]] * 3 + [[r2, 0, 0]] * 3, float)
-    return Device(name="pendulum-adxl202e", sample_rate_hz=60.0, gravity_mps2=G, raw_min=0, raw_max=10000,
-                  positions=pos, axes=np.vstack([np.eye(3), np.eye(3)]),
-                  counts_per_mps2=np.full(6, 1250.0 / G), zero_counts=np.full(6, 5000.0), noise_mps2=0.02)
-
-
-def adxl_triad():
-    from accelcal.device import Device
-    return Device(name="triad-adxl202e", sample_rate_hz=60.0, gravity_mps2=G, raw_min=0, raw_max=10000,
-                  positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, 1250.0 / G),
-                  zero_counts=np.full(3, 5000.0), noise_mps2=0.02)
 
 
 def rms(x):
@@ -63,9 +56,6 @@ def rms(x):
 # ------------------------------------------------------------------------------------
 
 def pendulum_accuracy():
-    from accelcal import estimators as E
-    from accelcal.calibration import Calibration
-    from accelcal.simulate import run_simulation
     d = adxl_triads()
     cal = Calibration.nominal(d)
     res = {k: [] for k in ("th_f", "th_x", "w_f", "w_x", "dw_f", "sqrt", "th_max", "dth_ref_lsb", "dw_ref",
@@ -89,7 +79,7 @@ def pendulum_accuracy():
         f2 = E.triad_apply_float(cal.offsets[3:], cal.sensitivity[3:], rec.raw[:, 3:])
         w2 = (f2[:, 0] - f1[:, 0]) / (0.1 - 0.3)
         res["sqrt"].append(rms(np.sqrt(np.maximum(w2, 0)) - np.abs(rec.w[:, 1])))
-        res["dth_ref_lsb"].append(float(np.max(np.abs(a["theta_rad"] - b["theta_rad"]))) * 2**13)
+        res["dth_ref_lsb"].append(float(np.max(np.abs(a["theta_rad"] - b["theta_rad"]))) * 2**E.ANGLE_FRAC)
         res["dw_ref"].append(float(np.max(np.abs(a["w_y"] - b["w_y"]))))
         # against the twin (same quantised triad outputs)
         tab1 = E.quantize_triad(cal.offsets[:3], cal.sensitivity[:3])
@@ -99,19 +89,16 @@ def pendulum_accuracy():
         p = E.AttitudeParams(r1=0.1, r2=0.3, dt=1 / 60, noise_mps2=0.02)
         fx = E.attitude_fixed(q1, q2, p)
         tw = E.attitude_twin(q1, q2, fx)
-        res["th_twin"].append(float(np.max(np.abs(fx["theta"] - tw["theta"] * 2**13))))
+        res["th_twin"].append(float(np.max(np.abs(fx["theta"] - tw["theta"] * 2**E.ANGLE_FRAC))))
         bound = E.attitude_rate_bound(fx, tw)
-        dw_ = np.abs(fx["w"] / 1024 - tw["w"])
+        dw_ = np.abs(fx["w"] / 2**E.OMEGA_FRAC - tw["w"])
         res["w_twin_ratio"].append(float(np.max(dw_ / bound)))
-        res["w_twin_lsb"].append(float(np.max(dw_)) * 1024)
-        res["dw_twin"].append(float(np.max(np.abs(fx["dw"] - tw["dw"] * 1024))))
+        res["w_twin_lsb"].append(float(np.max(dw_)) * 2**E.OMEGA_FRAC)
+        res["dw_twin"].append(float(np.max(np.abs(fx["dw"] - tw["dw"] * 2**E.OUT_FRAC))))
     return {k: (float(np.mean(v)), float(np.max(v))) for k, v in res.items()}
 
 
 def displacement_accuracy(device, axis, tilt_deg=0.0, offset=0.05, strokes=1, seeds=SEEDS):
-    from accelcal import estimators as E
-    from accelcal.calibration import Calibration
-    from accelcal.simulate import run_simulation
     cal = Calibration.nominal(device)
     k = float(device.counts_per_mps2[0])
     eff = [f"offset:db={offset * k},channel=0"] if offset else []
@@ -138,10 +125,6 @@ def displacement_accuracy(device, axis, tilt_deg=0.0, offset=0.05, strokes=1, se
 
 
 def displacement_fixed_vs_float():
-    from accelcal import estimators as E
-    from accelcal.calibration import Calibration
-    from accelcal.device import default_triad
-    from accelcal.simulate import run_simulation
     d = default_triad()
     cal = Calibration.nominal(d)
     worst_ratio, worst_p, worst_ref = 0.0, 0.0, 0.0
@@ -154,7 +137,7 @@ def displacement_fixed_vs_float():
         fx = E.displace_fixed(fq, p)
         tw = E.displace_twin(fq, fx, p)
         bv, bp = E.displace_error_bound(fx, tw, True)
-        dp = np.abs(fx["p"] / 2**20 - tw["p"]).max(axis=1)
+        dp = np.abs(fx["p"] / 2**E.P_FRAC - tw["p"]).max(axis=1)
         worst_ratio = max(worst_ratio, float(np.max(dp / np.maximum(bp, 1e-30))))
         worst_p = max(worst_p, float(np.max(dp)))
         a = E.displacement_from_recording(d, cal, sim.recording, "float", form="stream")
@@ -164,10 +147,6 @@ def displacement_fixed_vs_float():
 
 
 def lane_change_rate():
-    from accelcal import estimators as E, model
-    from accelcal.calibration import Calibration
-    from accelcal.device import default_device
-    from accelcal.simulate import run_simulation
     d = default_device()
     cal = Calibration.nominal(d)
     e_reset, e_plain, e_fixed = [], [], []
@@ -193,9 +172,6 @@ def c_array(vals):
 
 
 def make_data(n=16):
-    from accelcal import estimators as E
-    from accelcal.calibration import Calibration
-    from accelcal.simulate import run_simulation
     d = adxl_triads()
     cal = Calibration.nominal(d)
     rec = run_simulation(d, "pendulum", seed=1, duration_s=3.0).recording
@@ -209,10 +185,11 @@ def make_data(n=16):
         return (f"static const ac_triad {name} = {{{c_array(t.trim)}, {c_array(t.shift)}, {c_array(t.k)}, "
                 f"{{{', '.join(c_array(r) for r in t.m)}}}}};")
     lines = ["/* generated by tools/bench_estimators.py */", f"#define BENCH_N {n}",
-             f"#define BENCH_R1 {round(0.1 * 2**20)}L", f"#define BENCH_R2 {round(0.3 * 2**20)}L",
+             f"#define BENCH_R1 {round(0.1 * 2**FORMATS.pos_frac)}L",
+             f"#define BENCH_R2 {round(0.3 * 2**FORMATS.pos_frac)}L",
              f"#define BENCH_DT_M {dm}u", f"#define BENCH_DT_SHIFT {dsh}u",
-             f"#define BENCH_W2_GATE {int(E.round_half_up(p.gate() * 2**20))}L",
-             f"#define BENCH_LEAK {int(E.round_half_up(p.leak() * 65536))}u",
+             f"#define BENCH_W2_GATE {int(round_half_up(p.gate() * 2**E.W2_FRAC))}L",
+             f"#define BENCH_LEAK {int(round_half_up(p.leak() * 2**LEAK_FRAC))}u",
              triad("BENCH_TRIAD1", t1), triad("BENCH_TRIAD2", t2),
              f"static const uint16_t BENCH_RAW[{n}][6] = {{{', '.join(c_array(r) for r in raw)}}};"]
     BUILD.mkdir(parents=True, exist_ok=True)
@@ -303,7 +280,6 @@ def h8_sizes():
 # ------------------------------------------------------------------------------------
 
 def main():
-    sys.path.insert(0, str(ROOT / "python"))
     rows = ["| measure | value | goal |", "| --- | --- | --- |"]
     pa = pendulum_accuracy()
     rows += [
@@ -317,14 +293,12 @@ def main():
         f"| same: fraction of samples gated (\\|w\\| not measurable, integrated) | {100 * pa['gated'][0]:.0f} % | |",
     ]
     for dev_name, dev in (("16-bit triad, 0.005 m/s^2, 100 Hz", None), ("ADXL202E-like, 0.02 m/s^2, 60 Hz", adxl_triad())):
-        from accelcal.device import default_triad
         d = dev or default_triad()
         r = displacement_accuracy(d, "x")
         for (engine, form), (mean_c, max_c, mean_u) in r.items():
             rows.append(f"| stop-to-stop 1-D 0.5 m in 2 s, 0.05 m/s^2 zero-point error, {dev_name}, {engine} {form}: "
                         f"final error corrected (mean / worst of {len(SEEDS)}) vs uncorrected | {mean_c:.3f} % / "
                         f"{max_c:.3f} % vs {mean_u:.1f} % | <= 0.5 % |")
-    from accelcal.device import default_triad
     r = displacement_accuracy(default_triad(), None, tilt_deg=20.0, offset=0.0, strokes=2)
     for (engine, form), (mean_c, max_c, mean_u) in r.items():
         rows.append(f"| tilted rail 20 deg, 3-axis (gravity removed in the first rest's frame), two strokes of 0.5 m, "
@@ -344,7 +318,7 @@ def main():
     ]
     ratio, dp, dref = displacement_fixed_vs_float()
     rows += [f"| fixed vs float twin: displacement p, max over the tilted-rail runs (fraction of the stated bound) | "
-             f"{dp * 1e6:.2f} um = {dp * 2**20:.1f} LSB ({ratio:.2f} of the bound) | <= bound |",
+             f"{dp * 1e6:.2f} um = {dp * 2**E.P_FRAC:.1f} LSB ({ratio:.2f} of the bound) | <= bound |",
              f"| fixed vs float reference (streaming, float triad): p, max | {dref * 1e6:.1f} um | |"]
     make_data()
     if shutil.which("simavr") and shutil.which("avr-gcc"):
