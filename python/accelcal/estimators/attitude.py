@@ -55,7 +55,6 @@ def atan2_fixed(y, x) -> tuple[np.ndarray, np.ndarray]:
     return ang, mag
 
 
-
 @dataclass
 class AttitudeParams:
     """r1, r2: triad radii on body x (m); dt (s); gain: K = gain dt |w|; w2_gate
@@ -284,9 +283,37 @@ def triad_geometry(device, cal) -> tuple[float, float]:
 
 def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: float = 2.0,
                             w2_gate: float | None = None, leak_tau_s: float = 2.0) -> Columns:
-    """`accelcal attitude`: columns t, theta_rad, w_y, dw_y (contract) plus g_mps2 (|g| the pair
-    sees), gated (|w| not measured: integrated), unsettled (sign of w not yet established),
-    saturated.  Warnings for: unsettled samples, |g| far from gravity, saturation."""
+    """`accelcal attitude`: the pendulum's angle, rate and angular acceleration.
+
+    Parameters
+    ----------
+    device : Device
+        Two triads (channels 0-2 and 3-5) on body x, the pivot at the origin.
+    cal : Calibration
+    rec : Recording
+        Uniformly sampled.
+    engine : {"float", "fixed"}
+        Float reference or the C core (triads and estimator).
+    gain : float
+        K = gain dt |w| (1/rad).
+    w2_gate : float, optional
+        (rad/s)^2 below which |w| is not measured (default: 3 sigma of w^2 from the noise).
+    leak_tau_s : float
+        Time constant (s) of the pull to 0 while gated.
+
+    Returns
+    -------
+    Columns
+        t (s), theta_rad (rad), w_y (rad/s), dw_y (rad/s^2) (the contract's), g_mps2 (|g| the
+        pair sees, m/s^2), gated (|w| not measured: integrated), unsettled (sign of w not yet
+        established), saturated; warnings for unsettled samples, |g| more than 20 % off
+        gravity, saturation.
+
+    Raises
+    ------
+    InputError
+        Not two triads on x, r1 = r2, non-uniform time, counts outside uint16 (fixed).
+    """
     if engine not in ("float", "fixed"):
         raise ValueError(f"unknown engine {engine!r}")
     check_for_device(rec, device, min_samples=2)
