@@ -13,22 +13,80 @@ from pathlib import Path
 
 import numpy as np
 
+from tqdm import tqdm
+
+from . import __version__
+from .calibrate import JIG_ACCURACY_DEG, calibrate_recordings
+from .calibration import load_calibration, save_calibration
+from .demo import run_demo
+from .device import default_device, load_device
+from .diagnose import diagnose
+from .effects import describe_effects, parse_effect_spec
 from .errors import AccelcalError, atomic_write
 from .estimators import attitude_from_recording, displacement_from_recording, rate_from_recording, report_plots
-from .recording import read_recording, write_columns_csv
+from .header import render_header
+from .motions import describe_motions
+from .quantize import quantize_calibration
+from .recording import read_recording, write_columns_csv, write_recording
+from .report import REPORT_FILES, write_report
+from .resolve import resolve_recording
+from .simulate import simulate
 
 EXIT_INPUT = 2
 EXIT_INTERNAL = 3
 
 
 def _load_device(path):
-    from .device import default_device, load_device
     return default_device() if path in (None, "default") else load_device(path)
 
 
 def _load_cal(path, device):
-    from .calibration import load_calibration
     return load_calibration(path, device)
+
+
+def check_output(path, option: str = "-o") -> None:
+    """Refuse, before any work, an output path that cannot be written (one line).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output file.
+    option : str
+        The option that named it, for the message.
+
+    Raises
+    ------
+    AccelcalError
+        The directory does not exist or is not a directory, or the path is a directory.
+    """
+    out = Path(path)
+    parent = out.parent if str(out.parent) else Path(".")
+    if out.is_dir():
+        raise AccelcalError(f"{option} {path}: is a directory, expected a file name")
+    if not parent.exists():
+        raise AccelcalError(f"{option} {path}: directory {str(parent)!r} does not exist")
+    if not parent.is_dir():
+        raise AccelcalError(f"{option} {path}: {str(parent)!r} is not a directory")
+
+
+def check_output_dir(path, option: str) -> None:
+    """Refuse a report directory that is a file, or whose parent does not exist."""
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise AccelcalError(f"{option} {path}: exists and is not a directory")
+    parent = out.parent if str(out.parent) else Path(".")
+    if not out.exists() and not parent.is_dir():
+        raise AccelcalError(f"{option} {path}: directory {str(parent)!r} does not exist")
+
+
+def _read(paths, device, command: str) -> list:
+    """Read recordings; mention once, on stderr, the columns that are ignored."""
+    recs = [read_recording(p, device.n_channels) for p in paths]
+    ignored = sorted({k for r in recs for k in r.extra})
+    if ignored:
+        print(f"accelcal {command}: note: ignored column{'s' if len(ignored) > 1 else ''} "
+              f"{', '.join(ignored)} (not part of the accelerometer model)", file=sys.stderr)
+    return recs
 
 
 def _write_csv(path, header: list[str], columns: list[np.ndarray], comments: dict):
@@ -39,7 +97,6 @@ def _progress(desc: str, total: int | None = None, unit: str = " steps"):
     """A progress bar on stderr for work that takes seconds on long recordings.  Off when
     stderr is not a terminal (tqdm's disable=None): pipes, logs and scripts see only the
     one-line messages."""
-    from tqdm import tqdm
     return tqdm(desc=desc, total=total, unit=unit, file=sys.stderr, disable=None, leave=False,
                 dynamic_ncols=True)
 
@@ -47,11 +104,10 @@ def _progress(desc: str, total: int | None = None, unit: str = " steps"):
 # ---- subcommands -------------------------------------------------------------
 
 def cmd_resolve(a):
-    from .recording import read_recording
-    from .resolve import resolve_recording
+    check_output(a.output)
     dev = _load_device(a.device)
     cal = _load_cal(a.calibration, dev)
-    rec = read_recording(a.recording, dev.n_channels)
+    rec, = _read([a.recording], dev, "resolve")
     f, al, flags = resolve_recording(dev, cal, rec, a.engine, a.omega)
     comments = {"engine": a.engine, "device": dev.name}
     if flags is not None and flags.any():
@@ -67,8 +123,7 @@ def cmd_resolve(a):
 
 
 def cmd_header(a):
-    from .header import render_header
-    from .quantize import quantize_calibration
+    check_output(a.output)
     dev = _load_device(a.device)
     cal = _load_cal(a.calibration, dev)
     t = quantize_calibration(dev, cal)
@@ -80,9 +135,7 @@ def cmd_header(a):
 
 
 def cmd_simulate(a):
-    from .effects import parse_effect_spec
-    from .recording import write_recording
-    from .simulate import simulate
+    check_output(a.output)
     dev = _load_device(a.device)
     effects = [parse_effect_spec(s) for s in a.effect]
     params = {}
@@ -113,21 +166,70 @@ def _jig_accuracy(text) -> float:
 
 
 def cmd_calibrate(a):
-    from .calibrate import calibrate_recordings
-    from .calibration import save_calibration
-    from .recording import read_recording
+    check_output(a.output)
     jig = _jig_accuracy(a.jig_accuracy)
     dev = _load_device(a.device)
-    recs = [read_recording(p, dev.n_channels) for p in a.recordings]
+    recs = _read(a.recordings, dev, "calibrate")
     cal = calibrate_recordings(dev, recs, method=a.method, jig_accuracy_deg=jig)
     fit = cal.extra.get("fit", {}) if isinstance(cal.extra, dict) else {}
+    warnings = []
+    chi2, dof = fit.get("chi2"), fit.get("dof")
+    red = chi2 / dof if chi2 is not None and dof else None
+    cross_axis = fit.get("model", cal.method) in ("full", "jigfree")
     hint = fit.get("jig_accuracy_consistent_with_scatter_deg")
-    if hint is not None:
-        print(f"accelcal calibrate: warning: the poses scatter about the fit far beyond their noise (chi2/dof "
-              f"{fit['chi2'] / fit['dof']:.3g}), as a jig error of about {hint:.2g} deg would; if the jig is that "
-              f"inaccurate, state it with --jig-accuracy (else the offsets absorb it)", file=sys.stderr)
+    if hint is not None and cross_axis:
+        warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}), as a jig "
+                        f"error of about {hint:.2g} deg would; if the jig is that inaccurate, state it with "
+                        "--jig-accuracy (else the offsets absorb it)")
+    elif red is not None and red > 4 and not cross_axis:
+        warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}): the "
+                        f"'{fit.get('model', cal.method)}' model has no cross-axis terms, which a real sensor "
+                        "has; use --method full if the poses determine it")
     save_calibration(cal, a.output)
+    for w in warnings:
+        print(f"accelcal calibrate: warning: {w}", file=sys.stderr)
+    print(calibration_summary(cal, len(recs), a.output))
     return 0
+
+
+def calibration_summary(cal, n_recordings: int, output) -> str:
+    """One paragraph on what a calibration used and how well it fits.
+
+    Parameters
+    ----------
+    cal : Calibration
+        The result of ``calibrate_recordings``.
+    n_recordings : int
+        How many recordings went in.
+    output : path
+        Where it was written.
+
+    Returns
+    -------
+    str
+    """
+    fit = cal.extra.get("fit", {}) if isinstance(cal.extra, dict) else {}
+    n = cal.offsets.shape[0]
+    poses = len(cal.poses_used) if cal.poses_used is not None else None
+    parts = [f"{cal.method} calibration of {n} channel{'s' if n != 1 else ''}"]
+    src = f"from {poses} static pose{'s' if poses != 1 else ''}" if poses is not None else "from the recordings"
+    how = fit.get("poses")
+    parts.append(f"{src} ({how}; {n_recordings} recording{'s' if n_recordings != 1 else ''})" if how
+                 else f"{src} ({n_recordings} recording{'s' if n_recordings != 1 else ''})")
+    text = " ".join(parts) + "."
+    if cal.residual_rms_per_channel is not None:
+        r = np.asarray(cal.residual_rms_per_channel, dtype=float)
+        text += f" Residual rms {np.sqrt(np.mean(r ** 2)):.3g} counts (worst channel {int(np.argmax(r))}: {r.max():.3g})."
+    chi2, dof = fit.get("chi2"), fit.get("dof")
+    if chi2 is not None and dof:
+        text += f" chi2/dof {chi2 / dof:.3g} ({dof} dof)."
+    if fit.get("jig_accuracy_deg"):
+        text += f" Jig accuracy stated: {fit['jig_accuracy_deg']:g} deg."
+    if cal.positions is not None:
+        text += " Lever arms estimated."
+    if cal.offset_tc is not None or cal.gain_tc is not None:
+        text += " Temperature coefficients fitted."
+    return text + f" Written to {output}."
 
 
 ESTIMATORS = {"attitude": attitude_from_recording, "displacement": displacement_from_recording,
@@ -167,6 +269,9 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
     fn = ESTIMATORS.get(kind)
     if fn is None:
         raise ValueError(f"unknown estimator {kind!r}")
+    check_output(output)
+    if report is not None:
+        check_output_dir(report, "--report")
     dev = _load_device(device_path)
     cal = _load_cal(calibration_path, dev)
     rec = read_recording(recording_path, dev.n_channels)
@@ -199,11 +304,12 @@ def cmd_rate(a):
 
 
 def cmd_diagnose(a):
-    from .diagnose import diagnose, write_report
-    from .recording import read_recording
+    check_output(a.json, "--json")
+    if a.report:
+        check_output_dir(a.report, "--report")
     dev = _load_device(a.device)
     cal = _load_cal(a.calibration, dev)
-    recs = [read_recording(p, dev.n_channels) for p in a.recordings]
+    recs = _read(a.recordings, dev, "diagnose")
     with _progress("diagnose: scoring candidates", unit=" fits") as bar:
         def scored(name):
             bar.set_postfix_str(name, refresh=False)
@@ -213,7 +319,6 @@ def cmd_diagnose(a):
     # series the report plots, so it goes to write_report as it is
     atomic_write(a.json, lambda f: json.dump(result, f, indent=2, default=_json_default))
     if a.report:
-        from .report import REPORT_FILES
         with _progress("diagnose: writing the report", total=REPORT_FILES, unit=" files") as bar:
             write_report(result, a.report, progress=lambda path: bar.update())
     print(f"verdict: {result.get('verdict')}")
@@ -229,46 +334,53 @@ def _json_default(o):
 
 
 def cmd_demo(a):
-    from .demo import run_demo
     return run_demo(out_dir=Path(a.out), seed=a.seed)
 
 
 def _simulate_epilog() -> str:
-    from .effects import describe_effects
-    from .motions import describe_motions
     return "motions:\n" + describe_motions() + "\n\neffects:\n" + describe_effects()
+
+
+_DEVICE = "device description JSON (docs/data-contract.md), or 'default' for the seed's 6-channel prototype"
+_CAL = "calibration JSON, as written by accelcal calibrate"
+_REC = "recording CSV (docs/data-contract.md)"
+_RECS = "one or more recording CSVs of the same device"
+_ENGINE = "float: the float64 reference; fixed: the C core with exactly the header's constants"
+_OUT_CSV = "the CSV to write (written atomically: no partial file on error)"
 
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="accelcal", description=__doc__.splitlines()[0])
-    from . import __version__
     p.add_argument("--version", action="version", version=f"accelcal {__version__}")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     s = sub.add_parser("demo", help="simulate, calibrate, emit the header, resolve with the C core, "
                        "diagnose, on the seed's 6-channel r = 60 mm prototype")
     s.add_argument("--out", default="accelcal-demo", help="directory for the demo's files")
-    s.add_argument("--seed", type=int, default=1)
+    s.add_argument("--seed", type=int, default=1, help="random seed of the simulated data (default %(default)s)")
     s.set_defaults(func=cmd_demo)
 
     s = sub.add_parser("simulate", help="simulate a recording", epilog=_simulate_epilog(),
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    s.add_argument("--device", required=True, help="device JSON ('default' = the seed prototype)")
+    s.add_argument("--device", required=True, metavar="D.json", help=_DEVICE)
     s.add_argument("--motion", required=True, help="motion profile name")
     s.add_argument("--effect", action="append", default=[], metavar="NAME[:k=v,...]",
                    help="unmodelled effect to put in the data (repeatable)")
     s.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                    help="motion parameter (repeatable; JSON values)")
     s.add_argument("--calibration", help="true channel parameters (default: the device's nominal)")
-    s.add_argument("--seed", type=int, default=0)
-    s.add_argument("-o", "--output", required=True)
+    s.add_argument("--seed", type=int, default=0, help="random seed (noise, random effect values; default %(default)s)")
+    s.add_argument("-o", "--output", required=True, metavar="REC.csv", help=_OUT_CSV)
     s.set_defaults(func=cmd_simulate)
 
     s = sub.add_parser("calibrate", help="estimate a calibration")
-    s.add_argument("--device", required=True)
-    s.add_argument("recordings", nargs="+", metavar="REC.csv")
-    s.add_argument("--method", choices=["full", "gain", "offset", "jigfree"], default=None)
-    from .calibrate import JIG_ACCURACY_DEG
+    s.add_argument("--device", required=True, metavar="D.json", help=_DEVICE)
+    s.add_argument("recordings", nargs="+", metavar="REC.csv", help=_RECS)
+    s.add_argument("--method", choices=["full", "gain", "offset", "jigfree"], default=None,
+                   help="full: offset + sensitivity vector per channel from known poses (the default when the "
+                   "recordings give reference f); gain: offset + gain along the nominal axis; offset: offset "
+                   "only; jigfree: no reference needed, static intervals found and |f| = g (the default when "
+                   "the recordings have no reference)")
     s.add_argument("--jig-accuracy", metavar="DEG", default=f"{JIG_ACCURACY_DEG:g}",
                    help="known poses: the jig's accuracy, as the rms angle (deg) by which a pose may be rotated "
                    "from its reference f.  The pose directions are then estimated jointly with the channel "
@@ -280,36 +392,36 @@ def build_parser() -> argparse.ArgumentParser:
                    "larger offset errors on +-x,+-y,+-z than stating it, and 16-61x the bound on 24 general "
                    "poses (a warning names the accuracy the residuals imply): state your jig's accuracy.  "
                    "Ignored by jigfree")
-    s.add_argument("-o", "--output", required=True)
+    s.add_argument("-o", "--output", required=True, metavar="CAL.json", help="the calibration JSON to write")
     s.set_defaults(func=cmd_calibrate)
 
     s = sub.add_parser("header", help="emit the C header for firmware")
-    s.add_argument("--device", required=True)
-    s.add_argument("--calibration", required=True)
+    s.add_argument("--device", required=True, metavar="D.json", help=_DEVICE)
+    s.add_argument("--calibration", required=True, metavar="CAL.json", help=_CAL)
     s.add_argument("--prefix", default="AC_CAL", help="C identifier prefix (default AC_CAL)")
-    s.add_argument("-o", "--output", required=True)
+    s.add_argument("-o", "--output", required=True, metavar="NAME.h", help="the C header to write")
     s.set_defaults(func=cmd_header)
 
     s = sub.add_parser("resolve", help="per-sample f and alpha")
-    s.add_argument("--device", required=True)
-    s.add_argument("--calibration", required=True)
-    s.add_argument("recording", metavar="REC.csv")
-    s.add_argument("--engine", choices=["float", "fixed"], default="float")
+    s.add_argument("--device", required=True, metavar="D.json", help=_DEVICE)
+    s.add_argument("--calibration", required=True, metavar="CAL.json", help=_CAL)
+    s.add_argument("recording", metavar="REC.csv", help=_REC)
+    s.add_argument("--engine", choices=["float", "fixed"], default="float", help=_ENGINE)
     s.add_argument("--omega", choices=["auto", "reference", "none"], default="auto",
                    help="omega for the centripetal correction (auto: the w_* columns when complete)")
-    s.add_argument("-o", "--output", required=True)
+    s.add_argument("-o", "--output", required=True, metavar="OUT.csv", help="t, f_x, f_y, f_z, dw_x, dw_y, dw_z")
     s.set_defaults(func=cmd_resolve)
 
     for name, func, what in (("attitude", cmd_attitude, "pendulum attitude from two triads: t, theta_rad, w_y, dw_y"),
                              ("displacement", cmd_displacement, "stop-to-stop displacement: t, v_*, p_*"),
                              ("rate", cmd_rate, "angular rate from alpha, leaky integration reset on rest")):
         s = sub.add_parser(name, help=what)
-        s.add_argument("--device", required=True)
-        s.add_argument("--calibration", required=True)
-        s.add_argument("recording", metavar="REC.csv")
-        s.add_argument("--engine", choices=["float", "fixed"], default="float")
+        s.add_argument("--device", required=True, metavar="D.json", help=_DEVICE)
+        s.add_argument("--calibration", required=True, metavar="CAL.json", help=_CAL)
+        s.add_argument("recording", metavar="REC.csv", help=_REC)
+        s.add_argument("--engine", choices=["float", "fixed"], default="float", help=_ENGINE)
         s.add_argument("--report", metavar="DIR", help="write plots into DIR")
-        s.add_argument("-o", "--output", required=True)
+        s.add_argument("-o", "--output", required=True, metavar="OUT.csv", help=_OUT_CSV)
         if name == "displacement":
             s.add_argument("--axis", choices=["x", "y", "z"],
                            help="1-D along this body axis (the seed's actuator; nothing removed)")
@@ -319,13 +431,13 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("diagnose", help="sim-to-real diagnosis: where the gap lies, which effect, how far "
                        "it shrinks")
-    s.add_argument("--device", required=True)
-    s.add_argument("--calibration", required=True)
-    s.add_argument("recordings", nargs="+", metavar="REC.csv")
-    s.add_argument("--json", required=True, metavar="OUT.json")
+    s.add_argument("--device", required=True, metavar="D.json", help=_DEVICE)
+    s.add_argument("--calibration", required=True, metavar="CAL.json", help=_CAL)
+    s.add_argument("recordings", nargs="+", metavar="REC.csv", help=_RECS)
+    s.add_argument("--json", required=True, metavar="OUT.json", help="the diagnosis (format: docs/diagnosis-json.md)")
     s.add_argument("--report", metavar="DIR", help="plots and a written summary")
     s.add_argument("--folds", type=int, default=5, help="blocked cross-validation folds")
-    s.add_argument("--seed", type=int, default=0)
+    s.add_argument("--seed", type=int, default=0, help="seed of the cross-validation folds (default %(default)s)")
     s.set_defaults(func=cmd_diagnose)
     return p
 
