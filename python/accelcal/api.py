@@ -1,0 +1,299 @@
+"""The Python API: ``import accelcal as ac``.
+
+Each function takes the package's objects (:class:`~accelcal.device.Device`,
+:class:`~accelcal.recording.Recording`, :class:`~accelcal.calibration.Calibration`),
+file paths, or numpy arrays, and does what the command of the same name does,
+without writing files unless asked::
+
+    import accelcal as ac
+    dev = ac.load_device("mpu6050.json")
+    rec = ac.read_recording("poses.csv", dev)
+    cal = ac.calibrate(dev, rec)                 # known poses or jig-free, as the data allow
+    ac.save_calibration(cal, "cal.json")
+    text = ac.header(dev, cal)                   # the firmware header, as a string
+    out = ac.resolve(dev, cal, rec, engine="fixed")
+    out.f[:3]                                    # m/s^2, from the C core
+
+Errors in the inputs raise :class:`~accelcal.errors.AccelcalError` (its subclass
+:class:`~accelcal.errors.InputError` names file, row or field) with one line of text.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+
+from .calibrate import calibrate_recordings
+from .calibration import Calibration, load_calibration, save_calibration
+from .device import Device, default_device, load_device, save_device
+from .diagnose import diagnose as _diagnose_impl
+from .errors import AccelcalError, atomic_write
+from .estimators import Columns, attitude_from_recording, displacement_from_recording, rate_from_recording
+from .header import render_header
+from .quantize import quantize_calibration
+from .recording import Recording, read_recording as _read_recording_file, write_recording
+from .resolve import resolve_recording
+from .simulate import simulate as _simulate_impl
+
+__all__ = ["Device", "Recording", "Calibration", "Columns", "ResolveResult", "AccelcalError",
+           "default_device", "load_device", "save_device", "read_recording", "write_recording",
+           "load_calibration", "save_calibration", "as_recording", "calibrate", "resolve", "diagnose",
+           "header", "simulate", "attitude", "displacement", "rate"]
+
+
+def as_device(device: Any) -> Device:
+    """A Device from a Device, a JSON path, or ``"default"`` / None (the seed prototype)."""
+    if isinstance(device, Device):
+        return device
+    if device is None or (isinstance(device, str) and device == "default"):
+        return default_device()
+    if isinstance(device, (str, Path)):
+        return load_device(device)
+    raise TypeError(f"device: expected a Device, a JSON path or 'default', not {type(device).__name__}")
+
+
+def as_calibration(calibration: Any, device: Device) -> Calibration:
+    """A Calibration from a Calibration or a JSON path (checked against ``device``)."""
+    if isinstance(calibration, Calibration):
+        return calibration
+    if isinstance(calibration, (str, Path)):
+        return load_calibration(calibration, device)
+    raise TypeError(f"calibration: expected a Calibration or a JSON path, not {type(calibration).__name__}")
+
+
+def read_recording(path: Any, device: Any = None) -> Recording:
+    """Read a recording CSV (the data contract's format).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file.
+    device : Device, path or int, optional
+        When given, the file must have that device's ``raw_0 .. raw_{N-1}`` (an int is N).
+
+    Returns
+    -------
+    Recording
+    """
+    n = device if isinstance(device, int) else (None if device is None else as_device(device).n_channels)
+    return _read_recording_file(path, n)
+
+
+def as_recording(recording: Any, device: Device) -> Recording:
+    """A Recording from a Recording, a CSV path, or an (n, N) array of raw counts.
+
+    Parameters
+    ----------
+    recording : Recording, path or array_like
+        An array is taken as integer raw counts, one row per sample, sampled at the
+        device's ``sample_rate_hz`` from t = 0, with no reference columns.
+    device : Device
+
+    Returns
+    -------
+    Recording
+
+    Raises
+    ------
+    AccelcalError
+        An array of the wrong shape, or with values that are not integers.
+    """
+    if isinstance(recording, Recording):
+        return recording
+    if isinstance(recording, (str, Path)):
+        return _read_recording_file(recording, device.n_channels)
+    raw = np.asarray(recording)
+    if raw.ndim != 2 or raw.shape[1] != device.n_channels:
+        raise AccelcalError(f"raw counts: expected an (n, {device.n_channels}) array for device "
+                            f"{device.name!r}, got shape {raw.shape}")
+    if raw.dtype.kind == "f":
+        if not np.all(np.isfinite(raw)) or np.any(raw != np.round(raw)):
+            bad = int(np.argmax(~np.isfinite(raw).all(axis=1) | (raw != np.round(raw)).any(axis=1)))
+            raise AccelcalError(f"raw counts: row {bad} is not integer counts ({raw[bad].tolist()})")
+    elif raw.dtype.kind not in "iu":
+        raise AccelcalError(f"raw counts: expected integers, got dtype {raw.dtype}")
+    t = np.arange(raw.shape[0]) / float(device.sample_rate_hz)
+    return Recording(t=t, raw=raw.astype(np.int64), source="<array>")
+
+
+def _as_recordings(recordings: Any, device: Device) -> list[Recording]:
+    if isinstance(recordings, (Recording, str, Path, np.ndarray)):
+        return [as_recording(recordings, device)]
+    return [as_recording(r, device) for r in recordings]
+
+
+def calibrate(device: Any, recordings: Any, method: str | None = None, *,
+              jig_accuracy_deg: float = 0.0) -> Calibration:
+    """Estimate a calibration from static poses (as ``accelcal calibrate``).
+
+    Parameters
+    ----------
+    device : Device, path or "default"
+    recordings : Recording, path, array or a sequence of them
+        Poses come from the ``pose`` labels when present, else from static detection.
+    method : {"full", "gain", "offset", "jigfree"}, optional
+        Default: ``full`` when every pose has a reference f, ``jigfree`` when none has.
+    jig_accuracy_deg : float
+        Known poses: the rms angle (deg) by which the jig's poses may be off.
+
+    Returns
+    -------
+    Calibration
+        Offsets (counts), sensitivity vectors (counts per m/s^2), uncertainties and the
+        fit's statistics in ``extra["fit"]`` (chi2, dof).
+
+    Examples
+    --------
+    >>> import accelcal as ac
+    >>> dev = ac.default_device()
+    >>> rec = ac.simulate(dev, "static_poses", poses="24", seed=1)
+    >>> cal = ac.calibrate(dev, rec)
+    >>> cal.method
+    'full'
+    """
+    dev = as_device(device)
+    return calibrate_recordings(dev, _as_recordings(recordings, dev), method=method,
+                                jig_accuracy_deg=jig_accuracy_deg)
+
+
+@dataclass
+class ResolveResult:
+    """Per-sample specific force and angular acceleration.
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+        Time (s).
+    f : ndarray, shape (n, 3)
+        Specific force at the body origin (m/s^2).
+    alpha : ndarray, shape (n, 3)
+        Angular acceleration (rad/s^2).
+    saturated : ndarray of uint8, shape (n,), or None
+        The C core's saturation flags (``engine="fixed"`` only).
+    """
+
+    t: np.ndarray
+    f: np.ndarray
+    alpha: np.ndarray
+    saturated: np.ndarray | None = None
+
+
+def resolve(device: Any, calibration: Any, recording: Any, engine: str = "float",
+            omega: str = "auto") -> ResolveResult:
+    """Per-sample f and alpha (as ``accelcal resolve``).
+
+    Parameters
+    ----------
+    device : Device, path or "default"
+    calibration : Calibration or path
+    recording : Recording, path or (n, N) array of raw counts
+    engine : {"float", "fixed"}
+        ``fixed`` runs the C core with exactly the header's constants.
+    omega : {"auto", "reference", "none"}
+        Angular rate for the centripetal correction (auto: the recording's w_* when complete).
+
+    Returns
+    -------
+    ResolveResult
+    """
+    dev = as_device(device)
+    cal = as_calibration(calibration, dev)
+    rec = as_recording(recording, dev)
+    f, alpha, flags = resolve_recording(dev, cal, rec, engine, omega)
+    return ResolveResult(t=rec.t, f=f, alpha=alpha, saturated=flags)
+
+
+def diagnose(device: Any, calibration: Any, recordings: Any, **options: Any) -> dict:
+    """The sim-to-real diagnosis (as ``accelcal diagnose``); returns the JSON object.
+
+    Parameters
+    ----------
+    device : Device, path or "default"
+    calibration : Calibration or path
+    recordings : Recording, path, array or a sequence of them
+    **options
+        ``folds``, ``seed``, ``candidates``, ``progress`` (see ``accelcal.diagnose``).
+
+    Returns
+    -------
+    dict
+        The diagnosis (docs/diagnosis-json.md): ``verdict``, ``effects``, ``model``, ``where``...
+    """
+    dev = as_device(device)
+    return _diagnose_impl(dev, as_calibration(calibration, dev), _as_recordings(recordings, dev), **options)
+
+
+def header(device: Any, calibration: Any, *, prefix: str = "AC_CAL", output: Any = None) -> str:
+    """The C header for firmware (as ``accelcal header``).
+
+    Parameters
+    ----------
+    device : Device, path or "default"
+    calibration : Calibration or path
+    prefix : str
+        C identifier prefix.
+    output : path, optional
+        Also write it there (atomically).
+
+    Returns
+    -------
+    str
+        The header text.
+    """
+    dev = as_device(device)
+    cal = as_calibration(calibration, dev)
+    text = render_header(quantize_calibration(dev, cal), prefix=prefix, calibration_method=cal.method,
+                         temp_ref_c=cal.temp_ref_c, offset_tc=cal.offset_tc, gain_tc=cal.gain_tc)
+    if output is not None:
+        atomic_write(output, lambda f: f.write(text))
+    return text
+
+
+def simulate(device: Any, motion: str, *, effects: Iterable[Any] = (), seed: int = 0,
+             calibration: Any = None, **motion_params: Any) -> Recording:
+    """A simulated recording (as ``accelcal simulate``).
+
+    Parameters
+    ----------
+    device : Device, path or "default"
+    motion : str
+        Motion profile name (``accelcal simulate --help`` lists them).
+    effects : iterable of str
+        Effect specs, ``"name:k=v,..."``.
+    seed : int
+    calibration : Calibration or path, optional
+        The true channel parameters (default: the device's nominal ones).
+    **motion_params
+        The motion's parameters.
+
+    Returns
+    -------
+    Recording
+    """
+    dev = as_device(device)
+    cal = None if calibration is None else as_calibration(calibration, dev)
+    return _simulate_impl(dev, motion, effects=effects, seed=seed, calibration=cal, **motion_params)
+
+
+def _estimate(fn, device, calibration, recording, engine, options) -> Columns:
+    dev = as_device(device)
+    return fn(dev, as_calibration(calibration, dev), as_recording(recording, dev), engine, **options)
+
+
+def attitude(device: Any, calibration: Any, recording: Any, engine: str = "float", **options: Any) -> Columns:
+    """Pendulum attitude from two triads (as ``accelcal attitude``): columns t, theta_rad, w_y, dw_y."""
+    return _estimate(attitude_from_recording, device, calibration, recording, engine, options)
+
+
+def displacement(device: Any, calibration: Any, recording: Any, engine: str = "float",
+                 **options: Any) -> Columns:
+    """Stop-to-stop displacement (as ``accelcal displacement``): columns t, v_*, p_* (m/s, m)."""
+    return _estimate(displacement_from_recording, device, calibration, recording, engine, options)
+
+
+def rate(device: Any, calibration: Any, recording: Any, engine: str = "float", **options: Any) -> Columns:
+    """Angular rate from alpha, reset on rest (as ``accelcal rate``)."""
+    return _estimate(rate_from_recording, device, calibration, recording, engine, options)
+
