@@ -200,6 +200,7 @@ def calibration_from_dict(d: Any, source: str = "<dict>", device: Device | None 
     v = _Fields(source)
     v.no_nonfinite(d, "")
     d = v.obj(d, "")
+    v.known(d, "", sorted(_KNOWN_TOP | {"fit", "poses"}))
     dev_name = v.string(v.get(d, "device", ""), "device")
     method = v.string(v.get(d, "method", ""), "method")
     chans = v.get(d, "channels", "")
@@ -222,6 +223,7 @@ def calibration_from_dict(d: Any, source: str = "<dict>", device: Device | None 
     for i, ch in enumerate(chans):
         p = f"channels[{i}]"
         ch = v.obj(ch, p)
+        v.known(ch, p, ["offset_counts", "sensitivity"] + [key for _, key, _ in _OPTIONAL_CHANNEL_FIELDS])
         offsets[i] = v.number(v.get(ch, "offset_counts", p), f"{p}.offset_counts")
         check_limits(v, f"{p}.offset_counts", offsets[i], "offset_counts")
         sens[i] = v.vector(v.get(ch, "sensitivity", p), f"{p}.sensitivity")

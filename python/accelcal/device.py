@@ -4,11 +4,12 @@ accelerometer channels, with JSON load/save per the data contract.
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 import os
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Iterable
 
 import numpy as np
 
@@ -122,12 +123,19 @@ def _show(value: Any) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
+KEY_CUTOFF = 0.8  # difflib similarity above which an unknown JSON key is taken for a misspelling
+MISSING_KEY_CUTOFF = 0.6  # ... and, when a required key is missing, above which a key present is named
+DEVICE_KEYS = ("name", "sample_rate_hz", "gravity_mps2", "raw_min", "raw_max", "noise_mps2", "channels")
+CHANNEL_KEYS = ("position_m", "axis", "counts_per_mps2", "zero_counts")
+
+
 class _Fields:
     """Validator for one JSON document: every failure is an InputError with
     the document's source and the field path."""
 
     def __init__(self, source: str) -> None:
         self.source = source
+        self.known_keys: dict[int, list[str]] = {}  # id(object) -> its valid keys (see known())
 
     def fail(self, path: str, message: str) -> InputError:
         if not path:
@@ -148,9 +156,30 @@ class _Fields:
         sub = f"{path}.{key}" if path else key
         if key not in obj:
             if required:
-                raise self.fail(sub, "missing (required)")
+                valid = self.known_keys.get(id(obj), ())
+                near = difflib.get_close_matches(key, [k for k in obj if isinstance(k, str) and k not in valid],
+                                                 n=1, cutoff=MISSING_KEY_CUTOFF)
+                hint = f"; the object has {near[0]!r}: did you mean {key!r}?" if near else ""
+                raise self.fail(sub, f"missing (required){hint}")
             return None
         return obj[key]
+
+    def known(self, obj: dict, path: str, keys: Iterable[str]) -> None:
+        """Refuse a key that is not one of ``keys`` but close to one (a misspelling).
+
+        Keys far from every known one are extensions and pass (the contract lets a
+        file carry fields of its own); a near miss such as ``noise_mps`` for
+        ``noise_mps2`` would otherwise be silently ignored.
+        """
+        keys = list(keys)
+        self.known_keys[id(obj)] = keys
+        for k in obj:
+            if not isinstance(k, str) or k in keys:
+                continue
+            near = difflib.get_close_matches(k, keys, n=1, cutoff=KEY_CUTOFF)
+            if near and near[0] not in obj:
+                sub = f"{path}.{k}" if path else k
+                raise self.fail(sub, f"unknown key: did you mean {near[0]!r}?")
 
     def number(self, value: Any, path: str, *, what: str = "a number") -> float:
         if isinstance(value, _NonFinite):
@@ -404,6 +433,7 @@ def device_from_dict(d: Any, source: str = "<dict>") -> Device:
     v = _Fields(source)
     v.no_nonfinite(d, "")
     d = v.obj(d, "")
+    v.known(d, "", DEVICE_KEYS)
     name = v.string(v.get(d, "name", ""), "name")
     rate = v.number(v.get(d, "sample_rate_hz", ""), "sample_rate_hz")
     if rate <= 0:
@@ -440,6 +470,7 @@ def device_from_dict(d: Any, source: str = "<dict>") -> Device:
     for i, ch in enumerate(chans):
         p = f"channels[{i}]"
         ch = v.obj(ch, p)
+        v.known(ch, p, CHANNEL_KEYS)
         pos[i] = v.vector(v.get(ch, "position_m", p), f"{p}.position_m")
         check_limits(v, f"{p}.position_m", pos[i], "position_m")
         axes[i] = v.vector(v.get(ch, "axis", p), f"{p}.axis")
