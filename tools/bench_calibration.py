@@ -8,7 +8,7 @@ two axes across the nominal one, offsets uniform in +-28 % of g; white noise
 0.02 m/s^2 rms, rounding to counts; 60 samples a pose.  Each trial draws a new
 device.  Pose sets: 4 = +x, +y, +z, -z (the paper's example); 6 = +-x, +-y,
 +-z; 12 and 24 = Fibonacci lattices on the sphere.  Jig-free needs at least 9
-poses in general position (calibrate._min_poses), so it has no 4- or 6-pose row.
+poses in general position (calibrate.checks.min_poses), so it has no 4- or 6-pose row.
 
 Cramer-Rao bound: the Fisher information of the reading model itself, built
 here independently of calibrate.py by central differences of

@@ -15,7 +15,7 @@ the effect registry's own ``effects.evaluate``.
 * Reference mode (a recording with ``f_*``): every sample whose f (and, for a device with
   channels off the origin, w and dw; static poses count as w = dw = 0) is known.
 * Jig-free mode (no recording has ``f_*``; e.g. the real Xsens recording): the static poses
-  (``pose`` labels, else ``calibrate.detect_static``) are the reference.  Each pose's specific
+  (``pose`` labels, else ``static.detect_static``) are the reference.  Each pose's specific
   force ``f_p`` is estimated from the pose mean with the calibration under ``|f_p| = g``.  The
   two pose angles are nuisance parameters, so the residual of every sample is projected on
   the N - 2 directions of channel space they cannot explain (per pose, the orthogonal
@@ -343,7 +343,7 @@ def _segments(t: np.ndarray, usable: np.ndarray, key: np.ndarray, h: float) -> l
 
 def _jigfree_poses(rec, device) -> list[np.ndarray]:
     """Static poses of a recording without reference f: its pose labels, else detected."""
-    from .calibrate import detect_static
+    from .static import detect_static
     if rec.has_pose():
         out = []
         for lab in rec.pose_labels():

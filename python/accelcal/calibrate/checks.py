@@ -1,0 +1,174 @@
+"""Checks and small helpers every static fit shares: pose-mean shapes, the design of
+one channel, whether a pose set determines a method, the jig accuracy in radians,
+the Birge ratio, and the nominal starting forces."""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..static import PoseSet
+from .settings import CANDIDATES
+
+
+def as_means(device, means, what="means") -> np.ndarray:
+    m = np.asarray(means, float)
+    if m.ndim != 2 or m.shape[1] != device.n_channels:
+        raise InputError("<arrays>", f"expected shape (P, {device.n_channels}), got {m.shape}", field=what)
+    bad = np.argwhere(~np.isfinite(m))
+    if bad.size:
+        p, c = bad[0]
+        raise InputError("<arrays>", f"not finite: {m[p, c]}", field=f"{what}[{p}][{c}]")
+    return m
+
+
+def design(method: str, device, i: int, F: np.ndarray) -> np.ndarray:
+    """Per-channel regressors for pose forces F (P,3): offset [1]; gain [1, u.f]; full [1, f]."""
+    one = np.ones((F.shape[0], 1))
+    if method == "offset":
+        return one
+    if method == "gain":
+        return np.hstack([one, (F @ device.axes[i])[:, None]])
+    return np.hstack([one, F])
+
+
+def pose_label(info: list[dict] | None, p: int) -> str:
+    if info and p < len(info) and info[p].get("label") is not None:
+        return f"pose {info[p]['label']}"
+    return f"pose {p}"
+
+
+def check_identifiable(device, method: str, F: np.ndarray, min_rcond: float) -> None:
+    """Raise InputError (which pose to add) when the known poses cannot determine
+    every free parameter of every channel."""
+    g = device.gravity_mps2
+    P = F.shape[0]
+    if P == 0:
+        raise InputError("<poses>", "no static pose to calibrate from")
+
+    def rcond(Fs: np.ndarray, i: int) -> float:
+        A = design(method, device, i, Fs / g)
+        sv = np.linalg.svd(A, compute_uv=False)
+        q = A.shape[1]
+        return 0.0 if len(sv) < q else float(sv[-1] / sv[0])
+
+    def best_candidate(i: int) -> str:
+        best, name = -1.0, ""
+        for nm, d in CANDIDATES:
+            r = rcond(np.vstack([F, g * np.asarray(d)]), i)
+            if r > best + 1e-9:
+                best, name = r, nm
+        return name
+
+    channels = range(device.n_channels) if method == "gain" else [0]
+    for i in channels:
+        if rcond(F, i) >= min_rcond:
+            continue
+        add = best_candidate(i)
+        if method == "gain":
+            x = F @ device.axes[i] / g
+            raise InputError("<poses>", f"the poses do not determine channel {i}'s gain: every pose gives it "
+                             f"u.f = {np.mean(x):+.2f} g along its axis (spread {np.ptp(x):.3f} g); add a pose with "
+                             f"f along {add} (body {add} axis up)", field=f"channels[{i}]")
+        if P < 4:
+            what = f"only {P} pose{'s' if P != 1 else ''}"
+        elif np.max(np.linalg.norm(F - F.mean(0), axis=1)) < 0.05 * g:
+            fm = F.mean(0) / g
+            what = f"all {P} poses have about the same f = [{fm[0]:+.2f}, {fm[1]:+.2f}, {fm[2]:+.2f}] g"
+        else:
+            A = design("full", device, 0, F / g)
+            v = np.linalg.svd(A)[2][-1]
+            nrm = v[1:] / np.linalg.norm(v[1:])
+            c = -v[0] / np.linalg.norm(v[1:])
+            what = (f"all {P} pose forces lie in one plane (n.f = {c:+.2f} g, n = "
+                    f"[{nrm[0]:+.2f}, {nrm[1]:+.2f}, {nrm[2]:+.2f}])")
+        raise InputError("<poses>", f"the poses do not determine the offset and sensitivity vector of channel {i} "
+                         f"(nor of any channel): {what}; 'full' needs f along 4 directions not in one plane: add a "
+                         f"pose with f along {add} (body {add} axis up)", field="poses")
+
+
+def jig_accuracy_rad(jig_accuracy_deg: Any) -> float:
+    """Validate a stated jig accuracy (degrees, finite, >= 0) and return it in radians."""
+    try:
+        v = float(jig_accuracy_deg)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if not (math.isfinite(v) and v >= 0.0):
+        raise InputError("<arguments>", f"jig accuracy must be a finite angle >= 0 degrees, got {jig_accuracy_deg!r}",
+                         field="jig_accuracy_deg")
+    return math.radians(v)
+
+
+def birge_ratio(chi2: float, dof: int) -> float:
+    return max(1.0, chi2 / dof) if dof > 0 else 1.0
+
+
+def bare_poses(m: np.ndarray, F: np.ndarray | None = None) -> PoseSet:
+    P, N = m.shape
+    return PoseSet(means=m, n=np.ones(P, dtype=np.int64), std=np.zeros((P, N)),
+                   f_ref=np.full((P, 3), np.nan) if F is None else F, temp=np.full(P, np.nan),
+                   info=[{"label": None} for _ in range(P)])
+
+
+def min_poses(device, method: str, temp: bool) -> int:
+    """Fewest poses a jig-free fit can be determined from.
+
+    The readings m_p = b + S f_p fix (b, S, f_p) only up to f -> A f + c,
+    S -> S A^-1, b -> b - S A^-1 c; |f_p| = g must rule out every such map except
+    rotations (full) or the identity (gain, offset).  Each pose gives one equation
+    on (A, c), so P >= the dimension of the admissible maps: 9 for full (12 affine
+    minus 3 rotations, imu_tk's "at least 9"), 3 + dim{A : A^T u_i || u_i} for gain,
+    3 for offset.  Also P N readings >= the number of unknowns (temperature terms)."""
+    N = device.n_channels
+    if method == "full":
+        amb = 9
+    elif method == "gain":
+        # A^T u_i must stay parallel to u_i: (I - u u^T) M u = 0 for M = A^T
+        rows = []
+        for u in device.axes:
+            Pp = np.eye(3) - np.outer(u, u)
+            rows.append(np.kron(Pp, u[None, :]))       # vec(M) row-major: (Pp M u)_a = sum Pp_ab M_bc u_c
+        K = np.vstack(rows)
+        amb = 3 + (9 - int(np.linalg.matrix_rank(K, tol=1e-9)))
+    else:
+        amb = 3
+    q = {"offset": 1, "gain": 2, "full": 4}[method] + (2 if temp else 0)
+    gauge = 3 if method == "full" else 0
+    count = int(math.ceil((q * N - gauge) / (N - 2))) if N > 2 else 10 ** 9
+    return max(amb, count)
+
+
+def missing_direction(device, F: np.ndarray) -> str:
+    """The body axis direction (of +-x, +-y, +-z) farthest from every pose."""
+    fh = F / np.linalg.norm(F, axis=1, keepdims=True)
+    best, name = -2.0, ""
+    for nm, d in CANDIDATES:
+        score = -float(np.max(fh @ np.asarray(d)))
+        if score > best + 1e-9:
+            best, name = score, nm
+    return name
+
+
+def initial_forces(device, m: np.ndarray) -> np.ndarray:
+    """Pose forces from the nominal model, scaled to |f| = g."""
+    S = device.nominal_sensitivity()
+    F = np.linalg.lstsq(S, (m - device.nominal_offsets()[None, :]).T, rcond=None)[0].T
+    n = np.linalg.norm(F, axis=1, keepdims=True)
+    n[n == 0] = 1.0
+    return device.gravity_mps2 * F / n
+
+
+def static_force(offsets, sensitivity, means, sigma=None) -> np.ndarray:
+    """Specific force (P,3) of each static pose from its mean readings by (weighted)
+    least squares f = argmin sum_i ((m_i - b_i - s_i.f)/sigma_i)^2."""
+    m = np.atleast_2d(np.asarray(means, float)) - np.asarray(offsets, float)[None, :]
+    S = np.asarray(sensitivity, float)
+    if sigma is None:
+        return np.linalg.lstsq(S, m.T, rcond=None)[0].T
+    w = 1.0 / np.atleast_2d(np.asarray(sigma, float))
+    out = np.empty((m.shape[0], 3))
+    for p in range(m.shape[0]):
+        out[p] = np.linalg.lstsq(S * w[p][:, None], m[p] * w[p], rcond=None)[0]
+    return out

@@ -1,0 +1,103 @@
+"""The entry point the command line uses: recordings in, a Calibration out."""
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from ..static import PoseSet, poses_from_recording
+from .checks import jig_accuracy_rad, pose_label
+from .known_poses import fit_known_poses
+from .lever_arms import calibrate_positions
+from .results import to_calibration
+from .settings import JIG_ACCURACY_DEG, METHODS, ROTATION_MIN_RADPS, TEMP_MIN_SPAN_C
+from .static_model import fit_static
+
+
+def calibrate_recordings(device, recordings: Sequence[Any], method: str | None = None, *,
+                         jig_accuracy_deg: float = JIG_ACCURACY_DEG):
+    """Calibrate ``device`` from recordings and return a Calibration.
+
+    Static poses: a recording's ``pose`` labels when present, else automatic static
+    detection.  Method: ``offset``/``gain``/``full`` need reference f_* on the poses
+    (known poses); ``jigfree`` ignores any reference.  Default: ``full`` when every
+    pose has a reference, ``jigfree`` when none has.  ``jig_accuracy_deg``: rms
+    rotation angle by which the jig's poses may differ from their references
+    (known poses only; see the module notes; default 0 = exact references).
+    Temperature coefficients are fitted when the pose temperatures span at least
+    TEMP_MIN_SPAN_C; lever arms when samples rotate (|w| > ROTATION_MIN_RADPS) with
+    reference f, w and dw.
+    """
+    jig_accuracy_rad(jig_accuracy_deg)
+    if method is not None and method not in METHODS + ("jigfree",):
+        raise InputError("<command line>", f"unknown method {method!r}; expected one of "
+                         f"{', '.join(METHODS + ('jigfree',))}", field="method")
+    if not recordings:
+        raise InputError("<command line>", "no recording given")
+    rotating = [rotating_samples(rec) for rec in recordings]
+    sets = [poses_from_recording(rec, device, required=not rot.any()) for rec, rot in zip(recordings, rotating)]
+    poses = PoseSet.concat(sets)
+    if poses.n_poses == 0:
+        raise InputError(recordings[0].source, "no static pose in any recording: the offsets and sensitivities "
+                         "need static poses (lever arms alone cannot be estimated without them)")
+    has_f = np.all(np.isfinite(poses.f_ref), axis=1)
+    if method is None:
+        if has_f.all():
+            method = "full"
+        elif not has_f.any():
+            method = "jigfree"
+        else:
+            p = int(np.flatnonzero(~has_f)[0])
+            info = poses.info[p]
+            raise InputError(info["source"], f"{pose_label(poses.info, p)} has no reference f_x, f_y, f_z but "
+                             "other poses do: give f on every pose, or choose --method jigfree", column="f_x")
+    jigfree = method == "jigfree"
+    model_method = "full" if jigfree else method
+    if not jigfree and not has_f.all():
+        p = int(np.flatnonzero(~has_f)[0])
+        info = poses.info[p]
+        where = pose_label(poses.info, p) if info.get("label") is not None else \
+            f"the static interval at t = {info['t_start']:.6g}..{info['t_stop']:.6g} s"
+        raise InputError(info["source"], f"method '{method}' needs the reference specific force f_x, f_y, f_z on "
+                         f"every static pose, but {where} has none (use --method jigfree for unknown poses)",
+                         column="f_x")
+    temps = poses.temp
+    temperature = bool(np.all(np.isfinite(temps)) and np.ptp(temps) >= TEMP_MIN_SPAN_C)
+    try:
+        if jigfree:
+            fit = fit_static(device, poses, model_method, jigfree=True, temperature=temperature)
+        elif temperature:
+            fit = fit_static(device, poses, model_method, jigfree=False, temperature=True,
+                             jig_accuracy_deg=jig_accuracy_deg)
+        else:
+            fit = fit_known_poses(device, poses.means, poses.f_ref, model_method, poses.sem(), poses=poses,
+                                  jig_accuracy_deg=jig_accuracy_deg)
+    except InputError as e:
+        if e.source != "<poses>":
+            raise
+        names = sorted({str(d.get("source")) for d in poses.info})
+        raise InputError(", ".join(names), e.detail, field=e.field) from None
+
+    pos_fit = None
+    rot = [(rec, m) for rec, m in zip(recordings, rotating) if m.any()]
+    if rot:
+        raw = np.vstack([rec.raw[m] for rec, m in rot])
+        f = np.vstack([rec.f[m] for rec, m in rot])
+        w = np.vstack([rec.w[m] for rec, m in rot])
+        dw = np.vstack([rec.dw[m] for rec, m in rot])
+        segs = np.concatenate([np.full(int(m.sum()), k) for k, (_, m) in enumerate(rot)])
+        b, S = fit.offsets, fit.sensitivity
+        noise = fit.poses.channel_noise()
+        pos_fit = calibrate_positions(device, b, S, raw, f, w, dw, segments=segs, noise=noise,
+                                      source=rot[0][0].source)
+    return to_calibration(device, fit, "jigfree" if jigfree else method, pos_fit)
+
+
+def rotating_samples(rec) -> np.ndarray:
+    if not (rec.has_omega() and rec.has_alpha() and rec.has_f()):
+        return np.zeros(rec.n_samples, dtype=bool)
+    ok = np.all(np.isfinite(rec.f), 1) & np.all(np.isfinite(rec.w), 1) & np.all(np.isfinite(rec.dw), 1)
+    return ok & (np.linalg.norm(np.nan_to_num(rec.w), axis=1) > ROTATION_MIN_RADPS)
+
+
