@@ -135,7 +135,7 @@ def implied_jig_deg(device, method, m, F, sig, start) -> float | None:
     x_prev = [None]
 
     def chi2_per_dof(deg: float) -> float:
-        prob, x, _ = prior_solve(device, method, m, sig, None, F, math.radians(deg), start, x_prev[0])
+        prob, x, _, _ = prior_solve(device, method, m, sig, None, F, math.radians(deg), start, x_prev[0])
         x_prev[0] = x
         r = prob.residual(x)
         return float(r @ r) / dof

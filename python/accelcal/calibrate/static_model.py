@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.optimize import least_squares
 
 from ..errors import InputError
 from ..static import PoseSet, QUANT_VAR
@@ -86,22 +87,22 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
                           f"add poses in other orientations (e.g. f along {missing_direction(device, F)})"
                           + ("" if not temperature else " and at other temperatures"), field="poses")
 
-    def not_converged() -> InputError:
-        return InputError("<poses>", f"the {'jig-free ' if jigfree else ''}'{method}' fit did not converge in 100 "
-                          "iterations: the static poses do not fit the model (moving poses, or another device?)",
-                          field="poses")
+    def not_converged(message: str) -> InputError:
+        return InputError("<poses>", f"the {'jig-free ' if jigfree else ''}'{method}' fit did not converge "
+                          f"(scipy least_squares: {message.rstrip('.')}): the static poses do not fit the model "
+                          "(moving poses, or another device?)", field="poses")
 
     x0 = prob.pack(b0, s0)
     if constrained_inverse(prob.jacobian(x0), None) is None:     # gauge already fixed in prob
         raise undetermined()
-    x, converged = solve_least_squares(prob.residual, prob.jacobian, x0)
+    x, converged, message = solve_least_squares(prob.residual, prob.jacobian, x0)
     if not converged:
-        raise not_converged()
+        raise not_converged(message)
     if jig > 0:
         # the references as priors: start from the fit with the poses at their references
-        prob, x, converged = prior_solve(device, method, m, sig, dT, F, jig, prob.unpack(x))
+        prob, x, converged, message = prior_solve(device, method, m, sig, dT, F, jig, prob.unpack(x))
         if not converged:
-            raise not_converged()
+            raise not_converged(message)
     b, s, beta, gamma = prob.unpack(x)
     F, _ = prob.forces(x)
     if gauge:
@@ -140,53 +141,43 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
 
 def prior_solve(device, method, m, sig, dT, F, jig, start, x_start=None):
     """The known-pose model with the references F as priors of rms rotation ``jig``
-    (rad): (problem, x, converged), started from channel parameters ``start`` =
+    (rad): (problem, x, converged, message), started from channel parameters ``start`` =
     (b, s, beta, gamma) with the poses at their references, or from ``x_start`` (a
     previous solution of the same parameterisation)."""
     prob = StaticProblem(device, method, m, sig, dT, True, F, prior_rad=jig)
     x0 = prob.pack(*start) if x_start is None else x_start
-    x, converged = solve_least_squares(prob.residual, prob.jacobian, x0)
-    return prob, x, converged
+    x, converged, message = solve_least_squares(prob.residual, prob.jacobian, x0)
+    return prob, x, converged, message
 
 
 def solve_least_squares(fun, jac, x0: np.ndarray, max_iter: int = 100,
-                         tol: float = 1e-12) -> tuple[np.ndarray, bool]:
-    """Minimise |fun(x)|^2 (Levenberg-Marquardt, Marquardt's diagonal scaling).
+                        tol: float = 1e-12) -> tuple[np.ndarray, bool, str]:
+    """Minimise |fun(x)|^2 with ``scipy.optimize.least_squares`` (MINPACK's
+    Levenberg-Marquardt, analytic Jacobian).
 
-    Small dense problems only (a few hundred parameters).  Returns (x, converged):
-    converged when the relative decrease of the cost or the scaled step became
-    negligible, or no step can lower the cost any more."""
-    x = np.array(x0, float)
-    r = fun(x)
-    cost = float(r @ r)
-    lam = 1e-3
-    for _ in range(max_iter):
-        J = jac(x)
-        A = J.T @ J
-        grad = J.T @ r
-        d = np.maximum(np.diag(A), 1e-300)
-        while True:
-            try:
-                step = -np.linalg.solve(A + lam * np.diag(d), grad)
-            except np.linalg.LinAlgError:
-                step = None
-            if step is not None:
-                x_new = x + step
-                r_new = fun(x_new)
-                cost_new = float(r_new @ r_new)
-                if np.isfinite(cost_new) and cost_new <= cost:
-                    break
-            lam *= 10.0
-            if lam > 1e12:
-                return x, True        # no step lowers the cost: at the minimum to rounding
-        x, r = x_new, r_new
-        small_step = np.all(np.abs(step) * np.sqrt(d) <= tol ** 0.5 * (1.0 + np.sqrt(cost)))
-        done = cost - cost_new <= tol * cost or small_step
-        cost = cost_new
-        lam = max(lam / 10.0, 1e-12)
-        if done:
-            return x, True
-    return x, False
+    Parameters
+    ----------
+    fun, jac : callable
+        Residual vector and its Jacobian at x.
+    x0 : ndarray
+        Start.
+    max_iter : int
+        Bound on the Jacobian evaluations, as iterations (``max_nfev`` is this many
+        times len(x0) + 1, MINPACK's count of function calls).
+    tol : float
+        Relative tolerance on the cost (``ftol``) and the step (``xtol``, its square root).
+
+    Returns
+    -------
+    x : ndarray
+    converged : bool
+        scipy's ``status`` > 0 (a tolerance was met).
+    message : str
+        scipy's ``message``, for the error a caller raises when not converged.
+    """
+    res = least_squares(fun, np.asarray(x0, float), jac=jac, method="lm", ftol=tol, xtol=math.sqrt(tol),
+                        gtol=tol, x_scale="jac", max_nfev=max_iter * (len(x0) + 1))
+    return res.x, bool(res.status > 0), str(res.message)
 
 
 def refine_start(device, m, sig, F, b0, s0):
@@ -196,7 +187,7 @@ def refine_start(device, m, sig, F, b0, s0):
     prob = StaticProblem(device, "gain", m, sig, None, True, F)
     if P * N < prob.n_ch + prob.n_pose:
         return b0, s0, F
-    x, _ = solve_least_squares(prob.residual, prob.jacobian, prob.pack(b0, s0), max_iter=30, tol=1e-8)
+    x, _, _ = solve_least_squares(prob.residual, prob.jacobian, prob.pack(b0, s0), max_iter=30, tol=1e-8)
     b, s, _, _ = prob.unpack(x)
     F, _ = prob.forces(x)
     return b, s, F
