@@ -136,9 +136,19 @@ from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 import numpy as np
+from scipy.interpolate import CubicSpline
+from scipy.signal import lfilter
 
+from .calibration import Calibration, load_calibration
+from .device import Device, load_device
 from .effects import EFFECT_NAMES, EFFECTS
 from .errors import AccelcalError, InputError
+from .model import centripetal_matrix, omega_products
+from .motions import Trajectory
+from .recording import Recording, check_for_device, read_recording
+from .report import write_report as _wr
+from .sensor import evaluate, rotation_matrix, true_state
+from .static import detect_static
 
 __all__ = [
     "diagnose",
@@ -198,7 +208,6 @@ class DiagnosisResult(dict):
 
 
 def _as_device(device: Any):
-    from .device import Device, load_device
     if isinstance(device, Device):
         return device
     if isinstance(device, (str, os.PathLike)):
@@ -207,7 +216,6 @@ def _as_device(device: Any):
 
 
 def _as_calibration(cal: Any, device) -> tuple[Any, str]:
-    from .calibration import Calibration, load_calibration
     if isinstance(cal, (str, os.PathLike)):
         return load_calibration(cal, device), os.fspath(cal)
     if not isinstance(cal, Calibration):
@@ -224,7 +232,6 @@ def _as_calibration(cal: Any, device) -> tuple[Any, str]:
 
 
 def _as_recordings(recordings: Any, device) -> list:
-    from .recording import Recording, check_for_device, read_recording
     if isinstance(recordings, (Recording, str, os.PathLike)):
         recordings = [recordings]
     out = []
@@ -343,7 +350,6 @@ def _segments(t: np.ndarray, usable: np.ndarray, key: np.ndarray, h: float) -> l
 
 def _jigfree_poses(rec, device) -> list[np.ndarray]:
     """Static poses of a recording without reference f: its pose labels, else detected."""
-    from .static import detect_static
     if rec.has_pose():
         out = []
         for lab in rec.pose_labels():
@@ -370,9 +376,6 @@ def _pose_force(S: np.ndarray, ybar: np.ndarray, g: float, wch: np.ndarray) -> n
 
 
 def _prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> _Data:
-    from .motions import Trajectory
-    from .simulate import true_state
-    from .effects import evaluate
 
     N = device.n_channels
     g = float(device.gravity_mps2)
@@ -975,7 +978,6 @@ class _Misalignment(_LinearCandidate):
         return X, E
 
     def _exact(self, D, fa, rot):
-        from .effects import rotation_matrix
         S1 = np.einsum("nij,nj->ni", rotation_matrix(rot), D.s)
         d = np.einsum("tnc,nc->tn", fa, S1 - D.s)
         return d * D.gain_t if D.gain_t is not None else d, S1
@@ -1066,7 +1068,6 @@ class _Centripetal(_LinearCandidate):
         return None
 
     def columns(self, D):
-        from .model import centripetal_matrix, omega_products
         c = omega_products(D.w) @ centripetal_matrix(D.r, D.s).T
         if D.gain_t is not None:
             c = c * D.gain_t
@@ -1235,7 +1236,6 @@ class _Shifter:
     (clamped at the run's ends)."""
 
     def __init__(self, D: _Data, x: np.ndarray):
-        from scipy.interpolate import CubicSpline
         n, N = x.shape
         self.x = x
         self.tg = D.tg
@@ -1418,7 +1418,6 @@ def _lowpass_runs(t: np.ndarray, x: np.ndarray, w: float, h: float) -> np.ndarra
     """The registry's first-order low-pass (effects.lowpass_first_order: exact for an input linear
     between samples, steady state at the first sample) with angular cut-off w, computed with
     lfilter over runs of samples at the nominal period h (gaps > 1.5 h get their exact update)."""
-    from scipy.signal import lfilter
     n = t.shape[0]
     y = np.empty_like(x)
     gaps = np.flatnonzero(np.diff(t) > 1.5 * h) + 1
@@ -2105,5 +2104,4 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
 
 def write_report(result: dict, out_dir: Any, **kw: Any) -> list[str]:
     """Plots and a short written summary of a diagnosis into ``out_dir`` (see :mod:`accelcal.report`)."""
-    from .report import write_report as _wr
     return _wr(result, out_dir, **kw)

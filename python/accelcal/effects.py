@@ -70,13 +70,14 @@ import difflib
 import json
 import math
 import zlib
-from dataclasses import dataclass, field, replace as _dc_replace
-from typing import Any, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Iterable, Mapping
 
 import numpy as np
 
 from .errors import AccelcalError
-from .model import centripetal_matrix, omega_products
+from .sensor import ChannelState, Context, evaluate, lowpass_first_order, make_context, rotation_matrix
+from .spec import Param, check_params, format_spec, parse_spec, with_defaults
 
 __all__ = [
     "Param",
@@ -112,360 +113,28 @@ STAGES = ("state", "signal", "adc", "reference")
 # ==========================================================================
 
 
-def _split_top(text: str, seps: str = ",") -> list[str]:
-    """Split at separators that are not inside [...]; raises on unbalanced brackets."""
-    parts, depth, cur = [], 0, []
-    for ch in text:
-        if ch == "[":
-            depth += 1
-        elif ch == "]":
-            depth -= 1
-            if depth < 0:
-                raise ValueError("unbalanced ']'")
-        if ch in seps and depth == 0:
-            parts.append("".join(cur))
-            cur = []
-        else:
-            cur.append(ch)
-    if depth != 0:
-        raise ValueError("unbalanced '['")
-    parts.append("".join(cur))
-    return parts
 
 
-def _parse_value(text: str) -> Any:
-    """A spec value: a string, or a (nested) list of strings from [a,b] or a;b / a|b."""
-    s = text.strip()
-    if s.startswith("[") and s.endswith("]"):
-        inner = s[1:-1].strip()
-        if not inner:
-            return []
-        return [_parse_value(p) for p in _split_top(inner, ",;|")]
-    if ("[" in s) or ("]" in s):
-        raise ValueError(f"misplaced bracket in {s!r}")
-    if ";" in s or "|" in s:
-        return [p.strip() for p in s.replace("|", ";").split(";")]
-    return s
 
 
-def parse_spec(text: str, what: str = "effect") -> tuple[str, dict[str, Any]]:
-    """Split ``NAME[:k=v,...]`` into (name, {k: raw value}); values stay strings
-    or lists of strings (coercion is the registry's job).  Raises AccelcalError."""
-    if not isinstance(text, str):
-        raise AccelcalError(f"{what} spec: expected a string like NAME[:k=v,...], got {text!r}")
-    s = text.strip()
-    if not s:
-        raise AccelcalError(f"{what} spec is empty (expected NAME[:k=v,...])")
-    name, sep, rest = s.partition(":")
-    name = name.strip()
-    if not name:
-        raise AccelcalError(f"{what} spec {s!r}: the name before ':' is missing")
-    params: dict[str, Any] = {}
-    if sep and not rest.strip():
-        raise AccelcalError(f"{what} spec {s!r}: nothing after ':' (expected k=v,...)")
-    if rest.strip():
-        try:
-            items = _split_top(rest, ",")
-        except ValueError as e:
-            raise AccelcalError(f"{what} spec {s!r}: {e}") from None
-        for item in items:
-            if not item.strip():
-                raise AccelcalError(f"{what} spec {s!r}: empty parameter (stray ',')")
-            k, eq, v = item.partition("=")
-            k = k.strip()
-            if not eq or not k:
-                raise AccelcalError(f"{what} spec {s!r}: expected k=v, got {item.strip()!r}")
-            if k in params:
-                raise AccelcalError(f"{what} spec {s!r}: parameter {k!r} given more than once")
-            if not v.strip():
-                raise AccelcalError(f"{what} spec {s!r}: parameter {k!r} has no value")
-            try:
-                params[k] = _parse_value(v)
-            except ValueError as e:
-                raise AccelcalError(f"{what} spec {s!r}: parameter {k!r}: {e}") from None
-    return name, params
 
 
-_AXIS_WORDS = {
-    "x": (1.0, 0.0, 0.0),
-    "y": (0.0, 1.0, 0.0),
-    "z": (0.0, 0.0, 1.0),
-}
 
 
-def _axis_word(s: str) -> np.ndarray | None:
-    w = s.strip().lower()
-    sign = 1.0
-    if w and w[0] in "+-":
-        sign = -1.0 if w[0] == "-" else 1.0
-        w = w[1:]
-    if w in _AXIS_WORDS:
-        return sign * np.array(_AXIS_WORDS[w])
-    return None
 
 
-def _show(v: Any) -> str:
-    if isinstance(v, np.ndarray):
-        v = v.tolist()
-    text = repr(v)
-    return text if len(text) <= 60 else text[:57] + "..."
 
 
-@dataclass(frozen=True)
-class Param:
-    """One user-facing parameter of an effect or a motion.
-
-    ``kind`` says what values it takes:
-
-    - ``float`` / ``int`` / ``bool`` / ``str``: one value;
-    - ``floats``: one number or a per-channel list;
-    - ``choice``: one of ``choices``;
-    - ``direction``: a unit vector: an axis word (``x``, ``-z``) or 3 numbers
-      (normalised); ``direction_or_random`` also takes ``random``;
-    - ``vector``: 3 numbers (not normalised);
-    - ``channels``: ``all``, one index or a list of indices;
-    - ``poses``: a preset name/count (``4``, ``6``, ``18``, ``24``, ``26``)
-      or a list of directions (each an axis word or 3 numbers).
-
-    ``default`` None means "derived" (the doc says from what).
-    """
-
-    name: str
-    default: Any
-    unit: str
-    doc: str
-    kind: str = "float"
-    choices: tuple = ()
-    minimum: float | None = None
-    maximum: float | None = None
-    exclusive_min: bool = False
-
-    def help(self) -> str:
-        d = self.default
-        if d is None:
-            dtext = "auto"
-        elif isinstance(d, bool):
-            dtext = "1" if d else "0"
-        elif isinstance(d, (list, tuple, np.ndarray)):
-            dtext = "[" + ",".join(str(x) for x in np.asarray(d).tolist()) + "]"
-        else:
-            dtext = str(d)
-        unit = f" {self.unit}" if self.unit and self.unit != "-" else ""
-        return f"{self.name}={dtext}{unit}: {self.doc}"
-
-    # -- coercion ---------------------------------------------------------
-
-    def coerce(self, value: Any, owner: str) -> Any:
-        """Check and convert ``value`` (a Python value or a spec string);
-        raises AccelcalError naming ``owner`` and the parameter."""
-        if value is None:
-            return None
-        try:
-            out = getattr(self, "_as_" + self.kind)(value)
-        except _Bad as e:
-            raise AccelcalError(f"{owner} parameter {self.name!r}: expected {e}, got {_show(value)}") from None
-        return out
-
-    def _range(self, x: float) -> float:
-        lo, hi = self.minimum, self.maximum
-        if lo is not None and (x < lo or (self.exclusive_min and x == lo)):
-            rel = ">" if self.exclusive_min else ">="
-            raise _Bad(f"a number {rel} {lo:g}")
-        if hi is not None and x > hi:
-            raise _Bad(f"a number <= {hi:g}")
-        return x
-
-    @staticmethod
-    def _num(v: Any, what: str = "a finite number") -> float:
-        if isinstance(v, (bool, np.bool_)):
-            raise _Bad(what)
-        if isinstance(v, str):
-            try:
-                x = float(v.strip())
-            except ValueError:
-                raise _Bad(what) from None
-        elif isinstance(v, (int, float, np.integer, np.floating)):
-            x = float(v)
-        else:
-            raise _Bad(what)
-        if not math.isfinite(x):
-            raise _Bad(what)
-        return x
-
-    def _as_float(self, v: Any) -> float:
-        return self._range(self._num(v))
-
-    def _as_floats(self, v: Any) -> float | np.ndarray:
-        if isinstance(v, (list, tuple, np.ndarray)):
-            arr = np.asarray(v, dtype=object).ravel()
-            if arr.size == 0:
-                raise _Bad("a number or a per-channel list of numbers")
-            try:
-                return np.array([self._range(self._num(x)) for x in arr], dtype=float)
-            except _Bad:
-                raise _Bad("a number or a per-channel list of numbers") from None
-        return self._range(self._num(v, "a number or a per-channel list of numbers"))
-
-    def _as_int(self, v: Any) -> int:
-        x = self._num(v, "an integer")
-        if x != math.floor(x):
-            raise _Bad("an integer")
-        return int(self._range(x))
-
-    def _as_bool(self, v: Any) -> bool:
-        if isinstance(v, (bool, np.bool_)):
-            return bool(v)
-        if isinstance(v, (int, np.integer)) and v in (0, 1):
-            return bool(v)
-        if isinstance(v, str) and v.strip().lower() in ("1", "true", "yes", "on"):
-            return True
-        if isinstance(v, str) and v.strip().lower() in ("0", "false", "no", "off"):
-            return False
-        raise _Bad("0/1 (or true/false)")
-
-    def _as_str(self, v: Any) -> str:
-        if not isinstance(v, str):
-            raise _Bad("a string")
-        return v.strip()
-
-    def _as_choice(self, v: Any) -> str:
-        if not isinstance(v, str) or v.strip().lower() not in self.choices:
-            raise _Bad("one of " + ", ".join(self.choices))
-        return v.strip().lower()
-
-    def _as_vector(self, v: Any) -> np.ndarray:
-        if isinstance(v, str):
-            w = _axis_word(v)
-            if w is not None:
-                return w
-            raise _Bad("3 numbers like [0,0.1,0]")
-        arr = np.asarray(v, dtype=object).ravel()
-        if arr.size != 3:
-            raise _Bad("3 numbers like [0,0.1,0]")
-        return np.array([self._num(x, "3 numbers like [0,0.1,0]") for x in arr])
-
-    def _as_direction(self, v: Any) -> np.ndarray:
-        what = "an axis (x, y, z, -x, ...) or 3 numbers like [0,1,1]"
-        if isinstance(v, str):
-            w = _axis_word(v)
-            if w is None:
-                raise _Bad(what)
-            return w
-        try:
-            vec = self._as_vector(v)
-        except _Bad:
-            raise _Bad(what) from None
-        n = float(np.linalg.norm(vec))
-        if not n > 1e-12 or not math.isfinite(n):
-            raise _Bad("a non-zero direction")
-        return vec / n
-
-    def _as_direction_or_random(self, v: Any) -> Any:
-        if isinstance(v, str) and v.strip().lower() == "random":
-            return "random"
-        try:
-            return self._as_direction(v)
-        except _Bad:
-            raise _Bad("'random', an axis (x, y, z, -x, ...) or 3 numbers") from None
-
-    def _as_channels(self, v: Any) -> tuple[int, ...] | None:
-        what = "'all', a channel index or a list of indices"
-        if isinstance(v, str) and v.strip().lower() == "all":
-            return None
-        items = list(np.asarray(v, dtype=object).ravel()) if isinstance(v, (list, tuple, np.ndarray)) else [v]
-        if not items:
-            raise _Bad(what)
-        out = []
-        for x in items:
-            try:
-                xf = self._num(x, what)
-            except _Bad:
-                raise _Bad(what) from None
-            if xf != math.floor(xf) or xf < 0:
-                raise _Bad(what)
-            out.append(int(xf))
-        return tuple(sorted(set(out)))
-
-    def _as_poses(self, v: Any) -> Any:
-        what = "a preset (4, 6, 18, 24, 26) or a list of directions like [x,y,z,-z]"
-        if isinstance(v, (int, np.integer)) and not isinstance(v, bool):
-            v = str(int(v))
-        if isinstance(v, str):
-            s = v.strip().lower()
-            if s in ("4", "6", "18", "24", "26"):
-                return s
-            w = _axis_word(s)
-            if w is not None:
-                return np.array([w])
-            raise _Bad(what)
-        if isinstance(v, np.ndarray) and v.ndim == 2 and v.shape[1] == 3:
-            items = list(v)
-        elif isinstance(v, (list, tuple)):
-            items = list(v)
-        else:
-            raise _Bad(what)
-        if not items:
-            raise _Bad(what)
-        # A flat list of 3 numbers is one direction.
-        if len(items) == 3 and all(not isinstance(x, (list, tuple, np.ndarray)) and _axis_word(str(x)) is None
-                                   for x in items):
-            items = [items]
-        dirs = []
-        for x in items:
-            try:
-                dirs.append(self._as_direction(x))
-            except _Bad:
-                raise _Bad(what) from None
-        return np.array(dirs)
 
 
-class _Bad(Exception):
-    """Internal: a value did not fit a Param's kind (message = what was expected)."""
 
 
-def _check_params(params: Sequence[Param], given: Mapping[str, Any], owner: str) -> dict[str, Any]:
-    """Coerce the given values, reject unknown names; returns only the given ones."""
-    by_name = {p.name: p for p in params}
-    out = {}
-    for k, v in given.items():
-        if k not in by_name:
-            names = list(by_name)
-            close = difflib.get_close_matches(k, names, n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
-            known = ", ".join(names) if names else "none"
-            raise AccelcalError(f"{owner}: unknown parameter {k!r}{hint}; parameters: {known}")
-        out[k] = by_name[k].coerce(v, owner)
-    return out
 
 
-def _with_defaults(params: Sequence[Param], given: Mapping[str, Any]) -> dict[str, Any]:
-    """Checked values plus every other parameter's (coerced) default."""
-    out = {p.name: p.coerce(p.default, "default") for p in params}
-    out.update(given)
-    return out
 
 
-def _format_value(v: Any) -> str:
-    if isinstance(v, bool):
-        return "1" if v else "0"
-    if isinstance(v, (float, np.floating)):
-        x = float(v)
-        return str(int(x)) if x.is_integer() and abs(x) < 1e15 else repr(x)
-    if isinstance(v, (int, np.integer)):
-        return str(int(v))
-    if isinstance(v, np.ndarray) or isinstance(v, (list, tuple)):
-        arr = np.asarray(v, dtype=object)
-        if arr.ndim == 0:
-            return _format_value(arr.item())
-        return "[" + ",".join(_format_value(x) for x in arr.tolist()) + "]"
-    return str(v)
 
 
-def format_spec(name: str, params: Mapping[str, Any]) -> str:
-    """Canonical ``NAME:k=v,...`` text (parses back to the same values)."""
-    if not params:
-        return name
-    return name + ":" + ",".join(f"{k}={_format_value(v)}" for k, v in params.items())
 
 
 # ==========================================================================
@@ -473,177 +142,20 @@ def format_spec(name: str, params: Mapping[str, Any]) -> str:
 # ==========================================================================
 
 
-def rotation_matrix(rotvec: np.ndarray) -> np.ndarray:
-    """Rodrigues: rotation matrices (..., 3, 3) from rotation vectors (..., 3) (rad).
-
-    R = cos(th) I + sin(th)/th [v]x + (1 - cos(th))/th^2 v v^T, with series
-    for small th."""
-    v = np.asarray(rotvec, dtype=float)
-    x, y, z = v[..., 0], v[..., 1], v[..., 2]
-    th2 = x * x + y * y + z * z
-    th = np.sqrt(th2)
-    small = th < 1e-4
-    safe = np.where(small, 1.0, th)
-    a = np.where(small, 1.0 - th2 / 6.0 + th2 * th2 / 120.0, np.sin(th) / safe)
-    b = np.where(small, 0.5 - th2 / 24.0 + th2 * th2 / 720.0, (1.0 - np.cos(th)) / (safe * safe))
-    c = np.cos(th)
-    R = np.empty(v.shape[:-1] + (3, 3))
-    bx, by, bz = b * x, b * y, b * z
-    ax, ay, az = a * x, a * y, a * z
-    R[..., 0, 0] = c + bx * x
-    R[..., 0, 1] = bx * y - az
-    R[..., 0, 2] = bx * z + ay
-    R[..., 1, 0] = bx * y + az
-    R[..., 1, 1] = c + by * y
-    R[..., 1, 2] = by * z - ax
-    R[..., 2, 0] = bx * z - ay
-    R[..., 2, 1] = by * z + ax
-    R[..., 2, 2] = c + bz * z
-    return R
 
 
-@dataclass(frozen=True, eq=False)
-class ChannelState:
-    """Everything the sensor equation needs per channel (see the module doc).
-
-    offsets (N,) counts; sensitivity (N, 3) counts per m/s^2; positions (N, 3) m;
-    centripetal (N,) multiplier of the omega x (omega x r) term (1 = physics,
-    0 = a model that leaves it out); tau (N,) s, channel i sampled at t + tau_i;
-    bias (n, N) counts or None, a time-varying offset added to ``offsets``;
-    gain (n, N) or None, a time-varying factor on the sensed part.
-    """
-
-    offsets: np.ndarray
-    sensitivity: np.ndarray
-    positions: np.ndarray
-    centripetal: np.ndarray
-    tau: np.ndarray
-    bias: np.ndarray | None = None
-    gain: np.ndarray | None = None
-
-    @property
-    def n_channels(self) -> int:
-        return int(self.offsets.shape[0])
-
-    def replace(self, **kw: Any) -> "ChannelState":
-        return _dc_replace(self, **kw)
-
-    def total_offset(self) -> np.ndarray:
-        """b_i + bias_i(t): (n, N) if a bias is set, else (N,)."""
-        return self.offsets if self.bias is None else self.offsets + self.bias
-
-    @classmethod
-    def from_parameters(cls, offsets: Any, sensitivity: Any, positions: Any, centripetal: Any = 1.0) -> "ChannelState":
-        b = np.array(offsets, dtype=float).reshape(-1)
-        n = b.shape[0]
-        s = np.array(sensitivity, dtype=float).reshape(n, 3)
-        r = np.array(positions, dtype=float).reshape(n, 3)
-        m = np.broadcast_to(np.asarray(centripetal, dtype=float), (n,)).copy()
-        return cls(offsets=b, sensitivity=s, positions=r, centripetal=m, tau=np.zeros(n))
 
 
-@dataclass(frozen=True, eq=False)
-class Context:
-    """The truth, the device, the channel state and the current noise-free
-    readings ``counts`` (n, N) float.  ``truth`` needs ``t, f, omega, alpha,
-    temp_c, pose`` (and ``sample(times)`` for exact time shifts; otherwise the
-    arrays are interpolated).  Build one with :func:`make_context`."""
-
-    device: Any
-    truth: Any
-    state: ChannelState
-    counts: np.ndarray
-
-    def replace(self, **kw: Any) -> "Context":
-        return _dc_replace(self, **kw)
-
-    @property
-    def n_samples(self) -> int:
-        return int(np.asarray(self.truth.t).shape[0])
-
-    @property
-    def n_channels(self) -> int:
-        return self.state.n_channels
-
-    def g_counts(self) -> np.ndarray:
-        """(N,) one g in counts for each channel, from the state's |s_i|."""
-        return self.device.gravity_mps2 * np.linalg.norm(self.state.sensitivity, axis=1)
 
 
-def make_context(device: Any, truth: Any, offsets: Any = None, sensitivity: Any = None,
-                 positions: Any = None, centripetal: Any = 1.0) -> Context:
-    """Context with the given channel parameters (device nominal ones where None)
-    and ``counts`` evaluated from ``truth``.  ``centripetal`` 1 means the model
-    has the omega x (omega x r) term, 0 that it leaves it out."""
-    state = ChannelState.from_parameters(
-        device.nominal_offsets() if offsets is None else offsets,
-        device.nominal_sensitivity() if sensitivity is None else sensitivity,
-        device.positions if positions is None else positions,
-        centripetal,
-    )
-    return Context(device=device, truth=truth, state=state, counts=evaluate(truth, state))
 
 
-def _interp_truth(truth: Any, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """f, omega, alpha at ``times`` by cubic-spline (or, with gaps, linear) interpolation."""
-    t = np.asarray(truth.t, float)
-    out = []
-    for name in ("f", "omega", "alpha"):
-        arr = np.asarray(getattr(truth, name), float)
-        if np.all(np.isfinite(arr)) and t.size >= 4:
-            from scipy.interpolate import CubicSpline
-
-            out.append(CubicSpline(t, arr, axis=0, extrapolate=True)(np.clip(times, t[0], t[-1])))
-        else:
-            out.append(np.column_stack([np.interp(times, t, arr[:, k]) for k in range(3)]))
-    return out[0], out[1], out[2]
 
 
-def _sample_truth(truth: Any, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    sample = getattr(truth, "sample", None)
-    if callable(sample):
-        return sample(times)
-    return _interp_truth(truth, times)
 
 
-def _sensed(f: np.ndarray, alpha: np.ndarray | None, omega: np.ndarray | None,
-            s: np.ndarray, r: np.ndarray, m: np.ndarray) -> np.ndarray:
-    out = f @ s.T
-    if alpha is not None:
-        out += alpha @ np.cross(r, s).T  # s . (alpha x r) = alpha . (r x s)
-    if omega is not None and np.any(m != 0):
-        out += omega_products(omega) @ (centripetal_matrix(r, s) * m[:, None]).T
-    return out
 
 
-def evaluate(truth: Any, state: ChannelState, f: np.ndarray | None = None) -> np.ndarray:
-    """Noise-free, unrounded readings (n, N) of ``state`` driven by ``truth``
-    (the module doc's equation).  ``f`` (n, 3) replaces the truth's specific
-    force (for a channel with a time skew, the replacement's difference to the
-    truth is added to the shifted truth)."""
-    t = np.asarray(truth.t, float)
-    f_truth = np.asarray(truth.f, float)
-    f_use = f_truth if f is None else np.asarray(f, float)
-    alpha = None if truth.alpha is None else np.asarray(truth.alpha, float)
-    omega = None if truth.omega is None else np.asarray(truth.omega, float)
-    s, r, m, tau = state.sensitivity, state.positions, state.centripetal, state.tau
-    n, N = t.shape[0], state.n_channels
-    if not np.any(tau):
-        sensed = _sensed(f_use, alpha, omega, s, r, m)
-    else:
-        sensed = np.empty((n, N))
-        for u in np.unique(tau):
-            idx = np.flatnonzero(tau == u)
-            if u == 0:
-                fs, ws, as_ = f_use, omega, alpha
-            else:
-                fs, ws, as_ = _sample_truth(truth, t + u)
-                if f is not None:
-                    fs = fs + (f_use - f_truth)
-            sensed[:, idx] = _sensed(fs, as_, ws, s[idx], r[idx], m[idx])
-    if state.gain is not None:
-        sensed = sensed * state.gain
-    return sensed + state.total_offset()
 
 
 # ==========================================================================
@@ -651,60 +163,10 @@ def evaluate(truth: Any, state: ChannelState, f: np.ndarray | None = None) -> np
 # ==========================================================================
 
 
-def lowpass_first_order(t: np.ndarray, x: np.ndarray, fc_hz: Any) -> np.ndarray:
-    """y' = 2 pi fc (x - y) sampled at ``t`` (strictly increasing, any spacing),
-    x (n, N), fc (N,) Hz (inf or <= 0: channel passed through).
-
-    Exact for an input that is linear between samples (first-order hold):
-    y_k = a y_{k-1} + (beta - a) x_{k-1} + (1 - beta) x_k with
-    a = exp(-w h), beta = (1 - a) / (w h).  Starts in steady state (y_0 = x_0).
-    Vectorised: the recursion is solved in closed form blockwise."""
-    t = np.asarray(t, float)
-    x = np.asarray(x, float)
-    fc = np.broadcast_to(np.asarray(fc_hz, float), (x.shape[1],))
-    y = x.copy()
-    if x.shape[0] < 2:
-        return y
-    active = np.isfinite(fc) & (fc > 0)
-    for f_c in np.unique(fc[active]):
-        idx = np.flatnonzero(fc == f_c)
-        y[:, idx] = _lowpass_one(t, x[:, idx], 2.0 * math.pi * float(f_c))
-    return y
 
 
-_BLOCK_PHASE = 400.0  # exp(400) ~ 5e173: the closed form stays far from overflow
 
 
-def _lowpass_one(t: np.ndarray, x: np.ndarray, w: float) -> np.ndarray:
-    h = np.diff(t)
-    xh = w * h
-    a = np.exp(-xh)
-    beta = -np.expm1(-xh) / xh
-    c = np.empty_like(x)
-    c[0] = 0.0
-    c[1:] = (beta - a)[:, None] * x[:-1] + (1.0 - beta)[:, None] * x[1:]
-    phase = w * (t - t[0])
-    y = np.empty_like(x)
-    y_prev = x[0].copy()  # state before sample 0's update: steady state
-    start, n = 0, x.shape[0]
-    while start < n:
-        # block [start, stop): phase span below _BLOCK_PHASE
-        stop = int(np.searchsorted(phase, phase[start] + _BLOCK_PHASE, side="right"))
-        stop = max(stop, start + 1)
-        ph = phase[start:stop] - phase[start]
-        e = np.exp(ph)[:, None]
-        cc = c[start:stop].copy()
-        if start == 0:
-            cc[0] = x[0]  # y_0 = x_0
-            z = np.cumsum(cc * e, axis=0)
-        else:
-            a0 = a[start - 1]
-            cc[0] = a0 * y_prev + cc[0]  # y_start, computed directly
-            z = np.cumsum(cc * e, axis=0)
-        y[start:stop] = z / e
-        y_prev = y[stop - 1]
-        start = stop
-    return y
 
 
 # ==========================================================================
@@ -751,12 +213,12 @@ class Effect:
 
     def check(self, given: Mapping[str, Any]) -> dict[str, Any]:
         """Coerce user parameters (strings or values); unknown names raise AccelcalError."""
-        return _check_params(self.params, given, _owner(self.name))
+        return check_params(self.params, given, _owner(self.name))
 
     def resolve(self, given: Mapping[str, Any], ctx: Context, rng: np.random.Generator | None = None) -> dict[str, Any]:
         """Spec parameters (checked or raw) -> concrete parameters for ``ctx``
         (defaults filled from the device, channels selected, random draws made)."""
-        spec = _with_defaults(self.params, self.check(given))
+        spec = with_defaults(self.params, self.check(given))
         rng = np.random.default_rng(0) if rng is None else rng
         return self._resolve(spec, ctx, rng)
 

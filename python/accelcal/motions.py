@@ -31,7 +31,8 @@ from typing import Any, Callable, Mapping, NamedTuple
 
 import numpy as np
 
-from .effects import Param, _check_params, _with_defaults, format_spec, parse_spec, rotation_matrix
+from .sensor import interp_truth, rotation_matrix
+from .spec import Param, check_params, format_spec, parse_spec, with_defaults
 from .errors import AccelcalError
 
 __all__ = [
@@ -101,9 +102,8 @@ class Trajectory:
         if self.evaluator is not None:
             k = self.evaluator(times, position=False)
             return k.f, k.omega, k.alpha
-        from .effects import _interp_truth
 
-        return _interp_truth(self, times)
+        return interp_truth(self, times)
 
     def world_acceleration(self) -> np.ndarray:
         """a_O in world axes (n, 3): C f + g_vec (needs the attitude)."""
@@ -677,11 +677,11 @@ class Motion:
         return self.params + _TEMP_PARAMS
 
     def check(self, given: Mapping[str, Any]) -> dict[str, Any]:
-        return _check_params(self.all_params, given, f"motion {self.name!r}")
+        return check_params(self.all_params, given, f"motion {self.name!r}")
 
     def __call__(self, device: Any, rng: np.random.Generator | None = None, **params: Any) -> Trajectory:
         given = self.check(params)
-        full = _with_defaults(self.all_params, given)
+        full = with_defaults(self.all_params, given)
         temp = {p.name: full.pop(p.name) for p in _TEMP_PARAMS}
         rng = np.random.default_rng(0) if rng is None else rng
         out = self.build(device, rng, **full)

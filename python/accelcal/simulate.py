@@ -35,16 +35,14 @@ import numpy as np
 from . import __version__
 from .effects import (
     PIPELINE_ORDER,
-    ChannelState,
-    Context,
     EffectSpec,
     effect_rng,
-    evaluate,
-    format_spec,
     params_to_json,
     parse_effect_specs,
 )
 from .errors import AccelcalError
+from .sensor import ChannelState, Context, evaluate, true_state
+from .spec import format_spec
 from .motions import Motion, Trajectory, get_motion, parse_motion_spec
 from .recording import Recording, recording_from_arrays
 
@@ -73,51 +71,6 @@ class Simulation:
     clean_counts: np.ndarray
     effects: dict[str, dict[str, Any]] = field(default_factory=dict)
     context: Context | None = None
-
-
-def _calibration_arrays(device: Any, cal: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    offsets = np.asarray(cal.offsets, float).reshape(-1)
-    if offsets.shape[0] != device.n_channels:
-        raise AccelcalError(
-            f"the calibration has {offsets.shape[0]} channels but device {device.name!r} has {device.n_channels}"
-        )
-    sens = np.asarray(cal.sensitivity, float).reshape(-1, 3)
-    pos = getattr(cal, "positions", None)
-    if pos is None:
-        pos = np.array(device.positions, float)
-    else:
-        pos = np.asarray(pos, float)
-        known = np.all(np.isfinite(pos), axis=1)
-        pos = np.where(known[:, None], pos, device.positions)
-    if not (np.all(np.isfinite(offsets)) and np.all(np.isfinite(sens))):
-        raise AccelcalError("the calibration has non-finite offsets or sensitivities")
-    return offsets, sens, pos
-
-
-def true_state(device: Any, calibration: Any = None, temp_c: np.ndarray | None = None) -> ChannelState:
-    """The true channel state: ``calibration`` (anything with ``offsets``,
-    ``sensitivity`` and optionally ``positions``) or the device's nominal
-    values; centripetal multiplier 1.  With ``temp_c`` (n,) and a calibration
-    that has temperature coefficients (``offset_tc``, ``gain_tc``,
-    ``temp_ref_c``), the time-varying bias and gain they imply are included."""
-    if calibration is None:
-        b, s, r = device.nominal_offsets(), device.nominal_sensitivity(), np.array(device.positions, float)
-    else:
-        b, s, r = _calibration_arrays(device, calibration)
-    state = ChannelState.from_parameters(b, s, r, 1.0)
-    if calibration is None or temp_c is None:
-        return state
-    ref = getattr(calibration, "temp_ref_c", None)
-    otc = getattr(calibration, "offset_tc", None)
-    gtc = getattr(calibration, "gain_tc", None)
-    if ref is None or (otc is None and gtc is None):
-        return state
-    dT = (np.asarray(temp_c, float) - float(ref))[:, None]
-    if otc is not None:
-        state = state.replace(bias=dT * np.nan_to_num(np.asarray(otc, float))[None, :])
-    if gtc is not None:
-        state = state.replace(gain=1.0 + dT * np.nan_to_num(np.asarray(gtc, float))[None, :])
-    return state
 
 
 def _rngs(seed: int) -> tuple[np.random.Generator, np.random.Generator]:
