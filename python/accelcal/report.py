@@ -19,7 +19,6 @@ is then left out).
 """
 from __future__ import annotations
 
-import io
 import math
 import os
 from typing import Any
@@ -27,24 +26,13 @@ from typing import Any
 import numpy as np
 
 from .errors import AccelcalError, atomic_write
+from .plotting import pyplot, save_figure
 
 __all__ = ["write_report", "summary_text"]
 
 _MAX_POINTS = 20000
 
 
-def _plt():
-    import matplotlib
-    matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
-    return plt
-
-
-def _save(fig, path: str, dpi: int) -> None:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
-    data = buf.getvalue()
-    atomic_write(path, lambda f: f.write(data), mode="wb")
 
 
 MEAN_BINS = 300  # running means per residual trace (long recordings) ...
@@ -87,7 +75,7 @@ def _plot_residual_time(res: dict, path: str, dpi: int) -> bool:
     ser = getattr(res, "series", None)
     if not ser:
         return False
-    plt = _plt()
+    plt = pyplot()
     tg, e = np.asarray(ser["tg"]), np.asarray(ser["residual"])
     after = np.asarray(ser["residual_after"])
     sig = np.asarray(ser["noise_floor"])
@@ -130,7 +118,7 @@ def _plot_residual_time(res: dict, path: str, dpi: int) -> bool:
     handles, labels = axes[0][0].get_legend_handles_labels()
     fig.legend(handles, labels, fontsize=7, loc="upper center", ncol=4, bbox_to_anchor=(0.5, 0.955), frameon=False)
     fig.subplots_adjust(top=1.0 - 0.95 / (1.7 * rows + 0.8))
-    _save(fig, path, dpi)
+    save_figure(fig, path, dpi)
     plt.close(fig)
     return True
 
@@ -158,7 +146,7 @@ def _bars(ax, items: list[dict], floor: float, title: str, key: str = "rms_count
 
 
 def _plot_breakdown(res: dict, path: str, dpi: int) -> None:
-    plt = _plt()
+    plt = pyplot()
     w = res.get("where", {})
     floor = float(res["gap"]["noise_floor_counts"])
     panels = []
@@ -188,12 +176,12 @@ def _plot_breakdown(res: dict, path: str, dpi: int) -> None:
     fig.suptitle(f"Where the gap lies: residual RMS {res['gap']['rms_counts']:.3g} counts, noise floor "
                  f"{floor:.3g} counts (numbers on bars: samples)", fontsize=10)
     fig.tight_layout()
-    _save(fig, path, dpi)
+    save_figure(fig, path, dpi)
     plt.close(fig)
 
 
 def _plot_candidates(res: dict, path: str, dpi: int) -> None:
-    plt = _plt()
+    plt = pyplot()
     eff = res.get("effects", [])
     if not eff:
         return
@@ -213,7 +201,7 @@ def _plot_candidates(res: dict, path: str, dpi: int) -> None:
     ax.set_xlabel("counts (RMS over held-out samples)", fontsize=8)
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.6 / max(len(eff), 1) - 0.08), ncol=3)
     ax.set_title(f"Candidates (red: chosen, orange: significant); verdict: {res.get('verdict')}", fontsize=10)
-    _save(fig, path, dpi)
+    save_figure(fig, path, dpi)
     plt.close(fig)
 
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..plotting import plt, save_figure
+from ..plotting import pyplot, save_figure
 from .common import Columns
 
 __all__ = ["report_plots"]
@@ -32,6 +32,7 @@ def report_plots(out_dir, columns: Columns, rec=None, kind: str | None = None) -
     list of Path
         The files written (each atomically).
     """
+    plt = pyplot()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     t = columns["t"]
