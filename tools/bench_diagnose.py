@@ -56,9 +56,11 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "python"))
 
 from accelcal.device import Device, default_device, default_triad, pendulum_device  # noqa: E402
-from accelcal.effects import EFFECT_NAMES, EFFECTS, evaluate, format_spec  # noqa: E402
+from accelcal.effects import EFFECT_NAMES, EFFECTS, random_walk  # noqa: E402
 from accelcal.motions import MOTIONS, Kinematics, Trajectory, temperature_profile  # noqa: E402
-from accelcal.simulate import run_simulation, seed_prototype_truth, true_state  # noqa: E402
+from accelcal.sensor import evaluate, rotation_matrix, true_state  # noqa: E402
+from accelcal.simulate import run_simulation, seed_prototype_truth  # noqa: E402
+from accelcal.spec import format_spec  # noqa: E402
 
 LABELS = tuple(EFFECT_NAMES) + ("none",)
 RHO_LO, RHO_HI = 0.05, 30.0
@@ -67,7 +69,6 @@ GAP_S = 1.0
 
 # ------------------------------------------------------------------ devices, motions
 def random_array(rng: np.random.Generator, n_triads: int) -> Device:
-    from accelcal.effects import rotation_matrix
     pos, axes = [], []
     for _ in range(n_triads):
         d = rng.standard_normal(3)
@@ -403,7 +404,6 @@ def _arr(v):
 
 def _drift(p: dict, t: np.ndarray) -> np.ndarray:
     """(n, N) bias change of bias_drift params (the registry's formula: ramp + seeded walk + path)."""
-    from accelcal.effects import random_walk
     rate = _arr(p["rate"])
     out = (t - float(p["t0"]))[:, None] * rate[None, :]
     rw = _arr(p.get("rw", np.zeros_like(rate)))

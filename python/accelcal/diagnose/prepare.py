@@ -1,0 +1,223 @@
+"""The model's prediction for the recordings (through :mod:`accelcal.sensor`) and the
+data the candidates fit: reference or jig-free poses, segments, blocks and folds."""
+from __future__ import annotations
+
+
+import numpy as np
+
+from ..effects.fitdata import FitData, tangent_basis
+from ..effects.settings import BLOCK_S
+from ..errors import InputError
+from ..motions import Trajectory
+from ..sensor import evaluate, true_state
+from ..static import detect_static
+
+
+def segments(t: np.ndarray, usable: np.ndarray, key: np.ndarray, h: float) -> list[tuple[int, int]]:
+    """Contiguous runs of usable samples with one key and no time gap (index pairs)."""
+    n = t.shape[0]
+    brk = np.zeros(n, bool)
+    brk[0] = True
+    brk[1:] = (np.diff(t) > 1.5 * h) | (key[1:] != key[:-1]) | (usable[1:] != usable[:-1])
+    starts = np.flatnonzero(brk)
+    ends = np.append(starts[1:], n)
+    return [(int(a), int(b)) for a, b in zip(starts, ends) if usable[a]]
+
+
+def jigfree_poses(rec, device) -> list[np.ndarray]:
+    """Static poses of a recording without reference f: its pose labels, else detected."""
+    if rec.has_pose():
+        out = []
+        for lab in rec.pose_labels():
+            out.append(np.flatnonzero(rec.pose == lab))
+        return out
+    return [np.arange(a, b) for a, b in detect_static(rec, device)]
+
+
+def pose_force(S: np.ndarray, ybar: np.ndarray, g: float, wch: np.ndarray) -> np.ndarray:
+    """f with |f| = g minimising sum_i w_i (ybar_i - s_i . f)^2 (Gauss-Newton on the sphere)."""
+    sw = np.sqrt(wch)
+    f = np.linalg.lstsq(S * sw[:, None], ybar * sw, rcond=None)[0]
+    nf = np.linalg.norm(f)
+    f = g * (f / nf if nf > 0 else np.array([0.0, 0.0, 1.0]))
+    for _ in range(8):
+        E = tangent_basis(f / g)                        # (2,3)
+        J = (S @ E.T) * sw[:, None]                      # (N,2)
+        d = np.linalg.lstsq(J, (ybar - S @ f) * sw, rcond=None)[0]
+        f = f + E.T @ d
+        f = g * f / np.linalg.norm(f)
+        if np.max(np.abs(d)) < 1e-12 * g:
+            break
+    return f
+
+
+def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
+
+    N = device.n_channels
+    g = float(device.gravity_mps2)
+    b = np.asarray(cal.offsets, float)
+    S = np.asarray(cal.sensitivity, float)
+    r = cal.positions_or_nominal(device)
+    at_origin = bool(np.all(np.abs(r) < 1e-12))
+    h = 1.0 / float(device.sample_rate_hz)
+    has_f = [rec.has_f() for rec in recs]
+    notes: list[str] = []
+    if any(has_f):
+        mode = "reference"
+        keep = [i for i, hf in enumerate(has_f) if hf]
+        for i, hf in enumerate(has_f):
+            if not hf:
+                notes.append(f"{recs[i].source}: skipped: no reference f while other recordings have one "
+                             "(diagnose it on its own for a jig-free diagnosis)")
+    else:
+        mode = "jigfree"
+        keep = list(range(len(recs)))
+
+    parts = []
+    rec_info = []
+    for ri in keep:
+        rec = recs[ri]
+        n = rec.n_samples
+        T = np.asarray(rec.temp_c, float)
+        has_tc = cal.temp_ref_c is not None and (cal.offset_tc is not None or cal.gain_tc is not None)
+        state = true_state(device, cal, T if has_tc else None)
+        state = state.replace(centripetal=np.full(N, float(m0)))
+        pose_lab = np.asarray(rec.pose, np.int64)
+        if mode == "reference":
+            traj = Trajectory.from_recording(rec, g)
+            if at_origin:      # no rotation terms: w and dw are not needed
+                traj.omega = np.nan_to_num(traj.omega)
+                traj.alpha = np.nan_to_num(traj.alpha)
+            with np.errstate(invalid="ignore"):
+                pred = evaluate(traj, state)
+            usable = np.all(np.isfinite(pred), axis=1)
+            f, w, dw = traj.f, traj.omega, traj.alpha
+            stated = pose_lab >= 0
+            key = pose_lab.copy()
+            how = "reference f" + (", w, dw" if rec.has_omega() else "") + (", temp_c" if rec.has_temp() else "")
+        else:
+            poses = jigfree_poses(rec, device)
+            off = state.total_offset()
+            off = np.broadcast_to(off, (n, N))
+            gain = np.ones((n, N)) if state.gain is None else state.gain
+            y = (np.asarray(rec.raw, float) - off) / gain
+            f = np.full((n, 3), np.nan)
+            key = np.full(n, -1, np.int64)
+            wch = 1.0 / np.maximum(np.asarray(device.noise_counts(), float), 1.0) ** 2 \
+                if np.all(device.noise_counts() > 0) else np.ones(N)
+            for p, idx in enumerate(poses):
+                f[idx] = pose_force(S, y[idx].mean(axis=0), g, wch)
+                key[idx] = p
+            w = np.where(np.isfinite(f), 0.0, np.nan)
+            dw = w.copy()
+            usable = np.all(np.isfinite(f), axis=1)
+            pred = np.full((n, N), np.nan)
+            fu = np.nan_to_num(f)
+            pred[:] = off + gain * (fu @ S.T)
+            pred[~usable] = np.nan
+            stated = np.zeros(n, bool)
+            pose_lab = key
+            how = f"jig-free: {len(poses)} static poses, |f| = g"
+        # readings at the ADC limits carry no information about the model (they would answer no effect)
+        at_limit = np.any((rec.raw <= device.raw_min) | (rec.raw >= device.raw_max), axis=1)
+        if np.any(at_limit & usable):
+            notes.append(f"{rec.source}: {int(np.count_nonzero(at_limit & usable))} samples with a reading at the "
+                         f"ADC limits ({device.raw_min} / {device.raw_max}) are left out")
+            usable = usable & ~at_limit
+        if not usable.any():
+            if mode == "jigfree":
+                raise InputError(rec.source, "no reference to diagnose against: no f_x, f_y, f_z columns and no "
+                                 "static interval (at least 1 s at rest) whose |f| = g could serve instead")
+            raise InputError(rec.source, "no sample has a complete reference (f_x, f_y, f_z, and w_*, dw_* while "
+                             "moving) to predict the readings from", column="f_x")
+        if mode == "reference" and usable.sum() < 0.5 * n:
+            notes.append(f"{rec.source}: {int((~usable).sum())} of {n} samples lack part of the reference "
+                         "(f, or w/dw while moving) and are left out")
+        off = np.broadcast_to(state.total_offset(), (n, N))
+        gain_t = None if state.gain is None else np.asarray(state.gain, float)
+        parts.append(dict(ri=ri, rec=rec, usable=usable, pred=pred, off=off, gain=gain_t, f=f, w=w, dw=dw,
+                          T=T, key=key, stated=stated, pose_lab=pose_lab))
+        rec_info.append({"source": rec.source, "n_samples": int(n), "n_used": int(usable.sum()), "reference": how})
+
+    # --- concatenate the usable samples, segments, global pose indices -----------------
+    cols: dict[str, list] = {k: [] for k in ("t", "tg", "rec", "raw", "pred", "off", "gain", "f", "w", "dw", "T",
+                                             "pose", "stated")}
+    seg_lo, seg_hi = [], []
+    tg_off = 0.0
+    n_tot = 0
+    pose_map: dict = {}
+    rec_t0 = []
+    for k, pt in enumerate(parts):
+        rec, u = pt["rec"], pt["usable"]
+        t = np.asarray(rec.t, float)
+        rec_t0.append(float(t[0]))
+        segs = segments(t, u, pt["key"], h)
+        idx = np.concatenate([np.arange(a, bb) for a, bb in segs])
+        # local positions of the segments in the concatenated arrays
+        pos = n_tot
+        for a, bb in segs:
+            seg_lo.append(pos)
+            seg_hi.append(pos + bb - a)
+            pos += bb - a
+        tt = t[idx]
+        cols["t"].append(tt)
+        cols["tg"].append(tt - t[0] + tg_off)
+        tg_off += float(t[-1] - t[0]) + 1000.0 * h + 1.0
+        cols["rec"].append(np.full(idx.size, k))
+        cols["raw"].append(np.asarray(rec.raw, float)[idx])
+        cols["pred"].append(pt["pred"][idx])
+        cols["off"].append(np.asarray(pt["off"], float)[idx])
+        cols["gain"].append(np.ones((idx.size, N)) if pt["gain"] is None else pt["gain"][idx])
+        for nm in ("f", "w", "dw"):
+            cols[nm].append(np.asarray(pt[nm], float)[idx])
+        cols["T"].append(pt["T"][idx])
+        lab = pt["pose_lab"][idx]
+        gp = np.full(idx.size, -1, np.int64)
+        for L in np.unique(lab[lab >= 0]):
+            keyp = (k, int(L))
+            if keyp not in pose_map:
+                pose_map[keyp] = len(pose_map)
+            gp[lab == L] = pose_map[keyp]
+        cols["pose"].append(gp)
+        cols["stated"].append(pt["stated"][idx])
+        n_tot += idx.size
+    cat = {k: np.concatenate(v) for k, v in cols.items()}
+    seg_lo = np.array(seg_lo, np.int64)
+    seg_hi = np.array(seg_hi, np.int64)
+    n = n_tot
+    seg = np.repeat(np.arange(seg_lo.size), seg_hi - seg_lo)
+
+    # --- blocks and folds -----------------------------------------------------------------
+    rng = np.random.default_rng(seed)
+    blen = max(1, int(round(BLOCK_S / h)))
+    bstart, bfold, bseg = [], [], []
+    for s_i, (a, bb) in enumerate(zip(seg_lo, seg_hi)):
+        L = int(bb - a)
+        nb = max(K, -(-L // blen)) if L >= K else 1
+        edges = a + (np.arange(nb) * L) // nb
+        o = int(rng.integers(K))
+        for j, e0 in enumerate(edges):
+            bstart.append(int(e0))
+            bfold.append((j + o) % K)
+            bseg.append(s_i)
+    bstart = np.array(bstart, np.int64)
+    bfold = np.array(bfold, np.int64)
+    if len(np.unique(bfold)) < K:
+        raise InputError(rec_info[0]["source"], f"too little data for {K}-fold cross-validation "
+                         f"({n} usable samples in {len(bstart)} blocks)")
+    block = np.repeat(np.arange(bstart.size), np.diff(np.append(bstart, n)))
+
+    pred = cat["pred"]
+    p0 = np.clip(pred, device.raw_min, device.raw_max)
+    gain_t = cat["gain"] if np.any(cat["gain"] != 1.0) else None
+    static = cat["pose"] >= 0
+    D = FitData(device=device, cal=cal, mode=mode, m0=float(m0), K=K, t=cat["t"], tg=cat["tg"], rec=cat["rec"],
+              seg=seg, seg_lo=seg_lo, seg_hi=seg_hi, bstart=bstart, bfold=bfold, bseg=np.array(bseg, np.int64),
+              block=block, raw=cat["raw"], pred=pred, p0=p0, offset_t=cat["off"], gain_t=gain_t,
+              sensed=pred - cat["off"], f=cat["f"], w=cat["w"], dw=cat["dw"], temp=cat["T"], pose=cat["pose"],
+              pose_labels=[kk for kk, _ in sorted(pose_map.items(), key=lambda kv: kv[1])],
+              pose_stated=np.where(cat["stated"], cat["pose"], -1), static=static, s=S, r=r, b=b,
+              rec_t0=np.array(rec_t0), rec_info=rec_info, notes=notes, h=h)
+    for i, pt in enumerate(parts):
+        D.rec_info[i]["t0"] = rec_t0[i]
+    return D

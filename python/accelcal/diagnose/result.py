@@ -1,0 +1,215 @@
+"""The diagnosis: stepwise search over the effects, the verdict, the JSON object."""
+from __future__ import annotations
+
+import math
+import time
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..effects import EFFECT_NAMES
+from ..effects.adc import code_lattice
+from ..effects.fitting import Cand, block_ss
+from ..effects.settings import BACKFIT_PASSES, BLOCK_S
+from ..errors import AccelcalError
+from .floor import setup_rows
+from .inputs import as_calibration, as_device, as_recordings
+from .prepare import prepare
+from .scoring import rank_key, run_candidates
+from .settings import FORMAT, MAX_STEPS, MIN_SHRINK, PENALTY_PER_PARAM, T_MIN, Z_MIN
+from .text import entry, to_json
+from .where import pose_mean_gap, where_breakdown
+from ..effects import EFFECTS
+
+
+class DiagnosisResult(dict):
+    """The diagnosis JSON object (a plain dict for ``json.dump``); ``series`` holds the
+    per-sample arrays (time, residual before/after, noise floor) that :func:`write_report`
+    plots.  It is not part of the JSON."""
+
+    series: dict | None = None
+
+
+def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, seed: int = 0,
+             candidates: Sequence[str] | None = None, max_steps: int = MAX_STEPS, model_centripetal: bool = True,
+             progress: Any = None) -> DiagnosisResult:
+    """Diagnose the gap between recordings and a calibrated model (see the module doc).
+
+    ``device``, ``calibration``: objects or JSON paths; ``recordings``: Recordings or CSV
+    paths (one or several).  ``folds``: cross-validation folds; ``seed``: fold assignment.
+    ``candidates``: effect names to try (default: every effect of the registry).
+    ``model_centripetal``: False diagnoses a model without the omega x (omega x r) term.
+    ``progress``: optional callable(name) called after each candidate is scored.
+    Returns the JSON object of the data contract (a dict; see :class:`DiagnosisResult`).
+    Bad input raises :class:`~accelcal.errors.InputError` / AccelcalError (one line).
+    """
+    t_start = time.perf_counter()
+    if isinstance(folds, bool) or not isinstance(folds, (int, np.integer)) or folds < 2:
+        raise AccelcalError(f"diagnose: folds must be an integer >= 2, got {folds!r}")
+    dev = as_device(device)
+    cal, cal_src = as_calibration(calibration, dev)
+    recs = as_recordings(recordings, dev)
+    cands = dict(EFFECTS)
+    if candidates is None:
+        names = list(EFFECT_NAMES)
+    else:
+        names = []
+        for nm in candidates:
+            if nm not in cands:
+                raise AccelcalError(f"diagnose: unknown candidate effect {nm!r}; effects: {', '.join(EFFECT_NAMES)}")
+            names.append(nm)
+    D = prepare(dev, cal, recs, int(folds), int(seed), 1.0 if model_centripetal else 0.0)
+    e = D.raw - D.p0
+    setup_rows(D, e)
+
+    skipped = []
+    active = []
+    for nm in names:
+        why = cands[nm].skip(D)
+        if why is None:
+            active.append(nm)
+        else:
+            skipped.append({"name": nm, "reason": why})
+
+    # --- step 1: every candidate alone, then stepwise --------------------------------------------
+    y = e.copy()
+    pcur = D.p0.copy()
+    first, _, S0u = run_candidates(D, cands, active, y, pcur, progress)
+    base_rms = float(math.sqrt(S0u.sum() / (D.n * D.R)))
+    steps: list[tuple[Cand, str]] = []
+    results = first
+    remaining = list(active)
+    chosen: list[str] = []
+    while True:
+        sig = [c for c in results.values() if c.significant]
+        if not sig:
+            break
+        best = sorted(sig, key=rank_key)[0]
+        baseline = "the calibrated model" + ("" if not chosen else " + " + " + ".join(chosen))
+        steps.append((best, baseline))
+        chosen.append(best.name)
+        remaining.remove(best.name)
+        if best.gain > 0:
+            y = y - best.delta
+            pcur = pcur + best.delta
+        if len(chosen) >= max_steps or not remaining:
+            break
+        results, _, _ = run_candidates(D, cands, remaining, y, pcur, progress)
+
+    # --- joint refit of the chosen effects (backfitting) -----------------------------------------
+    joint: dict[str, Cand] = {c.name: c for c, _ in steps}
+    if len(steps) > 1:
+        deltas = {c.name: (c.delta if c.gain > 0 else np.zeros_like(c.delta)) for c, _ in steps}
+        for _ in range(BACKFIT_PASSES):
+            for c, _ in steps:
+                if c.gain <= 0:
+                    continue
+                others = sum((deltas[o] for o in deltas if o != c.name), np.zeros_like(e))
+                yt = e - others
+                R0 = D.rows(yt)
+                s0w, s0u = block_ss(D, R0)
+                cc = cands[c.name].cv(D, yt, D.p0 + others, s0w, s0u, folds=False)
+                deltas[c.name] = cc.delta
+                joint[c.name] = cc
+    total_delta = np.zeros_like(e)
+    for c, _ in steps:
+        if c.gain > 0:
+            total_delta += joint[c.name].delta
+
+    # --- output ------------------------------------------------------------------------------------
+    effects = []
+    for k, (c, baseline) in enumerate(steps):
+        effects.append(entry(D, c, step=k + 1, selected=True, baseline=baseline, alone=first.get(c.name)))
+    rest = sorted((c for nm, c in first.items() if nm not in chosen), key=rank_key)
+    for c in rest:
+        effects.append(entry(D, c, step=None, selected=False, baseline="the calibrated model"))
+    verdict = steps[0][0].name if steps else "none"
+    model_after = steps[-1][0].after if steps else base_rms
+    floor = float(np.sqrt(np.mean(D.sigma ** 2)))
+    rms_ch = np.sqrt(np.mean(e * e, axis=0))
+    gap_rms = float(np.sqrt(np.mean(rms_ch ** 2)))
+    notes = list(D.notes)
+    if D.mode == "jigfree":
+        notes.append("jig-free: the static poses with |f| = g are the reference; fitted and scored on the "
+                     f"{D.R} direction(s) per sample the pose angles cannot absorb")
+    if steps and len(steps) > 1:
+        notes.append("effects after the first were scored on the residual left by the ones before (their in-sample "
+                     "fits subtracted); 'model' gives the joint refit")
+    # near-ties for the verdict: candidates whose held-out gain is within a few null spreads of it
+    ties = []
+    if steps:
+        b0 = steps[0][0]
+        for c in first.values():
+            if c.name != b0.name and c.significant and (b0.gain - c.gain) < 3.0 * math.sqrt(max(b0.gain, 1.0)) \
+                    and abs(c.shrink - b0.shrink) < 0.02:
+                ties.append(c.name)
+        effects[0]["ambiguous_with"] = ties
+    if ties:
+        notes.append(f"{verdict} is barely ahead of {', '.join(ties)}: the data hardly tell them apart")
+    if D.mode == "jigfree" and len(D.pose_labels) < 6:
+        notes.append(f"only {len(D.pose_labels)} static pose(s) found: effects that are constant within a pose "
+                     "(offset, gain, misalignment, nonlinearity) can hardly be told apart")
+    lattice = []
+    for i in range(D.N):
+        q, ph, fr, nd = code_lattice(D.raw[:, i])
+        ent = {"channel": i, "step": int(q), "share_on_lattice": fr, "distinct_values": int(nd)}
+        if q == 1 and D.n >= 500:
+            # uneven use of the low bits (missing or doubled codes): the most used residue class mod m
+            v = D.raw[:, i].astype(np.int64)
+            best = None
+            for m in (2, 3, 4):
+                share = float(np.max(np.bincount(v % m, minlength=m))) / D.n
+                if best is None or share - 1.0 / m > best[1] - 1.0 / best[0]:
+                    best = (m, share)
+            ent["low_bits"] = {"modulus": best[0], "share_of_top_residue": best[1], "uniform_share": 1.0 / best[0]}
+            if best[1] - 1.0 / best[0] > 0.1:
+                notes.append(f"raw_{i}: {100 * best[1]:.0f} % of the readings fall in one residue class mod {best[0]} "
+                             f"({100 / best[0]:.0f} % for evenly used codes): the lowest bits are unevenly used "
+                             "(missing or doubled codes: a rescaled or differentially nonlinear ADC); not a lattice")
+        lattice.append(ent)
+    gap_extra = pose_mean_gap(D, e)
+    result = DiagnosisResult({
+        "format": FORMAT,
+        "verdict": verdict,
+        "device": dev.name,
+        "calibration": {"source": cal_src, "method": cal.method},
+        "mode": D.mode,
+        "recordings": D.rec_info,
+        "n_samples": D.n,
+        "n_channels": D.N,
+        "gap": {
+            "rms_counts": gap_rms,
+            "noise_floor_counts": floor,
+            "ratio_to_noise": gap_rms / floor if floor > 0 else None,
+            "heldout_rms_counts": base_rms,
+            "noise_floor_per_channel": D.sigma.tolist(),
+            "rms_per_channel": rms_ch.tolist(),
+            "noise_method": D.noise_method,
+            **gap_extra,
+        },
+        "effects": effects,
+        "model": {
+            "effects": chosen,
+            "heldout_rms_before": base_rms,
+            "heldout_rms_after": model_after,
+            "shrink": float(max(0.0, 1.0 - model_after / base_rms)) if base_rms > 0 else 0.0,
+            "params": {nm: to_json(joint[nm].params) for nm in chosen},
+            "params_sigma": {nm: to_json(joint[nm].sigma) for nm in chosen},
+        },
+        "skipped": skipped,
+        "where": to_json(where_breakdown(D, e)),
+        "raw_values": lattice,
+        "cv": {"folds": D.K, "blocks": D.B, "seed": int(seed), "block_s": BLOCK_S,
+               "t_min": T_MIN, "z_min": Z_MIN, "penalty_per_param_chi2": PENALTY_PER_PARAM, "min_shrink": MIN_SHRINK,
+               "rule": "significant: held-out chi2 gain > penalty, (block t >= t_min or chi2 z >= z_min), "
+                       "shrink >= min_shrink"},
+        "notes": notes,
+        "model_centripetal": bool(model_centripetal),
+        "elapsed_s": time.perf_counter() - t_start,
+    })
+    result["where"] = to_json(result["where"])
+    result.series = {
+        "tg": D.tg, "t": D.t, "rec": D.rec, "residual": e, "residual_after": e - total_delta,
+        "noise_floor": D.sigma, "sources": [ri["source"] for ri in D.rec_info], "static": D.static,
+    }
+    return result

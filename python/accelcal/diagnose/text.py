@@ -1,0 +1,68 @@
+"""The result's JSON entries and the one-line prose of each effect."""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ..effects import EFFECTS
+from ..effects.fitdata import FitData
+from ..effects.fitting import Cand
+
+
+def to_json(v: Any) -> Any:
+    if isinstance(v, dict):
+        return {str(k): to_json(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [to_json(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return to_json(v.tolist())
+    if isinstance(v, (np.integer,)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        x = float(v)
+        if math.isfinite(x):
+            return x
+        return "inf" if x > 0 else "-inf" if x < 0 else None
+    if isinstance(v, np.bool_):
+        return bool(v)
+    return v
+
+
+def units_of(name: str) -> dict:
+    return {fp.name: fp.unit for fp in EFFECTS[name].fit}
+
+
+def entry(D: FitData, c: Cand, *, step: int | None, selected: bool, baseline: str, alone: Cand | None = None) -> dict:
+    e = {
+        "name": c.name,
+        "shrink": c.shrink,
+        "heldout_rms_before": c.before,
+        "heldout_rms_after": c.after,
+        "params": to_json(c.params),
+        "params_sigma": to_json(c.sigma),
+        "units": units_of(c.name),
+        "n_params": int(c.k),
+        "significant": bool(c.significant),
+        "selected": bool(selected),
+        "step": step,
+        "baseline": baseline,
+        "score": {"gain_chi2": c.gain, "penalty_chi2": c.penalty, "penalised_gain_chi2": c.gain - c.penalty,
+                  "t": c.t if math.isfinite(c.t) else 1e9, "z": c.z, "evidence": c.evidence},
+        "summary": describe(c.name, c.params, c.sigma, D),
+    }
+    if c.notes:
+        e["notes"] = list(c.notes)
+    a = alone if alone is not None else c
+    e["alone"] = {"shrink": a.shrink, "heldout_rms_before": a.before, "heldout_rms_after": a.after}
+    return e
+
+
+def describe(name: str, p: dict, s: dict, D: FitData) -> str:
+    """One line in physical units for the summary: the effect's own prose
+    (``Effect.describe``), or its name when its parameters do not fit the prose."""
+    try:
+        return EFFECTS[name].describe(p, s, D)
+    except (KeyError, ValueError, IndexError):
+        return name

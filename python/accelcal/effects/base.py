@@ -1,0 +1,187 @@
+"""The Effect base class (simulation, fit, report and benchmark hooks) and the helpers
+its subclasses share to resolve a user's spec into per-channel parameters."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+import numpy as np
+
+from ..errors import AccelcalError
+from ..sensor import ChannelState, Context, evaluate
+from ..spec import Param, check_params, with_defaults
+
+
+STAGES = ("state", "signal", "adc", "reference")
+
+
+@dataclass(frozen=True)
+class FitParam:
+    """One concrete (fitted) parameter: ``shape`` is 'channel' (N,),
+    'channel3' (N, 3), 'pose' (P,), 'pose3' (P, 3), 'knot' (K,), 'channel_knot' (N, K) or
+    'scalar'; ``free`` False
+    for bookkeeping values a fit keeps fixed (reference temperature, seeds)."""
+
+    name: str
+    shape: str
+    unit: str
+    doc: str
+    free: bool = True
+
+
+CHANNEL_PARAM = Param("channel", "all", "-", "channels that get the effect: all, an index or a list", "channels")
+
+
+RANDOM_PARAM = Param("random", False, "-", "1: each selected channel draws value x N(0, 1) instead of the value", "bool")
+
+
+def owner(name: str) -> str:
+    return f"effect {name!r}"
+
+
+class Effect:
+    """One contract effect.  Subclasses set the class attributes and implement
+    the stage's hook (``modify_state`` / ``apply_signal`` / ``apply_reference``)
+    plus ``_resolve`` and ``identity``."""
+
+    name: str = ""
+    summary: str = ""  # the contract's line
+    doc: str = ""  # parameterisation, units, how it is applied
+    stage: str = "state"
+    linear: bool = False  # readings affine in the free concrete parameters
+    params: tuple[Param, ...] = ()
+    fit: tuple[FitParam, ...] = ()
+
+    # -- user-facing ------------------------------------------------------
+
+    def check(self, given: Mapping[str, Any]) -> dict[str, Any]:
+        """Coerce user parameters (strings or values); unknown names raise AccelcalError."""
+        return check_params(self.params, given, owner(self.name))
+
+    def resolve(self, given: Mapping[str, Any], ctx: Context, rng: np.random.Generator | None = None) -> dict[str, Any]:
+        """Spec parameters (checked or raw) -> concrete parameters for ``ctx``
+        (defaults filled from the device, channels selected, random draws made)."""
+        spec = with_defaults(self.params, self.check(given))
+        rng = np.random.default_rng(0) if rng is None else rng
+        return self._resolve(spec, ctx, rng)
+
+    def help(self) -> str:
+        lines = [f"{self.name}: {self.summary}"]
+        lines += [f"    {p.help()}" for p in self.params]
+        return "\n".join(lines)
+
+    # -- the model --------------------------------------------------------
+
+    def identity(self, ctx: Context) -> dict[str, Any]:
+        """Concrete parameters that leave ``ctx``'s readings unchanged."""
+        raise NotImplementedError
+
+    def apply(self, ctx: Context, p: Mapping[str, Any]) -> np.ndarray:
+        """Readings (n, N) float, noise-free, with this effect (parameters ``p``,
+        concrete) added to ``ctx`` (see the module doc for each stage)."""
+        if self.stage == "state":
+            return evaluate(ctx.truth, self.modify_state(ctx.state, p, ctx))
+        if self.stage in ("signal", "adc"):
+            return self.apply_signal(ctx.counts, p, ctx)
+        raise NotImplementedError
+
+    def modify_state(self, state: ChannelState, p: Mapping[str, Any], ctx: Context) -> ChannelState:
+        raise NotImplementedError(f"{self.name} is not a state effect")
+
+    def apply_signal(self, counts: np.ndarray, p: Mapping[str, Any], ctx: Context) -> np.ndarray:
+        raise NotImplementedError(f"{self.name} is not a signal effect")
+
+    def apply_reference(self, f_ref: np.ndarray, p: Mapping[str, Any], ctx: Context) -> np.ndarray:
+        """Recorded reference f (n, 3) with this effect (reference stage only);
+        other stages leave it alone."""
+        return f_ref
+
+    def _resolve(self, spec: dict[str, Any], ctx: Context, rng: np.random.Generator) -> dict[str, Any]:
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return f"<Effect {self.name} ({self.stage})>"
+
+
+def channel_mask(spec: Mapping[str, Any], ctx: Context, name: str) -> np.ndarray:
+    N = ctx.n_channels
+    sel = spec.get("channel")
+    m = np.zeros(N, bool)
+    if sel is None:
+        m[:] = True
+        return m
+    bad = [c for c in sel if c >= N]
+    if bad:
+        raise AccelcalError(
+            f"{owner(name)} parameter 'channel': channel {bad[0]} is out of range "
+            f"(the device has {N} channels: 0..{N - 1})"
+        )
+    m[list(sel)] = True
+    return m
+
+
+def per_channel(value: Any, default: np.ndarray, mask: np.ndarray, rng: np.random.Generator | None,
+                 name: str, pname: str, off_value: float = 0.0) -> np.ndarray:
+    """(N,) values: ``value`` (None = ``default``), scalar or a list of length N
+    or of the number of selected channels; ``rng`` given: value x N(0,1) per
+    channel; channels outside ``mask`` get ``off_value``."""
+    N = mask.shape[0]
+    if value is None:
+        v = np.asarray(default, float) * np.ones(N)
+    elif np.ndim(value) == 0:
+        v = np.full(N, float(value))
+    else:
+        arr = np.asarray(value, float).ravel()
+        k = int(mask.sum())
+        if arr.size == N:
+            v = arr.copy()
+        elif arr.size == k:
+            v = np.full(N, off_value)
+            v[mask] = arr
+        else:
+            raise AccelcalError(
+                f"{owner(name)} parameter {pname!r}: expected 1 value or {N} (one per channel)"
+                + (f" or {k} (one per selected channel)" if k != N else "")
+                + f", got {arr.size}"
+            )
+    if rng is not None:
+        v = v * rng.standard_normal(N)
+    return np.where(mask, v, off_value)
+
+
+def random_perpendicular(u: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Unit vectors (N,3) perpendicular to the unit rows of u, uniformly random around them."""
+    out = np.empty_like(u)
+    for i in range(u.shape[0]):
+        while True:
+            v = rng.standard_normal(3)
+            v -= np.dot(v, u[i]) * u[i]
+            nv = np.linalg.norm(v)
+            if nv > 1e-6:
+                out[i] = v / nv
+                break
+    return out
+
+
+def unit_rows(a: np.ndarray) -> np.ndarray:
+    n = np.linalg.norm(a, axis=1, keepdims=True)
+    return a / np.where(n > 0, n, 1.0)
+
+
+def start_time(ctx: Context) -> float:
+    return float(np.asarray(ctx.truth.t, float)[0])
+
+
+def temperature_of(ctx: Context, name: str) -> np.ndarray:
+    T = getattr(ctx.truth, "temp_c", None)
+    T = None if T is None else np.asarray(T, float)
+    if T is None or not np.all(np.isfinite(T)):
+        raise AccelcalError(f"{owner(name)} needs the temperature at every sample (temp_c)")
+    return T
+
+
+def strongest(v: np.ndarray) -> int:
+    """Index of the largest finite |v| (the channel a report line names)."""
+    v = np.asarray(v, float)
+    a = np.where(np.isfinite(v), np.abs(v), -1.0)
+    return int(np.argmax(a))

@@ -1,0 +1,191 @@
+"""Channel parameters: offset, gain, misalignment."""
+from __future__ import annotations
+
+
+import numpy as np
+
+from ..errors import AccelcalError
+from ..sensor import rotation_matrix
+from ..spec import Param
+from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, channel_mask, owner, per_channel, random_perpendicular, strongest, unit_rows
+from .fitdata import FitData, force_at, tangent_basis, unit_rows3
+from .fitting import Cand, LinearCandidate, block_ss, linear_fit
+from .settings import MISALIGN_MAX_RAD
+
+
+class Offset(LinearCandidate, Effect):
+    name = "offset"
+    summary = "b_i differs from the calibrated value (a constant shift)"
+    doc = "b_i -> b_i + db_i (counts)."
+    stage = "state"
+    linear = True
+    params = (
+        Param("db", None, "counts", "offset change; auto = 1 % of g in counts (per channel, from |s_i|)", "floats"),
+        CHANNEL_PARAM,
+        RANDOM_PARAM,
+    )
+    fit = (FitParam("db", "channel", "counts", "offset change"),)
+
+    def _resolve(self, spec, ctx, rng):
+        m = channel_mask(spec, ctx, self.name)
+        db = per_channel(spec["db"], 0.01 * ctx.g_counts(), m, rng if spec["random"] else None, self.name, "db")
+        return {"db": db}
+
+    def identity(self, ctx):
+        return {"db": np.zeros(ctx.n_channels)}
+
+    def modify_state(self, state, p, ctx):
+        return state.replace(offsets=state.offsets + np.asarray(p["db"], float))
+
+    # -- fit to a residual (the diagnosis) ------------------------------------
+
+    pname = 'db'
+
+    def columns(self, D):
+        return np.ones((D.n, D.N, 1))
+
+    # -- report prose ---------------------------------------------------------
+
+    def describe(self, p: dict, s: dict, D: FitData) -> str:
+        """One line in physical units for the report (p: parameters, s: their 1-sigma)."""
+        ks = np.linalg.norm(D.s, axis=1)
+        i = strongest(p["db"])
+        return (f"offset change up to {p['db'][i]:+.4g} +- {s['db'][i]:.2g} counts "
+                f"({p['db'][i] / ks[i]:+.4g} m/s^2) on channel {i}")
+
+
+class Gain(LinearCandidate, Effect):
+    name = "gain"
+    summary = "the magnitude of s_i differs (scale error along the axis)"
+    doc = "s_i -> (1 + scale_i) s_i (scale: fraction)."
+    stage = "state"
+    linear = True
+    params = (
+        Param("scale", 0.01, "fraction", "relative gain change delta k_i / k_i", "floats", minimum=-0.99),
+        CHANNEL_PARAM,
+        RANDOM_PARAM,
+    )
+    fit = (FitParam("scale", "channel", "fraction", "relative gain change"),)
+
+    def _resolve(self, spec, ctx, rng):
+        m = channel_mask(spec, ctx, self.name)
+        return {"scale": per_channel(spec["scale"], 0.0, m, rng if spec["random"] else None, self.name, "scale")}
+
+    def identity(self, ctx):
+        return {"scale": np.zeros(ctx.n_channels)}
+
+    def modify_state(self, state, p, ctx):
+        return state.replace(sensitivity=state.sensitivity * (1.0 + np.asarray(p["scale"], float))[:, None])
+
+    # -- fit to a residual (the diagnosis) ------------------------------------
+
+    pname = 'scale'
+
+    def columns(self, D):
+        return D.sensed[:, :, None]
+
+    # -- report prose ---------------------------------------------------------
+
+    def describe(self, p: dict, s: dict, D: FitData) -> str:
+        """One line in physical units for the report (p: parameters, s: their 1-sigma)."""
+        i = strongest(p["scale"])
+        return f"gain error up to {100 * p['scale'][i]:+.4g} +- {100 * s['scale'][i]:.2g} % on channel {i}"
+
+
+class Misalignment(LinearCandidate, Effect):
+    name = "misalignment"
+    summary = "the direction of s_i differs (cross-axis sensitivity)"
+    doc = ("s_i -> Exp(rot_i) s_i: s_i rotated by the small rotation vector rot_i (rad, body axes); "
+           "only the part of rot_i perpendicular to s_i matters (2 free values per channel).")
+    stage = "state"
+    linear = False  # affine to first order in rot
+    params = (
+        Param("angle_deg", 0.5, "deg", "tilt of each selected channel's sensitive axis", "floats", minimum=0.0),
+        Param("toward", "random", "-", "direction the axis tilts toward: random (per channel) or a body direction",
+              "direction_or_random"),
+        CHANNEL_PARAM,
+    )
+    fit = (FitParam("rot", "channel3", "rad", "rotation vector applied to s_i"),)
+
+    def _resolve(self, spec, ctx, rng):
+        m = channel_mask(spec, ctx, self.name)
+        ang = np.radians(per_channel(spec["angle_deg"], 0.0, m, None, self.name, "angle_deg"))
+        u = unit_rows(ctx.state.sensitivity)
+        if isinstance(spec["toward"], str):
+            d = random_perpendicular(u, rng)
+        else:
+            d = np.broadcast_to(spec["toward"], u.shape)
+            d = d - np.sum(d * u, axis=1, keepdims=True) * u
+            small = np.linalg.norm(d, axis=1) < 1e-9
+            if np.any(small & m):
+                i = int(np.flatnonzero(small & m)[0])
+                raise AccelcalError(
+                    f"{owner(self.name)} parameter 'toward': channel {i}'s axis already points that way"
+                )
+            d = unit_rows(d)
+        axis = unit_rows(np.cross(u, d))  # rotating u about u x d tilts it toward d
+        return {"rot": axis * ang[:, None]}
+
+    def identity(self, ctx):
+        return {"rot": np.zeros((ctx.n_channels, 3))}
+
+    def modify_state(self, state, p, ctx):
+        R = rotation_matrix(np.asarray(p["rot"], float))
+        return state.replace(sensitivity=np.einsum("nij,nj->ni", R, state.sensitivity))
+
+    # -- fit to a residual (the diagnosis) ------------------------------------
+
+    # fit: s_i -> Exp(rot_i) s_i.  Linear to first order; for tilts of more than a few tenths of a
+    #     degree the fit is relinearised (Gauss-Newton) about the all-data estimate rot0, and every
+    #     fold fits the increment about it: delta = exact(rot0) + X(rot0) d.
+
+    def _cols(self, D, fa, S):
+        E = tangent_basis(unit_rows3(S))                        # (N,2,3)
+        X = np.einsum("nkc,tnc->tnk", E, np.cross(S[None, :, :], fa))    # rot . (s x f_at)
+        if D.gain_t is not None:
+            X = X * D.gain_t[:, :, None]
+        return X, E
+
+    def _exact(self, D, fa, rot):
+        S1 = np.einsum("nij,nj->ni", rotation_matrix(rot), D.s)
+        d = np.einsum("tnc,nc->tn", fa, S1 - D.s)
+        return d * D.gain_t if D.gain_t is not None else d, S1
+
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
+        fa = force_at(D)
+        X, E = self._cols(D, fa, D.s)
+        Sw, Su, theta, cov, k, delta = linear_fit(D, X, y, S0w, S0u)
+        rot = np.einsum("nk,nkc->nc", theta, E)
+        # Gauss-Newton when second order matters (> ~0.1 deg), in reference mode only (jig-free, a
+        # common rotation is absorbed by the poses and the steps could wander along it); a step is
+        # kept only when it lowers the all-data chi2, and tilts stay below MISALIGN_MAX_RAD
+        if D.Qp is None and 2e-3 < np.max(np.linalg.norm(rot, axis=1)) < MISALIGN_MAX_RAD:
+            best = float(np.sum(D.W * (y - delta) ** 2))
+            for _ in range(3):
+                d0, S1 = self._exact(D, fa, rot)
+                X1, E1 = self._cols(D, fa, S1)
+                yr = y - d0
+                s0w, s0u = block_ss(D, yr)
+                Sw1, Su1, th1, cov1, k1, dlin = linear_fit(D, X1, yr, s0w, s0u)
+                step = np.einsum("nk,nkc->nc", th1, E1)
+                new_rot = rot + step             # Exp(step) Exp(rot) ~ Exp(rot + step) for small steps
+                if np.max(np.linalg.norm(new_rot, axis=1)) > MISALIGN_MAX_RAD:
+                    break
+                d_new, _ = self._exact(D, fa, new_rot)
+                obj = float(np.sum(D.W * (y - d_new) ** 2))
+                if obj >= best:
+                    break
+                best, rot, delta = obj, new_rot, d_new
+                Sw, Su, cov, k, E = Sw1, Su1, cov1, k1, E1
+                if np.max(np.linalg.norm(step, axis=1)) < 1e-6:
+                    break
+        sd = np.sqrt(np.maximum(np.einsum("nkc,nkl,nlc->nc", E, cov, E), 0.0))
+        return Cand(self.name, k, Sw, Su, delta, {"rot": rot}, {"rot": sd})
+
+    # -- report prose ---------------------------------------------------------
+
+    def describe(self, p: dict, s: dict, D: FitData) -> str:
+        """One line in physical units for the report (p: parameters, s: their 1-sigma)."""
+        a = np.degrees(np.linalg.norm(p["rot"], axis=1))
+        i = int(np.argmax(a))
+        return f"axis tilt up to {a[i]:.3g} deg (+- {np.degrees(np.linalg.norm(s['rot'][i])):.2g}) on channel {i}"

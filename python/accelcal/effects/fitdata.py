@@ -1,0 +1,143 @@
+"""FitData: the data every effect's fit works on (the recordings laid end to end, the
+model's prediction, blocks and folds for cross-validation, the noise floor), and small
+helpers over it."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .settings import ROTATING_RADPS, TEMP_MIN_SPAN_C
+
+
+@dataclass
+class FitData:
+    device: Any
+    cal: Any
+    mode: str                     # "reference" | "jigfree"
+    m0: float                     # centripetal multiplier of the model
+    K: int                        # folds
+    t: np.ndarray                 # (n,) recording time
+    tg: np.ndarray                # (n,) strictly increasing global time (recordings laid end to end)
+    rec: np.ndarray               # (n,) recording index
+    seg: np.ndarray               # (n,) segment index
+    seg_lo: np.ndarray            # (S,) first sample of each segment
+    seg_hi: np.ndarray            # (S,) one past the last
+    bstart: np.ndarray            # (B,) first sample of each block (blocks are contiguous)
+    bfold: np.ndarray             # (B,) fold of each block
+    bseg: np.ndarray              # (B,)
+    block: np.ndarray             # (n,)
+    raw: np.ndarray               # (n, N) float
+    pred: np.ndarray              # (n, N) model prediction, unclipped
+    p0: np.ndarray                # (n, N) clipped to the ADC range
+    offset_t: np.ndarray          # (n, N) b + bias(T)
+    gain_t: np.ndarray | None     # (n, N) temperature gain factor or None
+    sensed: np.ndarray            # (n, N) pred - offset_t
+    f: np.ndarray                 # (n, 3) reference (or estimated) specific force
+    w: np.ndarray                 # (n, 3)
+    dw: np.ndarray                # (n, 3)
+    temp: np.ndarray              # (n,) NaN unknown
+    pose: np.ndarray              # (n,) global pose index, -1 none
+    pose_labels: list             # [(recording index, label)] per global pose
+    pose_stated: np.ndarray       # (n,) pose with a stated (reference) f, for pose_error
+    static: np.ndarray            # (n,) bool
+    s: np.ndarray                 # (N, 3)
+    r: np.ndarray                 # (N, 3)
+    b: np.ndarray                 # (N,)
+    rec_t0: np.ndarray            # (n_rec,) first sample time of each recording
+    rec_info: list
+    notes: list
+    Qp: np.ndarray | None = None  # (P, M, N) jig-free projections per pose
+    sigma: np.ndarray | None = None   # (N,) noise floor
+    noise_method: str = ""
+    W: np.ndarray | None = None   # (n, R) row weights
+    h: float = 0.0                # sample period (s)
+
+    @property
+    def n(self) -> int:
+        return int(self.t.shape[0])
+
+    @property
+    def N(self) -> int:
+        return int(self.raw.shape[1])
+
+    @property
+    def B(self) -> int:
+        return int(self.bstart.shape[0])
+
+    def rows(self, A: np.ndarray) -> np.ndarray:
+        """Channel-space array (n, N) -> the rows that are fitted and scored (n, R)."""
+        if self.Qp is None:
+            return A
+        return np.einsum("tmn,tn->tm", self.Qp[self.pose], A)
+
+    @property
+    def R(self) -> int:
+        return self.N if self.Qp is None else int(self.Qp.shape[1])
+
+    def bsum(self, a: np.ndarray) -> np.ndarray:
+        """Per-block sums along axis 0."""
+        return np.add.reduceat(a, self.bstart, axis=0)
+
+
+def tangent_basis(d: np.ndarray) -> np.ndarray:
+    """(..., 2, 3) two unit vectors across each unit row of d (..., 3)."""
+    d = np.asarray(d, float)
+    helper = np.where(np.abs(d[..., :1]) < 0.9, np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
+    e1 = np.cross(d, helper)
+    e1 /= np.linalg.norm(e1, axis=-1, keepdims=True)
+    e2 = np.cross(d, e1)
+    return np.stack([e1, e2], axis=-2)
+
+
+def unit_rows3(v: np.ndarray) -> np.ndarray:
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    return v / np.where(n > 0, n, 1.0)
+
+
+def is_moving(D: FitData) -> bool:
+    mv = ~D.static
+    if not mv.any():
+        return False
+    x = D.sensed[mv]
+    return bool(np.any(np.ptp(x, axis=0) > 5 * D.sigma))
+
+
+def rotating_mask(D: FitData) -> np.ndarray:
+    return np.linalg.norm(D.w, axis=1) > ROTATING_RADPS
+
+
+def force_at(D: FitData) -> np.ndarray:
+    """(n,N,3) specific force at each channel's position (model terms)."""
+    f = D.f[:, None, :]
+    if np.all(D.r == 0):
+        return np.broadcast_to(f, (D.n, D.N, 3))
+    r = D.r[None, :, :]
+    a = np.cross(D.dw[:, None, :], r)
+    w = D.w[:, None, :]
+    c = np.cross(w, np.cross(w, r)) * D.m0
+    return f + a + c
+
+
+def temp_skip(D: FitData) -> str | None:
+    T = D.temp
+    if not np.all(np.isfinite(T)):
+        return "needs temp_c (the recordings have no temperature)" if not np.isfinite(T).any() else \
+            "needs temp_c on every sample used"
+    span = float(np.ptp(T))
+    if span < TEMP_MIN_SPAN_C:
+        return f"temp_c varies by only {span:.3g} degC (needs {TEMP_MIN_SPAN_C:g})"
+    return None
+
+
+def t_ref_known(D: FitData) -> float | None:
+    cal = D.cal
+    if cal.temp_ref_c is not None:
+        return float(cal.temp_ref_c)
+    poses = cal.extra.get("poses") if isinstance(cal.extra, dict) else None
+    if isinstance(poses, list):
+        ts = [p.get("temp_c") for p in poses if isinstance(p, dict) and isinstance(p.get("temp_c"), (int, float))]
+        if ts:
+            return float(np.mean(ts))
+    return None

@@ -1,0 +1,342 @@
+"""The fitting toolkit the effects share: a candidate's cross-validated result
+(:class:`Cand`), block least squares with held-out scoring (linear effects), and the
+search over a nonlinear parameter with a linear nuisance (time shifts, low-pass)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from .fitdata import FitData, is_moving
+from .settings import SKEW_GRID
+
+
+@dataclass
+class Cand:
+    """One candidate's cross-validated result on a target residual."""
+
+    name: str
+    k: int                        # parameters it adds
+    Sw: np.ndarray                # (B,) held-out weighted chi2 after
+    Su: np.ndarray                # (B,) held-out sum of squares after (counts^2)
+    delta: np.ndarray             # (n, N) in-sample (all-data fit) change to the prediction
+    params: dict
+    sigma: dict
+    notes: list = field(default_factory=list)
+    evidence: str = "held-out gain"
+    proof: bool = False           # significant on its own evidence (quantization lattice)
+    # filled by score
+    gain: float = 0.0
+    penalty: float = 0.0
+    t: float = 0.0
+    z: float = 0.0
+    before: float = 0.0
+    after: float = 0.0
+    shrink: float = 0.0
+    significant: bool = False
+
+
+def block_ss(D: FitData, Rr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    sq = Rr * Rr
+    return D.bsum(np.sum(sq * D.W, axis=1)), D.bsum(sq.sum(axis=1))
+
+
+def solve_groups(G: np.ndarray, h: np.ndarray, rtol: float = 1e-10):
+    """Batched min-norm solve of G theta = h (G (g,k,k) symmetric PSD), with Jacobi scaling.
+    Returns theta (g,k), G^+ (g,k,k), rank (g,)."""
+    d = np.sqrt(np.maximum(np.einsum("gii->gi", G), 0.0))
+    d = np.where(d > 0, d, 1.0)
+    Gs = G / d[:, :, None] / d[:, None, :]
+    lam, V = np.linalg.eigh(Gs)
+    lmax = np.max(lam, axis=-1, keepdims=True)
+    keep = lam > rtol * np.maximum(lmax, 1e-300)
+    inv = np.where(keep, 1.0 / np.where(keep, lam, 1.0), 0.0)
+    Ginv = np.einsum("gij,gj,gkj->gik", V, inv, V) / d[:, :, None] / d[:, None, :]
+    theta = np.einsum("gij,gj->gi", Ginv, h)
+    return theta, Ginv, keep.sum(axis=-1)
+
+
+def lin_cv(D: FitData, Gw, hw, Gu, hu, S0w, S0u):
+    """Fold fits and held-out block scores from block statistics (B, g, k, k) / (B, g, k)."""
+    K, bf = D.K, D.bfold
+    Gt, ht = Gw.sum(axis=0), hw.sum(axis=0)
+    theta = np.zeros((K,) + ht.shape)
+    for f in range(K):
+        m = bf == f
+        theta[f] = solve_groups(Gt - Gw[m].sum(axis=0), ht - hw[m].sum(axis=0))[0]
+    tb = theta[bf]
+    Sw = S0w - 2 * np.einsum("bgk,bgk->b", tb, hw) + np.einsum("bgk,bgkl,bgl->b", tb, Gw, tb)
+    Su = S0u - 2 * np.einsum("bgk,bgk->b", tb, hu) + np.einsum("bgk,bgkl,bgl->b", tb, Gu, tb)
+    th_all, Ginv, rank = solve_groups(Gt, ht)
+    Sall = float(S0w.sum() - 2 * np.einsum("gk,gk->", th_all, ht) + np.einsum("gk,gkl,gl->", th_all, Gt, th_all))
+    return Sw, Su, th_all, Ginv, rank, Sall
+
+
+def sep_stats(D: FitData, X: np.ndarray, y: np.ndarray):
+    """Per-channel (separable) block statistics: X (n,N,k), y (n,N) -> Gw, hw, Gu, hu."""
+    k = X.shape[2]
+    B, N = D.B, D.N
+    Gu = np.empty((B, N, k, k))
+    if k <= 3:
+        for a in range(k):
+            for c in range(a, k):
+                v = D.bsum(X[:, :, a] * X[:, :, c])
+                Gu[:, :, a, c] = v
+                Gu[:, :, c, a] = v
+        hu = D.bsum(X * y[:, :, None])
+    else:
+        # many columns: a batched matrix product per block (the k^2 / 2 column products over
+        # all samples would dominate a long recording)
+        hu = np.empty((B, N, k))
+        ends = np.append(D.bstart[1:], D.n)
+        for bi, (a, e) in enumerate(zip(D.bstart, ends)):
+            Xb = X[a:e].transpose(1, 2, 0)                      # (N, k, n_b)
+            Gu[bi] = Xb @ Xb.transpose(0, 2, 1)
+            hu[bi] = (Xb @ y[a:e].T[:, :, None])[:, :, 0]
+    wch = D.W[0]
+    return Gu * wch[None, :, None, None], hu * wch[None, :, None], Gu, hu
+
+
+def joint_stats(D: FitData, Xr: np.ndarray, yr: np.ndarray):
+    """One group, rows (n, R, P) with weights D.W (n, R)."""
+    n, R, P = Xr.shape
+    sw = np.sqrt(D.W)
+    Xw = Xr * sw[:, :, None]
+    yw = yr * sw
+    Gw = np.empty((D.B, 1, P, P))
+    Gu = np.empty((D.B, 1, P, P))
+    hw = D.bsum(np.einsum("trp,tr->tp", Xw, yw))[:, None, :]
+    hu = D.bsum(np.einsum("trp,tr->tp", Xr, yr))[:, None, :]
+    ends = np.append(D.bstart[1:], n)
+    for bi, (a, e) in enumerate(zip(D.bstart, ends)):
+        A = Xw[a:e].reshape(-1, P)
+        Gw[bi, 0] = A.T @ A
+        A = Xr[a:e].reshape(-1, P)
+        Gu[bi, 0] = A.T @ A
+    return Gw, hw, Gu, hu
+
+
+def jig_rows(D: FitData, X: np.ndarray) -> np.ndarray:
+    """Per-channel columns X (n,N,k) -> projected joint rows (n, M, N k)."""
+    Q = D.Qp[D.pose]                                     # (n,M,N)
+    n, N, k = X.shape
+    return np.einsum("tmi,tij->tmij", Q, X).reshape(n, Q.shape[1], N * k)
+
+
+def linear_fit(D: FitData, X: np.ndarray, y: np.ndarray, S0w, S0u):
+    """CV of the per-channel linear columns X (n,N,k) on the target y (n,N).
+    Returns Sw, Su, theta (N,k), cov (N,k,k), n_params, delta (n,N)."""
+    n, N, k = X.shape
+    if D.Qp is None:
+        Gw, hw, Gu, hu = sep_stats(D, X, y)
+        Sw, Su, th, Ginv, rank, Sall = lin_cv(D, Gw, hw, Gu, hu, S0w, S0u)
+        theta, cov = th, Ginv
+        npar = int(rank.sum())
+    else:
+        Xr = jig_rows(D, X)
+        yr = D.rows(y)
+        Gw, hw, Gu, hu = joint_stats(D, Xr, yr)
+        Sw, Su, th, Ginv, rank, Sall = lin_cv(D, Gw, hw, Gu, hu, S0w, S0u)
+        theta = th[0].reshape(N, k)
+        full = Ginv[0]
+        cov = np.stack([full[i * k:(i + 1) * k, i * k:(i + 1) * k] for i in range(N)])
+        npar = int(rank.sum())
+    dof = max(D.n * D.R - npar, 1)
+    cov = cov * max(1.0, Sall / dof)
+    delta = np.einsum("tnk,nk->tn", X, theta)
+    return Sw, Su, theta, cov, npar, delta
+
+
+class Candidate:
+    name = ""
+
+    def skip(self, D: FitData) -> str | None:
+        return None
+
+    def cv(self, D: FitData, y: np.ndarray, pcur: np.ndarray, S0w, S0u) -> Cand:
+        raise NotImplementedError
+
+
+class LinearCandidate(Candidate):
+    pname = ""
+
+    def columns(self, D: FitData) -> np.ndarray:
+        raise NotImplementedError
+
+    def to_params(self, D: FitData, theta: np.ndarray, cov: np.ndarray) -> tuple[dict, dict]:
+        sd = np.sqrt(np.maximum(np.einsum("nkk->nk", cov), 0.0))
+        return {self.pname: theta[:, 0]}, {self.pname: sd[:, 0]}
+
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
+        X = self.columns(D)
+        Sw, Su, theta, cov, k, delta = linear_fit(D, X, y, S0w, S0u)
+        p, s = self.to_params(D, theta, cov)
+        return Cand(self.name, k, Sw, Su, delta, p, s)
+
+
+class Shifter:
+    """x(t + tau) per channel along a cubic spline per run of samples contiguous in time
+    (clamped at the run's ends)."""
+
+    def __init__(self, D: FitData, x: np.ndarray):
+        n, N = x.shape
+        self.x = x
+        self.tg = D.tg
+        C = np.zeros((4, n, N))
+        C[3] = x
+        # runs of samples contiguous in time (a pose label change without a time gap is motion
+        # going on: the rest -> travel of a linear actuator)
+        brk = np.flatnonzero(np.diff(D.tg) > 1.5 * D.h) + 1
+        lo = np.r_[0, brk]
+        hi = np.r_[brk, n]
+        self.ilo = np.repeat(lo, hi - lo)
+        self.ihi = np.repeat(hi, hi - lo) - 1                        # last sample of the run
+        for a, b in zip(lo, hi):
+            L = b - a
+            if L < 2:
+                continue
+            xs = x[a:b]
+            if np.all(xs == xs[0]):
+                continue
+            ts = D.tg[a:b]
+            if L >= 4:
+                C[:, a:b - 1] = CubicSpline(ts, xs, axis=0).c
+            else:
+                C[2, a:b - 1] = np.diff(xs, axis=0) / np.diff(ts)[:, None]
+        self.C = C
+        self.tlo = D.tg[self.ilo]
+        self.thi = D.tg[self.ihi]
+
+    def _eval(self, tt: np.ndarray, cols: np.ndarray | None) -> np.ndarray:
+        k = np.searchsorted(self.tg, tt, side="right") - 1
+        k = np.clip(k, self.ilo, np.maximum(self.ilo, self.ihi - 1))
+        dx = tt - self.tg[k]
+        if cols is None:
+            c = self.C[:, k, :]
+            dx = dx[:, None]
+        else:
+            c = self.C[:, k, cols]
+        return ((c[0] * dx + c[1]) * dx + c[2]) * dx + c[3]
+
+    def delta(self, tau: np.ndarray) -> np.ndarray:
+        tau = np.asarray(tau, float)
+        if tau.ndim == 0 or np.all(tau == tau.flat[0]):
+            tv = float(tau.flat[0])
+            if tv == 0:
+                return np.zeros_like(self.x)
+            tt = np.clip(self.tg + tv, self.tlo, self.thi)
+            return self._eval(tt, None) - self.x
+        n, N = self.x.shape
+        tt = np.clip(self.tg[:, None] + tau[None, :], self.tlo[:, None], self.thi[:, None])
+        k = np.searchsorted(self.tg, tt.ravel(), side="right").reshape(n, N) - 1
+        k = np.clip(k, self.ilo[:, None], np.maximum(self.ilo, self.ihi - 1)[:, None])
+        dx = tt - self.tg[k]
+        c = self.C[:, k, np.arange(N)[None, :]]
+        return ((c[0] * dx + c[1]) * dx + c[2]) * dx + c[3] - self.x
+
+
+class SearchCandidate(Candidate):
+    """One scalar parameter u per channel (in samples); delta(D, u (N,)) -> (n, N)."""
+
+    grid = SKEW_GRID
+    lower = -math.inf
+
+    def skip(self, D):
+        if D.mode == "jigfree":
+            return "jig-free: static poses only, no reference of the motion"
+        if not is_moving(D):
+            return "needs motion in the reference (time effects show only while the readings change)"
+        return None
+
+    def prepare(self, D: FitData, pcur: np.ndarray):
+        raise NotImplementedError
+
+    def delta(self, u: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def to_params(self, D, u, su) -> tuple[dict, dict]:
+        raise NotImplementedError
+
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
+        self.prepare(D, pcur)
+        N, K, bf = D.N, D.K, D.bfold
+        wch = D.W[0]
+        grid = self.grid
+        Sg = np.empty((grid.size, D.B, N))                  # unweighted block SS per channel
+        for gi, u in enumerate(grid):
+            R = y - self.delta(np.full(N, u))
+            Sg[gi] = D.bsum(R * R)
+        tot = Sg.sum(axis=1)                                # (G,N)
+        cols = np.arange(N)
+
+        def parabola(x3, y3):
+            A = np.vstack([x3 ** 2, x3, np.ones(3)]).T
+            try:
+                a2, a1, _ = np.linalg.solve(A, y3)
+            except np.linalg.LinAlgError:
+                return None, 0.0
+            if not a2 > 0:
+                return None, 0.0
+            return float(np.clip(-a1 / (2 * a2), x3.min(), x3.max())), float(a2)
+
+        def refine(mask_blocks, obj):
+            """Grid minimum, then two parabolic steps, per channel, on the blocks in mask_blocks.
+            Returns u (N,), block SS at u (B,N), curvature (N,)."""
+            j = np.argmin(obj, axis=0)
+            u = grid[j].astype(float)
+            best_obj = obj[j, cols].copy()
+            best_S = Sg[j, :, cols].T.copy()                # (B,N)
+            curv = np.zeros(N)
+            # three distinct grid points around the minimum (at an end of the grid: the end and its
+            # two neighbours)
+            c0 = np.clip(j - 1, 0, grid.size - 3)
+            pts = [[(float(grid[c]), float(obj[c, i])) for c in range(c0[i], c0[i] + 3)] for i in range(N)]
+            for _ in range(2):
+                cand = u.copy()
+                for i in range(N):
+                    near = []
+                    for p in sorted(pts[i], key=lambda p: p[1]):
+                        if all(abs(p[0] - q[0]) > 1e-12 for q in near):
+                            near.append(p)
+                        if len(near) == 3:
+                            break
+                    if len(near) < 3:
+                        continue
+                    x3 = np.array([p[0] for p in near])
+                    v, a2 = parabola(x3, np.array([p[1] for p in near]))
+                    if v is not None:
+                        cand[i] = max(v, self.lower)
+                        curv[i] = a2
+                if np.all(cand == u):
+                    break
+                R = y - self.delta(cand)
+                Sr = D.bsum(R * R)
+                o = Sr[mask_blocks].sum(axis=0)
+                for i in range(N):
+                    pts[i].append((float(cand[i]), float(o[i])))
+                better = o < best_obj
+                u = np.where(better, cand, u)
+                best_obj = np.where(better, o, best_obj)
+                best_S[:, better] = Sr[:, better]
+            return u, best_S, curv
+
+        Sw = np.full(D.B, np.nan)
+        Su = np.full(D.B, np.nan)
+        if folds:
+            for f in range(K):
+                trn = bf != f
+                _, Sb, _ = refine(trn, Sg[:, trn].sum(axis=1))
+                m = bf == f
+                Sw[m] = Sb[m] @ wch
+                Su[m] = Sb[m].sum(axis=1)
+        u, Sb_all, curv = refine(np.ones(D.B, bool), tot)
+        d_all = self.delta(u)
+        Sall = float(Sb_all.sum(axis=0) @ wch)
+        npar = N
+        scale = max(1.0, Sall / max(D.n * N - npar, 1))
+        with np.errstate(divide="ignore"):
+            su = np.where(curv > 0, np.sqrt(scale / np.maximum(curv * wch, 1e-300)), math.inf)
+        p, s = self.to_params(D, u, su)
+        return Cand(self.name, npar, Sw, Su, d_all, p, s)

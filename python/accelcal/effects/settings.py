@@ -1,0 +1,29 @@
+"""Settings of the effects' fits (grids, thresholds), documented defaults."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+BLOCK_S = 2.0              # longest cross-validation block in a moving segment (s)
+ROTATING_RADPS = 0.05      # |w| above this counts as rotating (regimes, position_error)
+TEMP_MIN_SPAN_C = 1.0      # temperature candidates need this span of temp_c
+T_REF_SPANS = 2.0          # a fitted reference temperature stays within this many spans of temp_c
+MISALIGN_MAX_RAD = 0.35     # relinearised misalignment fits stay below ~20 deg
+POSITION_TOL_M = 1e-3      # position_error reports dr along directions with 1-sigma below this
+QUANT_MIN_FRAC = 0.99      # share of readings on the lattice to call a channel quantised
+QUANT_STRONG_FRAC = 0.999  # ... and to take the lattice alone as proof (with QUANT_STRONG_VALUES)
+QUANT_STRONG_VALUES = 20   # distinct lattice values needed for the proof (chance <= 2^-19)
+QUANT_MAX_STEP = 256
+
+
+# noise before the quantiser, as a fraction of the step, tried for each quantised channel
+QUANT_DITHER_GRID = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4)
+SAT_PROOF_COUNT = 10       # readings at one extreme value, the model >= 5 sigma beyond: proof of a clip
+BACKFIT_PASSES = 3
+DRIFT_KNOT_FRACTIONS = (1 / 2, 1 / 4, 1 / 8, 1 / 16)  # bias_drift paths: knot spacing / time span
+DRIFT_MIN_BLOCKS = 2       # ... each knot interval at least this many CV blocks long
+ROUND_SIGMA = math.sqrt(1.0 / 12.0)
+SKEW_GRID = np.array([0.0, 0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 12.0])
+SKEW_GRID = np.concatenate([-SKEW_GRID[:0:-1], SKEW_GRID])          # in samples
+DELAY_GRID = np.array([0.0, 0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0])  # samples
+PENALTY_PER_PARAM = 2.0    # chi2 units per parameter an effect adds (AIC-like)

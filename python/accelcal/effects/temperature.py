@@ -1,0 +1,190 @@
+"""Temperature: offset and gain linear in temperature."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..spec import Param
+from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, channel_mask, per_channel, strongest, temperature_of
+from .fitdata import FitData, t_ref_known, temp_skip
+from .fitting import Cand, Candidate, jig_rows, joint_stats, sep_stats, solve_groups
+from .settings import T_REF_SPANS
+
+
+class TemperatureFit(Candidate):
+    """c_i (T - t_ref) z_i with z = 1 (offset) or the sensed reading (gain); t_ref shared."""
+
+    gain = False
+
+    def skip(self, D):
+        return temp_skip(D)
+
+    def _z(self, D):
+        return D.sensed if self.gain else np.ones((D.n, D.N))
+
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
+        z = self._z(D)
+        T = D.temp
+        # columns T z and z: c (T - t_ref) z = c (X2 . [1, -t_ref])
+        X2 = np.stack([T[:, None] * z, z], axis=2)
+        fixed = t_ref_known(D)
+        if D.Qp is None:
+            Gw2, hw2, Gu2, hu2 = sep_stats(D, X2, y)
+        else:
+            Gw2, hw2, Gu2, hu2 = joint_stats(D, jig_rows(D, X2), D.rows(y))
+        N = D.N
+        Tlo, Thi = float(T.min()), float(T.max())
+        span = max(Thi - Tlo, 1e-9)
+
+        def reduce(G2, h2, tr):
+            v = np.array([1.0, -tr])
+            if D.Qp is None:
+                return (np.einsum("...kl,k,l->...", G2, v, v)[..., None, None],
+                        np.einsum("...k,k->...", h2, v)[..., None])
+            P = N
+            Vm = np.zeros((2 * P, P))
+            for i in range(P):
+                Vm[2 * i:2 * i + 2, i] = v
+            return (np.einsum("...ab,ai,bj->...ij", G2, Vm, Vm), np.einsum("...a,ai->...i", h2, Vm))
+
+        def objective(G2, h2, tr):
+            G, hh = reduce(G2, h2, tr)
+            th = solve_groups(G, hh)[0]
+            return -float(np.einsum("gk,gk->", th, hh))         # S = q - h' th at the optimum
+
+        def best_tref(G2, h2):
+            if fixed is not None:
+                return fixed
+            # within two spans of the data: further out, c (T - t_ref) is an offset change in disguise
+            grid = np.linspace(Tlo - T_REF_SPANS * span, Thi + T_REF_SPANS * span, 41)
+            vals = [objective(G2, h2, tr) for tr in grid]
+            j = int(np.argmin(vals))
+            from scipy.optimize import minimize_scalar
+            lo, hi = grid[max(j - 1, 0)], grid[min(j + 1, grid.size - 1)]
+            res = minimize_scalar(lambda tr: objective(G2, h2, tr), bounds=(lo, hi), method="bounded",
+                                  options={"xatol": 1e-3 * span})
+            return float(res.x) if res.fun <= vals[j] else float(grid[j])
+
+        K, bf = D.K, D.bfold
+        Gt2, ht2 = Gw2.sum(0), hw2.sum(0)
+        Sw = np.empty(D.B)
+        Su = np.empty(D.B)
+        for f in range(K):
+            m = bf == f
+            Gtr, htr = Gt2 - Gw2[m].sum(0), ht2 - hw2[m].sum(0)
+            tr = best_tref(Gtr, htr)
+            G, hh = reduce(Gtr, htr, tr)
+            th = solve_groups(G, hh)[0]
+            Gb, hb = reduce(Gw2[m], hw2[m], tr)
+            Gub, hub = reduce(Gu2[m], hu2[m], tr)
+            Sw[m] = S0w[m] - 2 * np.einsum("gk,bgk->b", th, hb) + np.einsum("gk,bgkl,gl->b", th, Gb, th)
+            Su[m] = S0u[m] - 2 * np.einsum("gk,bgk->b", th, hub) + np.einsum("gk,bgkl,gl->b", th, Gub, th)
+        tr = best_tref(Gt2, ht2)
+        G, hh = reduce(Gt2, ht2, tr)
+        th, Ginv, rank = solve_groups(G, hh)
+        Sall = float(S0w.sum() - np.einsum("gk,gk->", th, hh))
+        npar = int(rank.sum()) + (0 if fixed is not None else 1)
+        scale = max(1.0, Sall / max(D.n * D.R - npar, 1))
+        if D.Qp is None:
+            coeff = th[:, 0]
+            sd = np.sqrt(np.maximum(Ginv[:, 0, 0] * scale, 0.0))
+        else:
+            coeff = th[0]
+            sd = np.sqrt(np.maximum(np.diag(Ginv[0]) * scale, 0.0))
+        delta = coeff[None, :] * (T - tr)[:, None] * z
+        params = {"coeff": coeff, "t_ref": tr}
+        sigma = {"coeff": sd, "t_ref": 0.0 if fixed is not None else math.nan}
+        notes = [] if fixed is None else [f"t_ref = {fixed:.4g} degC from the calibration"]
+        if fixed is None:
+            # 1-sigma of t_ref from the curvature of the profile objective
+            hstep = 0.05 * span + 0.5
+            o0, op, om = (objective(Gt2, ht2, tr + d) for d in (0.0, hstep, -hstep))
+            curv = (op + om - 2 * o0) / hstep ** 2
+            sigma["t_ref"] = float(math.sqrt(2.0 * scale / curv)) if curv > 0 else math.inf
+        return Cand(self.name, npar, Sw, Su, delta, params, sigma, notes)
+
+
+class TemperatureOffset(TemperatureFit, Effect):
+    name = "temperature_offset"
+    summary = "b_i changes linearly with temperature"
+    doc = "bias_i(t) += coeff_i (T(t) - t_ref) (coeff: counts per degC)."
+    stage = "state"
+    linear = True
+    params = (
+        Param("coeff", None, "counts/degC", "offset tempco; auto = 0.2 % of g per degC in counts", "floats"),
+        Param("t_ref", 25.0, "degC", "temperature at which the offset is the calibrated one (the effect shows "
+              "only when the motion's temperature moves away from it: temp_profile=ramp or sine)"),
+        CHANNEL_PARAM,
+        RANDOM_PARAM,
+    )
+    fit = (
+        FitParam("coeff", "channel", "counts/degC", "offset temperature coefficient"),
+        FitParam("t_ref", "scalar", "degC", "reference temperature", free=False),
+    )
+
+    def _resolve(self, spec, ctx, rng):
+        m = channel_mask(spec, ctx, self.name)
+        c = per_channel(spec["coeff"], 0.002 * ctx.g_counts(), m, rng if spec["random"] else None, self.name, "coeff")
+        return {"coeff": c, "t_ref": float(spec["t_ref"])}
+
+    def identity(self, ctx):
+        return {"coeff": np.zeros(ctx.n_channels), "t_ref": 25.0}
+
+    def modify_state(self, state, p, ctx):
+        T = temperature_of(ctx, self.name)
+        add = (T - float(p["t_ref"]))[:, None] * np.asarray(p["coeff"], float)[None, :]
+        return state.replace(bias=add if state.bias is None else state.bias + add)
+
+    gain = False  # the fit: coefficient on the sensed reading (True) or on 1
+
+    # -- report prose ---------------------------------------------------------
+
+    def describe(self, p: dict, s: dict, D: FitData) -> str:
+        """One line in physical units for the report (p: parameters, s: their 1-sigma)."""
+        i = strongest(p["coeff"])
+        return (f"offset tempco up to {p['coeff'][i]:+.4g} +- {s['coeff'][i]:.2g} counts/degC on channel {i} "
+                f"(t_ref {p['t_ref']:.4g} degC)")
+
+
+class TemperatureGain(TemperatureFit, Effect):
+    name = "temperature_gain"
+    summary = "the magnitude of s_i changes linearly with temperature"
+    doc = "gain_i(t) *= 1 + coeff_i (T(t) - t_ref) (coeff: fraction per degC)."
+    stage = "state"
+    linear = True
+    params = (
+        Param("coeff", 3e-4, "1/degC", "gain tempco (fraction per degC)", "floats"),
+        Param("t_ref", 25.0, "degC", "temperature at which the gain is the calibrated one (the effect shows "
+              "only when the motion's temperature moves away from it: temp_profile=ramp or sine)"),
+        CHANNEL_PARAM,
+        RANDOM_PARAM,
+    )
+    fit = (
+        FitParam("coeff", "channel", "1/degC", "gain temperature coefficient"),
+        FitParam("t_ref", "scalar", "degC", "reference temperature", free=False),
+    )
+
+    def _resolve(self, spec, ctx, rng):
+        m = channel_mask(spec, ctx, self.name)
+        c = per_channel(spec["coeff"], 0.0, m, rng if spec["random"] else None, self.name, "coeff")
+        return {"coeff": c, "t_ref": float(spec["t_ref"])}
+
+    def identity(self, ctx):
+        return {"coeff": np.zeros(ctx.n_channels), "t_ref": 25.0}
+
+    def modify_state(self, state, p, ctx):
+        T = temperature_of(ctx, self.name)
+        fac = 1.0 + (T - float(p["t_ref"]))[:, None] * np.asarray(p["coeff"], float)[None, :]
+        return state.replace(gain=fac if state.gain is None else state.gain * fac)
+
+    gain = True  # the fit: coefficient on the sensed reading (True) or on 1
+
+    # -- report prose ---------------------------------------------------------
+
+    def describe(self, p: dict, s: dict, D: FitData) -> str:
+        """One line in physical units for the report (p: parameters, s: their 1-sigma)."""
+        i = strongest(p["coeff"])
+        return (f"gain tempco up to {1e6 * p['coeff'][i]:+.4g} +- {1e6 * s['coeff'][i]:.2g} ppm/degC "
+                f"on channel {i} "
+                f"(t_ref {p['t_ref']:.4g} degC)")
