@@ -38,9 +38,12 @@ What it does
    over the calls that firmware makes (painted stack, bench_h8.c), against 2 KB.
 6. Flash: text of the two firmware links (tools/build_h8.sh at -O2 and -Os).
 
+Env: H8_EXTRA_CFLAGS adds compiler flags to the benchmark build (experiments; the
+firmware sizes always come from tools/build_h8.sh's own flags).
 Writes the table to build/h8bench/bench_h8.md and per-instruction profiles to
 build/h8bench/profile_<opt>_<region>.txt.  Usage: python3 tools/bench_h8.py
 """
+import os
 import re
 import subprocess
 import sys
@@ -165,7 +168,7 @@ def build_and_profile(opt, sim):
     d = OUT / opt
     d.mkdir(parents=True, exist_ok=True)
     cflags = ["-mh", "-mn", f"-{opt}", "-fomit-frame-pointer", "-std=c99", "-Wall", "-Wextra",
-              "-Werror", f"-I{ROOT / 'include'}"]
+              "-Werror", f"-I{ROOT / 'include'}", *os.environ.get("H8_EXTRA_CFLAGS", "").split()]
     objs = []
     for src in sorted((ROOT / "csrc").glob("*.c")) + [ROOT / "tools/h8sim/bench_h8.c"]:
         obj = d / (src.stem + ".o")
