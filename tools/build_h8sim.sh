@@ -62,10 +62,10 @@ LOG="$WORK/log"
 t0=$(date +%s)
 
 say "gdb-source $VERSION: unpacking $TAR"
-tar -xf "$TAR" -C "$WORK" > "$LOG" 2>&1 || fail "unpacking $TAR: $(tail -n 1 "$LOG")"
+tar -xf "$TAR" -C "$WORK" > "$LOG" 2>&1 || fail "unpacking $TAR: $(grep -v "^\s*$" "$LOG" | tail -n 1)"
 [ -f "$WORK/gdb/sim/h8300/compile.c" ] || fail "$TAR has no gdb/sim/h8300/compile.c"
 patch -d "$WORK/gdb" -p1 --no-backup-if-mismatch < "$PATCH" > "$LOG" 2>&1 \
-    || fail "tools/h8sim/decode-cache.patch does not apply to gdb-source $VERSION: $(tail -n 1 "$LOG")"
+    || fail "tools/h8sim/decode-cache.patch does not apply to gdb-source $VERSION: $(grep -v "^\s*$" "$LOG" | tail -n 1)"
 
 say "configure (target h8300-elf, simulator only)"
 mkdir "$WORK/build"
