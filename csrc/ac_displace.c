@@ -290,7 +290,12 @@ ac_status ac_disp_step(ac_disp *st, const int32_t *f, ac_disp_out *out)
     int32_t a[3];
     ac_status s;
     int zp_set = 0;
-    int32_t zp[3] = {0, 0, 0};
+    int32_t zp[3];
+    /* element by element: h8300-hms-gcc 3.4.6 at -Os turns the initialiser
+     * {0, 0, 0} into a call to memset, which firmware does not have */
+    zp[0] = 0;
+    zp[1] = 0;
+    zp[2] = 0;
     if (st == 0 || f == 0 || out == 0) {
         return AC_ERR_NULL;
     }

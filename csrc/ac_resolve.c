@@ -3,11 +3,9 @@
 #include "accelcal/ac_trim.h"
 #include "ac_internal.h"
 
-/* -31 <= s <= 31 */
-static int shift_ok(int8_t s)
-{
-    return (uint8_t)(s + 31) <= 62u;
-}
+/* -31 <= s <= 31 (a macro: h8300-hms-gcc 3.4 calls a static function here,
+ * 12 calls a sample) */
+#define SHIFT_OK(s) ((uint8_t)((s) + 31) <= 62u)
 
 /* Cheap per-call checks; the row sums are ac_resolver_check's job (once per table). */
 ac_status ac_resolver_shape(const ac_resolver *r)
@@ -20,7 +18,7 @@ ac_status ac_resolver_shape(const ac_resolver *r)
         return AC_ERR_SIZE;
     }
     for (j = 0u; j < 6u; j++) {
-        if (!shift_ok(r->m_shift[j]) || !shift_ok(r->g_shift[j])) {
+        if (!SHIFT_OK(r->m_shift[j]) || !SHIFT_OK(r->g_shift[j])) {
             return AC_ERR_FORMAT;
         }
     }

@@ -2,6 +2,9 @@
 # accelcal -- H8/300H build of the C core (the seed's MCU, H8/3664 in normal mode).
 #
 #  1. compiles every csrc/*.c with h8300-hms-gcc -mh -mn -O2 -fomit-frame-pointer -std=c99 -Wall -Wextra -Werror;
+#     then steps 1-4 again at -Os (outputs in build/h8/Os/): the core must need
+#     nothing from outside at either level (h8300-hms-gcc 3.4.6 at -Os turns some
+#     zeroings into memset calls);
 #  2. checks that the objects together need NO external symbol at all: the
 #     H8/300H has no usable libgcc, so any ___mulsi3 / ___divsi3 / ___udivsi3 /
 #     ___modsi3 / ___muldi3 / soft-float (___adddf3 ...) / memcpy / memset
@@ -13,16 +16,18 @@
 #     sizes (from symbol addresses; COFF records no sizes) to
 #     build/h8/function_sizes.txt and a summary table to build/h8/sizes.md.
 #
-# Usage:  tools/build_h8.sh            (from anywhere; outputs in build/h8/)
+# Usage:  tools/build_h8.sh            (from anywhere; outputs in build/h8/, -Os in build/h8/Os/)
+# Env:    H8_OPT (O2 or Os; set, it builds that level only, into H8_OUT)
 # Exit:   0 on success, 1 on any compiler warning/error, external symbol or link error.
 set -euo pipefail
 export LC_ALL=C
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-OUT="$ROOT/build/h8"
+OUT=${H8_OUT:-$ROOT/build/h8}
+OPT=${H8_OPT:-O2}
 CROSS=${H8_CROSS:-h8300-hms-}
 CC="${CROSS}gcc"
-CFLAGS=(-mh -mn -O2 -fomit-frame-pointer -std=c99 -Wall -Wextra -Werror -I"$ROOT/include")
+CFLAGS=(-mh -mn -"$OPT" -fomit-frame-pointer -std=c99 -Wall -Wextra -Werror -I"$ROOT/include")
 LDFLAGS=(-mh -mn -nostdlib -nostartfiles -Wl,-e,_main)
 
 fail() {
@@ -136,4 +141,8 @@ echo "  per-function sizes: build/h8/function_sizes.txt"
 } > "$OUT/sizes.md"
 echo "  summary table: build/h8/sizes.md"
 cat "$OUT/sizes.md"
-echo "build_h8: OK"
+echo "build_h8: OK (-$OPT)"
+if [ -z "${H8_OPT:-}" ]; then
+    echo "== the same at -Os (build/h8/Os)"
+    H8_OPT=Os H8_OUT="$OUT/Os" bash "${BASH_SOURCE[0]}"
+fi

@@ -1,0 +1,248 @@
+/*
+ * accelcal -- benchmark program of tools/bench_h8.py, run on the patched H8
+ * simulator (tools/build_h8sim.sh) with H8SIM_PROFILE set.
+ *
+ * Each measured call runs inside a profile region: `jsr @@0xcd' with r0 = the
+ * region's number before the call's argument set-up and with r0 = 0 after its
+ * return (the REGION macro), so the simulator counts every instruction the
+ * call executes, by address, in that region.  A region is entered `calls'
+ * times with different inputs; region EMPTY brackets nothing and gives the
+ * bracket's own instructions, which bench_h8.py subtracts once per entry.
+ *
+ * Stack: before each measured call the free RAM below the stack pointer is
+ * painted; after it the lowest changed byte gives the call's deepest stack use
+ * (return address included).
+ *
+ * Output lines (write trap, stdout):
+ *   REGION <id> <name> <entries> <samples>   samples: what one entry processes
+ *   STACK <id> <bytes>                       deepest use over all entries
+ *   END bench                                 the last line
+ */
+#include <accelcal/accelcal.h>
+
+void h8sim_exit(int status); /* crt0.s */
+extern uint8_t end;          /* linker: end of .bss */
+
+#define REGION(id)                                                          \
+    do {                                                                    \
+        register uint16_t r0_ __asm__("r0") = (uint16_t)(id);               \
+        __asm__ volatile("jsr @@0xcd" : "+r"(r0_) : : "memory");            \
+    } while (0)
+
+enum {
+    R_EMPTY = 1,
+    R_TRIM,
+    R_PROCESS,
+    R_PROCESS_W,
+    R_RESOLVE_W,
+    R_RATE,
+    R_ATT,
+    R_DISP,
+    R_BATCH_W,
+    R_BUILD,
+    R_COUNT
+};
+static const char *const region_name[R_COUNT] = {
+    "", "empty", "ac_trim", "ac_process", "ac_process_omega", "ac_resolve_omega",
+    "ac_rate_step", "ac_att_step", "ac_disp_step", "ac_process_batch_omega", "ac_resolver_build"};
+static uint16_t entries[R_COUNT], samples[R_COUNT], deepest[R_COUNT];
+
+/* ---- output through the write trap ---- */
+static char line[96];
+static uint16_t line_n;
+static void flush(void)
+{
+    register uint16_t r0 __asm__("r0") = 1u;
+    register const char *r1 __asm__("r1") = line;
+    register uint16_t r2 __asm__("r2") = line_n;
+    __asm__ volatile("jsr @@0xc7" : "+r"(r0) : "r"(r1), "r"(r2) : "memory");
+    line_n = 0u;
+}
+static void put_c(char c)
+{
+    line[line_n++] = c;
+    if (c == '\n' || line_n == sizeof line) {
+        flush();
+    }
+}
+static void put_s(const char *s)
+{
+    while (*s != '\0') {
+        put_c(*s++);
+    }
+}
+static void put_u(uint16_t v)
+{
+    char d[6];
+    uint8_t i = 0u;
+    do {
+        d[i++] = (char)('0' + v % 10u);
+        v = (uint16_t)(v / 10u);
+    } while (v != 0u);
+    while (i > 0u) {
+        put_c(d[--i]);
+    }
+}
+
+/* ---- stack painting (inline in main: no frame of its own below sp) ---- */
+#define PAINT 0xA5u
+static uint16_t sp_now(void)
+{
+    uint16_t sp;
+    __asm__ volatile("mov.w r7,%0" : "=r"(sp));
+    return sp;
+}
+
+/* ---- inputs ---- */
+static uint32_t rng = 2463534242UL;
+static uint16_t rnd16(void)
+{
+    rng ^= rng << 13;
+    rng ^= rng >> 17;
+    rng ^= rng << 5;
+    return (uint16_t)(rng >> 8);
+}
+static int16_t rnd_range(int16_t lo, uint16_t span)
+{
+    return (int16_t)(lo + (int16_t)(rnd16() % span));
+}
+
+/* the seed's 6 channels (as tests/c/vectors.c) */
+#define S1 8353515L
+#define SC 7234356L
+#define SH 4176758L
+#define R1 62915L
+#define RC 54486L
+#define RH 31457L
+static const int32_t seed_t[3][3] = {{0, S1, 0}, {-SC, -SH, 0}, {SC, -SH, 0}};
+static const int32_t seed_pos[3][3] = {{R1, 0, 0}, {-RH, RC, 0}, {-RH, -RC, 0}};
+
+static ac_channel_cal cal[6];
+static ac_build_work work;
+static ac_resolver res;
+static ac_rate rate;
+static ac_att att;
+static ac_disp disp;
+
+#define BATCH 8u
+#define N_SAMPLES 16u
+
+/* one measured call: RAM from the end of .bss up to the stack pointer painted,
+ * the call in its region, then the lowest changed byte (all inline in main, so
+ * nothing but the call writes below the stack pointer in between) */
+#define MEASURE(id, nsamp, call)                                            \
+    do {                                                                    \
+        uint16_t sp_ = sp_now();                                            \
+        uint8_t *p_ = &end;                                                 \
+        while ((uint16_t)p_ < sp_) {                                        \
+            *p_++ = PAINT;                                                  \
+        }                                                                   \
+        REGION(id);                                                         \
+        (void)(call);                                                       \
+        REGION(0);                                                          \
+        p_ = &end;                                                          \
+        while ((uint16_t)p_ < sp_ && *p_ == PAINT) {                        \
+            p_++;                                                           \
+        }                                                                   \
+        if ((uint16_t)(sp_ - (uint16_t)p_) > deepest[id]) {                 \
+            deepest[id] = (uint16_t)(sp_ - (uint16_t)p_);                   \
+        }                                                                   \
+        entries[id]++;                                                      \
+        samples[id] = (nsamp);                                              \
+    } while (0)
+
+int main(void)
+{
+    static uint16_t trim[6], raw[BATCH * 6u];
+    static int16_t x[6], w[BATCH * 3u];
+    static int32_t out[BATCH * 6u], f[6];
+    static ac_att_out aout;
+    static ac_disp_out dout;
+    ac_disp_cfg dcfg;
+    uint16_t k, i;
+    uint8_t a, id;
+
+    for (k = 0u; k < 3u; k++) {
+        for (a = 0u; a < 3u; a++) {
+            cal[2u * k].sens[a] = seed_t[k][a];
+            cal[2u * k].pos[a] = seed_pos[k][a];
+            cal[2u * k + 1u].sens[a] = (a == 2u) ? S1 : 0;
+            cal[2u * k + 1u].pos[a] = seed_pos[k][a];
+        }
+        cal[2u * k].offset = 300;
+        cal[2u * k + 1u].offset = -200;
+    }
+    MEASURE(R_BUILD, 1u, ac_resolver_build(cal, 6u, &work, &res, 0));
+    (void)ac_rate_init(&rate, 34953u, 21u, 655u); /* 60 Hz */
+    (void)ac_att_init(&att, 104858L, 314573L, 34953u, 21u, 512u, 1000L, 328u);
+    dcfg.rest.dev_max = 51;
+    dcfg.rest.g2_lo = 0u;
+    dcfg.rest.g2_hi = 0xFFFFFFFFUL;
+    dcfg.rest.alpha_max = 0;
+    dcfg.rest.ref_max = 154;
+    dcfg.rest.hold = 20u;
+    dcfg.rest.ema_shift = 3u;
+    dcfg.dt_m = 34953u;
+    dcfg.dt_shift = 21u;
+    dcfg.axis = -1;
+    (void)ac_disp_init(&disp, &dcfg);
+
+    for (k = 0u; k < N_SAMPLES; k++) {
+        for (i = 0u; i < 6u; i++) {
+            trim[i] = (uint16_t)(5000u + (uint16_t)rnd_range(-50, 100));
+            raw[i] = (uint16_t)(trim[i] + rnd_range(-1500, 3000));
+        }
+        for (i = 0u; i < 3u; i++) {
+            w[i] = rnd_range(-3000, 6000); /* +-2.9 rad/s */
+        }
+        MEASURE(R_EMPTY, 1u, 0);
+        MEASURE(R_TRIM, 1u, ac_trim(raw, trim, 6u, x));
+        MEASURE(R_PROCESS, 1u, ac_process(&res, trim, raw, 0, out));
+        MEASURE(R_PROCESS_W, 1u, ac_process(&res, trim, raw, w, out));
+        MEASURE(R_RESOLVE_W, 1u, ac_resolve(&res, x, w, out));
+        MEASURE(R_RATE, 1u, ac_rate_step(&rate, &out[3], w));
+        for (i = 0u; i < 6u; i++) {
+            f[i] = (int32_t)rnd_range(-2000, 4000); /* +-2 m/s^2 */
+        }
+        f[2] += 10045L; /* g */
+        f[5] += 10045L;
+        MEASURE(R_ATT, 1u, ac_att_step(&att, &f[0], &f[3], &aout));
+        /* displacement: 24 samples at rest, then moving */
+        if (k >= 8u) {
+            f[0] += 3000L;
+        } else {
+            f[0] = 0;
+            f[1] = 0;
+            f[2] = 10045L;
+        }
+        MEASURE(R_DISP, 1u, ac_disp_step(&disp, f, &dout));
+    }
+    for (k = 0u; k < 2u; k++) {
+        for (i = 0u; i < BATCH * 6u; i++) {
+            raw[i] = (uint16_t)(trim[i % 6u] + rnd_range(-1500, 3000));
+        }
+        for (i = 0u; i < BATCH * 3u; i++) {
+            w[i] = rnd_range(-3000, 6000);
+        }
+        MEASURE(R_BATCH_W, BATCH, ac_process_batch(&res, trim, raw, BATCH, w, out, 0));
+    }
+
+    for (id = 1u; id < R_COUNT; id++) {
+        put_s("REGION ");
+        put_u(id);
+        put_c(' ');
+        put_s(region_name[id]);
+        put_c(' ');
+        put_u(entries[id]);
+        put_c(' ');
+        put_u(samples[id]);
+        put_c('\n');
+        put_s("STACK ");
+        put_u(id);
+        put_c(' ');
+        put_u(deepest[id]);
+        put_c('\n');
+    }
+    put_s("END bench\n");
+    return 0;
+}
