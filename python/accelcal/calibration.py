@@ -11,7 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from .device import Device, _Fields, _json_number, _read_json, _show, check_limits
+from .device import Device
+from .jsonfields import JsonFields, check_limits, json_number, read_json, show_json
 from .errors import atomic_write
 
 __all__ = ["Calibration", "load_calibration", "save_calibration", "calibration_from_dict", "calibration_to_dict"]
@@ -180,7 +181,7 @@ def calibration_to_dict(cal: Calibration) -> dict:
     if resid:
         out["residual_rms_counts"] = resid
     if cal.poses_used is not None:
-        out["poses_used"] = [p if isinstance(p, str) else _json_number(p) for p in cal.poses_used]
+        out["poses_used"] = [p if isinstance(p, str) else json_number(p) for p in cal.poses_used]
     for k, v in cal.extra.items():
         if k in _KNOWN_TOP:
             raise ValueError(f"Calibration.extra: key {k!r} is reserved")
@@ -197,7 +198,7 @@ def save_calibration(cal: Calibration, path: Any) -> None:
 def calibration_from_dict(d: Any, source: str = "<dict>", device: Device | None = None) -> Calibration:
     """Validate a parsed calibration and build it; with ``device``, also check
     it belongs to that device and fill unestimated positions with nominal."""
-    v = _Fields(source)
+    v = JsonFields(source)
     v.no_nonfinite(d, "")
     d = v.obj(d, "")
     v.known(d, "", sorted(_KNOWN_TOP | {"fit", "poses"}))
@@ -205,7 +206,7 @@ def calibration_from_dict(d: Any, source: str = "<dict>", device: Device | None 
     method = v.string(v.get(d, "method", ""), "method")
     chans = v.get(d, "channels", "")
     if not isinstance(chans, list):
-        raise v.fail("channels", f"expected a list of channel objects, got {_show(chans)}")
+        raise v.fail("channels", f"expected a list of channel objects, got {show_json(chans)}")
     if not chans:
         raise v.fail("channels", "expected at least one channel, got an empty list")
     if device is not None:
@@ -241,7 +242,7 @@ def calibration_from_dict(d: Any, source: str = "<dict>", device: Device | None 
             if key == "position_m":
                 check_limits(v, fp, value, "position_m")
             if attr in _NONNEGATIVE and np.any(value < 0):
-                raise v.fail(fp, f"expected values >= 0 (an uncertainty), got {_show(ch[key])}")
+                raise v.fail(fp, f"expected values >= 0 (an uncertainty), got {show_json(ch[key])}")
             if attr not in opt:
                 opt[attr] = np.full((n, 3) if width == 3 else (n,), np.nan)
             opt[attr][i] = value if width == 3 else value[0]
@@ -260,26 +261,26 @@ def calibration_from_dict(d: Any, source: str = "<dict>", device: Device | None 
             pc = res["per_channel"]
             fp = "residual_rms_counts.per_channel"
             if not isinstance(pc, list) or len(pc) != n:
-                got = len(pc) if isinstance(pc, list) else _show(pc)
+                got = len(pc) if isinstance(pc, list) else show_json(pc)
                 raise v.fail(fp, f"expected {n} numbers (one per channel), got {got}")
             per_channel = np.array([v.number(x, f"{fp}[{k}]") for k, x in enumerate(pc)])
             if np.any(per_channel < 0):
                 k = int(np.flatnonzero(per_channel < 0)[0])
-                raise v.fail(f"{fp}[{k}]", f"expected a number >= 0, got {_show(pc[k])}")
+                raise v.fail(f"{fp}[{k}]", f"expected a number >= 0, got {show_json(pc[k])}")
         if "per_pose" in res:
             pp = v.obj(res["per_pose"], "residual_rms_counts.per_pose")
             per_pose = {}
             for k, x in pp.items():
                 val = v.number(x, f"residual_rms_counts.per_pose.{k}")
                 if val < 0:
-                    raise v.fail(f"residual_rms_counts.per_pose.{k}", f"expected a number >= 0, got {_show(x)}")
+                    raise v.fail(f"residual_rms_counts.per_pose.{k}", f"expected a number >= 0, got {show_json(x)}")
                 per_pose[k] = val
 
     poses = None
     if "poses_used" in d:
         pu = d["poses_used"]
         if not isinstance(pu, list):
-            raise v.fail("poses_used", f"expected a list of pose labels, got {_show(pu)}")
+            raise v.fail("poses_used", f"expected a list of pose labels, got {show_json(pu)}")
         poses = []
         for k, x in enumerate(pu):
             if isinstance(x, str):
@@ -313,5 +314,5 @@ def calibration_from_dict(d: Any, source: str = "<dict>", device: Device | None 
 
 def load_calibration(path: Any, device: Device | None = None) -> Calibration:
     """Read and validate a calibration JSON file (see calibration_from_dict)."""
-    doc, source = _read_json(path)
+    doc, source = read_json(path)
     return calibration_from_dict(doc, source, device)

@@ -12,6 +12,13 @@ from pathlib import Path
 import numpy as np
 
 from .calibration import Calibration, save_calibration
+from .calibrate import calibrate_recordings
+from .diagnose import diagnose
+from .header import render_header
+from .quantize import FORMATS, quantize_calibration
+from .recording import write_recording
+from .resolve import resolve_recording
+from .simulate import seed_prototype_truth, simulate
 from .device import default_device, save_device
 from .errors import atomic_write
 
@@ -23,12 +30,6 @@ def _rms(a) -> float:
 
 
 def run_demo(out_dir: Path, seed: int = 1, *, quiet: bool = False) -> int:
-    from .calibrate import calibrate_recordings
-    from .header import render_header
-    from .quantize import FORMATS, quantize_calibration
-    from .recording import write_recording
-    from .resolve import resolve_recording
-    from .simulate import seed_prototype_truth, simulate
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -88,7 +89,6 @@ def run_demo(out_dir: Path, seed: int = 1, *, quiet: bool = False) -> int:
         "fixed_saturated_samples": int(np.count_nonzero(flags)) if flags is not None else 0,
     }
     try:
-        from .diagnose import diagnose
         diag = diagnose(dev, cal, [motion])
         summary["diagnosis_verdict"] = diag.get("verdict")
         atomic_write(out / "diagnosis.json", lambda f: json.dump(diag, f, indent=2, default=float))

@@ -4,16 +4,15 @@ accelerometer channels, with JSON load/save per the data contract.
 
 from __future__ import annotations
 
-import difflib
 import json
 import math
-import os
 from dataclasses import dataclass
-from typing import Any, Iterable
+from typing import Any
 
 import numpy as np
 
-from .errors import InputError, atomic_write
+from .errors import atomic_write
+from .jsonfields import JsonFields, check_limits, json_number, read_json, show_json
 
 __all__ = [
     "Device",
@@ -40,198 +39,8 @@ _SAME_POINT_M = 1e-9
 # --------------------------------------------------------------------------
 
 
-class _NonFinite:
-    """Stand-in for a JSON NaN/Infinity token, so validation can name its field."""
-
-    def __init__(self, token: str) -> None:
-        self.token = token
-
-    def __repr__(self) -> str:
-        return self.token
-
-
-class _JsonObject(dict):
-    """A JSON object that remembers keys given more than once."""
-
-    duplicates: tuple[str, ...] = ()
-
-
-def _object_pairs(pairs: list[tuple[str, Any]]) -> _JsonObject:
-    obj = _JsonObject()
-    dups = []
-    for k, v in pairs:
-        if k in obj:
-            dups.append(k)
-        obj[k] = v
-    if dups:
-        obj.duplicates = tuple(dups)
-    return obj
-
-
-def _parse_float(text: str) -> Any:
-    value = float(text)
-    # 1e400 parses to inf: keep the literal so the message can show it.
-    return value if math.isfinite(value) else _NonFinite(text)
-
-
-def _read_json(path: Any) -> tuple[Any, str]:
-    """Read and parse a JSON file; returns (document, source name)."""
-    source = os.fspath(path) if not isinstance(path, str) else path
-    try:
-        with open(path, "rb") as f:
-            data = f.read()
-    except OSError as e:
-        raise InputError(source, f"cannot read the file: {e.strerror or e}") from None
-    try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError as e:
-        line = data.count(b"\n", 0, e.start) + 1
-        raise InputError(source, f"line {line}: not valid UTF-8 (byte {e.start})") from None
-    return _parse_json_text(text, source), source
-
-
-def _parse_json_text(text: str, source: str) -> Any:
-    if not text.strip():
-        raise InputError(source, "the file is empty (expected a JSON object)")
-    try:
-        return json.loads(
-            text,
-            parse_constant=_NonFinite,
-            parse_float=_parse_float,
-            object_pairs_hook=_object_pairs,
-        )
-    except json.JSONDecodeError as e:
-        raise InputError(
-            source, f"not valid JSON at line {e.lineno}, column {e.colno}: {e.msg}"
-        ) from None
-    except (ValueError, RecursionError) as e:  # e.g. integer too long to convert
-        raise InputError(source, f"not valid JSON: {e}") from None
-
-
-def _show(value: Any) -> str:
-    """Short JSON-like rendering of a value for an error message."""
-    if isinstance(value, _NonFinite):
-        return value.token
-    if isinstance(value, dict):
-        return "an object"
-    if isinstance(value, list):
-        return f"a list of {len(value)}"
-    try:
-        text = json.dumps(value)
-    except (TypeError, ValueError):
-        text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
-
-
-KEY_CUTOFF = 0.8  # difflib similarity above which an unknown JSON key is taken for a misspelling
-MISSING_KEY_CUTOFF = 0.6  # ... and, when a required key is missing, above which a key present is named
 DEVICE_KEYS = ("name", "sample_rate_hz", "gravity_mps2", "raw_min", "raw_max", "noise_mps2", "channels")
 CHANNEL_KEYS = ("position_m", "axis", "counts_per_mps2", "zero_counts")
-
-
-class _Fields:
-    """Validator for one JSON document: every failure is an InputError with
-    the document's source and the field path."""
-
-    def __init__(self, source: str) -> None:
-        self.source = source
-        self.known_keys: dict[int, list[str]] = {}  # id(object) -> its valid keys (see known())
-
-    def fail(self, path: str, message: str) -> InputError:
-        if not path:
-            return InputError(self.source, message)
-        return InputError(self.source, message, field=path)
-
-    def obj(self, value: Any, path: str) -> dict:
-        if not isinstance(value, dict):
-            where = "" if path else " at the top level"
-            raise self.fail(path, f"expected a JSON object{where}, got {_show(value)}")
-        dups = getattr(value, "duplicates", ())
-        if dups:
-            where = f"{path}.{dups[0]}" if path else dups[0]
-            raise self.fail(where, "given more than once")
-        return value
-
-    def get(self, obj: dict, key: str, path: str, *, required: bool = True) -> Any:
-        sub = f"{path}.{key}" if path else key
-        if key not in obj:
-            if required:
-                valid = self.known_keys.get(id(obj), ())
-                near = difflib.get_close_matches(key, [k for k in obj if isinstance(k, str) and k not in valid],
-                                                 n=1, cutoff=MISSING_KEY_CUTOFF)
-                hint = f"; the object has {near[0]!r}: did you mean {key!r}?" if near else ""
-                raise self.fail(sub, f"missing (required){hint}")
-            return None
-        return obj[key]
-
-    def known(self, obj: dict, path: str, keys: Iterable[str]) -> None:
-        """Refuse a key that is not one of ``keys`` but close to one (a misspelling).
-
-        Keys far from every known one are extensions and pass (the contract lets a
-        file carry fields of its own); a near miss such as ``noise_mps`` for
-        ``noise_mps2`` would otherwise be silently ignored.
-        """
-        keys = list(keys)
-        self.known_keys[id(obj)] = keys
-        for k in obj:
-            if not isinstance(k, str) or k in keys:
-                continue
-            near = difflib.get_close_matches(k, keys, n=1, cutoff=KEY_CUTOFF)
-            if near and near[0] not in obj:
-                sub = f"{path}.{k}" if path else k
-                raise self.fail(sub, f"unknown key: did you mean {near[0]!r}?")
-
-    def number(self, value: Any, path: str, *, what: str = "a number") -> float:
-        if isinstance(value, _NonFinite):
-            raise self.fail(path, f"expected a finite number, got {value.token}")
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.fail(path, f"expected {what}, got {_show(value)}")
-        try:
-            out = float(value)
-        except OverflowError:
-            raise self.fail(path, f"expected a finite number, got {_show(value)}") from None
-        if not math.isfinite(out):
-            raise self.fail(path, f"expected a finite number, got {_show(value)}")
-        return out
-
-    def integer(self, value: Any, path: str) -> int:
-        if isinstance(value, int) and not isinstance(value, bool):
-            return value
-        x = self.number(value, path, what="an integer")
-        if x != math.floor(x):
-            raise self.fail(path, f"expected an integer, got {_show(value)}")
-        return int(x)
-
-    def string(self, value: Any, path: str) -> str:
-        if not isinstance(value, str):
-            raise self.fail(path, f"expected a string, got {_show(value)}")
-        return value
-
-    def vector(self, value: Any, path: str, n: int = 3) -> np.ndarray:
-        if not isinstance(value, list) or len(value) != n:
-            got = f"{len(value)}" if isinstance(value, list) else _show(value)
-            raise self.fail(path, f"expected {n} numbers, got {got}")
-        return np.array([self.number(v, f"{path}[{i}]") for i, v in enumerate(value)])
-
-    def no_nonfinite(self, value: Any, path: str) -> None:
-        """Reject NaN/Infinity anywhere below ``value`` (also in unknown fields)."""
-        if isinstance(value, _NonFinite):
-            raise self.fail(path, f"expected a finite number, got {value.token}")
-        if isinstance(value, dict):
-            self.obj(value, path)  # duplicate keys
-            for k, v in value.items():
-                self.no_nonfinite(v, f"{path}.{k}" if path else k)
-        elif isinstance(value, list):
-            for i, v in enumerate(value):
-                self.no_nonfinite(v, f"{path}[{i}]")
-
-
-def _json_number(x: float) -> int | float:
-    """Integral values as JSON integers (readable files), others as floats."""
-    x = float(x)
-    if x.is_integer() and abs(x) < 2**53:
-        return int(x)
-    return x
 
 
 # --------------------------------------------------------------------------
@@ -395,34 +204,11 @@ class Device:
                     "position_m": [float(x) for x in self.positions[i]],
                     "axis": [float(x) for x in self.axes[i]],
                     "counts_per_mps2": float(self.counts_per_mps2[i]),
-                    "zero_counts": _json_number(self.zero_counts[i]),
+                    "zero_counts": json_number(self.zero_counts[i]),
                 }
                 for i in range(self.n_channels)
             ],
         }
-
-
-# The ranges a file may use.  Far wider than any real sensor, they keep absurd values
-# (1e300 m, 1e30 Hz) out of the numerics, where they would overflow or underflow and
-# surface as a numerical failure instead of a message that names the field.
-LIMITS = {
-    "sample_rate_hz": (1e-3, 1e6, "Hz"),
-    "gravity_mps2": (1e-2, 1e3, "m/s^2"),
-    "noise_mps2": (0.0, 1e3, "m/s^2"),
-    "position_m": (-1e3, 1e3, "m"),
-    "counts_per_mps2": (1e-6, 1e9, "counts per m/s^2"),
-    "raw": (-(2.0**53), 2.0**53, "counts"),
-    "sensitivity": (-1e9, 1e9, "counts per m/s^2"),
-    "offset_counts": (-(2.0**53), 2.0**53, "counts"),
-}
-
-
-def check_limits(fields: Any, field: str, value: Any, kind: str) -> None:
-    """Raise the field's InputError when value (scalar or vector) leaves LIMITS[kind]."""
-    lo, hi, unit = LIMITS[kind]
-    a = np.atleast_1d(np.asarray(value, float))
-    if np.any(a < lo) or np.any(a > hi):
-        raise fields.fail(field, f"expected values in [{lo:g}, {hi:g}] {unit}, got {_show(value)}")
 
 
 def device_from_dict(d: Any, source: str = "<dict>") -> Device:
@@ -430,18 +216,18 @@ def device_from_dict(d: Any, source: str = "<dict>") -> Device:
 
     Raises InputError naming ``source`` and the field on any violation.
     """
-    v = _Fields(source)
+    v = JsonFields(source)
     v.no_nonfinite(d, "")
     d = v.obj(d, "")
     v.known(d, "", DEVICE_KEYS)
     name = v.string(v.get(d, "name", ""), "name")
     rate = v.number(v.get(d, "sample_rate_hz", ""), "sample_rate_hz")
     if rate <= 0:
-        raise v.fail("sample_rate_hz", f"expected a number > 0, got {_show(d['sample_rate_hz'])}")
+        raise v.fail("sample_rate_hz", f"expected a number > 0, got {show_json(d['sample_rate_hz'])}")
     check_limits(v, "sample_rate_hz", rate, "sample_rate_hz")
     grav = v.number(v.get(d, "gravity_mps2", ""), "gravity_mps2")
     if grav <= 0:
-        raise v.fail("gravity_mps2", f"expected a number > 0, got {_show(d['gravity_mps2'])}")
+        raise v.fail("gravity_mps2", f"expected a number > 0, got {show_json(d['gravity_mps2'])}")
     check_limits(v, "gravity_mps2", grav, "gravity_mps2")
     raw_min = v.integer(v.get(d, "raw_min", ""), "raw_min")
     raw_max = v.integer(v.get(d, "raw_max", ""), "raw_max")
@@ -453,11 +239,11 @@ def device_from_dict(d: Any, source: str = "<dict>") -> Device:
     if "noise_mps2" in d:
         noise = v.number(d["noise_mps2"], "noise_mps2")
         if noise < 0:
-            raise v.fail("noise_mps2", f"expected a number >= 0, got {_show(d['noise_mps2'])}")
+            raise v.fail("noise_mps2", f"expected a number >= 0, got {show_json(d['noise_mps2'])}")
         check_limits(v, "noise_mps2", noise, "noise_mps2")
     chans = v.get(d, "channels", "")
     if not isinstance(chans, list):
-        raise v.fail("channels", f"expected a list of channel objects, got {_show(chans)}")
+        raise v.fail("channels", f"expected a list of channel objects, got {show_json(chans)}")
     if len(chans) == 0:
         raise v.fail("channels", "expected at least 3 channels, got an empty list")
     if len(chans) < 3:
@@ -478,13 +264,13 @@ def device_from_dict(d: Any, source: str = "<dict>") -> Device:
             raise v.fail(f"{p}.axis", "expected a non-zero vector, got [0, 0, 0]")
         k[i] = v.number(v.get(ch, "counts_per_mps2", p), f"{p}.counts_per_mps2")
         if k[i] <= 0:
-            raise v.fail(f"{p}.counts_per_mps2", f"expected a number > 0, got {_show(ch['counts_per_mps2'])}")
+            raise v.fail(f"{p}.counts_per_mps2", f"expected a number > 0, got {show_json(ch['counts_per_mps2'])}")
         check_limits(v, f"{p}.counts_per_mps2", k[i], "counts_per_mps2")
         z[i] = v.number(v.get(ch, "zero_counts", p), f"{p}.zero_counts")
         if not raw_min <= z[i] <= raw_max:
             raise v.fail(
                 f"{p}.zero_counts",
-                f"expected a value in [raw_min, raw_max] = [{raw_min}, {raw_max}], got {_show(ch['zero_counts'])}",
+                f"expected a value in [raw_min, raw_max] = [{raw_min}, {raw_max}], got {show_json(ch['zero_counts'])}",
             )
     unit = _normalise_rows(axes)
     dev = Device(
@@ -532,7 +318,7 @@ def _geometry_problem(dev: Device) -> str | None:
 
 def load_device(path: Any) -> Device:
     """Read and validate a device description JSON file."""
-    doc, source = _read_json(path)
+    doc, source = read_json(path)
     return device_from_dict(doc, source)
 
 

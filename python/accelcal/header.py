@@ -13,7 +13,7 @@ import numpy as np
 
 from . import __version__
 from .native import FORMATS
-from .quantize import FixedTables
+from .quantize import FixedTables, to_fixed
 
 
 def _c_ident(text: str) -> str:
@@ -102,7 +102,6 @@ def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method:
                      f"{{{', '.join(f'{int(v)}L' for v in t.pos_q[i])}}}, {int(t.offset_q[i])}L}},")
     lines.append("};")
     if has_temp:
-        from .quantize import to_fixed
         otc = to_fixed(np.zeros(n) if offset_tc is None else offset_tc, 16, "offset_tc")
         gtc = to_fixed(np.zeros(n) if gain_tc is None else gain_tc, 30, "gain_tc")
         lines += [f"const int32_t {p}_OFFSET_TC[{n}] = {{{', '.join(f'{int(v)}L' for v in otc)}}};",

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping, NamedTuple
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from .sensor import interp_truth, rotation_matrix
 from .spec import Param, check_params, format_spec, parse_spec, with_defaults
@@ -181,8 +182,6 @@ def _up_attitude(d: np.ndarray, heading: float = 0.0) -> np.ndarray:
 
 def _rotvecs_between(Ca: np.ndarray, Cb: np.ndarray) -> np.ndarray:
     """Body-frame rotation vectors v (P, 3) with Cb = Ca Exp(v)."""
-    from scipy.spatial.transform import Rotation
-
     return Rotation.from_matrix(np.einsum("pji,pjk->pik", Ca, Cb)).as_rotvec()
 
 

@@ -23,8 +23,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import model
-from .errors import AccelcalError
-from .native import FORMATS
+from .errors import AccelcalError, IllConditionedError, SingularError
+from .native import FORMATS, new_resolver
 
 COEF_MAX = 32767
 ROW_L1_MAX = 65535
@@ -103,7 +103,6 @@ class FixedTables:
         return self.trim + self.offset_q / 2.0**FORMATS.offset_frac
 
     def resolver(self):
-        from .native import new_resolver
         return new_resolver(self.m, self.m_shift, self.k, self.g, self.g_shift)
 
 
@@ -133,11 +132,9 @@ def quantize(offsets, sensitivity, positions, device: str = "") -> FixedTables:
     o_t = offset_q / 2.0**f.offset_frac
     R = model.sensor_matrix(r_t, s_t)
     if np.linalg.matrix_rank(R) < 6:
-        from .errors import SingularError
         raise SingularError(-3, "sensor matrix has rank < 6: the geometry does not determine f and alpha")
     cl2 = cond_log2_equilibrated(R)
     if cl2 > f.cond_log2_max:
-        from .errors import IllConditionedError
         raise IllConditionedError(-4, f"geometry too ill-conditioned: cond ~ 2^{cl2} > 2^{f.cond_log2_max}")
     M = np.linalg.pinv(R) * 2.0**f.out_frac            # LSB per count
     G = M @ model.centripetal_matrix(r_t, s_t)          # LSB per (rad/s)^2

@@ -40,6 +40,7 @@ from .effects import (
     params_to_json,
     parse_effect_specs,
 )
+from .calibration import Calibration
 from .errors import AccelcalError
 from .sensor import ChannelState, Context, evaluate, true_state
 from .spec import format_spec
@@ -186,8 +187,6 @@ def seed_prototype_truth(device: Any, rng: np.random.Generator | int | None = No
     positions nominal (or off by up to ``position_error_mm`` per component,
     uniform; the paper's housings: 0.1 mm).  Returns a
     :class:`~accelcal.calibration.Calibration` (method ``truth``)."""
-    from .calibration import Calibration
-
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     N = device.n_channels
     k = np.asarray(device.counts_per_mps2, float)

@@ -4,6 +4,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.optimize import minimize_scalar
 
 from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, channel_mask, per_channel, strongest, temperature_of
@@ -60,7 +61,6 @@ class TemperatureFit(Candidate):
             grid = np.linspace(Tlo - T_REF_SPANS * span, Thi + T_REF_SPANS * span, 41)
             vals = [objective(G2, h2, tr) for tr in grid]
             j = int(np.argmin(vals))
-            from scipy.optimize import minimize_scalar
             lo, hi = grid[max(j - 1, 0)], grid[min(j + 1, grid.size - 1)]
             res = minimize_scalar(lambda tr: objective(G2, h2, tr), bounds=(lo, hi), method="bounded",
                                   options={"xatol": 1e-3 * span})
