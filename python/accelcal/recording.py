@@ -11,42 +11,19 @@ that names the row and column.
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 import os
-import re
 from dataclasses import dataclass, field
-from typing import Any, Iterator, Sequence
+from typing import Any
 
 import numpy as np
 
+from .csvformat import CSV_G, CSV_G_NAN, CSV_INT, CSV_REPR, G_FORMAT_RE, csv_cell, csv_rows, float_strings
+from .csvtable import (META_KEY_RE, META_RE, RAW_RE, REFERENCE_NAMES, VECTOR_COLUMNS, ByteTable, CellError, ListTable,
+                       classify_columns, convert_column, quote_cell, scan_fast, split_header)
 from .errors import InputError, atomic_write
 
 __all__ = ["Recording", "check_for_device", "read_recording", "write_recording", "recording_from_arrays", "VECTOR_COLUMNS"]
-
-VECTOR_COLUMNS: dict[str, tuple[str, str, str]] = {
-    "f": ("f_x", "f_y", "f_z"),
-    "w": ("w_x", "w_y", "w_z"),
-    "dw": ("dw_x", "dw_y", "dw_z"),
-}
-_REFERENCE_NAMES = {c for cols in VECTOR_COLUMNS.values() for c in cols} | {"temp_c", "pose"}
-_RAW_RE = re.compile(r"raw_(\d+)")
-# "# key: value"; the key is a bare word so that "# taken at 12:30" stays a plain comment.
-_META_RE = re.compile(r"#\s*([A-Za-z_][A-Za-z0-9_.\-]*)\s*:(.*)", re.S)
-_META_KEY_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
-_INT_RE = re.compile(r"[+-]?[0-9]+")
-_FLOAT_RE = re.compile(
-    r"[+-]?(?:[0-9]+\.?[0-9]*(?:[eE][+-]?[0-9]+)?|\.[0-9]+(?:[eE][+-]?[0-9]+)?|nan|inf|infinity)",
-    re.I,
-)
-_NAN_WORDS = {"nan", "+nan", "-nan"}
-# Widest numeric cell handled by the fixed-width fast path; wider ones go slow.
-_FAST_WIDTH = 32
-_FLOAT_BYTES = np.zeros(256, dtype=bool)
-_FLOAT_BYTES[list(b"0123456789+-.eEnNaAiIfFtTyY \t\x00")] = True
-_INT_BYTES = np.zeros(256, dtype=bool)
-_INT_BYTES[list(b"0123456789+- \t\x00")] = True
 
 
 # --------------------------------------------------------------------------
@@ -230,7 +207,7 @@ def _check_content(rec: Recording) -> None:
     if np.any(rec.pose < -1):
         raise ValueError("Recording.pose: labels must be >= 0, or -1 for moving/unknown")
     for k in rec.extra:
-        if k in ("t",) or k in _REFERENCE_NAMES or _RAW_RE.fullmatch(k):
+        if k in ("t",) or k in REFERENCE_NAMES or RAW_RE.fullmatch(k):
             raise ValueError(f"Recording.extra: column name {k!r} is reserved")
 
 
@@ -259,281 +236,6 @@ def recording_from_arrays(
 # --------------------------------------------------------------------------
 # Reading
 # --------------------------------------------------------------------------
-
-
-class _CellError(Exception):
-    """Bad cell at data-row index ``i`` (converted to InputError by the reader)."""
-
-    def __init__(self, i: int, message: str) -> None:
-        super().__init__(message)
-        self.i = i
-        self.message = message
-
-
-def _quote(text: str) -> str:
-    shown = text if len(text) <= 40 else text[:37] + "..."
-    return repr(shown)
-
-
-def _got(text: str) -> str:
-    return "an empty cell" if not text.strip() else _quote(text)
-
-
-class _ByteTable:
-    """Data rows located in the raw bytes ``data[start:end]``: ``starts`` and
-    ``ends`` are (n, m) cell offsets into ``data``."""
-
-    def __init__(self, data: bytes, start: int, end: int, m: int, first_line: int, source: str) -> None:
-        self.data = data
-        self.first_line = first_line
-        view = np.frombuffer(data, dtype=np.uint8, count=end - start, offset=start)
-        seps = np.flatnonzero((view == 44) | (view == 10))
-        is_nl = view[seps] == 10
-        # The end of the data section terminates the last row.
-        seps = np.append(seps, view.size) + start
-        is_nl = np.append(is_nl, True)
-        nl = np.flatnonzero(is_nl)
-        counts = np.diff(nl, prepend=-1)
-        bad = np.flatnonzero(counts != m)
-        if bad.size:
-            i = int(bad[0])
-            line_start = start if i == 0 else int(seps[nl[i - 1]]) + 1
-            text = data[line_start : int(seps[nl[i]])].decode("utf-8", "replace")
-            if not text.strip():
-                what = "an empty line"
-            elif text.startswith("#"):
-                what = "a comment (comments are only allowed before the header)"
-            else:
-                what = f"{int(counts[i])}"
-            raise InputError(source, f"expected {m} cells as in the header, got {what}", row=first_line + i)
-        self.n = int(nl.size)
-        starts = np.empty(seps.size, dtype=np.int64)
-        starts[0] = start
-        starts[1:] = seps[:-1] + 1
-        self.starts = starts.reshape(self.n, m)
-        self.ends = seps.reshape(self.n, m)
-        self._window: np.ndarray | None = None
-        # NUL bytes are the padding of the fast path's fixed-width cells, so a
-        # file that contains any is converted by the slow path only.
-        self._fast = data.find(b"\x00", start, end) < 0
-
-    def line(self, i: int) -> int:
-        return self.first_line + i
-
-    def cell(self, i: int, j: int) -> str:
-        return self.data[self.starts[i, j] : self.ends[i, j]].decode("utf-8")
-
-    def strings(self, j: int) -> list[str]:
-        data = self.data
-        return [data[s:e].decode("utf-8") for s, e in zip(self.starts[:, j].tolist(), self.ends[:, j].tolist())]
-
-    def matrix(self, j: int) -> tuple[np.ndarray, np.ndarray] | None:
-        """Column j as an (n, W) zero-padded byte matrix and the cell lengths;
-        None when a cell is too wide for the fast path."""
-        s = self.starts[:, j]
-        lens = self.ends[:, j] - s
-        width = int(lens.max(initial=0))
-        if width > _FAST_WIDTH or not self._fast:
-            return None
-        if self._window is None:
-            # A sliding (len, _FAST_WIDTH) view of the bytes: picking rows of it
-            # copies each cell's bytes in one go instead of gathering bytes singly.
-            padded = np.zeros(len(self.data) + _FAST_WIDTH, dtype=np.uint8)
-            padded[: len(self.data)] = np.frombuffer(self.data, dtype=np.uint8)
-            self._window = np.lib.stride_tricks.as_strided(
-                padded, shape=(len(self.data), _FAST_WIDTH), strides=(1, 1), writeable=False
-            )
-        width = max(width, 3)  # room for b"nan" in empty cells
-        mat = self._window[s, :width]
-        mat *= np.arange(width) < lens[:, None]
-        return mat, lens
-
-
-class _ListTable:
-    """Data rows parsed by the csv module (used when a cell is quoted)."""
-
-    def __init__(self, body: str, m: int, first_line: int, source: str) -> None:
-        reader = csv.reader(io.StringIO(body, newline=""), strict=True)
-        rows: list[list[str]] = []
-        lines: list[int] = []
-        before = 0
-        try:
-            for row in reader:
-                line = first_line + before
-                if len(row) != m:
-                    what = "an empty line" if not row or row == [""] else f"{len(row)}"
-                    raise InputError(source, f"expected {m} cells as in the header, got {what}", row=line)
-                rows.append(row)
-                lines.append(line)
-                before = reader.line_num
-        except csv.Error as e:
-            raise InputError(source, f"bad CSV quoting: {e}", row=first_line + before) from None
-        self.rows = rows
-        self.lines = lines
-        self.n = len(rows)
-
-    def line(self, i: int) -> int:
-        return self.lines[i]
-
-    def cell(self, i: int, j: int) -> str:
-        return self.rows[i][j]
-
-    def strings(self, j: int) -> list[str]:
-        return [r[j] for r in self.rows]
-
-    def matrix(self, j: int) -> None:
-        return None
-
-
-# -- fast converters: return None whenever the slow path must decide ---------
-
-
-def _fast_int(mb: tuple[np.ndarray, np.ndarray] | None, empty_value: int | None) -> np.ndarray | None:
-    if mb is None:
-        return None
-    mat, lens = mb
-    # Only digits, signs and blanks: numpy's parser would also take '1_0'.
-    if not _INT_BYTES[mat].all():
-        return None
-    empty = lens == 0
-    if empty.any():
-        if empty_value is None:
-            return None
-        mat[empty, : len(str(empty_value))] = np.frombuffer(str(empty_value).encode(), dtype=np.uint8)
-    strings = np.ascontiguousarray(mat).view(f"S{mat.shape[1]}").ravel()
-    try:
-        return strings.astype(np.int64)
-    except (ValueError, OverflowError):
-        return None
-
-
-def _fast_float(mb: tuple[np.ndarray, np.ndarray] | None, allow_empty: bool) -> np.ndarray | None:
-    if mb is None:
-        return None
-    mat, lens = mb
-    if not _FLOAT_BYTES[mat].all():
-        return None
-    empty = lens == 0
-    if empty.any():
-        if not allow_empty:
-            return None
-        mat[empty, :3] = np.frombuffer(b"nan", dtype=np.uint8)
-    strings = np.ascontiguousarray(mat).view(f"S{mat.shape[1]}").ravel()
-    try:
-        return strings.astype(np.float64)
-    except (ValueError, OverflowError):
-        return None
-
-
-# -- slow converters: per cell, with the exact message -----------------------
-
-
-def _slow_int(strings: Sequence[str], empty_value: int | None, what: str) -> np.ndarray:
-    out = np.empty(len(strings), dtype=np.int64)
-    for i, s in enumerate(strings):
-        c = s.strip()
-        if not c or c.lower() in _NAN_WORDS:
-            if empty_value is None:
-                raise _CellError(i, f"expected {what}, got {_got(s)}")
-            out[i] = empty_value
-            continue
-        if _INT_RE.fullmatch(c):
-            v = int(c)
-        elif _FLOAT_RE.fullmatch(c):
-            x = float(c)
-            if not math.isfinite(x) or not x.is_integer():
-                raise _CellError(i, f"expected {what}, got {_quote(s)}")
-            v = int(x)
-        else:
-            raise _CellError(i, f"expected {what}, got {_quote(s)}")
-        if not -(2**63) <= v < 2**63:
-            raise _CellError(i, f"expected {what} within 64 bits, got {_quote(s)}")
-        out[i] = v
-    return out
-
-
-def _slow_float(strings: Sequence[str], allow_unknown: bool) -> np.ndarray:
-    out = np.empty(len(strings), dtype=np.float64)
-    expect = "a finite number, or empty/nan for unknown" if allow_unknown else "a finite number"
-    for i, s in enumerate(strings):
-        c = s.strip()
-        if not c:
-            if not allow_unknown:
-                raise _CellError(i, f"expected {expect}, got an empty cell")
-            out[i] = np.nan
-            continue
-        if not _FLOAT_RE.fullmatch(c):
-            raise _CellError(i, f"expected {expect}, got {_quote(s)}")
-        x = float(c)
-        if math.isinf(x) or (math.isnan(x) and not allow_unknown):
-            raise _CellError(i, f"expected {expect}, got {_quote(s)}")
-        out[i] = x
-    return out
-
-
-def _convert(table: Any, j: int, kind: str) -> np.ndarray:
-    """Column j of the table as numbers; kinds: raw, pose, t, ref."""
-    if kind in ("raw", "pose"):
-        empty_value = -1 if kind == "pose" else None
-        vals = _fast_int(table.matrix(j), empty_value)
-        if vals is not None and (kind == "raw" or not np.any(vals < -1)):
-            return vals
-        what = "an integer" if kind == "raw" else "an integer pose label (>= 0, or -1/empty while moving)"
-        vals = _slow_int(table.strings(j), empty_value, what)
-        if kind == "pose":
-            bad = np.flatnonzero(vals < -1)
-            if bad.size:
-                i = int(bad[0])
-                raise _CellError(i, f"expected {what}, got {_quote(table.cell(i, j))}")
-        return vals
-    allow_unknown = kind == "ref"
-    vals = _fast_float(table.matrix(j), allow_unknown)
-    if vals is not None:
-        ok = ~np.isinf(vals) if allow_unknown else np.isfinite(vals)
-        if ok.all():
-            return vals
-    return _slow_float(table.strings(j), allow_unknown)
-
-
-_SCAN_KIND = {"raw": 1, "pose": 2, "t": 3, "ref": 4}  # _csv_fast.h: ACX_INT ... (0: ACX_SKIP)
-
-
-def _scan_fast(data: bytes, pos: int, end: int, names: list[str], cols: dict[str, tuple[int, str]]
-               ) -> dict[str, np.ndarray] | None:
-    """The columns of cols from the data rows data[pos:end] by the C scanner
-    (_csv_fast.c), or None when it stops at a row: then the slow path decides."""
-    from ._core import ffi, lib
-
-    m = len(names)
-    kind = np.zeros(m, dtype=np.int8)
-    slot = np.zeros(m, dtype=np.int16)
-    n_int = n_float = 0
-    for j, k in cols.values():
-        kind[j] = _SCAN_KIND[k]
-        if k in ("raw", "pose"):
-            slot[j], n_int = n_int, n_int + 1
-        else:
-            slot[j], n_float = n_float, n_float + 1
-    n = data.count(b"\n", pos, end) + 1
-    ints = np.empty((n_int, n), dtype=np.int64)
-    floats = np.empty((n_float, n), dtype=np.float64)
-    view = memoryview(data)[pos:end]
-    done = lib.acx_scan_rows(ffi.from_buffer(view), end - pos, n, m,
-                             ffi.cast("const int8_t *", ffi.from_buffer(kind)),
-                             ffi.cast("const int16_t *", ffi.from_buffer(slot)),
-                             ffi.cast("int64_t *", ffi.from_buffer(ints)),
-                             ffi.cast("double *", ffi.from_buffer(floats)))
-    if done != n:
-        return None
-    return {name: (ints if k in ("raw", "pose") else floats)[slot[j]] for name, (j, k) in cols.items()}
-
-
-def _split_header(line: str) -> list[str]:
-    if '"' in line:
-        cells = next(csv.reader([line]), [])
-    else:
-        cells = line.split(",")
-    return [c.strip() for c in cells]
 
 
 def read_recording(path: Any, n_channels: int | None = None) -> Recording:
@@ -570,7 +272,7 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
         line_no += 1
         pos = end + 1
         if text.startswith("#"):
-            m = _META_RE.fullmatch(text)
+            m = META_RE.fullmatch(text)
             if m:
                 metadata[m.group(1)] = m.group(2).strip()
             continue
@@ -582,8 +284,8 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
         what = "the file is empty" if not data.strip() else "no header row after the comments"
         raise InputError(source, f"{what} (expected a header such as 't,raw_0,raw_1,...')")
     header_line = line_no
-    names = _split_header(header)
-    cols = _classify(names, n_channels, source, header_line)
+    names = split_header(header)
+    cols = classify_columns(names, n_channels, source, header_line)
 
     # Trailing blank lines are not rows; blank lines inside the data are errors.
     # (Offsets, not slices: the data may be hundreds of MB.)
@@ -598,21 +300,21 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
     m = len(names)
     first = header_line + 1
     table: Any = None
-    values = _scan_fast(data, pos, end, names, cols)
+    values = scan_fast(data, pos, end, names, cols)
     if values is None:
         # Anything the C scanner did not take (quotes, blanks, words, an error):
         # the numpy/Python path decides, with the exact message.
         if data.find(b'"', pos, end) >= 0:
-            table = _ListTable(data[pos:end].decode("utf-8"), m, first, source)
+            table = ListTable(data[pos:end].decode("utf-8"), m, first, source)
         else:
-            table = _ByteTable(data, pos, end, m, first, source)
+            table = ByteTable(data, pos, end, m, first, source)
         # Convert every column; report the earliest bad cell in the file.
         errors: list[tuple[int, int, str]] = []
         values = {}
         for name, (j, kind) in cols.items():
             try:
-                values[name] = _convert(table, j, kind)
-            except _CellError as e:
+                values[name] = convert_column(table, j, kind)
+            except CellError as e:
                 errors.append((e.i, j, e.message))
         if errors:
             i, j, msg = min(errors)
@@ -624,7 +326,7 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
         file) built only when a message or an extra column needs it."""
         nonlocal table
         if table is None:
-            table = _ByteTable(data, pos, end, m, first, source)
+            table = ByteTable(data, pos, end, m, first, source)
         return table
 
     t = values["t"]
@@ -634,8 +336,8 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
         jt = cols["t"][0]
         raise InputError(
             source,
-            f"t must be strictly increasing, got {_quote(located().cell(i, jt).strip())} "
-            f"after {_quote(located().cell(i - 1, jt).strip())}",
+            f"t must be strictly increasing, got {quote_cell(located().cell(i, jt).strip())} "
+            f"after {quote_cell(located().cell(i - 1, jt).strip())}",
             row=located().line(i),
             column="t",
         )
@@ -678,7 +380,7 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
         metadata=metadata,
         extra=extra,
         source=source,
-        lines=first if not isinstance(table, _ListTable) else table.lines,
+        lines=first if not isinstance(table, ListTable) else table.lines,
     )
 
 
@@ -710,144 +412,6 @@ def check_for_device(rec: Recording, device, *, min_samples: int = 1) -> None:
                          row=rec.line(i), column=f"raw_{c}")
 
 
-def _classify(
-    names: list[str], n_channels: int | None, source: str, row: int
-) -> dict[str, tuple[int, str]]:
-    """Map known column names to (index, kind); check the header's rules."""
-    seen: dict[str, int] = {}
-    for j, name in enumerate(names):
-        known = name == "t" or name in _REFERENCE_NAMES or _RAW_RE.fullmatch(name)
-        # Unknown columns are never an error (contract): a repeated or empty
-        # unknown name is just not kept.  A repeated known name is ambiguous.
-        if known and name in seen:
-            raise InputError(
-                source, f"column name {name!r} appears twice (columns {seen[name] + 1} and {j + 1})", row=row
-            )
-        seen.setdefault(name, j)
-    cols: dict[str, tuple[int, str]] = {}
-    raw_idx: dict[int, int] = {}
-    for j, name in enumerate(names):
-        m = _RAW_RE.fullmatch(name)
-        if m:
-            digits = m.group(1)
-            if len(digits) > 1 and digits.startswith("0"):
-                raise InputError(source, f"column name {name!r}: expected raw_{int(digits)} (no leading zeros)", row=row)
-            raw_idx[int(digits)] = j
-        elif name == "t":
-            cols[name] = (j, "t")
-        elif name == "pose":
-            cols[name] = (j, "pose")
-        elif name in _REFERENCE_NAMES:
-            cols[name] = (j, "ref")
-    if "t" not in cols:
-        hint = next((f" (found {n!r}; names are case-sensitive)" for n in names if n.strip().lower() == "t"), "")
-        if len(names) == 1 and (";" in names[0] or "\t" in names[0]):
-            hint = " (cells must be separated by commas; this header uses ';' or tabs)"
-        raise InputError(source, f"the header has no 't' column{hint}", row=row)
-    if not raw_idx:
-        raise InputError(source, "the header has no raw_0, raw_1, ... columns", row=row)
-    if n_channels is not None:
-        extra_raw = sorted(k for k in raw_idx if k >= n_channels)
-        if extra_raw:
-            raise InputError(
-                source, f"recording has raw_{extra_raw[0]} but the device has {n_channels} channels", row=row
-            )
-        missing = [k for k in range(n_channels) if k not in raw_idx]
-        if missing:
-            raise InputError(
-                source,
-                f"the header has no raw_{missing[0]} column (the device has {n_channels} channels: "
-                f"raw_0..raw_{n_channels - 1})",
-                row=row,
-            )
-    else:
-        top = max(raw_idx)
-        missing = [k for k in range(top) if k not in raw_idx]
-        if missing:
-            raise InputError(
-                source, f"raw columns must be contiguous: raw_{top} is present but raw_{missing[0]} is not", row=row
-            )
-    for k in sorted(raw_idx):
-        cols[f"raw_{k}"] = (raw_idx[k], "raw")
-    for comps in VECTOR_COLUMNS.values():
-        present = [c for c in comps if c in cols]
-        if present and len(present) < 3:
-            absent = next(c for c in comps if c not in cols)
-            raise InputError(
-                source, f"the header has {present[0]} but no {absent} (vector columns come as a full triple)", row=row
-            )
-    return cols
-
-
-# --------------------------------------------------------------------------
-# Writing
-# --------------------------------------------------------------------------
-
-
-def _float_strings(values: np.ndarray, fmt: str) -> list[str]:
-    strs = list(map(fmt.__mod__, values.tolist()))
-    if np.isnan(values).any():
-        # NaN is written as an empty cell; dict.get keeps this a C-level map.
-        blank = {fmt % math.nan: ""}
-        strs = list(map(blank.get, strs, strs))
-    return strs
-
-
-_G_FORMAT_RE = re.compile(r"%\.([1-9]|1[0-7])g")
-_FORMAT_CHUNK_ROWS = 65536
-# _csv_fast.h: ACX_OUT_INT, ACX_OUT_REPR, ACX_OUT_G (NaN: empty cell), ACX_OUT_G_NAN (NaN: 'nan'), ACX_CELL_MAX
-CSV_INT, CSV_REPR, CSV_G, CSV_G_NAN = 1, 2, 3, 4
-_CELL_MAX = 32
-
-
-def csv_rows(columns: Sequence[np.ndarray], kinds: Sequence[int], precision: int = 9) -> Iterator[str]:
-    """The CSV rows of equal-length columns, in chunks of text (each ending with a newline):
-    CSV_INT columns as str(v), CSV_REPR as repr(x), CSV_G as '%.<precision>g' % x with NaN as
-    an empty cell, CSV_G_NAN likewise with NaN as 'nan'.  Formatted by the extension's C
-    (_csv_fast.c), which writes exactly what those Python expressions give."""
-    from ._core import ffi, lib
-
-    m = len(columns)
-    arrs = [np.ascontiguousarray(c, dtype=np.int64 if k == CSV_INT else np.float64) for c, k in zip(columns, kinds)]
-    n = arrs[0].shape[0] if arrs else 0
-    kind = np.asarray(kinds, dtype=np.int8)
-    prec = np.full(m, precision, dtype=np.int8)
-    ptrs = ffi.new("void *[]", [ffi.from_buffer(a) for a in arrs])
-    kp = ffi.cast("const int8_t *", ffi.from_buffer(kind))
-    pp = ffi.cast("const int8_t *", ffi.from_buffer(prec))
-    rows = min(n, _FORMAT_CHUNK_ROWS)
-    cap = max(rows, 1) * m * (_CELL_MAX + 1)
-    buf = ffi.new("char[]", cap)
-    for row0 in range(0, n, _FORMAT_CHUNK_ROWS):
-        k = min(_FORMAT_CHUNK_ROWS, n - row0)
-        size = lib.acx_format_rows(row0, k, m, kp, pp, ptrs, buf, cap)
-        if size == -2:  # a program set a numeric locale without '.': Python's own formatting
-            yield _python_rows(arrs, kinds, precision, row0, k)
-            continue
-        if size < 0:
-            raise ValueError("csv_rows: bad column kind or precision")
-        yield ffi.unpack(buf, size).decode("ascii")
-
-
-def _python_rows(arrs: Sequence[np.ndarray], kinds: Sequence[int], precision: int, row0: int, k: int) -> str:
-    """What acx_format_rows writes, in Python (locale-independent): the definition it follows."""
-    def cell(kind: int, v: Any) -> str:
-        if kind == CSV_INT:
-            return str(v)
-        if kind == CSV_REPR:
-            return repr(v)
-        return "" if kind == CSV_G and math.isnan(v) else "%.*g" % (precision, v)
-
-    cols = [[cell(kd, v) for v in a[row0 : row0 + k].tolist()] for a, kd in zip(arrs, kinds)]
-    return "".join(",".join(row) + "\n" for row in zip(*cols))
-
-
-def _csv_cell(text: str) -> str:
-    if any(ch in text for ch in ',"') or text != text.strip():
-        return '"' + text.replace('"', '""') + '"'
-    return text
-
-
 def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> None:
     """Write ``rec`` as CSV, atomically.
 
@@ -864,7 +428,7 @@ def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> No
         raise ValueError(f"float_format {float_format!r} does not format a float readably")
     lines: list[str] = []
     for k, v in rec.metadata.items():
-        if not _META_KEY_RE.fullmatch(k):
+        if not META_KEY_RE.fullmatch(k):
             raise ValueError(f"metadata key {k!r}: expected a word of letters, digits, '_', '.', '-'")
         if "\n" in v or "\r" in v:
             raise ValueError(f"metadata {k!r}: the value must be one line")
@@ -885,10 +449,10 @@ def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> No
     if rec.has_pose():
         names.append("pose")
         numeric.append((rec.pose, CSV_INT))
-    g = _G_FORMAT_RE.fullmatch(float_format)
+    g = G_FORMAT_RE.fullmatch(float_format)
     if g and not rec.extra:
         # every cell is a number in a '%.<p>g' format: the extension's C writes the same text
-        lines.append(",".join(map(_csv_cell, names)))
+        lines.append(",".join(map(csv_cell, names)))
 
         def write_fast(f: Any) -> None:
             f.write("\n".join(lines))
@@ -900,15 +464,15 @@ def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> No
         return
     cols: list[list[str]] = [list(map(repr, a.tolist())) if k == CSV_REPR
                              else list(map(str, a.tolist())) if k == CSV_INT
-                             else _float_strings(a, float_format) for a, k in numeric]
+                             else float_strings(a, float_format) for a, k in numeric]
     for name, vals in rec.extra.items():
         if not name.strip() or name.strip() != name:
             raise ValueError(f"extra column name {name!r}: expected a non-empty name without surrounding spaces")
         if any("\n" in v or "\r" in v for v in vals):
             raise ValueError(f"extra column {name!r}: values must not contain line breaks")
         names.append(name)
-        cols.append(list(map(_csv_cell, vals)))
-    lines.append(",".join(map(_csv_cell, names)))
+        cols.append(list(map(csv_cell, vals)))
+    lines.append(",".join(map(csv_cell, names)))
 
     def write(f: Any) -> None:
         f.write("\n".join(lines))

@@ -9,19 +9,10 @@ import pytest
 from hypothesis import assume, given, settings, strategies as st
 
 from accelcal.errors import InputError
+from accelcal.csvformat import CSV_G, CSV_G_NAN, CSV_INT, CSV_REPR, csv_rows, python_rows
+from accelcal.csvtable import ByteTable, CellError, ListTable, convert_column, scan_fast
 from accelcal.recording import (
     Recording,
-    _ByteTable,
-    _CellError,
-    _convert,
-    _ListTable,
-    CSV_G,
-    CSV_G_NAN,
-    CSV_INT,
-    CSV_REPR,
-    _python_rows,
-    _scan_fast,
-    csv_rows,
     read_recording,
     recording_from_arrays,
     write_recording,
@@ -484,13 +475,13 @@ def test_property_fast_and_slow_paths_agree(kind, cells):
     same cells and give the same numbers."""
     text = "\n".join(c + ",0" for c in cells)
     data = text.encode()
-    fast = _ByteTable(data, 0, len(data), 2, 2, "x")
-    slow = _ListTable(text + "\n", 2, 2, "x")
+    fast = ByteTable(data, 0, len(data), 2, 2, "x")
+    slow = ListTable(text + "\n", 2, 2, "x")
     results = []
     for table in (fast, slow):
         try:
-            results.append(("ok", _convert(table, 0, kind)))
-        except _CellError as e:
+            results.append(("ok", convert_column(table, 0, kind)))
+        except CellError as e:
             results.append(("err", e.i, e.message))
     if results[0][0] == "ok" and results[1][0] == "ok":
         assert np.array_equal(results[0][1], results[1][1], equal_nan=True)
@@ -519,10 +510,10 @@ def test_property_c_scanner_takes_only_valid_cells(kind, cells, last):
     rows = [(f"0,{c}" if last else f"{c},0") for c in cells]
     text = "\n".join(rows)
     j = 1 if last else 0
-    fast = _scan_fast(text.encode(), 0, len(text.encode()), ["a", "b"], {"c": (j, kind)})
+    fast = scan_fast(text.encode(), 0, len(text.encode()), ["a", "b"], {"c": (j, kind)})
     try:
-        slow = _convert(_ListTable(text + "\n", 2, 2, "x"), j, kind)
-    except _CellError:
+        slow = convert_column(ListTable(text + "\n", 2, 2, "x"), j, kind)
+    except CellError:
         slow = None
     if fast is not None:
         assert slow is not None, cells
@@ -538,7 +529,7 @@ def test_property_c_scanner_reads_as_the_python_path(tmp_path_factory, rec):
     write_recording(p, rec, float_format="%.17g")
     a = read_recording(p, rec.n_channels)
     with pytest.MonkeyPatch.context() as m:
-        m.setattr("accelcal.recording._scan_fast", lambda *args: None)
+        m.setattr("accelcal.recording.scan_fast", lambda *args: None)
         b = read_recording(p, rec.n_channels)
     assert a == b
     for name in ("t", "raw", "f", "w", "dw", "temp_c", "pose"):
@@ -561,7 +552,7 @@ def test_property_c_formatter_writes_what_python_writes(x, v, p):
     assert text == want
     # the locale fallback is the same definition
     cols = [fin, xf, xf, np.array(ints, dtype=np.int64)]
-    assert _python_rows(cols, [CSV_REPR, CSV_G, CSV_G_NAN, CSV_INT], p, 0, n) == want
+    assert python_rows(cols, [CSV_REPR, CSV_G, CSV_G_NAN, CSV_INT], p, 0, n) == want
 
 
 @IO
@@ -573,7 +564,7 @@ def test_property_c_formatter_file_is_the_python_file(tmp_path_factory, rec, fmt
     d = tmp_path_factory.getbasetemp()
     write_recording(d / "fast.csv", rec, float_format=fmt)
     with pytest.MonkeyPatch.context() as m:
-        m.setattr("accelcal.recording._G_FORMAT_RE", __import__("re").compile(r"(?!)"))  # matches nothing
+        m.setattr("accelcal.recording.G_FORMAT_RE", __import__("re").compile(r"(?!)"))  # matches nothing
         write_recording(d / "slow.csv", rec, float_format=fmt)
     assert (d / "fast.csv").read_bytes() == (d / "slow.csv").read_bytes()
 
@@ -618,8 +609,8 @@ def test_c_scanner_hands_back_irregular_rows():
     and the Python path decides."""
     cols = {"t": (0, "t"), "raw_0": (1, "raw")}
     for text in ["1,2\n2,3,4", "1,2\n2", '1,"2"', "1, 2", "nan,2", "1,2\n\n3,4", "1,2\r", "1,2.0", "1,2\n"]:
-        assert _scan_fast(text.encode(), 0, len(text), ["t", "raw_0"], cols) is None, text
-    good = _scan_fast(b"1,2\n2.5e-1,-3", 0, 13, ["t", "raw_0"], cols)
+        assert scan_fast(text.encode(), 0, len(text), ["t", "raw_0"], cols) is None, text
+    good = scan_fast(b"1,2\n2.5e-1,-3", 0, 13, ["t", "raw_0"], cols)
     assert good["t"].tolist() == [1.0, 0.25] and good["raw_0"].tolist() == [2, -3]
 
 

@@ -1,0 +1,384 @@
+"""Reading the data rows of a recording CSV: the header's columns classified, the cells
+converted column by column -- by the extension's C scanner when every row is plain,
+else vectorised with numpy on a byte table, and cell by cell in Python only where a
+column needs it, which also words the error naming the row and the column."""
+from __future__ import annotations
+
+import csv
+import io
+import math
+import re
+from typing import Any, Sequence
+
+import numpy as np
+
+from ._core import ffi, lib
+from .errors import InputError
+
+VECTOR_COLUMNS: dict[str, tuple[str, str, str]] = {
+    "f": ("f_x", "f_y", "f_z"),
+    "w": ("w_x", "w_y", "w_z"),
+    "dw": ("dw_x", "dw_y", "dw_z"),
+}
+
+
+REFERENCE_NAMES = {c for cols in VECTOR_COLUMNS.values() for c in cols} | {"temp_c", "pose"}
+RAW_RE = re.compile(r"raw_(\d+)")
+# "# key: value"; the key is a bare word so that "# taken at 12:30" stays a plain comment.
+META_RE = re.compile(r"#\s*([A-Za-z_][A-Za-z0-9_.\-]*)\s*:(.*)", re.S)
+META_KEY_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
+INT_RE = re.compile(r"[+-]?[0-9]+")
+FLOAT_RE = re.compile(
+    r"[+-]?(?:[0-9]+\.?[0-9]*(?:[eE][+-]?[0-9]+)?|\.[0-9]+(?:[eE][+-]?[0-9]+)?|nan|inf|infinity)",
+    re.I,
+)
+NAN_WORDS = {"nan", "+nan", "-nan"}
+# Widest numeric cell handled by the fixed-width fast path; wider ones go slow.
+FAST_WIDTH = 32
+FLOAT_BYTES = np.zeros(256, dtype=bool)
+FLOAT_BYTES[list(b"0123456789+-.eEnNaAiIfFtTyY \t\x00")] = True
+INT_BYTES = np.zeros(256, dtype=bool)
+INT_BYTES[list(b"0123456789+- \t\x00")] = True
+
+
+class CellError(Exception):
+    """Bad cell at data-row index ``i`` (converted to InputError by the reader)."""
+
+    def __init__(self, i: int, message: str) -> None:
+        super().__init__(message)
+        self.i = i
+        self.message = message
+
+
+def quote_cell(text: str) -> str:
+    shown = text if len(text) <= 40 else text[:37] + "..."
+    return repr(shown)
+
+
+def got_text(text: str) -> str:
+    return "an empty cell" if not text.strip() else quote_cell(text)
+
+
+class ByteTable:
+    """Data rows located in the raw bytes ``data[start:end]``: ``starts`` and
+    ``ends`` are (n, m) cell offsets into ``data``."""
+
+    def __init__(self, data: bytes, start: int, end: int, m: int, first_line: int, source: str) -> None:
+        self.data = data
+        self.first_line = first_line
+        view = np.frombuffer(data, dtype=np.uint8, count=end - start, offset=start)
+        seps = np.flatnonzero((view == 44) | (view == 10))
+        is_nl = view[seps] == 10
+        # The end of the data section terminates the last row.
+        seps = np.append(seps, view.size) + start
+        is_nl = np.append(is_nl, True)
+        nl = np.flatnonzero(is_nl)
+        counts = np.diff(nl, prepend=-1)
+        bad = np.flatnonzero(counts != m)
+        if bad.size:
+            i = int(bad[0])
+            line_start = start if i == 0 else int(seps[nl[i - 1]]) + 1
+            text = data[line_start : int(seps[nl[i]])].decode("utf-8", "replace")
+            if not text.strip():
+                what = "an empty line"
+            elif text.startswith("#"):
+                what = "a comment (comments are only allowed before the header)"
+            else:
+                what = f"{int(counts[i])}"
+            raise InputError(source, f"expected {m} cells as in the header, got {what}", row=first_line + i)
+        self.n = int(nl.size)
+        starts = np.empty(seps.size, dtype=np.int64)
+        starts[0] = start
+        starts[1:] = seps[:-1] + 1
+        self.starts = starts.reshape(self.n, m)
+        self.ends = seps.reshape(self.n, m)
+        self._window: np.ndarray | None = None
+        # NUL bytes are the padding of the fast path's fixed-width cells, so a
+        # file that contains any is converted by the slow path only.
+        self._fast = data.find(b"\x00", start, end) < 0
+
+    def line(self, i: int) -> int:
+        return self.first_line + i
+
+    def cell(self, i: int, j: int) -> str:
+        return self.data[self.starts[i, j] : self.ends[i, j]].decode("utf-8")
+
+    def strings(self, j: int) -> list[str]:
+        data = self.data
+        return [data[s:e].decode("utf-8") for s, e in zip(self.starts[:, j].tolist(), self.ends[:, j].tolist())]
+
+    def matrix(self, j: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """Column j as an (n, W) zero-padded byte matrix and the cell lengths;
+        None when a cell is too wide for the fast path."""
+        s = self.starts[:, j]
+        lens = self.ends[:, j] - s
+        width = int(lens.max(initial=0))
+        if width > FAST_WIDTH or not self._fast:
+            return None
+        if self._window is None:
+            # A sliding (len, FAST_WIDTH) view of the bytes: picking rows of it
+            # copies each cell's bytes in one go instead of gathering bytes singly.
+            padded = np.zeros(len(self.data) + FAST_WIDTH, dtype=np.uint8)
+            padded[: len(self.data)] = np.frombuffer(self.data, dtype=np.uint8)
+            self._window = np.lib.stride_tricks.as_strided(
+                padded, shape=(len(self.data), FAST_WIDTH), strides=(1, 1), writeable=False
+            )
+        width = max(width, 3)  # room for b"nan" in empty cells
+        mat = self._window[s, :width]
+        mat *= np.arange(width) < lens[:, None]
+        return mat, lens
+
+
+class ListTable:
+    """Data rows parsed by the csv module (used when a cell is quoted)."""
+
+    def __init__(self, body: str, m: int, first_line: int, source: str) -> None:
+        reader = csv.reader(io.StringIO(body, newline=""), strict=True)
+        rows: list[list[str]] = []
+        lines: list[int] = []
+        before = 0
+        try:
+            for row in reader:
+                line = first_line + before
+                if len(row) != m:
+                    what = "an empty line" if not row or row == [""] else f"{len(row)}"
+                    raise InputError(source, f"expected {m} cells as in the header, got {what}", row=line)
+                rows.append(row)
+                lines.append(line)
+                before = reader.line_num
+        except csv.Error as e:
+            raise InputError(source, f"bad CSV quoting: {e}", row=first_line + before) from None
+        self.rows = rows
+        self.lines = lines
+        self.n = len(rows)
+
+    def line(self, i: int) -> int:
+        return self.lines[i]
+
+    def cell(self, i: int, j: int) -> str:
+        return self.rows[i][j]
+
+    def strings(self, j: int) -> list[str]:
+        return [r[j] for r in self.rows]
+
+    def matrix(self, j: int) -> None:
+        return None
+
+
+# -- fast converters: return None whenever the slow path must decide ---------
+
+
+def fast_int(mb: tuple[np.ndarray, np.ndarray] | None, empty_value: int | None) -> np.ndarray | None:
+    if mb is None:
+        return None
+    mat, lens = mb
+    # Only digits, signs and blanks: numpy's parser would also take '1_0'.
+    if not INT_BYTES[mat].all():
+        return None
+    empty = lens == 0
+    if empty.any():
+        if empty_value is None:
+            return None
+        mat[empty, : len(str(empty_value))] = np.frombuffer(str(empty_value).encode(), dtype=np.uint8)
+    strings = np.ascontiguousarray(mat).view(f"S{mat.shape[1]}").ravel()
+    try:
+        return strings.astype(np.int64)
+    except (ValueError, OverflowError):
+        return None
+
+
+def fast_float(mb: tuple[np.ndarray, np.ndarray] | None, allow_empty: bool) -> np.ndarray | None:
+    if mb is None:
+        return None
+    mat, lens = mb
+    if not FLOAT_BYTES[mat].all():
+        return None
+    empty = lens == 0
+    if empty.any():
+        if not allow_empty:
+            return None
+        mat[empty, :3] = np.frombuffer(b"nan", dtype=np.uint8)
+    strings = np.ascontiguousarray(mat).view(f"S{mat.shape[1]}").ravel()
+    try:
+        return strings.astype(np.float64)
+    except (ValueError, OverflowError):
+        return None
+
+
+# -- slow converters: per cell, with the exact message -----------------------
+
+
+def slow_int(strings: Sequence[str], empty_value: int | None, what: str) -> np.ndarray:
+    out = np.empty(len(strings), dtype=np.int64)
+    for i, s in enumerate(strings):
+        c = s.strip()
+        if not c or c.lower() in NAN_WORDS:
+            if empty_value is None:
+                raise CellError(i, f"expected {what}, got {got_text(s)}")
+            out[i] = empty_value
+            continue
+        if INT_RE.fullmatch(c):
+            v = int(c)
+        elif FLOAT_RE.fullmatch(c):
+            x = float(c)
+            if not math.isfinite(x) or not x.is_integer():
+                raise CellError(i, f"expected {what}, got {quote_cell(s)}")
+            v = int(x)
+        else:
+            raise CellError(i, f"expected {what}, got {quote_cell(s)}")
+        if not -(2**63) <= v < 2**63:
+            raise CellError(i, f"expected {what} within 64 bits, got {quote_cell(s)}")
+        out[i] = v
+    return out
+
+
+def slow_float(strings: Sequence[str], allow_unknown: bool) -> np.ndarray:
+    out = np.empty(len(strings), dtype=np.float64)
+    expect = "a finite number, or empty/nan for unknown" if allow_unknown else "a finite number"
+    for i, s in enumerate(strings):
+        c = s.strip()
+        if not c:
+            if not allow_unknown:
+                raise CellError(i, f"expected {expect}, got an empty cell")
+            out[i] = np.nan
+            continue
+        if not FLOAT_RE.fullmatch(c):
+            raise CellError(i, f"expected {expect}, got {quote_cell(s)}")
+        x = float(c)
+        if math.isinf(x) or (math.isnan(x) and not allow_unknown):
+            raise CellError(i, f"expected {expect}, got {quote_cell(s)}")
+        out[i] = x
+    return out
+
+
+def convert_column(table: Any, j: int, kind: str) -> np.ndarray:
+    """Column j of the table as numbers; kinds: raw, pose, t, ref."""
+    if kind in ("raw", "pose"):
+        empty_value = -1 if kind == "pose" else None
+        vals = fast_int(table.matrix(j), empty_value)
+        if vals is not None and (kind == "raw" or not np.any(vals < -1)):
+            return vals
+        what = "an integer" if kind == "raw" else "an integer pose label (>= 0, or -1/empty while moving)"
+        vals = slow_int(table.strings(j), empty_value, what)
+        if kind == "pose":
+            bad = np.flatnonzero(vals < -1)
+            if bad.size:
+                i = int(bad[0])
+                raise CellError(i, f"expected {what}, got {quote_cell(table.cell(i, j))}")
+        return vals
+    allow_unknown = kind == "ref"
+    vals = fast_float(table.matrix(j), allow_unknown)
+    if vals is not None:
+        ok = ~np.isinf(vals) if allow_unknown else np.isfinite(vals)
+        if ok.all():
+            return vals
+    return slow_float(table.strings(j), allow_unknown)
+
+
+SCAN_KIND = {"raw": 1, "pose": 2, "t": 3, "ref": 4}  # _csv_fast.h: ACX_INT ... (0: ACX_SKIP)
+
+
+def scan_fast(data: bytes, pos: int, end: int, names: list[str], cols: dict[str, tuple[int, str]]
+               ) -> dict[str, np.ndarray] | None:
+    """The columns of cols from the data rows data[pos:end] by the C scanner
+    (_csv_fast.c), or None when it stops at a row: then the slow path decides."""
+
+    m = len(names)
+    kind = np.zeros(m, dtype=np.int8)
+    slot = np.zeros(m, dtype=np.int16)
+    n_int = n_float = 0
+    for j, k in cols.values():
+        kind[j] = SCAN_KIND[k]
+        if k in ("raw", "pose"):
+            slot[j], n_int = n_int, n_int + 1
+        else:
+            slot[j], n_float = n_float, n_float + 1
+    n = data.count(b"\n", pos, end) + 1
+    ints = np.empty((n_int, n), dtype=np.int64)
+    floats = np.empty((n_float, n), dtype=np.float64)
+    view = memoryview(data)[pos:end]
+    done = lib.acx_scan_rows(ffi.from_buffer(view), end - pos, n, m,
+                             ffi.cast("const int8_t *", ffi.from_buffer(kind)),
+                             ffi.cast("const int16_t *", ffi.from_buffer(slot)),
+                             ffi.cast("int64_t *", ffi.from_buffer(ints)),
+                             ffi.cast("double *", ffi.from_buffer(floats)))
+    if done != n:
+        return None
+    return {name: (ints if k in ("raw", "pose") else floats)[slot[j]] for name, (j, k) in cols.items()}
+
+
+def split_header(line: str) -> list[str]:
+    if '"' in line:
+        cells = next(csv.reader([line]), [])
+    else:
+        cells = line.split(",")
+    return [c.strip() for c in cells]
+
+
+def classify_columns(
+    names: list[str], n_channels: int | None, source: str, row: int
+) -> dict[str, tuple[int, str]]:
+    """Map known column names to (index, kind); check the header's rules."""
+    seen: dict[str, int] = {}
+    for j, name in enumerate(names):
+        known = name == "t" or name in REFERENCE_NAMES or RAW_RE.fullmatch(name)
+        # Unknown columns are never an error (contract): a repeated or empty
+        # unknown name is just not kept.  A repeated known name is ambiguous.
+        if known and name in seen:
+            raise InputError(
+                source, f"column name {name!r} appears twice (columns {seen[name] + 1} and {j + 1})", row=row
+            )
+        seen.setdefault(name, j)
+    cols: dict[str, tuple[int, str]] = {}
+    raw_idx: dict[int, int] = {}
+    for j, name in enumerate(names):
+        m = RAW_RE.fullmatch(name)
+        if m:
+            digits = m.group(1)
+            if len(digits) > 1 and digits.startswith("0"):
+                raise InputError(source, f"column name {name!r}: expected raw_{int(digits)} (no leading zeros)", row=row)
+            raw_idx[int(digits)] = j
+        elif name == "t":
+            cols[name] = (j, "t")
+        elif name == "pose":
+            cols[name] = (j, "pose")
+        elif name in REFERENCE_NAMES:
+            cols[name] = (j, "ref")
+    if "t" not in cols:
+        hint = next((f" (found {n!r}; names are case-sensitive)" for n in names if n.strip().lower() == "t"), "")
+        if len(names) == 1 and (";" in names[0] or "\t" in names[0]):
+            hint = " (cells must be separated by commas; this header uses ';' or tabs)"
+        raise InputError(source, f"the header has no 't' column{hint}", row=row)
+    if not raw_idx:
+        raise InputError(source, "the header has no raw_0, raw_1, ... columns", row=row)
+    if n_channels is not None:
+        extra_raw = sorted(k for k in raw_idx if k >= n_channels)
+        if extra_raw:
+            raise InputError(
+                source, f"recording has raw_{extra_raw[0]} but the device has {n_channels} channels", row=row
+            )
+        missing = [k for k in range(n_channels) if k not in raw_idx]
+        if missing:
+            raise InputError(
+                source,
+                f"the header has no raw_{missing[0]} column (the device has {n_channels} channels: "
+                f"raw_0..raw_{n_channels - 1})",
+                row=row,
+            )
+    else:
+        top = max(raw_idx)
+        missing = [k for k in range(top) if k not in raw_idx]
+        if missing:
+            raise InputError(
+                source, f"raw columns must be contiguous: raw_{top} is present but raw_{missing[0]} is not", row=row
+            )
+    for k in sorted(raw_idx):
+        cols[f"raw_{k}"] = (raw_idx[k], "raw")
+    for comps in VECTOR_COLUMNS.values():
+        present = [c for c in comps if c in cols]
+        if present and len(present) < 3:
+            absent = next(c for c in comps if c not in cols)
+            raise InputError(
+                source, f"the header has {present[0]} but no {absent} (vector columns come as a full triple)", row=row
+            )
+    return cols
