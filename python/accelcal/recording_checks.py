@@ -1,0 +1,55 @@
+"""Checks of a recording against what a consumer needs: a device's channels and range
+(:func:`check_for_device`), the C core's input types (:func:`check_core_input`)."""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .errors import InputError
+
+__all__ = ["check_for_device", "check_core_input"]
+
+
+def check_for_device(rec: Any, device, *, min_samples: int = 1) -> None:
+    """One check, for every command, that a recording can be used with a device:
+    its raw channel count, at least ``min_samples`` samples, finite strictly
+    increasing t, and every raw reading inside the device's [raw_min, raw_max]
+    (the device clips there, so a reading outside means the wrong device file
+    or a damaged recording).  InputError names the file, row and column."""
+    if rec.n_channels != device.n_channels:
+        raise InputError(rec.source, f"the recording has {rec.n_channels} raw channels "
+                         f"(raw_0..raw_{rec.n_channels - 1}) but device {device.name!r} has {device.n_channels}",
+                         column=f"raw_{min(rec.n_channels, device.n_channels)}")
+    if rec.n_samples < min_samples:
+        raise InputError(rec.source, f"{rec.n_samples} sample(s), at least {min_samples} needed")
+    bad = np.flatnonzero(~np.isfinite(rec.t))
+    if bad.size:
+        raise InputError(rec.source, "t is not finite", row=rec.line(int(bad[0])), column="t")
+    bad = np.flatnonzero(~(np.diff(rec.t) > 0))
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise InputError(rec.source, f"t must be strictly increasing: t = {float(rec.t[i]):.6g} s follows "
+                         f"t = {float(rec.t[i - 1]):.6g} s", row=rec.line(i), column="t")
+    out = (rec.raw < device.raw_min) | (rec.raw > device.raw_max)
+    if out.any():
+        i, c = (int(v) for v in np.argwhere(out)[0])
+        raise InputError(rec.source, f"raw reading {int(rec.raw[i, c])} is outside device {device.name!r}'s "
+                         f"[raw_min, raw_max] = [{device.raw_min}, {device.raw_max}]",
+                         row=rec.line(i), column=f"raw_{c}")
+
+
+def check_core_input(rec: Any) -> None:
+    """Refuse raw counts the C core cannot take (it reads them as uint16).
+
+    Raises
+    ------
+    InputError
+        For the first reading outside 0..65535 (counts), naming its row and column;
+        nothing is ever clipped.
+    """
+    bad = np.argwhere((rec.raw < 0) | (rec.raw > 65535))
+    if bad.size:
+        r, c = (int(v) for v in bad[0])
+        raise InputError(rec.source, f"raw reading {int(rec.raw[r, c])} does not fit the C core's uint16 input "
+                         "(0..65535)", row=rec.line(r), column=f"raw_{c}")
