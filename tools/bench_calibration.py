@@ -46,9 +46,10 @@ from accelcal.device import default_device  # noqa: E402
 from accelcal.recording import recording_from_arrays  # noqa: E402
 from accelcal.xsens import load_xsens  # noqa: E402
 
-XSENS = os.path.join(os.path.dirname(ROOT), "shared", "data", "imu_tk_xsens", "xsens_acc.txt.gz")
-if not os.path.exists(XSENS):
-    XSENS = "/work/shared/data/imu_tk_xsens/xsens_acc.txt.gz"
+sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
+from shared_data import XSENS_ACC, SHARED_DATA  # noqa: E402
+
+XSENS = SHARED_DATA.joinpath(*XSENS_ACC)  # the real recordings stay in ../shared/data
 N_PER_POSE = 60
 
 

@@ -83,9 +83,10 @@ try:
 except ImportError:  # pragma: no cover
     sys.exit("bench_peers: imucal is not installed (pip install imucal)")
 
-XSENS = os.path.join(os.path.dirname(ROOT), "shared", "data", "imu_tk_xsens", "xsens_acc.txt.gz")
-if not os.path.exists(XSENS):
-    XSENS = "/work/shared/data/imu_tk_xsens/xsens_acc.txt.gz"
+sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
+from shared_data import XSENS_ACC, SHARED_DATA  # noqa: E402
+
+XSENS = SHARED_DATA.joinpath(*XSENS_ACC)  # the real recordings stay in ../shared/data
 
 G = 9.80665
 K_NOM = 410.0

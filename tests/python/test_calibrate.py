@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 
 import numpy as np
 import pytest
@@ -19,13 +18,11 @@ from accelcal.calibrate import (PoseSet, calibrate_jigfree, calibrate_known_pose
                                 gauge_rotation, pose_means, poses_from_recording, static_force)
 from accelcal.device import default_device, default_triad
 from accelcal.errors import InputError
+from accelcal.xsens import load_xsens
+from shared_data import XSENS_ACC
 from accelcal.recording import Recording, read_recording, recording_from_arrays, write_recording
 
 G = 9.80665
-HERE = os.path.dirname(os.path.abspath(__file__))
-XSENS = os.path.normpath(os.path.join(HERE, "..", "..", "..", "shared", "data", "imu_tk_xsens", "xsens_acc.txt.gz"))
-if not os.path.exists(XSENS):
-    XSENS = "/work/shared/data/imu_tk_xsens/xsens_acc.txt.gz"
 
 AXES6 = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1.0]])
 
@@ -411,10 +408,8 @@ def test_positions_from_rate_table_and_observability():
 
 
 # ----------------------------------------------------------------------------- real data
-@pytest.mark.skipif(not os.path.exists(XSENS) and not os.environ.get("CI"), reason="shared Xsens data not present (CI requires it)")
-def test_xsens_jigfree_calibration():
-    from accelcal.xsens import load_xsens
-    dev, rec = load_xsens(XSENS)
+def test_xsens_jigfree_calibration(shared_data):
+    dev, rec = load_xsens(shared_data.joinpath(*XSENS_ACC))
     ps = poses_from_recording(rec, dev)
     assert 38 <= ps.n_poses <= 44                 # the README: about 40 poses (+ the initial rest)
     cal = calibrate_recordings(dev, [rec])

@@ -4,7 +4,6 @@ the real Xsens recording, the report, and bad input."""
 from __future__ import annotations
 
 import importlib
-import importlib.util
 import json
 import math
 import os
@@ -12,30 +11,20 @@ import os
 import numpy as np
 import pytest
 
-from accelcal.calibration import Calibration
-from accelcal.device import default_device, default_triad
+import diag_datasets as B
+from accelcal.calibrate import calibrate_recordings
+from accelcal.calibration import Calibration, save_calibration
+from accelcal.device import default_device, default_triad, save_device
 from accelcal.diagnose import diagnose, write_report
 from accelcal.effects import EFFECT_NAMES, EFFECTS
 from accelcal.sensor import make_context
 from accelcal.errors import AccelcalError, InputError
 from accelcal.motions import Trajectory
-from accelcal.recording import recording_from_arrays
+from accelcal.recording import recording_from_arrays, write_recording
+from accelcal.xsens import load_xsens
+from shared_data import XSENS_ACC
 from accelcal.simulate import run_simulation, seed_prototype_truth
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-XSENS = os.path.join(os.path.dirname(ROOT), "shared", "data", "imu_tk_xsens", "xsens_acc.txt.gz")
-if not os.path.exists(XSENS):
-    XSENS = "/work/shared/data/imu_tk_xsens/xsens_acc.txt.gz"
-
-
-def _bench():
-    spec = importlib.util.spec_from_file_location("bench_diagnose", os.path.join(ROOT, "tools", "bench_diagnose.py"))
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-B = _bench()
 
 
 def _entry(res, name):
@@ -192,16 +181,14 @@ def test_two_effects_stepwise():
 
 
 @pytest.fixture(scope="module")
-def xsens():
-    from accelcal.xsens import load_xsens
-    dev, rec = load_xsens(XSENS)
+def xsens(shared_data):
+    dev, rec = load_xsens(shared_data.joinpath(*XSENS_ACC))
     part = rec.select(rec.t < rec.t[0] + 200.0)      # the initial rest and ~15 poses: fast
     part.source = "xsens (first 200 s)"
     return dev, part
 
 
 def test_xsens_jigfree(xsens):
-    from accelcal.calibrate import calibrate_recordings
     dev, rec = xsens
     cal = calibrate_recordings(dev, [rec], "jigfree")
     res = diagnose(dev, cal, [rec])
@@ -266,9 +253,6 @@ def test_bad_input_messages():
 
 
 def test_recording_paths_and_files(tmp_path):
-    from accelcal.calibration import save_calibration
-    from accelcal.device import save_device
-    from accelcal.recording import write_recording
     ds = B.make_dataset("nonlinearity", 51, rho=5.0)
     save_device(ds["device"], tmp_path / "d.json")
     save_calibration(ds["cal"], tmp_path / "c.json")
