@@ -1,0 +1,114 @@
+"""Unit tests of the diagnosis's parts on data whose answer is known in closed form:
+the noise floor, the scoring of a candidate's held-out gain, and the breakdown of the gap."""
+import math
+
+import numpy as np
+import pytest
+
+from accelcal.calibration import Calibration
+from accelcal.device import default_device
+from accelcal.diagnose.floor import noise_floor, setup_rows
+from accelcal.diagnose.prepare import prepare
+from accelcal.diagnose.scoring import score
+from accelcal.diagnose.settings import PENALTY_PER_PARAM, T_MIN, Z_MIN
+from accelcal.diagnose.where import where_breakdown
+from accelcal.effects.fitting import Cand
+from accelcal.simulate import simulate
+
+DEV = default_device()
+
+
+def _truth_cal(dev):
+    return Calibration(device=dev.name, method="truth", offsets=dev.nominal_offsets(),
+                       sensitivity=dev.nominal_sensitivity())
+
+
+def _data(rec, dev=DEV):
+    D = prepare(dev, _truth_cal(dev), [rec], 5, 0, 1.0)
+    e = D.raw - D.p0
+    return D, e
+
+
+@pytest.fixture(scope="module")
+def static_data():
+    rec = simulate(DEV, "static_poses", poses="24", seed=11)
+    return _data(rec)
+
+
+def test_noise_floor_from_static_poses_matches_the_simulated_noise(static_data):
+    D, e = static_data
+    sig, how = noise_floor(D, e)
+    assert "static segments" in how
+    true = np.sqrt(DEV.noise_counts() ** 2 + 1.0 / 12.0)      # Gaussian noise, then rounding
+    dof = sum(b - a - 1 for a, b in zip(D.seg_lo, D.seg_hi) if D.static[a])
+    # a std from dof samples has relative spread 1 / sqrt(2 dof); the median of the segments'
+    # variances is less efficient than their mean (about 1.25x the spread): allow 4 such sigmas
+    tol = 4 * 1.25 / math.sqrt(2.0 * dof)
+    np.testing.assert_allclose(sig, true, rtol=tol)
+
+
+def test_noise_floor_ignores_a_constant_model_error(static_data):
+    D, e = static_data
+    shifted = e + np.array([40.0, 0, 0, 0, 0, -25.0])[None, :]    # an offset the model lacks
+    np.testing.assert_allclose(noise_floor(D, shifted)[0], noise_floor(D, e)[0], rtol=1e-12)
+
+
+def test_noise_floor_without_static_stretches_uses_fourth_differences():
+    rec = simulate(DEV, "random_6dof", seed=3, duration_s=20.0)
+    D, e = _data(rec)
+    assert not D.static.any()
+    smooth = e + 30.0 * np.sin(2 * np.pi * 0.05 * D.t)[:, None]   # a slow model error
+    sig, how = noise_floor(D, smooth)
+    assert "fourth differences" in how
+    true = np.sqrt(DEV.noise_counts() ** 2 + 1.0 / 12.0)
+    np.testing.assert_allclose(sig, true, rtol=0.15)
+
+
+def _cand(D, Sw, Su, k=1):
+    return Cand(name="test", k=k, Sw=Sw, Su=Su, delta=np.zeros((D.n, D.N)), params={}, sigma={})
+
+
+def test_score_of_no_gain_is_not_significant(static_data):
+    D, e = static_data
+    setup_rows(D, e)
+    rng = np.random.default_rng(0)
+    S0w = rng.uniform(50, 60, D.B)
+    c = score(D, _cand(D, S0w.copy(), S0w.copy()), S0w, S0w.copy())
+    assert c.gain == 0 and c.shrink == 0 and not c.significant
+    assert c.penalty == PENALTY_PER_PARAM * 1
+
+
+def test_score_of_a_consistent_large_gain_is_significant(static_data):
+    D, e = static_data
+    setup_rows(D, e)
+    rng = np.random.default_rng(1)
+    S0w = rng.uniform(50, 60, D.B)
+    Sw = 0.25 * S0w                      # every block loses three quarters of its chi2
+    c = score(D, _cand(D, Sw, Sw.copy()), S0w, S0w.copy())
+    assert c.significant and (c.t >= T_MIN or c.z >= Z_MIN)
+    assert c.shrink == pytest.approx(1 - math.sqrt(0.25), rel=1e-12)
+    assert c.before > c.after > 0
+
+
+def test_score_of_a_gain_in_one_block_only_is_not_trusted(static_data):
+    D, e = static_data
+    setup_rows(D, e)
+    S0w = np.full(D.B, 55.0)
+    Sw = S0w.copy()
+    Sw[0] = 54.0                         # a small gain in one block, none elsewhere
+    c = score(D, _cand(D, Sw, Sw.copy(), k=6), S0w, S0w.copy())
+    assert not c.significant             # below the penalty of 6 parameters
+
+
+def test_where_puts_the_gap_on_the_channel_that_has_it(static_data):
+    D, e = static_data
+    setup_rows(D, e)
+    bad = e.copy()
+    bad[:, 3] += 20.0 * np.sign(np.sin(np.arange(D.n)))   # a large error on channel 3 only
+    w = where_breakdown(D, bad)
+    ratios = [c["ratio_to_noise"] for c in w["by_channel"]]
+    assert int(np.argmax(ratios)) == 3
+    sig3 = w["by_channel"][3]["noise_floor_counts"]
+    assert ratios[3] == pytest.approx(math.sqrt(20.0 ** 2 + sig3 ** 2) / sig3, rel=0.05)
+    assert max(r for i, r in enumerate(ratios) if i != 3) < 1.2   # the others: noise only
+    assert [r["label"] for r in w["static_vs_rotating"]] == ["static"]
