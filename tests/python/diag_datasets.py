@@ -15,7 +15,8 @@ import math
 import numpy as np
 
 from accelcal.device import Device, default_device, default_triad, pendulum_device
-from accelcal.effects import EFFECT_NAMES, EFFECTS, random_walk
+from accelcal.effects import EFFECT_NAMES, EFFECTS
+from accelcal.effects.base import as_list
 from accelcal.motions import MOTIONS, Kinematics, Trajectory, temperature_profile
 from accelcal.sensor import evaluate, rotation_matrix, true_state
 from accelcal.simulate import run_simulation, seed_prototype_truth
@@ -204,43 +205,10 @@ def _random_unit(rng):
 
 
 # ------------------------------------------------------------------ effects
-def _fmt(v):
-    return [float(x) for x in np.asarray(v, float)]
-
-
 def effect_spec(name: str, m: float, z: np.ndarray, aux: dict) -> tuple[str, dict]:
-    """Spec (name, params) of size m with per-channel normal draws z."""
-    if name == "offset":
-        return name, {"db": _fmt(m * z)}
-    if name == "gain":
-        return name, {"scale": _fmt(m * z)}
-    if name == "misalignment":
-        return name, {"angle_deg": _fmt(m * np.abs(z))}
-    if name == "position_error":
-        return name, {"mm": _fmt(m * np.abs(z))}
-    if name == "centripetal":
-        return name, {"scale": float(1.0 - min(m, 1.0))}
-    if name == "time_skew":
-        return name, {"tau": _fmt(m * z)}
-    if name == "bandwidth":
-        d = m * aux["u"]
-        return name, {"fc_hz": _fmt(1.0 / (2 * math.pi * d))}
-    if name == "nonlinearity":
-        return name, {"k2": _fmt(m * z)}
-    if name in ("temperature_offset", "temperature_gain"):
-        return name, {"coeff": _fmt(m * z)}
-    if name == "bias_drift":
-        if aux.get("walk"):  # a random walk (rw counts/sqrt(s)) instead of a ramp
-            return name, {"rate": _fmt(0.0 * z), "rw": _fmt(m * np.abs(z))}
-        return name, {"rate": _fmt(m * z)}
-    if name == "pose_error":
-        return name, {"angle_deg": float(m)}
-    raise KeyError(name)
+    """Spec (name, params) of size m with per-channel normal draws z: the effect's own."""
+    return name, EFFECTS[name].bench_spec(m, z, aux)
 
-
-REF_SIZE = {"offset": 1.0, "gain": 1e-3, "misalignment": 0.1, "position_error": 1.0, "centripetal": 1.0,
-            "time_skew": 1e-3, "bandwidth": 1e-3, "nonlinearity": 0.01, "temperature_offset": 0.1,
-            "temperature_gain": 1e-5, "bias_drift": 0.05, "pose_error": 0.1}
 
 
 def _pred_base(dev, cal, rec):
@@ -313,11 +281,11 @@ def make_dataset(effect: str, seed: int, rho: float | None = None, walk: bool | 
                 / (dev.gravity_mps2 * np.linalg.norm(S, axis=1)))
         chans = np.sort(rng.choice(N, size=int(rng.integers(1, N + 1)), replace=False))
         lim = amax * (1.0 - np.exp(rng.uniform(np.log(0.002), np.log(0.45), N)))
-        specs = [("saturation", {"limit_g": _fmt(lim[chans]), "channel": [int(c) for c in chans]})]
+        specs = [("saturation", {"limit_g": as_list(lim[chans]), "channel": [int(c) for c in chans]})]
     else:
         aux = {"u": rng.uniform(0.6, 1.4, N),
                "walk": effect == "bias_drift" and (seed % 2 == 1 if walk is None else walk)}
-        m_ref = REF_SIZE[effect]
+        m_ref = EFFECTS[effect].bench_size
         sim1 = run_simulation(dev, traj, seed=sim_seed, calibration=cal, effects=[effect_spec(effect, m_ref, z, aux)])
         if effect == "pose_error":
             c_ref = np.sqrt(np.mean((sim1.clean_counts - _pred_base(dev, cal, sim1.recording)) ** 2))
@@ -355,106 +323,11 @@ def make_dataset(effect: str, seed: int, rho: float | None = None, walk: bool | 
 
 
 # ------------------------------------------------------------------ parameter errors
-def _arr(v):
-    a = np.asarray([np.inf if x == "inf" else (-np.inf if x == "-inf" else (np.nan if x is None else x))
-                    for x in np.asarray(v, dtype=object).ravel()], float)
-    return a.reshape(np.shape(v)) if np.ndim(v) else a
-
-
-def _drift(p: dict, t: np.ndarray) -> np.ndarray:
-    """(n, N) bias change of bias_drift params (the registry's formula: ramp + seeded walk + path)."""
-    rate = _arr(p["rate"])
-    out = (t - float(p["t0"]))[:, None] * rate[None, :]
-    rw = _arr(p.get("rw", np.zeros_like(rate)))
-    if np.any(rw):
-        out = out + random_walk(t, rw, int(p["seed"]))
-    knots = _arr(p.get("path_t", [])).ravel()
-    if knots.size:
-        path = _arr(p["path"]).reshape(-1, knots.size)
-        out = out + np.stack([np.interp(t, knots, v) for v in path], axis=1)
-    return out
-
-
 def drift_error(est: dict, truth: dict, t: np.ndarray) -> float | None:
-    """bias_drift (ramp or random walk): RMS of the fitted minus the true bias change over the
-    recording, relative to the RMS of the true change."""
-    try:
-        e, tr = _drift(est, t), _drift(truth, t)
-    except (KeyError, ValueError, TypeError):
-        return None
-    nt = float(np.sqrt(np.mean(tr ** 2)))
-    return None if nt == 0 else float(np.sqrt(np.mean((e - tr) ** 2)) / nt)
+    """bias_drift (ramp or random walk): the effect's path error."""
+    return EFFECTS["bias_drift"].path_error(est, truth, t)
 
 
 def param_error(name: str, est: dict, truth: dict, sig: dict | None = None) -> float | None:
-    """Relative error of the effect's size parameter, |est - true| / |true| over the entries the
-    data determine (1-sigma below a tenth of the truth's RMS); saturation: median |level error|
-    in counts; quantization: share of channels with the wrong step."""
-    try:
-        if name in ("offset",):
-            e, t = _arr(est["db"]), np.asarray(truth["db"], float)
-        elif name in ("gain",):
-            e, t = _arr(est["scale"]), np.asarray(truth["scale"], float)
-        elif name == "centripetal":
-            e, t = 1.0 - _arr(est["scale"]), 1.0 - np.asarray(truth["scale"], float)
-        elif name == "misalignment":
-            e, t = _arr(est["rot"]), np.asarray(truth["rot"], float)
-        elif name == "position_error":
-            e, t = _arr(est["dr"]), np.asarray(truth["dr"], float)
-            if sig is not None:      # compare on the directions the motion makes observable
-                sd = _arr(sig["dr"])
-                ok = np.all(sd > 0, axis=1) & np.all(sd <= 1e-3, axis=1)
-                e, t = e[ok], t[ok]
-        elif name == "time_skew":
-            e, t = _arr(est["tau"]), np.asarray(truth["tau"], float)
-        elif name == "bandwidth":
-            fe, ft = _arr(est["fc_hz"]), np.asarray(truth["fc_hz"], float)
-            e = np.where(np.isfinite(fe), 1 / (2 * np.pi * fe), 0.0)
-            t = np.where(np.isfinite(ft), 1 / (2 * np.pi * ft), 0.0)
-        elif name == "nonlinearity":
-            e, t = _arr(est["k2"]), np.asarray(truth["k2"], float)
-        elif name in ("temperature_offset", "temperature_gain"):
-            e, t = _arr(est["coeff"]), np.asarray(truth["coeff"], float)
-        elif name == "bias_drift":
-            e, t = _arr(est["rate"]), np.asarray(truth["rate"], float)
-        elif name == "pose_error":
-            lab_e = list(_arr(est["labels"]).astype(int))
-            te = np.asarray(truth["rot"], float)
-            lab_t = list(np.asarray(truth["labels"]).astype(int))
-            re = _arr(est["rot"]).reshape(-1, 3)
-            e = np.array([re[lab_e.index(L)] if L in lab_e else np.zeros(3) for L in lab_t])
-            t = te
-        elif name == "quantization":
-            e, t = _arr(est["step"]), np.asarray(truth["step"], float)
-            return float(np.mean(np.abs(e - t) > 0))
-        elif name == "saturation":
-            lo_e, hi_e = _arr(est["lo"]), _arr(est["hi"])
-            lo_t, hi_t = np.asarray(truth["lo"], float), np.asarray(truth["hi"], float)
-            errs = []
-            for a, b in ((lo_e, lo_t), (hi_e, hi_t)):
-                m = np.isfinite(b) & np.isfinite(a)
-                errs += list(np.abs(a[m] - b[m]))
-            return float(np.median(errs)) if errs else None
-        else:
-            return None
-        # compare where the data determine the parameter: entries whose 1-sigma is below a tenth of
-        # the truth's RMS (a channel that barely sees the effect has a wide, uninformative estimate)
-        skey = {"offset": "db", "gain": "scale", "centripetal": "scale", "misalignment": "rot", "time_skew": "tau",
-                "nonlinearity": "k2", "temperature_offset": "coeff", "temperature_gain": "coeff",
-                "bias_drift": "rate"}.get(name)
-        if sig is not None and skey in sig and name != "position_error":
-            sd = _arr(sig[skey])
-            if sd.shape == e.shape:
-                rt = float(np.sqrt(np.mean(t ** 2)))
-                ok = np.isfinite(sd) & (sd <= 0.1 * rt)
-                if e.ndim == 2:
-                    ok = np.all(ok, axis=1)
-                e, t = e[ok], t[ok]
-    except (KeyError, ValueError, TypeError):
-        return None
-    nt = float(np.linalg.norm(t))
-    if nt == 0:
-        return None
-    return float(np.linalg.norm(e - t) / nt)
-
-
+    """The effect's own measure of how far its fitted parameters are from the truth."""
+    return EFFECTS[name].param_error(est, truth, sig)

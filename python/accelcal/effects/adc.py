@@ -7,7 +7,7 @@ import numpy as np
 
 from ..errors import AccelcalError
 from ..spec import Param
-from .base import CHANNEL_PARAM, Effect, FitParam, channel_mask, owner, per_channel
+from .base import CHANNEL_PARAM, Effect, FitParam, as_float_array, channel_mask, owner, per_channel
 from .fitdata import FitData
 from .fitting import Cand, Candidate, block_ss
 from .settings import QUANT_DITHER_GRID, QUANT_MAX_STEP, QUANT_MIN_FRAC, QUANT_STRONG_FRAC, QUANT_STRONG_VALUES, SAT_PROOF_COUNT
@@ -148,6 +148,17 @@ class Saturation(Candidate, Effect):
             c.notes.append("readings pile up at " + "; ".join(proof))
         return c
 
+    # -- the benchmark --------------------------------------------------------
+
+    def bench_pair(self, est, truth, sig):
+        """The median error of the found clip levels (counts)."""
+        errs = []
+        for k in ("lo", "hi"):
+            a, b = as_float_array(est[k]), np.asarray(truth[k], float)
+            m = np.isfinite(b) & np.isfinite(a)
+            errs += list(np.abs(a[m] - b[m]))
+        return float(np.median(errs)) if errs else None
+
     # -- report prose ---------------------------------------------------------
 
     def describe(self, p: dict, s: dict, D: FitData) -> str:
@@ -279,6 +290,13 @@ class Quantization(Candidate, Effect):
         c.params["phase"] = phase
         c.params["dither"] = dither
         return c
+
+    # -- the benchmark --------------------------------------------------------
+
+    def bench_pair(self, est, truth, sig):
+        """The share of channels with the wrong step."""
+        e, t = as_float_array(est["step"]), np.asarray(truth["step"], float)
+        return float(np.mean(np.abs(e - t) > 0))
 
     # -- report prose ---------------------------------------------------------
 

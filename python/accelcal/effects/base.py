@@ -99,6 +99,35 @@ class Effect:
     def _resolve(self, spec: dict[str, Any], ctx: Context, rng: np.random.Generator) -> dict[str, Any]:
         raise NotImplementedError
 
+    # -- the benchmark (tools/bench_diagnose.py) ---------------------------------
+
+    #: size the benchmark's pilot simulation scales from (None: drawn directly)
+    bench_size: float | None = None
+
+    def bench_spec(self, m: float, z: np.ndarray, aux: Mapping[str, Any]) -> dict[str, Any]:
+        """Spec parameters of size ``m`` with per-channel standard normal draws ``z``."""
+        raise NotImplementedError(f"{self.name}: the benchmark draws it directly")
+
+    def bench_pair(self, est: Mapping[str, Any], truth: Mapping[str, Any],
+                   sig: Mapping[str, Any] | None) -> Any:
+        """(estimate, truth) arrays the relative error compares, a ready error (float), or None."""
+        return None
+
+    def param_error(self, est: Mapping[str, Any], truth: Mapping[str, Any],
+                    sig: Mapping[str, Any] | None = None) -> float | None:
+        """How far the fitted parameters are from the truth: |est - true| / |true| over the
+        entries the data determine (an effect may define its own measure); None when it
+        cannot be told."""
+        try:
+            pair = self.bench_pair(est, truth, sig)
+        except (KeyError, ValueError, TypeError):
+            return None
+        if pair is None or isinstance(pair, float):
+            return pair
+        e, t = pair
+        nt = float(np.linalg.norm(t))
+        return None if nt == 0 else float(np.linalg.norm(e - t) / nt)
+
     def __repr__(self) -> str:
         return f"<Effect {self.name} ({self.stage})>"
 
@@ -185,3 +214,27 @@ def strongest(v: np.ndarray) -> int:
     v = np.asarray(v, float)
     a = np.where(np.isfinite(v), np.abs(v), -1.0)
     return int(np.argmax(a))
+
+
+def as_float_array(v: Any) -> np.ndarray:
+    """A JSON value (lists with "inf", "-inf" and null) as a float array of the same shape."""
+    a = np.asarray([np.inf if x == "inf" else (-np.inf if x == "-inf" else (np.nan if x is None else x))
+                    for x in np.asarray(v, dtype=object).ravel()], float)
+    return a.reshape(np.shape(v)) if np.ndim(v) else a
+
+
+def as_list(v: Any) -> list[float]:
+    """Floats for a spec parameter."""
+    return [float(x) for x in np.asarray(v, float)]
+
+
+def determined(e: np.ndarray, t: np.ndarray, sd: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The entries the data determine: 1-sigma below a tenth of the truth's RMS (a channel that
+    barely sees the effect has a wide, uninformative estimate)."""
+    sd = as_float_array(sd)
+    if sd.shape != e.shape:
+        return e, t
+    ok = np.isfinite(sd) & (sd <= 0.1 * float(np.sqrt(np.mean(t ** 2))))
+    if e.ndim == 2:
+        ok = np.all(ok, axis=1)
+    return e[ok], t[ok]

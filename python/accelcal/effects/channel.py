@@ -7,7 +7,7 @@ import numpy as np
 from ..errors import AccelcalError
 from ..sensor import rotation_matrix
 from ..spec import Param
-from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, channel_mask, owner, per_channel, random_perpendicular, strongest, unit_rows
+from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_float_array, as_list, channel_mask, determined, owner, per_channel, random_perpendicular, strongest, unit_rows
 from .fitdata import FitData, force_at, tangent_basis, unit_rows3
 from .fitting import Cand, LinearCandidate, block_ss, linear_fit
 from .settings import MISALIGN_MAX_RAD
@@ -43,6 +43,18 @@ class Offset(LinearCandidate, Effect):
 
     def columns(self, D):
         return np.ones((D.n, D.N, 1))
+
+    # -- the benchmark --------------------------------------------------------
+
+    bench_size = 1.0
+
+    def bench_spec(self, m, z, aux):
+        return {"db": as_list(m * z)}
+
+    def bench_pair(self, est, truth, sig):
+        e, t = as_float_array(est["db"]), np.asarray(truth["db"], float)
+        return determined(e, t, sig["db"]) if sig is not None and "db" in sig else (e, t)
+
 
     # -- report prose ---------------------------------------------------------
 
@@ -83,6 +95,18 @@ class Gain(LinearCandidate, Effect):
 
     def columns(self, D):
         return D.sensed[:, :, None]
+
+    # -- the benchmark --------------------------------------------------------
+
+    bench_size = 0.001
+
+    def bench_spec(self, m, z, aux):
+        return {"scale": as_list(m * z)}
+
+    def bench_pair(self, est, truth, sig):
+        e, t = as_float_array(est["scale"]), np.asarray(truth["scale"], float)
+        return determined(e, t, sig["scale"]) if sig is not None and "scale" in sig else (e, t)
+
 
     # -- report prose ---------------------------------------------------------
 
@@ -181,6 +205,18 @@ class Misalignment(LinearCandidate, Effect):
                     break
         sd = np.sqrt(np.maximum(np.einsum("nkc,nkl,nlc->nc", E, cov, E), 0.0))
         return Cand(self.name, k, Sw, Su, delta, {"rot": rot}, {"rot": sd})
+
+    # -- the benchmark --------------------------------------------------------
+
+    bench_size = 0.1
+
+    def bench_spec(self, m, z, aux):
+        return {"angle_deg": as_list(m * np.abs(z))}
+
+    def bench_pair(self, est, truth, sig):
+        e, t = as_float_array(est["rot"]), np.asarray(truth["rot"], float)
+        return determined(e, t, sig["rot"]) if sig is not None and "rot" in sig else (e, t)
+
 
     # -- report prose ---------------------------------------------------------
 

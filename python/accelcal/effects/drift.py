@@ -2,10 +2,12 @@
 from __future__ import annotations
 
 
+from typing import Any, Mapping
+
 import numpy as np
 
 from ..spec import Param
-from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, channel_mask, per_channel, start_time, strongest
+from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_float_array, as_list, channel_mask, determined, per_channel, start_time, strongest
 from .channel import Misalignment
 from .fitdata import FitData, force_at, temp_skip
 from .fitting import Cand, LinearCandidate, linear_fit
@@ -157,6 +159,43 @@ class BiasDrift(LinearCandidate, Effect):
             if pgain_of(np.concatenate([best_X, Z], axis=2)) <= pgain_of(np.concatenate([self.columns(D), Z], axis=2)):
                 return ramp
         return best
+
+    # -- the benchmark --------------------------------------------------------
+
+    bench_size = 0.05
+
+    def bench_spec(self, m, z, aux):
+        if aux.get("walk"):  # a random walk (rw counts/sqrt(s)) instead of a ramp
+            return {"rate": as_list(0.0 * z), "rw": as_list(m * np.abs(z))}
+        return {"rate": as_list(m * z)}
+
+    def bench_pair(self, est, truth, sig):
+        e, t = as_float_array(est["rate"]), np.asarray(truth["rate"], float)
+        return determined(e, t, sig["rate"]) if sig is not None and "rate" in sig else (e, t)
+
+    @staticmethod
+    def bias_change(p: Mapping[str, Any], t: np.ndarray) -> np.ndarray:
+        """(n, N) bias change of bias_drift parameters: ramp + seeded walk + path."""
+        rate = as_float_array(p["rate"])
+        out = (t - float(p["t0"]))[:, None] * rate[None, :]
+        rw = as_float_array(p.get("rw", np.zeros_like(rate)))
+        if np.any(rw):
+            out = out + random_walk(t, rw, int(p["seed"]))
+        knots = as_float_array(p.get("path_t", [])).ravel()
+        if knots.size:
+            path = as_float_array(p["path"]).reshape(-1, knots.size)
+            out = out + np.stack([np.interp(t, knots, v) for v in path], axis=1)
+        return out
+
+    def path_error(self, est: Mapping[str, Any], truth: Mapping[str, Any], t: np.ndarray) -> float | None:
+        """RMS of the fitted minus the true bias change over the recording, relative to the RMS of
+        the true change (ramp or random walk)."""
+        try:
+            e, tr = self.bias_change(est, t), self.bias_change(truth, t)
+        except (KeyError, ValueError, TypeError):
+            return None
+        nt = float(np.sqrt(np.mean(tr ** 2)))
+        return None if nt == 0 else float(np.sqrt(np.mean((e - tr) ** 2)) / nt)
 
     # -- report prose ---------------------------------------------------------
 

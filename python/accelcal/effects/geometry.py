@@ -6,7 +6,7 @@ import numpy as np
 
 from ..model import centripetal_matrix, omega_products
 from ..spec import Param
-from .base import CHANNEL_PARAM, Effect, FitParam, channel_mask, per_channel, unit_rows
+from .base import CHANNEL_PARAM, Effect, FitParam, as_float_array, as_list, channel_mask, determined, per_channel, unit_rows
 from .fitdata import FitData, rotating_mask
 from .fitting import Cand, LinearCandidate, linear_fit
 from .settings import POSITION_TOL_M, ROTATING_RADPS
@@ -81,6 +81,22 @@ class PositionError(LinearCandidate, Effect):
         c.observable = obs
         return c
 
+    # -- the benchmark --------------------------------------------------------
+
+    bench_size = 1.0
+
+    def bench_spec(self, m, z, aux):
+        return {"mm": as_list(m * np.abs(z))}
+
+    def bench_pair(self, est, truth, sig):
+        e, t = as_float_array(est["dr"]), np.asarray(truth["dr"], float)
+        if sig is not None:      # compare on the directions the motion makes observable
+            sd = as_float_array(sig["dr"])
+            ok = np.all(sd > 0, axis=1) & np.all(sd <= 1e-3, axis=1)
+            e, t = e[ok], t[ok]
+        return e, t
+
+
     # -- report prose ---------------------------------------------------------
 
     def describe(self, p: dict, s: dict, D: FitData) -> str:
@@ -139,6 +155,18 @@ class Centripetal(LinearCandidate, Effect):
     def to_params(self, D, theta, cov):
         sd = np.sqrt(np.maximum(cov[:, 0, 0], 0.0))
         return {"scale": D.m0 + theta[:, 0]}, {"scale": sd}
+
+    # -- the benchmark --------------------------------------------------------
+
+    bench_size = 1.0
+
+    def bench_spec(self, m, z, aux):
+        return {"scale": float(1.0 - min(m, 1.0))}
+
+    def bench_pair(self, est, truth, sig):
+        e, t = 1.0 - as_float_array(est["scale"]), 1.0 - np.asarray(truth["scale"], float)
+        return determined(e, t, sig["scale"]) if sig is not None and "scale" in sig else (e, t)
+
 
     # -- report prose ---------------------------------------------------------
 

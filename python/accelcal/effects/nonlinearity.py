@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..spec import Param
-from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, channel_mask, per_channel, strongest
+from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_float_array, as_list, channel_mask, determined, per_channel, strongest
 from .fitdata import FitData
 from .fitting import LinearCandidate
 
@@ -46,6 +46,18 @@ class Nonlinearity(LinearCandidate, Effect):
     def columns(self, D):
         x = D.sensed / np.linalg.norm(D.s, axis=1)
         return (x * x)[:, :, None]
+
+    # -- the benchmark --------------------------------------------------------
+
+    bench_size = 0.01
+
+    def bench_spec(self, m, z, aux):
+        return {"k2": as_list(m * z)}
+
+    def bench_pair(self, est, truth, sig):
+        e, t = as_float_array(est["k2"]), np.asarray(truth["k2"], float)
+        return determined(e, t, sig["k2"]) if sig is not None and "k2" in sig else (e, t)
+
 
     # -- report prose ---------------------------------------------------------
 

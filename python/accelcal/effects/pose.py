@@ -8,7 +8,7 @@ import numpy as np
 
 from ..sensor import Context, evaluate, rotation_matrix
 from ..spec import Param
-from .base import Effect, FitParam, random_perpendicular, unit_rows
+from .base import Effect, FitParam, as_float_array, random_perpendicular, unit_rows
 from .fitdata import FitData, tangent_basis, unit_rows3
 from .fitting import Cand, Candidate, lin_cv
 
@@ -122,6 +122,20 @@ class PoseError(Candidate, Effect):
         params = {"labels": np.array([labels[p] for p in keep], np.int64), "rot": rot[keep],
                   "recording": np.array([recs[p] for p in keep], np.int64)}
         return Cand(self.name, npar, Sw, Su, delta, params, {"rot": sd[keep]})
+
+    # -- the benchmark --------------------------------------------------------
+
+    bench_size = 0.1
+
+    def bench_spec(self, m, z, aux):
+        return {"angle_deg": float(m)}
+
+    def bench_pair(self, est, truth, sig):
+        lab_e = list(as_float_array(est["labels"]).astype(int))
+        lab_t = list(np.asarray(truth["labels"]).astype(int))
+        re_ = as_float_array(est["rot"]).reshape(-1, 3)
+        e = np.array([re_[lab_e.index(L)] if L in lab_e else np.zeros(3) for L in lab_t])
+        return e, np.asarray(truth["rot"], float)
 
     # -- report prose ---------------------------------------------------------
 

@@ -7,7 +7,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from ..spec import Param
-from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, channel_mask, per_channel, strongest, temperature_of
+from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_float_array, as_list, channel_mask, determined, per_channel, strongest, temperature_of
 from .fitdata import FitData, t_ref_known, temp_skip
 from .fitting import Cand, Candidate, jig_rows, joint_stats, sep_stats, solve_groups
 from .settings import T_REF_SPANS
@@ -138,6 +138,18 @@ class TemperatureOffset(TemperatureFit, Effect):
 
     gain = False  # the fit: coefficient on the sensed reading (True) or on 1
 
+    # -- the benchmark --------------------------------------------------------
+
+    bench_size = 0.1
+
+    def bench_spec(self, m, z, aux):
+        return {"coeff": as_list(m * z)}
+
+    def bench_pair(self, est, truth, sig):
+        e, t = as_float_array(est["coeff"]), np.asarray(truth["coeff"], float)
+        return determined(e, t, sig["coeff"]) if sig is not None and "coeff" in sig else (e, t)
+
+
     # -- report prose ---------------------------------------------------------
 
     def describe(self, p: dict, s: dict, D: FitData) -> str:
@@ -179,6 +191,18 @@ class TemperatureGain(TemperatureFit, Effect):
         return state.replace(gain=fac if state.gain is None else state.gain * fac)
 
     gain = True  # the fit: coefficient on the sensed reading (True) or on 1
+
+    # -- the benchmark --------------------------------------------------------
+
+    bench_size = 1e-05
+
+    def bench_spec(self, m, z, aux):
+        return {"coeff": as_list(m * z)}
+
+    def bench_pair(self, est, truth, sig):
+        e, t = as_float_array(est["coeff"]), np.asarray(truth["coeff"], float)
+        return determined(e, t, sig["coeff"]) if sig is not None and "coeff" in sig else (e, t)
+
 
     # -- report prose ---------------------------------------------------------
 

@@ -8,7 +8,7 @@ from scipy.signal import lfilter
 
 from ..sensor import lowpass_first_order
 from ..spec import Param
-from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, channel_mask, per_channel, strongest
+from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_float_array, as_list, channel_mask, determined, per_channel, strongest
 from .fitdata import FitData
 from .fitting import SearchCandidate, Shifter
 from .settings import DELAY_GRID, SKEW_GRID
@@ -85,6 +85,18 @@ class TimeSkew(SearchCandidate, Effect):
     def to_params(self, D, u, su):
         return {"tau": u * D.h}, {"tau": su * D.h}
 
+    # -- the benchmark --------------------------------------------------------
+
+    bench_size = 0.001
+
+    def bench_spec(self, m, z, aux):
+        return {"tau": as_list(m * z)}
+
+    def bench_pair(self, est, truth, sig):
+        e, t = as_float_array(est["tau"]), np.asarray(truth["tau"], float)
+        return determined(e, t, sig["tau"]) if sig is not None and "tau" in sig else (e, t)
+
+
     # -- report prose ---------------------------------------------------------
 
     def describe(self, p: dict, s: dict, D: FitData) -> str:
@@ -145,6 +157,20 @@ class Bandwidth(SearchCandidate, Effect):
         with np.errstate(divide="ignore", invalid="ignore"):
             sfc = np.where(d > 0, fc * (su * D.h) / np.maximum(d, 1e-300), math.inf)
         return {"fc_hz": fc}, {"fc_hz": sfc, "delay_s": su * D.h}
+
+    # -- the benchmark --------------------------------------------------------
+
+    bench_size = 0.001
+
+    def bench_spec(self, m, z, aux):
+        return {"fc_hz": as_list(1.0 / (2 * math.pi * m * np.asarray(aux["u"], float)))}
+
+    def bench_pair(self, est, truth, sig):
+        fe, ft = as_float_array(est["fc_hz"]), np.asarray(truth["fc_hz"], float)
+        e = np.where(np.isfinite(fe), 1 / (2 * np.pi * fe), 0.0)     # compared as delays
+        t = np.where(np.isfinite(ft), 1 / (2 * np.pi * ft), 0.0)
+        return e, t
+
 
     # -- report prose ---------------------------------------------------------
 
