@@ -75,3 +75,14 @@ def test_api_page_is_generated_from_the_docstrings():
     tool = Path(__file__).resolve().parents[2] / "tools" / "gen_api_doc.py"
     r = subprocess.run([sys.executable, str(tool), "--check"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
+
+
+def test_readme_python_session_runs(tmp_path, monkeypatch):
+    """The README's Python session, run as written (in a scratch directory)."""
+    import re
+    from pathlib import Path
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    block = re.search(r"## Python\n\n```python\n(.*?)```", readme, re.S).group(1)
+    monkeypatch.chdir(tmp_path)
+    exec(compile(block, "README.md", "exec"), {})
+    assert (tmp_path / "cal.json").exists() and (tmp_path / "calibration.h").exists()
