@@ -56,7 +56,6 @@ class Saturation(Candidate, Effect):
     doc = ("counts_i -> clip(counts_i, lo_i, hi_i) (counts).  By default the limits are the "
            "channel's offset -+ limit_g g in counts; lo/hi give them directly.")
     stage = "adc"
-    linear = False
     params = (
         Param("limit_g", 1.5, "g", "symmetric limit around each channel's offset", "floats", minimum=0.0,
               exclusive_min=True),
@@ -174,7 +173,6 @@ class Quantization(Candidate, Effect):
     doc = ("counts_i -> step_i round(counts_i / step_i) (step in counts, >= 1), instead of rounding to 1 "
            "count; step 0 (unselected channels, identity) leaves the channel alone.")
     stage = "adc"
-    linear = False
     params = (
         Param("step", 8.0, "counts", "quantisation step", "floats", minimum=1.0),
         CHANNEL_PARAM,

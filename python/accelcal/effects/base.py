@@ -48,7 +48,6 @@ class Effect:
     summary: str = ""  # the contract's line
     doc: str = ""  # parameterisation, units, how it is applied
     stage: str = "state"
-    linear: bool = False  # readings affine in the free concrete parameters
     params: tuple[Param, ...] = ()
     fit: tuple[FitParam, ...] = ()
 
@@ -108,10 +107,18 @@ class Effect:
         """Spec parameters of size ``m`` with per-channel standard normal draws ``z``."""
         raise NotImplementedError(f"{self.name}: the benchmark draws it directly")
 
+    #: the fitted parameter the default bench_pair compares (None: the effect defines its own)
+    bench_key: str | None = None
+
     def bench_pair(self, est: Mapping[str, Any], truth: Mapping[str, Any],
                    sig: Mapping[str, Any] | None) -> Any:
-        """(estimate, truth) arrays the relative error compares, a ready error (float), or None."""
-        return None
+        """(estimate, truth) arrays the relative error compares, a ready error (float), or None.
+        By default ``bench_key``'s values over the entries the data determine."""
+        if self.bench_key is None:
+            return None
+        k = self.bench_key
+        e, t = as_float_array(est[k]), np.asarray(truth[k], float)
+        return determined(e, t, sig[k]) if sig is not None and k in sig else (e, t)
 
     def param_error(self, est: Mapping[str, Any], truth: Mapping[str, Any],
                     sig: Mapping[str, Any] | None = None) -> float | None:

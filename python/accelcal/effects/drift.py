@@ -7,7 +7,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..spec import Param
-from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_float_array, as_list, channel_mask, determined, per_channel, start_time, strongest
+from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_float_array, as_list, channel_mask, per_channel, start_time, strongest
 from .channel import Misalignment
 from .fitdata import FitData, force_at, temp_skip
 from .fitting import Cand, LinearCandidate, linear_fit
@@ -48,7 +48,6 @@ class BiasDrift(LinearCandidate, Effect):
            "sample time.  path_i (fitted only): the piecewise-linear bias path through the knots path_t, "
            "held at its end values outside them (a random walk the diagnosis has estimated).")
     stage = "state"
-    linear = True  # in rate and rw for a fixed path
     params = (
         Param("rate", None, "counts/s", "ramp; auto = 0.01 % of g per s in counts", "floats"),
         Param("rw", 0.0, "counts/sqrt(s)", "random-walk intensity", "floats", minimum=0.0),
@@ -169,9 +168,7 @@ class BiasDrift(LinearCandidate, Effect):
             return {"rate": as_list(0.0 * z), "rw": as_list(m * np.abs(z))}
         return {"rate": as_list(m * z)}
 
-    def bench_pair(self, est, truth, sig):
-        e, t = as_float_array(est["rate"]), np.asarray(truth["rate"], float)
-        return determined(e, t, sig["rate"]) if sig is not None and "rate" in sig else (e, t)
+    bench_key = "rate"
 
     @staticmethod
     def bias_change(p: Mapping[str, Any], t: np.ndarray) -> np.ndarray:

@@ -17,7 +17,6 @@ class PositionError(LinearCandidate, Effect):
     summary = "the true position is r_i + dr_i: shows only under rotation"
     doc = "r_i -> r_i + dr_i (m, body axes)."
     stage = "state"
-    linear = True
     params = (
         Param("mm", 1.0, "mm", "size of each selected channel's position error", "floats", minimum=0.0),
         Param("direction", "random", "-", "direction of dr_i: random (per channel) or a body direction",
@@ -115,7 +114,6 @@ class Centripetal(LinearCandidate, Effect):
            "is the contract's, with the term (multiplier 1), and the fit recovers the data's scale; "
            "diagnose(model_centripetal=False) starts from the paper's model without it (multiplier 0).")
     stage = "state"
-    linear = True
     params = (
         Param("scale", 1.0, "-", "multiplier of the centripetal term (1 = physics, 0 = withheld)", "floats"),
         CHANNEL_PARAM,

@@ -22,7 +22,6 @@ class PoseError(Candidate, Effect):
            "direction by angle_deg in a random direction.  apply() (the diagnosis) predicts the "
            "readings from the recorded reference rotated back, Exp(rot_p) f_recorded.")
     stage = "reference"
-    linear = False
     params = (
         Param("angle_deg", 1.0, "deg", "tilt of each static pose's stated orientation", "float", minimum=0.0),
     )

@@ -7,7 +7,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from ..spec import Param
-from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_float_array, as_list, channel_mask, determined, per_channel, strongest, temperature_of
+from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_list, channel_mask, per_channel, strongest, temperature_of
 from .fitdata import FitData, t_ref_known, temp_skip
 from .fitting import Cand, Candidate, jig_rows, joint_stats, sep_stats, solve_groups
 from .settings import T_REF_SPANS
@@ -17,6 +17,10 @@ class TemperatureFit(Candidate):
     """c_i (T - t_ref) z_i with z = 1 (offset) or the sensed reading (gain); t_ref shared."""
 
     gain = False
+    bench_key = "coeff"  # the benchmark compares the coefficients
+
+    def bench_spec(self, m, z, aux):
+        return {"coeff": as_list(m * z)}
 
     def skip(self, D):
         return temp_skip(D)
@@ -110,7 +114,6 @@ class TemperatureOffset(TemperatureFit, Effect):
     summary = "b_i changes linearly with temperature"
     doc = "bias_i(t) += coeff_i (T(t) - t_ref) (coeff: counts per degC)."
     stage = "state"
-    linear = True
     params = (
         Param("coeff", None, "counts/degC", "offset tempco; auto = 0.2 % of g per degC in counts", "floats"),
         Param("t_ref", 25.0, "degC", "temperature at which the offset is the calibrated one (the effect shows "
@@ -142,12 +145,6 @@ class TemperatureOffset(TemperatureFit, Effect):
 
     bench_size = 0.1
 
-    def bench_spec(self, m, z, aux):
-        return {"coeff": as_list(m * z)}
-
-    def bench_pair(self, est, truth, sig):
-        e, t = as_float_array(est["coeff"]), np.asarray(truth["coeff"], float)
-        return determined(e, t, sig["coeff"]) if sig is not None and "coeff" in sig else (e, t)
 
 
     # -- report prose ---------------------------------------------------------
@@ -164,7 +161,6 @@ class TemperatureGain(TemperatureFit, Effect):
     summary = "the magnitude of s_i changes linearly with temperature"
     doc = "gain_i(t) *= 1 + coeff_i (T(t) - t_ref) (coeff: fraction per degC)."
     stage = "state"
-    linear = True
     params = (
         Param("coeff", 3e-4, "1/degC", "gain tempco (fraction per degC)", "floats"),
         Param("t_ref", 25.0, "degC", "temperature at which the gain is the calibrated one (the effect shows "
@@ -196,12 +192,6 @@ class TemperatureGain(TemperatureFit, Effect):
 
     bench_size = 1e-05
 
-    def bench_spec(self, m, z, aux):
-        return {"coeff": as_list(m * z)}
-
-    def bench_pair(self, est, truth, sig):
-        e, t = as_float_array(est["coeff"]), np.asarray(truth["coeff"], float)
-        return determined(e, t, sig["coeff"]) if sig is not None and "coeff" in sig else (e, t)
 
 
     # -- report prose ---------------------------------------------------------

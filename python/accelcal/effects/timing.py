@@ -8,7 +8,7 @@ from scipy.signal import lfilter
 
 from ..sensor import lowpass_first_order
 from ..spec import Param
-from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_float_array, as_list, channel_mask, determined, per_channel, strongest
+from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_float_array, as_list, channel_mask, per_channel, strongest
 from .fitdata import FitData
 from .fitting import SearchCandidate, Shifter
 from .settings import DELAY_GRID, SKEW_GRID
@@ -46,7 +46,6 @@ class TimeSkew(SearchCandidate, Effect):
     doc = ("tau_i -> tau_i + tau (s): the motion is evaluated at t + tau_i (exactly from the analytic "
            "trajectory when the truth has one, else by cubic-spline interpolation of the reference).")
     stage = "state"
-    linear = False
     params = (
         Param("tau", None, "s", "skew; auto = a quarter of the sample period", "floats"),
         Param("sequential", False, "-", "1: channel i is skewed by i x tau (a multiplexed ADC)", "bool"),
@@ -92,9 +91,7 @@ class TimeSkew(SearchCandidate, Effect):
     def bench_spec(self, m, z, aux):
         return {"tau": as_list(m * z)}
 
-    def bench_pair(self, est, truth, sig):
-        e, t = as_float_array(est["tau"]), np.asarray(truth["tau"], float)
-        return determined(e, t, sig["tau"]) if sig is not None and "tau" in sig else (e, t)
+    bench_key = "tau"
 
 
     # -- report prose ---------------------------------------------------------
@@ -111,7 +108,6 @@ class Bandwidth(SearchCandidate, Effect):
     doc = ("y' = 2 pi fc (x - y) on the noise-free readings, exact ramp-invariant discretisation at "
            "the sample times, starting in steady state (fc = inf: no filter).")
     stage = "signal"
-    linear = False
     params = (
         Param("fc_hz", 5.0, "Hz", "cut-off frequency", "floats", minimum=0.0, exclusive_min=True),
         CHANNEL_PARAM,
