@@ -11,6 +11,8 @@ that names the row and column.
 
 from __future__ import annotations
 
+import csv
+
 import math
 import os
 from dataclasses import dataclass, field
@@ -286,7 +288,10 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
         what = "the file is empty" if not data.strip() else "no header row after the comments"
         raise InputError(source, f"{what} (expected a header such as 't,raw_0,raw_1,...')")
     header_line = line_no
-    names = split_header(header)
+    try:
+        names = split_header(header)
+    except csv.Error as e:
+        raise InputError(source, f"the header cannot be split into columns ({e})", row=header_line) from None
     cols = classify_columns(names, n_channels, source, header_line)
 
     # Trailing blank lines are not rows; blank lines inside the data are errors.

@@ -640,3 +640,13 @@ def test_property_corruption_gives_input_error(tmp_path_factory, data):
         assert msg.startswith(str(p) + ": ") and "\n" not in msg
         return
     assert isinstance(back, Recording) and back.n_samples >= 1
+
+
+def test_header_with_stray_carriage_return_and_quote_is_one_line_error(tmp_path):
+    # found by the corruption property: the csv module refuses a CR inside an unquoted cell
+    p = tmp_path / "cr.csv"
+    p.write_bytes(b't,raw\r_0,"raw_1"\n0,1,2\n')
+    with pytest.raises(InputError) as ei:
+        read_recording(p)
+    msg = str(ei.value)
+    assert msg.startswith(str(p) + ": ") and "\n" not in msg and "header" in msg
