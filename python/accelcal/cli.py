@@ -223,6 +223,12 @@ def calibration_summary(cal, n_recordings: int, output) -> str:
     chi2, dof = fit.get("chi2"), fit.get("dof")
     if chi2 is not None and dof:
         text += f" chi2/dof {chi2 / dof:.3g} ({dof} dof)."
+    aside = cal.extra.get("set_aside", []) if isinstance(cal.extra, dict) else []
+    if aside:
+        n_cl = sum(int(d.get("n_clipped", 0)) for d in aside)
+        text += (f" {len(aside)} pose{'s' if len(aside) != 1 else ''} set aside ({n_cl} clipped samples): "
+                 + "; ".join(f"{d['name']} ({d['levels']})" for d in aside[:3]) + ("; ..." if len(aside) > 3 else "")
+                 + ".")
     if fit.get("jig_accuracy_deg"):
         text += f" Jig accuracy stated: {fit['jig_accuracy_deg']:g} deg."
     if cal.positions is not None:

@@ -15,7 +15,9 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from .clipping import ClipLevels, clip_levels
 from .errors import InputError
+from .noise import noise_for, window_std
 from .recording import check_for_device
 
 
@@ -31,7 +33,19 @@ MIN_POSE_S = 1.0           # shortest static interval kept as a pose
 EDGE_SIGMA = 4.0           # static interval ends: the nearest samples this x noise off the median
 
 
-MOVE_FACTOR = 3.0          # a labelled pose "moves" when a channel's std > this x its noise
+MOVE_RANGE = 8.0           # a labelled pose "moves" when a channel's mean over an eighth of it strays
+                           # this x its noise from another eighth's ...
+
+
+MOVE_STD = 6.0             # ... or its std exceeds this x its noise (noise: the larger of the recording's
+                           # and the median within-pose std of the labelled poses: hand-held tremor is noise)
+
+
+MOVE_PARTS = 8             # the parts a pose is cut into for the mean test
+
+
+STEP_SIGMA = 4.0           # an instant step inside a static run: means of the h samples either side
+                           # differ by this x noise (the same size EDGE_SIGMA calls an edge)
 
 
 QUANT_VAR = 1.0 / 12.0    # variance of rounding to integer counts
@@ -43,7 +57,9 @@ class PoseSet:
 
     means (P,N) counts; n (P,) samples; std (P,N) within-pose sample std (counts);
     f_ref (P,3) reference specific force (NaN = unknown); temp (P,) mean degC (NaN
-    = unknown); info: one dict a pose (source, label, first/last sample, t range).
+    = unknown); info: one dict a pose (source, label, first/last sample, t range);
+    set_aside: one dict a pose left out (source, label, t range, reason, clipped
+    samples and the channels and levels they sit at).
     """
 
     means: np.ndarray
@@ -52,6 +68,7 @@ class PoseSet:
     f_ref: np.ndarray
     temp: np.ndarray
     info: list[dict] = field(default_factory=list)
+    set_aside: list[dict] = field(default_factory=list)
 
     @property
     def n_poses(self) -> int:
@@ -78,32 +95,8 @@ class PoseSet:
             f_ref=np.concatenate([s.f_ref for s in sets]),
             temp=np.concatenate([s.temp for s in sets]),
             info=[d for s in sets for d in s.info],
+            set_aside=[d for s in sets for d in s.set_aside],
         )
-
-
-def window_std(raw: np.ndarray, w: int) -> tuple[np.ndarray, int, int]:
-    """Std of windows of about w samples at a stride: blocks of h = max(1, w // 4)
-    samples, windows of k = ceil(w / h) blocks (L = k h samples, population std).
-
-    Returns (ws (n_windows, N), h, k); window j covers samples [j h, (j + k) h).
-    One pass over the data for the block sums, then cumulative sums over blocks."""
-    raw = np.asarray(raw)
-    n, N = raw.shape
-    h = max(1, w // 4)
-    k = max(1, -(-w // h))
-    nb = n // h
-    if nb < k:
-        return np.zeros((0, N)), h, k
-    ref = np.median(raw[:: max(1, n // 1000)], axis=0)       # keep the sums small
-    x = (raw[: nb * h] - ref).reshape(nb, h, N)
-    s1 = x.sum(axis=1, dtype=float)
-    s2 = np.einsum("bhn,bhn->bn", x, x, dtype=float)
-    c1 = np.concatenate([np.zeros((1, N)), np.cumsum(s1, axis=0)])
-    c2 = np.concatenate([np.zeros((1, N)), np.cumsum(s2, axis=0)])
-    L = k * h
-    S1 = c1[k:] - c1[:-k]
-    S2 = c2[k:] - c2[:-k]
-    return np.sqrt(np.maximum((S2 - S1 * S1 / L) / L, 0.0)), h, k
 
 
 def window_len(device, window_s: float, n: int) -> int:
@@ -111,32 +104,27 @@ def window_len(device, window_s: float, n: int) -> int:
     return max(3, min(w, n))
 
 
-def estimate_noise(raw: np.ndarray, window: int) -> np.ndarray:
-    """Per-channel noise (counts) estimated robustly from the data.
-
-    The std of windows of about ``window`` samples is taken (see window_std); static
-    windows form the low cluster.  With s10 the 10th percentile of the window stds,
-    the noise is the median of the windows whose std is below 2 x s10, times
-    sqrt(L/(L-1)).  This needs at least about 10 % of the recording to be static.
-    """
-    ws, h, k = window_std(raw, window)
-    if ws.shape[0] == 0:
-        return np.full(np.asarray(raw).shape[1], math.sqrt(QUANT_VAR))
-    s10 = np.percentile(ws, 10, axis=0)
-    out = np.empty(ws.shape[1])
-    for i in range(ws.shape[1]):
-        col = ws[:, i]
-        out[i] = np.median(col[col <= 2.0 * s10[i]]) if s10[i] > 0 else 0.0
-    L = h * k
-    out *= math.sqrt(L / max(L - 1, 1))
-    return np.maximum(out, math.sqrt(QUANT_VAR))
-
-
-def noise_for(device, raw: np.ndarray, window: int) -> tuple[np.ndarray, str]:
-    k = np.asarray(device.noise_counts(), float)
-    if np.all(k > 0):
-        return np.sqrt(k ** 2 + QUANT_VAR), "device noise_mps2"
-    return estimate_noise(raw, window), "estimated from the data (robust window std)"
+def step_splits(raw: np.ndarray, a: int, b: int, m: int, sig: np.ndarray) -> list[int]:
+    """Sample indices in (a, b) at which the readings step: the means of the m samples
+    before and after differ by more than STEP_SIGMA x noise on some channel (the local
+    maximum of each run of such indices)."""
+    L = b - a
+    if L < 2 * m + 1:
+        return []
+    x = np.asarray(raw[a:b], float)
+    c = np.concatenate([np.zeros((1, x.shape[1])), np.cumsum(x - x[0], axis=0)])
+    i = np.arange(m, L - m + 1)                       # split before local sample i
+    left = (c[i] - c[i - m]) / m
+    right = (c[i + m] - c[i]) / m
+    z = np.max(np.abs(right - left) / sig[None, :], axis=1)
+    over = z > STEP_SIGMA
+    if not over.any():
+        return []
+    edges = np.diff(np.concatenate([[0], over.astype(np.int8), [0]]))
+    out = []
+    for s0, e0 in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+        out.append(a + int(i[s0 + int(np.argmax(z[s0:e0]))]))
+    return out
 
 
 def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: float = STATIC_THRESHOLD,
@@ -147,16 +135,19 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
        (window_std), are quiet when the std of every channel in them is at most
        ``threshold`` times that channel's noise; the blocks a quiet window covers are
        static.
-    2. Each run of static blocks is refined to the sample: with med the median of the
-       run, its ends move to the nearest samples (searching one window beyond and a
-       block inside the run, never into a neighbouring run) at which some channel is
-       more than EDGE_SIGMA x noise away from med.  The window test alone would admit
-       an edge sample up to about sqrt(3 w) x noise off.
-    3. Intervals shorter than ``min_s`` (or one window) are dropped.
+    2. A run of static blocks is cut where the readings step (two poses joined by an
+       instant change, no samples in between): where the means of the quarter windows
+       either side differ by more than STEP_SIGMA x noise.
+    3. Each piece is refined to the sample: with med its median, its ends move to the
+       nearest samples (searching one window beyond and a block inside, never into a
+       neighbouring piece) at which some channel is more than EDGE_SIGMA x noise away
+       from med.  The window test alone would admit an edge sample up to about
+       sqrt(3 w) x noise off.
+    4. Intervals shorter than ``min_s`` (or one window) are dropped.
 
     The noise is the device's ``noise_mps2`` (plus rounding) when it is given for
-    every channel, else estimated from the data (:func:`estimate_noise`), unless
-    ``noise`` (counts, per channel) is passed.
+    every channel, else estimated from the data (:func:`accelcal.noise.estimate_noise`),
+    unless ``noise`` (counts, per channel) is passed.
     """
     raw = np.asarray(rec.raw)
     n = raw.shape[0]
@@ -164,6 +155,7 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
     if n < w:
         return []
     sig = np.asarray(noise, float) if noise is not None else noise_for(device, raw, w)[0]
+    sig = np.maximum(sig, 1e-9)
     ws, h, k = window_std(raw, w)
     nw = ws.shape[0]
     if nw == 0:
@@ -174,20 +166,27 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
     blk = np.arange(nw + k - 1)
     static = (c[np.clip(blk + 1, 0, nw)] - c[np.clip(blk - k + 1, 0, nw)]) > 0
     edges = np.diff(np.concatenate([[0], static.astype(np.int8), [0]]))
-    runs = list(zip(np.flatnonzero(edges == 1) * h, np.flatnonzero(edges == -1) * h))
+    runs = []
+    for a, b in zip(np.flatnonzero(edges == 1) * h, np.flatnonzero(edges == -1) * h):
+        cuts = [int(a)] + step_splits(raw, int(a), int(b), max(2, h), sig) + [int(b)]
+        runs += [(cuts[j], cuts[j + 1], j > 0, j + 2 < len(cuts)) for j in range(len(cuts) - 1)]
     min_n = max(w, int(math.ceil(min_s * device.sample_rate_hz)))
     ext = k * h
     out: list[tuple[int, int]] = []
-    for r, (a, b) in enumerate(runs):
+    lim = EDGE_SIGMA * sig
+    for r, (a, b, cut_a, cut_b) in enumerate(runs):
         lo_lim = max(out[-1][1] if out else 0, runs[r - 1][1] if r else 0)
         hi_lim = runs[r + 1][0] if r + 1 < len(runs) else n
-        lo, hi = max(lo_lim, a - ext), min(hi_lim, b + ext)
+        lo = a if cut_a else max(lo_lim, a - ext)
+        hi = b if cut_b else min(hi_lim, b + ext)
+        if b - a < 1:
+            continue
         med = np.median(raw[a:b:max(1, (b - a) // 2000)], axis=0)
-        lim = EDGE_SIGMA * sig
-        left = np.flatnonzero(np.any(np.abs(raw[lo:a + h] - med) > lim, axis=1))
+        left = np.flatnonzero(np.any(np.abs(raw[lo:min(a + h, b)] - med) > lim, axis=1))
         start = lo + (int(left[-1]) + 1 if left.size else 0)
-        right = np.flatnonzero(np.any(np.abs(raw[b - h:hi] - med) > lim, axis=1))
-        stop = b - h + int(right[0]) if right.size else hi
+        r0 = max(b - h, a)
+        right = np.flatnonzero(np.any(np.abs(raw[r0:hi] - med) > lim, axis=1))
+        stop = r0 + int(right[0]) if right.size else hi
         if stop - start >= min_n:
             out.append((int(start), int(stop)))
     return out
@@ -202,9 +201,13 @@ def pose_means(rec, intervals: Sequence[Any], device, *, labels: Sequence[Any] |
     """Mean, sample count and within-pose std of each static pose.
 
     ``intervals``: (start, stop) sample index pairs, or index arrays (a labelled pose
-    may be split).  Checks (each an InputError naming the recording and where):
-    no reading of a pose sits at raw_min/raw_max; with ``check_motion``, no channel's
-    std in a pose exceeds MOVE_FACTOR x its noise (the pose would not be static).
+    may be split).  With ``check_motion`` (labelled poses: the user says they are
+    static) a pose that moves is refused, naming its label, time span and channel:
+    one whose mean over an eighth of it differs from another eighth's by more than
+    MOVE_RANGE x the channel's noise, or whose std exceeds MOVE_STD x it; the noise
+    is the larger of the recording's and the median within-pose std of the poses
+    (tremor that every hand-held pose shows is noise, not motion).  Clipped readings
+    are the caller's to set aside (:func:`poses_from_recording`).
     Returns means (P,N), counts (P,), std (P,N).
     """
     raw = np.asarray(rec.raw)
@@ -221,19 +224,8 @@ def pose_means(rec, intervals: Sequence[Any], device, *, labels: Sequence[Any] |
     # one gather, then per-pose reductions; integer arithmetic about a reference is exact
     x = raw[np.concatenate(idx_list)]
     offs = np.concatenate([[0], np.cumsum(cnt)[:-1]])
-    lo, hi = np.minimum.reduceat(x, offs, axis=0), np.maximum.reduceat(x, offs, axis=0)
-    bad = np.argwhere((lo <= device.raw_min) | (hi >= device.raw_max))
-    if bad.size:
-        p, c = (int(v) for v in bad[0])
-        seg = raw[idx_list[p], c]
-        k = int(np.flatnonzero((seg <= device.raw_min) | (seg >= device.raw_max))[0])
-        i = int(idx_list[p][k])
-        lim = "raw_max" if raw[i, c] >= device.raw_max else "raw_min"
-        raise InputError(rec.source, f"{names[p]}: raw_{c} = {int(raw[i, c])} at {sample_where(rec, i)} sits at the "
-                         f"ADC limit {lim} = {getattr(device, lim)} (clipped readings cannot be calibrated)",
-                         column=f"raw_{c}")
     ref = x[0].copy()
-    x -= ref
+    x = x - ref
     s1 = np.add.reduceat(x, offs, axis=0).astype(float)
     s2 = np.add.reduceat(x * x, offs, axis=0).astype(float)
     cf = cnt.astype(float)[:, None]
@@ -244,14 +236,24 @@ def pose_means(rec, intervals: Sequence[Any], device, *, labels: Sequence[Any] |
     if check_motion:
         if noise is None:
             noise = noise_for(device, raw, window_len(device, STATIC_WINDOW_S, n))[0]
-        ratio = std / np.asarray(noise, float)[None, :]
-        ratio[cnt < 3] = 0.0
-        if np.any(ratio > MOVE_FACTOR):
-            p, c = np.unravel_index(int(np.argmax(ratio)), ratio.shape)
-            idx = idx_list[p]
-            raise InputError(rec.source, f"{names[p]} ({sample_where(rec, idx[0])} to {sample_where(rec, idx[-1])}) is labelled "
-                             f"static but moves: raw_{c} varies by {std[p, c]:.3g} counts rms, its noise is "
-                             f"{noise[c]:.3g} counts", column="pose" if labels is not None else f"raw_{c}")
+        ref_sig = np.maximum(np.asarray(noise, float), np.median(std[cnt >= 3], axis=0) if np.any(cnt >= 3) else 0.0)
+        ref_sig = np.maximum(ref_sig, 1e-9)
+        for p, idx in enumerate(idx_list):
+            if idx.size < 2 * MOVE_PARTS:
+                continue
+            parts = np.array_split(raw[idx].astype(float), MOVE_PARTS)
+            pm = np.array([q.mean(axis=0) for q in parts])
+            spread = (pm.max(axis=0) - pm.min(axis=0)) / ref_sig
+            ratio = std[p] / ref_sig
+            bad = np.flatnonzero((spread > MOVE_RANGE) | (ratio > MOVE_STD))
+            if bad.size:
+                c = int(bad[np.argmax(np.maximum(spread[bad] / MOVE_RANGE, ratio[bad] / MOVE_STD))])
+                what = (f"its mean moves by {spread[c] * ref_sig[c]:.4g} counts" if spread[c] > MOVE_RANGE
+                        else f"it varies by {std[p, c]:.4g} counts rms")
+                raise InputError(rec.source, f"{names[p]} (t = {float(rec.t[idx[0]]):.6g} .. {float(rec.t[idx[-1]]):.6g} s, "
+                                 f"samples {int(idx[0])}..{int(idx[-1])}) is labelled static but moves: on raw_{c} "
+                                 f"{what}, its noise is {ref_sig[c]:.3g} counts",
+                                 column="pose" if labels is not None else f"raw_{c}")
     return mean, cnt, std
 
 
@@ -259,9 +261,36 @@ def is_pair(iv: Any) -> bool:
     return isinstance(iv, tuple) and len(iv) == 2 and np.isscalar(iv[0])
 
 
+def set_aside_clipped(rec, intervals: list, labels: list | None, clipped: np.ndarray,
+                      levels: ClipLevels) -> tuple[list, list | None, list[dict]]:
+    """Drop the poses with a clipped reading (their mean would be biased); one record
+    each of what was set aside and why."""
+    keep, keep_lab, aside = [], [] if labels is not None else None, []
+    for p, iv in enumerate(intervals):
+        idx = np.arange(iv[0], iv[1]) if is_pair(iv) else iv
+        cl = clipped[idx]
+        if not cl.any():
+            keep.append(iv)
+            if labels is not None:
+                keep_lab.append(labels[p])
+            continue
+        chans = [int(c) for c in np.flatnonzero(cl.any(axis=0))]
+        lv = []
+        for c in chans:
+            v = rec.raw[idx, c][cl[:, c]]
+            lv.append(f"raw_{c} at {int(v.max()) if v.max() >= levels.hi[c] else int(v.min())}")
+        aside.append({"source": rec.source, "label": labels[p] if labels is not None else None,
+                      "t_start": float(rec.t[idx[0]]), "t_stop": float(rec.t[idx[-1]]), "n": int(idx.size),
+                      "reason": "clipped", "n_clipped": int(cl.any(axis=1).sum()), "channels": chans,
+                      "levels": ", ".join(lv)})
+    return keep, keep_lab, aside
+
+
 def poses_from_recording(rec, device, *, use_labels: bool | None = None, required: bool = True) -> PoseSet:
     """The static poses of one recording: its ``pose`` labels when it has them (and
-    ``use_labels`` is not False), else :func:`detect_static`.  The reference
+    ``use_labels`` is not False), else :func:`detect_static`.  Poses with clipped
+    readings (:func:`accelcal.clipping.clip_levels`: at raw_min/raw_max or piled up at
+    a level inside the range) are set aside and listed in ``set_aside``.  The reference
     specific force and temperature of a pose are the means of f_* and temp_c over it.
     With ``required`` False a recording without static poses gives an empty set."""
     check_for_device(rec, device)
@@ -279,13 +308,16 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
     else:
         intervals = detect_static(rec, device, noise=noise)
         labels = None
-    if not intervals and not required:
-        return PoseSet(np.zeros((0, device.n_channels)), np.zeros(0, dtype=np.int64),
-                       np.zeros((0, device.n_channels)), np.zeros((0, 3)), np.zeros(0), [])
+    levels = clip_levels(rec.raw, device, noise)
+    intervals, labels, aside = set_aside_clipped(rec, intervals, labels, levels.mask(rec.raw), levels)
+    empty = PoseSet(np.zeros((0, device.n_channels)), np.zeros(0, dtype=np.int64),
+                    np.zeros((0, device.n_channels)), np.zeros((0, 3)), np.zeros(0), [], aside)
+    if not intervals and (not required or aside):
+        return empty
     if not intervals:
         raise InputError(rec.source, "no static pose found (no 'pose' labels, and no interval of at least "
                          f"{MIN_POSE_S:g} s in which every channel is within {STATIC_THRESHOLD:g} x its noise)")
-    means, cnt, std = pose_means(rec, intervals, device, labels=labels, noise=noise, check_motion=True)
+    means, cnt, std = pose_means(rec, intervals, device, labels=labels, noise=noise, check_motion=labelled)
     P = len(intervals)
     f_ref = np.full((P, 3), np.nan)
     temp = np.full(P, np.nan)
@@ -310,4 +342,4 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
             "t_start": float(rec.t[idx[0]]), "t_stop": float(rec.t[idx[-1]]),
             "n": int(cnt[p]),
         })
-    return PoseSet(means=means, n=cnt, std=std, f_ref=f_ref, temp=temp, info=info)
+    return PoseSet(means=means, n=cnt, std=std, f_ref=f_ref, temp=temp, info=info, set_aside=aside)

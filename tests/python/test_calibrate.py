@@ -468,17 +468,38 @@ def test_labelled_pose_that_moves_is_refused():
         calibrate_recordings(dev, [bad])
 
 
-def test_reading_at_adc_limit_is_refused():
+def test_pose_with_a_reading_at_the_adc_limit_is_set_aside_and_counted():
+    rng = np.random.default_rng(17)
+    dev = default_device()
+    b, S = draw_truth(dev, rng)
+    P = np.vstack([AXES6, AXES6[:2] * 0.6 + AXES6[2:4] * 0.8])
+    rec = make_recording(dev, b, S, G * P, rng)
+    raw = rec.raw.copy()
+    i = int(np.flatnonzero(rec.pose == 2)[5])
+    raw[i, 4] = dev.raw_max
+    clipped = Recording(t=rec.t, raw=raw, f=rec.f, pose=rec.pose, source="clip.csv")
+    cal = calibrate_recordings(dev, [clipped])
+    aside = cal.extra["set_aside"]
+    assert [d["name"] for d in aside] == ["pose 2"] and aside[0]["n_clipped"] == 1
+    assert aside[0]["reason"] == "clipped" and f"raw_4 at {dev.raw_max}" in aside[0]["levels"]
+    assert "2" not in [str(p) for p in cal.poses_used] and len(cal.poses_used) == P.shape[0] - 1
+    # what is left is calibrated as without the clipped pose
+    keep = rec.pose != 2
+    ref = calibrate_recordings(dev, [Recording(t=rec.t[keep], raw=rec.raw[keep], f=rec.f[keep], pose=rec.pose[keep])])
+    np.testing.assert_allclose(cal.offsets, ref.offsets, rtol=0, atol=1e-9)
+
+
+def test_every_pose_clipped_is_one_line_naming_them():
     rng = np.random.default_rng(17)
     dev = default_device()
     b, S = draw_truth(dev, rng)
     rec = make_recording(dev, b, S, G * AXES6, rng)
     raw = rec.raw.copy()
-    i = int(np.flatnonzero(rec.pose == 2)[5])
-    raw[i, 4] = dev.raw_max
-    bad = Recording(t=rec.t, raw=raw, f=rec.f, pose=rec.pose, source="clip.csv")
-    with pytest.raises(InputError, match=rf"clip\.csv: column raw_4: pose 2: raw_4 = 10000 at sample {i} .*ADC limit raw_max"):
-        calibrate_recordings(dev, [bad])
+    for p in range(6):
+        raw[np.flatnonzero(rec.pose == p)[3], 0] = dev.raw_min
+    with pytest.raises(InputError, match=r"^c\.csv: no usable static pose in any recording \(6 set aside because "
+                                         r"their readings clip: pose 0 \(raw_0 at 0\)"):
+        calibrate_recordings(dev, [Recording(t=rec.t, raw=raw, f=rec.f, pose=rec.pose, source="c.csv")])
 
 
 def test_non_increasing_time_is_refused():

@@ -95,7 +95,8 @@ problem), ``static_model`` (the nonlinear fit by scipy.optimize.least_squares),
 ``known_poses`` (linear known-pose fits and the jig-accuracy joint fit),
 ``lever_arms``, ``recordings`` (recordings in, a Calibration out).
 """
-from ..static import PoseSet, detect_static, estimate_noise, pose_means, poses_from_recording
+from ..noise import estimate_noise
+from ..static import PoseSet, detect_static, pose_means, poses_from_recording
 from .checks import jig_accuracy_rad, static_force
 from .known_poses import calibrate_known_poses, fit_known_poses
 from .lever_arms import calibrate_positions

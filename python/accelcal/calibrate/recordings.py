@@ -10,7 +10,7 @@ from ..static import PoseSet, poses_from_recording
 from .checks import jig_accuracy_rad, pose_label
 from .known_poses import fit_known_poses
 from .lever_arms import calibrate_positions
-from .results import to_calibration
+from .results import set_aside_entry, to_calibration
 from .settings import JIG_ACCURACY_DEG, METHODS, ROTATION_MIN_RADPS, TEMP_MIN_SPAN_C
 from .static_model import fit_static
 
@@ -39,8 +39,11 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     sets = [poses_from_recording(rec, device, required=not rot.any()) for rec, rot in zip(recordings, rotating)]
     poses = PoseSet.concat(sets)
     if poses.n_poses == 0:
-        raise InputError(recordings[0].source, "no static pose in any recording: the offsets and sensitivities "
-                         "need static poses (lever arms alone cannot be estimated without them)")
+        why = (f" ({len(poses.set_aside)} set aside because their readings clip: "
+               + "; ".join(f"{set_aside_entry(d)['name']} ({d['levels']})" for d in poses.set_aside[:3]) + ")"
+               if poses.set_aside else "")
+        raise InputError(recordings[0].source, f"no usable static pose in any recording{why}: the offsets and "
+                         "sensitivities need static poses (lever arms alone cannot be estimated without them)")
     has_f = np.all(np.isfinite(poses.f_ref), axis=1)
     if method is None:
         if has_f.all():

@@ -109,6 +109,14 @@ def pose_names(info: list[dict]) -> list:
     return out
 
 
+def set_aside_entry(d: dict) -> dict:
+    """A pose left out of the fit, for the calibration's ``extra.set_aside``."""
+    name = f"pose {d['label']}" if d.get("label") is not None else f"static@{d['t_start']:.2f}-{d['t_stop']:.2f}s"
+    return {"name": name, "source": str(d.get("source")), "reason": d["reason"],
+            "t_start_s": d["t_start"], "t_stop_s": d["t_stop"], "n_samples": d["n"],
+            "n_clipped": d.get("n_clipped", 0), "levels": d.get("levels", "")}
+
+
 def to_calibration(device, fit: StaticFit, method: str, positions: PositionFit | None = None):
     """Build the contract's Calibration from a fit: offsets, sensitivity, 1-sigma
     uncertainties, temperature terms, residual RMS per channel and per pose (counts),
@@ -143,6 +151,8 @@ def to_calibration(device, fit: StaticFit, method: str, positions: PositionFit |
         },
         "poses": pose_detail,
     }
+    if fit.poses.set_aside:
+        extra["set_aside"] = [set_aside_entry(d) for d in fit.poses.set_aside]
     if not fit.jigfree:
         extra["fit"]["jig_accuracy_deg"] = float(fit.jig_accuracy_deg)
         if fit.jig_hint_deg is not None:

@@ -8,10 +8,10 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..effects import EFFECT_NAMES
-from ..effects.adc import code_lattice
 from ..effects.fitting import Cand, block_ss
 from ..effects.settings import BACKFIT_PASSES, BLOCK_S
 from ..errors import AccelcalError
+from ..noise import code_lattice
 from .floor import setup_rows
 from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare

@@ -6,11 +6,12 @@ import math
 import numpy as np
 
 from ..errors import AccelcalError
+from ..noise import QUANT_MIN_FRAC, code_lattice
 from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, as_float_array, channel_mask, owner, per_channel
 from .fitdata import FitData
 from .fitting import Cand, Candidate, block_ss
-from .settings import QUANT_DITHER_GRID, QUANT_MAX_STEP, QUANT_MIN_FRAC, QUANT_STRONG_FRAC, QUANT_STRONG_VALUES, SAT_PROOF_COUNT
+from .settings import QUANT_DITHER_GRID, QUANT_STRONG_FRAC, QUANT_STRONG_VALUES, SAT_PROOF_COUNT
 
 
 ERFC = np.frompyfunc(math.erfc, 1, 1)
@@ -19,35 +20,6 @@ ERFC = np.frompyfunc(math.erfc, 1, 1)
 def normal_tail(z: np.ndarray) -> np.ndarray:
     """P(N(0, 1) > z), elementwise."""
     return 0.5 * ERFC(np.asarray(z, float) / math.sqrt(2.0)).astype(float)
-
-
-def code_lattice(v: np.ndarray) -> tuple[int, float, float, int]:
-    """Best lattice of integer readings v: (step, phase, share of readings on it, distinct values on it).
-    Step 1 when none is found (share >= QUANT_MIN_FRAC with >= 6 distinct values)."""
-    u, cnt = np.unique(v.astype(np.int64), return_counts=True)
-    tot = float(cnt.sum())
-    best = (1, 0.0, 1.0, int(u.size))
-    if u.size < 6:
-        return best
-    span = int(u[-1] - u[0])
-    # exact lattice: the gcd of the differences of the values
-    gq = int(np.gcd.reduce(np.diff(u)))
-    if gq >= 2:
-        return (gq, float(u[0] % gq), 1.0, int(u.size))
-    # robust: a lattice that holds for QUANT_MIN_FRAC of the readings (a few strays allowed); dense
-    # readings (most neighbouring values one count apart) are on none
-    if np.mean(np.diff(u) == 1) > 0.3:
-        return best
-    for q in range(2, min(QUANT_MAX_STEP, max(span // 3, 2)) + 1):
-        res = u % q
-        bc = np.bincount(res, weights=cnt, minlength=q)
-        ph = int(np.argmax(bc))
-        frac = bc[ph] / tot
-        if frac >= QUANT_MIN_FRAC:
-            nd = int(np.count_nonzero(res == ph))
-            if nd >= 6:
-                best = (q, float(ph), float(frac), nd)
-    return best
 
 
 class Saturation(Candidate, Effect):

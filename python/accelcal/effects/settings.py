@@ -10,10 +10,8 @@ TEMP_MIN_SPAN_C = 1.0      # temperature candidates need this span of temp_c
 T_REF_SPANS = 2.0          # a fitted reference temperature stays within this many spans of temp_c
 MISALIGN_MAX_RAD = 0.35     # relinearised misalignment fits stay below ~20 deg
 POSITION_TOL_M = 1e-3      # position_error reports dr along directions with 1-sigma below this
-QUANT_MIN_FRAC = 0.99      # share of readings on the lattice to call a channel quantised
 QUANT_STRONG_FRAC = 0.999  # ... and to take the lattice alone as proof (with QUANT_STRONG_VALUES)
 QUANT_STRONG_VALUES = 20   # distinct lattice values needed for the proof (chance <= 2^-19)
-QUANT_MAX_STEP = 256
 
 
 # noise before the quantiser, as a fraction of the step, tried for each quantised channel

@@ -1,0 +1,224 @@
+"""The noise of a recording, estimated from the recording itself.
+
+Every threshold that depends on the sensor's noise (static-interval detection, the
+"labelled pose moves" check, the estimators' rest test) takes its noise from here
+unless the device file states ``noise_mps2`` (an optional override).
+
+How (:func:`estimate_noise`): the standard deviation of windows of about half a second
+is taken at a stride of a quarter window (:func:`window_std`).  Windows at rest form the
+low cluster of log(std), motion the high one; the two are split where the between-class
+variance of log(std) is largest (Otsu's threshold), and the noise is the median of the
+low class.  When the two classes are less than NOISE_SPLIT_RATIO apart the recording is
+one regime (all at rest, say) and the median of every window is taken.  Unlike a low
+percentile this follows the typical static window, also when the noise is coloured and
+uneven from pose to pose (hand-held tremor), and it needs no fixed share of the recording
+at rest.
+
+Quantization (:func:`code_lattice`): integer readings whose values all sit on a lattice
+of step q (coarse converters, or low bits always 0) dither between neighbouring codes at
+rest; a reading that sits on one code has a window std of 0 and one that flips between
+two codes up to q/2.  Such a dither is noise of order q/sqrt(12), not motion, so the
+noise of an integer channel is sqrt(sigma^2 + q^2/12) (q = 1 for plain integers: the
+rounding to counts).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+NOISE_SPLIT_RATIO = 3.0    # rest and motion classes of window std at least this far apart (ratio of medians)
+
+
+QUANT_MIN_FRAC = 0.99      # a lattice must hold this share of the readings (a few strays allowed)
+
+
+QUANT_MAX_STEP = 256       # largest lattice step searched for (beyond the exact gcd)
+
+
+def code_lattice(v: np.ndarray) -> tuple[int, float, float, int]:
+    """The lattice of integer readings.
+
+    Parameters
+    ----------
+    v : array_like of int
+        Readings of one channel (counts).
+
+    Returns
+    -------
+    step : int
+        Lattice step (counts); 1 when the readings use every count (or too few distinct
+        values, < 6, to tell).
+    phase : float
+        The readings' common residue modulo ``step``.
+    share : float
+        Share of the readings on the lattice (1.0 for an exact lattice).
+    distinct : int
+        Distinct values on the lattice.
+    """
+    u, cnt = np.unique(np.asarray(v).astype(np.int64), return_counts=True)
+    tot = float(cnt.sum())
+    best = (1, 0.0, 1.0, int(u.size))
+    if u.size < 6:
+        return best
+    span = int(u[-1] - u[0])
+    gq = int(np.gcd.reduce(np.diff(u)))           # exact lattice: the gcd of the differences
+    if gq >= 2:
+        return (gq, float(u[0] % gq), 1.0, int(u.size))
+    # robust: a lattice that holds for QUANT_MIN_FRAC of the readings; dense readings (most
+    # neighbouring values one count apart) are on none
+    if np.mean(np.diff(u) == 1) > 0.3:
+        return best
+    for q in range(2, min(QUANT_MAX_STEP, max(span // 3, 2)) + 1):
+        res = u % q
+        bc = np.bincount(res, weights=cnt, minlength=q)
+        ph = int(np.argmax(bc))
+        frac = bc[ph] / tot
+        if frac >= QUANT_MIN_FRAC:
+            nd = int(np.count_nonzero(res == ph))
+            if nd >= 6:
+                best = (q, float(ph), float(frac), nd)
+    return best
+
+
+def code_step(v: np.ndarray) -> int:
+    """The code step of integer readings: the gcd of the differences of their distinct
+    values (exact, from two values on), else :func:`code_lattice`'s robust step; 1 for a
+    single value."""
+    u = np.unique(np.asarray(v).astype(np.int64))
+    if u.size < 2:
+        return 1
+    g = int(np.gcd.reduce(np.diff(u)))
+    return g if g >= 2 else code_lattice(v)[0]
+
+
+def window_std(x: np.ndarray, w: int) -> tuple[np.ndarray, int, int]:
+    """Population std of windows of about ``w`` samples, at a stride of a quarter window.
+
+    Blocks of h = max(1, w // 4) samples; windows of k = ceil(w / h) blocks (L = k h
+    samples).  One pass over the data for the block sums, then cumulative sums over
+    blocks.
+
+    Parameters
+    ----------
+    x : array_like (n, N)
+        Readings (counts or physical units).
+    w : int
+        Window length (samples).
+
+    Returns
+    -------
+    ws : ndarray (n_windows, N)
+        Window std, in the units of ``x``; window j covers samples [j h, (j + k) h).
+    h, k : int
+        Block length (samples) and blocks per window.
+    """
+    x = np.asarray(x)
+    n, N = x.shape
+    h = max(1, w // 4)
+    k = max(1, -(-w // h))
+    nb = n // h
+    if nb < k:
+        return np.zeros((0, N)), h, k
+    ref = np.median(x[:: max(1, n // 1000)], axis=0)       # keep the sums small
+    d = (x[: nb * h] - ref).reshape(nb, h, N)
+    s1 = d.sum(axis=1, dtype=float)
+    s2 = np.einsum("bhn,bhn->bn", d, d, dtype=float)
+    c1 = np.concatenate([np.zeros((1, N)), np.cumsum(s1, axis=0)])
+    c2 = np.concatenate([np.zeros((1, N)), np.cumsum(s2, axis=0)])
+    L = k * h
+    S1 = c1[k:] - c1[:-k]
+    S2 = c2[k:] - c2[:-k]
+    return np.sqrt(np.maximum((S2 - S1 * S1 / L) / L, 0.0)), h, k
+
+
+def rest_level(ws: np.ndarray) -> float:
+    """The typical window std at rest: the median of the low class of log(std) (Otsu's
+    split), or of every window when the classes are less than NOISE_SPLIT_RATIO apart.
+
+    Parameters
+    ----------
+    ws : array_like (n_windows,)
+        Window stds of one channel (>= 0).
+
+    Returns
+    -------
+    float
+        0.0 when every window is exactly constant.
+    """
+    v = np.sort(np.asarray(ws, float)[np.isfinite(ws)])
+    if v.size == 0 or v[-1] <= 0.0:
+        return 0.0
+    pos = v[v > 0]
+    x = np.log(np.maximum(v, 0.1 * pos[0]))      # a window on one code: a tenth of the least dither
+    n = x.size
+    if n < 4:
+        return float(np.median(v))
+    c = np.cumsum(x)
+    k = np.arange(1, n)
+    m0 = c[:-1] / k
+    m1 = (c[-1] - c[:-1]) / (n - k)
+    between = k * (n - k) * (m1 - m0) ** 2
+    between[x[1:] == x[:-1]] = -1.0               # split only between distinct values
+    j = int(np.argmax(between)) + 1
+    lo, hi = v[:j], v[j:]
+    if between[j - 1] <= 0 or np.median(hi) < NOISE_SPLIT_RATIO * max(np.median(lo), 1e-300):
+        return float(np.median(v))
+    return float(np.median(lo))
+
+
+def estimate_noise(x: np.ndarray, window: int, *, integer: bool | None = None) -> np.ndarray:
+    """Per-channel noise std estimated from the data (see the module doc).
+
+    Parameters
+    ----------
+    x : array_like (n, N)
+        Readings: integer counts (quantization-aware) or floats (physical units).
+    window : int
+        Window length in samples (about half a second).
+    integer : bool, optional
+        Treat the readings as integer codes (default: when ``x`` has an integer dtype).
+
+    Returns
+    -------
+    ndarray (N,)
+        Noise std in the units of ``x``; for integer readings at least the rounding
+        noise q/sqrt(12) of their lattice step q.
+    """
+    x = np.asarray(x)
+    N = x.shape[1]
+    if integer is None:
+        integer = np.issubdtype(x.dtype, np.integer)
+    ws, h, k = window_std(x, window)
+    L = h * k
+    q = np.array([code_step(x[:, i]) for i in range(N)], float) if integer else np.zeros(N)
+    out = np.zeros(N)
+    first = x[np.arange(ws.shape[0]) * h]
+    for i in range(N if ws.shape[0] else 0):
+        col = ws[:, i]
+        if integer:
+            # a window held on the channel's extreme value is clipped, not at rest (a window on one
+            # code elsewhere is a rest quieter than the code step)
+            held = (col == 0) & ((first[:, i] == x[:, i].max()) | (first[:, i] == x[:, i].min()))
+            col = col[~held]
+        out[i] = rest_level(col)
+    out *= math.sqrt(L / max(L - 1, 1))
+    return np.sqrt(out ** 2 + q ** 2 / 12.0)
+
+
+def noise_for(device, raw: np.ndarray, window: int) -> tuple[np.ndarray, str]:
+    """The noise (counts, per channel) the thresholds use: the device's ``noise_mps2``
+    (plus rounding) when it states one for every channel, else :func:`estimate_noise`.
+
+    Returns
+    -------
+    sigma : ndarray (N,)
+        Counts.
+    how : str
+        Where it came from, for messages and reports.
+    """
+    k = np.asarray(device.noise_counts(), float)
+    if np.all(k > 0):
+        return np.sqrt(k ** 2 + 1.0 / 12.0), "device noise_mps2"
+    return estimate_noise(raw, window, integer=True), "estimated from the data (window std at rest)"

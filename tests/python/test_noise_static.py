@@ -1,0 +1,160 @@
+"""Noise from the data, static intervals as a user sees them, clipped readings set aside
+(issue 13, items 1-3), on recordings whose shape the detector did not choose: coloured
+tremor, coarse quantization, instant steps, clipping inside the range."""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from scipy.signal import lfilter
+from scipy.spatial.transform import Rotation
+
+import accelcal as ac
+from accelcal.calibrate import calibrate_recordings
+from accelcal.clipping import clip_levels
+from accelcal.device import default_device, default_triad
+from accelcal.errors import InputError
+from accelcal.noise import estimate_noise
+from accelcal.recording import Recording
+from accelcal.static import detect_static, poses_from_recording
+
+G = 9.80665
+
+
+def bare(dev):
+    """The device as a file with only the contract's fields has it (no noise_mps2)."""
+    return dataclasses.replace(dev, noise_mps2=0.0)
+
+
+def recording(raw, rate, pose=None, source="x.csv"):
+    n = raw.shape[0]
+    nan = np.full((n, 3), np.nan)
+    return Recording(t=np.arange(n) / rate, raw=np.asarray(raw, np.int64), f=nan, w=nan.copy(), dw=nan.copy(),
+                     temp_c=np.full(n, np.nan), pose=np.full(n, -1) if pose is None else pose, source=source)
+
+
+def tremor(rng, n, rate, hz=8.0):
+    """Unit-variance coloured noise resonant near ``hz`` (an AR(2) process)."""
+    r, th = 0.95, 2 * np.pi * min(hz, 0.4 * rate) / rate
+    x = lfilter([1.0], [1.0, -2 * r * np.cos(th), r * r], rng.standard_normal((n, 3)), axis=0)
+    return x / x.std(axis=0)
+
+
+def hand_held(rng, P=60, hold=200, rate=100.0, k=None):
+    """P random poses held ``hold`` samples each, joined by instant steps (no samples in
+    between), with tremor whose size differs from pose to pose."""
+    dev = bare(default_triad())
+    k = dev.counts_per_mps2[0] if k is None else k
+    F = Rotation.random(P, random_state=int(rng.integers(1 << 30))).apply([0.0, 0.0, G])
+    f = np.repeat(F, hold, axis=0)
+    amp = np.repeat(rng.uniform(0.02, 0.08, P), hold)[:, None]
+    f = f + amp * tremor(rng, f.shape[0], rate) + 0.01 * rng.standard_normal(f.shape)
+    raw = np.round(32768 + k * f).astype(np.int64)
+    return dev, raw, np.repeat(np.arange(P), hold)
+
+
+@pytest.mark.parametrize("rate", [50.0, 1000.0])
+@pytest.mark.parametrize("noise_mps2", [0.002, 0.05])
+def test_noise_estimate_follows_white_noise_with_motion_between(rate, noise_mps2):
+    rng = np.random.default_rng(int(rate) + int(1e4 * noise_mps2))
+    k = default_triad().counts_per_mps2[0]
+    n = int(40 * rate)
+    t = np.arange(n) / rate
+    moving = (t % 8.0) > 5.0                                 # 5 s rest, 3 s motion
+    f = np.column_stack([np.zeros(n), np.zeros(n), np.full(n, G)])
+    f[moving] += 3.0 * np.sin(2 * np.pi * 1.3 * t[moving])[:, None] * np.array([1.0, 0.5, -0.3])
+    raw = np.round(32768 + k * (f + noise_mps2 * rng.standard_normal((n, 3)))).astype(np.int64)
+    est = estimate_noise(raw, int(0.5 * rate))
+    truth = np.sqrt((noise_mps2 * k) ** 2 + 1 / 12)
+    np.testing.assert_allclose(est, truth, rtol=0.1)
+
+
+def test_noise_of_a_dither_between_coarse_codes_is_about_the_step():
+    rng = np.random.default_rng(2)
+    for q in (2, 8, 34, 64):
+        raw = (q * np.round((32768 + 0.3 * q * rng.standard_normal((3000, 3))) / q)).astype(np.int64)
+        est = estimate_noise(raw, 50)
+        assert np.all(est >= q / np.sqrt(12) - 1e-9) and np.all(est <= 0.6 * q), (q, est)
+
+
+@pytest.mark.parametrize("make", [default_device, default_triad])
+@pytest.mark.parametrize("step", [2, 8, 16, 34, 64])
+def test_labelled_jig_with_coarse_quantization_is_calibrated(make, step):
+    dev = make()
+    rec = ac.simulate(dev, "static_poses", effects=[f"quantization:step={step}"], seed=3)
+    cal = calibrate_recordings(bare(dev), [rec])
+    assert "set_aside" not in cal.extra
+    # a reading stuck between codes is biased by up to half a step, no more
+    assert np.max(np.abs(cal.offsets - dev.zero_counts)) <= step / 2 + 1.0
+
+
+def test_instant_steps_split_static_blocks_and_tremor_is_not_motion():
+    rng = np.random.default_rng(5)
+    dev, raw, lab = hand_held(rng)
+    unl = recording(raw, 100.0)
+    iv = detect_static(unl, dev)
+    P = lab.max() + 1
+    assert len(iv) >= 0.95 * P
+    # every interval lies inside one block: no two poses merged
+    assert all(lab[a] == lab[b - 1] for a, b in iv)
+    cal = calibrate_recordings(dev, [unl], method="jigfree")
+    assert len(cal.poses_used) == len(iv)
+    labelled = calibrate_recordings(dev, [recording(raw, 100.0, pose=lab)], method="jigfree")
+    assert len(labelled.poses_used) == P
+
+
+def test_labelled_pose_that_turns_is_refused_naming_label_time_and_channel():
+    rng = np.random.default_rng(6)
+    dev, raw, lab = hand_held(rng, P=20)
+    k = dev.counts_per_mps2[0]
+    idx = np.flatnonzero(lab == 7)
+    turn = np.round(k * G * np.array([np.sin(np.radians(10)), 0, np.cos(np.radians(10)) - 1])).astype(np.int64)
+    raw[idx[len(idx) // 2:]] += turn                    # the hand turns it by 10 deg half-way
+    rec = recording(raw, 100.0, pose=lab, source="turned.csv")
+    with pytest.raises(InputError, match=r"^turned\.csv: column pose: pose 7 \(t = 14 \.\. 15\.99 s, samples "
+                                         r"1400\.\.1599\) is labelled static but moves: on raw_0 its mean moves"):
+        calibrate_recordings(dev, [rec], method="jigfree")
+
+
+def test_unlabelled_data_is_never_called_labelled():
+    rng = np.random.default_rng(7)
+    dev, raw, lab = hand_held(rng, P=20)
+    raw[lab == 3] += np.linspace(0, 400, np.count_nonzero(lab == 3)).astype(np.int64)[:, None]   # slow slide
+    try:
+        calibrate_recordings(dev, [recording(raw, 100.0)], method="jigfree")
+    except InputError as e:              # pragma: no cover - only its wording is checked
+        assert "labelled" not in str(e)
+
+
+def test_clip_levels_inside_the_range_are_found_and_a_coarse_pose_is_not_a_clip():
+    rng = np.random.default_rng(8)
+    dev, raw, lab = hand_held(rng, P=40)
+    k = dev.counts_per_mps2[0]
+    top, bot = int(32768 + 0.93 * G * k), int(32768 - 0.93 * G * k)
+    clipped = np.clip(raw, bot, top)
+    noise = estimate_noise(clipped, 50)
+    lv = clip_levels(clipped, dev, noise)
+    hit_top = (raw >= top).any(axis=0)
+    hit_bot = (raw <= bot).any(axis=0)
+    np.testing.assert_array_equal(lv.inside_hi, hit_top & ((raw >= top).sum(axis=0) >= 10))
+    assert np.all(lv.hi[lv.inside_hi] == top) and np.all(lv.lo[lv.inside_lo] == bot)
+    assert lv.inside_hi.any() and lv.inside_lo.any() and np.all(lv.inside_lo <= hit_bot)
+    # a coarsely quantised channel whose pose sits on one code: no clip claimed
+    q = 64 * np.round(np.asarray(raw, float) / 64)
+    assert not clip_levels(q.astype(np.int64), dev, estimate_noise(q.astype(np.int64), 50)).any_inside()
+
+
+def test_clipped_poses_are_set_aside_and_the_rest_calibrated():
+    rng = np.random.default_rng(9)
+    dev, raw, lab = hand_held(rng, P=40)
+    k = dev.counts_per_mps2[0]
+    top, bot = int(32768 + 0.93 * G * k), int(32768 - 0.93 * G * k)
+    rec = recording(np.clip(raw, bot, top), 100.0)
+    ps = poses_from_recording(rec, dev)
+    hit = {int(lab[int(round(d["t_start"] * 100))]) for d in ps.set_aside}
+    truly = {p for p in range(40) if ((raw[lab == p] >= top) | (raw[lab == p] <= bot)).any()}
+    assert hit and hit <= truly
+    cal = calibrate_recordings(dev, [rec], method="jigfree")
+    assert len(cal.extra["set_aside"]) == len(ps.set_aside)
+    assert np.max(np.abs(cal.offsets - 32768)) < 5.0
