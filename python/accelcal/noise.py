@@ -31,6 +31,10 @@ import numpy as np
 NOISE_SPLIT_RATIO = 3.0    # rest and motion classes of window std at least this far apart (ratio of medians)
 
 
+ONE_REGIME_RATIO = 3.0     # a recording with no rest/motion split: its window std level, at most this x
+                           # the white noise level (the rest/motion ratio: more is motion throughout)
+
+
 QUANT_MIN_FRAC = 0.99      # a lattice must hold this share of the readings (a few strays allowed)
 
 
@@ -133,7 +137,7 @@ def window_std(x: np.ndarray, w: int) -> tuple[np.ndarray, int, int]:
     return np.sqrt(np.maximum((S2 - S1 * S1 / L) / L, 0.0)), h, k
 
 
-def rest_level(ws: np.ndarray) -> float:
+def rest_level(ws: np.ndarray) -> tuple[float, bool]:
     """The typical window std at rest: the median of the low class of log(std) (Otsu's
     split), or of every window when the classes are less than NOISE_SPLIT_RATIO apart.
 
@@ -144,17 +148,19 @@ def rest_level(ws: np.ndarray) -> float:
 
     Returns
     -------
-    float
+    level : float
         0.0 when every window is exactly constant.
+    split : bool
+        Whether a rest class apart from a motion class was found.
     """
     v = np.sort(np.asarray(ws, float)[np.isfinite(ws)])
     if v.size == 0 or v[-1] <= 0.0:
-        return 0.0
+        return 0.0, False
     pos = v[v > 0]
     x = np.log(np.maximum(v, 0.1 * pos[0]))      # a window on one code: a tenth of the least dither
     n = x.size
     if n < 4:
-        return float(np.median(v))
+        return float(np.median(v)), False
     c = np.cumsum(x)
     k = np.arange(1, n)
     m0 = c[:-1] / k
@@ -164,8 +170,19 @@ def rest_level(ws: np.ndarray) -> float:
     j = int(np.argmax(between)) + 1
     lo, hi = v[:j], v[j:]
     if between[j - 1] <= 0 or np.median(hi) < NOISE_SPLIT_RATIO * max(np.median(lo), 1e-300):
-        return float(np.median(v))
-    return float(np.median(lo))
+        return float(np.median(v)), False
+    return float(np.median(lo)), True
+
+
+def white_noise(v: np.ndarray) -> float:
+    """The white part of the noise of one channel: the robust (MAD) std of its fourth
+    differences over sqrt(70).  Smooth motion hardly reaches it (a sine of period T
+    sampled at dt is scaled by (2 pi dt / T)^4); coloured noise is underestimated."""
+    v = np.asarray(v, float)
+    if v.size < 10:
+        return 0.0
+    d = v[:-4] - 4 * v[1:-3] + 6 * v[2:-2] - 4 * v[3:-1] + v[4:]
+    return float(1.4826 * np.median(np.abs(d - np.median(d))) / math.sqrt(70.0))
 
 
 def estimate_noise(x: np.ndarray, window: int, *, integer: bool | None = None) -> np.ndarray:
@@ -202,8 +219,12 @@ def estimate_noise(x: np.ndarray, window: int, *, integer: bool | None = None) -
             # code elsewhere is a rest quieter than the code step)
             held = (col == 0) & ((first[:, i] == x[:, i].max()) | (first[:, i] == x[:, i].min()))
             col = col[~held]
-        out[i] = rest_level(col)
-    out *= math.sqrt(L / max(L - 1, 1))
+        out[i], split = rest_level(col)
+        out[i] *= math.sqrt(L / max(L - 1, 1))
+        if not split:
+            # one regime: all at rest, or never at rest (a rate table turning throughout); in the
+            # latter the windows hold the motion, which the white noise level shows up
+            out[i] = min(out[i], ONE_REGIME_RATIO * white_noise(x[:, i]))
     return np.sqrt(out ** 2 + q ** 2 / 12.0)
 
 

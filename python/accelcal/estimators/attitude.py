@@ -19,7 +19,7 @@ from ..errors import AccelcalError, InputError
 from ..native import FORMATS, check, cptr, ffi, lib
 from ..quantize import round_half_up
 from ..recording import check_core_input, check_for_device
-from .common import CLIP, CLIP_LO, OMEGA_FRAC, OUT_FRAC, Columns, clip_i16, dt_fixed, uniform_dt
+from .common import CLIP, CLIP_LO, OMEGA_FRAC, OUT_FRAC, Columns, channel_noise, clip_i16, dt_fixed, force_noise, uniform_dt
 from .triad import triad_forces
 
 __all__ = ["ATT_GATED", "ATT_W2_NEG", "ATT_UNSETTLED", "ATT_NO_GRAVITY", "ATT_SAT", "ATT_SIGN_NEG",
@@ -320,7 +320,8 @@ def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: fl
     r1, r2 = triad_geometry(device, cal)
     dt = uniform_dt(rec)
     p = AttitudeParams(r1=r1, r2=r2, dt=dt, gain=gain, w2_gate=w2_gate,
-                       noise_mps2=max(float(device.noise_mps2), 1e-4), leak_tau_s=leak_tau_s)
+                       noise_mps2=max(force_noise(device, cal, channel_noise(device, rec), (0, 1, 2)), 1e-4),
+                       leak_tau_s=leak_tau_s)
     try:
         p.check()
     except AccelcalError as e:

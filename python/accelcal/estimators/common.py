@@ -12,10 +12,12 @@ from .. import model, native
 from ..errors import AccelcalError, InputError
 from ..native import FORMATS
 from ..quantize import quantize_calibration, round_half_up
+from ..noise import noise_for
 from ..recording import check_core_input
+from ..static import STATIC_WINDOW_S, window_len
 
 __all__ = ["Columns", "OUT_FRAC", "OMEGA_FRAC", "CLIP", "CLIP_LO", "dt_fixed", "clip_i16", "q_out",
-           "uniform_dt", "alpha_noise", "resolve_array"]
+           "uniform_dt", "alpha_noise", "channel_noise", "force_noise", "resolve_array"]
 
 OUT_FRAC = FORMATS.out_frac        # AC_OUT_FRAC: f (m/s^2), alpha (rad/s^2)
 OMEGA_FRAC = FORMATS.omega_frac    # AC_OMEGA_FRAC: omega (rad/s)
@@ -102,12 +104,40 @@ def uniform_dt(rec) -> float:
     return dt
 
 
-def alpha_noise(device, cal) -> float:
+def channel_noise(device, rec) -> np.ndarray:
+    """Noise std of each channel (counts): the device's ``noise_mps2`` when it states one,
+    else estimated from the recording itself (:func:`accelcal.noise.noise_for`)."""
+    raw = np.asarray(rec.raw)
+    return noise_for(device, raw, window_len(device, STATIC_WINDOW_S, raw.shape[0]))[0]
+
+
+def alpha_noise(device, cal, noise_counts=None) -> float:
     """The largest per-axis standard deviation (rad/s^2) of the resolved alpha that the
-    channels' noise alone gives (device noise through the resolve matrix)."""
+    channels' noise alone gives (``noise_counts`` (N,), default the device's, through the
+    resolve matrix)."""
     pos = cal.positions_or_nominal(device)
     M = model.resolve_matrix(pos, cal.sensitivity)
-    return float(np.max(np.sqrt(np.sum((M[3:] * device.noise_counts()[None, :]) ** 2, axis=1))))
+    k = device.noise_counts() if noise_counts is None else np.asarray(noise_counts, float)
+    return float(np.max(np.sqrt(np.sum((M[3:] * k[None, :]) ** 2, axis=1))))
+
+
+def force_noise(device, cal, noise_counts, channels=None) -> float:
+    """The largest per-axis standard deviation (m/s^2) of f that the channels' noise
+    (``noise_counts`` (N,), counts) gives: through the resolve matrix for a 6-DOF array,
+    through the inverse sensitivity of the triad at ``channels`` otherwise."""
+    k = np.asarray(noise_counts, float)
+    with np.errstate(all="ignore"):      # a degenerate calibration is reported where it is used
+        try:
+            if channels is None:
+                M = model.resolve_matrix(cal.positions_or_nominal(device), cal.sensitivity)[:3]
+            else:
+                ch = list(channels)
+                M = np.zeros((3, k.size))
+                M[:, ch] = np.linalg.inv(np.asarray(cal.sensitivity, float)[ch])
+        except (np.linalg.LinAlgError, ValueError):
+            return 0.0
+        out = float(np.max(np.sqrt(np.sum((M * k[None, :]) ** 2, axis=1))))
+    return out if math.isfinite(out) else 0.0
 
 
 def resolve_array(device, cal, rec, engine: str) -> tuple[np.ndarray, np.ndarray]:

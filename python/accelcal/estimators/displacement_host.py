@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import AccelcalError, InputError
 from ..recording import check_core_input, check_for_device
-from .common import CLIP, CLIP_LO, Columns, alpha_noise, resolve_array, uniform_dt
+from .common import CLIP, CLIP_LO, Columns, alpha_noise, channel_noise, force_noise, resolve_array, uniform_dt
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
@@ -161,12 +161,12 @@ def _body_forces(device, cal, rec, engine):
                      "(a triad at channels 0-2)")
 
 
-def _max_rotation_deg(device, cal, rec, at_rest, dt) -> float:
+def _max_rotation_deg(device, cal, rec, at_rest, dt, noise) -> float:
     """Largest angle (deg) turned within any run of not-at-rest samples, integrating the
     resolved alpha twice from rest (omega = 0 at rest); angles within 5 sigma of what the
     alpha noise alone integrates to are not counted."""
     _, a = resolve_array(device, cal, rec, "float")
-    sig_a = alpha_noise(device, cal)
+    sig_a = alpha_noise(device, cal, noise)
     worst = 0.0
     for i, j in _motion_runs(at_rest):
         w = np.cumsum(a[i:j] * dt, axis=0)
@@ -208,11 +208,13 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     check_for_device(rec, device, min_samples=2)
     ax = _axis_arg(axis)
     dt = uniform_dt(rec)
-    rp = rest or default_rest_params(device, 1.0 / dt)
-    p = DisplaceParams(dt=dt, axis=ax, rest=rp)
     if engine == "fixed":
         check_core_input(rec)
     f, note = _body_forces(device, cal, rec, engine)
+    noise = channel_noise(device, rec)
+    rp = rest or default_rest_params(device, 1.0 / dt, f_sigma=force_noise(
+        device, cal, noise, None if device.is_array() else device.triads()[0]))
+    p = DisplaceParams(dt=dt, axis=ax, rest=rp)
     t = np.asarray(rec.t, float)
     n = len(t)
     warnings = []
@@ -269,7 +271,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                         "(column corrected = 0 there) and its drift grows with time squared")
     if device.is_array():
         # the rail assumption: no rotation between rests (checked from the resolved alpha)
-        rot = _max_rotation_deg(device, cal, rec, np.asarray(at, bool), dt)
+        rot = _max_rotation_deg(device, cal, rec, np.asarray(at, bool), dt, noise)
         if rot > 3.0:
             warnings.append(f"displacement: the body turned by up to {rot:.1f} deg during a motion (from the "
                             "resolved alpha): gravity removal assumes no rotation between rests (a rail), so "

@@ -15,7 +15,7 @@ from ..errors import InputError
 from ..native import check, cptr, ffi, lib
 from ..quantize import round_half_up
 from ..recording import check_for_device
-from .common import OMEGA_FRAC, Columns, alpha_noise, dt_fixed, resolve_array, uniform_dt
+from .common import OMEGA_FRAC, Columns, alpha_noise, channel_noise, dt_fixed, force_noise, resolve_array, uniform_dt
 from .rest import REST_AT_REST, RestParams, default_rest_params, rest_cfg_fixed, rest_detect
 
 __all__ = ["LEAK_FRAC", "rate_rest_float", "rate_rest_fixed", "rate_from_recording"]
@@ -126,7 +126,11 @@ def rate_from_recording(device, cal, rec, engine: str = "float", *, leak_tau_s: 
         raise InputError(device.name, "rate needs a 6-DOF array (alpha from the resolver)")
     check_for_device(rec, device, min_samples=2)
     dt = uniform_dt(rec)
-    rp = rest or default_rest_params(device, 1.0 / dt, alpha_sigma=alpha_noise(device, cal))
+    if rest is None:
+        k = channel_noise(device, rec)
+        rest = default_rest_params(device, 1.0 / dt, alpha_sigma=alpha_noise(device, cal, k),
+                                   f_sigma=force_noise(device, cal, k))
+    rp = rest
     leak = min(1.0, dt / leak_tau_s) if leak_tau_s > 0 else 0.0
     if engine == "float":
         f, a = resolve_array(device, cal, rec, "float")

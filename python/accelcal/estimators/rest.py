@@ -47,12 +47,15 @@ class RestParams:
         return max(self.g - self.g_tol, 0.0) ** 2, (self.g + self.g_tol) ** 2
 
 
-def default_rest_params(device, rate_hz: float | None = None, alpha_sigma: float | None = None) -> RestParams:
-    """dev_max = 5 sigma (device noise; at least 0.01 m/s^2), ref_max = dev_max + 0.05 m/s^2
-    (room for a zero-point drift between rests), hold = 0.25 s, mean over ~0.1 s, |f| within
-    0.5 m/s^2 of g, |alpha| <= 5 sigma_alpha when given."""
+def default_rest_params(device, rate_hz: float | None = None, alpha_sigma: float | None = None,
+                        f_sigma: float | None = None) -> RestParams:
+    """dev_max = 5 sigma (sigma: ``f_sigma``, the noise of f in m/s^2 -- see
+    :func:`~accelcal.estimators.common.force_noise` -- else the device's ``noise_mps2``; at least
+    0.01 m/s^2), ref_max = dev_max + 0.05 m/s^2 (room for a zero-point drift between rests),
+    hold = 0.25 s, mean over ~0.1 s, |f| within 0.5 m/s^2 of g, |alpha| <= 5 sigma_alpha when
+    given."""
     rate = float(rate_hz or device.sample_rate_hz)
-    noise = float(getattr(device, "noise_mps2", 0.0) or 0.0)
+    noise = float(f_sigma) if f_sigma is not None else float(getattr(device, "noise_mps2", 0.0) or 0.0)
     k = int(min(12, max(1, round(math.log2(max(2.0, 0.1 * rate))))))
     dev = max(5.0 * noise, 0.01)
     return RestParams(dev_max=dev, g=float(device.gravity_mps2), g_tol=0.5,

@@ -1,0 +1,116 @@
+"""The estimators with a device file that holds only the contract's fields (no
+``noise_mps2``): their rest tests take the noise from the recording (issue 13).
+
+The stop-to-stop recordings here are written with numpy from the physics alone (a
+level triad, a one-period sine of acceleration along x: distance A T^2 / (2 pi)), not
+by the package's simulator."""
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+
+from accelcal import estimators as E
+from accelcal.calibration import Calibration, save_calibration
+from accelcal.cli import main
+from accelcal.device import Device, default_device
+from accelcal.recording import recording_from_arrays, write_recording
+from accelcal.simulate import run_simulation
+from estimator_devices import G, adxl_pendulum_device
+
+PEAK = 2.0          # m/s^2
+TRAVEL = 2.0        # s
+DISTANCE = PEAK * TRAVEL ** 2 / (2 * math.pi)
+
+
+def contract_triad(rate, signed):
+    """An MPU-6050-like signed 16-bit triad (+-2 g) or an ADXL-like 0..10000 one."""
+    if signed:
+        return Device(name="mpu6050", sample_rate_hz=rate, gravity_mps2=G, raw_min=-32768, raw_max=32767,
+                      positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, 16384 / G),
+                      zero_counts=np.zeros(3))
+    return Device(name="adxl", sample_rate_hz=rate, gravity_mps2=G, raw_min=0, raw_max=10000,
+                  positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, 1250 / G),
+                  zero_counts=np.full(3, 5000.0))
+
+
+def stop_to_stop(d, sigma, seed, rest_s=2.0):
+    rate = d.sample_rate_hz
+    rng = np.random.default_rng(seed)
+    n1, nm = int(rest_s * rate), int(TRAVEL * rate)
+    a = np.zeros(2 * n1 + nm)
+    a[n1:n1 + nm] = PEAK * np.sin(2 * np.pi * np.arange(nm) / nm)
+    f = np.column_stack([a, np.zeros_like(a), np.full_like(a, G)])
+    f = f + rng.normal(0, sigma, f.shape) + np.array([0.03, -0.02, 0.01])   # noise and a zero-point error
+    raw = np.round(f * d.counts_per_mps2 + d.zero_counts).astype(np.int64)
+    return recording_from_arrays(np.arange(len(a)) / rate, raw)
+
+
+@pytest.mark.parametrize("signed", [True, False])
+@pytest.mark.parametrize("rate", [50.0, 1000.0])
+@pytest.mark.parametrize("sigma", [0.002, 0.05])
+def test_displacement_finds_rest_at_any_noise_without_noise_mps2(signed, rate, sigma):
+    d = contract_triad(rate, signed)
+    assert d.noise_mps2 == 0.0
+    for seed in range(2):
+        rec = stop_to_stop(d, sigma, seed)
+        c = E.displacement_from_recording(d, Calibration.nominal(d), rec, "float", axis="x")
+        assert c["rest"][int(rate)] == 1 and c["rest"][-1] == 1     # 1 s into each rest
+        assert c["corrected"].any()
+        # the velocity random walk of white noise over the travel: sigma dt sqrt(n) ~ 0.002 m/s at
+        # 50 Hz, 0.05 m/s^2, i.e. ~ 0.3 % of the distance; 1 % leaves room for the rest edges
+        assert abs(c["p_x"][-1] - DISTANCE) <= 0.01 * DISTANCE
+
+
+def test_cli_displacement_with_a_contract_only_device_file(tmp_path):
+    """The issue's case: level triad, 100 Hz, 0.02 m/s^2, 2 s rest / 2 s travel / 2 s rest."""
+    d = contract_triad(100.0, signed=False)
+    dev = {"name": d.name, "sample_rate_hz": 100.0, "gravity_mps2": G, "raw_min": 0, "raw_max": 10000,
+           "channels": [{"position_m": [0, 0, 0], "axis": list(np.eye(3)[i]), "counts_per_mps2": 1250 / G,
+                         "zero_counts": 5000} for i in range(3)]}
+    (tmp_path / "dev.json").write_text(json.dumps(dev))
+    write_recording(tmp_path / "rec.csv", stop_to_stop(d, 0.02, 7))
+    save_calibration(Calibration.nominal(d), tmp_path / "cal.json")
+    rc = main(["displacement", "--device", str(tmp_path / "dev.json"), "--calibration", str(tmp_path / "cal.json"),
+               "--output", str(tmp_path / "out.csv"), "--axis", "x", str(tmp_path / "rec.csv")])
+    assert rc == 0
+    lines = [ln for ln in (tmp_path / "out.csv").read_text().splitlines() if not ln.startswith("#")]
+    last = dict(zip(lines[0].split(","), lines[-1].split(",")))
+    assert abs(float(last["p_x"]) - DISTANCE) <= 0.01 * DISTANCE
+
+
+def test_rate_without_noise_mps2_matches_the_stated_noise():
+    d = default_device()
+    rec = run_simulation(d, "lane_change", seed=3).recording
+    bare = dataclasses.replace(d, noise_mps2=0.0)
+    cal = Calibration.nominal(d)
+    stated = E.rate_from_recording(d, cal, rec, "float", leak_tau_s=5.0)
+    est = E.rate_from_recording(bare, cal, rec, "float", leak_tau_s=5.0)
+    e = [np.sqrt(np.mean((c["w_z"] - rec.w[:, 2]) ** 2)) for c in (stated, est)]
+    assert e[1] < 0.03 and e[1] <= 1.2 * e[0]
+    assert abs(est["rest"].mean() - stated["rest"].mean()) < 0.05
+
+
+def test_no_rest_found_in_a_recording_that_moves_throughout():
+    """A pendulum swings all the time: no window is at rest, so the noise is not taken from
+    the motion's window std (that would call the turning points rest and reset omega)."""
+    d = default_device()
+    rec = run_simulation(d, "pendulum", seed=3).recording
+    bare = dataclasses.replace(d, noise_mps2=0.0)
+    cal = Calibration.nominal(d)
+    est = E.rate_from_recording(bare, cal, rec, "float", leak_tau_s=5.0)
+    assert est["rest"].sum() == 0
+    w = np.column_stack([est["w_x"], est["w_y"], est["w_z"]])
+    assert np.sqrt(np.mean((w - rec.w) ** 2)) < 0.2
+
+
+def test_attitude_without_noise_mps2():
+    d = adxl_pendulum_device()
+    rec = run_simulation(d, "pendulum", seed=11, duration_s=20.0, amplitude_deg=40.0, freq_hz=0.5).recording
+    bare = dataclasses.replace(d, noise_mps2=0.0)
+    cols = E.attitude_from_recording(bare, Calibration.nominal(d), rec, "float")
+    th_ref = np.arctan2(-rec.f[:, 0], rec.f[:, 2])
+    e_th = np.degrees(np.angle(np.exp(1j * (cols["theta_rad"] - th_ref))))
+    assert np.sqrt(np.mean(e_th ** 2)) <= 0.3
+    assert np.sqrt(np.mean((cols["w_y"] - rec.w[:, 1]) ** 2)) <= 0.03
