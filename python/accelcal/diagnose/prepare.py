@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..clipping import clip_levels
 from ..effects.fitdata import FitData, tangent_basis
 from ..effects.settings import BLOCK_S
 from ..errors import InputError
 from ..motions import Trajectory
+from ..noise import noise_for
 from ..sensor import evaluate, true_state
-from ..static import detect_static
+from ..static import STATIC_WINDOW_S, detect_static, window_len
 
 
 def segments(t: np.ndarray, usable: np.ndarray, key: np.ndarray, h: float) -> list[tuple[int, int]]:
@@ -34,10 +36,14 @@ def jigfree_poses(rec, device) -> list[np.ndarray]:
     return [np.arange(a, b) for a, b in detect_static(rec, device)]
 
 
-def pose_force(S: np.ndarray, ybar: np.ndarray, g: float, wch: np.ndarray) -> np.ndarray:
-    """f with |f| = g minimising sum_i w_i (ybar_i - s_i . f)^2 (Gauss-Newton on the sphere)."""
+CLIPPED_WEIGHT = 1e-6       # relative weight of a clipped channel in a jig-free pose's force
+
+
+def pose_force(S: np.ndarray, ybar: np.ndarray, g: float, wch: np.ndarray, f0: np.ndarray | None = None) -> np.ndarray:
+    """f with |f| = g minimising sum_i w_i (ybar_i - s_i . f)^2 (Gauss-Newton on the sphere),
+    from ``f0`` (default: the weighted linear solution)."""
     sw = np.sqrt(wch)
-    f = np.linalg.lstsq(S * sw[:, None], ybar * sw, rcond=None)[0]
+    f = np.linalg.lstsq(S * sw[:, None], ybar * sw, rcond=None)[0] if f0 is None else np.asarray(f0, float)
     nf = np.linalg.norm(f)
     f = g * (f / nf if nf > 0 else np.array([0.0, 0.0, 1.0]))
     for _ in range(8):
@@ -83,6 +89,9 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
         state = true_state(device, cal, T if has_tc else None)
         state = state.replace(centripetal=np.full(N, float(m0)))
         pose_lab = np.asarray(rec.pose, np.int64)
+        raw_i = np.asarray(rec.raw)
+        levels = clip_levels(raw_i, device, noise_for(device, raw_i, window_len(device, STATIC_WINDOW_S, n))[0])
+        clipped = levels.mask(raw_i)
         if mode == "reference":
             traj = Trajectory.from_recording(rec, g)
             if at_origin:      # no rotation terms: w and dw are not needed
@@ -106,7 +115,14 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
             wch = 1.0 / np.maximum(np.asarray(device.noise_counts(), float), 1.0) ** 2 \
                 if np.all(device.noise_counts() > 0) else np.ones(N)
             for p, idx in enumerate(poses):
-                f[idx] = pose_force(S, y[idx].mean(axis=0), g, wch)
+                ybar = y[idx].mean(axis=0)
+                f[idx] = pose_force(S, ybar, g, wch)
+                hit = clipped[idx].any(axis=0)
+                if hit.any() and np.count_nonzero(~hit) >= 2:
+                    # a clipped channel's mean is not the model's: the pose's force from the others
+                    # (from the all-channel solution), so the clipped reading stays in the residual
+                    # where `saturation` can explain it
+                    f[idx] = pose_force(S, ybar, g, np.where(hit, CLIPPED_WEIGHT, 1.0) * wch, f[idx[0]])
                 key[idx] = p
             w = np.where(np.isfinite(f), 0.0, np.nan)
             dw = w.copy()
@@ -120,6 +136,7 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
             how = f"jig-free: {len(poses)} static poses, |f| = g"
         # readings at the ADC limits carry no information about the model (they would answer no effect)
         at_limit = np.any((rec.raw <= device.raw_min) | (rec.raw >= device.raw_max), axis=1)
+        usable0 = usable
         if np.any(at_limit & usable):
             notes.append(f"{rec.source}: {int(np.count_nonzero(at_limit & usable))} samples with a reading at the "
                          f"ADC limits ({device.raw_min} / {device.raw_max}) are left out")
@@ -137,7 +154,15 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
         gain_t = None if state.gain is None else np.asarray(state.gain, float)
         parts.append(dict(ri=ri, rec=rec, usable=usable, pred=pred, off=off, gain=gain_t, f=f, w=w, dw=dw,
                           T=T, key=key, stated=stated, pose_lab=pose_lab))
-        rec_info.append({"source": rec.source, "n_samples": int(n), "n_used": int(usable.sum()), "reference": how})
+        rec_info.append({"source": rec.source, "n_samples": int(n), "n_used": int(usable.sum()), "reference": how,
+                         "clipping": {"levels_lo": levels.lo.tolist(), "levels_hi": levels.hi.tolist(),
+                                      "inside_range": (levels.inside_lo | levels.inside_hi).tolist(),
+                                      "clipped_per_channel": clipped.sum(axis=0).astype(int).tolist(),
+                                      "left_out_at_adc_limits": int(np.count_nonzero(at_limit & usable0))}})
+        if levels.any_inside():
+            notes.append(f"{rec.source}: readings pile up at levels inside the range ({levels.describe()}): "
+                         f"{int(clipped.any(axis=1).sum())} samples clipped; kept, so that `saturation` can "
+                         "explain them")
 
     # --- concatenate the usable samples, segments, global pose indices -----------------
     cols: dict[str, list] = {k: [] for k in ("t", "tg", "rec", "raw", "pred", "off", "gain", "f", "w", "dw", "T",

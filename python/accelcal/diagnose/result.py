@@ -15,6 +15,8 @@ from ..noise import code_lattice
 from .floor import setup_rows
 from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare
+from .compare import contest, separate_by
+from .leftover import leftover
 from .scoring import rank_key, run_candidates
 from .settings import FORMAT, MAX_STEPS, MIN_SHRINK, PENALTY_PER_PARAM, T_MIN, Z_MIN
 from .text import entry, to_json
@@ -80,11 +82,19 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     results = first
     remaining = list(active)
     chosen: list[str] = []
+    duel = None
     while True:
         sig = [c for c in results.values() if c.significant]
         if not sig:
             break
         best = sorted(sig, key=rank_key)[0]
+        if not chosen:
+            duel = contest(D, cands, best, first, y, pcur)
+            best = duel.best
+            # time-dependent rivals the data cannot tell from the verdict are not added later
+            for nm in duel.ambiguous:
+                if cands[nm].time_dependent and nm in remaining:
+                    remaining.remove(nm)
         baseline = "the calibrated model" + ("" if not chosen else " + " + " + ".join(chosen))
         steps.append((best, baseline))
         chosen.append(best.name)
@@ -135,17 +145,15 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     if steps and len(steps) > 1:
         notes.append("effects after the first were scored on the residual left by the ones before (their in-sample "
                      "fits subtracted); 'model' gives the joint refit")
-    # near-ties for the verdict: candidates whose held-out gain is within a few null spreads of it
-    ties = []
+    ambiguous = list(duel.ambiguous) if duel is not None and steps else []
     if steps:
-        b0 = steps[0][0]
-        for c in first.values():
-            if c.name != b0.name and c.significant and (b0.gain - c.gain) < 3.0 * math.sqrt(max(b0.gain, 1.0)) \
-                    and abs(c.shrink - b0.shrink) < 0.02:
-                ties.append(c.name)
-        effects[0]["ambiguous_with"] = ties
-    if ties:
-        notes.append(f"{verdict} is barely ahead of {', '.join(ties)}: the data hardly tell them apart")
+        effects[0]["ambiguous_with"] = ambiguous
+        effects[0]["contest"] = {"first_ranked": duel.swapped_from or verdict, "rivals": duel.tests}
+    if duel is not None and duel.swapped_from:
+        notes.append(f"verdict {verdict} rather than {duel.swapped_from}, the larger held-out gain alone: {duel.why}")
+    if ambiguous:
+        notes.append(f"{verdict} and {', '.join(ambiguous)} explain the same part of the gap: the data cannot tell "
+                     "them apart (separate_by says what would)")
     if D.mode == "jigfree" and len(D.pose_labels) < 6:
         notes.append(f"only {len(D.pose_labels)} static pose(s) found: effects that are constant within a pose "
                      "(offset, gain, misalignment, nonlinearity) can hardly be told apart")
@@ -168,6 +176,9 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
                              "(missing or doubled codes: a rescaled or differentially nonlinear ADC); not a lattice")
         lattice.append(ent)
     gap_extra = pose_mean_gap(D, e)
+    left = leftover(D, e, e - total_delta, base_rms, model_after)
+    if left is not None and not steps:
+        verdict = "unexplained"
     result = DiagnosisResult({
         "format": FORMAT,
         "verdict": verdict,
@@ -175,6 +186,8 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         "calibration": {"source": cal_src, "method": cal.method},
         "mode": D.mode,
         "recordings": D.rec_info,
+        "clipped_per_channel": np.sum([ri["clipping"]["clipped_per_channel"] for ri in D.rec_info],
+                                      axis=0).astype(int).tolist(),
         "n_samples": D.n,
         "n_channels": D.N,
         "gap": {
@@ -196,6 +209,9 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
             "params": {nm: to_json(joint[nm].params) for nm in chosen},
             "params_sigma": {nm: to_json(joint[nm].sigma) for nm in chosen},
         },
+        "ambiguous_with": ambiguous,
+        "separate_by": separate_by(cands, verdict, ambiguous) if steps else "",
+        "unexplained": left,
         "skipped": skipped,
         "where": to_json(where_breakdown(D, e)),
         "raw_values": lattice,

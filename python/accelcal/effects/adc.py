@@ -24,6 +24,7 @@ def normal_tail(z: np.ndarray) -> np.ndarray:
 
 class Saturation(Candidate, Effect):
     name = "saturation"
+    tell_apart = "poses and motions that keep every reading well inside the range (a clip flattens only the readings beyond its level)"
     summary = "readings clip at limits inside [raw_min, raw_max]"
     doc = ("counts_i -> clip(counts_i, lo_i, hi_i) (counts).  By default the limits are the "
            "channel's offset -+ limit_g g in counts; lo/hi give them directly.")
@@ -141,6 +142,7 @@ class Saturation(Candidate, Effect):
 
 class Quantization(Candidate, Effect):
     name = "quantization"
+    tell_apart = "a slow, smooth change of the input, such as a ramp between poses (coarse codes show as steps)"
     summary = "readings are quantised in steps coarser than one count"
     doc = ("counts_i -> step_i round(counts_i / step_i) (step in counts, >= 1), instead of rounding to 1 "
            "count; step 0 (unselected channels, identity) leaves the channel alone.")

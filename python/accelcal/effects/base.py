@@ -50,6 +50,15 @@ class Effect:
     stage: str = "state"
     params: tuple[Param, ...] = ()
     fit: tuple[FitParam, ...] = ()
+    #: True when the reading's change follows time (drift, temperature), not the pose or the motion:
+    #: the diagnosis does not claim it from data that cannot tell it from a pose-dependent effect
+    time_dependent: bool = False
+    #: True when, in static poses, the effect's change is fixed within a pose but differs from pose to
+    #: pose (gain, misalignment, nonlinearity, a tilt of the jig): such an effect and a time-dependent one
+    #: explain the same on poses each held once
+    varies_by_pose: bool = False
+    #: the pose or motion that shows this effect distinctly (the diagnosis's ``separate_by``)
+    tell_apart: str = ""
 
     # -- user-facing ------------------------------------------------------
 

@@ -42,6 +42,8 @@ def hat_basis(t: np.ndarray, t0: float, spacing: float, K: int) -> np.ndarray:
 
 class BiasDrift(LinearCandidate, Effect):
     name = "bias_drift"
+    time_dependent = True
+    tell_apart = "a pose repeated at the end of the recording (a drift changes its reading, a fixed error does not)"
     summary = "b_i changes with time (ramp or random walk)"
     doc = ("bias_i(t) += rate_i (t - t0) + rw_i W(t) + path_i(t): a ramp (counts/s) plus a random walk of "
            "rw_i counts per sqrt(s) (W standard Brownian, from a fixed seed; W(t0) = 0); t0 is the first "

@@ -14,6 +14,7 @@ from .settings import POSITION_TOL_M, ROTATING_RADPS
 
 class PositionError(LinearCandidate, Effect):
     name = "position_error"
+    tell_apart = "rotations about several axes (a position error shows only under rotation)"
     summary = "the true position is r_i + dr_i: shows only under rotation"
     doc = "r_i -> r_i + dr_i (m, body axes)."
     stage = "state"
@@ -107,6 +108,7 @@ class PositionError(LinearCandidate, Effect):
 
 class Centripetal(LinearCandidate, Effect):
     name = "centripetal"
+    tell_apart = "steady rotations at several rates (the centripetal term grows with the rate squared)"
     summary = "the model leaves out the omega x (omega x r_i) term"
     doc = ("Sets the multiplier of s_i . (omega x (omega x r_i)) in the readings to scale_i.  The physical "
            "truth always has the term (multiplier 1), so in the simulator the default scale=1 changes "

@@ -12,6 +12,8 @@ from .fitting import LinearCandidate
 
 class Nonlinearity(LinearCandidate, Effect):
     name = "nonlinearity"
+    varies_by_pose = True
+    tell_apart = "poses at 45 deg between the axes (a nonlinearity bends the reading between -g and +g, a tilt of the table does not)"
     summary = "the reading gains a term in the square of the channel's input"
     doc = ("counts_i += k2_i x_i^2, x_i = (counts_i - b_i - bias_i) / |s_i| the channel's input in m/s^2 "
            "(k2: counts per (m/s^2)^2).  Applied before bandwidth.")

@@ -111,6 +111,8 @@ class TemperatureFit(Candidate):
 
 class TemperatureOffset(TemperatureFit, Effect):
     name = "temperature_offset"
+    time_dependent = True
+    tell_apart = "the same pose held at two temperatures, and repeated at one temperature later (temperature apart from time)"
     summary = "b_i changes linearly with temperature"
     doc = "bias_i(t) += coeff_i (T(t) - t_ref) (coeff: counts per degC)."
     stage = "state"
@@ -158,6 +160,8 @@ class TemperatureOffset(TemperatureFit, Effect):
 
 class TemperatureGain(TemperatureFit, Effect):
     name = "temperature_gain"
+    time_dependent = True
+    tell_apart = "each axis up and down at two temperatures (a gain change scales both readings, an offset change shifts them)"
     summary = "the magnitude of s_i changes linearly with temperature"
     doc = "gain_i(t) *= 1 + coeff_i (T(t) - t_ref) (coeff: fraction per degC)."
     stage = "state"

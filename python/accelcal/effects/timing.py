@@ -42,6 +42,7 @@ def lowpass_runs(t: np.ndarray, x: np.ndarray, w: float, h: float) -> np.ndarray
 
 class TimeSkew(SearchCandidate, Effect):
     name = "time_skew"
+    tell_apart = "fast motion with a sharp start and stop (a time shift moves the edge, a low-pass rounds it)"
     summary = "channel i is sampled at t + tau_i instead of t"
     doc = ("tau_i -> tau_i + tau (s): the motion is evaluated at t + tau_i (exactly from the analytic "
            "trajectory when the truth has one, else by cubic-spline interpolation of the reference).")
@@ -104,6 +105,7 @@ class TimeSkew(SearchCandidate, Effect):
 
 class Bandwidth(SearchCandidate, Effect):
     name = "bandwidth"
+    tell_apart = "motion at several frequencies (a low-pass damps and lags the faster ones more, a time shift only delays)"
     summary = "the channel responds through a first-order low-pass of cut-off f_c"
     doc = ("y' = 2 pi fc (x - y) on the noise-free readings, exact ramp-invariant discretisation at "
            "the sample times, starting in steady state (fc = inf: no filter).")

@@ -1,0 +1,183 @@
+"""Can the data tell the verdict from its nearest rivals?  Nested held-out tests.
+
+Two candidates A and B that both shrink the gap may explain the same part of it (a table
+tilt and a drift on six poses each held once) or different parts (two effects at once).
+The data tell them apart only through what one explains and the other cannot, so each is
+scored on the residual the other leaves (:func:`conditional`, the same held-out test as
+the stepwise search):
+
+* A after B significant, B after A not: A explains all B does and more; A is the verdict.
+* neither significant after the other: they explain the same thing; the data cannot tell
+  them apart (``ambiguous_with``), and ``separate_by`` names the poses or motions that
+  would (each effect's ``tell_apart``).
+* both significant after the other: both act; the stepwise search names both.
+
+On data that cannot tell time from pose (:func:`time_separable`: static poses only, no
+orientation held twice at different times), a time-dependent effect (drift, temperature)
+is not claimed over a rival that varies by
+pose (gain, misalignment, nonlinearity, pose_error; not offset, which is constant)
+unless the data within the poses bear out the change it claims there
+(:func:`within_pose_support`): six poses each held once let a drift take each pose's
+level, so there a drift rests on what a table tilt explains too, and only the slope it
+claims within each pose can tell them apart.  The verdict then
+goes to the pose-dependent rival and the time-dependent effect is listed in
+``ambiguous_with``; it is not added later in the stepwise search either.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..effects.fitting import Cand, block_ss
+from .scoring import score
+
+RIVAL_GAIN_SHARE = 0.5     # rivals: significant candidates with at least this share of the best one's gain
+MAX_RIVALS = 3             # ... at most this many, by gain
+REPEAT_DEG = 5.0           # two static poses within this angle are one orientation, repeated ...
+REPEAT_MIN_S = 2.0         # ... when their mid-times are at least this far apart (s)
+WITHIN_MIN = 0.5           # a time-dependent fit is borne out within the poses at >= this share of its claim ...
+WITHIN_Z = 3.0             # ... and this many standard errors above 0
+
+
+@dataclass
+class Contest:
+    """The outcome for the verdict: the chosen candidate, the rivals the data cannot tell
+    from it, and the nested test of each rival (``tests``: name -> (rival after best
+    significant, best after rival significant, their shrinks))."""
+
+    best: Cand
+    ambiguous: list[str] = field(default_factory=list)
+    tests: dict = field(default_factory=dict)
+    swapped_from: str | None = None
+    why: str = ""
+
+
+def conditional(D, cands, name: str, given: Cand, y, pcur) -> Cand:
+    """Candidate ``name`` scored on the residual ``y`` after ``given``'s in-sample fit."""
+    yb = y - given.delta
+    pb = pcur + given.delta
+    S0w, S0u = block_ss(D, D.rows(yb))
+    return score(D, cands[name].cv(D, yb, pb, S0w, S0u), S0w, S0u)
+
+
+def time_separable(D) -> bool:
+    """Whether the data can tell time from pose: some orientation held in two static poses
+    at different times (a pose repeated later, a rest before and after a motion), or data
+    taken while moving (the orientation changes continuously)."""
+    if np.any(~D.static):
+        return True
+    P = len(D.pose_labels)
+    if P < 2:
+        return False
+    u = np.zeros((P, 3))
+    t = np.zeros(P)
+    for p in range(P):
+        m = D.pose == p
+        f = np.nanmean(D.f[m], axis=0)
+        nf = np.linalg.norm(f)
+        u[p] = f / nf if nf > 0 else 0.0
+        t[p] = float(np.mean(D.tg[m]))
+    close = (u @ u.T) >= math.cos(math.radians(REPEAT_DEG))
+    apart = np.abs(t[:, None] - t[None, :]) >= REPEAT_MIN_S
+    np.fill_diagonal(close, False)
+    return bool(np.any(close & apart))
+
+
+def within_pose_support(D, y, best: Cand, rival: Cand) -> tuple[float, float]:
+    """How far the data within static poses bear out a time-dependent fit.
+
+    Within each static segment the fit's change (``best.delta`` less its segment mean) is
+    the shape it claims there; the residual left by the ``rival`` (less its segment means)
+    is regressed on it.  Returns the weighted slope ``a`` (1: the data change within the
+    poses as the fit says; 0: they do not change at all) and its standard error."""
+    r = D.rows(y - rival.delta)
+    d = D.rows(best.delta)
+    W = D.W
+    num = den = 0.0
+    for lo, hi in zip(D.seg_lo, D.seg_hi):
+        if not D.static[lo] or hi - lo < 3:
+            continue
+        rw = r[lo:hi] - r[lo:hi].mean(axis=0)
+        dw = d[lo:hi] - d[lo:hi].mean(axis=0)
+        num += float(np.sum(W[lo:hi] * rw * dw))
+        den += float(np.sum(W[lo:hi] * dw * dw))
+    if den <= 0:
+        return 0.0, math.inf
+    return num / den, 1.0 / math.sqrt(den)
+
+
+def _claims_time(D, y, best: Cand, rival: Cand) -> tuple[bool, str]:
+    """A time-dependent fit ``best`` is claimed over a pose-dependent ``rival`` when the
+    data within the poses bear out its change there: slope >= WITHIN_MIN and >= WITHIN_Z
+    standard errors (:func:`within_pose_support`)."""
+    a, sa = within_pose_support(D, y, best, rival)
+    ok = a >= WITHIN_MIN and a >= WITHIN_Z * sa
+    return ok, f"within the poses the data change by {a:.2f} +- {sa:.2f} of what {best.name} claims there"
+
+
+def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
+    """Test ``best`` against its rivals among the first-round results ``first``."""
+    rivals = sorted((c for c in first.values() if c.name != best.name and c.significant and c.gain > 0
+                     and c.gain >= RIVAL_GAIN_SHARE * best.gain), key=lambda c: -c.gain)[:MAX_RIVALS]
+    out = Contest(best=best)
+    if best.gain <= 0:
+        return out
+    # without a repeated orientation (or motion) a drift can take each pose's level: then a
+    # time-dependent effect must earn its claim beyond a pose-dependent rival
+    judge_time = not time_separable(D)
+    b_time = cands[best.name].time_dependent and judge_time
+    swap = None
+    for c in rivals:
+        c_after = conditional(D, cands, c.name, best, y, pcur)
+        b_after = conditional(D, cands, best.name, c, y, pcur)
+        out.tests[c.name] = {"rival_after_verdict": {"significant": c_after.significant, "shrink": c_after.shrink,
+                                                     "gain_chi2": c_after.gain},
+                             "verdict_after_rival": {"significant": b_after.significant, "shrink": b_after.shrink,
+                                                     "gain_chi2": b_after.gain}}
+        c_time = cands[c.name].time_dependent and judge_time
+        c_pose = cands[c.name].varies_by_pose
+        b_pose = cands[best.name].varies_by_pose
+        if b_time and c_pose:
+            ok, how = _claims_time(D, y, best, c)
+            out.tests[c.name]["within_poses"] = how
+            if not ok:
+                # the time-dependent verdict rests on what a pose-dependent rival explains too
+                out.ambiguous.append(c.name)
+                if swap is None:
+                    swap = (c.name, f"{best.name} changes with time, but {how}: a time-dependent effect is not "
+                                    f"claimed from data that cannot tell it from {c.name} (fixed per pose)")
+        elif c_time and b_pose:
+            ok, how = _claims_time(D, y, c, best)
+            out.tests[c.name]["within_poses"] = how
+            if not ok:
+                out.ambiguous.append(c.name)
+            elif c_after.significant and not b_after.significant and swap is None:
+                swap = (c.name, f"{c.name} explains all that {best.name} does and more, and {how}")
+        elif c_after.significant and not b_after.significant and swap is None:
+            swap = (c.name, f"{c.name} explains all that {best.name} does and more ({best.name} adds nothing "
+                            "significant after it)")
+        elif not c_after.significant and not b_after.significant:
+            out.ambiguous.append(c.name)
+    if swap is not None:
+        name, why = swap
+        out.swapped_from, out.why = best.name, why
+        out.best = first[name]
+        amb = [n for n in out.ambiguous if n != name]
+        if name in out.ambiguous:
+            amb = [best.name] + amb
+        out.ambiguous = amb
+    return out
+
+
+def separate_by(cands, verdict: str, ambiguous: list[str]) -> str:
+    """One sentence: the poses or motions that would tell ``verdict`` from ``ambiguous``."""
+    if not ambiguous:
+        return ""
+    hints = []
+    for nm in [verdict] + list(ambiguous):
+        h = cands[nm].tell_apart
+        if h and h not in hints:
+            hints.append(h)
+    return (f"To tell {verdict} from {' or '.join(ambiguous)}, record " + "; or ".join(hints) + ".")
