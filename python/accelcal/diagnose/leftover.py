@@ -13,9 +13,9 @@ is split into noise and a systematic part:
 The held-out figure is then ``heldout_rms_left = sqrt(max(after^2 - noise^2, 0))`` with
 ``after`` the model's held-out RMS, and ``fraction = heldout_rms_left^2 / before^2``, its
 share of the held-out gap's energy.  It is reported (not ``null``) when it is at least
-LEFT_MIN_RATIO of the noise and FRACTION_MIN of the gap: a gap the chosen effects leave
-that a sensor effect of another shape (a resonance, crosstalk, mains pickup) or motion
-the model does not follow would leave.  ``where`` names the channels, the frequency band
+LEFT_MIN_RATIO of the noise (the residual at least 1.118 x the noise), however small a
+share of the gap: what a sensor effect of another shape (a resonance, mains pickup) or
+motion the model does not follow would leave.  ``where`` names the channels, the frequency band
 and the regime in which it lies, and for static data the poses.
 """
 from __future__ import annotations
@@ -27,8 +27,7 @@ import numpy as np
 from ..effects.fitdata import FitData
 from .where import where_breakdown
 
-LEFT_MIN_RATIO = 0.5       # left at least this x the noise (the residual >= 1.118 x the noise) ...
-FRACTION_MIN = 0.1         # ... and at least this share of the held-out gap's energy
+LEFT_MIN_RATIO = 0.5       # left at least this x the noise (the residual >= 1.118 x the noise)
 
 
 def _split(D: FitData, A: np.ndarray, floor2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -66,7 +65,7 @@ def leftover(D: FitData, e: np.ndarray, e_after: np.ndarray, before: float, afte
     noise = math.sqrt(float(np.mean(noise2)))
     left = math.sqrt(max(after * after - noise * noise, 0.0))
     fraction = left * left / (before * before)
-    if left < LEFT_MIN_RATIO * noise or fraction < FRACTION_MIN:
+    if left < LEFT_MIN_RATIO * noise:
         return None
     # where: by channel (channel space), band, regime, poses
     n2c, sys_c, mov_c = _split(D, e_after, D.sigma ** 2)

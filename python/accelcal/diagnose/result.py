@@ -8,14 +8,15 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..effects import EFFECT_NAMES
-from ..effects.fitting import Cand, block_ss
-from ..effects.settings import BACKFIT_PASSES, BLOCK_S
+from ..effects.fitting import Cand
+from ..effects.settings import BLOCK_S
 from ..errors import AccelcalError
 from ..noise import code_lattice
 from .floor import setup_rows
 from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare
 from .compare import contest, separate_by
+from .relinearise import joint_fit, relinearise
 from .leftover import leftover
 from .scoring import rank_key, run_candidates
 from .settings import FORMAT, MAX_STEPS, MIN_SHRINK, PENALTY_PER_PARAM, T_MIN, Z_MIN
@@ -106,25 +107,14 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
             break
         results, _, _ = run_candidates(D, cands, remaining, y, pcur, progress)
 
-    # --- joint refit of the chosen effects (backfitting) -----------------------------------------
+    # --- joint refit of the chosen effects (backfitting), re-linearised about the corrected calibration
+    fitted = [c.name for c, _ in steps if c.gain > 0]
     joint: dict[str, Cand] = {c.name: c for c, _ in steps}
-    if len(steps) > 1:
-        deltas = {c.name: (c.delta if c.gain > 0 else np.zeros_like(c.delta)) for c, _ in steps}
-        for _ in range(BACKFIT_PASSES):
-            for c, _ in steps:
-                if c.gain <= 0:
-                    continue
-                others = sum((deltas[o] for o in deltas if o != c.name), np.zeros_like(e))
-                yt = e - others
-                R0 = D.rows(yt)
-                s0w, s0u = block_ss(D, R0)
-                cc = cands[c.name].cv(D, yt, D.p0 + others, s0w, s0u, folds=False)
-                deltas[c.name] = cc.delta
-                joint[c.name] = cc
-    total_delta = np.zeros_like(e)
-    for c, _ in steps:
-        if c.gain > 0:
-            total_delta += joint[c.name].delta
+    if len(fitted) > 1:
+        joint.update(joint_fit(D, cands, fitted, e, start={nm: joint[nm] for nm in fitted}))
+    total_delta = sum((joint[nm].delta for nm in fitted), np.zeros_like(e))
+    relin = relinearise(dev, cal, recs, int(folds), int(seed), 1.0 if model_centripetal else 0.0, cands, fitted,
+                        joint, D) if fitted else None
 
     # --- output ------------------------------------------------------------------------------------
     effects = []
@@ -135,6 +125,16 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         effects.append(entry(D, c, step=None, selected=False, baseline="the calibrated model"))
     verdict = steps[0][0].name if steps else "none"
     model_after = steps[-1][0].after if steps else base_rms
+    model_params = {nm: joint[nm].params for nm in chosen}
+    model_sigma = {nm: joint[nm].sigma for nm in chosen}
+    relin_info = None
+    if relin is not None:
+        model_after = min(model_after, relin["path"][-1].after)
+        model_params.update(relin["params"])
+        model_sigma.update({nm: relin["joint"][nm].sigma for nm in relin["params"]})
+        relin_info = {"iterations": relin["iterations"], "converged": relin["converged"],
+                      "heldout_rms_after": relin["path"][-1].after,
+                      "heldout_rms_after_first_linearisation": steps[-1][0].after}
     floor = float(np.sqrt(np.mean(D.sigma ** 2)))
     rms_ch = np.sqrt(np.mean(e * e, axis=0))
     gap_rms = float(np.sqrt(np.mean(rms_ch ** 2)))
@@ -176,7 +176,12 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
                              "(missing or doubled codes: a rescaled or differentially nonlinear ADC); not a lattice")
         lattice.append(ent)
     gap_extra = pose_mean_gap(D, e)
-    left = leftover(D, e, e - total_delta, base_rms, model_after)
+    if relin is not None:
+        ef = relin["e"]
+        left = leftover(relin["D"], ef, ef - sum((relin["joint"][nm].delta for nm in fitted), np.zeros_like(ef)),
+                        base_rms, model_after)
+    else:
+        left = leftover(D, e, e - total_delta, base_rms, model_after)
     if left is not None and not steps:
         verdict = "unexplained"
     result = DiagnosisResult({
@@ -206,8 +211,9 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
             "heldout_rms_before": base_rms,
             "heldout_rms_after": model_after,
             "shrink": float(max(0.0, 1.0 - model_after / base_rms)) if base_rms > 0 else 0.0,
-            "params": {nm: to_json(joint[nm].params) for nm in chosen},
-            "params_sigma": {nm: to_json(joint[nm].sigma) for nm in chosen},
+            "params": {nm: to_json(model_params[nm]) for nm in chosen},
+            "params_sigma": {nm: to_json(model_sigma[nm]) for nm in chosen},
+            "relinearised": relin_info,
         },
         "ambiguous_with": ambiguous,
         "separate_by": separate_by(cands, verdict, ambiguous) if steps else "",

@@ -107,6 +107,21 @@ class Effect:
     def _resolve(self, spec: dict[str, Any], ctx: Context, rng: np.random.Generator) -> dict[str, Any]:
         raise NotImplementedError
 
+    # -- a calibration parameter (the diagnosis's re-linearisation) -------------
+
+    #: True when the effect is a change of the calibration's own parameters (offsets, sensitivity):
+    #: the diagnosis then folds its fit into the calibration and fits again (re-linearisation)
+    absorbs: bool = False
+
+    def absorb(self, cal, p: Mapping[str, Any]):
+        """The calibration ``cal`` with this effect's fitted parameters ``p`` built in."""
+        raise NotImplementedError(f"{self.name} is not a calibration parameter")
+
+    def params_between(self, cal0, cal1) -> dict[str, Any]:
+        """The parameters of this effect that take calibration ``cal0`` to ``cal1`` (in what
+        this effect changes; the rest of the calibration is ignored)."""
+        raise NotImplementedError(f"{self.name} is not a calibration parameter")
+
     # -- the benchmark (tools/bench_diagnose.py) ---------------------------------
 
     #: size the benchmark's pilot simulation scales from (None: drawn directly)

@@ -2,7 +2,10 @@
 from __future__ import annotations
 
 
+import dataclasses
+
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from ..errors import AccelcalError
 from ..sensor import rotation_matrix
@@ -25,6 +28,13 @@ class Offset(LinearCandidate, Effect):
         RANDOM_PARAM,
     )
     fit = (FitParam("db", "channel", "counts", "offset change"),)
+    absorbs = True
+
+    def absorb(self, cal, p):
+        return dataclasses.replace(cal, offsets=cal.offsets + np.asarray(p["db"], float))
+
+    def params_between(self, cal0, cal1):
+        return {"db": np.asarray(cal1.offsets, float) - np.asarray(cal0.offsets, float)}
 
     def _resolve(self, spec, ctx, rng):
         m = channel_mask(spec, ctx, self.name)
@@ -77,6 +87,13 @@ class Gain(LinearCandidate, Effect):
         RANDOM_PARAM,
     )
     fit = (FitParam("scale", "channel", "fraction", "relative gain change"),)
+    absorbs = True
+
+    def absorb(self, cal, p):
+        return dataclasses.replace(cal, sensitivity=cal.sensitivity * (1.0 + np.asarray(p["scale"], float))[:, None])
+
+    def params_between(self, cal0, cal1):
+        return {"scale": np.linalg.norm(cal1.sensitivity, axis=1) / np.linalg.norm(cal0.sensitivity, axis=1) - 1.0}
 
     def _resolve(self, spec, ctx, rng):
         m = channel_mask(spec, ctx, self.name)
@@ -128,6 +145,20 @@ class Misalignment(LinearCandidate, Effect):
         CHANNEL_PARAM,
     )
     fit = (FitParam("rot", "channel3", "rad", "rotation vector applied to s_i"),)
+    absorbs = True
+
+    def absorb(self, cal, p):
+        R = rotation_matrix(np.asarray(p["rot"], float))
+        return dataclasses.replace(cal, sensitivity=np.einsum("nij,nj->ni", R, cal.sensitivity))
+
+    def params_between(self, cal0, cal1):
+        """The smallest rotation (perpendicular to s_i) that turns s_i's direction in ``cal0``
+        into its direction in ``cal1``."""
+        u0, u1 = unit_rows(cal0.sensitivity), unit_rows(cal1.sensitivity)
+        rot = np.zeros_like(u0)
+        for i in range(u0.shape[0]):
+            rot[i] = Rotation.align_vectors(u1[i][None, :], u0[i][None, :])[0].as_rotvec()
+        return {"rot": rot}
 
     def _resolve(self, spec, ctx, rng):
         m = channel_mask(spec, ctx, self.name)
