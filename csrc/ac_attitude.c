@@ -27,22 +27,16 @@ ac_status ac_triad_check(const ac_triad *t)
     return AC_OK;
 }
 
-ac_status ac_triad_apply(const ac_triad *t, const uint16_t *raw, int32_t *f)
+ac_status ac_triad_resolve(const ac_triad *t, const int16_t *x, int32_t *f)
 {
-    int16_t x[3];
     uint8_t sat = 0u, j;
-    ac_status s;
-    if (t == 0 || raw == 0 || f == 0) {
+    if (t == 0 || x == 0 || f == 0) {
         return AC_ERR_NULL;
     }
     for (j = 0u; j < 3u; j++) {
         if (t->shift[j] < -31 || t->shift[j] > 31) {
             return AC_ERR_FORMAT;
         }
-    }
-    s = ac_trim(raw, t->trim, 3u, x);
-    if (s < 0) {
-        return s;
     }
     for (j = 0u; j < 3u; j++) {
         /* within int32 when the row-sum invariant holds (ac_triad_check); a table that
@@ -52,7 +46,22 @@ ac_status ac_triad_apply(const ac_triad *t, const uint16_t *raw, int32_t *f)
         acc = ac_sat_sub(acc, t->k[j], &sat);
         f[j] = ac_scale_round(acc, (int16_t)t->shift[j], &sat);
     }
-    return ac_merge(s, sat ? AC_SATURATED : AC_OK);
+    return sat ? AC_SATURATED : AC_OK;
+}
+
+ac_status ac_triad_apply(const ac_triad *t, const uint16_t *raw, int32_t *f)
+{
+    int16_t x[3];
+    ac_status s, r;
+    if (t == 0 || raw == 0 || f == 0) {
+        return AC_ERR_NULL;
+    }
+    s = ac_trim(raw, t->trim, 3u, x);
+    if (s < 0) {
+        return s;
+    }
+    r = ac_triad_resolve(t, x, f);
+    return r < 0 ? r : ac_merge(s, r);
 }
 
 /* ---- constants ----------------------------------------------------------------------- */

@@ -102,7 +102,11 @@ typedef struct ac_triad {
 } ac_triad;
 
 ac_status ac_triad_check(const ac_triad *t);
+/* Pre-trim (t->trim) and resolve one sample: raw[3] counts -> f[3]. */
 ac_status ac_triad_apply(const ac_triad *t, const uint16_t *raw, int32_t *f);
+/* Resolve readings already pre-trimmed (x[3] = raw - trim, e.g. by ac_trim_s16 for a
+ * chip with signed output) -> f[3]; t->trim is not used. */
+ac_status ac_triad_resolve(const ac_triad *t, const int16_t *x, int32_t *f);
 
 /* ---- the pendulum estimator ---------------------------------------------------- */
 

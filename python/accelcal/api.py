@@ -31,8 +31,7 @@ from .device import Device, default_device, load_device, save_device
 from .diagnose import diagnose as _diagnose_impl
 from .errors import AccelcalError, atomic_write
 from .estimators import Columns, attitude_from_recording, displacement_from_recording, rate_from_recording
-from .header import render_header
-from .quantize import quantize_calibration
+from .header import calibration_header
 from .recording import Recording, read_recording as _read_recording_file, write_recording
 from .resolve import resolve_recording
 from .simulate import simulate as _simulate_impl
@@ -226,7 +225,9 @@ def diagnose(device: Any, calibration: Any, recordings: Any, **options: Any) -> 
 
 
 def header(device: Any, calibration: Any, *, prefix: str = "AC_CAL", output: Any = None) -> str:
-    """The C header for firmware (as ``accelcal header``).
+    """The C header for firmware (as ``accelcal header``): the 6-DOF resolver's tables for an
+    array, the triad table (f only) for a 3-axis sensor; int16 types for a chip with signed
+    output (``raw_min < 0``).
 
     Parameters
     ----------
@@ -244,8 +245,7 @@ def header(device: Any, calibration: Any, *, prefix: str = "AC_CAL", output: Any
     """
     dev = as_device(device)
     cal = as_calibration(calibration, dev)
-    text = render_header(quantize_calibration(dev, cal), prefix=prefix, calibration_method=cal.method,
-                         temp_ref_c=cal.temp_ref_c, offset_tc=cal.offset_tc, gain_tc=cal.gain_tc)
+    text = calibration_header(dev, cal, prefix=prefix)
     if output is not None:
         atomic_write(output, lambda f: f.write(text))
     return text

@@ -24,9 +24,8 @@ from .diagnose import diagnose
 from .effects import describe_effects, parse_effect_spec
 from .errors import AccelcalError, atomic_write
 from .estimators import attitude_from_recording, displacement_from_recording, rate_from_recording, report_plots
-from .header import render_header
+from .header import calibration_header
 from .motions import describe_motions
-from .quantize import quantize_calibration
 from .recording import read_recording, write_columns_csv, write_recording
 from .report import REPORT_FILES, write_report
 from .resolve import resolve_recording
@@ -126,10 +125,7 @@ def cmd_header(a):
     check_output(a.output)
     dev = _load_device(a.device)
     cal = _load_cal(a.calibration, dev)
-    t = quantize_calibration(dev, cal)
-    text = render_header(t, prefix=a.prefix, calibration_method=cal.method,
-                         temp_ref_c=getattr(cal, "temp_ref_c", None),
-                         offset_tc=getattr(cal, "offset_tc", None), gain_tc=getattr(cal, "gain_tc", None))
+    text = calibration_header(dev, cal, prefix=a.prefix)
     atomic_write(a.output, lambda f: f.write(text))
     return 0
 

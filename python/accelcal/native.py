@@ -90,9 +90,19 @@ def resolver_arrays(r) -> dict:
     )
 
 
+def offset_binary(a: np.ndarray) -> np.ndarray:
+    """int16 counts as the uint16 codes a + 32768 (order and differences kept): what
+    ``ac_trim_s16`` pre-trims, so ac_process_batch on these equals ac_trim_s16 + ac_resolve."""
+    return (np.asarray(a, np.int64) + 32768).astype(np.uint16)
+
+
 def process_batch(resolver, trim: np.ndarray, raw: np.ndarray,
                   omega_q: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Pre-trim and resolve every sample: raw (n,N) -> out (n,6) int32 Q.AC_OUT_FRAC, flags (n,)."""
+    """Pre-trim and resolve every sample: raw (n,N) -> out (n,6) int32 Q.AC_OUT_FRAC, flags (n,).
+    A signed (int16) ``trim`` means signed readings: both are passed as offset-binary codes
+    (bit for bit what ``ac_trim_s16`` does; tests/python/test_signed_triad.py checks it)."""
+    if np.asarray(trim).dtype == np.int16:
+        raw, trim = offset_binary(raw), offset_binary(trim)
     raw = np.ascontiguousarray(raw, dtype=np.uint16)
     trim = np.ascontiguousarray(trim, dtype=np.uint16)
     n = raw.shape[0]

@@ -6,7 +6,7 @@ constants" holds by construction.  The same rules are implemented on the device
 by ``ac_resolver_build`` (csrc/ac_invert.c); tests compare the two.
 
 Rules (see include/accelcal/ac_resolve.h for the arithmetic they feed):
-  trim_i   = round(b_i)                       uint16 counts
+  trim_i   = round(b_i)                       uint16 counts (int16 for a chip with signed output)
   o_i      = b_i - trim_i                     residual offset, Q.AC_OFFSET_FRAC
   s_i, r_i                                    Q.AC_SENS_FRAC, Q.AC_POS_FRAC (int32)
   M        = pinv(R(s~, r~)) in output LSB per count, from the *quantised* s~, r~
@@ -76,7 +76,7 @@ def to_fixed(x, frac: int, what: str, lo: int = -2**31, hi: int = 2**31 - 1) -> 
 class FixedTables:
     """Everything the firmware needs, in the core's integer formats."""
     device: str
-    trim: np.ndarray      # (N,) uint16 counts
+    trim: np.ndarray      # (N,) uint16 counts (int16 when ``signed``)
     sens_q: np.ndarray    # (N,3) int32 Q.sens_frac
     pos_q: np.ndarray     # (N,3) int32 Q.pos_frac
     offset_q: np.ndarray  # (N,) int32 Q.offset_frac (b_i - trim_i)
@@ -87,6 +87,7 @@ class FixedTables:
     g_shift: np.ndarray   # (6,) int8
     cond_log2: int
     extra: dict = field(default_factory=dict)
+    signed: bool = False  # the chip's readings are int16 (pre-trim with ac_trim_s16)
 
     @property
     def n(self) -> int:
@@ -116,14 +117,21 @@ def cond_log2_equilibrated(R: np.ndarray) -> int:
     return int(math.ceil(math.log2(c)))
 
 
-def quantize(offsets, sensitivity, positions, device: str = "") -> FixedTables:
-    """Quantise a calibration (b (N,), s (N,3), r (N,3)) into the core's tables."""
+def trim_range(signed: bool) -> tuple[int, int]:
+    """The pre-trim's input range: int16 for a chip with signed output, else uint16."""
+    return (-32768, 32767) if signed else (0, 65535)
+
+
+def quantize(offsets, sensitivity, positions, device: str = "", signed: bool = False) -> FixedTables:
+    """Quantise a calibration (b (N,), s (N,3), r (N,3)) into the core's tables
+    (``signed``: the chip's readings are int16, and so is the trim)."""
     f = FORMATS
     b = np.asarray(offsets, float)
     n = len(b)
     if not 6 <= n <= f.max_channels:
-        raise QuantizeError(f"{n} channels: the resolver takes 6..{f.max_channels}")
-    trim = to_fixed(b, 0, "offset_counts", 0, 65535)
+        raise QuantizeError(f"{n} channels: the resolver takes 6..{f.max_channels}"
+                            + ("; a 3-axis sensor gets the triad table (quantize_triad)" if n == 3 else ""))
+    trim = to_fixed(b, 0, "offset_counts", *trim_range(signed))
     sens_q = to_fixed(sensitivity, f.sens_frac, "sensitivity")
     pos_q = to_fixed(positions, f.pos_frac, "position_m")
     offset_q = to_fixed(b - trim, f.offset_frac, "residual offset")
@@ -144,16 +152,17 @@ def quantize(offsets, sensitivity, positions, device: str = "") -> FixedTables:
     m = round_half_up(M * 2.0 ** m_shift[:, None]).astype(np.int16)
     g = round_half_up(G * 2.0 ** g_shift[:, None]).astype(np.int16)
     k = to_fixed(kv * 2.0 ** m_shift, 0, "offset term k")
-    return FixedTables(device=device, trim=trim.astype(np.uint16), sens_q=sens_q.astype(np.int32),
+    return FixedTables(device=device, trim=trim.astype(np.int16 if signed else np.uint16),
+                       sens_q=sens_q.astype(np.int32),
                        pos_q=pos_q.astype(np.int32), offset_q=offset_q.astype(np.int32),
                        m=m, m_shift=m_shift.astype(np.int8), k=k.astype(np.int32), g=g,
-                       g_shift=g_shift.astype(np.int8), cond_log2=cl2)
+                       g_shift=g_shift.astype(np.int8), cond_log2=cl2, signed=signed)
 
 
 def quantize_calibration(device, cal) -> FixedTables:
     """quantize() for a Device and a Calibration (positions default to the device's)."""
     pos = cal.positions_or_nominal(device)
-    return quantize(cal.offsets, cal.sensitivity, pos, device.name)
+    return quantize(cal.offsets, cal.sensitivity, pos, device.name, signed=device.raw_min < 0)
 
 
 def omega_to_fixed(omega) -> np.ndarray:

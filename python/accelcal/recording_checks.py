@@ -39,17 +39,20 @@ def check_for_device(rec: Any, device, *, min_samples: int = 1) -> None:
                          row=rec.line(i), column=f"raw_{c}")
 
 
-def check_core_input(rec: Any) -> None:
-    """Refuse raw counts the C core cannot take (it reads them as uint16).
+def check_core_input(rec: Any, signed: bool = False) -> None:
+    """Refuse raw counts the C core cannot take: uint16 (0..65535), or int16
+    (-32768..32767) for a chip with signed output (``signed``, the device's raw_min < 0).
 
     Raises
     ------
     InputError
-        For the first reading outside 0..65535 (counts), naming its row and column;
+        For the first reading outside the range (counts), naming its row and column;
         nothing is ever clipped.
     """
-    bad = np.argwhere((rec.raw < 0) | (rec.raw > 65535))
+    lo, hi = (-32768, 32767) if signed else (0, 65535)
+    bad = np.argwhere((rec.raw < lo) | (rec.raw > hi))
     if bad.size:
         r, c = (int(v) for v in bad[0])
-        raise InputError(rec.source, f"raw reading {int(rec.raw[r, c])} does not fit the C core's uint16 input "
-                         "(0..65535)", row=rec.line(r), column=f"raw_{c}")
+        kind = "int16" if signed else "uint16"
+        raise InputError(rec.source, f"raw reading {int(rec.raw[r, c])} does not fit the C core's {kind} input "
+                         f"({lo}..{hi})", row=rec.line(r), column=f"raw_{c}")

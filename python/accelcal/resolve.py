@@ -8,7 +8,8 @@ from __future__ import annotations
 import numpy as np
 
 from . import model, native
-from .errors import InputError
+from .errors import AccelcalError, InputError
+from .triad import triad_forces
 from .native import FORMATS
 from .quantize import omega_to_fixed, quantize_calibration
 from .recording import check_core_input, check_for_device
@@ -32,8 +33,24 @@ def omega_for(rec, source: str) -> np.ndarray | None:
 
 
 def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str = "auto"):
-    """Returns (f (n,3) m/s^2, alpha (n,3) rad/s^2, flags (n,) uint8 or None)."""
+    """Returns (f (n,3) m/s^2, alpha (n,3) rad/s^2, flags (n,) uint8 or None).
+
+    A 3-axis sensor (``device.is_triad()``) gives f = S^-1 (raw - b) at its point and no
+    alpha (NaN): the float reference, or the C core's ``ac_triad_apply`` (``ac_trim_s16`` +
+    ``ac_triad_resolve`` for signed readings) with the header's triad table."""
     check_for_device(rec, device)
+    if device.is_triad():
+        if engine not in ("float", "fixed"):
+            raise ValueError(f"unknown engine {engine!r}")
+        if engine == "fixed":
+            check_core_input(rec, device.raw_min < 0)
+        try:
+            f, sat = triad_forces(cal, rec, (0, 1, 2), engine, device.raw_min < 0)
+        except AccelcalError as e:
+            raise InputError(getattr(cal, "source", "calibration"), str(e), field="channels") from None
+        if engine == "fixed":
+            f = f / 2.0 ** FORMATS.out_frac
+        return f, np.full_like(f, np.nan, dtype=float), None if sat is None else sat.astype(np.uint8)
     omega = omega_for(rec, omega_source)
     pos = cal.positions_or_nominal(device)
     if engine == "float":
@@ -46,7 +63,7 @@ def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str
         return f, a, None
     if engine != "fixed":
         raise ValueError(f"unknown engine {engine!r}")
-    check_core_input(rec)
+    check_core_input(rec, device.raw_min < 0)
     t = quantize_calibration(device, cal)
     w_q = None if omega is None else omega_to_fixed(omega)
     out, flags = native.process_batch(t.resolver(), t.trim, rec.raw, w_q)

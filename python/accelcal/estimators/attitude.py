@@ -20,7 +20,7 @@ from ..native import FORMATS, check, cptr, ffi, lib
 from ..quantize import round_half_up
 from ..recording import check_core_input, check_for_device
 from .common import CLIP, CLIP_LO, OMEGA_FRAC, OUT_FRAC, Columns, channel_noise, clip_i16, dt_fixed, force_noise, uniform_dt
-from .triad import triad_forces
+from ..triad import triad_forces
 
 __all__ = ["ATT_GATED", "ATT_W2_NEG", "ATT_UNSETTLED", "ATT_NO_GRAVITY", "ATT_SAT", "ATT_SIGN_NEG",
            "ANGLE_FRAC", "W_FRAC", "W2_FRAC", "atan2_fixed", "AttitudeParams", "AttitudeConsts",
@@ -335,9 +335,9 @@ def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: fl
         gated, unsettled = r["gated"], ~r["settled"]
         sat = np.zeros(rec.n_samples, bool)
     else:
-        check_core_input(rec)
-        f1, s1 = triad_forces(cal, rec, (0, 1, 2), "fixed")
-        f2, s2 = triad_forces(cal, rec, (3, 4, 5), "fixed")
+        check_core_input(rec, device.raw_min < 0)
+        f1, s1 = triad_forces(cal, rec, (0, 1, 2), "fixed", device.raw_min < 0)
+        f2, s2 = triad_forces(cal, rec, (3, 4, 5), "fixed", device.raw_min < 0)
         r = attitude_fixed(f1, f2, p)
         theta = r["theta"] / 2.0**ANGLE_FRAC
         w = r["w"] / 2.0**OMEGA_FRAC

@@ -153,7 +153,7 @@ def resolve_array(device, cal, rec, engine: str) -> tuple[np.ndarray, np.ndarray
         return model.resolve(cal.offsets, cal.sensitivity, cal.positions_or_nominal(device), rec.raw, None)
     if engine != "fixed":
         raise ValueError(f"unknown engine {engine!r}")
-    check_core_input(rec)
+    check_core_input(rec, device.raw_min < 0)
     t = quantize_calibration(device, cal)
     out, _ = native.process_batch(t.resolver(), t.trim, rec.raw, None)
     return out[:, :3].astype(np.int32), out[:, 3:].astype(np.int32)

@@ -15,7 +15,7 @@ from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OP
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
 from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params
-from .triad import triad_forces
+from ..triad import triad_forces
 
 __all__ = ["retro_correct", "displace_offline", "displacement_from_recording"]
 
@@ -155,7 +155,7 @@ def _body_forces(device, cal, rec, engine):
         return f, "resolved f at the body origin" + (" (C core)" if engine == "fixed" else "")
     tri = device.triads()
     if tri:
-        f, _ = triad_forces(cal, rec, tri[0], engine)
+        f, _ = triad_forces(cal, rec, tri[0], engine, device.raw_min < 0)
         return f, "f of the triad at channels 0-2"
     raise InputError(device.name, "displacement needs a 6-DOF array or a device with a 3-axis sensor "
                      "(a triad at channels 0-2)")
@@ -209,7 +209,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     ax = _axis_arg(axis)
     dt = uniform_dt(rec)
     if engine == "fixed":
-        check_core_input(rec)
+        check_core_input(rec, device.raw_min < 0)
     f, note = _body_forces(device, cal, rec, engine)
     noise = channel_noise(device, rec)
     rp = rest or default_rest_params(device, 1.0 / dt, f_sigma=force_noise(

@@ -1,5 +1,8 @@
 """One triad: raw counts -> calibrated specific force at its point, f = S^-1 (raw - b).
 
+The firmware path of a 3-axis sensor (the calibration header, ``resolve --engine fixed``)
+and the estimators' triads share it.
+
 Float reference (:func:`triad_apply_float`), the fixed-point table by the quantizer's
 rules (:func:`quantize_triad`), the C core's ``ac_triad_apply`` on arrays
 (:func:`triad_apply_fixed`) with its exact semantics (:func:`triad_exact`), and the
@@ -11,10 +14,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import AccelcalError
-from ..native import check, cptr, ffi, lib
-from ..quantize import round_half_up, row_shift, to_fixed
-from .common import OUT_FRAC, I16_MAX, I16_MIN
+from .errors import AccelcalError
+from .native import FORMATS, check, cptr, ffi, lib
+from .quantize import round_half_up, row_shift, to_fixed, trim_range
+
+OUT_FRAC = FORMATS.out_frac
+I16_MIN, I16_MAX = -32768, 32767
 
 __all__ = ["TriadTable", "triad_matrix", "quantize_triad", "triad_apply_fixed", "triad_exact",
            "triad_apply_float", "triad_forces"]
@@ -23,16 +28,24 @@ __all__ = ["TriadTable", "triad_matrix", "quantize_triad", "triad_apply_fixed", 
 @dataclass
 class TriadTable:
     """One triad's fixed-point table (ac_triad): f = round((m x - k) 2^-shift), x = raw - trim."""
-    trim: np.ndarray   # (3,) uint16 counts
+    trim: np.ndarray   # (3,) uint16 counts (int16 when ``signed``)
     m: np.ndarray      # (3,3) int16
     shift: np.ndarray  # (3,) int8
     k: np.ndarray      # (3,) int32
+    signed: bool = False   # int16 readings: pre-trim with ac_trim_s16, then ac_triad_resolve
+
+    def trim_code(self) -> np.ndarray:
+        """The trim as the uint16 code ac_triad's ``trim`` field holds: offset binary
+        (trim + 32768) for a signed chip, so ac_triad_apply on offset-binary readings gives
+        what ac_trim_s16 + ac_triad_resolve give on the signed ones."""
+        t = self.trim.astype(np.int64)
+        return (t + 32768 if self.signed else t).astype(np.uint16)
 
     def cdata(self):
         """The table as a C ``ac_triad``."""
         t = ffi.new("ac_triad *")
         for j in range(3):
-            t.trim[j] = int(self.trim[j])
+            t.trim[j] = int(self.trim_code()[j])
             t.shift[j] = int(self.shift[j])
             t.k[j] = int(self.k[j])
             for i in range(3):
@@ -54,7 +67,7 @@ def triad_matrix(sens3: np.ndarray) -> np.ndarray:
     return np.linalg.inv(S)
 
 
-def quantize_triad(offsets3, sens3) -> TriadTable:
+def quantize_triad(offsets3, sens3, signed: bool = False) -> TriadTable:
     """The triad's table by the rules of quantize.quantize.
 
     Parameters
@@ -63,6 +76,8 @@ def quantize_triad(offsets3, sens3) -> TriadTable:
         Offsets b, counts.
     sens3 : array_like (3, 3)
         Sensitivity rows s_i, counts per m/s^2.
+    signed : bool
+        The chip's readings are int16 (trim in -32768..32767), else uint16.
 
     Returns
     -------
@@ -71,13 +86,14 @@ def quantize_triad(offsets3, sens3) -> TriadTable:
         max |m| <= 32767 and sum |m| <= 65535 - 3; output Q.AC_OUT_FRAC m/s^2.
     """
     b = np.asarray(offsets3, float)
-    trim = to_fixed(b, 0, "offset_counts", 0, 65535)
+    trim = to_fixed(b, 0, "offset_counts", *trim_range(signed))
     M = triad_matrix(sens3) * 2.0 ** OUT_FRAC       # output LSB per count
     o = b - trim
     shift = np.array([row_shift(M[j], f"triad matrix row {j}") for j in range(3)])
     m = round_half_up(M * 2.0 ** shift[:, None]).astype(np.int16)
     k = to_fixed((M @ o) * 2.0 ** shift, 0, "triad offset term k")
-    return TriadTable(trim=trim.astype(np.uint16), m=m, shift=shift.astype(np.int8), k=k.astype(np.int32))
+    return TriadTable(trim=trim.astype(np.int16 if signed else np.uint16), m=m, shift=shift.astype(np.int8),
+                      k=k.astype(np.int32), signed=signed)
 
 
 def triad_apply_fixed(table: TriadTable, raw) -> tuple[np.ndarray, np.ndarray]:
@@ -87,7 +103,8 @@ def triad_apply_fixed(table: TriadTable, raw) -> tuple[np.ndarray, np.ndarray]:
     ----------
     table : TriadTable
     raw : array_like (n, 3)
-        Counts (uint16).
+        Counts: uint16, or int16 for a ``signed`` table (then pre-trimmed with
+        ``ac_trim_s16`` and resolved with ``ac_triad_resolve``, as signed firmware does).
 
     Returns
     -------
@@ -95,12 +112,22 @@ def triad_apply_fixed(table: TriadTable, raw) -> tuple[np.ndarray, np.ndarray]:
         Q.AC_OUT_FRAC m/s^2.
     saturated : ndarray (n,) bool
     """
-    raw = np.ascontiguousarray(raw, dtype=np.uint16)
     t = table.cdata()
     check(lib.ac_triad_check(t), "ac_triad_check")
+    raw = np.ascontiguousarray(raw, dtype=np.int16 if table.signed else np.uint16)
     out = np.zeros((raw.shape[0], 3), np.int32)
     sat = np.zeros(raw.shape[0], bool)
     fo = ffi.new("int32_t[3]")
+    if table.signed:
+        trim = np.ascontiguousarray(table.trim, dtype=np.int16)
+        x = np.zeros(3, np.int16)
+        for n in range(raw.shape[0]):
+            s1 = check(lib.ac_trim_s16(cptr("int16_t *", raw[n]), cptr("int16_t *", trim), 3, cptr("int16_t *", x)),
+                       "ac_trim_s16")
+            s2 = check(lib.ac_triad_resolve(t, cptr("int16_t *", x), fo), "ac_triad_resolve")
+            sat[n] = s1 or s2
+            out[n] = (fo[0], fo[1], fo[2])
+        return out, sat
     for n in range(raw.shape[0]):
         sat[n] = check(lib.ac_triad_apply(t, cptr("uint16_t *", raw[n]), fo), "ac_triad_apply")
         out[n] = (fo[0], fo[1], fo[2])
@@ -118,8 +145,8 @@ def triad_apply_float(offsets3, sens3, raw) -> np.ndarray:
     return (np.asarray(raw, float) - np.asarray(offsets3, float)) @ triad_matrix(sens3).T
 
 
-def triad_forces(cal, rec, chans, engine: str) -> tuple[np.ndarray, np.ndarray | None]:
-    """f of the triad at channels ``chans`` of a recording.
+def triad_forces(cal, rec, chans, engine: str, signed: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
+    """f of the triad at channels ``chans`` of a recording (``signed``: int16 readings).
 
     Returns
     -------
@@ -133,4 +160,4 @@ def triad_forces(cal, rec, chans, engine: str) -> tuple[np.ndarray, np.ndarray |
     raw = np.asarray(rec.raw)[:, list(chans)]
     if engine == "float":
         return triad_apply_float(b, s, raw), None
-    return triad_apply_fixed(quantize_triad(b, s), raw)
+    return triad_apply_fixed(quantize_triad(b, s, signed), raw)

@@ -1,0 +1,260 @@
+"""Signed readings and 3-axis sensors through the firmware path (issue 14): the signed
+pre-trim, the triad table against the float reference, the triad and signed headers
+compiled with the C core on every compiler, and the command line from calibration to
+header and fixed-point resolve."""
+import json
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import example, given, strategies as st
+
+from accelcal import estimators as E
+from accelcal.calibration import Calibration, load_calibration
+from accelcal.cli import main
+from accelcal.device import Device
+from accelcal.header import calibration_header
+from accelcal.native import cptr, ffi, lib, offset_binary
+from accelcal.recording import recording_from_arrays, write_recording
+from accelcal.resolve import resolve_recording
+from core_settings import estimator
+
+ROOT = Path(__file__).resolve().parents[2]
+CORE = sorted(str(p) for p in (ROOT / "csrc").glob("*.c"))
+WARN = ["-std=c99", "-Wall", "-Wextra", "-Werror"]
+G = 9.80665
+I16 = st.integers(-32768, 32767)
+
+
+def need(tool):
+    if shutil.which(tool) is None:
+        if os.environ.get("CI"):
+            pytest.fail(f"{tool} is required in CI (tools/test_all.sh installs it)")
+        pytest.skip(f"{tool} not installed")
+
+
+# ---------------------------------------------------------------- the signed pre-trim
+
+def trim_s16(raw, trim):
+    raw = np.ascontiguousarray(raw, np.int16)
+    trim = np.ascontiguousarray(trim, np.int16)
+    x = np.zeros(len(raw), np.int16)
+    st_ = lib.ac_trim_s16(cptr("int16_t *", raw), cptr("int16_t *", trim), len(raw), cptr("int16_t *", x))
+    return x, st_
+
+
+@given(st.lists(st.tuples(I16, I16), min_size=1, max_size=12))
+@example([(-32768, 32767), (32767, -32768), (0, 0), (-1, 0), (0, -1), (-32768, 0), (32767, 0)])
+@example([(-32768, -32768), (32767, 32767)])
+def test_trim_s16_is_the_clipped_difference(pairs):
+    raw = np.array([p[0] for p in pairs])
+    trim = np.array([p[1] for p in pairs])
+    x, status = trim_s16(raw, trim)
+    d = raw.astype(np.int64) - trim
+    assert np.array_equal(x, np.clip(d, -32768, 32767))
+    assert status == (lib.AC_SATURATED if np.any((d < -32768) | (d > 32767)) else lib.AC_OK)
+    # bit for bit ac_trim on the offset-binary codes (what the batch path and ac_triad_apply use)
+    xu = np.zeros(len(raw), np.int16)
+    ru, tu = offset_binary(raw), offset_binary(trim)
+    assert lib.ac_trim(cptr("uint16_t *", ru), cptr("uint16_t *", tu), len(raw), cptr("int16_t *", xu)) == status
+    assert np.array_equal(x, xu)
+
+
+def test_trim_s16_bad_arguments():
+    x = ffi.new("int16_t[3]")
+    r = ffi.new("int16_t[3]")
+    assert lib.ac_trim_s16(ffi.NULL, r, 3, x) == lib.AC_ERR_NULL
+    assert lib.ac_trim_s16(r, r, 0, x) == lib.AC_ERR_SIZE
+
+
+# ---------------------------------------------------------------- a signed triad's table
+
+@st.composite
+def signed_triads(draw):
+    k = draw(st.floats(200.0, 4000.0))          # counts per m/s^2: +-16 g ... +-2 g at 16 bits
+    gain = np.array(draw(st.lists(st.floats(-0.05, 0.05), min_size=3, max_size=3)))
+    mis = np.array(draw(st.lists(st.floats(-0.03, 0.03), min_size=9, max_size=9))).reshape(3, 3)
+    S = k * (np.diag(1.0 + gain) + mis - np.diag(np.diag(mis)))
+    b = np.array(draw(st.lists(st.floats(-3000.0, 3000.0), min_size=3, max_size=3)))
+    return b, S
+
+
+@estimator
+@given(signed_triads(), st.lists(I16, min_size=3, max_size=3))
+@example((np.zeros(3), np.eye(3) * 16384 / G), [-32768, 32767, 0])
+def test_signed_triad_against_the_float_reference(tri, raw):
+    b, S = tri
+    tab = E.quantize_triad(b, S, signed=True)
+    assert tab.trim.dtype == np.int16
+    raw = np.array([raw])
+    f_q, sat = E.triad_apply_fixed(tab, raw)
+    exact = E.triad_exact(tab, raw)
+    x = raw - tab.trim.astype(np.int64)
+    clipped = np.any((x < -32768) | (x > 32767))
+    if not sat[0]:
+        assert np.all(np.abs(f_q - exact) <= 0.5)
+    else:
+        assert clipped or np.any(np.abs(exact) > 2**31 - 1)
+    if not clipped and not sat[0]:
+        ref = E.triad_apply_float(b, S, raw) * 1024.0
+        half = 0.5 * 2.0 ** (-tab.shift.astype(float))
+        assert np.all(np.abs(f_q - ref) <= (np.abs(x).sum() + 1.0) * half + 0.5 + 1e-6 * np.abs(ref))
+    # the unsigned path on offset-binary codes is the same table and the same numbers
+    tab_u = E.TriadTable(trim=tab.trim_code(), m=tab.m, shift=tab.shift, k=tab.k)
+    f_u, sat_u = E.triad_apply_fixed(tab_u, offset_binary(raw))
+    assert np.array_equal(f_u, f_q) and np.array_equal(sat_u, sat)
+
+
+# ---------------------------------------------------------------- headers with the C core
+
+def mpu_triad(signed=True):
+    if signed:
+        return Device(name="mpu6050", sample_rate_hz=100.0, gravity_mps2=G, raw_min=-32768, raw_max=32767,
+                      positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, 16384 / G),
+                      zero_counts=np.zeros(3))
+    return Device(name="adxl", sample_rate_hz=100.0, gravity_mps2=G, raw_min=0, raw_max=4095,
+                  positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, 256 / G),
+                  zero_counts=np.full(3, 2048.0))
+
+
+def a_calibration(d, seed=5):
+    rng = np.random.default_rng(seed)
+    S = np.diag(d.counts_per_mps2) @ (np.eye(3) + rng.normal(0, 0.01, (3, 3)))
+    b = d.zero_counts + rng.normal(0, 0.02 * G, 3) * d.counts_per_mps2
+    return Calibration(device=d.name, method="full", offsets=b, sensitivity=S)
+
+
+TRIAD_DRIVER = r"""
+#define AC_CAL_IMPLEMENTATION
+#include "cal.h"
+#include <stdio.h>
+int main(void) {
+    int v[3], i;
+    int32_t f[3];
+    ac_status s;
+    if (ac_triad_check(&AC_CAL_TRIAD) != AC_OK) return 10;
+    while (scanf("%d %d %d", &v[0], &v[1], &v[2]) == 3) {
+#ifdef SIGNED
+        int16_t raw[3], x[3];
+        ac_status s2;
+        for (i = 0; i < 3; i++) raw[i] = (int16_t)v[i];
+        s = ac_trim_s16(raw, AC_CAL_TRIM, 3u, x);
+        s2 = ac_triad_resolve(&AC_CAL_TRIAD, x, f);
+        if (s2 != AC_OK) s = s2;
+#else
+        uint16_t raw[3];
+        for (i = 0; i < 3; i++) raw[i] = (uint16_t)v[i];
+        s = ac_triad_apply(&AC_CAL_TRIAD, raw, f);
+#endif
+        printf("%d %ld %ld %ld\n", (int)s, (long)f[0], (long)f[1], (long)f[2]);
+    }
+    return 0;
+}
+"""
+
+
+@pytest.mark.parametrize("signed", [True, False])
+def test_triad_header_on_the_host_equals_resolve_fixed(tmp_path, signed):
+    d = mpu_triad(signed)
+    cal = a_calibration(d)
+    (tmp_path / "cal.h").write_text(calibration_header(d, cal))
+    (tmp_path / "main.c").write_text(TRIAD_DRIVER)
+    exe = tmp_path / "drv"
+    subprocess.run(["gcc", *WARN, "-Wconversion", *(["-DSIGNED"] if signed else []), "-I", str(ROOT / "include"),
+                    "-I", str(tmp_path), str(tmp_path / "main.c"), *CORE, "-o", str(exe)], check=True)
+    rng = np.random.default_rng(1)
+    lo, hi = d.raw_min, d.raw_max
+    raw = np.vstack([rng.integers(lo, hi + 1, (300, 3)), [[lo, lo, lo], [hi, hi, hi], [lo, hi, 0]]])
+    res = subprocess.run([str(exe)], input="\n".join(" ".join(map(str, r)) for r in raw) + "\n",
+                         capture_output=True, text=True)
+    assert res.returncode == 0
+    rows = np.array([list(map(int, ln.split())) for ln in res.stdout.splitlines()])
+    rec = recording_from_arrays(np.arange(len(raw)) / 100.0, raw)
+    f, a, flags = resolve_recording(d, cal, rec, "fixed")
+    assert np.array_equal(rows[:, 1:], np.round(f * 1024).astype(np.int64))
+    assert np.array_equal(rows[:, 0] != 0, flags.astype(bool))
+    assert np.all(np.isnan(a))
+    ff, _, _ = resolve_recording(d, cal, rec, "float")
+    ok = flags == 0
+    tab = E.quantize_triad(cal.offsets, cal.sensitivity, signed)
+    x = np.abs(raw - tab.trim.astype(np.int64)).sum(axis=1, keepdims=True)
+    bound = ((x + 1.0) * 0.5 * 2.0 ** (-tab.shift.astype(float)) + 0.5) / 1024.0      # m/s^2
+    assert ok.mean() > 0.9 and np.all(np.abs(f - ff)[ok] <= bound[ok] + 1e-9)
+
+
+@pytest.mark.parametrize("target", ["h8", "avr"])
+@pytest.mark.parametrize("kind", ["signed_triad", "triad", "signed_array"])
+def test_triad_and_signed_headers_cross_compile(tmp_path, target, kind):
+    if kind == "signed_array":
+        from accelcal.device import default_device
+        d0 = default_device()
+        d = Device(name="signed-array", sample_rate_hz=60.0, gravity_mps2=G, raw_min=-32768, raw_max=32767,
+                   positions=d0.positions, axes=d0.axes, counts_per_mps2=d0.counts_per_mps2,
+                   zero_counts=d0.zero_counts - 32768)
+        cal = Calibration.nominal(d)
+        call = "int16_t x[6];\n    ac_trim_s16(raw, AC_CAL_TRIM, 6u, x);\n    return (int)ac_resolve(&AC_CAL_RESOLVER, x, 0, out);"
+        rt = "int16_t"
+    else:
+        d = mpu_triad(kind == "signed_triad")
+        cal = a_calibration(d)
+        if kind == "signed_triad":
+            call = "int16_t x[3];\n    ac_trim_s16(raw, AC_CAL_TRIM, 3u, x);\n    return (int)ac_triad_resolve(&AC_CAL_TRIAD, x, out);"
+            rt = "int16_t"
+        else:
+            call = "return (int)ac_triad_apply(&AC_CAL_TRIAD, raw, out);"
+            rt = "uint16_t"
+    text = calibration_header(d, cal)
+    assert (f"const {rt} AC_CAL_TRIM" in text)
+    (tmp_path / "cal.h").write_text(text)
+    src = tmp_path / "unit.c"
+    src.write_text('#define AC_CAL_IMPLEMENTATION\n#include "cal.h"\n'
+                   f"int32_t out[6];\nint run(const {rt} *raw) {{\n    {call}\n}}\n")
+    if target == "h8":
+        need("h8300-hms-gcc")
+        cmd = ["h8300-hms-gcc", "-mh", "-mn", "-O2", "-fomit-frame-pointer", *WARN]
+    else:
+        need("avr-gcc")
+        cmd = ["avr-gcc", "-mmcu=atmega328p", "-Os", *WARN]
+    subprocess.run(cmd + ["-I", str(ROOT / "include"), "-I", str(tmp_path), "-c", str(src),
+                          "-o", str(tmp_path / f"unit_{target}.o")], check=True)
+
+
+# ---------------------------------------------------------------- the command line
+
+def test_mpu6050_signed_triad_from_calibration_to_header_and_fixed_resolve(tmp_path):
+    """A signed triad: calibrate (known poses), header, resolve --engine fixed: no +32768 by hand."""
+    d = mpu_triad(True)
+    dev = {"name": d.name, "sample_rate_hz": 100.0, "gravity_mps2": G, "raw_min": -32768, "raw_max": 32767,
+           "channels": [{"position_m": [0, 0, 0], "axis": list(np.eye(3)[i]), "counts_per_mps2": 16384 / G,
+                         "zero_counts": 0} for i in range(3)]}
+    (tmp_path / "dev.json").write_text(json.dumps(dev))
+    truth = a_calibration(d)
+    rng = np.random.default_rng(3)
+    dirs = [np.eye(3)[i] * s for i in range(3) for s in (1, -1)]
+    dirs += [v / np.linalg.norm(v) for v in rng.normal(size=(6, 3))]
+    t, raw, f, pose = [], [], [], []
+    for p, u in enumerate(dirs):
+        fi = np.tile(G * u, (200, 1))
+        raw.append(np.round(truth.offsets + fi @ truth.sensitivity.T + rng.normal(0, 8, (200, 3))).astype(int))
+        f.append(fi)
+        t.append(p * 3.0 + np.arange(200) / 100.0)
+        pose.append(np.full(200, p))
+    rec = recording_from_arrays(np.concatenate(t), np.vstack(raw), f=np.vstack(f), pose=np.concatenate(pose))
+    write_recording(tmp_path / "rec.csv", rec)
+    assert main(["calibrate", "--device", str(tmp_path / "dev.json"), str(tmp_path / "rec.csv"),
+                 "-o", str(tmp_path / "cal.json")]) == 0
+    cal = load_calibration(tmp_path / "cal.json")
+    assert np.max(np.abs(cal.offsets - truth.offsets)) < 5.0
+    assert main(["header", "--device", str(tmp_path / "dev.json"), "--calibration", str(tmp_path / "cal.json"),
+                 "-o", str(tmp_path / "cal.h")]) == 0
+    assert "const int16_t AC_CAL_TRIM[3]" in (tmp_path / "cal.h").read_text()
+    assert main(["resolve", "--device", str(tmp_path / "dev.json"), "--calibration", str(tmp_path / "cal.json"),
+                 "--engine", "fixed", str(tmp_path / "rec.csv"), "-o", str(tmp_path / "out.csv")]) == 0
+    lines = [ln for ln in (tmp_path / "out.csv").read_text().splitlines() if not ln.startswith("#")]
+    hdr = lines[0].split(",")
+    vals = np.array([[float(v) if v else np.nan for v in ln.split(",")] for ln in lines[1:]])
+    fr = vals[:, hdr.index("f_x"):hdr.index("f_x") + 3]
+    assert np.sqrt(np.mean((np.linalg.norm(fr, axis=1) - G) ** 2)) < 0.01
