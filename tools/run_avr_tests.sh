@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # accelcal -- bit-for-bit cross-check of the C core on a 16-bit-int target.
 #
-# Builds tests/c/vectors.c + csrc/*.c for the ATmega328P (avr-gcc, int is 16
+# Builds tests/c/vectors.c + csrc/*.c for the ATmega1284P (avr-gcc, int is 16
 # bits as on the H8/300H), runs it under simavr, builds the same program for
 # the host, and compares the two outputs byte for byte.  Any difference is a
 # portability bug (integer promotion, implementation-defined behaviour) in the
@@ -9,14 +9,14 @@
 # not need host-only features (long double maths) compile for the AVR.
 #
 # Usage:  tools/run_avr_tests.sh            (from anywhere; outputs in build/avr/)
-# Env:    SIMAVR_TIMEOUT (seconds, default 600), AVR_MCU (default atmega328p),
+# Env:    SIMAVR_TIMEOUT (seconds, default 600), AVR_MCU (default atmega1284p: the vector program outgrew the 328P's 32 KB flash),
 #         AVR_RAM (bytes, default 2048)
 # Exit:   0 = outputs identical; 1 = mismatch or any build/run failure.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 OUT="$ROOT/build/avr"
-MCU=${AVR_MCU:-atmega328p}
+MCU=${AVR_MCU:-atmega1284p}
 RAM=${AVR_RAM:-2048}
 FREQ=16000000
 TIMEOUT=${SIMAVR_TIMEOUT:-600}

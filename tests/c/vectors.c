@@ -485,6 +485,68 @@ static void vec_trim(void)
     st(ac_trim(raw, trim, 0u, x));
     st(ac_trim(0, trim, 1u, x));
     nl();
+    /* signed readings (ac_trim_s16): random int16 pairs, near pairs, the extremes */
+    for (i = 0u; i < 60u; i++) {
+        int16_t sraw[AC_MAX_CHANNELS], strim[AC_MAX_CHANNELS];
+        uint16_t n = (uint16_t)(1u + below(AC_MAX_CHANNELS));
+        ac_status s;
+        for (k = 0u; k < n; k++) {
+            uint32_t u = rnd();
+            if (i < 4u) {
+                sraw[k] = (int16_t)((k + i) & 1u ? 32767 : -32767 - 1);
+                strim[k] = (int16_t)((k + i) & 2u ? 32767 : -32767 - 1);
+            } else if (i & 1u) {
+                sraw[k] = (int16_t)(int32_t)((u & 0xFFFFUL) - 32768L);
+                strim[k] = (int16_t)(int32_t)((long)(u >> 16) - 32768L);
+            } else {
+                strim[k] = (int16_t)(int32_t)((long)((u >> 16) & 0xFFFUL) - 2048L);
+                sraw[k] = (int16_t)(strim[k] + (int16_t)(int32_t)((long)(u & 0x1FFFUL) - 0x1000L));
+            }
+            x[k] = 0;
+        }
+        s = ac_trim_s16(sraw, strim, n, x);
+        TAG("TRS");
+        h8((uint8_t)n);
+        st(s);
+        for (k = 0u; k < n; k++) {
+            h16(x[k]);
+        }
+        nl();
+    }
+}
+
+/* ---- one triad (f only) ----------------------------------------------------------- */
+
+static void vec_triad(void)
+{
+    uint16_t i, j, q;
+    for (i = 0u; i < 40u; i++) {
+        ac_triad t;
+        int16_t x[3];
+        int32_t f[3];
+        for (j = 0u; j < 3u; j++) {
+            uint32_t budget = 65535u;
+            t.trim[j] = (uint16_t)rnd();
+            t.shift[j] = (int8_t)((int16_t)below(40u) - 8);
+            t.k[j] = (int32_t)rnd();
+            if (i & 1u) {
+                t.k[j] = (int32_t)((long)(t.k[j] & 0xFFFFFL) - 0x80000L);
+            }
+            for (q = 0u; q < 3u; q++) {
+                uint32_t v = below((uint16_t)(budget < 32768u ? budget + 1u : 32768u));
+                budget -= v;
+                t.m[j][q] = (int16_t)((rnd() & 1u) ? -(int32_t)(v > 32767u ? 32767u : v) : (int32_t)(v > 32767u ? 32767u : v));
+            }
+            x[j] = (int16_t)(int32_t)((long)(rnd() & 0xFFFFUL) - 32768L);
+        }
+        TAG("TRI");
+        st(ac_triad_check(&t));
+        st(ac_triad_resolve(&t, x, f));
+        for (j = 0u; j < 3u; j++) {
+            h32(f[j]);
+        }
+        nl();
+    }
 }
 
 /* ---- resolve ---------------------------------------------------------------------- */
@@ -974,6 +1036,7 @@ int main(void)
     vec_fixed();
     vec_xf();
     vec_trim();
+    vec_triad();
     vec_resolve();
     vec_build();
     vec_invert6();
