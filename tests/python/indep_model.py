@@ -905,9 +905,12 @@ def inject(dev: Device, cal: Calibration, rec, effect, seed=0, *, ratio=None, st
     change of |s_i| on every channel (random signs); misalignment small rotations of s_i;
     nonlinearity the cubic k3 (raw - b)^3; bias_drift a linear ramp over the recording;
     temperature_offset an ambient step (the added temp_c column) seen through a 30-120 s
-    thermal lag; saturation a clip at 90 % of the largest excursion from b of one axis in
+    thermal lag; pose_error (recordings with stated f only) the stated f of each labelled
+    pose turned by 0.3-2 deg about a random axis; saturation a clip at 90 % of the largest
+    excursion from b of one axis in
     the still intervals (so that a pose clips; the ratio is what it is); quantization
-    steps of 4-16 counts (multiples of the native step); crosstalk 0.5-2 % of channel j into i; mains 50 Hz; resonance a damped
+    steps of 4-16 counts (multiples of the native step); crosstalk 0.5-2 % of channel j
+    into i; mains 50 Hz; resonance a damped
     20-45 Hz sinusoid at the start of every still interval.  The result is rounded to the
     native code step.  Returns (recording, effects' parameters, ratio reached by each)."""
     names = (effect,) if isinstance(effect, str) else tuple(effect)
@@ -988,10 +991,28 @@ def inject(dev: Device, cal: Calibration, rec, effect, seed=0, *, ratio=None, st
             c = min(0.02, max(0.005, target / float(np.sqrt(np.mean(base ** 2) / N))))
             d[:, i] = c * base
             params[nm] = {"i": i, "j": j, "c": c}
+        elif nm == "pose_error":  # the stated f of every labelled pose turned by 0.3-2 deg
+            if rec.f is None or rec.pose is None:
+                raise ValueError("inject: pose_error needs a recording with stated f on labelled poses")
+            f_new = np.array(rec.f, dtype=float)
+            angles = {}
+            for lab in np.unique(rec.pose[rec.pose >= 0]):
+                m = rec.pose == lab
+                ax = rng.normal(size=3)
+                ang = rng.uniform(0.3, 2.0)
+                f_new[m] = f_new[m] @ expm_so3(ax / np.linalg.norm(ax) * math.radians(ang)).T
+                angles[int(lab)] = ang
+            ok = np.all(np.isfinite(f_new), axis=1)
+            dd = np.zeros((n, N))
+            dd[ok] = (rec.f[ok] - f_new[ok]) @ S.T  # the model's prediction moves by this
+            measured[nm] = float(np.sqrt(np.mean(dd ** 2))) / floor
+            params[nm] = {"angles_deg": angles}
+            continue
         elif nm in ("saturation", "quantization"):
             continue  # ADC effects: below, after the others
         else:
-            raise ValueError(f"inject: no semi-synthetic shape for {nm!r}")
+            raise ValueError(f"inject: no semi-synthetic shape for {nm!r} (bandwidth and time_skew need a "
+                             "reference motion)")
         x = x + d
         measured[nm] = float(np.sqrt(np.mean(d ** 2))) / floor
     y = step * np.round(x / step)
@@ -1016,7 +1037,8 @@ def inject(dev: Device, cal: Calibration, rec, effect, seed=0, *, ratio=None, st
         params["saturation"] = {"channel": i, "level": float(lvl), "side": "high" if side > 0 else "low"}
         y = ys
     y = np.clip(y, dev.raw_min, dev.raw_max).astype(np.int64)
-    out = recording_from_arrays(t, y, f=rec.f, w=rec.w, dw=rec.dw, temp_c=temp if temp is not None else rec.temp_c,
+    out = recording_from_arrays(t, y, f=f_new if "pose_error" in names else rec.f, w=rec.w, dw=rec.dw,
+                                temp_c=temp if temp is not None else rec.temp_c,
                                 pose=rec.pose, metadata={"injected": ",".join(names)})
     out.source = f"{rec.source} + {'+'.join(names)}"
     return out, params, measured
