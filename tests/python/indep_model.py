@@ -907,11 +907,10 @@ def inject(dev: Device, cal: Calibration, rec, effect, seed=0, *, ratio=None, st
     temperature_offset an ambient step (the added temp_c column) seen through a 30-120 s
     thermal lag; pose_error (recordings with stated f only) the stated f of each labelled
     pose turned by 0.3-2 deg about a random axis; saturation a clip at 90 % of the largest
-    excursion from b of one axis in
-    the still intervals (so that a pose clips; the ratio is what it is); quantization
-    steps of 4-16 counts (multiples of the native step); crosstalk 0.5-2 % of channel j
-    into i; mains 50 Hz; resonance a damped
-    20-45 Hz sinusoid at the start of every still interval.  The result is rounded to the
+    excursion from b of one axis in the still intervals (so that a pose clips; the ratio is
+    what it is); quantization steps of 4-16 counts (multiples of the native step);
+    crosstalk 0.5-2 % of channel j into i; mains 50 Hz; resonance a damped 20-45 Hz
+    sinusoid at the start of every still interval.  The result is rounded to the
     native code step.  Returns (recording, effects' parameters, ratio reached by each)."""
     names = (effect,) if isinstance(effect, str) else tuple(effect)
     rng = np.random.default_rng([seed] + [zlib.crc32(nm.encode()) for nm in names])
