@@ -1,0 +1,142 @@
+"""The diagnosis on data it did not make: the independent forward model of indep_model.py
+(written from the data contract alone) and effects injected into the real Xsens recording.
+
+Only what the diagnosis was seen to do on every one of several seeds is asserted here
+(each case below runs 3 seeds).  Cases it gets wrong are measured by
+tools/bench_diagnose_indep.py, not asserted: a cubic nonlinearity is named gain, a
+second-order low-pass time_skew, an offset behind a thermal lag bias_drift, a resonance or
+50 Hz mains pickup none, crosstalk misalignment.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import indep_model as im
+from accelcal.diagnose import diagnose
+from shared_data import XSENS_ACC, shared_file
+
+SEEDS = (0, 1, 2)
+
+
+def _diagnose(ds, seed):
+    return diagnose(ds["device"], ds["cal"], ds["recordings"], seed=seed)
+
+
+def _ambiguous(res) -> list:
+    """ambiguous_with at the top level (the contract) or, before it is there, on effects[0]."""
+    amb = res.get("ambiguous_with")
+    if amb is None and res.get("effects"):
+        amb = res["effects"][0].get("ambiguous_with")
+    return list(amb or [])
+
+
+# ------------------------------------------------------------------ the model itself
+def test_kinematics_match_finite_differences():
+    """f(r) = R^T (d^2/dt^2 (p + R r) + g z) and ω from R^T dR/dt, to 1e-5 (m/s^2, rad/s)."""
+    rng = np.random.default_rng(3)
+    tr = im.Trajectory(g=9.81)
+    tr.hold(im.random_rotation(rng), 0.5)
+    tr.move_to(im.random_rotation(rng), 0.7, d=[0.1, -0.05, 0.02])
+    tr.hold(tr.R_end, 0.5)
+    r = np.array([0.06, 0.02, -0.01])
+
+    def pose(t):
+        k = int(tr.segment(np.array([t]))[0])
+        h = im._h(np.array([(t - tr.t0[k]) / tr.dur[k]]))[0][0]
+        R = tr.R0[k] @ im.expm_so3(tr.e[k] * tr.phi[k] * h)
+        p = sum(tr.d[j] * im._h(np.array([(t - tr.t0[j]) / tr.dur[j]]))[0][0] for j in range(len(tr.t0)))
+        return R, p + R @ r
+
+    h = 1e-4
+    for t in (0.6, 0.8, 0.95, 1.1, 1.5):
+        f, w, dw = tr.evaluate(np.array([t]))
+        R, x = pose(t)
+        acc = (pose(t + h)[1] - 2 * x + pose(t - h)[1]) / h ** 2
+        f_num = R.T @ (acc + np.array([0.0, 0.0, 9.81]))
+        f_r = f[0] + np.cross(dw[0], r) + np.cross(w[0], np.cross(w[0], r))
+        W = R.T @ (pose(t + h)[0] - pose(t - h)[0]) / (2 * h)
+        assert np.abs(f_num - f_r).max() < 1e-5
+        assert np.abs(np.array([W[2, 1], W[0, 2], W[1, 0]]) - w[0]).max() < 1e-5
+
+
+def test_stated_ratio_is_the_contribution():
+    """The ratio a dataset states is in the drawn 3-30x range for an effect linear in its size."""
+    ds = im.make_jig(["gain"], 5, device="triad16", rate=100.0, noise=0.01, motion=False, temperature=False)
+    assert 2.9 < ds["ratio"]["gain"] < 30.5
+    raw = ds["recording"].raw
+    assert raw.min() >= 0 and raw.max() <= 65535
+
+
+# ------------------------------------------------------------------ independent jig / hand-held
+@pytest.mark.parametrize("seed", SEEDS)
+def test_jig_clean_is_none(seed):
+    ds = im.make_jig([], seed, device="triad16", rate=100.0, noise=0.01, temperature=False)
+    assert _diagnose(ds, seed)["verdict"] == "none"
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_jig_offset_is_offset(seed):
+    ds = im.make_jig(["offset"], seed, device="triad16", rate=100.0, noise=0.01, motion=False, temperature=False)
+    res = _diagnose(ds, seed)
+    assert res["verdict"] == "offset", (res["verdict"], ds["ratio"])
+    assert res["effects"][0]["shrink"] > 0.6
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_jig_random_walk_drift_with_repeated_poses_is_bias_drift(seed):
+    ds = im.make_jig(["bias_drift"], seed, device="triad16", rate=100.0, noise=0.01, motion=False,
+                     temperature=False, repeats=True)
+    assert ds["effects"]["bias_drift"]["shape"] == "random_walk"
+    assert _diagnose(ds, seed)["verdict"] == "bias_drift"
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_jig_in_range_clip_is_saturation(seed):
+    ds = im.make_jig(["saturation"], seed, device="triad16", rate=100.0, noise=0.01, motion=False, temperature=False)
+    assert _diagnose(ds, seed)["verdict"] == "saturation"
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_jig_skew_with_jitter_on_the_array_is_time_skew(seed):
+    ds = im.make_jig(["time_skew"], seed, device="seed6", rate=100.0, noise=0.01, motion=True, temperature=False)
+    assert _diagnose(ds, seed)["verdict"] == "time_skew"
+
+
+@pytest.mark.parametrize("kind", ["pose_error", "bias_drift"])
+@pytest.mark.parametrize("seed", SEEDS)
+def test_six_poses_held_once_name_the_effect_or_flag_it(kind, seed):
+    """+-x, +-y, +-z each held once: a table tilt and a linear drift; the diagnosis names
+    the effect or lists it in ambiguous_with."""
+    ds = im.make_six_pose(kind, seed)
+    res = _diagnose(ds, seed)
+    assert res["verdict"] == kind or kind in _ambiguous(res), (res["verdict"], _ambiguous(res))
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_handheld_offset_is_offset(seed):
+    ds = im.make_handheld(["offset"], seed, device="triad16", rate=100.0, noise=0.01, temperature=False)
+    assert _diagnose(ds, seed)["verdict"] == "offset"
+
+
+# ------------------------------------------------------------------ the real Xsens recording
+@pytest.fixture(scope="module")
+def xsens(shared_data):
+    if shared_file(*XSENS_ACC) is None:
+        pytest.skip(f"{'/'.join(XSENS_ACC)} not in {shared_data}")
+    return im.real_model("xsens", shared_file)
+
+
+def test_xsens_clean_against_its_own_calibration_is_none(xsens):
+    dev, rec, _, cal = xsens
+    for seed in SEEDS:
+        assert diagnose(dev, cal, [rec], seed=seed)["verdict"] == "none"
+
+
+@pytest.mark.parametrize("effect", ["offset", "gain", "bias_drift"])
+@pytest.mark.parametrize("seed", SEEDS)
+def test_xsens_injected_effect_is_named(xsens, effect, seed):
+    dev, rec, step, cal = xsens
+    rec2, _, ratio = im.inject(dev, cal, rec, effect, seed, step=step)
+    res = diagnose(dev, cal, [rec2], seed=seed)
+    assert res["verdict"] == effect, (res["verdict"], ratio)
