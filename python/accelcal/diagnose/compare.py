@@ -9,7 +9,7 @@ the stepwise search):
 * A after B significant, B after A not: A explains all B does and more; A is the verdict.
 * neither significant after the other: they explain the same thing; the data cannot tell
   them apart (``ambiguous_with``), and ``separate_by`` names the poses or motions that
-  would (each effect's ``tell_apart``).
+  would (each effect's ``tell_apart``); the one with fewer parameters is the verdict.
 * both significant after the other: both act; the stepwise search names both.
 
 On data that cannot tell time from pose (:func:`time_separable`: static poses only, no
@@ -160,6 +160,9 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
                             "significant after it)")
         elif not c_after.significant and not b_after.significant:
             out.ambiguous.append(c.name)
+            if c.k < best.k and swap is None:
+                swap = (c.name, f"{c.name} explains the same part of the gap with fewer parameters "
+                                f"({c.k} against {best.k})")
     if swap is not None:
         name, why = swap
         out.swapped_from, out.why = best.name, why

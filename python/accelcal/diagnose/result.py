@@ -89,13 +89,18 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         if not sig:
             break
         best = sorted(sig, key=rank_key)[0]
+        step_duel = contest(D, cands, best, first if not chosen else results, y, pcur)
+        best = step_duel.best
+        # time-dependent rivals the data cannot tell from the chosen effect are not added later
+        for nm in step_duel.ambiguous:
+            if cands[nm].time_dependent and nm in remaining and nm != best.name:
+                remaining.remove(nm)
         if not chosen:
-            duel = contest(D, cands, best, first, y, pcur)
-            best = duel.best
-            # time-dependent rivals the data cannot tell from the verdict are not added later
-            for nm in duel.ambiguous:
-                if cands[nm].time_dependent and nm in remaining:
-                    remaining.remove(nm)
+            duel = step_duel
+        elif step_duel.swapped_from or step_duel.ambiguous:
+            best.notes = list(best.notes) + [f"step {len(chosen) + 1}: {step_duel.why or 'ranked first'}"
+                                             + (f"; cannot be told from {', '.join(step_duel.ambiguous)}"
+                                                if step_duel.ambiguous else "")]
         baseline = "the calibrated model" + ("" if not chosen else " + " + " + ".join(chosen))
         steps.append((best, baseline))
         chosen.append(best.name)
