@@ -82,14 +82,9 @@ def signed_triads(draw):
     return b, S
 
 
-@estimator
-@given(signed_triads(), st.lists(I16, min_size=3, max_size=3))
-@example((np.zeros(3), np.eye(3) * 16384 / G), [-32768, 32767, 0])
-def test_signed_triad_against_the_float_reference(tri, raw):
-    b, S = tri
-    tab = E.quantize_triad(b, S, signed=True)
-    assert tab.trim.dtype == np.int16
-    raw = np.array([raw])
+def check_triad_table(tab, b, S, raw):
+    """The core's triad result against its exact semantics (0.5 LSB) and the float reference
+    (the table's rounding bound), unless it saturated."""
     f_q, sat = E.triad_apply_fixed(tab, raw)
     exact = E.triad_exact(tab, raw)
     x = raw - tab.trim.astype(np.int64)
@@ -102,10 +97,35 @@ def test_signed_triad_against_the_float_reference(tri, raw):
         ref = E.triad_apply_float(b, S, raw) * 1024.0
         half = 0.5 * 2.0 ** (-tab.shift.astype(float))
         assert np.all(np.abs(f_q - ref) <= (np.abs(x).sum() + 1.0) * half + 0.5 + 1e-6 * np.abs(ref))
+    return f_q, sat
+
+
+@estimator
+@given(signed_triads(), st.lists(I16, min_size=3, max_size=3))
+@example((np.zeros(3), np.eye(3) * 16384 / G), [-32768, 32767, 0])
+def test_signed_triad_against_the_float_reference(tri, raw):
+    b, S = tri
+    tab = E.quantize_triad(b, S, signed=True)
+    assert tab.trim.dtype == np.int16
+    raw = np.array([raw])
+    f_q, sat = check_triad_table(tab, b, S, raw)
     # the unsigned path on offset-binary codes is the same table and the same numbers
     tab_u = E.TriadTable(trim=tab.trim_code(), m=tab.m, shift=tab.shift, k=tab.k)
     f_u, sat_u = E.triad_apply_fixed(tab_u, offset_binary(raw))
     assert np.array_equal(f_u, f_q) and np.array_equal(sat_u, sat)
+
+
+@st.composite
+def unsigned_triads(draw):
+    b, S = draw(signed_triads())
+    return b + draw(st.floats(4000.0, 61000.0)), S
+
+
+@estimator
+@given(unsigned_triads(), st.lists(st.integers(0, 65535), min_size=3, max_size=3))
+def test_triad_against_the_float_reference(tri, raw):
+    b, S = tri
+    check_triad_table(E.quantize_triad(b, S), b, S, np.array([raw]))
 
 
 # ---------------------------------------------------------------- headers with the C core
