@@ -201,3 +201,32 @@ def test_xsens_nominal_parameters_do_not_depend_on_the_start(shared_data):
     own = diagnose(dev, jf, [rec])
     assert m["heldout_rms_after"] <= 1.02 * own["model"]["heldout_rms_after"]
     assert m["relinearised"]["converged"]
+
+
+@pytest.mark.parametrize("seed", [2, 3, 5])
+@pytest.mark.parametrize("kind", ["mains", "resonance"])
+def test_a_tone_at_rest_is_unexplained(seed, kind):
+    """A tone present at rest as much as in motion (mains pickup on every channel, or a
+    ringing on channel 0 that decays after each knock) is in the within-segment scatter, so
+    only the spectral-line test sees it: unexplained, with the line's frequency."""
+    ds = B.make_dataset("none", seed)
+    dev = ds["device"]
+    fs = dev.sample_rate_hz
+    sig = float(np.sqrt(np.mean(dev.noise_counts() ** 2)))
+    recs = []
+    for r in ds["recordings"]:
+        raw = r.raw.astype(float)
+        if kind == "mains":
+            raw += 3 * sig * np.sin(2 * np.pi * 0.17 * fs * r.t)[:, None]
+        else:
+            raw[:, 0] += 6 * sig * np.sin(2 * np.pi * 0.38 * fs * r.t) * np.exp(-(r.t % 3.0) / 0.5)
+        recs.append(recording_from_arrays(r.t, np.round(raw).astype(np.int64), f=r.f, w=r.w, dw=r.dw, pose=r.pose,
+                                          temp_c=r.temp_c))
+    res = diagnose(dev, ds["cal"], recs)
+    u = res["unexplained"]
+    assert res["verdict"] == "unexplained" and u is not None
+    peak = 0.17 * fs if kind == "mains" else 0.38 * fs
+    assert abs(u["lines"]["peak_hz"] - peak) <= 2 * fs / 64
+    assert u["where"]["band"].startswith("a line at")
+    if kind == "resonance":
+        assert u["where"]["channels"] == [0]

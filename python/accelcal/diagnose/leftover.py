@@ -5,7 +5,8 @@ is split into noise and a systematic part:
 
 * noise: the scatter within static segments about their own means (the dof-weighted mean
   of the segment variances, so hand tremor and coloured noise at rest count as noise);
-  without static segments, the noise floor;
+  without static segments, the noise floor; less the power of narrow spectral lines
+  (:func:`spectral_lines`: a tone or a resonance is not noise however steady it is);
 * systematic: the static segments' means beyond what that scatter gives a mean
   (sum of n m^2 minus the sum of the variances), plus the moving samples' energy beyond
   the scatter.
@@ -23,11 +24,60 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy import signal, stats
+from scipy.ndimage import median_filter
 
 from ..effects.fitdata import FitData
 from .where import where_breakdown
 
 LEFT_MIN_RATIO = 0.5       # left at least this x the noise (the residual >= 1.118 x the noise)
+LINE_NPERSEG = 256         # Welch segment (samples) of the spectral-line test, at most ...
+LINE_MIN_NPERSEG = 32      # ... and at least
+LINE_BACKGROUND_BINS = 17  # running-median width (bins) of the smooth spectrum a line stands out of
+LINE_FALSE_ALARM = 1e-3    # chance that noise alone puts one bin over the line threshold (per channel)
+
+
+def spectral_lines(D: FitData, e_after: np.ndarray) -> dict | None:
+    """Narrow peaks in the residual's spectrum: tones and resonances that sit in the static
+    stretches as much as in motion, where the scatter test takes them for noise.
+
+    Per channel, the Welch spectrum (segments of LINE_NPERSEG samples within contiguous
+    runs) against its running median over LINE_BACKGROUND_BINS bins; bins above the
+    median by more than the chi2 quantile that noise alone exceeds with probability
+    LINE_FALSE_ALARM over all bins are a line.  Returns the lines' power beyond the
+    background (rms, counts) and where they are, or None."""
+    fs = 1.0 / D.h
+    lens = D.seg_hi - D.seg_lo
+    if lens.size == 0 or lens.max() < LINE_MIN_NPERSEG:
+        return None
+    # Welch segments as long as the typical run allows (a power of two, LINE_MIN_NPERSEG..LINE_NPERSEG)
+    L = int(min(LINE_NPERSEG, 2 ** int(math.log2(max(np.median(lens[lens >= LINE_MIN_NPERSEG]), 1)))))
+    acc = None
+    nseg = 0
+    for a, b in zip(D.seg_lo, D.seg_hi):
+        if b - a < L:
+            continue
+        f, P = signal.welch(e_after[a:b], fs=fs, nperseg=L, axis=0, detrend="constant")
+        k = (b - a) // (L // 2) - 1
+        acc = P * k if acc is None else acc + P * k
+        nseg += k
+    if acc is None or nseg < 2:
+        return None
+    P = acc / nseg                                           # (F, N) counts^2 / Hz
+    bg = median_filter(P, size=(LINE_BACKGROUND_BINS, 1), mode="nearest")
+    dof = 2.0 * nseg
+    ratio = stats.chi2.ppf(1.0 - LINE_FALSE_ALARM / P.shape[0], dof) / dof
+    ratio /= stats.chi2.median(dof) / dof                    # the background is a median
+    line = P > ratio * bg
+    line[0] = False                                          # DC: offsets, not lines
+    if not line.any():
+        return None
+    df = f[1] - f[0]
+    excess = np.where(line, P - bg, 0.0).sum(axis=0) * df    # counts^2 per channel
+    rms = math.sqrt(float(np.mean(excess)))
+    j = np.unravel_index(np.argmax(np.where(line, P - bg, 0.0)), P.shape)
+    return {"rms_counts": rms, "rms_per_channel": np.sqrt(excess).tolist(), "peak_hz": float(f[j[0]]),
+            "channels": [int(i) for i in np.flatnonzero(line.any(axis=0))], "line_bins": int(line.sum())}
 
 
 def _split(D: FitData, A: np.ndarray, floor2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -63,12 +113,22 @@ def leftover(D: FitData, e: np.ndarray, e_after: np.ndarray, before: float, afte
     floor2_rows = np.mean(D.sigma ** 2) * np.ones(Ra.shape[1])
     noise2, _, _ = _split(D, Ra, floor2_rows)
     noise = math.sqrt(float(np.mean(noise2)))
+    lines = spectral_lines(D, e_after)
+    tone = lines["rms_counts"] if lines is not None else 0.0
+    if lines is not None:
+        noise = math.sqrt(max(noise * noise - tone * tone, 0.0))    # the scatter held the lines too
     left = math.sqrt(max(after * after - noise * noise, 0.0))
+    # a line counts on its own channel: it may stand well above that channel's noise and still be
+    # a small part of the average over channels
+    n2c, sys_c, mov_c = _split(D, e_after, D.sigma ** 2)
+    line_ch = np.asarray(lines["rms_per_channel"]) if lines is not None else np.zeros(D.N)
+    loud_line = bool(np.any(line_ch >= LEFT_MIN_RATIO * np.sqrt(np.maximum(n2c - line_ch ** 2, 1e-300))))
+    if loud_line:
+        left = max(left, tone)
     fraction = left * left / (before * before)
-    if left < LEFT_MIN_RATIO * noise:
+    if left < LEFT_MIN_RATIO * max(noise, 1e-300) and not loud_line:
         return None
     # where: by channel (channel space), band, regime, poses
-    n2c, sys_c, mov_c = _split(D, e_after, D.sigma ** 2)
     rms_left_ch = np.sqrt(np.maximum(sys_c, 0.0) / D.n)
     top = float(rms_left_ch.max())
     channels = [int(i) for i in np.argsort(-rms_left_ch) if rms_left_ch[i] >= 0.25 * top and top > 0]
@@ -79,7 +139,10 @@ def leftover(D: FitData, e: np.ndarray, e_after: np.ndarray, before: float, afte
     regs = w["static_vs_rotating"]
     rex = [r["n"] * (r["rms_counts"] ** 2 - noise * noise) for r in regs]
     regime = regs[int(np.argmax(rex))]["label"] if regs else None
-    out = {"heldout_rms_left": left, "fraction": fraction, "noise_counts": noise,
+    if lines is not None and tone * tone >= 0.5 * left * left:
+        channels = lines["channels"]
+        band = f"a line at {lines['peak_hz']:.3g} Hz"
+    out = {"heldout_rms_left": left, "fraction": fraction, "noise_counts": noise, "lines": lines,
            "where": {"channels": channels, "rms_left_per_channel": rms_left_ch.tolist(), "band": band,
                      "regime": regime,
                      "moving_share": float(np.sum(np.maximum(mov_c, 0)) / max(np.sum(np.maximum(sys_c, 0)), 1e-300))}}
