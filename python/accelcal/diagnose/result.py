@@ -84,12 +84,14 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     remaining = list(active)
     chosen: list[str] = []
     duel = None
+    Dk = D                     # the data as linearised for the current step
+    m0 = 1.0 if model_centripetal else 0.0
     while True:
         sig = [c for c in results.values() if c.significant]
         if not sig:
             break
         best = sorted(sig, key=rank_key)[0]
-        step_duel = contest(D, cands, best, first if not chosen else results, y, pcur)
+        step_duel = contest(Dk, cands, best, first if not chosen else results, y, pcur)
         best = step_duel.best
         # time-dependent rivals the data cannot tell from the chosen effect are not added later
         for nm in step_duel.ambiguous:
@@ -110,7 +112,16 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
             pcur = pcur + best.delta
         if len(chosen) >= max_steps or not remaining:
             break
-        results, _, _ = run_candidates(D, cands, remaining, y, pcur, progress)
+        if Dk.mode == "jigfree" and best.gain > 0 and cands[best.name].absorbs:
+            # a change of the calibration itself: the next step is scored about the corrected
+            # calibration (new pose forces), not on the first linearisation's residual
+            now = [c.name for c, _ in steps if c.gain > 0]
+            rl = relinearise(dev, cal, recs, int(folds), int(seed), m0, cands, now, {c.name: c for c, _ in steps}, Dk)
+            Dk = rl["D"]
+            done = sum((rl["joint"][nm].delta for nm in now), np.zeros_like(rl["e"]))
+            y = rl["e"] - done
+            pcur = Dk.p0 + done
+        results, _, _ = run_candidates(Dk, cands, remaining, y, pcur, progress)
 
     # --- joint refit of the chosen effects (backfitting), re-linearised about the corrected calibration
     fitted = [c.name for c, _ in steps if c.gain > 0]
@@ -118,8 +129,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     if len(fitted) > 1:
         joint.update(joint_fit(D, cands, fitted, e, start={nm: joint[nm] for nm in fitted}))
     total_delta = sum((joint[nm].delta for nm in fitted), np.zeros_like(e))
-    relin = relinearise(dev, cal, recs, int(folds), int(seed), 1.0 if model_centripetal else 0.0, cands, fitted,
-                        joint, D) if fitted else None
+    relin = relinearise(dev, cal, recs, int(folds), int(seed), m0, cands, fitted, joint, D) if fitted else None
 
     # --- output ------------------------------------------------------------------------------------
     effects = []
