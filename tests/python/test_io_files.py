@@ -445,3 +445,29 @@ def test_calibrate_refuses_bad_new_forms(form, data, capfd, tmp_path_factory):
         (d / "rec").write_bytes(blob)
         rc, _, err, caught = run(["calibrate", "--device", dev, d / "rec", "-o", out / "cal.json"], capfd)
         check_rejected(rc, err, caught, out, repr(blob[:200]))
+
+
+def test_readme_convert_examples_run(shared_data, tmp_path, capfd, monkeypatch):
+    """The README's "Files from other tools" commands, convert and calibrate run as written
+    (input names found in shared/data) with the summary lines it quotes."""
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    section = readme.split("## Files from other tools\n", 1)[1].split("\n## ", 1)[0]
+    blocks = re.findall(r"```sh\n(.*?)```", section, re.S)
+    assert len(blocks) == 2
+    monkeypatch.chdir(tmp_path)
+    inputs = {p.name: p for d in ("imucal", "mpu6050_tomisuarez") for p in (shared_data / d).iterdir()}
+    ran = 0
+    for block in blocks:
+        lines = block.replace("\\\n", " ").splitlines()
+        for i, line in enumerate(lines):
+            cmd = line.split("#")[0].split()
+            if cmd[:2] not in (["accelcal", "convert"], ["accelcal", "calibrate"]):
+                continue
+            rc, out, err, _ = run([str(inputs.get(a, a)) for a in cmd[1:]], capfd)
+            assert rc == 0, err
+            quoted = [ln.lstrip("# ").strip() for ln in lines[i + 1:i + 3] if ln.startswith("#")]
+            said = " ".join(q for q in quoted if not q.startswith("accelcal convert: note"))
+            first = said.split("...")[0].split("(")[0].strip()
+            assert first and first in out, (first, out)
+            ran += 1
+    assert ran == 4
