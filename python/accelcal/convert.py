@@ -335,11 +335,11 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
         (pose, f), names = kept, [str(k) for k in np.unique(kept[0][kept[0] >= 0])]
     else:
         pose, f, names = label_poses(index, part, opts.regions, opts.stated_f, gravity, source, opts.regions_source)
-    metadata = {"source_file": source, "source_format": fmt, **metadata}
+    metadata = {"source_file": " ".join(source.splitlines()), "source_format": fmt, **metadata}
     if scale is not None:
         metadata["source_scale"] = scale.describe()
     if opts.regions_source:
-        metadata["source_regions"] = opts.regions_source
+        metadata["source_regions"] = " ".join(opts.regions_source.splitlines())
     if names and kept is None:
         metadata["pose_names"] = " ".join(f"{k}={nm}" for k, nm in enumerate(names))
     rec = Recording(t=t, raw=raw, f=f, pose=pose, metadata=metadata, source=source)
@@ -493,4 +493,3 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         pre, meta, fs = mpu6050_preamble(source, data, pre)
         opts.rate_hz = rate_hz if rate_hz is not None else fs
     return convert_table(source, data, pre, fmt, opts, meta)
-
