@@ -18,6 +18,7 @@ from tqdm import tqdm
 from . import __version__
 from .calibrate import JIG_ACCURACY_DEG, calibrate_recordings
 from .calibration import load_calibration, save_calibration
+from .convert_cli import add_convert_parser
 from .demo import run_demo
 from .device import default_device, load_device
 from .diagnose import diagnose
@@ -441,6 +442,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--folds", type=int, default=5, help="blocked cross-validation folds")
     s.add_argument("--seed", type=int, default=0, help="seed of the cross-validation folds (default %(default)s)")
     s.set_defaults(func=cmd_diagnose)
+    add_convert_parser(sub, check_output)
     return p
 
 

@@ -12,19 +12,19 @@ that names the row and column.
 from __future__ import annotations
 
 import csv
-
 import math
-import os
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from .csvformat import CSV_G, CSV_G_NAN, CSV_INT, CSV_REPR, G_FORMAT_RE, csv_cell, csv_rows, float_strings
-from .csvtable import (META_KEY_RE, META_RE, RAW_RE, REFERENCE_NAMES, VECTOR_COLUMNS, ByteTable, CellError, ListTable,
+from .csvtable import (FLOAT_RE, META_KEY_RE, RAW_RE, REFERENCE_NAMES, VECTOR_COLUMNS, ByteTable, CellError, ListTable,
                        classify_columns, convert_column, quote_cell, scan_fast, split_header)
 from .errors import InputError, atomic_write
 from .recording_checks import check_core_input, check_for_device
+from .textinput import is_whitespace_header, read_preamble, read_text_bytes, split_whitespace_header, whitespace_to_commas
+from .units import Scale, converted_metadata, scale_from_metadata, to_counts
 
 __all__ = ["Recording", "check_for_device", "check_core_input", "read_recording", "write_recording", "write_columns_csv",
            "recording_from_arrays", "VECTOR_COLUMNS"]
@@ -242,57 +242,55 @@ def recording_from_arrays(
 # --------------------------------------------------------------------------
 
 
-def read_recording(path: Any, n_channels: int | None = None) -> Recording:
-    """Read a recording CSV (see the data contract).
+def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | None = None,
+                   columns: list[str] | None = None) -> Recording:
+    """Read a recording (see the data contract and its extensions).
 
-    ``n_channels``: the device's channel count; raw_0..raw_{N-1} must then be
-    present and no other raw_k.  Without it, N is the number of contiguous
-    raw_k columns.  Any violation raises InputError naming the file, the
-    line and the column.
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A CSV file, or text whose header has no comma and whose cells are separated by
+        runs of blanks or tabs; either may be gzip-compressed (told by its first bytes).
+    n_channels : int, optional
+        The device's channel count; raw_0..raw_{N-1} must then be present and no other
+        raw_k.  Without it, N is the number of contiguous raw_k columns.
+    scale : units.Scale, optional
+        The raw_k readings' unit and LSB, overriding the file's ``# units:``/``# lsb:``
+        comments (:mod:`accelcal.units`): m/s^2 or g become counts exactly or not at all.
+    columns : list of str, optional
+        The column names of a file without a header row (its first non-comment line is data).
+
+    Raises
+    ------
+    InputError
+        Any violation, naming the file, the line (of the decompressed text) and the column.
     """
-    source = os.fspath(path) if not isinstance(path, str) else path
-    try:
-        with open(path, "rb") as fh:
-            data = fh.read()
-    except OSError as e:
-        raise InputError(source, f"cannot read the file: {e.strerror or e}") from None
-    try:
-        data.decode("utf-8")
-    except UnicodeDecodeError as e:
-        line = data.count(b"\n", 0, e.start) + 1
-        raise InputError(source, f"not valid UTF-8 text (byte {e.start})", row=line) from None
-    if data.startswith(b"\xef\xbb\xbf"):  # spreadsheet BOM: not data
-        data = data[3:]
-    if b"\r" in data:
-        data = data.replace(b"\r\n", b"\n")
-
-    # Preamble: comments (metadata) and blank lines, then the header.
-    metadata: dict[str, str] = {}
-    pos, line_no, header = 0, 0, None
-    while pos < len(data):
-        end = data.find(b"\n", pos)
-        end = len(data) if end < 0 else end
-        text = data[pos:end].decode("utf-8")
-        line_no += 1
-        pos = end + 1
-        if text.startswith("#"):
-            m = META_RE.fullmatch(text)
-            if m:
-                metadata[m.group(1)] = m.group(2).strip()
-            continue
-        if not text.strip():
-            continue
-        header = text
-        break
+    source, data = read_text_bytes(path)
+    pre = read_preamble(data)
+    metadata, header, pos = pre.metadata, pre.header, pre.pos
     if header is None:
         what = "the file is empty" if not data.strip() else "no header row after the comments"
         raise InputError(source, f"{what} (expected a header such as 't,raw_0,raw_1,...')")
-    header_line = line_no
-    try:
-        names = split_header(header)
-    except csv.Error as e:
-        raise InputError(source, f"the header cannot be split into columns ({e})", row=header_line) from None
+    header_line = pre.header_line
+    spaced = is_whitespace_header(header)
+    if columns is not None:
+        names, pos, header_line = list(columns), pre.header_pos, pre.header_line - 1
+    elif spaced:
+        names = split_whitespace_header(header)
+    else:
+        try:
+            names = split_header(header)
+        except csv.Error as e:
+            raise InputError(source, f"the header cannot be split into columns ({e})", row=header_line) from None
+    if columns is None and all(FLOAT_RE.fullmatch(c) for c in names):
+        raise InputError(source, "the first line is numbers, not a header (expected 't,raw_0,raw_1,...'; a "
+                         "table without one, such as imu_tk's 't ax ay az', is read by 'accelcal convert')",
+                         row=header_line)
     cols = classify_columns(names, n_channels, source, header_line)
+    if scale is None:
+        scale = scale_from_metadata(metadata, pre.metadata_lines, source)
+    if scale is not None and scale.converts:  # raw_k as finite numbers, then counts
+        cols = {k: (j, "t" if kind == "raw" else kind) for k, (j, kind) in cols.items()}
 
     # Trailing blank lines are not rows; blank lines inside the data are errors.
     # (Offsets, not slices: the data may be hundreds of MB.)
@@ -304,6 +302,9 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
         end = max(cut, pos)
     if end <= pos:
         raise InputError(source, "no data rows after the header", row=header_line)
+    if spaced:
+        data = whitespace_to_commas(data, pos, end, names, header_line + 1, source)
+        end = len(data)
     m = len(names)
     first = header_line + 1
     table: Any = None
@@ -349,10 +350,15 @@ def read_recording(path: Any, n_channels: int | None = None) -> Recording:
             column="t",
         )
 
-    n_raw = sum(1 for k in cols.values() if k[1] == "raw")
-    raw = np.empty((n, n_raw), dtype=np.int64)
-    for k in range(n_raw):
-        raw[:, k] = values[f"raw_{k}"]
+    n_raw = sum(1 for name in cols if RAW_RE.fullmatch(name))
+    if scale is not None and scale.converts:
+        raw = to_counts(np.column_stack([values[f"raw_{k}"] for k in range(n_raw)]), scale, source,
+                        lambda i, k: (located().line(i), f"raw_{k}"))
+        metadata = converted_metadata(metadata, scale)
+    else:
+        raw = np.empty((n, n_raw), dtype=np.int64)
+        for k in range(n_raw):
+            raw[:, k] = values[f"raw_{k}"]
     vecs: dict[str, np.ndarray | None] = {}
     for vec, comps in VECTOR_COLUMNS.items():
         if comps[0] not in values:

@@ -1,6 +1,6 @@
 """The real Xsens accelerometer recording from imu_tk (shared/data/imu_tk_xsens).
 
-File: whitespace-separated ASCII (optionally gzip), one sample a row: t [s], then
+File: whitespace-separated ASCII (optionally gzip), no header, one sample a row: t [s], then
 raw x, y, z in 16-bit ADC counts, 100 Hz.  No reference orientation: a jig-free
 calibration problem (about 50 s at rest, then about 40 hand-held static poses).
 
@@ -21,46 +21,38 @@ Device built for it (a triad at the origin, axes x, y, z):
 """
 from __future__ import annotations
 
-import gzip
-import os
 from typing import Any
 
 import numpy as np
 
 from .device import Device
-from .errors import InputError
-from .recording import Recording
+from .recording import Recording, read_recording
 
 __all__ = ["load_xsens", "XSENS_GRAVITY", "XSENS_ZERO"]
 
 XSENS_GRAVITY = 9.81744
 XSENS_ZERO = 32768.0
+COLUMNS = ("t", "raw_0", "raw_1", "raw_2")  # the file has no header: imu_tk's t, x, y, z
 
 
 def load_xsens(path: Any) -> tuple[Device, Recording]:
-    """Read the imu_tk accelerometer file; returns (Device, Recording)."""
-    source = os.fspath(path)
-    opener = gzip.open if source.endswith(".gz") else open
-    try:
-        with opener(source, "rt") as fh:
-            data = np.loadtxt(fh, ndmin=2)
-    except OSError as e:
-        raise InputError(source, f"cannot read the file: {e.strerror or e}") from None
-    except ValueError as e:
-        raise InputError(source, f"not a whitespace-separated table of numbers: {e}") from None
-    if data.shape[1] != 4:
-        raise InputError(source, f"expected 4 columns (t, x, y, z), got {data.shape[1]}", row=1)
-    bad = np.argwhere(~np.isfinite(data))
-    if bad.size:
-        raise InputError(source, "not a finite number", row=int(bad[0][0]) + 1)
-    t = data[:, 0]
-    raw = data[:, 1:]
-    if np.any(raw != np.round(raw)):
-        r = int(np.argwhere(raw != np.round(raw))[0][0])
-        raise InputError(source, "raw readings must be integer counts", row=r + 1)
-    dt_bad = np.flatnonzero(~(np.diff(t) > 0))
-    if dt_bad.size:
-        raise InputError(source, "t must be strictly increasing", row=int(dt_bad[0]) + 2)
+    """Read the imu_tk accelerometer file; returns (Device, Recording).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        imu_tk's text: no header, whitespace-separated ``t ax ay az`` (s, then counts;
+        integral values may be written as ``3.3108000e+04``), gzip-compressed or not (told
+        by the first bytes).
+
+    Raises
+    ------
+    InputError
+        Naming the file, the line and the column (t, raw_0, raw_1, raw_2) of the first bad
+        cell, a row that has not 4 cells, or a time that does not increase.
+    """
+    rec = read_recording(path, 3, columns=list(COLUMNS))
+    t, raw = rec.t, rec.raw
     lo, hi = np.percentile(raw, [1.0, 99.0], axis=0)
     scale = round(float(np.mean((hi - lo) / 2.0)) / XSENS_GRAVITY, 1)
     rate = 1.0 / float(np.median(np.diff(t)))
@@ -76,5 +68,4 @@ def load_xsens(path: Any) -> tuple[Device, Recording]:
         zero_counts=np.full(3, XSENS_ZERO),
         noise_mps2=0.0,
     )
-    rec = Recording(t=t, raw=raw.astype(np.int64), source=source)
     return device, rec

@@ -1,0 +1,495 @@
+"""``accelcal convert``: the data contract's recording (and a nominal device) from the
+files other tools write.
+
+Formats (``detect_format`` tells them from the first line that is not a comment):
+
+- ``imu_tk``: imu_tk's text, no header, whitespace-separated ``t ax ay az`` (s, counts),
+  read by :func:`accelcal.xsens.load_xsens`.
+- ``imucal``: imucal's CSV, columns ``acc_x, acc_y, acc_z`` (m/s^2 or g with a stated
+  LSB, or counts), no time column (``--rate``; an index column ``n_samples`` or
+  ``samples`` gives each row's sample number), poses from a JSON of ``{name: {start,
+  end}}`` sample ranges (end excluded) or from a ``part`` column.
+- ``mpu6050``: the MPU-6050 logger's CSV: ``key,value`` lines (``Fs,100`` the rate), then
+  ``ax,ay,az,gx,gy,gz`` in signed counts, no time column.
+- ``csv``: a recording per the contract (or any form ``read_recording`` takes: gzip,
+  whitespace, physical units), rewritten as plain CSV in counts.
+
+Gyroscope columns are dropped (one note).  Pose regions named ``x_p, x_a, y_p, y_a, z_p,
+z_a`` (imucal's: that axis pointing up, or down) can state the reference specific force
+(``stated_f``): +-g along that axis, making a known-pose (``full``) calibration possible.
+Regions whose name ends in ``_rot`` are motions, not poses.
+"""
+from __future__ import annotations
+
+import csv
+import re
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .csvtable import ByteTable, CellError, ListTable, convert_column, split_header
+from .device import Device
+from .errors import InputError
+from .jsonfields import JsonFields, read_json
+from .recording import Recording, read_recording
+from .textinput import is_whitespace_header, read_preamble, read_text_bytes, split_whitespace_header, whitespace_to_commas
+from .units import STANDARD_GRAVITY, Scale, scale_from_metadata, to_counts
+from .xsens import load_xsens
+
+__all__ = ["FORMATS", "POSE_DIRECTIONS", "Converted", "detect_format", "convert_file", "read_regions"]
+
+FORMATS = ("auto", "imu_tk", "imucal", "mpu6050", "csv")
+POSE_DIRECTIONS = {"x_p": (1, 0, 0), "x_a": (-1, 0, 0), "y_p": (0, 1, 0), "y_a": (0, -1, 0),
+                   "z_p": (0, 0, 1), "z_a": (0, 0, -1)}
+ACC = {"imucal": ("acc_x", "acc_y", "acc_z"), "mpu6050": ("ax", "ay", "az")}
+INDEX_COLUMNS = ("n_samples", "samples")
+GYRO_RE = re.compile(r"(gyr|gyro|g)[_ ]?[xyz]|w_?[xyz]", re.I)
+NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+
+
+@dataclass
+class Converted:
+    """A converted file: the contract recording, a nominal device for it, and what was done.
+
+    Attributes
+    ----------
+    recording : Recording
+        Counts in raw_0..raw_2, t in s, pose labels (and f in m/s^2 when stated).
+    device : Device or None
+        A nominal triad for the recording: counts per m/s^2 from the LSB when known, else
+        from the data's spread; zero 0 (signed) or 2**(bits-1) (unsigned); the ADC's range.
+    format, pose_names, notes, scale, sorted_rows
+        The format read; the region name of pose label 0, 1, ...; lines for stderr;
+        what one count of the file's readings was; whether the rows were put in sample order.
+    """
+
+    recording: Recording
+    device: Device | None
+    format: str
+    pose_names: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    scale: Scale | None = None
+    sorted_rows: bool = False
+    device_notes: list[str] = field(default_factory=list)  # how the nominal device was made
+
+    def summary(self, output: Any) -> str:
+        """One line: rows, channels, rate, poses, where it went."""
+        rec = self.recording
+        rate = 1.0 / float(np.median(np.diff(rec.t))) if rec.n_samples > 1 else float("nan")
+        what = f"{self.format}: {rec.n_samples} rows, {rec.n_channels} channels"
+        if self.scale is not None and self.scale.converts:
+            what += f" ({self.scale.describe()})"
+        what += f", {rate:.6g} Hz"
+        if self.pose_names:
+            what += f", {len(self.pose_names)} poses ({', '.join(self.pose_names)})"
+            what += ", reference f stated" if rec.has_f() else ""
+        else:
+            what += ", no pose labels"
+        if self.sorted_rows:
+            what += ", rows put in sample order"
+        return f"{what}; written to {output}"
+
+
+# ---- detection ---------------------------------------------------------------------
+
+def header_cells(header: str) -> list[str]:
+    if is_whitespace_header(header):
+        return split_whitespace_header(header)
+    try:
+        return split_header(header)
+    except csv.Error:
+        return [header]
+
+
+def detect_format(path: Any, data: bytes | None = None) -> str:
+    """The format of a file (its text ``data`` when already read), from its first line that
+    is not a comment.
+
+    Raises
+    ------
+    InputError
+        Unreadable, empty, or none of the formats (naming the line).
+    """
+    source, data = read_text_bytes(path) if data is None else (str(path), data)
+    pre = read_preamble(data)
+    if pre.header is None:
+        raise InputError(source, "the file is empty (nothing but comments and blank lines)")
+    cells = header_cells(pre.header)
+    low = {c.strip().lower() for c in cells}
+    if "t" in cells and "raw_0" in cells:
+        return "csv"
+    if set(ACC["imucal"]) <= low:
+        return "imucal"
+    if set(ACC["mpu6050"]) <= low or cells[0].strip().lower() == "fs":
+        return "mpu6050"
+    if is_whitespace_header(pre.header) and all(NUMBER_RE.fullmatch(c) for c in cells):
+        return "imu_tk"
+    raise InputError(source, f"cannot tell the format from this line ({pre.header[:60]!r}): expected a "
+                     "recording CSV (t, raw_0, ...), imucal's acc_x/acc_y/acc_z, the MPU-6050 log (Fs,... "
+                     "then ax,ay,az,...) or imu_tk's 't ax ay az' text; give --format", row=pre.header_line)
+
+
+# ---- regions -------------------------------------------------------------------------
+
+def read_regions(path: Any) -> list[tuple[str, int, int]]:
+    """Pose regions from a JSON object ``{name: {"start": s, "end": e}, ...}``.
+
+    Returns
+    -------
+    list of (name, start, end)
+        In the file's order; samples ``start <= k < end``.
+
+    Raises
+    ------
+    InputError
+        Naming the field (``x_p.start``) that is missing, not an integer >= 0, or whose
+        range is empty or overlaps another.
+    """
+    doc, source = read_json(path)
+    v = JsonFields(source)
+    v.no_nonfinite(doc, "")
+    doc = v.obj(doc, "")
+    if not doc:
+        raise v.fail("", "no regions (expected {name: {\"start\": ..., \"end\": ...}, ...})")
+    out = []
+    for name, reg in doc.items():
+        reg = v.obj(reg, name)
+        v.known(reg, name, ("start", "end"))
+        start = v.integer(v.get(reg, "start", name), f"{name}.start")
+        end = v.integer(v.get(reg, "end", name), f"{name}.end")
+        if start < 0:
+            raise v.fail(f"{name}.start", f"expected a sample number >= 0, got {start}")
+        if end <= start:
+            raise v.fail(f"{name}.end", f"expected end > start ({start}), got {end}")
+        for other, s, e in out:
+            if start < e and s < end:
+                raise v.fail(name, f"[{start}, {end}) overlaps region {other!r} [{s}, {e})")
+        out.append((name, start, end))
+    return out
+
+
+def is_motion(name: str) -> bool:
+    return name.lower().endswith("_rot")
+
+
+def label_poses(index: np.ndarray, names_per_sample: list[str] | None, regions, stated_f: bool,
+                gravity: float, source: str, regions_source: str | None):
+    """(pose (n,), f (n, 3) or None, pose names) from regions of sample numbers or per-sample names."""
+    n = index.shape[0]
+    pose = np.full(n, -1, dtype=np.int64)
+    names: list[str] = []
+    if regions is not None:
+        for name, start, end in regions:
+            sel = (index >= start) & (index < end)
+            if not sel.any():
+                raise InputError(regions_source, f"[{start}, {end}) holds none of the recording's samples "
+                                 f"({int(index[0])}..{int(index[-1])})", field=name)
+            if not is_motion(name):
+                pose[sel] = len(names)
+                names.append(name)
+    elif names_per_sample is not None:
+        code: dict[str, int] = {}
+        for i, nm in enumerate(names_per_sample):
+            nm = nm.strip()
+            if nm and not is_motion(nm):
+                if nm not in code:
+                    code[nm] = len(names)
+                    names.append(nm)
+                pose[i] = code[nm]
+    f = None
+    if stated_f:
+        if not names:
+            raise InputError(source, "--stated-f: no pose regions (give --regions JSON or a part column)")
+        unknown = [nm for nm in names if nm not in POSE_DIRECTIONS]
+        if unknown:
+            raise InputError(regions_source or source, f"--stated-f: pose {unknown[0]!r} states no direction "
+                             f"(names that do: {', '.join(POSE_DIRECTIONS)})",
+                             field=unknown[0] if regions_source else None)
+        dirs = np.array([POSE_DIRECTIONS[nm] for nm in names], dtype=float) * gravity
+        f = np.where(pose[:, None] >= 0, dirs[np.maximum(pose, 0)], np.nan)
+    return pose, f, names
+
+
+# ---- tables --------------------------------------------------------------------------
+
+def read_columns(source: str, data: bytes, pre, want: dict[str, str]) -> tuple[list[str], dict, Any]:
+    """The header's columns and the cells of the wanted ones (kinds: raw, t, text) with the
+    reader's strict errors; returns (names, {name: values}, table)."""
+    header = pre.header
+    spaced = is_whitespace_header(header)
+    names = [c.strip() for c in header_cells(header)]
+    pos = pre.pos
+    end = pos + len(data[pos:].rstrip(b"\n \t"))  # trailing blank lines are not rows
+    if end <= pos:
+        raise InputError(source, "no data rows after the header", row=pre.header_line)
+    first = pre.header_line + 1
+    if spaced:
+        data = whitespace_to_commas(data, pos, end, names, first, source)
+        end = len(data)
+    if data.find(b'"', pos, end) >= 0:
+        table = ListTable(data[pos:end].decode("utf-8"), len(names), first, source)
+    else:
+        table = ByteTable(data, pos, end, len(names), first, source)
+    values, errors = {}, []
+    for name, kind in want.items():
+        j = names.index(name)
+        if kind == "text":
+            values[name] = table.strings(j)
+            continue
+        try:
+            values[name] = convert_column(table, j, kind)
+        except CellError as e:
+            errors.append((e.i, j, e.message))
+    if errors:
+        i, j, msg = min(errors)
+        if want[names[j]] == "raw" and names[j] not in INDEX_COLUMNS and NUMBER_RE.fullmatch(table.cell(i, j).strip()):
+            msg += " (readings in m/s^2 or g: state --units mps2|g with --lsb VALUE or --full-scale G)"
+        raise InputError(source, msg, row=table.line(i), column=names[j])
+    return names, values, table
+
+
+def find_column(names: list[str], wanted: str) -> str | None:
+    return next((n for n in names if n.strip().lower() == wanted), None)
+
+
+# ---- the formats -----------------------------------------------------------------------
+
+@dataclass
+class Options:
+    """What the command line states (see :func:`convert_file`)."""
+
+    scale: Scale | None = None
+    rate_hz: float | None = None
+    regions: list[tuple[str, int, int]] | None = None
+    regions_source: str | None = None
+    stated_f: bool = False
+    gravity_mps2: float | None = None
+    bits: int = 16
+
+
+def adc_range(bits: int, signed: bool) -> tuple[int, int]:
+    return (-(2 ** (bits - 1)), 2 ** (bits - 1) - 1) if signed else (0, 2 ** bits - 1)
+
+
+def nominal_triad(name: str, rate: float, gravity: float, raw: np.ndarray, bits: int, signed: bool,
+                  scale: Scale | None, notes: list[str]) -> Device:
+    """A triad at the origin along x, y, z: counts per m/s^2 from the LSB when stated, else half
+    the spread of each axis between its 1st and 99th percentiles, over g (as load_xsens)."""
+    k = scale.counts_per_mps2(gravity) if scale is not None else None
+    if k is None:
+        lo, hi = np.percentile(raw, [1.0, 99.0], axis=0)
+        k = round(float(np.mean((hi - lo) / 2.0)) / gravity, 1)
+        if k > 0:
+            notes.append(f"the device's nominal scale, {k:g} counts per m/s^2, is taken from the readings' "
+                         "spread (state --full-scale G for the chip's)")
+        else:
+            k = 2.0 ** (bits - 1) / (2.0 * gravity)
+            notes.append(f"the readings span no range: the device's nominal scale is a guess ({k:g} counts per "
+                         "m/s^2, +-2 g); state --full-scale G")
+    lo, hi = adc_range(bits, signed)
+    return Device(name=name, sample_rate_hz=round(rate, 6), gravity_mps2=gravity, raw_min=lo, raw_max=hi,
+                  positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, k),
+                  zero_counts=np.full(3, 0.0 if signed else 2.0 ** (bits - 1)), noise_mps2=0.0)
+
+
+def check_range(raw: np.ndarray, bits: int, signed: bool, source: str, locate) -> None:
+    lo, hi = adc_range(bits, signed)
+    out = np.argwhere((raw < lo) | (raw > hi))
+    if out.size:
+        i, j = (int(v) for v in out[0])
+        row, column = locate(i, j)
+        raise InputError(source, f"reading {int(raw[i, j])} counts is outside {'signed' if signed else 'unsigned'} "
+                         f"{bits}-bit [{lo}, {hi}] (state --bits N)", row=row, column=column)
+
+
+def in_sample_order(index: np.ndarray, source: str, column: str | None, line) -> np.ndarray | None:
+    """The permutation putting the rows in order of their sample numbers (None when they are)."""
+    if np.all(np.diff(index) > 0):
+        return None
+    order = np.argsort(index, kind="stable")
+    dup = np.flatnonzero(np.diff(index[order]) == 0)
+    if dup.size:
+        a, b = sorted(int(v) for v in order[dup[0]:dup[0] + 2])
+        raise InputError(source, f"sample number {int(index[b])} is also that of row {line(a)}", row=line(b),
+                         column=column)
+    return order
+
+
+def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndarray | None, part: list[str] | None,
+           opts: Options, scale: Scale | None, signed: bool, rate: float | None, metadata: dict[str, str],
+           notes: list[str], locate, index_column: str | None, device: Device | None = None,
+           kept: tuple[np.ndarray, np.ndarray] | None = None) -> Converted:
+    """Range check, sample order, time, poses, metadata and the nominal device, shared by the formats."""
+    check_range(raw, opts.bits, signed, source, locate)
+    order = in_sample_order(index, source, index_column, lambda i: locate(i, 0)[0]) if t is None else None
+    if order is not None:
+        raw, index = raw[order], index[order]
+        part = None if part is None else [part[i] for i in order.tolist()]
+    if t is None:
+        t = index / rate
+    gravity = opts.gravity_mps2 or (device.gravity_mps2 if device is not None else STANDARD_GRAVITY)
+    if t is not None:
+        rate = 1.0 / float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    if kept is not None:  # a contract recording without --regions keeps its labels and references
+        (pose, f), names = kept, [str(k) for k in np.unique(kept[0][kept[0] >= 0])]
+    else:
+        pose, f, names = label_poses(index, part, opts.regions, opts.stated_f, gravity, source, opts.regions_source)
+    metadata = {"source_file": " ".join(source.splitlines()), "source_format": fmt, **metadata}
+    if scale is not None:
+        metadata["source_scale"] = scale.describe()
+    if opts.regions_source:
+        metadata["source_regions"] = " ".join(opts.regions_source.splitlines())
+    if names and kept is None:
+        metadata["pose_names"] = " ".join(f"{k}={nm}" for k, nm in enumerate(names))
+    rec = Recording(t=t, raw=raw, f=f, pose=pose, metadata=metadata, source=source)
+    device_notes: list[str] = []
+    if device is None:
+        device = nominal_triad(f"{fmt}-triad", rate, gravity, raw, opts.bits, signed, scale, device_notes)
+    return Converted(rec, device, fmt, names, notes, scale, order is not None, device_notes)
+
+
+def drop_note(dropped: list[str], ignored: list[str]) -> list[str]:
+    parts = []
+    if dropped:
+        parts.append(f"dropped gyroscope column{'s' if len(dropped) > 1 else ''} {', '.join(dropped)} (accelcal "
+                     "calibrates the accelerometer)")
+    if ignored:
+        parts.append(f"ignored column{'s' if len(ignored) > 1 else ''} {', '.join(ignored)}")
+    return ["; ".join(parts)] if parts else []
+
+
+def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metadata: dict[str, str]) -> Converted:
+    """imucal's CSV or the MPU-6050 log's rows (after its key,value lines)."""
+    names = [c.strip() for c in header_cells(pre.header)]
+    acc = [find_column(names, a) for a in ACC[fmt]]
+    if None in acc:
+        missing = ACC[fmt][acc.index(None)]
+        raise InputError(source, f"the header has no {missing} column (expected {', '.join(ACC[fmt])})",
+                         row=pre.header_line)
+    scale = opts.scale or scale_from_metadata(pre.metadata, pre.metadata_lines, source)
+    converts = scale is not None and scale.converts
+    want = {a: ("t" if converts else "raw") for a in acc}
+    index_column = next((n for n in names if n.lower() in INDEX_COLUMNS), None)
+    if index_column:
+        want[index_column] = "raw"
+    part_column = find_column(names, "part") if opts.regions is None else None
+    if part_column:
+        want[part_column] = "text"
+    names, values, table = read_columns(source, data, pre, want)
+    matrix = np.column_stack([values[a] for a in acc])
+
+    def locate(i: int, j: int) -> tuple[int, str]:
+        return table.line(i), acc[j]
+
+    raw = to_counts(matrix, scale, source, locate) if converts else matrix.astype(np.int64)
+    n = raw.shape[0]
+    index = values[index_column] if index_column else np.arange(n)
+    rate = opts.rate_hz
+    if rate is None:
+        raise InputError(source, f"{fmt} files have no time column: give the sample rate with --rate HZ")
+    used = set(want)
+    dropped = [c for c in names if c and c not in used and GYRO_RE.fullmatch(c)]
+    ignored = [c for c in names if c and c not in used and c not in dropped]
+    return finish(source, fmt, raw, index, None, values.get(part_column), opts, scale, True, rate, metadata,
+                  drop_note(dropped, ignored), locate, index_column)
+
+
+def mpu6050_preamble(source: str, data: bytes, pre) -> tuple[Any, dict[str, str], float | None]:
+    """The logger's ``key,value`` lines before the header ``ax,ay,az,...``: (the header's
+    preamble, metadata ``mpu6050.<key>``, the rate from ``Fs``)."""
+    meta, rate = {}, None
+    while pre.header is not None and find_column(header_cells(pre.header), "ax") is None:
+        cells = [c.strip() for c in pre.header.split(",")]
+        if len(cells) != 2 or not cells[0]:
+            raise InputError(source, f"expected a 'key,value' line (such as 'Fs,100') or the header 'ax,ay,az,...', "
+                             f"got {pre.header[:60]!r}", row=pre.header_line)
+        key = re.sub(r"[^A-Za-z0-9_.-]+", "_", cells[0].lower()).strip("_") or "key"
+        meta[f"mpu6050.{key}"] = cells[1]
+        if key == "fs":
+            try:
+                rate = float(cells[1])
+            except ValueError:
+                rate = float("nan")
+            if not (np.isfinite(rate) and rate > 0):
+                raise InputError(source, f"Fs {cells[1]!r}: expected a sample rate in Hz > 0", row=pre.header_line)
+        rest = read_preamble(data[pre.pos:])
+        rest.header_line += pre.header_line
+        rest.header_pos += pre.pos
+        rest.pos += pre.pos
+        rest.metadata, rest.metadata_lines = pre.metadata, pre.metadata_lines
+        pre = rest
+    if pre.header is None:
+        raise InputError(source, "no header 'ax,ay,az,...' after the logger's key,value lines")
+    return pre, meta, rate
+
+
+def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, rate_hz: float | None = None,
+                 regions: Any = None, stated_f: bool = False, gravity_mps2: float | None = None,
+                 bits: int = 16) -> Converted:
+    """Read another tool's file as a contract recording of a triad.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (gzip-compressed or not).
+    fmt : {"auto", "imu_tk", "imucal", "mpu6050", "csv"}
+        ``auto`` tells it from the first line (:func:`detect_format`).
+    scale : units.Scale, optional
+        The readings' unit and LSB (``--units``/``--lsb``/``--full-scale``); else the
+        file's ``# units:``/``# lsb:`` comments; else counts.
+    rate_hz : float, optional
+        Sample rate, Hz, for files without a time column (imucal; the MPU-6050 log's
+        ``Fs`` otherwise).
+    regions : path, optional
+        JSON ``{name: {"start": s, "end": e}}`` of sample numbers (end excluded): pose labels.
+    stated_f : bool
+        Give each pose named ``x_p ... z_a`` the reference f = +-g (m/s^2) along its axis.
+    gravity_mps2 : float, optional
+        g for the stated f and the device (default 9.80665; imu_tk: 9.81744).
+    bits : int
+        The ADC's bits: the device's range, and the readings must fit it.
+
+    Returns
+    -------
+    Converted
+
+    Raises
+    ------
+    InputError
+        One line naming the file and the row and column (or JSON field) at fault.
+    """
+    source, data = read_text_bytes(path)
+    if fmt == "auto":
+        fmt = detect_format(source, data)
+    if fmt not in FORMATS:
+        raise ValueError(f"unknown format {fmt!r}")
+    opts = Options(scale, rate_hz, None, None, stated_f, gravity_mps2, bits)
+    if regions is not None:
+        opts.regions, opts.regions_source = read_regions(regions), str(regions)
+    if fmt in ("imu_tk", "csv"):
+        if rate_hz is not None:
+            raise InputError(source, f"--rate: {fmt} files have a time column")
+        if fmt == "imu_tk" and scale is not None and scale.converts:
+            raise InputError(source, "imu_tk's readings are counts: --units mps2|g and --lsb do not apply")
+        if fmt == "imu_tk":
+            device, rec = load_xsens(path)
+            device = device if scale is None else None  # a stated full scale: the nominal device from it
+        else:
+            device, rec = None, read_recording(path, scale=scale)
+            if rec.n_channels != 3:
+                raise InputError(source, f"{rec.n_channels} raw channels: convert makes a triad's recording (3)")
+        signed = fmt == "csv" and bool(np.any(rec.raw < 0))
+        kept = (rec.pose, rec.f) if fmt == "csv" and opts.regions is None else None
+        if kept is not None and stated_f:
+            raise InputError(source, "--stated-f: a recording's poses are its own; give --regions to name them")
+        return finish(source, fmt, rec.raw, np.arange(rec.n_samples), rec.t, None, opts, scale, signed, None,
+                      dict(rec.metadata), [], lambda i, j: (rec.line(i), f"raw_{j}"), None, device, kept)
+    pre = read_preamble(data)
+    if pre.header is None:
+        raise InputError(source, "the file is empty (nothing but comments and blank lines)")
+    meta: dict[str, str] = {}
+    if fmt == "mpu6050":
+        pre, meta, fs = mpu6050_preamble(source, data, pre)
+        opts.rate_hz = rate_hz if rate_hz is not None else fs
+    return convert_table(source, data, pre, fmt, opts, meta)

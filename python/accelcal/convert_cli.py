@@ -1,0 +1,94 @@
+"""The ``accelcal convert`` subcommand: its options and what it prints (the work is
+:func:`accelcal.convert.convert_file`)."""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from typing import Any, Callable
+
+from .convert import FORMATS, convert_file
+from .device import save_device
+from .errors import AccelcalError
+from .recording import write_recording
+from .units import UNITS, scale_from_options
+
+__all__ = ["add_convert_parser", "cmd_convert"]
+
+DESCRIPTION = """\
+Write the data contract's recording CSV (t, raw_0..raw_2 in counts, pose, and f_x..f_z when
+the poses state their orientation) from another tool's file, and with --device-out a nominal
+device JSON for it.  Formats: imu_tk (whitespace 't ax ay az' in counts, no header), imucal
+(CSV with acc_x, acc_y, acc_z; no time column: --rate; poses from --regions JSON or a 'part'
+column), mpu6050 (the logger's 'Fs,100'... lines, then ax,ay,az,gx,gy,gz in signed counts),
+csv (a recording: gzip, whitespace and physical units rewritten as plain counts).  Any of them
+may be gzip-compressed.  Gyroscope columns are dropped with a note."""
+
+
+def positive(text: Any, option: str) -> float | None:
+    """An option's finite value > 0 (None when not given)."""
+    if text is None:
+        return None
+    try:
+        v = float(text)
+    except ValueError:
+        v = math.nan
+    if not (math.isfinite(v) and v > 0):
+        raise AccelcalError(f"{option} {text!r}: expected a finite number > 0")
+    return v
+
+
+def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int:
+    """Convert, write the recording (and the device), print the notes and a one-line summary."""
+    check_output(a.output)
+    if a.device_out is not None:
+        check_output(a.device_out, "--device-out")
+        if a.device_out == a.output:
+            raise AccelcalError(f"--device-out {a.device_out}: the same file as -o")
+    try:
+        bits = int(a.bits)
+    except ValueError:
+        bits = 0
+    if not 2 <= bits <= 32:
+        raise AccelcalError(f"--bits {a.bits!r}: expected an integer 2..32 (the ADC's bits)")
+    scale = scale_from_options(a.units, a.lsb, a.full_scale, bits, a.gravity)
+    conv = convert_file(a.input, a.format, scale=scale, rate_hz=positive(a.rate, "--rate"), regions=a.regions,
+                        stated_f=a.stated_f, gravity_mps2=positive(a.gravity, "--gravity"), bits=bits)
+    write_recording(a.output, conv.recording)
+    if a.device_out is not None:
+        save_device(conv.device, a.device_out)
+    for note in conv.notes + (conv.device_notes if a.device_out is not None else []):
+        print(f"accelcal convert: note: {note}", file=sys.stderr)
+    print(conv.summary(a.output) + (f"; device {a.device_out}" if a.device_out else ""))
+    return 0
+
+
+def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
+    """Add ``convert`` to the subcommands (``check_output``: the CLI's output-path check)."""
+    s = sub.add_parser("convert", help="the contract's recording CSV from imu_tk, imucal, MPU-6050 or other "
+                       "recording files", description=DESCRIPTION)
+    s.add_argument("input", metavar="FILE", help="the file to convert (gzip-compressed or not)")
+    s.add_argument("--format", choices=FORMATS, default="auto",
+                   help="the input's format (default auto: told from its first line)")
+    s.add_argument("--units", choices=UNITS, help="the unit of the file's accelerometer readings: counts "
+                   "(default), mps2 (m/s^2) or g; mps2 and g need --lsb or --full-scale, and every reading must "
+                   "then be a whole number of LSBs (within 1e-6), else the first that is not is named")
+    s.add_argument("--lsb", metavar="VALUE", help="one count, in --units (m/s^2 or g per count), e.g. "
+                   "0.0047900390625 for 9.81/2048")
+    s.add_argument("--full-scale", metavar="G", help="the range's full scale in g (16 for +-16 g): one count "
+                   "is 2*G/2**bits g; with counts it sets only the device's nominal scale")
+    s.add_argument("--bits", default="16", metavar="N", help="the ADC's bits (default 16): the device's "
+                   "raw range, and the LSB of --full-scale")
+    s.add_argument("--gravity", metavar="MPS2", help="g in m/s^2 for --full-scale with mps2, the stated f and "
+                   "the device (default 9.80665; imu_tk 9.81744)")
+    s.add_argument("--rate", metavar="HZ", help="sample rate of a file without a time column (imucal: "
+                   "required; the MPU-6050 log: its Fs line otherwise)")
+    s.add_argument("--regions", metavar="JSON", help="pose regions {name: {\"start\": s, \"end\": e}} in "
+                   "sample numbers, end excluded (imucal's session list); names ending in _rot are motions")
+    s.add_argument("--stated-f", action="store_true", help="poses named x_p, x_a, y_p, y_a, z_p, z_a (that "
+                   "axis up, p, or down, a) get the reference f = +-g along it, for a known-pose calibration")
+    s.add_argument("--device-out", metavar="D.json", help="also write a nominal device JSON for the "
+                   "recording (a triad at the origin; scale from the LSB, else from the readings)")
+    s.add_argument("-o", "--output", required=True, metavar="OUT.csv",
+                   help="the recording CSV to write (atomically: no partial file on error)")
+    s.set_defaults(func=lambda a: cmd_convert(a, check_output))

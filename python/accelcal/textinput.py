@@ -1,0 +1,148 @@
+"""The text of a recording file before its rows are read: the bytes (gzip-compressed or
+not, told by the magic bytes 1f 8b and never by the name), checked to be UTF-8, a
+spreadsheet's byte-order mark and CR line ends dropped; the preamble of ``#`` comments
+(``# key: value`` metadata, with the line each came from) up to the header; and text
+whose cells are separated by runs of blanks or tabs rewritten as comma-separated cells,
+line for line, so that the one CSV reader (and its errors naming row and column) reads
+both."""
+from __future__ import annotations
+
+import gzip
+import os
+import re
+import zlib
+from dataclasses import dataclass, field
+from typing import Any
+
+from .csvtable import META_RE
+from .errors import InputError
+
+__all__ = ["GZIP_MAGIC", "Preamble", "read_text_bytes", "read_preamble", "is_whitespace_header",
+           "split_whitespace_header", "whitespace_to_commas"]
+
+GZIP_MAGIC = b"\x1f\x8b"
+BLANKS = re.compile(rb"[ \t]+")
+EDGE_BLANKS = re.compile(rb"^[ \t]+|[ \t]+$", re.M)
+
+
+def read_text_bytes(path: Any) -> tuple[str, bytes]:
+    """The bytes of a text file, decompressed when they start with gzip's magic bytes.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.  ``.gz`` in the name is neither needed nor looked at.
+
+    Returns
+    -------
+    source : str
+        The path as given, for messages.
+    data : bytes
+        The (decompressed) text as UTF-8 bytes, without a byte-order mark, with ``\\n``
+        line ends.
+
+    Raises
+    ------
+    InputError
+        Unreadable file, a damaged or truncated gzip stream, or text that is not UTF-8
+        (naming the line of the first bad byte in the decompressed text).
+    """
+    source = os.fspath(path) if not isinstance(path, str) else path
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read()
+    except OSError as e:
+        raise InputError(source, f"cannot read the file: {e.strerror or e}") from None
+    compressed = data.startswith(GZIP_MAGIC)
+    if compressed:
+        try:
+            data = gzip.decompress(data)
+        except (OSError, EOFError, zlib.error) as e:
+            raise InputError(source, f"starts as gzip (bytes 1f 8b) but cannot be decompressed: {e}") from None
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = data.count(b"\n", 0, e.start) + 1
+        inside = " of the decompressed text" if compressed else ""
+        raise InputError(source, f"not valid UTF-8 text (byte {e.start}{inside})", row=line) from None
+    if data.startswith(b"\xef\xbb\xbf"):  # spreadsheet BOM: not data
+        data = data[3:]
+    if b"\r" in data:
+        data = data.replace(b"\r\n", b"\n")
+    return source, data
+
+
+@dataclass
+class Preamble:
+    """What comes before the data rows.
+
+    ``header`` is the first line that is neither a comment nor blank (None when there is
+    none), ``header_line`` its 1-based line number, ``header_pos`` and ``pos`` the byte
+    offsets of its start and of the line after it.  ``metadata`` holds the ``# key:
+    value`` comments, ``metadata_lines`` the line of each key."""
+
+    metadata: dict[str, str] = field(default_factory=dict)
+    metadata_lines: dict[str, int] = field(default_factory=dict)
+    header: str | None = None
+    header_line: int = 0
+    header_pos: int = 0
+    pos: int = 0
+
+
+def read_preamble(data: bytes) -> Preamble:
+    """Comments (metadata) and blank lines, then the header line."""
+    out = Preamble()
+    pos, line_no = 0, 0
+    while pos < len(data):
+        end = data.find(b"\n", pos)
+        end = len(data) if end < 0 else end
+        text = data[pos:end].decode("utf-8")
+        line_no += 1
+        start, pos = pos, end + 1
+        if text.startswith("#"):
+            m = META_RE.fullmatch(text)
+            if m:
+                out.metadata[m.group(1)] = m.group(2).strip()
+                out.metadata_lines[m.group(1)] = line_no
+            continue
+        if not text.strip():
+            continue
+        out.header, out.header_line, out.header_pos, out.pos = text, line_no, start, pos
+        break
+    return out
+
+
+def is_whitespace_header(header: str) -> bool:
+    """Commas in the header: CSV; else runs of blanks or tabs between cells: whitespace text."""
+    return "," not in header and re.search(r"[ \t]", header.strip(" \t")) is not None
+
+
+def split_whitespace_header(header: str) -> list[str]:
+    return re.split(r"[ \t]+", header.strip(" \t"))
+
+
+def whitespace_to_commas(data: bytes, pos: int, end: int, names: list[str], first_line: int,
+                         source: str) -> bytes:
+    """``data[:pos]`` followed by the rows ``data[pos:end]`` of whitespace-separated text
+    with each run of blanks or tabs between cells made one comma (blanks at a line's ends
+    dropped); every line stays the line it was.
+
+    Raises
+    ------
+    InputError
+        A comma or a double quote in a row (whitespace text has neither separators nor
+        quoting of that kind), naming its row and the column it falls in.
+    """
+    for bad in (b",", b'"'):
+        at = data.find(bad, pos, end)
+        if at < 0:
+            continue
+        line_start = data.rfind(b"\n", pos, at) + 1 or pos
+        row = first_line + data.count(b"\n", pos, line_start)
+        before = data[line_start:at].strip(b" \t")
+        j = 0 if not before else len(BLANKS.split(before)) - (0 if data[at - 1:at] in (b" ", b"\t") else 1)
+        what = "a comma" if bad == b"," else "a double quote"
+        raise InputError(source, f"{what} in whitespace-separated text (the header has no commas, so cells "
+                         "are separated by blanks or tabs)", row=row, column=names[j] if j < len(names) else None)
+    body = BLANKS.sub(b",", EDGE_BLANKS.sub(b"", data[pos:end]))
+    return data[:pos] + body

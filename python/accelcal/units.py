@@ -1,0 +1,229 @@
+"""Readings in physical units: the one place a recording's m/s^2 or g values become the
+integer counts the data contract asks for.
+
+A logger that writes floats (imucal's sessions, phone logs) has still read an integer
+register: every value is a whole number of LSBs.  Stated the LSB -- by an option
+(``--lsb VALUE`` with ``--units mps2|g``, or ``--full-scale G`` and ``--bits N``) or by
+the file's metadata comments (``# units: mps2``, ``# lsb: 0.0047900390625``) -- the
+counts are ``value / lsb``, and they are taken only when each is a whole number (within
+:data:`REL_TOL` of one); else the first value that is not is named by row and column.
+Used by the recording reader and by ``accelcal convert``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+from .errors import AccelcalError, InputError
+
+__all__ = ["UNITS", "REL_TOL", "Scale", "scale_from_options", "scale_from_metadata", "to_counts",
+           "METADATA_KEYS", "STANDARD_GRAVITY", "OPTION_NAMES",
+           "converted_metadata"]
+
+UNITS = ("counts", "mps2", "g")
+REL_TOL = 1e-6
+"""How far value / lsb may be from an integer n: ``REL_TOL * max(|n|, 1)``.  A float
+written by ``n * lsb`` and read back is within ~1e-15 of n; a wrong LSB is off by far more."""
+STANDARD_GRAVITY = 9.80665
+METADATA_KEYS = ("units", "lsb", "full_scale_g", "bits", "gravity_mps2")
+UNIT_TEXT = {"counts": "counts", "mps2": "m/s^2", "g": "g"}
+OPTION_NAMES = {"units": "--units", "lsb": "--lsb", "full_scale_g": "--full-scale", "bits": "--bits",
+                "gravity_mps2": "--gravity"}
+METADATA_NAMES = {k: f"'# {k}:'" for k in METADATA_KEYS}
+
+
+@dataclass(frozen=True)
+class Scale:
+    """What one count of a recording's readings is.
+
+    Attributes
+    ----------
+    units : {"counts", "mps2", "g"}
+        The unit of the readings as written in the file.
+    lsb : float or None
+        One count in ``units`` (m/s^2 per count for ``mps2``, g per count for ``g``);
+        None for ``counts`` when the count's size is not stated.
+    lsb_g : float or None
+        One count in g, when known (for a device's nominal scale).
+    how : str
+        Where the LSB came from, for messages (e.g. ``"--lsb"``, ``"# lsb: (row 3)"``).
+    """
+
+    units: str
+    lsb: float | None
+    lsb_g: float | None = None
+    how: str = ""
+
+    @property
+    def converts(self) -> bool:
+        """Whether the readings must be divided by the LSB (physical units)."""
+        return self.units != "counts"
+
+    def counts_per_mps2(self, gravity_mps2: float) -> float | None:
+        """The nominal sensitivity, counts per m/s^2, or None when the LSB is unknown.
+
+        Parameters
+        ----------
+        gravity_mps2 : float
+            g in m/s^2, used only when the LSB is in g.
+        """
+        if self.units == "mps2" and self.lsb:
+            return 1.0 / self.lsb
+        return 1.0 / (self.lsb_g * gravity_mps2) if self.lsb_g else None
+
+    def describe(self) -> str:
+        if not self.converts:
+            return "counts" + (f" (1 count = {self.lsb_g:.9g} g)" if self.lsb_g else "")
+        return f"{UNIT_TEXT[self.units]} / {self.lsb:.12g} {UNIT_TEXT[self.units]} per count"
+
+
+def _positive(text: Any, what: str, fail: Callable[[str], Exception]) -> float:
+    try:
+        v = float(text)
+    except (TypeError, ValueError):
+        v = math.nan
+    if not (math.isfinite(v) and v > 0):
+        raise fail(f"{what} {text!r}: expected a finite number > 0")
+    return v
+
+
+def _bits(text: Any, fail: Callable[[str], Exception], what: str) -> int:
+    try:
+        b = int(str(text).strip())
+    except ValueError:
+        b = 0
+    if not 2 <= b <= 32:
+        raise fail(f"{what} {text!r}: expected an integer 2..32 (the ADC's bits)")
+    return b
+
+
+def scale_from_options(units: str | None = None, lsb: Any = None, full_scale_g: Any = None, bits: Any = 16,
+                       gravity_mps2: Any = None, *, names: dict[str, str] | None = None) -> Scale | None:
+    """The Scale stated on the command line (or by keyword), or None when nothing is stated.
+
+    Parameters
+    ----------
+    units : {"counts", "mps2", "g"}, optional
+        Unit of the readings in the file.  Default: ``counts`` unless an ``lsb`` is given
+        (then it must be stated).
+    lsb : float, optional
+        One count in ``units``.
+    full_scale_g : float, optional
+        The range's full scale in g (``16`` for +-16 g): one count is
+        ``2 * full_scale_g / 2**bits`` g.  Exclusive with ``lsb``.
+    bits : int
+        The ADC's bits for ``full_scale_g`` (default 16).
+    gravity_mps2 : float, optional
+        g in m/s^2 to turn a full scale in g into an LSB in m/s^2 (default 9.80665).
+    names : dict, optional
+        How the parameters are spelt in messages (default: the command line's options,
+        :data:`OPTION_NAMES`).
+
+    Raises
+    ------
+    AccelcalError
+        A value that is not a positive number, or options that contradict each other.
+    """
+    spelt = OPTION_NAMES if names is None else names
+    opt = spelt.__getitem__
+
+    def fail(msg: str) -> AccelcalError:
+        return AccelcalError(msg)
+
+    if units is not None and units not in UNITS:
+        raise fail(f"{opt('units')} {units!r}: expected one of {', '.join(UNITS)}")
+    if lsb is None and full_scale_g is None:
+        if units in (None, "counts"):
+            return None
+        raise fail(f"{opt('units')} {units}: state the size of one count with {opt('lsb')} VALUE "
+                   f"(in {UNIT_TEXT[units]}) or {opt('full_scale_g')} G")
+    if lsb is not None and full_scale_g is not None:
+        raise fail(f"{opt('lsb')} and {opt('full_scale_g')} both given: state the count's size once")
+    g = STANDARD_GRAVITY if gravity_mps2 is None else _positive(gravity_mps2, opt("gravity_mps2"), fail)
+    if lsb is not None:
+        if units in (None, "counts"):
+            raise fail(f"{opt('lsb')} {lsb}: state the unit of the readings it divides with "
+                       f"{opt('units')} mps2|g (for readings already in counts use {opt('full_scale_g')})")
+        v = _positive(lsb, opt("lsb"), fail)
+        return Scale(units, v, v if units == "g" else v / g, opt("lsb"))
+    fs = _positive(full_scale_g, opt("full_scale_g"), fail)
+    lsb_g = 2.0 * fs / 2.0 ** _bits(bits, fail, opt("bits"))
+    units = units or "counts"
+    return Scale(units, None if units == "counts" else lsb_g * (g if units == "mps2" else 1.0), lsb_g,
+                 opt("full_scale_g"))
+
+
+def scale_from_metadata(metadata: dict[str, str], lines: dict[str, int], source: str) -> Scale | None:
+    """The Scale a recording's ``# units:``, ``# lsb:`` (or ``# full_scale_g:``, ``# bits:``,
+    ``# gravity_mps2:``) comments state, or None when they state none.
+
+    Raises
+    ------
+    InputError
+        A bad or contradictory value, naming the comment's line.
+    """
+    given = {k: metadata[k] for k in METADATA_KEYS if k in metadata}
+    if not given or set(given) == {"gravity_mps2"}:
+        return None
+    try:
+        scale = scale_from_options(given.get("units"), given.get("lsb"), given.get("full_scale_g"),
+                                   given.get("bits", 16), given.get("gravity_mps2"), names=METADATA_NAMES)
+    except AccelcalError as e:
+        key = next((k for k in METADATA_KEYS if str(e).startswith(METADATA_NAMES[k])), next(iter(given)))
+        raise InputError(source, str(e), row=lines.get(key)) from None
+    if scale is None:
+        return None
+    key = "lsb" if "lsb" in given else "full_scale_g"
+    return Scale(scale.units, scale.lsb, scale.lsb_g, f"{METADATA_NAMES[key]} (row {lines.get(key)})")
+
+
+def converted_metadata(metadata: dict[str, str], scale: Scale) -> dict[str, str]:
+    """The metadata of readings now in counts: each ``units``/``lsb``/... key renamed
+    ``source_<key>`` (so the file written from them is not converted twice), and
+    ``source_scale`` saying what the readings were."""
+    out = {(f"source_{k}" if k in METADATA_KEYS else k): v for k, v in metadata.items()}
+    out["source_scale"] = scale.describe()
+    return out
+
+
+def to_counts(values: np.ndarray, scale: Scale, source: str,
+              locate: Callable[[int, int], tuple[int, str]]) -> np.ndarray:
+    """Readings in physical units as integer counts, exactly.
+
+    Parameters
+    ----------
+    values : ndarray, shape (n, k)
+        The readings, in ``scale.units`` (m/s^2 or g), finite.
+    scale : Scale
+        Its ``lsb`` is one count in the same unit.
+    source : str
+        The file, for messages.
+    locate : callable
+        ``locate(i, j)`` -> (row, column name) of reading ``values[i, j]`` in the file.
+
+    Returns
+    -------
+    ndarray of int64, shape (n, k)
+        ``round(values / lsb)``.
+
+    Raises
+    ------
+    InputError
+        At the first reading (earliest row, then leftmost column) that is not a whole
+        number of LSBs within ``REL_TOL``, or whose count does not fit 64 bits.
+    """
+    with np.errstate(invalid="ignore", over="ignore"):
+        x = np.asarray(values, dtype=np.float64) / scale.lsb
+        n = np.round(x)
+        bad = ~(np.abs(x - n) <= REL_TOL * np.maximum(np.abs(n), 1.0)) | ~(np.abs(n) < 2.0 ** 62)
+    if bad.any():
+        i, j = (int(v) for v in np.argwhere(bad)[0])
+        row, column = locate(i, j)
+        unit = UNIT_TEXT[scale.units]
+        raise InputError(source, f"{float(values[i, j])!r} {unit} is {float(x[i, j]):.9g} counts of "
+                         f"{scale.lsb:.12g} {unit} (the LSB stated by {scale.how}), not a whole number: "
+                         "wrong LSB or units, or the values were rounded when written", row=row, column=column)
+    return n.astype(np.int64)
