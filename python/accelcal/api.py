@@ -33,13 +33,15 @@ from .errors import AccelcalError, atomic_write
 from .estimators import Columns, attitude_from_recording, displacement_from_recording, rate_from_recording
 from .header import calibration_header
 from .recording import Recording, read_recording as _read_recording_file, write_recording
+from .convert import Converted, convert_file
 from .resolve import resolve_recording
+from .units import scale_from_options
 from .simulate import simulate as _simulate_impl
 
 __all__ = ["Device", "Recording", "Calibration", "Columns", "ResolveResult", "AccelcalError",
            "default_device", "load_device", "save_device", "read_recording", "write_recording",
            "load_calibration", "save_calibration", "as_recording", "calibrate", "resolve", "diagnose",
-           "header", "simulate", "attitude", "displacement", "rate"]
+           "header", "simulate", "attitude", "displacement", "rate", "convert", "Converted"]
 
 
 def as_device(device: Any) -> Device:
@@ -297,3 +299,52 @@ def rate(device: Any, calibration: Any, recording: Any, engine: str = "float", *
     """Angular rate from alpha, reset on rest (as ``accelcal rate``)."""
     return _estimate(rate_from_recording, device, calibration, recording, engine, options)
 
+
+
+def convert(path: Any, fmt: str = "auto", *, units: str | None = None, lsb: float | None = None,
+            full_scale_g: float | None = None, bits: int = 16, rate_hz: float | None = None, regions: Any = None,
+            stated_f: bool = False, gravity_mps2: float | None = None) -> Converted:
+    """Another tool's file as a contract recording and a nominal device (as ``accelcal convert``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        imu_tk's text, imucal's CSV, the MPU-6050 logger's CSV or a contract-like CSV,
+        gzip-compressed or not.
+    fmt : {"auto", "imu_tk", "imucal", "mpu6050", "csv"}
+    units : {"counts", "mps2", "g"}, optional
+        The unit of the readings in the file; with ``lsb`` (one count in that unit) or
+        ``full_scale_g`` (+-range in g at ``bits`` bits).  Default: the file's ``# units:`` /
+        ``# lsb:`` comments, else counts.
+    rate_hz : float, optional
+        Hz, for files without a time column.
+    regions : path, optional
+        JSON of pose regions ``{name: {"start": s, "end": e}}`` (sample numbers).
+    stated_f : bool
+        Poses named ``x_p ... z_a`` get the reference f = +-g along their axis (m/s^2).
+    gravity_mps2 : float, optional
+        g of the stated f and the device (default 9.80665).
+
+    Returns
+    -------
+    Converted
+        ``.recording`` (counts), ``.device`` (a nominal triad), ``.notes``.
+
+    Raises
+    ------
+    InputError
+        One line naming the file, row and column at fault; a value that is not a whole
+        number of LSBs is refused with its row.
+
+    Examples
+    --------
+    >>> c = ac.convert("example_ferraris_session.csv", units="mps2", lsb=9.81 / 2048,
+    ...                rate_hz=102.4, regions="example_ferraris_session_list.json",
+    ...                stated_f=True, gravity_mps2=9.81)          # doctest: +SKIP
+    >>> cal = ac.calibrate(c.device, [c.recording], jig_accuracy_deg=0.5)   # doctest: +SKIP
+    """
+    scale = None
+    if units is not None or lsb is not None or full_scale_g is not None:
+        scale = scale_from_options(units, lsb, full_scale_g, bits, gravity_mps2)
+    return convert_file(path, fmt, scale=scale, rate_hz=rate_hz, regions=regions, stated_f=stated_f,
+                        gravity_mps2=gravity_mps2, bits=bits)

@@ -448,19 +448,25 @@ def test_calibrate_refuses_bad_new_forms(form, data, capfd, tmp_path_factory):
 
 
 def test_readme_convert_examples_run(shared_data, tmp_path, capfd, monkeypatch):
-    """The README's "Files from other tools" commands, convert and calibrate run as written
-    (input names found in shared/data) with the summary lines it quotes."""
+    """The README's "Files from other tools" commands run as written (input names found in
+    shared/data): convert and calibrate with the summary lines it quotes, then header and
+    resolve --engine fixed (a triad header; signed readings for the MPU-6050)."""
     readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
     section = readme.split("## Files from other tools\n", 1)[1].split("\n## ", 1)[0]
     blocks = re.findall(r"```sh\n(.*?)```", section, re.S)
     assert len(blocks) == 2
     monkeypatch.chdir(tmp_path)
     inputs = {p.name: p for d in ("imucal", "mpu6050_tomisuarez") for p in (shared_data / d).iterdir()}
-    ran = 0
+    ran = ran_fw = 0
     for block in blocks:
         lines = block.replace("\\\n", " ").splitlines()
         for i, line in enumerate(lines):
             cmd = line.split("#")[0].split()
+            if cmd[:2] in (["accelcal", "header"], ["accelcal", "resolve"]):
+                rc, out, err, _ = run([str(inputs.get(a, a)) for a in cmd[1:]], capfd)
+                assert rc == 0, err
+                ran_fw += 1
+                continue
             if cmd[:2] not in (["accelcal", "convert"], ["accelcal", "calibrate"]):
                 continue
             rc, out, err, _ = run([str(inputs.get(a, a)) for a in cmd[1:]], capfd)
@@ -470,4 +476,11 @@ def test_readme_convert_examples_run(shared_data, tmp_path, capfd, monkeypatch):
             first = said.split("...")[0].split("(")[0].strip()
             assert first and first in out, (first, out)
             ran += 1
-    assert ran == 4
+    assert ran == 4 and ran_fw == 3
+    # triad headers for signed readings (both chips give int16 counts)
+    for name in ("imucal_cal.h", "mpu_cal.h"):
+        text = (tmp_path / name).read_text()
+        assert "ac_triad_resolve(&AC_CAL_TRIAD" in text and "const int16_t AC_CAL_TRIM[3]" in text
+    rows = [ln.split(",") for ln in (tmp_path / "mpu_f.csv").read_text().splitlines() if not ln.startswith("#")]
+    f = np.array([[float(v) for v in r[1:4]] for r in rows[1:3000]])          # the first 30 s at rest
+    assert abs(np.linalg.norm(f.mean(axis=0)) - 9.80665) < 0.01
