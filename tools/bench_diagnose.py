@@ -153,7 +153,8 @@ def xsens_section() -> list[str]:
             notes = [n for n in res["notes"] if "residue" in n]
             bands = res["where"]["frequency_bands"]
             notes.append("residual by frequency band (counts; white noise at the floor in brackets): " + ", ".join(
-                f"{b['label']} {b['rms_counts']:.2f} ({b['white_noise_rms_counts']:.2f})" for b in bands))
+                f"{b['label']} {b['rms_counts']:.2f} ({b['white_noise_rms_counts']:.2f})" if b["rms_counts"] is not None
+                else f"{b['label']} not measurable" for b in bands))
             notes.append(f"noise floor {g['noise_floor_counts']:.2f} counts ({g['noise_method']}); "
                          f"{res['recordings'][0]['n_used']} of {res['recordings'][0]['n_samples']} samples in "
                          f"{g.get('n_poses')} static poses")

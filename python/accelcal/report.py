@@ -311,6 +311,7 @@ def summary_text(res: dict, images: list[str] = ()) -> str:
             continue
         if key == "frequency_bands":
             txt = ", ".join(f"{it['label']}: {it['rms_counts']:.3g} (white noise {it['white_noise_rms_counts']:.3g})"
+                            if it.get("rms_counts") is not None else f"{it['label']}: not measurable ({it.get('why', '')})"
                             for it in items)
         else:
             txt = ", ".join(f"{it['label']}: {it['rms_counts']:.3g} ({it['n']} samples)" for it in items)

@@ -87,7 +87,7 @@ def test_json_contract_fields():
     for key in ("static_vs_rotating", "frequency_bands", "time_bins"):
         assert w[key]
     # frequency bands add up to the total mean square
-    ms = sum(b["rms_counts"] ** 2 for b in w["frequency_bands"])
+    ms = sum((b["rms_counts"] or 0.0) ** 2 for b in w["frequency_bands"])
     assert ms == pytest.approx(back["gap"]["rms_counts"] ** 2, rel=1e-6)
     names = {e["name"] for e in back["effects"]} | {s["name"] for s in back["skipped"]}
     assert names == set(EFFECT_NAMES)

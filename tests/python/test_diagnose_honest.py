@@ -16,6 +16,7 @@ from accelcal.device import Device
 from accelcal.diagnose import diagnose
 from accelcal.effects import EFFECTS
 from accelcal.recording import recording_from_arrays
+from accelcal.report import summary_text
 from accelcal.xsens import load_xsens
 import diag_datasets as B
 
@@ -99,6 +100,8 @@ def test_a_drift_that_shows_within_the_poses_is_named(seed):
     assert res["verdict"] == "bias_drift"
     within = res["effects"][0]["contest"]["rivals"]["pose_error"]["within_poses"]
     assert "change by 0.9" in within or "change by 1.0" in within
+    # found over 34 s of data: quoted per second, not per hour
+    assert "m/s^2 per s, over 3" in res["effects"][0]["summary"]
 
 
 @pytest.mark.parametrize("seed", [2, 3, 4])
@@ -230,3 +233,14 @@ def test_a_tone_at_rest_is_unexplained(seed, kind):
     assert u["where"]["band"].startswith("a line at")
     if kind == "resonance":
         assert u["where"]["channels"] == [0]
+
+
+def test_bands_a_recording_cannot_resolve_are_not_measurable():
+    """Six 1 s poses with gaps between them: no run resolves 0.1-1 Hz (its lowest bin is 1 Hz),
+    so that band is 'not measurable', not 0; the report says so."""
+    d = triad()
+    res = diagnose(d, Calibration.nominal(d), [six_poses(1, tilt_deg=1.0, hold_s=1.0)])
+    bands = {b["label"]: b for b in res["where"]["frequency_bands"]}
+    assert bands["0.1-1 Hz"]["measurable"] is False and bands["0.1-1 Hz"]["rms_counts"] is None
+    assert bands["1-3 Hz"]["measurable"] is True and bands["1-3 Hz"]["rms_counts"] > 0
+    assert "0.1-1 Hz: not measurable" in summary_text(res)

@@ -133,7 +133,7 @@ def leftover(D: FitData, e: np.ndarray, e_after: np.ndarray, before: float, afte
     top = float(rms_left_ch.max())
     channels = [int(i) for i in np.argsort(-rms_left_ch) if rms_left_ch[i] >= 0.25 * top and top > 0]
     w = where_breakdown(D, e_after)
-    bands = w["frequency_bands"]
+    bands = [b for b in w["frequency_bands"] if b["rms_counts"] is not None]
     ex = [b["rms_counts"] ** 2 - b["white_noise_rms_counts"] ** 2 for b in bands]
     band = bands[int(np.argmax(ex))]["label"] if bands else None
     regs = w["static_vs_rotating"]

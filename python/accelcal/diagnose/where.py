@@ -54,11 +54,13 @@ def where_breakdown(D: FitData, e: np.ndarray) -> dict:
     edges = [0.0, 0.1, 1.0, 3.0, 10.0, 30.0, math.inf]
     edges = [x for x in edges if x < fs / 2] + [math.inf]
     E = np.zeros((len(edges) - 1, N))
+    nbins = np.zeros(len(edges) - 1, np.int64)     # spectral bins that fall in each band, over all runs
     for a, b in zip(D.seg_lo, D.seg_hi):
         x = e[a:b]
         L = b - a
         if L < 8:
             E[0] += np.sum(x * x, axis=0)
+            nbins[0] += 1
             continue
         X = np.fft.rfft(x, axis=0)
         p = np.abs(X) ** 2 / L
@@ -69,6 +71,7 @@ def where_breakdown(D: FitData, e: np.ndarray) -> dict:
         k = np.searchsorted(edges, fr, side="right") - 1
         for j in range(len(edges) - 1):
             E[j] += p[k == j].sum(axis=0)
+            nbins[j] += int(np.count_nonzero(k == j))
     floor = float(np.sqrt(np.mean(sig ** 2)))
     bands = []
     for j in range(len(edges) - 1):
@@ -80,7 +83,14 @@ def where_breakdown(D: FitData, e: np.ndarray) -> dict:
         top = min(hi, fs / 2)
         share = max(top - edges[j], 0.0) / (fs / 2)
         wn = floor * math.sqrt(share)
-        bands.append({"label": lab, "lo_hz": edges[j], "hi_hz": top, "rms_counts": rms,
+        if nbins[j] == 0:
+            # no run is long enough to resolve this band (short static stretches, time stamps that
+            # break the recording into pieces): not measurable, not zero
+            bands.append({"label": lab, "lo_hz": edges[j], "hi_hz": top, "measurable": False, "rms_counts": None,
+                          "white_noise_rms_counts": wn, "ratio_to_white_noise": None, "rms_per_channel": None,
+                          "why": f"no contiguous run longer than {1.0 / max(edges[j + 1] if math.isfinite(edges[j + 1]) else fs / 2, 1e-300):.3g} s"})
+            continue
+        bands.append({"label": lab, "lo_hz": edges[j], "hi_hz": top, "measurable": True, "rms_counts": rms,
                       "white_noise_rms_counts": wn, "ratio_to_white_noise": rms / wn if wn > 0 else None,
                       "rms_per_channel": rc.tolist()})
     out["frequency_bands"] = bands

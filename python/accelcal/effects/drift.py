@@ -209,5 +209,8 @@ class BiasDrift(LinearCandidate, Effect):
                     f"{path[i, j]:+.4g} +- {s['path'][i, j]:.2g} counts ({path[i, j] / ks[i]:+.4g} m/s^2) "
                     f"on channel {i}")
         i = strongest(p["rate"])
+        span = float(np.ptp(D.tg)) if D.n else 0.0
+        # the unit the data can support: a rate found over less than an hour is not quoted per hour
+        per, unit = (3600.0, "hour") if span >= 3600.0 else (60.0, "minute") if span >= 60.0 else (1.0, "s")
         return (f"offset ramp up to {p['rate'][i]:+.4g} +- {s['rate'][i]:.2g} counts/s "
-                f"({3600 * p['rate'][i] / ks[i]:+.3g} m/s^2 per hour) on channel {i}")
+                f"({per * p['rate'][i] / ks[i]:+.3g} m/s^2 per {unit}, over {span:.3g} s of data) on channel {i}")
