@@ -505,3 +505,66 @@ ac_status ac_resolver_build(const ac_channel_cal *cal, uint16_t n, ac_build_work
     }
     return AC_OK;
 }
+
+/* ---- one triad (f only) ------------------------------------------------------------- */
+
+ac_status ac_triad_build(const ac_channel_cal *cal, const uint16_t *trim, ac_build_work *w, ac_triad *out)
+{
+    xf o, c, mm[2];
+    int8_t shift[3];
+    int32_t k[3];
+    int16_t cl2 = 0, s;
+    unsigned i, j, l;
+    ac_status st;
+    if (cal == 0 || trim == 0 || w == 0 || out == 0) {
+        return AC_ERR_NULL;
+    }
+    clear(w, sizeof *w);
+    /* a = [[S, 0], [0, I]] (S's rows the s_i), S's columns equilibrated by powers of two */
+    for (i = 0u; i < 3u; i++) {
+        for (l = 0u; l < 3u; l++) {
+            from_fixed(&w->a[i][l], cal[i].sens[l], AC_SENS_FRAC);
+            acc_abs(&w->acc[l][7], &w->acc[l][8], &w->a[i][l]);
+        }
+    }
+    for (l = 0u; l < 3u; l++) {
+        if (w->acc[l][7].m == 0) {
+            return AC_ERR_SINGULAR;
+        }
+        w->colexp[l] = (int16_t)(w->acc[l][7].e + 30);
+        w->a[3u + l][3u + l] = xf_one;
+        for (i = 0u; i < 3u; i++) {
+            ac_inv_scale(&w->a[i][l], -(int32_t)w->colexp[l]);
+        }
+    }
+    st = ac_inv_gauss_jordan(w->a, w->perm, &cl2);
+    if (st != AC_OK) {
+        return st;
+    }
+    /* M = S^-1 in output LSB per count: row j of the inverse times 2^(AC_OUT_FRAC - colexp_j);
+     * its shift by the host quantizer's rule, k = round((M o) 2^shift) */
+    for (j = 0u; j < 3u; j++) {
+        clear(mm, sizeof mm);
+        clear(&c, sizeof c);
+        for (l = 0u; l < 3u; l++) {
+            ac_inv_scale(&w->a[j][l], (int32_t)AC_OUT_FRAC - w->colexp[j]);
+            acc_abs(&mm[0], &mm[1], &w->a[j][l]);
+            from_fixed(&o, cal[l].offset, AC_OFFSET_FRAC);
+            mac(&c, &w->a[j][l], &o, 0u);
+        }
+        s = row_shift(mm, 3u);
+        if (s < -31 || to_fixed(&c, s, &k[j]) != 0u) {
+            return AC_ERR_RANGE;
+        }
+        shift[j] = (int8_t)s;
+    }
+    for (j = 0u; j < 3u; j++) {
+        out->trim[j] = trim[j];
+        out->shift[j] = shift[j];
+        out->k[j] = k[j];
+        for (l = 0u; l < 3u; l++) {
+            out->m[j][l] = to_i16(&w->a[j][l], shift[j]);
+        }
+    }
+    return AC_OK;
+}

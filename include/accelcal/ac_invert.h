@@ -21,6 +21,7 @@
 #include "ac_status.h"
 #include "ac_xf.h"
 #include "ac_resolve.h"
+#include "ac_attitude.h"
 
 /* One channel's calibration in fixed point (see ac_config.h for formats). */
 typedef struct ac_channel_cal {
@@ -46,6 +47,14 @@ typedef struct ac_build_info {
 
 ac_status ac_resolver_build(const ac_channel_cal *cal, uint16_t n, ac_build_work *work,
                             ac_resolver *out, ac_build_info *info);
+
+/* The same for one 3-axis sensor (f only): cal[0..2] (pos unused), the trim codes of
+ * the ac_triad (uint16; offset binary, trim + 32768, for a chip with signed output)
+ * -> out = S^-1 folded as estimators' quantize_triad does (python/accelcal/triad.py).
+ * AC_ERR_SINGULAR when the three axes do not span 3-D, AC_ERR_ILL_COND above
+ * 2^AC_COND_LOG2_MAX, AC_ERR_RANGE when the offset term does not fit; out untouched
+ * on error. */
+ac_status ac_triad_build(const ac_channel_cal *cal, const uint16_t *trim, ac_build_work *work, ac_triad *out);
 
 /* Row i of the sensor matrix, [s_i, r_i x s_i] (counts per m/s^2, counts per rad/s^2),
  * and the centripetal row C_i with c_i(omega) = sum_q C_iq p_q (counts per (rad/s)^2). */

@@ -15,9 +15,9 @@ ROOT = Path(__file__).resolve().parents[2]
 INCLUDE = ROOT / "include"
 CSRC = ROOT / "csrc"
 HOST_DIR = Path(__file__).resolve().parent  # host-only C (libc, double): not firmware
-HEADERS = ["ac_status.h", "ac_fixed.h", "ac_xf.h", "ac_trim.h", "ac_resolve.h", "ac_invert.h",
-           "ac_rate.h"]
-HEADERS += ["ac_trig.h", "ac_rest.h", "ac_attitude.h", "ac_displace.h"]  # motion estimators
+HEADERS = ["ac_status.h", "ac_fixed.h", "ac_xf.h", "ac_trim.h", "ac_resolve.h", "ac_trig.h", "ac_attitude.h",
+           "ac_invert.h", "ac_rate.h"]
+HEADERS += ["ac_rest.h", "ac_displace.h"]  # motion estimators
 
 
 def config_constants(include_dir: Path = INCLUDE) -> dict[str, int]:

@@ -151,6 +151,8 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
         f" *   {p}_TRIAD.k[j]    * 2^-(shift[j] + {f.out_frac}) = (S^-1 (b - trim))[j] (m/s^2)",
         " *   |f - S^-1 (raw - b)| <= 0.5 LSB + the table's rounding (estimators.triad.triad_error_bound)",
     ]
+    lines += [f" *   {p}_CHANNELS: s_i Q.{f.sens_frac} counts per m/s^2, b_i - trim_i Q.{f.offset_frac} counts: after a",
+              f" *     field recalibration, ac_triad_build({p}_CHANNELS, {p}_TRIAD.trim, &work, &triad) remakes the table"]
     if t.signed:
         lines.append(f" *   {p}_TRIAD.trim holds TRIM + 32768 (offset binary): ac_triad_apply on raw + 32768 is the same")
     lines += [
@@ -166,6 +168,7 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
         "",
         f"extern const {tt} {p}_TRIM[3];",
         f"extern const ac_triad {p}_TRIAD;",
+        f"extern const ac_channel_cal {p}_CHANNELS[3];",
         "",
         f"#ifdef {p}_IMPLEMENTATION",
         f"const {tt} {p}_TRIM[3] = {_row(t.trim)};",
@@ -174,6 +177,10 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
         f"    {_row(t.shift)}, /* shift */",
         f"    {{{', '.join(f'{int(v)}L' for v in t.k)}}}, /* k */",
         f"    {{{_row(t.m[0])}, {_row(t.m[1])}, {_row(t.m[2])}}} /* m */",
+        "};",
+        f"const ac_channel_cal {p}_CHANNELS[3] = {{",
+    ] + [f"    {{{{{', '.join(f'{int(v)}L' for v in t.sens_q[i])}}}, {{0L, 0L, 0L}}, {int(t.offset_q[i])}L}},"
+         for i in range(3)] + [
         "};",
         f"#endif /* {p}_IMPLEMENTATION */",
         "",

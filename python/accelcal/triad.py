@@ -21,7 +21,7 @@ from .quantize import round_half_up, row_shift, to_fixed, trim_range
 OUT_FRAC = FORMATS.out_frac
 I16_MIN, I16_MAX = -32768, 32767
 
-__all__ = ["TriadTable", "triad_matrix", "quantize_triad", "triad_apply_fixed", "triad_exact",
+__all__ = ["TriadTable", "triad_matrix", "quantize_triad", "build_triad_on_device", "triad_apply_fixed", "triad_exact",
            "triad_apply_float", "triad_forces"]
 
 
@@ -33,6 +33,8 @@ class TriadTable:
     shift: np.ndarray  # (3,) int8
     k: np.ndarray      # (3,) int32
     signed: bool = False   # int16 readings: pre-trim with ac_trim_s16, then ac_triad_resolve
+    sens_q: np.ndarray | None = None    # (3,3) int32 Q.AC_SENS_FRAC: s~ (the header's channel entries)
+    offset_q: np.ndarray | None = None  # (3,) int32 Q.AC_OFFSET_FRAC: b - trim
 
     def trim_code(self) -> np.ndarray:
         """The trim as the uint16 code ac_triad's ``trim`` field holds: offset binary
@@ -82,18 +84,42 @@ def quantize_triad(offsets3, sens3, signed: bool = False) -> TriadTable:
     Returns
     -------
     TriadTable
-        trim = round(b), the residual folded into k; each row's shift the largest with
-        max |m| <= 32767 and sum |m| <= 65535 - 3; output Q.AC_OUT_FRAC m/s^2.
+        trim = round(b); s~ = s in Q.AC_SENS_FRAC and o~ = b - trim in Q.AC_OFFSET_FRAC (the
+        values the header's ac_channel_cal entries hold, from which ``ac_triad_build``
+        makes the same table on the device); M = S~^-1 in output LSB per count; each row's
+        shift the largest with max |m| <= 32767 and sum |m| <= 65535 - 3; k = M o~.
     """
     b = np.asarray(offsets3, float)
     trim = to_fixed(b, 0, "offset_counts", *trim_range(signed))
-    M = triad_matrix(sens3) * 2.0 ** OUT_FRAC       # output LSB per count
-    o = b - trim
+    sens_q = to_fixed(sens3, FORMATS.sens_frac, "sensitivity")
+    offset_q = to_fixed(b - trim, FORMATS.offset_frac, "residual offset")
+    M = triad_matrix(sens_q / 2.0 ** FORMATS.sens_frac) * 2.0 ** OUT_FRAC       # output LSB per count
+    o = offset_q / 2.0 ** FORMATS.offset_frac
     shift = np.array([row_shift(M[j], f"triad matrix row {j}") for j in range(3)])
     m = round_half_up(M * 2.0 ** shift[:, None]).astype(np.int16)
     k = to_fixed((M @ o) * 2.0 ** shift, 0, "triad offset term k")
     return TriadTable(trim=trim.astype(np.int16 if signed else np.uint16), m=m, shift=shift.astype(np.int8),
-                      k=k.astype(np.int32), signed=signed)
+                      k=k.astype(np.int32), signed=signed, sens_q=sens_q.astype(np.int32),
+                      offset_q=offset_q.astype(np.int32))
+
+
+def build_triad_on_device(table: TriadTable) -> TriadTable:
+    """The C core's ``ac_triad_build`` from the table's fixed-point channel parameters
+    (``sens_q``, ``offset_q``, the trim codes): what firmware rebuilds after a field
+    recalibration.  Raises AccelcalError with the core's status on failure."""
+    cal = ffi.new("ac_channel_cal[3]")
+    for i in range(3):
+        for a in range(3):
+            cal[i].sens[a] = int(table.sens_q[i][a])
+        cal[i].offset = int(table.offset_q[i])
+    trim = np.ascontiguousarray(table.trim_code(), dtype=np.uint16)
+    work = ffi.new("ac_build_work *")
+    out = ffi.new("ac_triad *")
+    check(lib.ac_triad_build(cal, cptr("uint16_t *", trim), work, out), "ac_triad_build")
+    return TriadTable(trim=table.trim.copy(), m=np.array([[out.m[j][i] for i in range(3)] for j in range(3)], np.int16),
+                      shift=np.array([out.shift[j] for j in range(3)], np.int8),
+                      k=np.array([out.k[j] for j in range(3)], np.int32), signed=table.signed,
+                      sens_q=table.sens_q, offset_q=table.offset_q)
 
 
 def triad_apply_fixed(table: TriadTable, raw) -> tuple[np.ndarray, np.ndarray]:

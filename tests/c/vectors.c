@@ -517,6 +517,58 @@ static void vec_trim(void)
 
 /* ---- one triad (f only) ----------------------------------------------------------- */
 
+/* ac_triad_build from random channel parameters: gains 50..4000 counts per m/s^2 with
+ * cross-axis terms up to 1/8, some nearly singular, and the table it makes */
+/* about uniform in [-lim, lim] (lim >= 1): a power-of-two mask, no division */
+static int32_t rnd_pm(int32_t lim)
+{
+    uint32_t mask = 1u;
+    while (mask < (uint32_t)lim) {
+        mask = (mask << 1) | 1u;
+    }
+    return (int32_t)(rnd() & mask) - (int32_t)(mask >> 1);
+}
+
+static void vec_triad_build(void)
+{
+    uint16_t i, j, q;
+    ac_build_work work;
+    for (i = 0u; i < 40u; i++) {
+        ac_channel_cal cal[3];
+        uint16_t trim[3];
+        ac_triad t;
+        ac_status s;
+        int32_t k = rnd_range(50L, 4000L) * 65536L;
+        for (j = 0u; j < 3u; j++) {
+            for (q = 0u; q < 3u; q++) {
+                cal[j].sens[q] = (j == q) ? k + rnd_pm(k >> 4) : rnd_pm(k >> 3);
+                cal[j].pos[q] = 0;
+            }
+            cal[j].offset = rnd_range(-128L, 127L);
+            trim[j] = (uint16_t)rnd();
+        }
+        if ((i & 7u) == 7u) {           /* two axes nearly parallel */
+            for (q = 0u; q < 3u; q++) {
+                cal[1].sens[q] = cal[0].sens[q] + (int32_t)(q == 2u);
+            }
+        }
+        s = ac_triad_build(cal, trim, &work, &t);
+        TAG("TBU");
+        st(s);
+        if (s == AC_OK) {
+            for (j = 0u; j < 3u; j++) {
+                hu16(t.trim[j]);
+                h8((uint8_t)t.shift[j]);
+                h32(t.k[j]);
+                for (q = 0u; q < 3u; q++) {
+                    h16(t.m[j][q]);
+                }
+            }
+        }
+        nl();
+    }
+}
+
 static void vec_triad(void)
 {
     uint16_t i, j, q;
@@ -1037,6 +1089,7 @@ int main(void)
     vec_xf();
     vec_trim();
     vec_triad();
+    vec_triad_build();
     vec_resolve();
     vec_build();
     vec_invert6();

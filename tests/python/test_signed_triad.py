@@ -20,6 +20,7 @@ from accelcal.header import calibration_header
 from accelcal.native import cptr, ffi, lib, offset_binary
 from accelcal.recording import recording_from_arrays, write_recording
 from accelcal.resolve import resolve_recording
+from accelcal.triad import build_triad_on_device
 from core_settings import estimator
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -96,7 +97,10 @@ def check_triad_table(tab, b, S, raw):
     if not clipped and not sat[0]:
         ref = E.triad_apply_float(b, S, raw) * 1024.0
         half = 0.5 * 2.0 ** (-tab.shift.astype(float))
-        assert np.all(np.abs(f_q - ref) <= (np.abs(x).sum() + 1.0) * half + 0.5 + 1e-6 * np.abs(ref))
+        # the entries' rounding, the final rounding, the residual offset in Q.8 (half an LSB of
+        # 2^-8 counts through M), and s in Q.16 (relative, far below 1e-6)
+        o_err = (np.abs(tab.m).astype(float) * 2.0 ** (-tab.shift.astype(float))[:, None]).sum(axis=1) * 2.0 ** -9
+        assert np.all(np.abs(f_q - ref) <= (np.abs(x).sum() + 1.0) * half + 0.5 + o_err + 1e-6 * np.abs(ref))
     return f_q, sat
 
 
@@ -110,7 +114,8 @@ def test_signed_triad_against_the_float_reference(tri, raw):
     raw = np.array([raw])
     f_q, sat = check_triad_table(tab, b, S, raw)
     # the unsigned path on offset-binary codes is the same table and the same numbers
-    tab_u = E.TriadTable(trim=tab.trim_code(), m=tab.m, shift=tab.shift, k=tab.k)
+    tab_u = E.TriadTable(trim=tab.trim_code(), m=tab.m, shift=tab.shift, k=tab.k, sens_q=tab.sens_q,
+                         offset_q=tab.offset_q)
     f_u, sat_u = E.triad_apply_fixed(tab_u, offset_binary(raw))
     assert np.array_equal(f_u, f_q) and np.array_equal(sat_u, sat)
 
@@ -126,6 +131,20 @@ def unsigned_triads(draw):
 def test_triad_against_the_float_reference(tri, raw):
     b, S = tri
     check_triad_table(E.quantize_triad(b, S), b, S, np.array([raw]))
+
+
+@estimator
+@given(st.one_of(signed_triads(), unsigned_triads()), st.booleans())
+def test_triad_device_build_matches_host_quantizer(tri, signed):
+    """ac_triad_build from the header's channel entries gives the host's table: the same
+    shifts, and m and k within one mantissa LSB (30-bit soft-float against float64)."""
+    b, S = tri
+    if signed != bool(np.all(b < 32768)):
+        b = b - 32768 if signed else b + 32768
+    tab = E.quantize_triad(b, S, signed)
+    dev = build_triad_on_device(tab)
+    assert np.array_equal(dev.shift, tab.shift)
+    assert np.all(np.abs(dev.m.astype(int) - tab.m) <= 1) and np.all(np.abs(dev.k.astype(np.int64) - tab.k) <= 1)
 
 
 # ---------------------------------------------------------------- headers with the C core
@@ -155,7 +174,16 @@ int main(void) {
     int v[3], i;
     int32_t f[3];
     ac_status s;
+    ac_triad built;
+    ac_build_work work;
     if (ac_triad_check(&AC_CAL_TRIAD) != AC_OK) return 10;
+    /* the on-device build from the header's channel entries must equal the table */
+    if (ac_triad_build(AC_CAL_CHANNELS, AC_CAL_TRIAD.trim, &work, &built) != AC_OK) return 11;
+    for (i = 0; i < 3; i++) {
+        int q;
+        if (built.shift[i] != AC_CAL_TRIAD.shift[i] || built.k[i] != AC_CAL_TRIAD.k[i]) return 12;
+        for (q = 0; q < 3; q++) if (built.m[i][q] != AC_CAL_TRIAD.m[i][q] || built.trim[q] != AC_CAL_TRIAD.trim[q]) return 13;
+    }
     while (scanf("%d %d %d", &v[0], &v[1], &v[2]) == 3) {
 #ifdef SIGNED
         int16_t raw[3], x[3];

@@ -1,0 +1,30 @@
+/* accelcal -- offset pre-trim of signed (two's complement) readings.
+ * Its own object so that firmware for an unsigned chip does not link it (the H8
+ * toolchain links whole objects). */
+#include "accelcal/ac_trim.h"
+#include "ac_internal.h"
+
+ac_status ac_trim_s16(const int16_t *raw, const int16_t *trim, uint16_t n, int16_t *x)
+{
+    uint8_t sat = 0u;
+    uint16_t i;
+    if (raw == 0 || trim == 0 || x == 0) {
+        return AC_ERR_NULL;
+    }
+    if (n == 0u) {
+        return AC_ERR_SIZE;
+    }
+    for (i = 0u; i < n; i++) {
+        /* in 32 bits (an add on every target, no library call): |raw - trim| <= 65535 */
+        int32_t d = (int32_t)raw[i] - (int32_t)trim[i];
+        if (d > 32767L) {
+            d = 32767L;
+            sat = 1u;
+        } else if (d < -32768L) {
+            d = -32768L;
+            sat = 1u;
+        }
+        x[i] = (int16_t)d;
+    }
+    return sat ? AC_SATURATED : AC_OK;
+}
