@@ -11,7 +11,7 @@ from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, as_float_array, channel_mask, owner, per_channel
 from .fitdata import FitData
 from .fitting import Cand, Candidate, block_ss
-from .settings import QUANT_DITHER_GRID, QUANT_STRONG_FRAC, QUANT_STRONG_VALUES, SAT_PROOF_COUNT
+from .settings import QUANT_DITHER_GRID, QUANT_RELEVANT, QUANT_STRONG_FRAC, QUANT_STRONG_VALUES, SAT_PROOF_COUNT
 
 
 ERFC = np.frompyfunc(math.erfc, 1, 1)
@@ -253,6 +253,14 @@ class Quantization(Candidate, Effect):
         Sw, Su = block_ss(D, D.rows(y - delta))
         c = Cand(self.name, int(np.count_nonzero(step)), Sw, Su, delta, {"step": step}, {"step": np.zeros(D.N)})
         strong = (step > 0) & (frac >= QUANT_STRONG_FRAC) & (nd >= QUANT_STRONG_VALUES)
+        # a lattice is the cause of a gap only where its rounding noise (step / sqrt(12)) is a real
+        # part of the noise: the MPU-6050's 4-count steps under 50-80 counts of noise are not
+        relevant = np.asarray(step, float) / np.sqrt(12.0) >= QUANT_RELEVANT * np.asarray(D.sigma, float)
+        if np.any(strong & ~relevant):
+            c.notes.append("raw values on a lattice too fine to matter: " + ", ".join(
+                f"channel {i}: step {int(step[i])} against {D.sigma[i]:.3g} counts of noise"
+                for i in np.flatnonzero(strong & ~relevant)))
+        strong &= relevant
         if np.any(strong):
             c.proof = True
             c.evidence = "lattice of the raw values (read from all the data)"

@@ -12,6 +12,7 @@ MISALIGN_MAX_RAD = 0.35     # relinearised misalignment fits stay below ~20 deg
 POSITION_TOL_M = 1e-3      # position_error reports dr along directions with 1-sigma below this
 QUANT_STRONG_FRAC = 0.999  # ... and to take the lattice alone as proof (with QUANT_STRONG_VALUES)
 QUANT_STRONG_VALUES = 20   # distinct lattice values needed for the proof (chance <= 2^-19)
+QUANT_RELEVANT = 0.25      # a lattice counts when step/sqrt(12) >= this x the channel's noise floor
 
 
 # noise before the quantiser, as a fraction of the step, tried for each quantised channel
