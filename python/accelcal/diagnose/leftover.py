@@ -113,10 +113,10 @@ def leftover(D: FitData, e: np.ndarray, e_after: np.ndarray, before: float, afte
     floor2_rows = np.mean(D.sigma ** 2) * np.ones(Ra.shape[1])
     noise2, _, _ = _split(D, Ra, floor2_rows)
     noise = math.sqrt(float(np.mean(noise2)))
-    lines = spectral_lines(D, e_after)
-    tone = lines["rms_counts"] if lines is not None else 0.0
-    if lines is not None:
-        noise = math.sqrt(max(noise * noise - tone * tone, 0.0))    # the scatter held the lines too
+    lines = spectral_lines(D, e_after)                     # channel space: where the lines are
+    rows_lines = lines if D.Qp is None else spectral_lines(D, Ra)   # the scored rows: how much they weigh
+    tone = rows_lines["rms_counts"] if rows_lines is not None else 0.0
+    noise = math.sqrt(max(noise * noise - tone * tone, 0.0))        # the scatter held the lines too
     left = math.sqrt(max(after * after - noise * noise, 0.0))
     # a line counts on its own channel: it may stand well above that channel's noise and still be
     # a small part of the average over channels
