@@ -162,27 +162,31 @@ def xsens_section() -> list[str]:
     return out
 
 
+VERDICTS = tuple(LABELS) + ("unexplained",)     # a verdict may also say that no effect explains the gap
+
+
 def summarise(rows: list[dict]) -> str:
     lines = []
     idx = {n: i for i, n in enumerate(LABELS)}
+    vdx = {n: i for i, n in enumerate(VERDICTS)}
 
     def conf(sub):
-        M = np.zeros((len(LABELS), len(LABELS)), int)
+        M = np.zeros((len(LABELS), len(VERDICTS)), int)
         for r in sub:
-            M[idx[r["effect"]], idx[r["verdict"]]] += 1
+            M[idx[r["effect"]], vdx[r["verdict"]]] += 1
         return M
 
     abbrev = (("temperature_", "temp_"), ("position_error", "position"), ("misalignment", "misalign"),
               ("quantization", "quantiz"), ("nonlinearity", "nonlin"))
     short = {}
-    for n in LABELS:
+    for n in VERDICTS:
         short[n] = n
         for a, b in abbrev:
             short[n] = short[n].replace(a, b)
 
     def table(M, title):
-        out = [f"### {title}", "", "| truth \\ verdict | " + " | ".join(short[n] for n in LABELS) + " |",
-               "| --- | " + " | ".join("---" for _ in LABELS) + " |"]
+        out = [f"### {title}", "", "| truth \\ verdict | " + " | ".join(short[n] for n in VERDICTS) + " |",
+               "| --- | " + " | ".join("---" for _ in VERDICTS) + " |"]
         for i, n in enumerate(LABELS):
             if M[i].sum() == 0:
                 continue

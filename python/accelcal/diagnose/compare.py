@@ -7,9 +7,11 @@ scored on the residual the other leaves (:func:`conditional`, the same held-out 
 the stepwise search):
 
 * A after B significant, B after A not: A explains all B does and more; A is the verdict.
-* neither significant after the other: they explain the same thing; the data cannot tell
-  them apart (``ambiguous_with``), and ``separate_by`` names the poses or motions that
-  would (each effect's ``tell_apart``); the one with fewer parameters is the verdict.
+* neither significant after the other, and their held-out gains alone within the
+  uncertainty of each other (:func:`separable`): they explain the same thing; the data
+  cannot tell them apart (``ambiguous_with``), and ``separate_by`` names the poses or
+  motions that would (each effect's ``tell_apart``); the one with fewer parameters is the
+  verdict when its held-out shrink alone is as large (within OCCAM_SHRINK).
 * both significant after the other: both act; the stepwise search names both.
 
 On data that cannot tell time from pose (:func:`time_separable`: static poses only, no
@@ -33,6 +35,8 @@ import numpy as np
 from ..effects.fitting import Cand, block_ss
 from .scoring import score
 
+OCCAM_SHRINK = 0.02        # ... and the one with fewer parameters is chosen when it shrinks the gap as far (to this)
+SEPARATE_T = 3.0           # paired block t of two candidates' held-out chi2 that tells them apart
 RIVAL_GAIN_SHARE = 0.5     # rivals: significant candidates with at least this share of the best one's gain
 MAX_RIVALS = 3             # ... at most this many, by gain
 REPEAT_DEG = 5.0           # two static poses within this angle are one orientation, repeated ...
@@ -52,6 +56,19 @@ class Contest:
     tests: dict = field(default_factory=dict)
     swapped_from: str | None = None
     why: str = ""
+
+
+def separable(a: Cand, b: Cand) -> bool:
+    """Whether the held-out gains of ``a`` and ``b`` (first round, same blocks) differ beyond
+    their uncertainty: the paired block differences of their held-out chi2 have a t
+    statistic of at least SEPARATE_T."""
+    d = np.asarray(b.Sw, float) - np.asarray(a.Sw, float)
+    if d.size < 2:
+        return False
+    sd = float(np.std(d, ddof=1))
+    if sd == 0.0:
+        return bool(np.any(d != 0))
+    return abs(float(np.mean(d))) / (sd / math.sqrt(d.size)) >= SEPARATE_T
 
 
 def conditional(D, cands, name: str, given: Cand, y, pcur) -> Cand:
@@ -158,9 +175,9 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
         elif c_after.significant and not b_after.significant and swap is None:
             swap = (c.name, f"{c.name} explains all that {best.name} does and more ({best.name} adds nothing "
                             "significant after it)")
-        elif not c_after.significant and not b_after.significant:
+        elif not c_after.significant and not b_after.significant and not separable(best, c):
             out.ambiguous.append(c.name)
-            if c.k < best.k and swap is None:
+            if c.k < best.k and c.shrink >= best.shrink - OCCAM_SHRINK and swap is None:
                 swap = (c.name, f"{c.name} explains the same part of the gap with fewer parameters "
                                 f"({c.k} against {best.k})")
     if swap is not None:
