@@ -1,16 +1,36 @@
-"""Temperature: offset and gain linear in temperature."""
+"""Temperature: offset and gain linear in the sensor's temperature, which may follow the
+recorded one through a first-order thermal lag."""
 from __future__ import annotations
 
 import math
 
 import numpy as np
 from scipy.optimize import minimize_scalar
+from scipy.signal import lfilter
 
 from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_list, channel_mask, per_channel, strongest, temperature_of
 from .fitdata import FitData, t_ref_known, temp_skip
 from .fitting import Cand, Candidate, jig_rows, joint_stats, sep_stats, solve_groups
-from .settings import T_REF_SPANS
+from .settings import PENALTY_PER_PARAM, T_LAG_GRID_S, T_REF_SPANS
+
+
+def lagged(T: np.ndarray, t: np.ndarray, tau_s: float, runs: np.ndarray | None = None) -> np.ndarray:
+    """The sensor's temperature: the recorded ``T`` (degC) through a first-order lag of time
+    constant ``tau_s`` (s), started at the recorded value, per run of samples ``runs``
+    (labels; default one run), at the mean sample spacing of ``t`` (s).  ``tau_s`` = 0: T."""
+    T = np.asarray(T, float)
+    if tau_s <= 0.0 or T.size < 2:
+        return T
+    out = np.empty_like(T)
+    runs = np.zeros(T.size, np.int64) if runs is None else np.asarray(runs)
+    for r in np.unique(runs):
+        idx = np.flatnonzero(runs == r)
+        tt = np.asarray(t, float)[idx]
+        h = float(np.mean(np.diff(tt))) if idx.size > 1 else 1.0
+        a = math.exp(-h / tau_s)
+        out[idx] = lfilter([1.0 - a], [1.0, -a], T[idx], zi=[a * T[idx[0]]])[0]
+    return out
 
 
 class TemperatureFit(Candidate):
@@ -28,17 +48,62 @@ class TemperatureFit(Candidate):
     def _z(self, D):
         return D.sensed if self.gain else np.ones((D.n, D.N))
 
-    def cv(self, D, y, pcur, S0w, S0u, folds=True):
-        z = self._z(D)
-        T = D.temp
+    def _profile(self, D, G2, h2, T, fixed):
+        """The all-data fit's objective (-h' theta; lower is better) at the best reference
+        temperature of a coarse grid (or the calibration's)."""
+        N = D.N
+        Tlo, Thi = float(T.min()), float(T.max())
+        span = max(Thi - Tlo, 1e-9)
+        grid = [fixed] if fixed is not None else np.linspace(Tlo - T_REF_SPANS * span, Thi + T_REF_SPANS * span, 41)
+        vals = []
+        for tr in grid:
+            v = np.array([1.0, -tr])
+            if D.Qp is None:
+                G = np.einsum("...kl,k,l->...", G2, v, v)[..., None, None]
+                hh = np.einsum("...k,k->...", h2, v)[..., None]
+            else:
+                Vm = np.zeros((2 * N, N))
+                for i in range(N):
+                    Vm[2 * i:2 * i + 2, i] = v
+                G = np.einsum("...ab,ai,bj->...ij", G2, Vm, Vm)
+                hh = np.einsum("...a,ai->...i", h2, Vm)
+            th = solve_groups(G, hh)[0]
+            vals.append(-float(np.einsum("gk,gk->", th, hh)))
+        return min(vals)
+
+    def _stats(self, D, y, z, T):
         # columns T z and z: c (T - t_ref) z = c (X2 . [1, -t_ref])
         X2 = np.stack([T[:, None] * z, z], axis=2)
-        fixed = t_ref_known(D)
         if D.Qp is None:
-            Gw2, hw2, Gu2, hu2 = sep_stats(D, X2, y)
-        else:
-            Gw2, hw2, Gu2, hu2 = joint_stats(D, jig_rows(D, X2), D.rows(y))
+            return sep_stats(D, X2, y)
+        return joint_stats(D, jig_rows(D, X2), D.rows(y))
+
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
+        z = self._z(D)
+        fixed = t_ref_known(D)
         N = D.N
+        # the thermal lag: the all-data best of T_LAG_GRID_S (a lag must beat none by more than its
+        # parameter's penalty); lags up to half the data's span
+        span_s = float(np.ptp(D.tg)) if D.n else 0.0
+        def lag_fit(tau):
+            T = lagged(D.temp, D.tg, tau, D.rec)
+            st = self._stats(D, y, z, T)
+            return float(self._profile(D, st[0].sum(0), st[1].sum(0), T, fixed)) + (PENALTY_PER_PARAM if tau else 0.0), \
+                tau, T, st
+
+        grid = [x for x in T_LAG_GRID_S if x <= 0.5 * span_s]
+        fits = [lag_fit(tau) for tau in grid]
+        j = int(np.argmin([f[0] for f in fits]))
+        best = fits[j]
+        if best[1] > 0:
+            # refine between the neighbouring grid lags (in log tau)
+            lo = grid[j - 1] if grid[j - 1] > 0 else 0.5 * grid[j]
+            hi = grid[j + 1] if j + 1 < len(grid) else min(2.0 * grid[j], 0.5 * span_s)
+            res = minimize_scalar(lambda u: lag_fit(math.exp(u))[0], bounds=(math.log(lo), math.log(hi)),
+                                  method="bounded", options={"xatol": 0.02})
+            if res.fun < best[0]:
+                best = lag_fit(math.exp(res.x))
+        _, tau, T, (Gw2, hw2, Gu2, hu2) = best
         Tlo, Thi = float(T.min()), float(T.max())
         span = max(Thi - Tlo, 1e-9)
 
@@ -88,7 +153,7 @@ class TemperatureFit(Candidate):
         G, hh = reduce(Gt2, ht2, tr)
         th, Ginv, rank = solve_groups(G, hh)
         Sall = float(S0w.sum() - np.einsum("gk,gk->", th, hh))
-        npar = int(rank.sum()) + (0 if fixed is not None else 1)
+        npar = int(rank.sum()) + (0 if fixed is not None else 1) + (1 if tau else 0)
         scale = max(1.0, Sall / max(D.n * D.R - npar, 1))
         if D.Qp is None:
             coeff = th[:, 0]
@@ -97,8 +162,8 @@ class TemperatureFit(Candidate):
             coeff = th[0]
             sd = np.sqrt(np.maximum(np.diag(Ginv[0]) * scale, 0.0))
         delta = coeff[None, :] * (T - tr)[:, None] * z
-        params = {"coeff": coeff, "t_ref": tr}
-        sigma = {"coeff": sd, "t_ref": 0.0 if fixed is not None else math.nan}
+        params = {"coeff": coeff, "t_ref": tr, "tau_s": float(tau)}
+        sigma = {"coeff": sd, "t_ref": 0.0 if fixed is not None else math.nan, "tau_s": 0.0}
         notes = [] if fixed is None else [f"t_ref = {fixed:.4g} degC from the calibration"]
         if fixed is None:
             # 1-sigma of t_ref from the curvature of the profile objective
@@ -114,30 +179,34 @@ class TemperatureOffset(TemperatureFit, Effect):
     time_dependent = True
     tell_apart = "the same pose held at two temperatures, and repeated at one temperature later (temperature apart from time)"
     summary = "b_i changes linearly with temperature"
-    doc = "bias_i(t) += coeff_i (T(t) - t_ref) (coeff: counts per degC)."
+    doc = ("bias_i(t) += coeff_i (T_s(t) - t_ref) (coeff: counts per degC), T_s the recorded temperature "
+           "through a first-order lag tau_s (s; 0: T_s = temp_c).")
     stage = "state"
     params = (
         Param("coeff", None, "counts/degC", "offset tempco; auto = 0.2 % of g per degC in counts", "floats"),
         Param("t_ref", 25.0, "degC", "temperature at which the offset is the calibrated one (the effect shows "
               "only when the motion's temperature moves away from it: temp_profile=ramp or sine)"),
+        Param("tau_s", 0.0, "s", "thermal lag: the sensor's temperature follows temp_c through a first-order lag "
+              "of this time constant", minimum=0.0),
         CHANNEL_PARAM,
         RANDOM_PARAM,
     )
     fit = (
         FitParam("coeff", "channel", "counts/degC", "offset temperature coefficient"),
         FitParam("t_ref", "scalar", "degC", "reference temperature", free=False),
+        FitParam("tau_s", "scalar", "s", "thermal lag", free=False),
     )
 
     def _resolve(self, spec, ctx, rng):
         m = channel_mask(spec, ctx, self.name)
         c = per_channel(spec["coeff"], 0.002 * ctx.g_counts(), m, rng if spec["random"] else None, self.name, "coeff")
-        return {"coeff": c, "t_ref": float(spec["t_ref"])}
+        return {"coeff": c, "t_ref": float(spec["t_ref"]), "tau_s": float(spec["tau_s"])}
 
     def identity(self, ctx):
-        return {"coeff": np.zeros(ctx.n_channels), "t_ref": 25.0}
+        return {"coeff": np.zeros(ctx.n_channels), "t_ref": 25.0, "tau_s": 0.0}
 
     def modify_state(self, state, p, ctx):
-        T = temperature_of(ctx, self.name)
+        T = lagged(temperature_of(ctx, self.name), ctx.truth.t, float(p.get("tau_s", 0.0)))
         add = (T - float(p["t_ref"]))[:, None] * np.asarray(p["coeff"], float)[None, :]
         return state.replace(bias=add if state.bias is None else state.bias + add)
 
@@ -155,7 +224,7 @@ class TemperatureOffset(TemperatureFit, Effect):
         """One line in physical units for the report (p: parameters, s: their 1-sigma)."""
         i = strongest(p["coeff"])
         return (f"offset tempco up to {p['coeff'][i]:+.4g} +- {s['coeff'][i]:.2g} counts/degC on channel {i} "
-                f"(t_ref {p['t_ref']:.4g} degC)")
+                f"(t_ref {p['t_ref']:.4g} degC" + (f", lag {p['tau_s']:.3g} s)" if p.get("tau_s") else ")"))
 
 
 class TemperatureGain(TemperatureFit, Effect):
@@ -163,30 +232,34 @@ class TemperatureGain(TemperatureFit, Effect):
     time_dependent = True
     tell_apart = "each axis up and down at two temperatures (a gain change scales both readings, an offset change shifts them)"
     summary = "the magnitude of s_i changes linearly with temperature"
-    doc = "gain_i(t) *= 1 + coeff_i (T(t) - t_ref) (coeff: fraction per degC)."
+    doc = ("gain_i(t) *= 1 + coeff_i (T_s(t) - t_ref) (coeff: fraction per degC), T_s the recorded "
+           "temperature through a first-order lag tau_s (s; 0: T_s = temp_c).")
     stage = "state"
     params = (
         Param("coeff", 3e-4, "1/degC", "gain tempco (fraction per degC)", "floats"),
         Param("t_ref", 25.0, "degC", "temperature at which the gain is the calibrated one (the effect shows "
               "only when the motion's temperature moves away from it: temp_profile=ramp or sine)"),
+        Param("tau_s", 0.0, "s", "thermal lag: the sensor's temperature follows temp_c through a first-order lag "
+              "of this time constant", minimum=0.0),
         CHANNEL_PARAM,
         RANDOM_PARAM,
     )
     fit = (
         FitParam("coeff", "channel", "1/degC", "gain temperature coefficient"),
         FitParam("t_ref", "scalar", "degC", "reference temperature", free=False),
+        FitParam("tau_s", "scalar", "s", "thermal lag", free=False),
     )
 
     def _resolve(self, spec, ctx, rng):
         m = channel_mask(spec, ctx, self.name)
         c = per_channel(spec["coeff"], 0.0, m, rng if spec["random"] else None, self.name, "coeff")
-        return {"coeff": c, "t_ref": float(spec["t_ref"])}
+        return {"coeff": c, "t_ref": float(spec["t_ref"]), "tau_s": float(spec["tau_s"])}
 
     def identity(self, ctx):
-        return {"coeff": np.zeros(ctx.n_channels), "t_ref": 25.0}
+        return {"coeff": np.zeros(ctx.n_channels), "t_ref": 25.0, "tau_s": 0.0}
 
     def modify_state(self, state, p, ctx):
-        T = temperature_of(ctx, self.name)
+        T = lagged(temperature_of(ctx, self.name), ctx.truth.t, float(p.get("tau_s", 0.0)))
         fac = 1.0 + (T - float(p["t_ref"]))[:, None] * np.asarray(p["coeff"], float)[None, :]
         return state.replace(gain=fac if state.gain is None else state.gain * fac)
 
@@ -205,4 +278,4 @@ class TemperatureGain(TemperatureFit, Effect):
         i = strongest(p["coeff"])
         return (f"gain tempco up to {1e6 * p['coeff'][i]:+.4g} +- {1e6 * s['coeff'][i]:.2g} ppm/degC "
                 f"on channel {i} "
-                f"(t_ref {p['t_ref']:.4g} degC)")
+                f"(t_ref {p['t_ref']:.4g} degC" + (f", lag {p['tau_s']:.3g} s)" if p.get("tau_s") else ")"))
