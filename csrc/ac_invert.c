@@ -513,7 +513,7 @@ ac_status ac_triad_build(const ac_channel_cal *cal, const uint16_t *trim, ac_bui
     xf o, c, mm[2];
     int8_t shift[3];
     int32_t k[3];
-    int16_t cl2 = 0, s;
+    int16_t cl2 = 0;
     unsigned i, j, l;
     ac_status st;
     if (cal == 0 || trim == 0 || w == 0 || out == 0) {
@@ -544,6 +544,7 @@ ac_status ac_triad_build(const ac_channel_cal *cal, const uint16_t *trim, ac_bui
     /* M = S^-1 in output LSB per count: row j of the inverse times 2^(AC_OUT_FRAC - colexp_j);
      * its shift by the host quantizer's rule, k = round((M o) 2^shift) */
     for (j = 0u; j < 3u; j++) {
+        int16_t s;
         clear(mm, sizeof mm);
         clear(&c, sizeof c);
         for (l = 0u; l < 3u; l++) {

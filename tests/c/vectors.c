@@ -534,25 +534,25 @@ static void vec_triad_build(void)
     uint16_t i, j, q;
     ac_build_work work;
     for (i = 0u; i < 40u; i++) {
-        ac_channel_cal cal[3];
+        ac_channel_cal ch[3];
         uint16_t trim[3];
         ac_triad t;
         ac_status s;
         int32_t k = rnd_range(50L, 4000L) * 65536L;
         for (j = 0u; j < 3u; j++) {
             for (q = 0u; q < 3u; q++) {
-                cal[j].sens[q] = (j == q) ? k + rnd_pm(k >> 4) : rnd_pm(k >> 3);
-                cal[j].pos[q] = 0;
+                ch[j].sens[q] = (j == q) ? k + rnd_pm(k >> 4) : rnd_pm(k >> 3);
+                ch[j].pos[q] = 0;
             }
-            cal[j].offset = rnd_range(-128L, 127L);
+            ch[j].offset = rnd_range(-128L, 127L);
             trim[j] = (uint16_t)rnd();
         }
         if ((i & 7u) == 7u) {           /* two axes nearly parallel */
             for (q = 0u; q < 3u; q++) {
-                cal[1].sens[q] = cal[0].sens[q] + (int32_t)(q == 2u);
+                ch[1].sens[q] = ch[0].sens[q] + (int32_t)(q == 2u);
             }
         }
-        s = ac_triad_build(cal, trim, &work, &t);
+        s = ac_triad_build(ch, trim, &work, &t);
         TAG("TBU");
         st(s);
         if (s == AC_OK) {
