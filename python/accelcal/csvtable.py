@@ -118,10 +118,11 @@ class ByteTable:
         if self._window is None:
             # A sliding (len, FAST_WIDTH) view of the bytes: picking rows of it
             # copies each cell's bytes in one go instead of gathering bytes singly.
-            padded = np.zeros(len(self.data) + FAST_WIDTH, dtype=np.uint8)
+            # one row more than there are bytes: an empty last cell starts at len(data)
+            padded = np.zeros(len(self.data) + 1 + FAST_WIDTH, dtype=np.uint8)
             padded[: len(self.data)] = np.frombuffer(self.data, dtype=np.uint8)
             self._window = np.lib.stride_tricks.as_strided(
-                padded, shape=(len(self.data), FAST_WIDTH), strides=(1, 1), writeable=False
+                padded, shape=(len(self.data) + 1, FAST_WIDTH), strides=(1, 1), writeable=False
             )
         width = max(width, 3)  # room for b"nan" in empty cells
         mat = self._window[s, :width]
