@@ -29,6 +29,13 @@ def _row(values, width: int = 0) -> str:
     return "{" + ", ".join(vals) + "}"
 
 
+def _format_guard(*formats: tuple[str, int]) -> list[str]:
+    """Preprocessor lines that refuse to build against a core with other fractional bits
+    (``("OUT", 10)`` checks AC_OUT_FRAC == 10)."""
+    cond = " || ".join(f"AC_{name}_FRAC != {bits}" for name, bits in formats)
+    return [f"#if {cond}", "#error \"calibration header made for other fixed-point formats: regenerate it\"", "#endif"]
+
+
 def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method: str = "",
                   temp_ref_c: float | None = None, offset_tc=None, gain_tc=None) -> str:
     """The header text for tables t (see quantize.quantize)."""
@@ -70,10 +77,8 @@ def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method:
         "",
         "#include \"accelcal/accelcal.h\"",
         "",
-        f"#if AC_OUT_FRAC != {f.out_frac} || AC_OMEGA_FRAC != {f.omega_frac} || "
-        f"AC_SENS_FRAC != {f.sens_frac} || AC_POS_FRAC != {f.pos_frac} || AC_OFFSET_FRAC != {f.offset_frac}",
-        "#error \"calibration header made for other fixed-point formats: regenerate it\"",
-        "#endif",
+        *_format_guard(("OUT", f.out_frac), ("OMEGA", f.omega_frac), ("SENS", f.sens_frac), ("POS", f.pos_frac),
+                       ("OFFSET", f.offset_frac)),
         f"#if AC_MAX_CHANNELS < {n}",
         f"#error \"this calibration has {n} channels: build accelcal with AC_MAX_CHANNELS >= {n}\"",
         "#endif",
@@ -149,7 +154,7 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
         f" *   {p}_TRIM: counts subtracted from the raw readings ({tt})",
         f" *   {p}_TRIAD.m[j][i] * 2^-(shift[j] + {f.out_frac}) = (S^-1)[j][i] (m/s^2 per count)",
         f" *   {p}_TRIAD.k[j]    * 2^-(shift[j] + {f.out_frac}) = (S^-1 (b - trim))[j] (m/s^2)",
-        " *   |f - S^-1 (raw - b)| <= 0.5 LSB + the table's rounding (estimators.triad.triad_error_bound)",
+        " *   |f - S^-1 (raw - b)| <= 0.5 LSB + the table's rounding (accelcal.triad.triad_exact: the exact semantics)",
     ]
     lines += [f" *   {p}_CHANNELS: s_i Q.{f.sens_frac} counts per m/s^2, b_i - trim_i Q.{f.offset_frac} counts: after a",
               f" *     field recalibration, ac_triad_build({p}_CHANNELS, {p}_TRIAD.trim, &work, &triad) remakes the table"]
@@ -162,9 +167,7 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
         "",
         "#include \"accelcal/accelcal.h\"",
         "",
-        f"#if AC_OUT_FRAC != {f.out_frac}",
-        "#error \"calibration header made for other fixed-point formats: regenerate it\"",
-        "#endif",
+        *_format_guard(("OUT", f.out_frac), ("SENS", f.sens_frac), ("OFFSET", f.offset_frac)),
         "",
         f"extern const {tt} {p}_TRIM[3];",
         f"extern const ac_triad {p}_TRIAD;",
