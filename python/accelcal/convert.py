@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from .csvtable import ByteTable, CellError, ListTable, convert_column, split_header
+from .csvtable import convert_columns, make_table, split_header
 from .device import Device
 from .errors import InputError
 from .jsonfields import JsonFields, read_json
@@ -227,22 +227,13 @@ def read_columns(source: str, data: bytes, pre, want: dict[str, str]) -> tuple[l
     if spaced:
         data = whitespace_to_commas(data, pos, end, names, first, source)
         end = len(data)
-    if data.find(b'"', pos, end) >= 0:
-        table = ListTable(data[pos:end].decode("utf-8"), len(names), first, source)
-    else:
-        table = ByteTable(data, pos, end, len(names), first, source)
-    values, errors = {}, []
-    for name, kind in want.items():
-        j = names.index(name)
-        if kind == "text":
-            values[name] = table.strings(j)
-            continue
-        try:
-            values[name] = convert_column(table, j, kind)
-        except CellError as e:
-            errors.append((e.i, j, e.message))
-    if errors:
-        i, j, msg = min(errors)
+    table = make_table(data, pos, end, len(names), first, source)
+    values = {name: table.strings(names.index(name)) for name, kind in want.items() if kind == "text"}
+    numbers, err = convert_columns(table, {name: (names.index(name), kind) for name, kind in want.items()
+                                           if kind != "text"})
+    values.update(numbers)
+    if err is not None:
+        i, j, msg = err
         if want[names[j]] == "raw" and names[j] not in INDEX_COLUMNS and NUMBER_RE.fullmatch(table.cell(i, j).strip()):
             msg += " (readings in m/s^2 or g: state --units mps2|g with --lsb VALUE or --full-scale G)"
         raise InputError(source, msg, row=table.line(i), column=names[j])

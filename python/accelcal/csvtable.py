@@ -276,6 +276,28 @@ def convert_column(table: Any, j: int, kind: str) -> np.ndarray:
     return slow_float(table.strings(j), allow_unknown)
 
 
+def make_table(data: bytes, pos: int, end: int, m: int, first: int, source: str) -> Any:
+    """The data rows data[pos:end] of m columns (first data line ``first``): through the csv
+    module when a cell is quoted (ListTable), else split as bytes (ByteTable)."""
+    if data.find(b'"', pos, end) >= 0:
+        return ListTable(data[pos:end].decode("utf-8"), m, first, source)
+    return ByteTable(data, pos, end, m, first, source)
+
+
+def convert_columns(table: Any, cols: dict[str, tuple[int, str]]) -> tuple[dict[str, np.ndarray],
+                                                                           tuple[int, int, str] | None]:
+    """Every column ``name -> (j, kind)`` of the table as numbers (:func:`convert_column`),
+    and the earliest bad cell in the file as (row index, column, message), or None."""
+    values: dict[str, np.ndarray] = {}
+    errors: list[tuple[int, int, str]] = []
+    for name, (j, kind) in cols.items():
+        try:
+            values[name] = convert_column(table, j, kind)
+        except CellError as e:
+            errors.append((e.i, j, e.message))
+    return values, (min(errors) if errors else None)
+
+
 SCAN_KIND = {"raw": 1, "pose": 2, "t": 3, "ref": 4}  # _csv_fast.h: ACX_INT ... (0: ACX_SKIP)
 
 

@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 
 from .csvformat import CSV_G, CSV_G_NAN, CSV_INT, CSV_REPR, G_FORMAT_RE, csv_cell, csv_rows, float_strings
-from .csvtable import (FLOAT_RE, META_KEY_RE, RAW_RE, REFERENCE_NAMES, VECTOR_COLUMNS, ByteTable, CellError, ListTable,
-                       classify_columns, convert_column, quote_cell, scan_fast, split_header)
+from .csvtable import (FLOAT_RE, META_KEY_RE, RAW_RE, REFERENCE_NAMES, VECTOR_COLUMNS, ByteTable, ListTable,
+                       classify_columns, convert_columns, make_table, quote_cell, scan_fast, split_header)
 from .errors import InputError, atomic_write
 from .recording_checks import check_core_input, check_for_device
 from .textinput import is_whitespace_header, read_preamble, read_text_bytes, split_whitespace_header, whitespace_to_commas
@@ -312,20 +312,11 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
     if values is None:
         # Anything the C scanner did not take (quotes, blanks, words, an error):
         # the numpy/Python path decides, with the exact message.
-        if data.find(b'"', pos, end) >= 0:
-            table = ListTable(data[pos:end].decode("utf-8"), m, first, source)
-        else:
-            table = ByteTable(data, pos, end, m, first, source)
+        table = make_table(data, pos, end, m, first, source)
         # Convert every column; report the earliest bad cell in the file.
-        errors: list[tuple[int, int, str]] = []
-        values = {}
-        for name, (j, kind) in cols.items():
-            try:
-                values[name] = convert_column(table, j, kind)
-            except CellError as e:
-                errors.append((e.i, j, e.message))
-        if errors:
-            i, j, msg = min(errors)
+        values, err = convert_columns(table, cols)
+        if err is not None:
+            i, j, msg = err
             raise InputError(source, msg, row=table.line(i), column=names[j])
     n = len(values["t"])
 
