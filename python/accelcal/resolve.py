@@ -38,10 +38,10 @@ def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str
     A 3-axis sensor (``device.is_triad()``) gives f = S^-1 (raw - b) at its point and no
     alpha (NaN): the float reference, or the C core's ``ac_triad_apply`` (``ac_trim_s16`` +
     ``ac_triad_resolve`` for signed readings) with the header's triad table."""
+    if engine not in ("float", "fixed"):
+        raise ValueError(f"unknown engine {engine!r}")
     check_for_device(rec, device)
     if device.is_triad():
-        if engine not in ("float", "fixed"):
-            raise ValueError(f"unknown engine {engine!r}")
         if engine == "fixed":
             check_core_input(rec, device.raw_min < 0)
         try:
@@ -61,8 +61,6 @@ def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str
                              f"the calibrated sensor matrix cannot be inverted ({e})",
                              field="channels") from None
         return f, a, None
-    if engine != "fixed":
-        raise ValueError(f"unknown engine {engine!r}")
     check_core_input(rec, device.raw_min < 0)
     t = quantize_calibration(device, cal)
     w_q = None if omega is None else omega_to_fixed(omega)

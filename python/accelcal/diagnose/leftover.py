@@ -103,10 +103,10 @@ def _split(D: FitData, A: np.ndarray, floor2: np.ndarray) -> tuple[np.ndarray, n
     return noise2, sys_static + sys_moving, sys_moving
 
 
-def leftover(D: FitData, e: np.ndarray, e_after: np.ndarray, before: float, after: float) -> dict | None:
-    """The contract's ``unexplained`` object for the model that leaves ``e_after`` (n, N)
-    of the residual ``e`` (held-out RMS ``before`` -> ``after``, counts), or None when what
-    is left is noise (see the module doc)."""
+def leftover(D: FitData, e_after: np.ndarray, before: float, after: float) -> dict | None:
+    """The contract's ``unexplained`` object for the model that leaves the residual
+    ``e_after`` (n, N; held-out RMS of the gap ``before`` -> ``after``, counts), or None when
+    what is left is noise (see the module doc)."""
     if before <= 0:
         return None
     Ra = D.rows(e_after)

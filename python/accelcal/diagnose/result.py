@@ -61,7 +61,8 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
             if nm not in cands:
                 raise AccelcalError(f"diagnose: unknown candidate effect {nm!r}; effects: {', '.join(EFFECT_NAMES)}")
             names.append(nm)
-    D = prepare(dev, cal, recs, int(folds), int(seed), 1.0 if model_centripetal else 0.0)
+    m0 = 1.0 if model_centripetal else 0.0
+    D = prepare(dev, cal, recs, int(folds), int(seed), m0)
     e = D.raw - D.p0
     setup_rows(D, e)
 
@@ -85,7 +86,6 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     chosen: list[str] = []
     duel = None
     Dk = D                     # the data as linearised for the current step
-    m0 = 1.0 if model_centripetal else 0.0
     while True:
         sig = [c for c in results.values() if c.significant]
         if not sig:
@@ -192,11 +192,10 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         lattice.append(ent)
     gap_extra = pose_mean_gap(D, e)
     if relin is not None:
-        ef = relin["e"]
-        left = leftover(relin["D"], ef, ef - sum((relin["joint"][nm].delta for nm in fitted), np.zeros_like(ef)),
-                        base_rms, model_after)
+        left = leftover(relin["D"], relin["e"] - sum((relin["joint"][nm].delta for nm in fitted),
+                                                     np.zeros_like(relin["e"])), base_rms, model_after)
     else:
-        left = leftover(D, e, e - total_delta, base_rms, model_after)
+        left = leftover(D, e - total_delta, base_rms, model_after)
     if left is not None and not steps:
         verdict = "unexplained"
     result = DiagnosisResult({
