@@ -602,6 +602,17 @@ def _draw_setup(rng, device=None, rate=None, noise=None, effects=(), temperature
     return DEVICES[name](rate), rate, noise
 
 
+def _draw_session(rng, effects, device, rate, noise, temperature):
+    """A session's temperature column (default: with temperature_offset, else in 30 % of the
+    sessions, never with the fast-sampled out-of-table cases: minutes at 200-500 Hz), device,
+    rate, noise and true channel parameters."""
+    if temperature is None:
+        temperature = "temperature_offset" in effects or (rng.random() < 0.3
+                                                          and not {"resonance", "mains"} & set(effects))
+    dev, rate, noise = _draw_setup(rng, device, rate, noise, effects, temperature)
+    return temperature, dev, rate, noise, true_parameters(dev, rng)
+
+
 def _sample_times(traj, rate):
     return np.arange(int(traj.end * rate)) / rate
 
@@ -674,11 +685,7 @@ def make_jig(effects=(), seed=0, *, device=None, rate=None, noise=None, n_poses=
     rng = np.random.default_rng(seed)
     shapes = dict(shapes or {})
     effects = list(effects)
-    if temperature is None:  # not with the fast-sampled out-of-table cases (minutes at 200-500 Hz)
-        temperature = "temperature_offset" in effects or (rng.random() < 0.3
-                                                          and not {"resonance", "mains"} & set(effects))
-    dev, rate, noise = _draw_setup(rng, device, rate, noise, effects, temperature)
-    p = true_parameters(dev, rng)
+    temperature, dev, rate, noise, p = _draw_session(rng, effects, device, rate, noise, temperature)
     if directions is None:
         K = n_poses or int(rng.integers(12, 27))
         directions = FACES + EDGES + CORNERS
@@ -761,11 +768,7 @@ def make_handheld(effects=(), seed=0, *, device=None, rate=None, noise=None, n_p
     rng = np.random.default_rng(seed + 104729)
     shapes = dict(shapes or {})
     effects = list(effects)
-    if temperature is None:  # not with the fast-sampled out-of-table cases (minutes at 200-500 Hz)
-        temperature = "temperature_offset" in effects or (rng.random() < 0.3
-                                                          and not {"resonance", "mains"} & set(effects))
-    dev, rate, noise = _draw_setup(rng, device, rate, noise, effects, temperature)
-    p = true_parameters(dev, rng)
+    temperature, dev, rate, noise, p = _draw_session(rng, effects, device, rate, noise, temperature)
     K = n_poses or int(rng.integers(12, 31))
     traj = handheld_trajectory(dev.gravity_mps2, K, rng, hold_s=(8.0, 12.0) if temperature else (2.0, 4.0))
     t = _sample_times(traj, rate)

@@ -1,10 +1,7 @@
 """The emitted calibration header compiles warning-free for every target and,
 linked with the C core, reproduces the quantizer's tables and the float
 reference within the core's bound."""
-import os
-import shutil
 import subprocess
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,10 +10,8 @@ from accelcal import model
 from accelcal.device import default_device
 from accelcal.header import render_header
 from accelcal.quantize import FORMATS, exact_fixed_semantics, quantize
+from toolchains import build_host, cross_compile
 
-ROOT = Path(__file__).resolve().parents[2]
-CORE = sorted(str(p) for p in (ROOT / "csrc").glob("*.c"))
-WARN = ["-std=c99", "-Wall", "-Wextra", "-Werror"]
 
 DRIVER = r"""
 #define AC_CAL_IMPLEMENTATION
@@ -49,13 +44,6 @@ int main(void) {
 """
 
 
-def need(tool):
-    if shutil.which(tool) is None:
-        if os.environ.get("CI"):
-            pytest.fail(f"{tool} is required in CI (tools/test_all.sh installs it)")
-        pytest.skip(f"{tool} not installed")
-
-
 @pytest.fixture(scope="module")
 def case(tmp_path_factory):
     d = default_device()
@@ -74,8 +62,7 @@ def case(tmp_path_factory):
 def test_host_build_reproduces_reference(case):
     d, t, b, s, tmp = case
     exe = tmp / "drv"
-    subprocess.run(["gcc", *WARN, "-Wconversion", "-I", str(ROOT / "include"), "-I", str(tmp),
-                    str(tmp / "main.c"), *CORE, "-o", str(exe)], check=True)
+    build_host(tmp / "main.c", exe)
     rng = np.random.default_rng(3)
     n = 2000
     f = rng.normal(0, 9.8, (n, 3))
@@ -107,11 +94,4 @@ def test_cross_compiles_warning_free(case, target):
     src.write_text('#define AC_CAL_IMPLEMENTATION\n#include "cal.h"\n'
                    "int32_t out[6];\nint run(const uint16_t *raw) {\n"
                    "    return (int)ac_process(&AC_CAL_RESOLVER, AC_CAL_TRIM, raw, 0, out);\n}\n")
-    if target == "h8":
-        need("h8300-hms-gcc")
-        cmd = ["h8300-hms-gcc", "-mh", "-mn", "-O2", "-fomit-frame-pointer", *WARN]
-    else:
-        need("avr-gcc")
-        cmd = ["avr-gcc", "-mmcu=atmega328p", "-Os", *WARN]
-    subprocess.run(cmd + ["-I", str(ROOT / "include"), "-I", str(tmp), "-c", str(src),
-                          "-o", str(tmp / f"unit_{target}.o")], check=True)
+    cross_compile(target, src)

@@ -3,10 +3,7 @@ pre-trim, the triad table against the float reference, the triad and signed head
 compiled with the C core on every compiler, and the command line from calibration to
 header and fixed-point resolve."""
 import json
-import os
-import shutil
 import subprocess
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,19 +19,10 @@ from accelcal.recording import recording_from_arrays, write_recording
 from accelcal.resolve import resolve_recording
 from accelcal.triad import build_triad_on_device
 from core_settings import estimator
+from toolchains import build_host, cross_compile
 
-ROOT = Path(__file__).resolve().parents[2]
-CORE = sorted(str(p) for p in (ROOT / "csrc").glob("*.c"))
-WARN = ["-std=c99", "-Wall", "-Wextra", "-Werror"]
 G = 9.80665
 I16 = st.integers(-32768, 32767)
-
-
-def need(tool):
-    if shutil.which(tool) is None:
-        if os.environ.get("CI"):
-            pytest.fail(f"{tool} is required in CI (tools/test_all.sh installs it)")
-        pytest.skip(f"{tool} not installed")
 
 
 # ---------------------------------------------------------------- the signed pre-trim
@@ -211,8 +199,7 @@ def test_triad_header_on_the_host_equals_resolve_fixed(tmp_path, signed):
     (tmp_path / "cal.h").write_text(calibration_header(d, cal))
     (tmp_path / "main.c").write_text(TRIAD_DRIVER)
     exe = tmp_path / "drv"
-    subprocess.run(["gcc", *WARN, "-Wconversion", *(["-DSIGNED"] if signed else []), "-I", str(ROOT / "include"),
-                    "-I", str(tmp_path), str(tmp_path / "main.c"), *CORE, "-o", str(exe)], check=True)
+    build_host(tmp_path / "main.c", exe, *(["-DSIGNED"] if signed else []))
     rng = np.random.default_rng(1)
     lo, hi = d.raw_min, d.raw_max
     raw = np.vstack([rng.integers(lo, hi + 1, (300, 3)), [[lo, lo, lo], [hi, hi, hi], [lo, hi, 0]]])
@@ -260,14 +247,7 @@ def test_triad_and_signed_headers_cross_compile(tmp_path, target, kind):
     src = tmp_path / "unit.c"
     src.write_text('#define AC_CAL_IMPLEMENTATION\n#include "cal.h"\n'
                    f"int32_t out[6];\nint run(const {rt} *raw) {{\n    {call}\n}}\n")
-    if target == "h8":
-        need("h8300-hms-gcc")
-        cmd = ["h8300-hms-gcc", "-mh", "-mn", "-O2", "-fomit-frame-pointer", *WARN]
-    else:
-        need("avr-gcc")
-        cmd = ["avr-gcc", "-mmcu=atmega328p", "-Os", *WARN]
-    subprocess.run(cmd + ["-I", str(ROOT / "include"), "-I", str(tmp_path), "-c", str(src),
-                          "-o", str(tmp_path / f"unit_{target}.o")], check=True)
+    cross_compile(target, src)
 
 
 # ---------------------------------------------------------------- the command line
