@@ -180,6 +180,10 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
             if c.k < best.k and c.shrink >= best.shrink - OCCAM_SHRINK and swap is None:
                 swap = (c.name, f"{c.name} explains the same part of the gap with fewer parameters "
                                 f"({c.k} against {best.k})")
+    for nm, eff in cands.items():
+        # effects that, on these data, look like the verdict in a part their fit leaves out
+        if nm != best.name and nm not in out.ambiguous and best.name in eff.looks_like(D):
+            out.ambiguous.append(nm)
     if swap is not None:
         name, why = swap
         out.swapped_from, out.why = best.name, why

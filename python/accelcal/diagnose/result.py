@@ -15,8 +15,8 @@ from ..noise import code_lattice
 from .floor import setup_rows
 from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare
-from .compare import contest, separate_by
-from .relinearise import joint_fit, relinearise
+from .compare import Contest, contest, separate_by
+from .relinearise import covered_by_calibration, joint_fit, relinearise
 from .leftover import leftover
 from .scoring import rank_key, run_candidates
 from .settings import FORMAT, MAX_STEPS, MIN_SHRINK, PENALTY_PER_PARAM, T_MIN, Z_MIN
@@ -93,6 +93,21 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         best = sorted(sig, key=rank_key)[0]
         step_duel = contest(Dk, cands, best, first if not chosen else results, y, pcur)
         best = step_duel.best
+        if Dk.mode == "jigfree" and not cands[best.name].absorbs:
+            cal_cands = sorted((c for c in results.values() if cands[c.name].absorbs and c.significant
+                                and c.gain > 0 and c.name in remaining), key=rank_key)
+            if cal_cands:
+                covered, after = covered_by_calibration(
+                    dev, cal, recs, int(folds), int(seed), m0, cands, {c.name: c for c, _ in steps},
+                    [c.name for c, _ in steps if c.gain > 0], cal_cands, best, D)
+                if covered:
+                    terms = " and ".join(c.name for c in cal_cands)
+                    why = (f"{terms} (the calibration's own terms), re-linearised, leave nothing significant to "
+                           f"{best.name} (held-out shrink {after.shrink:.3f} after them)")
+                    step_duel = Contest(best=cal_cands[0], swapped_from=best.name, why=why,
+                                        tests=dict(step_duel.tests, calibration={"terms": [c.name for c in cal_cands],
+                                                                                 "after_them": after.shrink}))
+                    best = cal_cands[0]
         # time-dependent rivals the data cannot tell from the chosen effect are not added later
         for nm in step_duel.ambiguous:
             if cands[nm].time_dependent and nm in remaining and nm != best.name:

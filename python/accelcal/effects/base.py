@@ -60,6 +60,12 @@ class Effect:
     #: the pose or motion that shows this effect distinctly (the diagnosis's ``separate_by``)
     tell_apart: str = ""
 
+    def looks_like(self, D) -> tuple[str, ...]:
+        """Effects that this one cannot be told from on the data ``D`` although its fit does not
+        show it (a part of it the fit leaves out there because the data cannot separate it): a
+        verdict named here is reported ambiguous with this effect."""
+        return ()
+
     # -- user-facing ------------------------------------------------------
 
     def check(self, given: Mapping[str, Any]) -> dict[str, Any]:
