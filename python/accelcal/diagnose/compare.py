@@ -195,6 +195,25 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
     return out
 
 
+def covered_by_terms(D, cands, best: Cand, terms: list[Cand], y, pcur) -> tuple[bool, Cand]:
+    """Whether ``terms`` (fitted one after another, in order) leave nothing significant to
+    ``best``; returns (covered, ``best`` scored after them).  The reference-mode form of
+    :func:`..relinearise.covered_by_calibration` (there the readings are linear in the
+    calibration's terms, so no re-linearisation is needed)."""
+    done = np.zeros_like(y)
+    for c in terms:
+        done = done + conditional(D, cands, c.name, _Given(done), y, pcur).delta
+    after = conditional(D, cands, best.name, _Given(done), y, pcur)
+    return not after.significant, after
+
+
+@dataclass
+class _Given:
+    """A fitted change to condition on (:func:`conditional` reads only its delta)."""
+
+    delta: np.ndarray
+
+
 def separate_by(cands, verdict: str, ambiguous: list[str]) -> str:
     """One sentence: the poses or motions that would tell ``verdict`` from ``ambiguous``."""
     if not ambiguous:

@@ -15,7 +15,7 @@ from ..noise import code_lattice
 from .floor import setup_rows
 from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare
-from .compare import Contest, contest, separate_by
+from .compare import Contest, contest, covered_by_terms, separate_by
 from .relinearise import covered_by_calibration, joint_fit, relinearise
 from .leftover import leftover
 from .scoring import rank_key, run_candidates
@@ -32,6 +32,36 @@ class DiagnosisResult(dict):
 
     series: dict | None = None
 
+
+def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, remaining, duel, best, y, pcur):
+    """A verdict whose fit can take parts of the calibration's terms at once
+    (``Effect.mimics_calibration``: the square and cube of the input take a part of a gain,
+    of an offset and of a drift together, so they can rank above each of them alone) must
+    explain something that the significant calibration candidates of this step (offset,
+    gain, misalignment) and the significant time-dependent ones (drift, temperature) cannot
+    explain together.  Jig-free the terms are re-linearised (:func:`covered_by_calibration`),
+    with a reference fitted one after another (:func:`covered_by_terms`).  Returns the contest
+    and the verdict, swapped to the strongest calibration term when they leave nothing
+    significant."""
+    terms = sorted((c for c in results.values() if c.name != best.name and c.significant and c.gain > 0
+                    and c.name in remaining
+                    and (cands[c.name].absorbs or cands[c.name].time_dependent)), key=rank_key)
+    cal_terms = [c for c in terms if cands[c.name].absorbs]
+    if not cal_terms:
+        return duel, best
+    if Dk.mode == "jigfree":
+        covered, after = covered_by_calibration(dev, cal, recs, int(folds), int(seed), m0, cands,
+                                                {c.name: c for c, _ in steps},
+                                                [c.name for c, _ in steps if c.gain > 0], terms, best, D)
+    else:
+        covered, after = covered_by_terms(Dk, cands, best, terms, y, pcur)
+    if not covered or after is None:
+        return duel, best
+    names = " and ".join(c.name for c in terms)
+    why = (f"{names} together leave nothing significant to {best.name} (held-out shrink {after.shrink:.3f} "
+           "after them)")
+    tests = dict(duel.tests, together={"terms": [c.name for c in terms], "verdict_after_them": after.shrink})
+    return Contest(best=cal_terms[0], swapped_from=best.name, why=why, tests=tests), cal_terms[0]
 
 def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, seed: int = 0,
              candidates: Sequence[str] | None = None, max_steps: int = MAX_STEPS, model_centripetal: bool = True,
@@ -93,21 +123,9 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         best = sorted(sig, key=rank_key)[0]
         step_duel = contest(Dk, cands, best, first if not chosen else results, y, pcur)
         best = step_duel.best
-        if Dk.mode == "jigfree" and not cands[best.name].absorbs:
-            cal_cands = sorted((c for c in results.values() if cands[c.name].absorbs and c.significant
-                                and c.gain > 0 and c.name in remaining), key=rank_key)
-            if cal_cands:
-                covered, after = covered_by_calibration(
-                    dev, cal, recs, int(folds), int(seed), m0, cands, {c.name: c for c, _ in steps},
-                    [c.name for c, _ in steps if c.gain > 0], cal_cands, best, D)
-                if covered:
-                    terms = " and ".join(c.name for c in cal_cands)
-                    why = (f"{terms} (the calibration's own terms), re-linearised, leave nothing significant to "
-                           f"{best.name} (held-out shrink {after.shrink:.3f} after them)")
-                    step_duel = Contest(best=cal_cands[0], swapped_from=best.name, why=why,
-                                        tests=dict(step_duel.tests, calibration={"terms": [c.name for c in cal_cands],
-                                                                                 "after_them": after.shrink}))
-                    best = cal_cands[0]
+        if cands[best.name].mimics_calibration:
+            step_duel, best = _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, remaining,
+                                           step_duel, best, y, pcur)
         # time-dependent rivals the data cannot tell from the chosen effect are not added later
         for nm in step_duel.ambiguous:
             if cands[nm].time_dependent and nm in remaining and nm != best.name:

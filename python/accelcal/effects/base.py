@@ -60,6 +60,11 @@ class Effect:
     #: the pose or motion that shows this effect distinctly (the diagnosis's ``separate_by``)
     tell_apart: str = ""
 
+    #: True when the effect's fit can take parts of several calibration terms at once (the square and
+    #: cube of the input: part of an offset, a gain and a drift): it is named only when significant after
+    #: the significant calibration and time-dependent candidates together
+    mimics_calibration: bool = False
+
     def looks_like(self, D) -> tuple[str, ...]:
         """Effects that this one cannot be told from on the data ``D`` although its fit does not
         show it (a part of it the fit leaves out there because the data cannot separate it): a

@@ -27,6 +27,7 @@ CUBE_APART = 0.05
 class Nonlinearity(LinearCandidate, Effect):
     name = "nonlinearity"
     varies_by_pose = True
+    mimics_calibration = True
     tell_apart = "poses at 45 deg between the axes (a nonlinearity bends the reading between -g and +g, a tilt of the table does not)"
     summary = "the reading gains a term in the square of the channel's input"
     doc = ("counts_i += k2_i x_i^2 + k3_i x_i^3, x_i = (counts_i - b_i - bias_i) / |s_i| the channel's input "
