@@ -64,7 +64,8 @@ def spectral_lines(D: FitData, e_after: np.ndarray) -> dict | None:
     if acc is None or nseg < 2:
         return None
     P = acc / nseg                                           # (F, N) counts^2 / Hz
-    bg = median_filter(P, size=(LINE_BACKGROUND_BINS, 1), mode="nearest")
+    # mirrored at the ends: a tone in the last (Nyquist) bin must not be its own background
+    bg = median_filter(P, size=(LINE_BACKGROUND_BINS, 1), mode="mirror")
     dof = 2.0 * nseg
     ratio = stats.chi2.ppf(1.0 - LINE_FALSE_ALARM / P.shape[0], dof) / dof
     ratio /= stats.chi2.median(dof) / dof                    # the background is a median

@@ -249,6 +249,22 @@ class Misalignment(LinearCandidate, Effect):
 
     def describe(self, p: dict, s: dict, D: FitData) -> str:
         """One line in physical units for the report (p: parameters, s: their 1-sigma)."""
-        a = np.degrees(np.linalg.norm(p["rot"], axis=1))
+        rot = np.asarray(p["rot"], float)
+        a = np.degrees(np.linalg.norm(rot, axis=1))
         i = int(np.argmax(a))
-        return f"axis tilt up to {a[i]:.3g} deg (+- {np.degrees(np.linalg.norm(s['rot'][i])):.2g}) on channel {i}"
+        text = f"axis tilt up to {a[i]:.3g} deg (+- {np.degrees(np.linalg.norm(s['rot'][i])):.2g}) on channel {i}"
+        # the tilt's direction: an electrical crosstalk of channel j into channel i adds c s_j to s_i,
+        # which no reading tells from a tilt toward s_j
+        u = unit_rows3(D.s)
+        tilt = np.cross(rot[i], u[i])
+        if np.linalg.norm(tilt) > 0 and D.N > 1:
+            tilt = tilt / np.linalg.norm(tilt)
+            perp = u - np.outer(u @ u[i], u[i])             # each axis across channel i's
+            nrm = np.linalg.norm(perp, axis=1)
+            cos = np.where(nrm > 0.1, np.abs(perp @ tilt) / np.maximum(nrm, 1e-300), -1.0)
+            cos[i] = -1.0
+            j = int(np.argmax(cos))
+            if cos[j] >= 0.9:
+                text += (f", toward channel {j}'s axis (an electrical crosstalk of channel {j} into {i} reads the "
+                         "same)")
+        return text
