@@ -14,6 +14,10 @@ the stepwise search):
   verdict when its held-out shrink alone is as large (within OCCAM_SHRINK).
 * both significant after the other: both act; the stepwise search names both.
 
+Two time-dependent candidates on such data (below) are tested after the strongest
+pose-dependent one (:func:`_after_pose`): a drift's path that also takes each pose's
+level must not beat a temperature term on the pose part alone.
+
 On data that cannot tell time from pose (:func:`time_separable`: static poses only, no
 orientation held twice at different times), a time-dependent effect (drift, temperature)
 is not claimed over a rival that varies by
@@ -32,6 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..effects.fitdata import time_separable
 from ..effects.fitting import Cand, block_ss
 from .scoring import score
 
@@ -39,8 +44,6 @@ OCCAM_SHRINK = 0.02        # ... and the one with fewer parameters is chosen whe
 SEPARATE_T = 3.0           # paired block t of two candidates' held-out chi2 that tells them apart
 RIVAL_GAIN_SHARE = 0.5     # rivals: significant candidates with at least this share of the best one's gain
 MAX_RIVALS = 3             # ... at most this many, by gain
-REPEAT_DEG = 5.0           # two static poses within this angle are one orientation, repeated ...
-REPEAT_MIN_S = 2.0         # ... when their mid-times are at least this far apart (s)
 WITHIN_MIN = 0.5           # a time-dependent fit is borne out within the poses at >= this share of its claim ...
 WITHIN_Z = 3.0             # ... and this many standard errors above 0
 
@@ -77,29 +80,6 @@ def conditional(D, cands, name: str, given: Cand, y, pcur) -> Cand:
     pb = pcur + given.delta
     S0w, S0u = block_ss(D, D.rows(yb))
     return score(D, cands[name].cv(D, yb, pb, S0w, S0u), S0w, S0u)
-
-
-def time_separable(D) -> bool:
-    """Whether the data can tell time from pose: some orientation held in two static poses
-    at different times (a pose repeated later, a rest before and after a motion), or data
-    taken while moving (the orientation changes continuously)."""
-    if np.any(~D.static):
-        return True
-    P = len(D.pose_labels)
-    if P < 2:
-        return False
-    u = np.zeros((P, 3))
-    t = np.zeros(P)
-    for p in range(P):
-        m = D.pose == p
-        f = np.nanmean(D.f[m], axis=0)
-        nf = np.linalg.norm(f)
-        u[p] = f / nf if nf > 0 else 0.0
-        t[p] = float(np.mean(D.tg[m]))
-    close = (u @ u.T) >= math.cos(math.radians(REPEAT_DEG))
-    apart = np.abs(t[:, None] - t[None, :]) >= REPEAT_MIN_S
-    np.fill_diagonal(close, False)
-    return bool(np.any(close & apart))
 
 
 def within_pose_support(D, y, best: Cand, rival: Cand) -> tuple[float, float]:
@@ -146,9 +126,17 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
     judge_time = not time_separable(D)
     b_time = cands[best.name].time_dependent and judge_time
     swap = None
+    # ... and two time-dependent effects are told apart on what a pose-dependent effect leaves:
+    # a path that also takes each pose's level would otherwise win on the pose part alone
+    poses = sorted((c for c in first.values() if c.significant and c.gain > 0 and cands[c.name].varies_by_pose
+                    and not cands[c.name].time_dependent and c.name != best.name), key=lambda c: -c.gain)
+    pose_ref = poses[0] if judge_time and poses else None
     for c in rivals:
-        c_after = conditional(D, cands, c.name, best, y, pcur)
-        b_after = conditional(D, cands, best.name, c, y, pcur)
+        if b_time and cands[c.name].time_dependent and pose_ref is not None and pose_ref.name != c.name:
+            c_after, b_after = _after_pose(D, cands, best, c, pose_ref, y, pcur)
+        else:
+            c_after = conditional(D, cands, c.name, best, y, pcur)
+            b_after = conditional(D, cands, best.name, c, y, pcur)
         out.tests[c.name] = {"rival_after_verdict": {"significant": c_after.significant, "shrink": c_after.shrink,
                                                      "gain_chi2": c_after.gain},
                              "verdict_after_rival": {"significant": b_after.significant, "shrink": b_after.shrink,
@@ -184,6 +172,10 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
         # effects that, on these data, look like the verdict in a part their fit leaves out
         if nm != best.name and nm not in out.ambiguous and best.name in eff.looks_like(D):
             out.ambiguous.append(nm)
+    for nm in cands[best.name].alike(D, best):
+        # ... or whose signature the verdict's fitted parameters have
+        if nm in cands and nm != best.name and nm not in out.ambiguous:
+            out.ambiguous.append(nm)
     if swap is not None:
         name, why = swap
         out.swapped_from, out.why = best.name, why
@@ -212,6 +204,16 @@ class _Given:
     """A fitted change to condition on (:func:`conditional` reads only its delta)."""
 
     delta: np.ndarray
+
+
+def _after_pose(D, cands, best: Cand, c: Cand, pose_ref: Cand, y, pcur) -> tuple[Cand, Cand]:
+    """The nested test of two time-dependent candidates after the pose-dependent ``pose_ref``:
+    ``c`` after ``pose_ref`` and ``best`` (fitted in turn), and ``best`` after ``pose_ref`` and ``c``."""
+    b_p = conditional(D, cands, best.name, pose_ref, y, pcur)
+    c_p = conditional(D, cands, c.name, pose_ref, y, pcur)
+    c_after = conditional(D, cands, c.name, _Given(pose_ref.delta + b_p.delta), y, pcur)
+    b_after = conditional(D, cands, best.name, _Given(pose_ref.delta + c_p.delta), y, pcur)
+    return c_after, b_after
 
 
 def separate_by(cands, verdict: str, ambiguous: list[str]) -> str:

@@ -60,6 +60,13 @@ class Effect:
     #: the pose or motion that shows this effect distinctly (the diagnosis's ``separate_by``)
     tell_apart: str = ""
 
+    def alike(self, D, fit) -> tuple[str, ...]:
+        """Effects that this one's fit ``fit`` (a Cand) on the data ``D`` cannot be told from,
+        although their held-out gains differ (its parameters have the other's signature: every
+        channel late by the same time is a skew and a low-pass's delay): a verdict with such a
+        fit is reported ambiguous with them."""
+        return ()
+
     #: True when the effect's fit can take parts of several calibration terms at once (the square and
     #: cube of the input: part of an offset, a gain and a drift): it is named only when significant after
     #: the significant calibration and time-dependent candidates together

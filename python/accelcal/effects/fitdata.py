@@ -3,12 +3,13 @@ model's prediction, blocks and folds for cross-validation, the noise floor), and
 helpers over it."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from .settings import ROTATING_RADPS, TEMP_MIN_SPAN_C
+from .settings import REPEAT_DEG, REPEAT_MIN_S, ROTATING_RADPS, TEMP_MIN_SPAN_C
 
 
 @dataclass
@@ -141,3 +142,26 @@ def t_ref_known(D: FitData) -> float | None:
         if ts:
             return float(np.mean(ts))
     return None
+
+
+def time_separable(D) -> bool:
+    """Whether the data can tell time from pose: some orientation held in two static poses
+    at different times (a pose repeated later, a rest before and after a motion), or data
+    taken while moving (the orientation changes continuously)."""
+    if np.any(~D.static):
+        return True
+    P = len(D.pose_labels)
+    if P < 2:
+        return False
+    u = np.zeros((P, 3))
+    t = np.zeros(P)
+    for p in range(P):
+        m = D.pose == p
+        f = np.nanmean(D.f[m], axis=0)
+        nf = np.linalg.norm(f)
+        u[p] = f / nf if nf > 0 else 0.0
+        t[p] = float(np.mean(D.tg[m]))
+    close = (u @ u.T) >= math.cos(math.radians(REPEAT_DEG))
+    apart = np.abs(t[:, None] - t[None, :]) >= REPEAT_MIN_S
+    np.fill_diagonal(close, False)
+    return bool(np.any(close & apart))

@@ -27,3 +27,5 @@ SKEW_GRID = np.array([0.0, 0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 12.0])
 SKEW_GRID = np.concatenate([-SKEW_GRID[:0:-1], SKEW_GRID])          # in samples
 DELAY_GRID = np.array([0.0, 0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0])  # samples
 PENALTY_PER_PARAM = 2.0    # chi2 units per parameter an effect adds (AIC-like)
+REPEAT_DEG = 5.0           # two static poses within this angle are one orientation, repeated ...
+REPEAT_MIN_S = 2.0         # ... when their mid-times are at least this far apart (s)

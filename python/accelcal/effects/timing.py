@@ -40,6 +40,11 @@ def lowpass_runs(t: np.ndarray, x: np.ndarray, w: float, h: float) -> np.ndarray
     return y
 
 
+#: a skew of every channel late by the same time, within this share of it, is also a low-pass's
+#: group delay: analog filters on each channel from the same parts (cut-offs within +-20 %)
+COMMON_LAG = 0.2
+
+
 class TimeSkew(SearchCandidate, Effect):
     name = "time_skew"
     tell_apart = "fast motion with a sharp start and stop (a time shift moves the edge, a low-pass rounds it)"
@@ -68,6 +73,17 @@ class TimeSkew(SearchCandidate, Effect):
 
     def modify_state(self, state, p, ctx):
         return state.replace(tau=state.tau + np.asarray(p["tau"], float))
+
+    def alike(self, D, fit):
+        # every channel late by about the same time: the group delay of a low-pass on each channel
+        # (a second-order one is nearly a pure delay below its cut-off, closer to a skew than the
+        # contract's first-order bandwidth), or a common latency
+        tau = np.asarray(fit.params.get("tau", ()), float)
+        sd = np.asarray(fit.sigma.get("tau", np.zeros_like(tau)), float)
+        if tau.size < 2 or not np.all(tau < -3.0 * sd) or not np.all(tau < 0):
+            return ()
+        lag = float(np.mean(tau))
+        return ("bandwidth",) if np.max(np.abs(tau - lag)) <= COMMON_LAG * abs(lag) else ()
 
     # -- fit to a residual (the diagnosis) ------------------------------------
 
