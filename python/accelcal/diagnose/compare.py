@@ -148,11 +148,14 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
             ok, how = _claims_time(D, y, best, c)
             out.tests[c.name]["within_poses"] = how
             if not ok:
-                # the time-dependent verdict rests on what a pose-dependent rival explains too
-                out.ambiguous.append(c.name)
+                # the time-dependent verdict rests on what a pose-dependent rival explains too; the
+                # verdict goes to the strongest rival that does not follow time (an offset the drift
+                # took along with each pose's level may be larger than the tilt)
+                to = next(r for r in rivals if not cands[r.name].time_dependent)
+                out.ambiguous.append(c.name if to.name == c.name else best.name)
                 if swap is None:
-                    swap = (c.name, f"{best.name} changes with time, but {how}: a time-dependent effect is not "
-                                    f"claimed from data that cannot tell it from {c.name} (fixed per pose)")
+                    swap = (to.name, f"{best.name} changes with time, but {how}: a time-dependent effect is not "
+                                     f"claimed from data that cannot tell it from {c.name} (fixed per pose)")
         elif c_time and b_pose:
             ok, how = _claims_time(D, y, c, best)
             out.tests[c.name]["within_poses"] = how
@@ -176,6 +179,7 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
         # ... or whose signature the verdict's fitted parameters have
         if nm in cands and nm != best.name and nm not in out.ambiguous:
             out.ambiguous.append(nm)
+    out.ambiguous = list(dict.fromkeys(out.ambiguous))
     if swap is not None:
         name, why = swap
         out.swapped_from, out.why = best.name, why
