@@ -13,6 +13,9 @@ the stepwise search):
   motions that would (each effect's ``tell_apart``); the one with fewer parameters is the
   verdict when its held-out shrink alone is as large (within OCCAM_SHRINK).
 * both significant after the other: both act; the stepwise search names both.
+* B after A not significant, A after B significant, and B with fewer parameters as large
+  alone (within OCCAM_SHRINK): B is the first step; what A adds beyond it is the next
+  step's to claim (a drift's path that also took an offset).
 
 Two time-dependent candidates on such data (below) are tested after the strongest
 pose-dependent one (:func:`_after_pose`): a drift's path that also takes each pose's
@@ -166,6 +169,13 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
         elif c_after.significant and not b_after.significant and swap is None:
             swap = (c.name, f"{c.name} explains all that {best.name} does and more ({best.name} adds nothing "
                             "significant after it)")
+        elif (not c_after.significant and b_after.significant and c.k < best.k
+              and c.shrink >= best.shrink - OCCAM_SHRINK and swap is None):
+            # the simpler rival explains as much alone and nothing beyond it is left to it: it is the
+            # first step, and what the verdict adds beyond it is the next step's to claim (a drift's
+            # path that also took an offset)
+            swap = (c.name, f"{c.name} explains as much of the gap alone with fewer parameters ({c.k} against "
+                            f"{best.k}); what {best.name} adds beyond it is tested after it")
         elif not c_after.significant and not b_after.significant and not separable(best, c):
             out.ambiguous.append(c.name)
             if c.k < best.k and c.shrink >= best.shrink - OCCAM_SHRINK and swap is None:

@@ -35,8 +35,8 @@ class DiagnosisResult(dict):
 
 def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, remaining, duel, best, y, pcur):
     """A verdict whose fit can take parts of the calibration's terms at once
-    (``Effect.mimics_calibration``: the square and cube of the input take a part of a gain,
-    of an offset and of a drift together, so they can rank above each of them alone) must
+    (``Effect.mimics_calibration``: a cube of the input takes a part of a gain, of an offset
+    and of a drift together, so it can rank above each of them alone) must
     explain something that the significant calibration candidates of this step (offset,
     gain, misalignment) and the significant time-dependent ones (drift, temperature) cannot
     explain together.  Jig-free the terms are re-linearised (:func:`covered_by_calibration`),
@@ -123,7 +123,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         best = sorted(sig, key=rank_key)[0]
         step_duel = contest(Dk, cands, best, first if not chosen else results, y, pcur)
         best = step_duel.best
-        if cands[best.name].mimics_calibration:
+        if cands[best.name].mimics_calibration(best):
             step_duel, best = _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, remaining,
                                            step_duel, best, y, pcur)
         # time-dependent rivals the data cannot tell from the chosen effect are not added later

@@ -67,10 +67,12 @@ class Effect:
         fit is reported ambiguous with them."""
         return ()
 
-    #: True when the effect's fit can take parts of several calibration terms at once (the square and
-    #: cube of the input: part of an offset, a gain and a drift): it is named only when significant after
-    #: the significant calibration and time-dependent candidates together
-    mimics_calibration: bool = False
+    def mimics_calibration(self, fit) -> bool:
+        """Whether this effect's fit ``fit`` (a Cand) can take parts of several calibration terms at
+        once (a cube of the input: part of a gain, of an offset and of a drift): it is then named
+        only when significant after the significant calibration and time-dependent candidates
+        together."""
+        return False
 
     def looks_like(self, D) -> tuple[str, ...]:
         """Effects that this one cannot be told from on the data ``D`` although its fit does not

@@ -14,7 +14,8 @@ import numpy as np
 from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_list, channel_mask, per_channel, strongest
 from .fitdata import FitData
-from .fitting import LinearCandidate
+from .fitting import Cand, LinearCandidate, linear_fit
+from .settings import PENALTY_PER_PARAM
 
 #: the cube is fitted on a channel only where the data can tell it from a gain: the part of
 #: x^3 that no multiple of x reproduces, relative to x^3 over the fitted samples, is at least
@@ -27,7 +28,6 @@ CUBE_APART = 0.05
 class Nonlinearity(LinearCandidate, Effect):
     name = "nonlinearity"
     varies_by_pose = True
-    mimics_calibration = True
     tell_apart = "poses at 45 deg between the axes (a nonlinearity bends the reading between -g and +g, a tilt of the table does not)"
     summary = "the reading gains a term in the square of the channel's input"
     doc = ("counts_i += k2_i x_i^2 + k3_i x_i^3, x_i = (counts_i - b_i - bias_i) / |s_i| the channel's input "
@@ -79,9 +79,33 @@ class Nonlinearity(LinearCandidate, Effect):
         whole = np.sum(x3 * x3, axis=0)
         return apart >= CUBE_APART ** 2 * np.where(whole > 0, whole, np.inf)
 
+    def mimics_calibration(self, fit):
+        # the cube (x^3 = g^2 x on the axes) takes a part of a gain; the square alone does not
+        return bool(np.any(np.asarray(fit.params.get("k3", ()), float) != 0))
+
     def looks_like(self, D):
         # on poses along the axes alone a cube is a gain change: a gain verdict there could be a bend
         return ("gain",) if not np.any(self.cube_told(D)) else ()
+
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
+        # the square alone, or the square and the cube: the one with the larger penalised held-out
+        # gain (a bend of one parity does not pay for the other's parameters)
+        X = self.columns(D)
+        best, best_pg = None, -np.inf
+        for cols in (X[:, :, :1], X):
+            Sw, Su, theta, cov, k, delta = linear_fit(D, cols, y, S0w, S0u)
+            pg = float((S0w - Sw).sum()) - PENALTY_PER_PARAM * k
+            if best is None or pg > best_pg:
+                th = np.zeros((theta.shape[0], 2))
+                cv2 = np.zeros((theta.shape[0], 2, 2))
+                m = cols.shape[2]
+                th[:, :m] = theta
+                cv2[:, :m, :m] = cov
+                p, s = self.to_params(D, th, cv2)
+                best, best_pg = Cand(self.name, k, Sw, Su, delta, p, s), pg
+            if not np.any(X[:, :, 1]):
+                break                                   # no channel tells a cube from a gain
+        return best
 
     def to_params(self, D, theta, cov):
         sd = np.sqrt(np.maximum(np.einsum("nkk->nk", cov), 0.0))
