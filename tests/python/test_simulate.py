@@ -383,6 +383,8 @@ def test_nonlinearity_adds_k2_input_squared():
     a, b = _pair("static_poses", "nonlinearity")  # default: 0.5 % of the reading at 1 g
     d = b.clean_counts - a.clean_counts
     assert math.isclose(d.max(), 0.005 * 1250, rel_tol=1e-9)
+    a, b = _pair("static_poses", "nonlinearity:k2=0,k3=0.01")       # the optional cube
+    assert np.allclose(b.clean_counts - a.clean_counts, 0.01 * x ** 3, atol=1e-9)
 
 
 def test_temperature_effects():
