@@ -1,12 +1,13 @@
 """Recordings: raw channel readings over time plus optional reference columns,
 read from and written to CSV per the data contract.
 
-Reading is vectorised: the data section is tokenised once with numpy (cell
-boundaries from the positions of ',' and '\\n'), and numeric columns are
-converted as fixed-width byte matrices.  Only when a column holds something
-the fast path does not handle (spaces, '123.0', 'nan', a bad cell) is it
-re-scanned cell by cell in Python; that scan also produces the error message
-that names the row and column.
+Reading goes through pyarrow's CSV reader when every row is plain (the common
+case).  Anything else -- quotes, '123.0' as an integer, a bad cell -- is read by
+the numpy/Python path: the data section tokenised once with numpy (cell
+boundaries from the positions of ',' and '\\n'), numeric columns converted as
+fixed-width byte matrices, and a column re-scanned cell by cell in Python only
+when it holds something those do not handle (spaces, 'nan', a bad cell); that
+scan also produces the error message that names the row and column.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import numpy as np
 
 from .csvformat import CSV_G, CSV_G_NAN, CSV_INT, CSV_REPR, G_FORMAT_RE, csv_cell, csv_rows, float_strings
 from .csvtable import (FLOAT_RE, META_KEY_RE, RAW_RE, REFERENCE_NAMES, VECTOR_COLUMNS, ByteTable, ListTable,
-                       classify_columns, convert_columns, make_table, quote_cell, scan_fast, split_header)
+                       classify_columns, convert_columns, fast_columns, make_table, quote_cell, split_header)
 from .errors import InputError, atomic_write
 from .recording_checks import check_core_input, check_for_device
 from .textinput import is_whitespace_header, read_preamble, read_text_bytes, split_whitespace_header, whitespace_to_commas
@@ -308,10 +309,10 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
     m = len(names)
     first = header_line + 1
     table: Any = None
-    values = scan_fast(data, pos, end, names, cols)
+    values = fast_columns(data, pos, end, m, cols)
     if values is None:
-        # Anything the C scanner did not take (quotes, blanks, words, an error):
-        # the numpy/Python path decides, with the exact message.
+        # Anything pyarrow's reader did not take (quotes, '1.0' as an integer, an
+        # error): the numpy/Python path decides, with the exact message.
         table = make_table(data, pos, end, m, first, source)
         # Convert every column; report the earliest bad cell in the file.
         values, err = convert_columns(table, cols)
@@ -321,8 +322,8 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
     n = len(values["t"])
 
     def located() -> Any:
-        """The table that locates cells and lines; after the C scanner (no quotes in the
-        file) built only when a message or an extra column needs it."""
+        """The table that locates cells and lines; after pyarrow's reader (no quotes in
+        the file) built only when a message or an extra column needs it."""
         nonlocal table
         if table is None:
             table = ByteTable(data, pos, end, m, first, source)

@@ -10,7 +10,7 @@ from hypothesis import assume, given, settings, strategies as st
 
 from accelcal.errors import InputError
 from accelcal.csvformat import CSV_G, CSV_G_NAN, CSV_INT, CSV_REPR, csv_rows, python_rows
-from accelcal.csvtable import ByteTable, CellError, ListTable, convert_column, scan_fast
+from accelcal.csvtable import ByteTable, CellError, ListTable, convert_column, fast_columns
 from accelcal.recording import (
     Recording,
     read_recording,
@@ -503,14 +503,14 @@ def same_numbers(a, b):
 @pytest.mark.parametrize("kind", ["raw", "pose", "t", "ref"])
 @IO
 @given(cells=st.lists(numeric_cell, min_size=1, max_size=12), last=st.booleans())
-def test_property_c_scanner_takes_only_valid_cells(kind, cells, last):
-    """The C scanner (_csv_fast.c) converts a column only if the per-cell
+def test_property_fast_path_takes_only_valid_cells(kind, cells, last):
+    """pyarrow's reader (fast_columns) converts a column only if the per-cell
     Python path accepts every cell, and then to the same numbers, bit for bit;
     it never decides an error itself (it hands the file back)."""
     rows = [(f"0,{c}" if last else f"{c},0") for c in cells]
     text = "\n".join(rows)
     j = 1 if last else 0
-    fast = scan_fast(text.encode(), 0, len(text.encode()), ["a", "b"], {"c": (j, kind)})
+    fast = fast_columns(text.encode(), 0, len(text.encode()), 2, {"c": (j, kind)})
     try:
         slow = convert_column(ListTable(text + "\n", 2, 2, "x"), j, kind)
     except CellError:
@@ -522,14 +522,14 @@ def test_property_c_scanner_takes_only_valid_cells(kind, cells, last):
 
 @IO
 @given(recordings())
-def test_property_c_scanner_reads_as_the_python_path(tmp_path_factory, rec):
-    """Whole files: read with the C scanner and with it switched off, the same
+def test_property_fast_path_reads_as_the_python_path(tmp_path_factory, rec):
+    """Whole files: read through pyarrow's reader and with it switched off, the same
     Recording, bit for bit."""
     p = tmp_path_factory.getbasetemp() / "test_io_recording_scan_r.csv"
     write_recording(p, rec, float_format="%.17g")
     a = read_recording(p, rec.n_channels)
     with pytest.MonkeyPatch.context() as m:
-        m.setattr("accelcal.recording.scan_fast", lambda *args: None)
+        m.setattr("accelcal.recording.fast_columns", lambda *args: None)
         b = read_recording(p, rec.n_channels)
     assert a == b
     for name in ("t", "raw", "f", "w", "dw", "temp_c", "pose"):
@@ -604,14 +604,22 @@ def test_csv_under_a_comma_decimal_locale(tmp_path):
     assert read_recording(tmp_path / "out.csv") == read_recording(tmp_path / "ref.csv")
 
 
-def test_c_scanner_hands_back_irregular_rows():
-    """Quotes, a missing or an extra cell, blanks and words: the scanner stops
-    and the Python path decides."""
+def test_fast_path_hands_back_irregular_rows():
+    """Quotes, a missing or an extra cell, an empty line, a lone CR, words, '2.0' as an
+    integer, hexadecimal, NaN with a payload: pyarrow's reader is not used and the Python
+    path decides."""
     cols = {"t": (0, "t"), "raw_0": (1, "raw")}
-    for text in ["1,2\n2,3,4", "1,2\n2", '1,"2"', "1, 2", "nan,2", "1,2\n\n3,4", "1,2\r", "1,2.0", "1,2\n"]:
-        assert scan_fast(text.encode(), 0, len(text), ["t", "raw_0"], cols) is None, text
-    good = scan_fast(b"1,2\n2.5e-1,-3", 0, 13, ["t", "raw_0"], cols)
+    for text in ["1,2\n2,3,4", "1,2\n2", '1,"2"', "nan,2", "inf,2", "1,2\n\n3,4", "1,2\r", "1\r,2", "1,2.0", "1,2\n",
+                 "1,0x10", "1,0X10", "1,", ",2", "1,+2", "1,2,3"]:
+        assert fast_columns(text.encode(), 0, len(text), 2, cols) is None, text
+    ref = {"t": (0, "t"), "f_x": (1, "ref"), "pose": (2, "pose")}
+    for text in ["1,nan(1),0", "1,NaN(),0", "1,inf,0", "1,2,-2", "1,2,x"]:
+        assert fast_columns(text.encode(), 0, len(text), 3, ref) is None, text
+    good = fast_columns(b"1,2\n2.5e-1,-3", 0, 13, 2, cols)
     assert good["t"].tolist() == [1.0, 0.25] and good["raw_0"].tolist() == [2, -3]
+    holes = fast_columns(b"1,,\n2, 3.5 ,7\n3,nan,-1", 0, 22, 3, ref)
+    assert holes["pose"].tolist() == [-1, 7, -1] and holes["pose"].dtype == np.int64
+    assert np.array_equal(holes["f_x"], [np.nan, 3.5, np.nan], equal_nan=True) and holes["f_x"].flags.writeable
 
 
 @IO
