@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from .csvformat import CSV_G, CSV_G_NAN, CSV_INT, CSV_REPR, G_FORMAT_RE, csv_cell, csv_rows, float_strings
+from .csvformat import INT, REPR, TEXT, csv_cell, csv_rows
 from .csvtable import (FLOAT_RE, META_KEY_RE, RAW_RE, REFERENCE_NAMES, VECTOR_COLUMNS, ByteTable, ListTable,
                        classify_columns, convert_columns, fast_columns, make_table, quote_cell, split_header)
 from .errors import InputError, atomic_write
@@ -411,51 +411,39 @@ def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> No
             raise ValueError(f"metadata {k!r}: the value must be one line")
         lines.append(f"# {k}: {v.strip()}")
     names = ["t"] + [f"raw_{k}" for k in range(rec.n_channels)]
-    # the numeric columns and how each is written (csv_rows' kinds); repr() is the
-    # shortest text that reads back to the same float
-    numeric: list[tuple[np.ndarray, int]] = [(rec.t, CSV_REPR)] + [(rec.raw[:, k], CSV_INT)
-                                                                  for k in range(rec.n_channels)]
+    # every column and how it is written (csv_rows' formats; NaN as an empty cell);
+    # repr() is the shortest text that reads back to the same float
+    columns: list[Any] = [rec.t] + [rec.raw[:, k] for k in range(rec.n_channels)]
+    formats = [REPR] + [INT] * rec.n_channels
     for vec, comps in VECTOR_COLUMNS.items():
         arr = getattr(rec, vec)
         if np.isfinite(arr).any():
             names += list(comps)
-            numeric += [(arr[:, c], CSV_G) for c in range(3)]
+            columns += [arr[:, c] for c in range(3)]
+            formats += [float_format] * 3
     if rec.has_temp():
         names.append("temp_c")
-        numeric.append((rec.temp_c, CSV_G))
+        columns.append(rec.temp_c)
+        formats.append(float_format)
     if rec.has_pose():
         names.append("pose")
-        numeric.append((rec.pose, CSV_INT))
-    g = G_FORMAT_RE.fullmatch(float_format)
-    if g and not rec.extra:
-        # every cell is a number in a '%.<p>g' format: the extension's C writes the same text
-        lines.append(",".join(map(csv_cell, names)))
-
-        def write_fast(f: Any) -> None:
-            f.write("\n".join(lines))
-            f.write("\n")
-            for chunk in csv_rows([a for a, _ in numeric], [k for _, k in numeric], int(g.group(1))):
-                f.write(chunk)
-
-        atomic_write(path, write_fast)
-        return
-    cols: list[list[str]] = [list(map(repr, a.tolist())) if k == CSV_REPR
-                             else list(map(str, a.tolist())) if k == CSV_INT
-                             else float_strings(a, float_format) for a, k in numeric]
+        columns.append(rec.pose)
+        formats.append(INT)
     for name, vals in rec.extra.items():
         if not name.strip() or name.strip() != name:
             raise ValueError(f"extra column name {name!r}: expected a non-empty name without surrounding spaces")
         if any("\n" in v or "\r" in v for v in vals):
             raise ValueError(f"extra column {name!r}: values must not contain line breaks")
         names.append(name)
-        cols.append(list(map(csv_cell, vals)))
+        columns.append(list(map(csv_cell, vals)))
+        formats.append(TEXT)
     lines.append(",".join(map(csv_cell, names)))
 
     def write(f: Any) -> None:
         f.write("\n".join(lines))
         f.write("\n")
-        f.write("\n".join(map(",".join, zip(*cols))))
-        f.write("\n")
+        for chunk in csv_rows(columns, formats, [""] * len(columns)):
+            f.write(chunk)
 
     atomic_write(path, write)
 
@@ -482,9 +470,8 @@ def write_columns_csv(path: Any, columns: Any, meta: dict | None = None) -> None
         for k, v in (meta or {}).items():
             f.write(f"# {k}: {v}\n")
         f.write(",".join(names) + "\n")
-        if names:
-            for chunk in csv_rows(arrays, [CSV_G_NAN] * len(names), 9):
-                f.write(chunk)
+        for chunk in csv_rows(arrays, ["%.9g"] * len(names)):
+            f.write(chunk)
 
     atomic_write(path, write)
 

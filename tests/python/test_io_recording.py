@@ -9,7 +9,7 @@ import pytest
 from hypothesis import assume, given, settings, strategies as st
 
 from accelcal.errors import InputError
-from accelcal.csvformat import CSV_G, CSV_G_NAN, CSV_INT, CSV_REPR, csv_rows, python_rows
+from accelcal.csvformat import INT, REPR, csv_rows
 from accelcal.csvtable import ByteTable, CellError, ListTable, convert_column, fast_columns
 from accelcal.recording import (
     Recording,
@@ -538,41 +538,58 @@ def test_property_fast_path_reads_as_the_python_path(tmp_path_factory, rec):
 
 
 @IO
-@given(x=st.lists(st.floats(), min_size=1, max_size=40), v=st.data(), p=st.integers(1, 17))
-def test_property_c_formatter_writes_what_python_writes(x, v, p):
-    """csv_rows (_csv_fast.c) gives repr(x), '%.<p>g' % x (NaN empty or 'nan') and str(i),
-    byte for byte, over every double (subnormals, signed zeros, the extremes) and int64."""
+@given(x=st.lists(st.floats(), min_size=1, max_size=40), v=st.data(), p=st.integers(1, 17),
+       chunk=st.integers(1, 50))
+def test_property_csv_rows_writes_each_cell_as_python_does(x, v, p, chunk):
+    """csv_rows gives repr(x), '%.<p>g' % x (NaN empty or 'nan'), str(i) and text as given,
+    byte for byte, over every double (subnormals, signed zeros, the extremes) and int64, in
+    chunks of any size."""
     n = len(x)
     ints = v.draw(st.lists(st.integers(-(2**63), 2**63 - 1), min_size=n, max_size=n))
+    words = v.draw(st.lists(st.text("ab%s,", max_size=4), min_size=n, max_size=n))
     xf = np.array(x, dtype=float)
     fin = np.where(np.isfinite(xf), xf, 0.0)
-    text = "".join(csv_rows([fin, xf, xf, np.array(ints, dtype=np.int64)], [CSV_REPR, CSV_G, CSV_G_NAN, CSV_INT], p))
-    want = "".join(f"{a!r},{'' if math.isnan(b) else ('%.*g' % (p, b))},{'%.*g' % (p, b)},{i}\n"
-                   for a, b, i in zip(fin.tolist(), xf.tolist(), ints))
+    g = f"%.{p}g"
+    text = "".join(csv_rows([fin, xf, xf, np.array(ints, dtype=np.int64), words], [REPR, g, g, INT, "%s"],
+                            [None, "", None, None, None], chunk_rows=chunk))
+    want = "".join(f"{a!r},{'' if math.isnan(b) else g % b},{g % b},{i},{w}\n"
+                   for a, b, i, w in zip(fin.tolist(), xf.tolist(), ints, words))
     assert text == want
-    # the locale fallback is the same definition
-    cols = [fin, xf, xf, np.array(ints, dtype=np.int64)]
-    assert python_rows(cols, [CSV_REPR, CSV_G, CSV_G_NAN, CSV_INT], p, 0, n) == want
 
 
 @IO
-@given(recordings(), st.sampled_from(["%.9g", "%.17g", "%.3g"]))
-def test_property_c_formatter_file_is_the_python_file(tmp_path_factory, rec, fmt):
-    """write_recording through the C formatter and through the Python path (forced by an extra
-    column, then dropped): the same bytes."""
-    rec.extra = {}
-    d = tmp_path_factory.getbasetemp()
-    write_recording(d / "fast.csv", rec, float_format=fmt)
-    with pytest.MonkeyPatch.context() as m:
-        m.setattr("accelcal.recording.G_FORMAT_RE", __import__("re").compile(r"(?!)"))  # matches nothing
-        write_recording(d / "slow.csv", rec, float_format=fmt)
-    assert (d / "fast.csv").read_bytes() == (d / "slow.csv").read_bytes()
+@given(recordings(), st.sampled_from(["%.9g", "%.17g", "%.3g", "%.4f", "%.6e"]))
+def test_property_written_file_is_its_definition(tmp_path_factory, rec, fmt):
+    """write_recording's text, byte for byte: the comments, the header, then per row t as
+    repr(t), raw_k and pose as str, the reference columns through the float format (NaN
+    as an empty cell), the extra columns quoted as CSV needs."""
+    p = tmp_path_factory.getbasetemp() / "test_io_recording_text.csv"
+    write_recording(p, rec, float_format=fmt)
+    names = ["t"] + [f"raw_{k}" for k in range(rec.n_channels)]
+    cols = [list(map(repr, rec.t.tolist()))] + [list(map(str, rec.raw[:, k].tolist())) for k in range(rec.n_channels)]
+    for vec, comps in (("f", ("f_x", "f_y", "f_z")), ("w", ("w_x", "w_y", "w_z")), ("dw", ("dw_x", "dw_y", "dw_z"))):
+        arr = getattr(rec, vec)
+        if np.isfinite(arr).any():
+            names += comps
+            cols += [["" if math.isnan(x) else fmt % x for x in arr[:, c].tolist()] for c in range(3)]
+    if rec.has_temp():
+        names.append("temp_c")
+        cols.append(["" if math.isnan(x) else fmt % x for x in rec.temp_c.tolist()])
+    if rec.has_pose():
+        names.append("pose")
+        cols.append(list(map(str, rec.pose.tolist())))
+    for name, vals in rec.extra.items():
+        names.append(name)
+        cols.append(['"' + v.replace('"', '""') + '"' if any(ch in v for ch in ',"') or v != v.strip() else v
+                     for v in vals])
+    head = "".join(f"# {k}: {v.strip()}\n" for k, v in rec.metadata.items()) + ",".join(names) + "\n"
+    assert p.read_bytes() == (head + "".join(",".join(row) + "\n" for row in zip(*cols))).encode("utf-8")
 
 
 def test_csv_under_a_comma_decimal_locale(tmp_path):
     """A program that sets LC_NUMERIC to a locale with a decimal comma (C's strtod and
-    snprintf follow it; Python's float() and '%' do not) reads and writes the same numbers and
-    the same text: the C fast paths stand aside (the Python paths take over)."""
+    snprintf follow it; pyarrow's reader, Python's float() and '%' do not) reads and writes
+    the same numbers and the same text."""
     import os
     import shutil
     import subprocess
