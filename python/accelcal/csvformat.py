@@ -66,11 +66,11 @@ def csv_rows(columns: Sequence[Any], formats: Sequence[str], nan_cells: Sequence
 
 
 def float_strings(values: np.ndarray, fmt: str, nan: str) -> list[str]:
-    """``fmt % x`` for each float, and ``nan`` where x is NaN."""
-    strs = list(map(fmt.__mod__, values.tolist()))
-    # NaN cells replaced; dict.get keeps this a C-level map.
-    blank = {fmt % np.nan: nan}
-    return list(map(blank.get, strs, strs))
+    """``fmt % x`` for each float, and ``nan`` where x is NaN (only the others formatted)."""
+    known = ~np.isnan(values)
+    cells = np.full(values.shape, nan, dtype=object)
+    cells[known] = list(map(fmt.__mod__, values[known].tolist()))
+    return cells.tolist()
 
 
 def csv_cell(text: str) -> str:
