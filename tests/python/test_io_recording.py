@@ -565,6 +565,10 @@ def test_property_written_file_is_its_definition(tmp_path_factory, rec, fmt):
     as an empty cell), the extra columns quoted as CSV needs."""
     p = tmp_path_factory.getbasetemp() / "test_io_recording_text.csv"
     write_recording(p, rec, float_format=fmt)
+
+    def quoted(v):
+        return '"' + v.replace('"', '""') + '"' if any(ch in v for ch in ',"') or v != v.strip() else v
+
     names = ["t"] + [f"raw_{k}" for k in range(rec.n_channels)]
     cols = [list(map(repr, rec.t.tolist()))] + [list(map(str, rec.raw[:, k].tolist())) for k in range(rec.n_channels)]
     for vec, comps in (("f", ("f_x", "f_y", "f_z")), ("w", ("w_x", "w_y", "w_z")), ("dw", ("dw_x", "dw_y", "dw_z"))):
@@ -580,9 +584,8 @@ def test_property_written_file_is_its_definition(tmp_path_factory, rec, fmt):
         cols.append(list(map(str, rec.pose.tolist())))
     for name, vals in rec.extra.items():
         names.append(name)
-        cols.append(['"' + v.replace('"', '""') + '"' if any(ch in v for ch in ',"') or v != v.strip() else v
-                     for v in vals])
-    head = "".join(f"# {k}: {v.strip()}\n" for k, v in rec.metadata.items()) + ",".join(names) + "\n"
+        cols.append(list(map(quoted, vals)))
+    head = "".join(f"# {k}: {v.strip()}\n" for k, v in rec.metadata.items()) + ",".join(map(quoted, names)) + "\n"
     assert p.read_bytes() == (head + "".join(",".join(row) + "\n" for row in zip(*cols))).encode("utf-8")
 
 
