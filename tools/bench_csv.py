@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """Speed of the recording CSV reader and writer (the README's figures).
 
-Writes and reads 10^6 rows (``--rows``) through the package's own functions:
+Writes and reads 10^6 rows (``--rows``) through the package's own functions
+(write_recording: Python's formatting, csvformat.csv_rows; read_recording: pyarrow's
+CSV reader for plain rows, csvtable.fast_columns):
 
 * ``full``: t, raw_0..raw_5, f_x, f_y, f_z (10 columns, every cell a number);
 * ``holes``: the same and a pose column, with f empty and pose -1 on every other row

@@ -302,11 +302,11 @@ def convert_columns(table: Any, cols: dict[str, tuple[int, str]]) -> tuple[dict[
 
 # pyarrow's type for each kind of column (an empty cell is read as null).
 ARROW_TYPES = {"raw": pa.int64(), "pose": pa.int64(), "t": pa.float64(), "ref": pa.float64()}
-# What in the data rows hands them to the numpy/Python path: a quote (cells are then
-# split by the csv module), a lone CR (a line end to pyarrow, a blank in a cell to the
-# Python path), and what the cells that pyarrow reads but the contract does not allow hold:
-# hexadecimal integers ('0x10') and NaN with a payload ('nan(1)').  Each as a byte that
-# is searched for first (memchr: fast) and the pair that refuses when that byte is there.
+# What hands the data rows to the numpy/Python path, searched for in their bytes: a quote
+# (cells are then split by the csv module), a lone CR (a line end to pyarrow, a blank in a
+# cell to the Python path), and hexadecimal integers ('0x10') and NaN with a payload
+# ('nan(1)'), which pyarrow reads and the contract does not allow.  Each key is one byte
+# (a fast search); only where it occurs are its patterns searched for.
 ARROW_REFUSED = {b'"': (b'"',), b"\r": (b"\r",), b"x": (b"0x",), b"X": (b"0X",), b"(": (b"n(", b"N(")}
 
 
