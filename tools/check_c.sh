@@ -11,10 +11,7 @@
 #  e. packaging: install, then a consumer using find_package(accelcal), and a
 #     consumer using add_subdirectory(); both build and run;
 #  f. valgrind (memcheck) over the vector program and the small unit tests, if
-#     valgrind is installed;
-#  g. the Python extension's host-only C (python/accelcal/_csv_fast.c: libc and
-#     double, not firmware) with the same strict warnings and -Werror, and cppcheck
-#     over it and its fuzz harness: zero findings.
+#     valgrind is installed.
 #
 # Usage:  tools/check_c.sh [step ...]     steps: build sanitize cppcheck grep package valgrind
 #         (default: all, in that order; build dirs under build/)
@@ -26,7 +23,7 @@ ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 B="$ROOT/build"
 JOBS=${JOBS:-2}
 STEPS=("$@")
-[ ${#STEPS[@]} -gt 0 ] || STEPS=(build sanitize cppcheck grep package valgrind hostc)
+[ ${#STEPS[@]} -gt 0 ] || STEPS=(build sanitize cppcheck grep package valgrind)
 declare -a RESULTS=()
 failed=0
 
@@ -221,25 +218,11 @@ step_valgrind() {
     if [ $ok -eq 1 ]; then pass "valgrind"; else flop "valgrind"; fi
 }
 
-step_hostc() {
-    hdr "g. host-only C of the Python extension (strict warnings, -Werror)"
-    local f ok=1
-    for f in "$ROOT"/python/accelcal/*.c; do
-        "${CC:-cc}" -std=c99 -Wall -Wextra -Wpedantic -Wconversion -Wsign-conversion -Wshadow -Werror \
-            -fsyntax-only "$f" || ok=0
-    done
-    if command -v cppcheck > /dev/null; then
-        cppcheck --enable=warning,style,performance,portability --std=c99 --quiet --error-exitcode=1 \
-            --inline-suppr -I "$ROOT/python/accelcal" "$ROOT"/python/accelcal/*.c "$ROOT/fuzz/fuzz_csv.c" || ok=0
-    fi
-    if [ $ok -eq 1 ]; then pass "host C of the extension"; else flop "host C of the extension"; fi
-}
-
 for s in "${STEPS[@]}"; do
     case $s in
-    build | sanitize | cppcheck | grep | package | valgrind | hostc) "step_$s" ;;
+    build | sanitize | cppcheck | grep | package | valgrind) "step_$s" ;;
     *)
-        echo "check_c: unknown step '$s' (build sanitize cppcheck grep package valgrind hostc)" >&2
+        echo "check_c: unknown step '$s' (build sanitize cppcheck grep package valgrind)" >&2
         exit 2
         ;;
     esac

@@ -14,7 +14,6 @@ from cffi import FFI
 ROOT = Path(__file__).resolve().parents[2]
 INCLUDE = ROOT / "include"
 CSRC = ROOT / "csrc"
-HOST_DIR = Path(__file__).resolve().parent  # host-only C (libc, double): not firmware
 HEADERS = ["ac_status.h", "ac_fixed.h", "ac_xf.h", "ac_trim.h", "ac_resolve.h", "ac_trig.h", "ac_attitude.h",
            "ac_invert.h", "ac_rate.h"]
 HEADERS += ["ac_rest.h", "ac_displace.h"]  # motion estimators
@@ -49,7 +48,6 @@ def cdef_from_headers(include_dir: Path = INCLUDE) -> str:
     consts = config_constants(include_dir)
     out = [f"#define {k} {v}" for k, v in consts.items() if k != "AC_NO_STDINT"]
     out += [_cdef_of(include_dir / "accelcal" / name, consts) for name in HEADERS]
-    out.append(_cdef_of(HOST_DIR / "_csv_fast.h", consts))
     return "\n".join(out)
 
 
@@ -57,9 +55,9 @@ ffibuilder = FFI()
 ffibuilder.cdef(cdef_from_headers())
 ffibuilder.set_source(
     "accelcal._core",
-    '#include "accelcal/accelcal.h"\n#include "_csv_fast.h"',
-    sources=[str(p.relative_to(ROOT)) for p in [*sorted(CSRC.glob("*.c")), HOST_DIR / "_csv_fast.c"]],
-    include_dirs=[str(INCLUDE), str(CSRC), str(HOST_DIR)],
+    '#include "accelcal/accelcal.h"',
+    sources=[str(p.relative_to(ROOT)) for p in sorted(CSRC.glob("*.c"))],
+    include_dirs=[str(INCLUDE), str(CSRC)],
     extra_compile_args=["-std=c99", "-O2"],
 )
 

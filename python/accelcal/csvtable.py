@@ -1,7 +1,8 @@
 """Reading the data rows of a recording CSV: the header's columns classified, the cells
-converted column by column -- by the extension's C scanner when every row is plain,
-else vectorised with numpy on a byte table, and cell by cell in Python only where a
-column needs it, which also words the error naming the row and the column."""
+converted column by column -- by pyarrow's CSV reader when every row is plain (its C++
+parser; :func:`fast_columns`), else vectorised with numpy on a byte table, and cell by
+cell in Python only where a column needs it, which also words the error naming the row
+and the column."""
 from __future__ import annotations
 
 import csv
@@ -11,8 +12,9 @@ import re
 from typing import Any, Sequence
 
 import numpy as np
+import pyarrow as pa
+import pyarrow.csv as pa_csv
 
-from ._core import ffi, lib
 from .errors import InputError
 
 VECTOR_COLUMNS: dict[str, tuple[str, str, str]] = {
@@ -298,36 +300,74 @@ def convert_columns(table: Any, cols: dict[str, tuple[int, str]]) -> tuple[dict[
     return values, (min(errors) if errors else None)
 
 
-SCAN_KIND = {"raw": 1, "pose": 2, "t": 3, "ref": 4}  # _csv_fast.h: ACX_INT ... (0: ACX_SKIP)
+# pyarrow's type for each kind of column (an empty cell is read as null).
+ARROW_TYPES = {"raw": pa.int64(), "pose": pa.int64(), "t": pa.float64(), "ref": pa.float64()}
+# What hands the data rows to the numpy/Python path, searched for in their bytes: a quote
+# (cells are then split by the csv module), a lone CR (a line end to pyarrow, a blank in a
+# cell to the Python path), and hexadecimal integers ('0x10') and NaN with a payload
+# ('nan(1)'), which pyarrow reads and the contract does not allow.  Each key is one byte
+# (a fast search); only where it occurs are its patterns searched for.
+ARROW_REFUSED = {b'"': (b'"',), b"\r": (b"\r",), b"x": (b"0x",), b"X": (b"0X",), b"(": (b"n(", b"N(")}
 
 
-def scan_fast(data: bytes, pos: int, end: int, names: list[str], cols: dict[str, tuple[int, str]]
-               ) -> dict[str, np.ndarray] | None:
-    """The columns of cols from the data rows data[pos:end] by the C scanner
-    (_csv_fast.c), or None when it stops at a row: then the slow path decides."""
+def fast_columns(data: bytes, pos: int, end: int, m: int, cols: dict[str, tuple[int, str]]
+                 ) -> dict[str, np.ndarray] | None:
+    """The columns ``name -> (j, kind)`` of the data rows ``data[pos:end]`` (m cells a row)
+    read by pyarrow's CSV reader, or None whenever the numpy/Python path must decide.
 
-    m = len(names)
-    kind = np.zeros(m, dtype=np.int8)
-    slot = np.zeros(m, dtype=np.int16)
-    n_int = n_float = 0
-    for j, k in cols.values():
-        kind[j] = SCAN_KIND[k]
-        if k in ("raw", "pose"):
-            slot[j], n_int = n_int, n_int + 1
-        else:
-            slot[j], n_float = n_float, n_float + 1
-    n = data.count(b"\n", pos, end) + 1
-    ints = np.empty((n_int, n), dtype=np.int64)
-    floats = np.empty((n_float, n), dtype=np.float64)
-    view = memoryview(data)[pos:end]
-    done = lib.acx_scan_rows(ffi.from_buffer(view), end - pos, n, m,
-                             ffi.cast("const int8_t *", ffi.from_buffer(kind)),
-                             ffi.cast("const int16_t *", ffi.from_buffer(slot)),
-                             ffi.cast("int64_t *", ffi.from_buffer(ints)),
-                             ffi.cast("double *", ffi.from_buffer(floats)))
-    if done != n:
+    Parameters
+    ----------
+    data : bytes
+        The file's text (UTF-8, ``\\n`` line ends).
+    pos, end : int
+        The data rows are ``data[pos:end]``; the last one ends at ``end``.
+    m : int
+        Cells in every row (the header's).
+    cols : dict of str to (int, str)
+        The columns to read: name -> (column index, kind: raw, pose, t or ref).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray or None
+        Each column's n values (int64 for raw and pose, float64 for t and ref; an empty
+        pose cell is -1, an empty ref cell NaN), as the Python path would read them bit
+        for bit; None when any row is not m cells, any cell of these columns is not what
+        its kind allows in the plainest form, or the rows hold what ARROW_REFUSED lists.
+        Errors and their wording are the Python path's alone.
+    """
+    for byte, refused in ARROW_REFUSED.items():
+        if data.find(byte, pos, end) >= 0 and any(data.find(r, pos, end) >= 0 for r in refused):
+            return None
+    want = {f"c{j}": ARROW_TYPES[kind] for j, kind in cols.values()}
+    try:
+        table = pa_csv.read_csv(
+            pa.py_buffer(memoryview(data)[pos:end]),
+            read_options=pa_csv.ReadOptions(column_names=[f"c{j}" for j in range(m)], use_threads=False),
+            parse_options=pa_csv.ParseOptions(delimiter=",", quote_char=False, escape_char=False,
+                                              newlines_in_values=False, ignore_empty_lines=False),
+            convert_options=pa_csv.ConvertOptions(column_types=want, include_columns=list(want), null_values=[""],
+                                                  true_values=[], false_values=[]),
+        )
+    except pa.ArrowException:  # a row of another length, a cell it does not read
         return None
-    return {name: (ints if k in ("raw", "pose") else floats)[slot[j]] for name, (j, k) in cols.items()}
+    if table.num_rows != data.count(b"\n", pos, end) + 1:
+        return None
+    out: dict[str, np.ndarray] = {}
+    for name, (j, kind) in cols.items():
+        col = table.column(f"c{j}")
+        if col.null_count:
+            if kind not in ("pose", "ref"):
+                return None
+            col = col.fill_null(-1 if kind == "pose" else np.nan)
+        vals = col.to_numpy()
+        if not vals.flags.writeable:  # a view of pyarrow's buffer
+            vals = vals.copy()
+        if kind == "pose" and np.any(vals < -1):
+            return None
+        if (kind == "t" and not np.isfinite(vals).all()) or (kind == "ref" and np.isinf(vals).any()):
+            return None
+        out[name] = vals
+    return out
 
 
 def split_header(line: str) -> list[str]:

@@ -1,12 +1,13 @@
 """Recordings: raw channel readings over time plus optional reference columns,
 read from and written to CSV per the data contract.
 
-Reading is vectorised: the data section is tokenised once with numpy (cell
-boundaries from the positions of ',' and '\\n'), and numeric columns are
-converted as fixed-width byte matrices.  Only when a column holds something
-the fast path does not handle (spaces, '123.0', 'nan', a bad cell) is it
-re-scanned cell by cell in Python; that scan also produces the error message
-that names the row and column.
+Reading goes through pyarrow's CSV reader when every row is plain (the common
+case).  Anything else -- quotes, '123.0' as an integer, a bad cell -- is read by
+the numpy/Python path: the data section tokenised once with numpy (cell
+boundaries from the positions of ',' and '\\n'), numeric columns converted as
+fixed-width byte matrices, and a column re-scanned cell by cell in Python only
+when it holds something those do not handle (spaces, 'nan', a bad cell); that
+scan also produces the error message that names the row and column.
 """
 
 from __future__ import annotations
@@ -18,9 +19,9 @@ from typing import Any
 
 import numpy as np
 
-from .csvformat import CSV_G, CSV_G_NAN, CSV_INT, CSV_REPR, G_FORMAT_RE, csv_cell, csv_rows, float_strings
+from .csvformat import INT, REPR, TEXT, csv_cell, csv_rows
 from .csvtable import (FLOAT_RE, META_KEY_RE, RAW_RE, REFERENCE_NAMES, VECTOR_COLUMNS, ByteTable, ListTable,
-                       classify_columns, convert_columns, make_table, quote_cell, scan_fast, split_header)
+                       classify_columns, convert_columns, fast_columns, make_table, quote_cell, split_header)
 from .errors import InputError, atomic_write
 from .recording_checks import check_core_input, check_for_device
 from .textinput import is_whitespace_header, read_preamble, read_text_bytes, split_whitespace_header, whitespace_to_commas
@@ -308,10 +309,10 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
     m = len(names)
     first = header_line + 1
     table: Any = None
-    values = scan_fast(data, pos, end, names, cols)
+    values = fast_columns(data, pos, end, m, cols)
     if values is None:
-        # Anything the C scanner did not take (quotes, blanks, words, an error):
-        # the numpy/Python path decides, with the exact message.
+        # Anything pyarrow's reader did not take (quotes, '1.0' as an integer, an
+        # error): the numpy/Python path decides, with the exact message.
         table = make_table(data, pos, end, m, first, source)
         # Convert every column; report the earliest bad cell in the file.
         values, err = convert_columns(table, cols)
@@ -321,8 +322,8 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
     n = len(values["t"])
 
     def located() -> Any:
-        """The table that locates cells and lines; after the C scanner (no quotes in the
-        file) built only when a message or an extra column needs it."""
+        """The table that locates cells and lines; after pyarrow's reader (no quotes in
+        the file) built only when a message or an extra column needs it."""
         nonlocal table
         if table is None:
             table = ByteTable(data, pos, end, m, first, source)
@@ -410,51 +411,39 @@ def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> No
             raise ValueError(f"metadata {k!r}: the value must be one line")
         lines.append(f"# {k}: {v.strip()}")
     names = ["t"] + [f"raw_{k}" for k in range(rec.n_channels)]
-    # the numeric columns and how each is written (csv_rows' kinds); repr() is the
-    # shortest text that reads back to the same float
-    numeric: list[tuple[np.ndarray, int]] = [(rec.t, CSV_REPR)] + [(rec.raw[:, k], CSV_INT)
-                                                                  for k in range(rec.n_channels)]
+    # every column and how it is written (csv_rows' formats; NaN as an empty cell);
+    # repr() is the shortest text that reads back to the same float
+    columns: list[Any] = [rec.t] + [rec.raw[:, k] for k in range(rec.n_channels)]
+    formats = [REPR] + [INT] * rec.n_channels
     for vec, comps in VECTOR_COLUMNS.items():
         arr = getattr(rec, vec)
         if np.isfinite(arr).any():
             names += list(comps)
-            numeric += [(arr[:, c], CSV_G) for c in range(3)]
+            columns += [arr[:, c] for c in range(3)]
+            formats += [float_format] * 3
     if rec.has_temp():
         names.append("temp_c")
-        numeric.append((rec.temp_c, CSV_G))
+        columns.append(rec.temp_c)
+        formats.append(float_format)
     if rec.has_pose():
         names.append("pose")
-        numeric.append((rec.pose, CSV_INT))
-    g = G_FORMAT_RE.fullmatch(float_format)
-    if g and not rec.extra:
-        # every cell is a number in a '%.<p>g' format: the extension's C writes the same text
-        lines.append(",".join(map(csv_cell, names)))
-
-        def write_fast(f: Any) -> None:
-            f.write("\n".join(lines))
-            f.write("\n")
-            for chunk in csv_rows([a for a, _ in numeric], [k for _, k in numeric], int(g.group(1))):
-                f.write(chunk)
-
-        atomic_write(path, write_fast)
-        return
-    cols: list[list[str]] = [list(map(repr, a.tolist())) if k == CSV_REPR
-                             else list(map(str, a.tolist())) if k == CSV_INT
-                             else float_strings(a, float_format) for a, k in numeric]
+        columns.append(rec.pose)
+        formats.append(INT)
     for name, vals in rec.extra.items():
         if not name.strip() or name.strip() != name:
             raise ValueError(f"extra column name {name!r}: expected a non-empty name without surrounding spaces")
         if any("\n" in v or "\r" in v for v in vals):
             raise ValueError(f"extra column {name!r}: values must not contain line breaks")
         names.append(name)
-        cols.append(list(map(csv_cell, vals)))
+        columns.append(list(map(csv_cell, vals)))
+        formats.append(TEXT)
     lines.append(",".join(map(csv_cell, names)))
 
     def write(f: Any) -> None:
         f.write("\n".join(lines))
         f.write("\n")
-        f.write("\n".join(map(",".join, zip(*cols))))
-        f.write("\n")
+        for chunk in csv_rows(columns, formats, [""] * len(columns)):
+            f.write(chunk)
 
     atomic_write(path, write)
 
@@ -481,9 +470,8 @@ def write_columns_csv(path: Any, columns: Any, meta: dict | None = None) -> None
         for k, v in (meta or {}).items():
             f.write(f"# {k}: {v}\n")
         f.write(",".join(names) + "\n")
-        if names:
-            for chunk in csv_rows(arrays, [CSV_G_NAN] * len(names), 9):
-                f.write(chunk)
+        for chunk in csv_rows(arrays, ["%.9g"] * len(names)):
+            f.write(chunk)
 
     atomic_write(path, write)
 

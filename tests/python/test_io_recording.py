@@ -9,8 +9,8 @@ import pytest
 from hypothesis import assume, given, settings, strategies as st
 
 from accelcal.errors import InputError
-from accelcal.csvformat import CSV_G, CSV_G_NAN, CSV_INT, CSV_REPR, csv_rows, python_rows
-from accelcal.csvtable import ByteTable, CellError, ListTable, convert_column, scan_fast
+from accelcal.csvformat import INT, REPR, csv_rows
+from accelcal.csvtable import ByteTable, CellError, ListTable, convert_column, fast_columns
 from accelcal.recording import (
     Recording,
     read_recording,
@@ -503,14 +503,14 @@ def same_numbers(a, b):
 @pytest.mark.parametrize("kind", ["raw", "pose", "t", "ref"])
 @IO
 @given(cells=st.lists(numeric_cell, min_size=1, max_size=12), last=st.booleans())
-def test_property_c_scanner_takes_only_valid_cells(kind, cells, last):
-    """The C scanner (_csv_fast.c) converts a column only if the per-cell
+def test_property_fast_path_takes_only_valid_cells(kind, cells, last):
+    """pyarrow's reader (fast_columns) converts a column only if the per-cell
     Python path accepts every cell, and then to the same numbers, bit for bit;
     it never decides an error itself (it hands the file back)."""
     rows = [(f"0,{c}" if last else f"{c},0") for c in cells]
     text = "\n".join(rows)
     j = 1 if last else 0
-    fast = scan_fast(text.encode(), 0, len(text.encode()), ["a", "b"], {"c": (j, kind)})
+    fast = fast_columns(text.encode(), 0, len(text.encode()), 2, {"c": (j, kind)})
     try:
         slow = convert_column(ListTable(text + "\n", 2, 2, "x"), j, kind)
     except CellError:
@@ -522,14 +522,14 @@ def test_property_c_scanner_takes_only_valid_cells(kind, cells, last):
 
 @IO
 @given(recordings())
-def test_property_c_scanner_reads_as_the_python_path(tmp_path_factory, rec):
-    """Whole files: read with the C scanner and with it switched off, the same
+def test_property_fast_path_reads_as_the_python_path(tmp_path_factory, rec):
+    """Whole files: read through pyarrow's reader and with it switched off, the same
     Recording, bit for bit."""
     p = tmp_path_factory.getbasetemp() / "test_io_recording_scan_r.csv"
     write_recording(p, rec, float_format="%.17g")
     a = read_recording(p, rec.n_channels)
     with pytest.MonkeyPatch.context() as m:
-        m.setattr("accelcal.recording.scan_fast", lambda *args: None)
+        m.setattr("accelcal.recording.fast_columns", lambda *args: None)
         b = read_recording(p, rec.n_channels)
     assert a == b
     for name in ("t", "raw", "f", "w", "dw", "temp_c", "pose"):
@@ -538,41 +538,61 @@ def test_property_c_scanner_reads_as_the_python_path(tmp_path_factory, rec):
 
 
 @IO
-@given(x=st.lists(st.floats(), min_size=1, max_size=40), v=st.data(), p=st.integers(1, 17))
-def test_property_c_formatter_writes_what_python_writes(x, v, p):
-    """csv_rows (_csv_fast.c) gives repr(x), '%.<p>g' % x (NaN empty or 'nan') and str(i),
-    byte for byte, over every double (subnormals, signed zeros, the extremes) and int64."""
+@given(x=st.lists(st.floats(), min_size=1, max_size=40), v=st.data(), p=st.integers(1, 17),
+       chunk=st.integers(1, 50))
+def test_property_csv_rows_writes_each_cell_as_python_does(x, v, p, chunk):
+    """csv_rows gives repr(x), '%.<p>g' % x (NaN empty or 'nan'), str(i) and text as given,
+    byte for byte, over every double (subnormals, signed zeros, the extremes) and int64, in
+    chunks of any size."""
     n = len(x)
     ints = v.draw(st.lists(st.integers(-(2**63), 2**63 - 1), min_size=n, max_size=n))
+    words = v.draw(st.lists(st.text("ab%s,", max_size=4), min_size=n, max_size=n))
     xf = np.array(x, dtype=float)
     fin = np.where(np.isfinite(xf), xf, 0.0)
-    text = "".join(csv_rows([fin, xf, xf, np.array(ints, dtype=np.int64)], [CSV_REPR, CSV_G, CSV_G_NAN, CSV_INT], p))
-    want = "".join(f"{a!r},{'' if math.isnan(b) else ('%.*g' % (p, b))},{'%.*g' % (p, b)},{i}\n"
-                   for a, b, i in zip(fin.tolist(), xf.tolist(), ints))
+    g = f"%.{p}g"
+    text = "".join(csv_rows([fin, xf, xf, np.array(ints, dtype=np.int64), words], [REPR, g, g, INT, "%s"],
+                            [None, "", None, None, None], chunk_rows=chunk))
+    want = "".join(f"{a!r},{'' if math.isnan(b) else g % b},{g % b},{i},{w}\n"
+                   for a, b, i, w in zip(fin.tolist(), xf.tolist(), ints, words))
     assert text == want
-    # the locale fallback is the same definition
-    cols = [fin, xf, xf, np.array(ints, dtype=np.int64)]
-    assert python_rows(cols, [CSV_REPR, CSV_G, CSV_G_NAN, CSV_INT], p, 0, n) == want
 
 
 @IO
-@given(recordings(), st.sampled_from(["%.9g", "%.17g", "%.3g"]))
-def test_property_c_formatter_file_is_the_python_file(tmp_path_factory, rec, fmt):
-    """write_recording through the C formatter and through the Python path (forced by an extra
-    column, then dropped): the same bytes."""
-    rec.extra = {}
-    d = tmp_path_factory.getbasetemp()
-    write_recording(d / "fast.csv", rec, float_format=fmt)
-    with pytest.MonkeyPatch.context() as m:
-        m.setattr("accelcal.recording.G_FORMAT_RE", __import__("re").compile(r"(?!)"))  # matches nothing
-        write_recording(d / "slow.csv", rec, float_format=fmt)
-    assert (d / "fast.csv").read_bytes() == (d / "slow.csv").read_bytes()
+@given(recordings(), st.sampled_from(["%.9g", "%.17g", "%.3g", "%.4f", "%.6e"]))
+def test_property_written_file_is_its_definition(tmp_path_factory, rec, fmt):
+    """write_recording's text, byte for byte: the comments, the header, then per row t as
+    repr(t), raw_k and pose as str, the reference columns through the float format (NaN
+    as an empty cell), the extra columns quoted as CSV needs."""
+    p = tmp_path_factory.getbasetemp() / "test_io_recording_text.csv"
+    write_recording(p, rec, float_format=fmt)
+
+    def quoted(v):
+        return '"' + v.replace('"', '""') + '"' if any(ch in v for ch in ',"') or v != v.strip() else v
+
+    names = ["t"] + [f"raw_{k}" for k in range(rec.n_channels)]
+    cols = [list(map(repr, rec.t.tolist()))] + [list(map(str, rec.raw[:, k].tolist())) for k in range(rec.n_channels)]
+    for vec, comps in (("f", ("f_x", "f_y", "f_z")), ("w", ("w_x", "w_y", "w_z")), ("dw", ("dw_x", "dw_y", "dw_z"))):
+        arr = getattr(rec, vec)
+        if np.isfinite(arr).any():
+            names += comps
+            cols += [["" if math.isnan(x) else fmt % x for x in arr[:, c].tolist()] for c in range(3)]
+    if rec.has_temp():
+        names.append("temp_c")
+        cols.append(["" if math.isnan(x) else fmt % x for x in rec.temp_c.tolist()])
+    if rec.has_pose():
+        names.append("pose")
+        cols.append(list(map(str, rec.pose.tolist())))
+    for name, vals in rec.extra.items():
+        names.append(name)
+        cols.append(list(map(quoted, vals)))
+    head = "".join(f"# {k}: {v.strip()}\n" for k, v in rec.metadata.items()) + ",".join(map(quoted, names)) + "\n"
+    assert p.read_bytes() == (head + "".join(",".join(row) + "\n" for row in zip(*cols))).encode("utf-8")
 
 
 def test_csv_under_a_comma_decimal_locale(tmp_path):
     """A program that sets LC_NUMERIC to a locale with a decimal comma (C's strtod and
-    snprintf follow it; Python's float() and '%' do not) reads and writes the same numbers and
-    the same text: the C fast paths stand aside (the Python paths take over)."""
+    snprintf follow it; pyarrow's reader, Python's float() and '%' do not) reads and writes
+    the same numbers and the same text."""
     import os
     import shutil
     import subprocess
@@ -604,14 +624,22 @@ def test_csv_under_a_comma_decimal_locale(tmp_path):
     assert read_recording(tmp_path / "out.csv") == read_recording(tmp_path / "ref.csv")
 
 
-def test_c_scanner_hands_back_irregular_rows():
-    """Quotes, a missing or an extra cell, blanks and words: the scanner stops
-    and the Python path decides."""
+def test_fast_path_hands_back_irregular_rows():
+    """Quotes, a missing or an extra cell, an empty line, a lone CR, words, '2.0' as an
+    integer, hexadecimal, NaN with a payload: pyarrow's reader is not used and the Python
+    path decides."""
     cols = {"t": (0, "t"), "raw_0": (1, "raw")}
-    for text in ["1,2\n2,3,4", "1,2\n2", '1,"2"', "1, 2", "nan,2", "1,2\n\n3,4", "1,2\r", "1,2.0", "1,2\n"]:
-        assert scan_fast(text.encode(), 0, len(text), ["t", "raw_0"], cols) is None, text
-    good = scan_fast(b"1,2\n2.5e-1,-3", 0, 13, ["t", "raw_0"], cols)
+    for text in ["1,2\n2,3,4", "1,2\n2", '1,"2"', "nan,2", "inf,2", "1,2\n\n3,4", "1,2\r", "1\r,2", "1,2.0", "1,2\n",
+                 "1,0x10", "1,0X10", "1,", ",2", "1,+2", "1,2,3"]:
+        assert fast_columns(text.encode(), 0, len(text), 2, cols) is None, text
+    ref = {"t": (0, "t"), "f_x": (1, "ref"), "pose": (2, "pose")}
+    for text in ["1,nan(1),0", "1,NaN(),0", "1,inf,0", "1,2,-2", "1,2,x"]:
+        assert fast_columns(text.encode(), 0, len(text), 3, ref) is None, text
+    good = fast_columns(b"1,2\n2.5e-1,-3", 0, 13, 2, cols)
     assert good["t"].tolist() == [1.0, 0.25] and good["raw_0"].tolist() == [2, -3]
+    holes = fast_columns(b"1,,\n2, 3.5 ,7\n3,nan,-1", 0, 22, 3, ref)
+    assert holes["pose"].tolist() == [-1, 7, -1] and holes["pose"].dtype == np.int64
+    assert np.array_equal(holes["f_x"], [np.nan, 3.5, np.nan], equal_nan=True) and holes["f_x"].flags.writeable
 
 
 @IO
