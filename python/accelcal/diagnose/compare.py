@@ -197,7 +197,7 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
         amb = [n for n in out.ambiguous if n != name]
         if name in out.ambiguous:
             amb = [best.name] + amb
-        out.ambiguous = amb
+        out.ambiguous = list(dict.fromkeys(amb))
     return out
 
 
