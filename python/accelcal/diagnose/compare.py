@@ -41,6 +41,7 @@ import numpy as np
 
 from ..effects.fitdata import time_separable
 from ..effects.fitting import Cand, block_ss
+from .relinearise import joint_fit
 from .scoring import score
 
 OCCAM_SHRINK = 0.02        # ... and the one with fewer parameters is chosen when it shrinks the gap as far (to this)
@@ -48,6 +49,7 @@ SEPARATE_T = 3.0           # paired block t of two candidates' held-out chi2 tha
 RIVAL_GAIN_SHARE = 0.5     # rivals: significant candidates with at least this share of the best one's gain
 MAX_RIVALS = 3             # ... at most this many, by gain
 WITHIN_MIN = 0.5           # a time-dependent fit is borne out within the poses at >= this share of its claim ...
+TERMS_PASSES = 20          # backfitting passes of the calibration's terms fitted together (they are correlated)
 WITHIN_Z = 3.0             # ... and this many standard errors above 0
 
 
@@ -202,13 +204,13 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
 
 
 def covered_by_terms(D, cands, best: Cand, terms: list[Cand], y, pcur) -> tuple[bool, Cand]:
-    """Whether ``terms`` (fitted one after another, in order) leave nothing significant to
-    ``best``; returns (covered, ``best`` scored after them).  The reference-mode form of
-    :func:`..relinearise.covered_by_calibration` (there the readings are linear in the
-    calibration's terms, so no re-linearisation is needed)."""
-    done = np.zeros_like(y)
-    for c in terms:
-        done = done + conditional(D, cands, c.name, _Given(done), y, pcur).delta
+    """Whether ``terms``, fitted together (backfitting, :func:`..relinearise.joint_fit`), leave
+    nothing significant to ``best``; returns (covered, ``best`` scored after them).  The
+    reference-mode form of :func:`..relinearise.covered_by_calibration` (there the readings
+    are linear in the calibration's terms, so no re-linearisation is needed)."""
+    names = [c.name for c in terms]
+    joint = joint_fit(D, cands, names, y, start={c.name: c for c in terms}, passes=TERMS_PASSES)
+    done = sum((joint[nm].delta for nm in names), np.zeros_like(y))
     after = conditional(D, cands, best.name, _Given(done), y, pcur)
     return not after.significant, after
 

@@ -27,12 +27,13 @@ RELIN_MAX = 15             # re-linearisations at most (the Xsens recording from
 RELIN_TOL = 0.05           # stop when the absorbed effects change the prediction by < this x the noise (max)
 
 
-def joint_fit(D, cands, names: list[str], e: np.ndarray, start: dict[str, Cand] | None = None) -> dict[str, Cand]:
+def joint_fit(D, cands, names: list[str], e: np.ndarray, start: dict[str, Cand] | None = None,
+              passes: int = BACKFIT_PASSES) -> dict[str, Cand]:
     """All-data fits of the effects ``names`` together on the residual ``e`` (backfitting:
-    each refitted on what the others leave, BACKFIT_PASSES times)."""
+    each refitted on what the others leave, ``passes`` times)."""
     joint = dict(start or {})
     deltas = {nm: (joint[nm].delta if nm in joint else np.zeros_like(e)) for nm in names}
-    for _ in range(BACKFIT_PASSES if len(names) > 1 or start is None else 1):
+    for _ in range(passes if len(names) > 1 or start is None else 1):
         for nm in names:
             others = sum((deltas[o] for o in names if o != nm), np.zeros_like(e))
             yt = e - others

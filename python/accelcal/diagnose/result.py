@@ -38,16 +38,15 @@ def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, 
     (``Effect.mimics_calibration``: a cube of the input takes a part of a gain, of an offset
     and of a drift together, so it can rank above each of them alone) must
     explain something that the significant calibration candidates of this step (offset,
-    gain, misalignment) and the significant time-dependent ones (drift, temperature) cannot
-    explain together.  Jig-free the terms are re-linearised (:func:`covered_by_calibration`),
+    gain, misalignment) cannot explain together (not the time-dependent ones: a drift's path
+    through poses visited in turn can take any pattern over the poses, a bend too).  Jig-free the terms are re-linearised (:func:`covered_by_calibration`),
     with a reference fitted one after another (:func:`covered_by_terms`).  Returns the contest
     and the verdict, swapped to the strongest calibration term when they leave nothing
     significant."""
     terms = sorted((c for c in results.values() if c.name != best.name and c.significant and c.gain > 0
                     and c.name in remaining
-                    and (cands[c.name].absorbs or cands[c.name].time_dependent)), key=rank_key)
-    cal_terms = [c for c in terms if cands[c.name].absorbs]
-    if not cal_terms:
+                    and cands[c.name].absorbs), key=rank_key)
+    if not terms:
         return duel, best
     if Dk.mode == "jigfree":
         covered, after = covered_by_calibration(dev, cal, recs, int(folds), int(seed), m0, cands,
@@ -61,7 +60,7 @@ def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, 
     why = (f"{names} together leave nothing significant to {best.name} (held-out shrink {after.shrink:.3f} "
            "after them)")
     tests = dict(duel.tests, together={"terms": [c.name for c in terms], "verdict_after_them": after.shrink})
-    return Contest(best=cal_terms[0], swapped_from=best.name, why=why, tests=tests), cal_terms[0]
+    return Contest(best=terms[0], swapped_from=best.name, why=why, tests=tests), terms[0]
 
 def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, seed: int = 0,
              candidates: Sequence[str] | None = None, max_steps: int = MAX_STEPS, model_centripetal: bool = True,

@@ -70,7 +70,7 @@ class Effect:
     def mimics_calibration(self, fit) -> bool:
         """Whether this effect's fit ``fit`` (a Cand) can take parts of several calibration terms at
         once (a cube of the input: part of a gain, of an offset and of a drift): it is then named
-        only when significant after the significant calibration and time-dependent candidates
+        only when significant after the significant calibration candidates (offset, gain, misalignment)
         together."""
         return False
 
