@@ -147,6 +147,18 @@ def test_on_six_face_poses_a_gain_is_flagged_as_a_possible_bend(seed):
     assert "45 deg" in res["separate_by"]
 
 
+@pytest.mark.parametrize("seed", SEEDS)
+def test_a_misalignment_on_six_faces_is_flagged_as_a_possible_tilt(seed):
+    """On the six faces of a box a tilt of each pose reproduces a misalignment to first order:
+    the verdict is misalignment with pose_error listed; with edge and corner poses it is not."""
+    kw = dict(device="triad16", rate=100.0, noise=0.01, motion=False, temperature=False)
+    res = _diagnose(im.make_jig(["misalignment"], seed, directions=list(im.FACES), **kw), seed)
+    assert res["verdict"] == "misalignment" and "pose_error" in _ambiguous(res)
+    assert "45 deg" in res["separate_by"]
+    res = _diagnose(im.make_jig(["misalignment"], seed, **kw), seed)
+    assert res["verdict"] == "misalignment" and "pose_error" not in _ambiguous(res)
+
+
 # ------------------------------------------------------------------ the real Xsens recording
 @pytest.fixture(scope="module")
 def xsens(shared_data):

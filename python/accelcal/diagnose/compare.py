@@ -183,14 +183,6 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
             if c.k < best.k and c.shrink >= best.shrink - OCCAM_SHRINK and swap is None:
                 swap = (c.name, f"{c.name} explains the same part of the gap with fewer parameters "
                                 f"({c.k} against {best.k})")
-    for nm, eff in cands.items():
-        # effects that, on these data, look like the verdict in a part their fit leaves out
-        if nm != best.name and nm not in out.ambiguous and best.name in eff.looks_like(D):
-            out.ambiguous.append(nm)
-    for nm in cands[best.name].alike(D, best):
-        # ... or whose signature the verdict's fitted parameters have
-        if nm in cands and nm != best.name and nm not in out.ambiguous:
-            out.ambiguous.append(nm)
     out.ambiguous = list(dict.fromkeys(out.ambiguous))
     if swap is not None:
         name, why = swap
@@ -200,6 +192,15 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
         if name in out.ambiguous:
             amb = [best.name] + amb
         out.ambiguous = list(dict.fromkeys(amb))
+    v = out.best
+    for nm, eff in cands.items():
+        # effects that, on these data, cannot be told from the verdict beyond what the test shows
+        if nm != v.name and nm not in out.ambiguous and v.name in eff.looks_like(D):
+            out.ambiguous.append(nm)
+    for nm in cands[v.name].alike(D, v):
+        # ... or whose signature the verdict's fitted parameters have
+        if nm in cands and nm != v.name and nm not in out.ambiguous:
+            out.ambiguous.append(nm)
     return out
 
 

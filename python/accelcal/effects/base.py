@@ -75,9 +75,9 @@ class Effect:
         return False
 
     def looks_like(self, D) -> tuple[str, ...]:
-        """Effects that this one cannot be told from on the data ``D`` although its fit does not
-        show it (a part of it the fit leaves out there because the data cannot separate it): a
-        verdict named here is reported ambiguous with this effect."""
+        """Effects that this one cannot be told from on the data ``D`` although the held-out
+        test does not show it (on poses along the axes alone a cube is a gain, and a tilt of
+        each pose a misalignment): a verdict named here is reported ambiguous with this effect."""
         return ()
 
     # -- user-facing ------------------------------------------------------

@@ -11,7 +11,7 @@ from ..errors import AccelcalError
 from ..sensor import rotation_matrix
 from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_list, channel_mask, owner, per_channel, random_perpendicular, strongest, unit_rows
-from .fitdata import FitData, force_at, tangent_basis, unit_rows3
+from .fitdata import FitData, force_at, poses_on_axes, tangent_basis, unit_rows3
 from .fitting import Cand, LinearCandidate, block_ss, linear_fit
 from .settings import MISALIGN_MAX_RAD
 
@@ -159,6 +159,10 @@ class Misalignment(LinearCandidate, Effect):
         for i in range(u0.shape[0]):
             rot[i] = Rotation.align_vectors(u1[i][None, :], u0[i][None, :])[0].as_rotvec()
         return {"rot": rot}
+
+    def looks_like(self, D):
+        # on the six faces of a box a tilt of each pose is a misalignment to first order
+        return ("pose_error",) if poses_on_axes(D) else ()
 
     def _resolve(self, spec, ctx, rng):
         m = channel_mask(spec, ctx, self.name)

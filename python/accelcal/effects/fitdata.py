@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .settings import REPEAT_DEG, REPEAT_MIN_S, ROTATING_RADPS, TEMP_MIN_SPAN_C
+from .settings import AXIS_POSE_DEG, REPEAT_DEG, REPEAT_MIN_S, ROTATING_RADPS, TEMP_MIN_SPAN_C
 
 
 @dataclass
@@ -165,3 +165,21 @@ def time_separable(D) -> bool:
     apart = np.abs(t[:, None] - t[None, :]) >= REPEAT_MIN_S
     np.fill_diagonal(close, False)
     return bool(np.any(close & apart))
+
+
+def poses_on_axes(D) -> bool:
+    """Whether every static pose with a stated f holds gravity along a channel's axis (within
+    AXIS_POSE_DEG): the six faces of a box.  On such poses a tilt of each pose reproduces a
+    misalignment of the axes to first order (channel i tilted toward j reads +-g theta in the
+    poses +-j, as those poses tilted by theta would), so the two cannot be told apart; poses
+    between the axes (edges, corners) tell them."""
+    stated = np.unique(D.pose_stated[D.pose_stated >= 0])
+    if stated.size == 0:
+        return False
+    axes = unit_rows3(D.s)
+    for p in stated:
+        f = np.nanmean(D.f[D.pose_stated == p], axis=0)
+        nf = np.linalg.norm(f)
+        if not nf > 0 or np.max(np.abs(axes @ (f / nf))) < math.cos(math.radians(AXIS_POSE_DEG)):
+            return False
+    return True

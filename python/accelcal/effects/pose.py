@@ -9,7 +9,7 @@ import numpy as np
 from ..sensor import Context, evaluate, rotation_matrix
 from ..spec import Param
 from .base import Effect, FitParam, as_float_array, random_perpendicular, unit_rows
-from .fitdata import FitData, tangent_basis, unit_rows3
+from .fitdata import FitData, poses_on_axes, tangent_basis, unit_rows3
 from .fitting import Cand, Candidate, lin_cv
 
 
@@ -31,6 +31,10 @@ class PoseError(Candidate, Effect):
         FitParam("labels", "pose", "-", "pose labels the rotations belong to", free=False),
         FitParam("rot", "pose3", "rad", "rotation from the stated to the true orientation"),
     )
+
+    def looks_like(self, D):
+        # on the six faces of a box a misalignment of the axes is a tilt of each pose to first order
+        return ("misalignment",) if poses_on_axes(D) else ()
 
     def _resolve(self, spec, ctx, rng):
         pose = np.asarray(ctx.truth.pose)

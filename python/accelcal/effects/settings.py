@@ -29,3 +29,4 @@ DELAY_GRID = np.array([0.0, 0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0])  # sample
 PENALTY_PER_PARAM = 2.0    # chi2 units per parameter an effect adds (AIC-like)
 REPEAT_DEG = 5.0           # two static poses within this angle are one orientation, repeated ...
 REPEAT_MIN_S = 2.0         # ... when their mid-times are at least this far apart (s)
+AXIS_POSE_DEG = 10.0       # a stated pose within this angle of a channel's axis is a face pose (poses_on_axes)
