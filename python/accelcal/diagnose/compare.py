@@ -30,7 +30,10 @@ unless the data within the poses bear out the change it claims there
 level, so there a drift rests on what a table tilt explains too, and only the slope it
 claims within each pose can tell them apart.  The verdict then
 goes to the pose-dependent rival and the time-dependent effect is listed in
-``ambiguous_with``; it is not added later in the stepwise search either.
+``ambiguous_with``; it is not added later in the stepwise search either.  Nor does a
+time-dependent rival displace, by the nested test, a verdict that does not follow time (a
+clip of one pose, which a drift's path takes as that pose's level) unless the poses bear
+out its slope.
 """
 from __future__ import annotations
 
@@ -161,7 +164,9 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
                 if swap is None:
                     swap = (to.name, f"{best.name} changes with time, but {how}: a time-dependent effect is not "
                                      f"claimed from data that cannot tell it from {c.name} (fixed per pose)")
-        elif c_time and b_pose:
+        elif c_time and (b_pose or not cands[best.name].time_dependent):
+            # a drift's path takes each pose's level: it does not displace a verdict that does not
+            # follow time (a tilt, a clip of one pose) unless the poses bear out its slope
             ok, how = _claims_time(D, y, c, best)
             out.tests[c.name]["within_poses"] = how
             if not ok:
