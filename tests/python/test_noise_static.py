@@ -104,6 +104,37 @@ def test_instant_steps_split_static_blocks_and_tremor_is_not_motion():
     assert len(labelled.poses_used) == P
 
 
+def test_mains_aliased_to_half_the_sampling_rate_is_not_motion():
+    """50 Hz mains on a logger sampling at 100 Hz whose clock runs 0.02 % fast: the tone sits
+    in the spectrum's last bin and swells and fades over tens of seconds.  The static poses
+    between moves are still found (each one inside its pose, none merged), as without it."""
+    rng = np.random.default_rng(3)
+    dev = bare(default_triad())
+    k = dev.counts_per_mps2[0]
+    P, hold, move, rate = 20, 400, 100, 100.0
+    F = Rotation.random(P, random_state=7).apply([0.0, 0.0, G])
+    segs, lab = [], []
+    for p in range(P):
+        segs.append(np.repeat(F[p][None, :], hold, axis=0))
+        lab += [p] * hold
+        if p + 1 < P:
+            a = np.linspace(0.0, 1.0, move)[:, None]
+            segs.append((1 - a) * F[p] + a * F[p + 1])
+            lab += [-1] * move
+    f = np.concatenate(segs) + 0.01 * rng.standard_normal((len(lab), 3))
+    t = np.arange(f.shape[0]) / (rate * 1.0002)
+    tone = 0.3 * np.sin(2 * np.pi * 50.0 * t[:, None] + rng.uniform(0, 2 * np.pi, 3))   # m/s^2
+    lab = np.asarray(lab)
+    for with_tone in (False, True):
+        raw = np.round(32768 + k * (f + (tone if with_tone else 0.0))).astype(np.int64)
+        iv = detect_static(recording(raw, rate), dev)
+        assert len(iv) == P, (with_tone, len(iv))
+        # each interval inside one pose, up to the 2 samples at each end where the move has
+        # not yet left the pose by more than the noise
+        bad = [(a, b) for a, b in iv if not (lab[a + 2] >= 0 and lab[a + 2] == lab[b - 3])]
+        assert not bad, (with_tone, bad)
+
+
 def test_labelled_pose_that_turns_is_refused_naming_label_time_and_channel():
     rng = np.random.default_rng(6)
     dev, raw, lab = hand_held(rng, P=20)
