@@ -1,4 +1,4 @@
-"""Exceptions and the atomic-write helper shared by every accelcal module.
+"""Exceptions, and the file helpers that word their errors, shared by every accelcal module.
 
 Every error the user can cause is an :class:`AccelcalError` whose ``str()`` is
 one complete line: the command line prints exactly that, with no traceback.
@@ -22,6 +22,7 @@ __all__ = [
     "FormatError",
     "core_error",
     "atomic_write",
+    "read_input",
 ]
 
 
@@ -151,6 +152,17 @@ def core_error(status: int, context: str) -> CoreError:
         raise ValueError(f"status {status} is not an error")
     cls = _STATUS_CLASSES.get(status, CoreError)
     return cls(status, context)
+
+
+def read_input(path: Any) -> tuple[str, bytes]:
+    """The bytes of an input file and its name for messages; an unreadable file is an
+    :class:`InputError` naming it (the read counterpart of :func:`atomic_write`)."""
+    source = os.fspath(path) if not isinstance(path, str) else path
+    try:
+        with open(path, "rb") as fh:
+            return source, fh.read()
+    except OSError as e:
+        raise InputError(source, f"cannot read the file: {e.strerror or e}") from None
 
 
 def atomic_write(path: Any, write_fn: Callable[[IO[Any]], Any], mode: str = "w") -> None:

@@ -7,12 +7,11 @@ from __future__ import annotations
 import difflib
 import json
 import math
-import os
 from typing import Any, Iterable
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, read_input
 
 __all__ = ["JsonFields", "NonFinite", "read_json", "parse_json_text", "show_json", "json_number", "LIMITS",
            "check_limits", "KEY_CUTOFF", "MISSING_KEY_CUTOFF"]
@@ -54,12 +53,7 @@ def parse_json_float(text: str) -> Any:
 
 def read_json(path: Any) -> tuple[Any, str]:
     """Read and parse a JSON file; returns (document, source name)."""
-    source = os.fspath(path) if not isinstance(path, str) else path
-    try:
-        with open(path, "rb") as f:
-            data = f.read()
-    except OSError as e:
-        raise InputError(source, f"cannot read the file: {e.strerror or e}") from None
+    source, data = read_input(path)
     try:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError as e:

@@ -8,14 +8,13 @@ both."""
 from __future__ import annotations
 
 import gzip
-import os
 import re
 import zlib
 from dataclasses import dataclass, field
 from typing import Any
 
 from .csvtable import META_RE
-from .errors import InputError
+from .errors import InputError, read_input
 
 __all__ = ["GZIP_MAGIC", "Preamble", "read_text_bytes", "read_preamble", "is_whitespace_header",
            "split_whitespace_header", "whitespace_to_commas"]
@@ -47,12 +46,7 @@ def read_text_bytes(path: Any) -> tuple[str, bytes]:
         Unreadable file, a damaged or truncated gzip stream, or text that is not UTF-8
         (naming the line of the first bad byte in the decompressed text).
     """
-    source = os.fspath(path) if not isinstance(path, str) else path
-    try:
-        with open(path, "rb") as fh:
-            data = fh.read()
-    except OSError as e:
-        raise InputError(source, f"cannot read the file: {e.strerror or e}") from None
+    source, data = read_input(path)
     compressed = data.startswith(GZIP_MAGIC)
     if compressed:
         try:
