@@ -29,11 +29,13 @@ def _row(values, width: int = 0) -> str:
     return "{" + ", ".join(vals) + "}"
 
 
-def _format_guard(*formats: tuple[str, int]) -> list[str]:
-    """Preprocessor lines that refuse to build against a core with other fractional bits
-    (``("OUT", 10)`` checks AC_OUT_FRAC == 10)."""
+def _opening(guard: str, *formats: tuple[str, int]) -> list[str]:
+    """The lines that close a header's comment and open its body: the include guard, the
+    core's header, and a check that refuses to build against a core with other fractional
+    bits (``("OUT", 10)`` checks AC_OUT_FRAC == 10)."""
     cond = " || ".join(f"AC_{name}_FRAC != {bits}" for name, bits in formats)
-    return [f"#if {cond}", "#error \"calibration header made for other fixed-point formats: regenerate it\"", "#endif"]
+    return [" */", f"#ifndef {guard}", f"#define {guard}", "", "#include \"accelcal/accelcal.h\"", "",
+            f"#if {cond}", "#error \"calibration header made for other fixed-point formats: regenerate it\"", "#endif"]
 
 
 def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method: str = "",
@@ -71,14 +73,8 @@ def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method:
         f" *   {p}_CHANNELS: s_i Q.{f.sens_frac} counts per m/s^2, r_i Q.{f.pos_frac} m,",
         f" *     b_i - trim_i Q.{f.offset_frac} counts (input to ac_resolver_build)",
         f" * 1-norm condition number of the inverted matrix: about 2^{t.cond_log2}.",
-        " */",
-        f"#ifndef {guard}",
-        f"#define {guard}",
-        "",
-        "#include \"accelcal/accelcal.h\"",
-        "",
-        *_format_guard(("OUT", f.out_frac), ("OMEGA", f.omega_frac), ("SENS", f.sens_frac), ("POS", f.pos_frac),
-                       ("OFFSET", f.offset_frac)),
+        *_opening(guard, ("OUT", f.out_frac), ("OMEGA", f.omega_frac), ("SENS", f.sens_frac), ("POS", f.pos_frac),
+                  ("OFFSET", f.offset_frac)),
         f"#if AC_MAX_CHANNELS < {n}",
         f"#error \"this calibration has {n} channels: build accelcal with AC_MAX_CHANNELS >= {n}\"",
         "#endif",
@@ -161,13 +157,7 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
     if t.signed:
         lines.append(f" *   {p}_TRIAD.trim holds TRIM + 32768 (offset binary): ac_triad_apply on raw + 32768 is the same")
     lines += [
-        " */",
-        f"#ifndef {guard}",
-        f"#define {guard}",
-        "",
-        "#include \"accelcal/accelcal.h\"",
-        "",
-        *_format_guard(("OUT", f.out_frac), ("SENS", f.sens_frac), ("OFFSET", f.offset_frac)),
+        *_opening(guard, ("OUT", f.out_frac), ("SENS", f.sens_frac), ("OFFSET", f.offset_frac)),
         "",
         f"extern const {tt} {p}_TRIM[3];",
         f"extern const ac_triad {p}_TRIAD;",
