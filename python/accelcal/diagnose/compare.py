@@ -44,7 +44,6 @@ import numpy as np
 
 from ..effects.fitdata import time_separable
 from ..effects.fitting import Cand, block_ss
-from .relinearise import joint_fit
 from .scoring import score
 
 OCCAM_SHRINK = 0.02        # ... and the one with fewer parameters is chosen when it shrinks the gap as far (to this)
@@ -52,7 +51,6 @@ SEPARATE_T = 3.0           # paired block t of two candidates' held-out chi2 tha
 RIVAL_GAIN_SHARE = 0.5     # rivals: significant candidates with at least this share of the best one's gain
 MAX_RIVALS = 3             # ... at most this many, by gain
 WITHIN_MIN = 0.5           # a time-dependent fit is borne out within the poses at >= this share of its claim ...
-TERMS_PASSES = 20          # backfitting passes of the calibration's terms fitted together (they are correlated)
 WITHIN_Z = 3.0             # ... and this many standard errors above 0
 
 
@@ -188,7 +186,6 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
             if c.k < best.k and c.shrink >= best.shrink - OCCAM_SHRINK and swap is None:
                 swap = (c.name, f"{c.name} explains the same part of the gap with fewer parameters "
                                 f"({c.k} against {best.k})")
-    out.ambiguous = list(dict.fromkeys(out.ambiguous))
     if swap is not None:
         name, why = swap
         out.swapped_from, out.why = best.name, why
@@ -196,7 +193,8 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
         amb = [n for n in out.ambiguous if n != name]
         if name in out.ambiguous:
             amb = [best.name] + amb
-        out.ambiguous = list(dict.fromkeys(amb))
+        out.ambiguous = amb
+    out.ambiguous = list(dict.fromkeys(out.ambiguous))
     v = out.best
     for nm, eff in cands.items():
         # effects that, on these data, cannot be told from the verdict beyond what the test shows
@@ -209,20 +207,8 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
     return out
 
 
-def covered_by_terms(D, cands, best: Cand, terms: list[Cand], y, pcur) -> tuple[bool, Cand]:
-    """Whether ``terms``, fitted together (backfitting, :func:`..relinearise.joint_fit`), leave
-    nothing significant to ``best``; returns (covered, ``best`` scored after them).  The
-    reference-mode form of :func:`..relinearise.covered_by_calibration` (there the readings
-    are linear in the calibration's terms, so no re-linearisation is needed)."""
-    names = [c.name for c in terms]
-    joint = joint_fit(D, cands, names, y, start={c.name: c for c in terms}, passes=TERMS_PASSES)
-    done = sum((joint[nm].delta for nm in names), np.zeros_like(y))
-    after = conditional(D, cands, best.name, _Given(done), y, pcur)
-    return not after.significant, after
-
-
 @dataclass
-class _Given:
+class Given:
     """A fitted change to condition on (:func:`conditional` reads only its delta)."""
 
     delta: np.ndarray
@@ -233,8 +219,8 @@ def _after_pose(D, cands, best: Cand, c: Cand, pose_ref: Cand, y, pcur) -> tuple
     ``c`` after ``pose_ref`` and ``best`` (fitted in turn), and ``best`` after ``pose_ref`` and ``c``."""
     b_p = conditional(D, cands, best.name, pose_ref, y, pcur)
     c_p = conditional(D, cands, c.name, pose_ref, y, pcur)
-    c_after = conditional(D, cands, c.name, _Given(pose_ref.delta + b_p.delta), y, pcur)
-    b_after = conditional(D, cands, best.name, _Given(pose_ref.delta + c_p.delta), y, pcur)
+    c_after = conditional(D, cands, c.name, Given(pose_ref.delta + b_p.delta), y, pcur)
+    b_after = conditional(D, cands, best.name, Given(pose_ref.delta + c_p.delta), y, pcur)
     return c_after, b_after
 
 

@@ -91,29 +91,3 @@ def relinearise(device, cal, recs, K: int, seed: int, m0: float, cands, names: l
     return {"params": params, "joint": joint, "path": heldout_path(D, cands, names, e), "iterations": it,
             "converged": converged, "D": D, "e": e}
 
-
-def covered_by_calibration(device, cal, recs, K: int, seed: int, m0: float, cands, fits: dict[str, Cand],
-                           chosen: list[str], cal_cands: list[Cand], best: Cand, D0) -> tuple[bool, Cand | None]:
-    """Whether the calibration's own terms (and others), re-linearised, leave nothing to ``best``.
-
-    Far from the truth a jig-free residual holds the calibration's error to second order
-    (the poses' forces are taken with the given calibration), and a generic basis such as the
-    square and cube of the input takes that part, a piece of a gain and a piece of a
-    misalignment at once, so it can rank above each of them alone.  Here the chosen effects
-    (``chosen``, fits ``fits``) and the significant calibration candidates of this step
-    (``cal_cands``: offset, gain, misalignment, and any other effects to fit with them) are
-    folded into the calibration (:func:`relinearise`) and ``best`` is scored on what they
-    leave.  Returns (covered, the
-    re-scored candidate)."""
-    names = list(chosen) + [c.name for c in cal_cands]
-    joint = dict(fits)
-    joint.update({c.name: c for c in cal_cands})
-    rl = relinearise(device, cal, recs, K, seed, m0, cands, names, joint, D0)
-    if rl is None:
-        return False, None
-    D, e = rl["D"], rl["e"]
-    done = sum((rl["joint"][nm].delta for nm in names), np.zeros_like(e))
-    y = e - done
-    s0w, s0u = block_ss(D, D.rows(y))
-    after = score(D, cands[best.name].cv(D, y, D.p0 + done, s0w, s0u), s0w, s0u)
-    return not after.significant, after

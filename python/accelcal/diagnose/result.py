@@ -15,11 +15,11 @@ from ..noise import code_lattice
 from .floor import setup_rows
 from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare
-from .compare import Contest, contest, covered_by_terms, separate_by
-from .relinearise import covered_by_calibration, joint_fit, relinearise
+from .compare import Contest, Given, conditional, contest, separate_by
+from .relinearise import joint_fit, relinearise
 from .leftover import leftover
 from .scoring import rank_key, run_candidates
-from .settings import FORMAT, MAX_STEPS, MIN_SHRINK, PENALTY_PER_PARAM, T_MIN, Z_MIN
+from .settings import FORMAT, MAX_STEPS, MIN_SHRINK, PENALTY_PER_PARAM, T_MIN, TERMS_PASSES, Z_MIN
 from .text import entry, to_json
 from .where import pose_mean_gap, where_breakdown
 from ..effects import EFFECTS
@@ -36,31 +36,38 @@ class DiagnosisResult(dict):
 def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, remaining, duel, best, y, pcur):
     """A verdict whose fit can take parts of the calibration's terms at once
     (``Effect.mimics_calibration``: a cube of the input takes a part of a gain, of an offset
-    and of a drift together, so it can rank above each of them alone) must
-    explain something that the significant calibration candidates of this step (offset,
-    gain, misalignment) cannot explain together (not the time-dependent ones: a drift's path
-    through poses visited in turn can take any pattern over the poses, a bend too).  Jig-free the terms are re-linearised (:func:`covered_by_calibration`),
-    with a reference fitted one after another (:func:`covered_by_terms`).  Returns the contest
-    and the verdict, swapped to the strongest calibration term when they leave nothing
-    significant."""
+    and of a drift together, so it can rank above each of them alone) must explain something
+    that the significant calibration candidates of this step (offset, gain, misalignment)
+    cannot explain together (not the time-dependent ones: a drift's path through poses
+    visited in turn can take any pattern over the poses, a bend too).  Jig-free the chosen
+    effects and the terms are folded into the calibration (:func:`relinearise`: far from the
+    truth the residual holds the calibration's error to second order, which the bend takes
+    too); with a reference the terms are fitted together (:func:`joint_fit`, TERMS_PASSES
+    passes).  Returns the contest and the verdict, swapped to the strongest calibration term
+    when they leave nothing significant."""
     terms = sorted((c for c in results.values() if c.name != best.name and c.significant and c.gain > 0
-                    and c.name in remaining
-                    and cands[c.name].absorbs), key=rank_key)
+                    and c.name in remaining and cands[c.name].absorbs), key=rank_key)
     if not terms:
         return duel, best
+    names = [c.name for c in terms]
     if Dk.mode == "jigfree":
-        covered, after = covered_by_calibration(dev, cal, recs, int(folds), int(seed), m0, cands,
-                                                {c.name: c for c, _ in steps},
-                                                [c.name for c, _ in steps if c.gain > 0], terms, best, D)
+        names = [c.name for c, _ in steps if c.gain > 0] + names
+        fits = {c.name: c for c, _ in steps}
+        fits.update({c.name: c for c in terms})
+        rl = relinearise(dev, cal, recs, int(folds), int(seed), m0, cands, names, fits, D)  # terms absorb: not None
+        Dc, yc, pc, joint = rl["D"], rl["e"], rl["D"].p0, rl["joint"]
     else:
-        covered, after = covered_by_terms(Dk, cands, best, terms, y, pcur)
-    if not covered or after is None:
+        Dc, yc, pc = Dk, y, pcur
+        joint = joint_fit(Dk, cands, names, y, start={c.name: c for c in terms}, passes=TERMS_PASSES)
+    done = sum((joint[nm].delta for nm in names), np.zeros_like(yc))
+    after = conditional(Dc, cands, best.name, Given(done), yc, pc)
+    if after.significant:
         return duel, best
-    names = " and ".join(c.name for c in terms)
-    why = (f"{names} together leave nothing significant to {best.name} (held-out shrink {after.shrink:.3f} "
-           "after them)")
+    why = (f"{' and '.join(c.name for c in terms)} together leave nothing significant to {best.name} "
+           f"(held-out shrink {after.shrink:.3f} after them)")
     tests = dict(duel.tests, together={"terms": [c.name for c in terms], "verdict_after_them": after.shrink})
     return Contest(best=terms[0], swapped_from=best.name, why=why, tests=tests), terms[0]
+
 
 def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, seed: int = 0,
              candidates: Sequence[str] | None = None, max_steps: int = MAX_STEPS, model_centripetal: bool = True,

@@ -8,5 +8,6 @@ Z_MIN = 6.0                # ... its held-out chi2 gain in units of its null spr
 MIN_SHRINK = 0.005         # a significant effect removes at least this fraction of the gap
 MAX_STEPS = 3              # effects found stepwise at most
 MIN_NOISE_DOF = 30         # static samples needed for the static noise-floor estimate
+TERMS_PASSES = 20          # backfitting passes of the calibration's terms that a bend must beat (they are correlated)
 
-__all__ = ["FORMAT", "T_MIN", "Z_MIN", "PENALTY_PER_PARAM", "MIN_SHRINK", "MAX_STEPS", "MIN_NOISE_DOF"]
+__all__ = ["FORMAT", "T_MIN", "Z_MIN", "PENALTY_PER_PARAM", "MIN_SHRINK", "MAX_STEPS", "MIN_NOISE_DOF", "TERMS_PASSES"]

@@ -63,15 +63,19 @@ class Nonlinearity(LinearCandidate, Effect):
 
     # -- fit to a residual (the diagnosis) ------------------------------------
 
+    @staticmethod
+    def _input(D) -> np.ndarray:
+        """(n, N) the channels' input x (m/s^2) as the model predicts it."""
+        return D.sensed / np.linalg.norm(D.s, axis=1)
+
     def columns(self, D):
-        x = D.sensed / np.linalg.norm(D.s, axis=1)
+        x = self._input(D)
         x2 = x * x
-        return np.stack([x2, np.where(self.cube_told(D), x2 * x, 0.0)], axis=2)
+        return np.stack([x2, np.where(self.cube_told(x), x2 * x, 0.0)], axis=2)
 
     @staticmethod
-    def cube_told(D) -> np.ndarray:
-        """(N,) bool: channels whose data tell a cube from a gain (:data:`CUBE_APART`)."""
-        x = D.sensed / np.linalg.norm(D.s, axis=1)
+    def cube_told(x: np.ndarray) -> np.ndarray:
+        """(N,) bool: channels whose input ``x`` (n, N) tells a cube from a gain (:data:`CUBE_APART`)."""
         x3 = x ** 3
         xx = np.sum(x * x, axis=0)
         proj = np.sum(x * x3, axis=0) / np.where(xx > 0, xx, 1.0)
@@ -85,7 +89,7 @@ class Nonlinearity(LinearCandidate, Effect):
 
     def looks_like(self, D):
         # on poses along the axes alone a cube is a gain change: a gain verdict there could be a bend
-        return ("gain",) if not np.any(self.cube_told(D)) else ()
+        return ("gain",) if not np.any(self.cube_told(self._input(D))) else ()
 
     def cv(self, D, y, pcur, S0w, S0u, folds=True):
         # the square alone, or the square and the cube: the one with the larger penalised held-out
