@@ -1067,6 +1067,24 @@ def real_model(name: str, shared_file):
     return dev, rec, step, cal
 
 
+def as_posed(rec, cal):
+    """The recording with the stated f of each labelled pose replaced by what the
+    calibration reads for that pose's mean, f_k = S^+ (mean raw_k - b): the poses as they
+    really were (a hand-placed pose is off by the table's tilt and the hand), so that the
+    model holds the real tilt as a jig-free fit holds each pose's orientation.  Unlabelled
+    samples keep their stated f (NaN where none)."""
+    if rec.f is None or rec.pose is None:
+        raise ValueError("as_posed: the recording has no labelled poses with stated f")
+    f = np.array(rec.f, dtype=float)
+    for lab in np.unique(rec.pose[rec.pose >= 0]):
+        m = rec.pose == lab
+        f[m] = np.linalg.lstsq(cal.sensitivity, rec.raw[m].mean(axis=0) - cal.offsets, rcond=None)[0]
+    out = recording_from_arrays(rec.t, rec.raw, f=f, w=rec.w, dw=rec.dw, temp_c=rec.temp_c, pose=rec.pose,
+                                metadata=dict(getattr(rec, "metadata", None) or {}, stated_f="as posed"))
+    out.source = f"{rec.source} (stated f as posed)"
+    return out
+
+
 def shared_paths():
     """{name: path parts} of the real recordings this module reads."""
     return {k: v[0] for k, v in REAL.items()}
@@ -1074,5 +1092,5 @@ def shared_paths():
 
 __all__ = ["IN_TABLE", "OUT_OF_TABLE", "PAIRS", "MOVING_ONLY", "DEVICES", "triad16", "adxl12", "seed6",
            "true_parameters", "as_calibration", "make_jig", "make_handheld", "make_six_pose", "load_real",
-           "load_imucal", "load_mpu6050", "inject", "real_model", "static_mask", "real_noise", "Trajectory",
+           "load_imucal", "load_mpu6050", "inject", "real_model", "as_posed", "static_mask", "real_noise", "Trajectory",
            "contribution"]

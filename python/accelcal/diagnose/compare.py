@@ -13,13 +13,14 @@ the stepwise search):
   motions that would (each effect's ``tell_apart``); the one with fewer parameters is the
   verdict when its held-out shrink alone is as large (within OCCAM_SHRINK).
 * both significant after the other: both act; the stepwise search names both.
-* B after A not significant, A after B significant, and B with fewer parameters as large
-  alone (within OCCAM_SHRINK): B is the first step; what A adds beyond it is the next
-  step's to claim (a drift's path that also took an offset).
-
-Two time-dependent candidates on such data (below) are tested after the strongest
-pose-dependent one (:func:`_after_pose`): a drift's path that also takes each pose's
-level must not beat a temperature term on the pose part alone.
+* B after A not significant, A after B significant, B with fewer parameters as large
+  alone (within OCCAM_SHRINK), A's form holds B's change and B's form does not hold A's
+  (:func:`holds`): A is B plus more, so B is the first step and what A adds beyond it is
+  the next step's to claim (a drift's path that also took an offset).  Where A's form
+  cannot hold B's, A explains all B does and more, and stays; where each holds the
+  other's (one change, described better by A), A stays too, unless B follows a recorded
+  covariate and A time alone (:func:`tied`: a temperature term and the drift path that
+  follows it): the measured cause is the first step.
 
 On data that cannot tell time from pose (:func:`time_separable`: static poses only, no
 orientation held twice at different times), a time-dependent effect (drift, temperature)
@@ -52,6 +53,7 @@ RIVAL_GAIN_SHARE = 0.5     # rivals: significant candidates with at least this s
 MAX_RIVALS = 3             # ... at most this many, by gain
 WITHIN_MIN = 0.5           # a time-dependent fit is borne out within the poses at >= this share of its claim ...
 WITHIN_Z = 3.0             # ... and this many standard errors above 0
+HOLDS_LEFT = 0.1           # one form holds another's change when it leaves at most this share of it
 
 
 @dataclass
@@ -111,12 +113,13 @@ def within_pose_support(D, y, best: Cand, rival: Cand) -> tuple[float, float]:
     return num / den, 1.0 / math.sqrt(den)
 
 
-def _claims_time(D, y, best: Cand, rival: Cand) -> tuple[bool, str]:
+def claims_time(D, y, best: Cand, rival: Cand, share: float = WITHIN_MIN) -> tuple[bool, str]:
     """A time-dependent fit ``best`` is claimed over a pose-dependent ``rival`` when the
-    data within the poses bear out its change there: slope >= WITHIN_MIN and >= WITHIN_Z
-    standard errors (:func:`within_pose_support`)."""
+    data within the poses bear out its change there: slope >= ``share`` and >= WITHIN_Z
+    standard errors (:func:`within_pose_support`).  ``share`` 0 asks only whether the data
+    change within the poses as the fit does at all (its size then comes from a joint fit)."""
     a, sa = within_pose_support(D, y, best, rival)
-    ok = a >= WITHIN_MIN and a >= WITHIN_Z * sa
+    ok = a >= share and a >= WITHIN_Z * sa
     return ok, f"within the poses the data change by {a:.2f} +- {sa:.2f} of what {best.name} claims there"
 
 
@@ -132,17 +135,9 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
     judge_time = not time_separable(D)
     b_time = cands[best.name].time_dependent and judge_time
     swap = None
-    # ... and two time-dependent effects are told apart on what a pose-dependent effect leaves:
-    # a path that also takes each pose's level would otherwise win on the pose part alone
-    poses = sorted((c for c in first.values() if c.significant and c.gain > 0 and cands[c.name].varies_by_pose
-                    and not cands[c.name].time_dependent and c.name != best.name), key=lambda c: -c.gain)
-    pose_ref = poses[0] if judge_time and poses else None
     for c in rivals:
-        if b_time and cands[c.name].time_dependent and pose_ref is not None and pose_ref.name != c.name:
-            c_after, b_after = _after_pose(D, cands, best, c, pose_ref, y, pcur)
-        else:
-            c_after = conditional(D, cands, c.name, best, y, pcur)
-            b_after = conditional(D, cands, best.name, c, y, pcur)
+        c_after = conditional(D, cands, c.name, best, y, pcur)
+        b_after = conditional(D, cands, best.name, c, y, pcur)
         out.tests[c.name] = {"rival_after_verdict": {"significant": c_after.significant, "shrink": c_after.shrink,
                                                      "gain_chi2": c_after.gain},
                              "verdict_after_rival": {"significant": b_after.significant, "shrink": b_after.shrink,
@@ -151,7 +146,7 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
         c_pose = cands[c.name].varies_by_pose
         b_pose = cands[best.name].varies_by_pose
         if b_time and c_pose:
-            ok, how = _claims_time(D, y, best, c)
+            ok, how = claims_time(D, y, best, c)
             out.tests[c.name]["within_poses"] = how
             if not ok:
                 # the time-dependent verdict rests on what a pose-dependent rival explains too; the
@@ -165,7 +160,7 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
         elif c_time and (b_pose or not cands[best.name].time_dependent):
             # a drift's path takes each pose's level: it does not displace a verdict that does not
             # follow time (a tilt, a clip of one pose) unless the poses bear out its slope
-            ok, how = _claims_time(D, y, c, best)
+            ok, how = claims_time(D, y, c, best)
             out.tests[c.name]["within_poses"] = how
             if not ok:
                 out.ambiguous.append(c.name)
@@ -175,10 +170,11 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
             swap = (c.name, f"{c.name} explains all that {best.name} does and more ({best.name} adds nothing "
                             "significant after it)")
         elif (not c_after.significant and b_after.significant and c.k < best.k
-              and c.shrink >= best.shrink - OCCAM_SHRINK and swap is None):
+              and c.shrink >= best.shrink - OCCAM_SHRINK and swap is None and holds(D, cands, best, c, pcur)
+              and (not holds(D, cands, c, best, pcur) or tied(cands, c, best))):
             # the simpler rival explains as much alone and nothing beyond it is left to it: it is the
             # first step, and what the verdict adds beyond it is the next step's to claim (a drift's
-            # path that also took an offset)
+            # path that also took an offset, or the temperature that a path follows)
             swap = (c.name, f"{c.name} explains as much of the gap alone with fewer parameters ({c.k} against "
                             f"{best.k}); what {best.name} adds beyond it is tested after it")
         elif not c_after.significant and not b_after.significant and not separable(best, c):
@@ -214,14 +210,26 @@ class Given:
     delta: np.ndarray
 
 
-def _after_pose(D, cands, best: Cand, c: Cand, pose_ref: Cand, y, pcur) -> tuple[Cand, Cand]:
-    """The nested test of two time-dependent candidates after the pose-dependent ``pose_ref``:
-    ``c`` after ``pose_ref`` and ``best`` (fitted in turn), and ``best`` after ``pose_ref`` and ``c``."""
-    b_p = conditional(D, cands, best.name, pose_ref, y, pcur)
-    c_p = conditional(D, cands, c.name, pose_ref, y, pcur)
-    c_after = conditional(D, cands, c.name, Given(pose_ref.delta + b_p.delta), y, pcur)
-    b_after = conditional(D, cands, best.name, Given(pose_ref.delta + c_p.delta), y, pcur)
-    return c_after, b_after
+def tied(cands, a: Cand, b: Cand) -> bool:
+    """Whether ``a`` follows a recorded covariate (``Effect.covariate``: temperature) and ``b``
+    follows time alone (a drift): of two descriptions of one change, the one tied to a
+    measurement is the more specific."""
+    return cands[a.name].covariate is not None and cands[b.name].covariate is None
+
+
+def holds(D, cands, big: Cand, small: Cand, pcur) -> bool:
+    """Whether ``big``'s form can take ``small``'s fitted change: ``big`` fitted to
+    ``small.delta`` alone (no noise) leaves at most HOLDS_LEFT of its weighted energy.  A
+    drift's path holds an offset; a temperature term through its lag does not hold a ramp
+    (unless the temperature itself is one)."""
+    target = small.delta
+    total = float(np.sum(D.W * D.rows(target) ** 2))
+    if total <= 0.0:
+        return True
+    S0w, S0u = block_ss(D, D.rows(target))
+    fit = cands[big.name].cv(D, target, pcur, S0w, S0u)
+    left = float(np.sum(D.W * D.rows(target - fit.delta) ** 2))
+    return left <= HOLDS_LEFT * total
 
 
 def separate_by(cands, verdict: str, ambiguous: list[str]) -> str:

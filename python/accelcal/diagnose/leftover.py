@@ -150,3 +150,27 @@ def leftover(D: FitData, e_after: np.ndarray, before: float, after: float) -> di
     if "poses" in w and regime == "static":
         out["where"]["poses"] = [p["label"] for p in w["poses"][:3]]
     return out
+
+
+def with_settling(left: dict | None, ring: dict | None, D: FitData, before: float) -> dict | None:
+    """The ``unexplained`` object with a ringing after the stops (:mod:`.settling`) added.
+
+    The ringing lies in samples the model does not score (the ends of the motions), so it
+    has no held-out figure of its own: ``heldout_rms_left`` is then its rms in the settling
+    windows (counts) and ``fraction`` its energy's share of its own plus the scored gap's
+    (``before``, held-out rms over the D.n x D.R scored rows).  An existing object keeps its
+    figures and ``where`` and gains the ``settling`` entry."""
+    if ring is None:
+        return left
+    if left is not None:
+        return {**left, "settling": ring}
+    n_ring = ring["n_stops"] * ring["window_s"] / D.h * D.N
+    e_ring = ring["rms_counts"] ** 2 * n_ring
+    e_gap = before * before * D.n * D.R
+    return {"heldout_rms_left": ring["rms_counts"], "fraction": e_ring / max(e_ring + e_gap, 1e-300),
+            "noise_counts": float(np.sqrt(np.mean(D.sigma ** 2))), "lines": None, "settling": ring,
+            "where": {"channels": ring["channels"], "rms_left_per_channel": ring["rms_per_channel"],
+                      "band": f"a line at {ring['peak_hz']:.3g} Hz",
+                      "regime": f"settling: the last {ring['window_s']:.2g} s before each of {ring['n_stops']} "
+                                "rests (not at the motions' starts nor within the rests)",
+                      "moving_share": 1.0}}

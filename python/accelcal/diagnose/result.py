@@ -15,10 +15,11 @@ from ..noise import code_lattice
 from .floor import setup_rows
 from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare
-from .compare import Contest, Given, conditional, contest, separate_by
-from .relinearise import joint_fit, relinearise
-from .leftover import leftover
+from .compare import OCCAM_SHRINK, Contest, Given, claims_time, conditional, contest, separate_by
+from .relinearise import heldout_path, joint_fit, relinearise
+from .leftover import leftover, with_settling
 from .scoring import rank_key, run_candidates
+from .settling import settling_ringing
 from .settings import FORMAT, MAX_STEPS, MIN_SHRINK, PENALTY_PER_PARAM, T_MIN, TERMS_PASSES, Z_MIN
 from .text import entry, to_json
 from .where import pose_mean_gap, where_breakdown
@@ -38,34 +39,55 @@ def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, 
     (``Effect.mimics_calibration``: a cube of the input takes a part of a gain, of an offset
     and of a drift together, so it can rank above each of them alone) must explain something
     that the significant calibration candidates of this step (offset, gain, misalignment)
-    cannot explain together (not the time-dependent ones: a drift's path through poses
-    visited in turn can take any pattern over the poses, a bend too).  Jig-free the chosen
+    cannot explain together, with the time-dependent candidates whose change the data within
+    the poses bear out (:func:`~.compare.claims_time`: a long rest that shows a drift's slope;
+    not the others: a drift's path through poses visited in turn can take any pattern over
+    the poses, a bend too).  Jig-free the chosen
     effects and the terms are folded into the calibration (:func:`relinearise`: far from the
     truth the residual holds the calibration's error to second order, which the bend takes
     too); with a reference the terms are fitted together (:func:`joint_fit`, TERMS_PASSES
     passes).  Returns the contest and the verdict, swapped to the strongest calibration term
-    when they leave nothing significant."""
+    when they leave nothing significant to it, or when they shrink the held-out gap as far
+    as it does (within OCCAM_SHRINK): then they are the first step and what the verdict adds
+    beyond them is the next step's to claim."""
     terms = sorted((c for c in results.values() if c.name != best.name and c.significant and c.gain > 0
                     and c.name in remaining and cands[c.name].absorbs), key=rank_key)
     if not terms:
         return duel, best
-    names = [c.name for c in terms]
+    # a time-dependent candidate joins them where the data within the poses change as it does
+    # (a long rest that shows a drift's slope; its size comes from the joint fit): then the bend
+    # cannot claim the drift's part either
+    timed = [c for c in sorted(results.values(), key=rank_key)
+             if c.name != best.name and c.significant and c.gain > 0 and c.name in remaining
+             and cands[c.name].time_dependent and claims_time(Dk, y, c, best, share=0.0)[0]]
+    names = [c.name for c in terms + timed]
     if Dk.mode == "jigfree":
         names = [c.name for c, _ in steps if c.gain > 0] + names
         fits = {c.name: c for c, _ in steps}
-        fits.update({c.name: c for c in terms})
+        fits.update({c.name: c for c in terms + timed})
         rl = relinearise(dev, cal, recs, int(folds), int(seed), m0, cands, names, fits, D)  # terms absorb: not None
         Dc, yc, pc, joint = rl["D"], rl["e"], rl["D"].p0, rl["joint"]
     else:
         Dc, yc, pc = Dk, y, pcur
-        joint = joint_fit(Dk, cands, names, y, start={c.name: c for c in terms}, passes=TERMS_PASSES)
+        joint = joint_fit(Dk, cands, names, y, start={c.name: c for c in terms + timed}, passes=TERMS_PASSES)
     done = sum((joint[nm].delta for nm in names), np.zeros_like(yc))
     after = conditional(Dc, cands, best.name, Given(done), yc, pc)
-    if after.significant:
+    # the terms' own held-out figure (with the steps before, at the final linearisation): as far
+    # as the verdict goes, they are the first step, and what it adds beyond them comes later
+    terms_after = (rl["path"][-1].after if Dk.mode == "jigfree"
+                   else heldout_path(Dk, cands, names, y)[-1].after)
+    terms_shrink = 1.0 - terms_after / best.before if best.before > 0 else 0.0
+    together = ' and '.join(c.name for c in terms + timed)
+    if after.significant and terms_shrink < best.shrink - OCCAM_SHRINK:
         return duel, best
-    why = (f"{' and '.join(c.name for c in terms)} together leave nothing significant to {best.name} "
-           f"(held-out shrink {after.shrink:.3f} after them)")
-    tests = dict(duel.tests, together={"terms": [c.name for c in terms], "verdict_after_them": after.shrink})
+    if after.significant:
+        why = (f"{together} together shrink the gap as far (held-out {terms_shrink:.3f} against "
+               f"{best.shrink:.3f} for {best.name}); what {best.name} adds beyond them "
+               f"({after.shrink:.3f}) is tested after them")
+    else:
+        why = (f"{together} together leave nothing significant to {best.name} "
+               f"(held-out shrink {after.shrink:.3f} after them)")
+    tests = dict(duel.tests, together={"terms": [c.name for c in terms + timed], "verdict_after_them": after.shrink})
     return Contest(best=terms[0], swapped_from=best.name, why=why, tests=tests), terms[0]
 
 
@@ -235,6 +257,12 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
                                                      np.zeros_like(relin["e"])), base_rms, model_after)
     else:
         left = leftover(D, e - total_delta, base_rms, model_after)
+    ring = settling_ringing(recs, dev)
+    left = with_settling(left, ring, D, base_rms)
+    if ring is not None:
+        notes.append(f"a ringing at {ring['peak_hz']:.3g} Hz after {ring['n_stops']} stops (channels "
+                     f"{', '.join(map(str, ring['channels']))}; {ring['ratio_to_onset']:.3g} x the power at the "
+                     "motions' starts): a resonance of the sensor or its mount, in samples the model does not score")
     if left is not None and not steps:
         verdict = "unexplained"
     result = DiagnosisResult({

@@ -53,6 +53,10 @@ class Effect:
     #: True when the reading's change follows time (drift, temperature), not the pose or the motion:
     #: the diagnosis does not claim it from data that cannot tell it from a pose-dependent effect
     time_dependent: bool = False
+    #: the recorded column a time-dependent effect follows (temperature: ``temp_c``), None for one
+    #: that follows time alone (drift): where the two describe the same change, the one tied to a
+    #: measurement is the more specific explanation
+    covariate: str | None = None
     #: True when, in static poses, the effect's change is fixed within a pose but differs from pose to
     #: pose (gain, misalignment, nonlinearity, a tilt of the jig): such an effect and a time-dependent one
     #: explain the same on poses each held once

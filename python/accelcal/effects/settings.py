@@ -8,6 +8,7 @@ BLOCK_S = 2.0              # longest cross-validation block in a moving segment 
 ROTATING_RADPS = 0.05      # |w| above this counts as rotating (regimes, position_error)
 TEMP_MIN_SPAN_C = 1.0      # temperature candidates need this span of temp_c
 T_LAG_GRID_S = (0.0, 10.0, 30.0, 60.0, 120.0, 300.0)   # thermal lags (s) the temperature fits try
+T_LAG_MAX_SPANS = 2.0   # ... up to this many times the span of the samples the diagnosis uses
 T_REF_SPANS = 2.0          # a fitted reference temperature stays within this many spans of temp_c
 MISALIGN_MAX_RAD = 0.35     # relinearised misalignment fits stay below ~20 deg
 POSITION_TOL_M = 1e-3      # position_error reports dr along directions with 1-sigma below this

@@ -12,24 +12,43 @@ from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_list, channel_mask, per_channel, strongest, temperature_of
 from .fitdata import FitData, t_ref_known, temp_skip
 from .fitting import Cand, Candidate, jig_rows, joint_stats, sep_stats, solve_groups
-from .settings import PENALTY_PER_PARAM, T_LAG_GRID_S, T_REF_SPANS
+from .settings import PENALTY_PER_PARAM, T_LAG_GRID_S, T_LAG_MAX_SPANS, T_REF_SPANS
 
 
 def lagged(T: np.ndarray, t: np.ndarray, tau_s: float, runs: np.ndarray | None = None) -> np.ndarray:
     """The sensor's temperature: the recorded ``T`` (degC) through a first-order lag of time
     constant ``tau_s`` (s), started at the recorded value, per run of samples ``runs``
-    (labels; default one run), at the mean sample spacing of ``t`` (s).  ``tau_s`` = 0: T."""
+    (labels; default one run).  ``t`` (s) may have gaps (the samples a diagnosis leaves
+    out, such as the motion between static poses): within a stretch of regular spacing
+    the filter runs at that spacing; across a gap of length d the state relaxes towards
+    the mean of the temperatures on either side by exp(-d / tau_s), so that the lag is
+    the same in seconds with or without the samples in between.  ``tau_s`` = 0: T."""
     T = np.asarray(T, float)
     if tau_s <= 0.0 or T.size < 2:
         return T
+    t = np.asarray(t, float)
     out = np.empty_like(T)
     runs = np.zeros(T.size, np.int64) if runs is None else np.asarray(runs)
     for r in np.unique(runs):
         idx = np.flatnonzero(runs == r)
-        tt = np.asarray(t, float)[idx]
-        h = float(np.mean(np.diff(tt))) if idx.size > 1 else 1.0
+        if idx.size < 2:
+            out[idx] = T[idx]
+            continue
+        dt = np.diff(t[idx])
+        h = float(np.median(dt))
+        # stretches of regular spacing: a step over 1.5 sample spacings is a gap
+        cut = np.flatnonzero(dt > 1.5 * h) + 1
         a = math.exp(-h / tau_s)
-        out[idx] = lfilter([1.0 - a], [1.0, -a], T[idx], zi=[a * T[idx[0]]])[0]
+        y = T[idx[0]]
+        for lo, hi in zip(np.r_[0, cut], np.r_[cut, idx.size]):
+            piece = idx[lo:hi]
+            if lo > 0:  # across the gap from the previous stretch's last sample
+                x_gap = 0.5 * (T[idx[lo - 1]] + T[piece[0]])
+                y = x_gap + (y - x_gap) * math.exp(-float(dt[lo - 1]) / tau_s)
+            out[piece[0]] = y
+            if piece.size > 1:
+                out[piece[1:]] = lfilter([1.0 - a], [1.0, -a], T[piece[1:]], zi=[a * y])[0]
+            y = float(out[piece[-1]])
     return out
 
 
@@ -83,7 +102,7 @@ class TemperatureFit(Candidate):
         fixed = t_ref_known(D)
         N = D.N
         # the thermal lag: the all-data best of T_LAG_GRID_S (a lag must beat none by more than its
-        # parameter's penalty); lags up to half the data's span
+        # parameter's penalty); lags up to twice the span of the data used
         span_s = float(np.ptp(D.tg)) if D.n else 0.0
         def lag_fit(tau):
             T = lagged(D.temp, D.tg, tau, D.rec)
@@ -91,14 +110,14 @@ class TemperatureFit(Candidate):
             return float(self._profile(D, st[0].sum(0), st[1].sum(0), T, fixed)) + (PENALTY_PER_PARAM if tau else 0.0), \
                 tau, T, st
 
-        grid = [x for x in T_LAG_GRID_S if x <= 0.5 * span_s]
+        grid = [x for x in T_LAG_GRID_S if x <= T_LAG_MAX_SPANS * span_s]
         fits = [lag_fit(tau) for tau in grid]
         j = int(np.argmin([f[0] for f in fits]))
         best = fits[j]
         if best[1] > 0:
             # refine between the neighbouring grid lags (in log tau)
             lo = grid[j - 1] if grid[j - 1] > 0 else 0.5 * grid[j]
-            hi = grid[j + 1] if j + 1 < len(grid) else min(2.0 * grid[j], 0.5 * span_s)
+            hi = grid[j + 1] if j + 1 < len(grid) else min(2.0 * grid[j], T_LAG_MAX_SPANS * span_s)
             res = minimize_scalar(lambda u: lag_fit(math.exp(u))[0], bounds=(math.log(lo), math.log(hi)),
                                   method="bounded", options={"xatol": 0.02})
             if res.fun < best[0]:
@@ -177,6 +196,7 @@ class TemperatureFit(Candidate):
 class TemperatureOffset(TemperatureFit, Effect):
     name = "temperature_offset"
     time_dependent = True
+    covariate = "temp_c"
     tell_apart = "the same pose held at two temperatures, and repeated at one temperature later (temperature apart from time)"
     summary = "b_i changes linearly with temperature"
     doc = ("bias_i(t) += coeff_i (T_s(t) - t_ref) (coeff: counts per degC), T_s the recorded temperature "
@@ -230,6 +250,7 @@ class TemperatureOffset(TemperatureFit, Effect):
 class TemperatureGain(TemperatureFit, Effect):
     name = "temperature_gain"
     time_dependent = True
+    covariate = "temp_c"
     tell_apart = "each axis up and down at two temperatures (a gain change scales both readings, an offset change shifts them)"
     summary = "the magnitude of s_i changes linearly with temperature"
     doc = ("gain_i(t) *= 1 + coeff_i (T_s(t) - t_ref) (coeff: fraction per degC), T_s the recorded "
