@@ -232,6 +232,15 @@ AC_ALWAYS_INLINE uint32_t ac_dot16_sparse(uint32_t acc, const int16_t *a, const 
 #endif
 }
 
+/* ac_resolve_kernel in H8/300H assembly (ac_resolve_h8.c) instead of the C
+ * of ac_resolve.c: normal mode (16-bit pointers, the h8300-hms-gcc -mh -mn
+ * calling convention) only; -DAC_NO_ASM gives the C on the H8 too. */
+#if defined(__H8300H__) && defined(__NORMAL_MODE__) && !defined(__H8300S__) && !defined(AC_NO_ASM)
+#define AC_H8_RESOLVE_ASM 1
+#else
+#define AC_H8_RESOLVE_ASM 0
+#endif
+
 /* ac_mul32x16.c: the int32 with sign neg and 64-bit magnitude hi 2^32 + lo,
  * clipped to int32 (then AC_SATURATED); shared with ac_fixed.c's multiply. */
 ac_status ac_from_sign_mag(int neg, uint32_t hi, uint32_t lo, int32_t *out);

@@ -25,6 +25,7 @@ ac_status ac_resolver_shape(const ac_resolver *r)
     return AC_OK;
 }
 
+#if !AC_H8_RESOLVE_ASM
 /* Output j: round((M x - k - T) 2^-m_shift) (p = 0: no rotation).  A function of
  * its own: it keeps the row's working set small (avr-gcc 5.4 at -Os misplaces
  * stack slots when the whole loop is inlined into the kernel, with the plain C
@@ -95,6 +96,7 @@ ac_status ac_resolve_kernel(const ac_resolver *r, const int16_t *x, const int16_
     }
     return sat ? AC_SATURATED : AC_OK;
 }
+#endif /* !AC_H8_RESOLVE_ASM: the H8/300H kernel is ac_resolve_h8.c */
 
 ac_status ac_resolve(const ac_resolver *r, const int16_t *x, const int16_t *omega, int32_t *out)
 {
