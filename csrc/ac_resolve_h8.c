@@ -1,8 +1,58 @@
 /*
  * accelcal -- ac_resolve_kernel for the H8/300H in normal mode, in assembly
- * (selected by AC_H8_RESOLVE_ASM, ac_internal.h; the C in ac_resolve.c is the
- * reference and the code for every other target).
- * DOC PLACEHOLDER
+ * (selected by AC_H8_RESOLVE_ASM, ac_internal.h: __H8300H__ with
+ * __NORMAL_MODE__ and no AC_NO_ASM; the C in ac_resolve.c is the reference
+ * and the code on every other target).  Same results bit for bit, status and
+ * saturation flag included (tools/run_h8_tests.sh: tests/c/vectors.c at -Os
+ * and -O2 against the host).
+ *
+ * Why assembly: h8300-hms-gcc 3.4 made the C kernel call the rounding helpers
+ * (ac_round_shift, ac_shr_u, ac_scale_round, ac_sat_sub, ac_i_from_u; 4,509
+ * states a sample, one bit a loop iteration in the shifts) and spill the row
+ * state: ac_process with omega took 12,280 states (-O2), 5.6x its multiply
+ * floor of 2,184.  This kernel takes 4,055 of the 4,819 that ac_process with
+ * omega now costs (2.21x; tools/bench_h8.py, profile in build/h8bench/).
+ *
+ * Interface: the C calling convention of h8300-hms-gcc -mh -mn: r0 = r,
+ * r1 = x, r2 = omega, out in the caller's stack slot (@(4,sp) at entry);
+ * status (AC_OK / AC_SATURATED) in r0; er4-er6 saved, er0-er3 clobbered.
+ * Needs a table that passed ac_resolver_shape (6 <= n <= AC_MAX_CHANNELS,
+ * shifts in -31..31); 12 bytes of stack for er4-er6, 8 of locals
+ * (r, omega, x, the saturation flag), 2 more in the cold paths.
+ *
+ * Scaling (as ac_resolve.h): x Q15 counts, m and k in 2^-m_shift output LSB,
+ * out Q21.10.  Three passes:
+ *  1. out[j] = sat(sum_i m[j][i] x[i] - k[j]).  n = 6: x0..x5 in e4 r4 e5 r5
+ *     e2 e3, the row through r2 by displacement (m[j][0] via @er2), k through
+ *     er6 (post-increment), out through r3, the row count in e6; acc er0,
+ *     product er1.  Each term MOV.W + MULXS.W + ADD.L, 32 states (floor 28).
+ *     n > 6: x from memory (r4), the column count in e3.  The sum wraps in
+ *     uint32 like the C's (a checked table cannot overflow: row L1 <= 65535).
+ *  2. omega: the squares and cross products (MULXS.W) in er0..er5, the block
+ *     exponent s = max(0, bitlen(max w_a^2) - 14) (a 16-entry nibble table),
+ *     p_q = round(sq_q 2^-s) half up: a byte move per register for 8 bits,
+ *     then SHAR.L of all six a bit, the last bit's carry added; p0..p5 in
+ *     e2 e3 e4 e5 r4 r5 (|p| <= 2^14).
+ *  3. per row: t = sum_q g[j][q] p_q (g through er2+, 32 states a term);
+ *     t = scale_round(t, g_shift - m_shift + 2 AC_OMEGA_FRAC - s) (the shift
+ *     in -59..82 fits a byte; e6 holds 2 AC_OMEGA_FRAC - s in its low byte and
+ *     the row count in its high byte, er6 points at m_shift[j]); then
+ *     out[j] = scale_round(sat(out[j] - t), m_shift[j]).
+ *     With omega = NULL: only the final rounding (a local subroutine).
+ *
+ * Rounding shifts (v in er0/er1, count n in 1..31): n >= 17 starts with a
+ * word move (MOV.W e,r; EXTS.L); the rest is a jump into a chain of 16
+ * SHAR.L (2 states a bit): n - 1 arithmetic shifts, then one more whose
+ * carry is added (round half up = floor(v 2^-(n-1)) + 1 >> 1, no overflow).
+ * Overflow behaviour as the C: a sum or difference that leaves int32 (V set)
+ * clips to INT32_MAX / INT32_MIN in the true result's direction (the wrapped
+ * result's sign inverted) and sets the flag; a left shift (negative shift)
+ * that overflows (SHAL.L sets V) clips by the operand's sign; a shift > 31
+ * gives 0; a centripetal term that clips alone gives out[j] = INT32_MIN if
+ * t > 0 else INT32_MAX, flagged, without the final rounding.
+ * Addresses: normal mode uses the low 16 bits of a register, so e2, e3 and e6
+ * hold data while r2, r3 and r6 point (no array reaches 0x10000, so a
+ * post-increment never carries into them while they are live).
  */
 #include "ac_internal.h"
 
