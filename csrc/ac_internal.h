@@ -232,6 +232,53 @@ AC_ALWAYS_INLINE uint32_t ac_dot16_sparse(uint32_t acc, const int16_t *a, const 
 #endif
 }
 
+/* ac_resolve_kernel in H8/300H assembly (ac_resolve_h8.c) instead of the C
+ * of ac_resolve.c: normal mode (16-bit pointers, the h8300-hms-gcc -mh -mn
+ * calling convention) only; -DAC_NO_ASM gives the C on the H8 too. */
+#if defined(__H8300H__) && defined(__NORMAL_MODE__) && !defined(__H8300S__) && !defined(AC_NO_ASM)
+#define AC_H8_RESOLVE_ASM 1
+#else
+#define AC_H8_RESOLVE_ASM 0
+#endif
+
+#if AC_H8_RESOLVE_ASM
+/* ac_trim's loop on the H8/300H: x[i] = raw[i] - trim[i] clipped to int16,
+ * n >= 1; returns 1 if any channel clipped.  The 16-bit difference is in
+ * int16 iff its borrow (C) equals its sign (N): one branch on each.  34-38
+ * states a channel against ~72 for the loop h8300-hms-gcc 3.4 makes of the C
+ * (it reloads raw from the stack and indexes every element); ac_process calls
+ * it inline, without ac_trim's call and checks.  Same results as the C of
+ * ac_trim.c (tests: tools/run_h8_tests.sh). */
+AC_ALWAYS_INLINE uint8_t ac_h8_trim(const uint16_t *raw, const uint16_t *trim, uint16_t n,
+                                    int16_t *x)
+{
+    uint32_t cs = n; /* low word: channels left; high word: 1 once one clipped */
+    int16_t a, b;
+    __asm__("1: mov.w  @%S[raw]+,%T[a]     \n\t"
+            "mov.w  @%S[trim]+,%T[b]        \n\t"
+            "sub.w  %T[b],%T[a]             \n\t"
+            "bcs    3f                      \n\t"
+            "bmi    4f                      \n\t"
+            "2: mov.w %T[a],@%S[x]          \n\t"
+            "adds   #2,%S[x]                \n\t"
+            "dec.w  #1,%T[cs]               \n\t"
+            "bne    1b                      \n\t"
+            "bra    6f                      \n\t"
+            "3: bmi 2b                      \n\t"
+            "mov.w  #0x8000,%T[a]           \n\t"
+            "bra    5f                      \n\t"
+            "4: mov.w #0x7fff,%T[a]         \n\t"
+            "5: mov.w #1,%e[cs]             \n\t"
+            "bra    2b                      \n\t"
+            "6:                             \n\t"
+            : [raw] "+r"(raw), [trim] "+r"(trim), [x] "+r"(x), [cs] "+r"(cs), [a] "=&r"(a),
+              [b] "=&r"(b)
+            :
+            : "memory", "cc");
+    return (uint8_t)(cs >> 16);
+}
+#endif
+
 /* ac_mul32x16.c: the int32 with sign neg and 64-bit magnitude hi 2^32 + lo,
  * clipped to int32 (then AC_SATURATED); shared with ac_fixed.c's multiply. */
 ac_status ac_from_sign_mag(int neg, uint32_t hi, uint32_t lo, int32_t *out);

@@ -25,6 +25,7 @@ ac_status ac_resolver_shape(const ac_resolver *r)
     return AC_OK;
 }
 
+#if !AC_H8_RESOLVE_ASM
 /* Output j: round((M x - k - T) 2^-m_shift) (p = 0: no rotation).  A function of
  * its own: it keeps the row's working set small (avr-gcc 5.4 at -Os misplaces
  * stack slots when the whole loop is inlined into the kernel, with the plain C
@@ -95,6 +96,7 @@ ac_status ac_resolve_kernel(const ac_resolver *r, const int16_t *x, const int16_
     }
     return sat ? AC_SATURATED : AC_OK;
 }
+#endif /* !AC_H8_RESOLVE_ASM: the H8/300H kernel is ac_resolve_h8.c */
 
 ac_status ac_resolve(const ac_resolver *r, const int16_t *x, const int16_t *omega, int32_t *out)
 {
@@ -121,9 +123,16 @@ ac_status ac_process(const ac_resolver *r, const uint16_t *trim, const uint16_t 
     if (st != AC_OK) {
         return st;
     }
+#if AC_H8_RESOLVE_ASM
+    /* the trim loop inline (ac_trim's checks hold here: n >= 6) */
+    st_trim = ac_h8_trim(raw, trim, r->n, x) ? AC_SATURATED : AC_OK;
+    st = ac_resolve_kernel(r, x, omega, out);
+    return (st_trim == AC_SATURATED) ? AC_SATURATED : st;
+#else
     st_trim = ac_trim(raw, trim, r->n, x);
     if (st_trim < 0) {
         return st_trim;
     }
     return ac_merge(st_trim, ac_resolve_kernel(r, x, omega, out));
+#endif
 }

@@ -12,6 +12,10 @@ ac_status ac_trim(const uint16_t *raw, const uint16_t *trim, uint16_t n, int16_t
     if (n == 0u) {
         return AC_ERR_SIZE;
     }
+#if AC_H8_RESOLVE_ASM
+    (void)i;
+    sat = ac_h8_trim(raw, trim, n, x);
+#else
     for (i = 0u; i < n; i++) {
         /* in 16 bits (one register pair on 8- and 16-bit cores): the
          * difference is in int16 iff it is below 2^15 in magnitude */
@@ -33,5 +37,6 @@ ac_status ac_trim(const uint16_t *raw, const uint16_t *trim, uint16_t n, int16_t
             x[i] = (int16_t)(-(int16_t)(d - 1u) - 1);
         }
     }
+#endif
     return sat ? AC_SATURATED : AC_OK;
 }

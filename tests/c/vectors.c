@@ -749,6 +749,90 @@ static void vec_resolve(void)
     nl();
 }
 
+/* Edge cases of the per-sample kernel (the H8/300H runs it in assembly, the
+ * fast path for n = 6 with x in registers): every rounding-shift length and
+ * the cold paths (zero, negative and > 31 shifts, the centripetal term that
+ * clips alone), saturated offsets, extreme rates and readings, and the
+ * pre-trim's clip limits.  Tables may break the row-sum invariant: the sums
+ * then wrap in uint32 on every target alike. */
+static const int8_t edge_mshift[] = {-31, -17, -1, 0, 1, 2, 7, 8, 9, 15, 16, 17, 30, 31};
+static const int8_t edge_gshift[] = {-31, -8, 0, 9, 17, 23, 31};
+static const int16_t edge_w[][3] = {{0, 0, 0},          {-32767 - 1, -32767 - 1, -32767 - 1},
+                                    {32767, -32767 - 1, 1}, {127, -128, 126},
+                                    {181, 0, -181},     {-2896, 2896, 100}};
+
+static void vec_resolve_edges(void)
+{
+    uint16_t t, i, k;
+    int16_t x[AC_MAX_CHANNELS], w[3];
+    uint16_t trim[AC_MAX_CHANNELS], raw[AC_MAX_CHANNELS];
+    int32_t out[6];
+    for (t = 0u; t < 48u; t++) {
+        uint8_t j, q;
+        ac_status s;
+        res.n = (t % 4u == 3u) ? (uint16_t)AC_MAX_CHANNELS : 6u;
+        for (j = 0u; j < 6u; j++) {
+            uint8_t big = (uint8_t)((t + j) % 5u == 0u);
+            res.m_shift[j] = edge_mshift[(t * 5u + j * 3u) % sizeof edge_mshift];
+            res.g_shift[j] = edge_gshift[(t * 3u + j) % sizeof edge_gshift];
+            for (i = 0u; i < AC_MAX_CHANNELS; i++) {
+                res.m[j][i] = big ? (int16_t)((i & 1u) ? 32767 : -32767 - 1) : rnd_i16();
+            }
+            for (q = 0u; q < 6u; q++) {
+                res.g[j][q] = big ? (int16_t)((q & 1u) ? -32767 - 1 : 32767) : rnd_i16();
+            }
+            switch ((t + 2u * j) % 4u) {
+            case 0u: res.k[j] = INT32_MAX; break;
+            case 1u: res.k[j] = INT32_MIN; break;
+            case 2u: res.k[j] = 0; break;
+            default: res.k[j] = s32(rnd()); break;
+            }
+        }
+        for (k = 0u; k < 3u; k++) {
+            for (i = 0u; i < res.n; i++) {
+                x[i] = (k == 0u) ? (int16_t)((i & 1u) ? -32767 - 1 : 32767)
+                                 : (k == 1u ? (int16_t)rnd_range(-40, 40) : rnd_i16());
+            }
+            for (q = 0u; q < 3u; q++) {
+                w[q] = (k == 2u && (t & 1u)) ? rnd_i16() : edge_w[(t + k) % 6u][q];
+            }
+            s = ac_resolve(&res, x, 0, out);
+            TAG("EDG0");
+            h8((uint8_t)res.n);
+            st(s);
+            print_out6(out);
+            nl();
+            s = ac_resolve(&res, x, w, out);
+            TAG("EDGW");
+            h16(w[0]);
+            h16(w[1]);
+            h16(w[2]);
+            st(s);
+            print_out6(out);
+            nl();
+        }
+        /* the pre-trim's limits: differences 32767, 32768, -32768, -32769, +-65535 */
+        for (i = 0u; i < res.n; i++) {
+            static const uint16_t tr[6] = {0u, 0u, 32768u, 32769u, 65535u, 1000u};
+            static const uint16_t rw[6] = {32767u, 32768u, 0u, 0u, 0u, 65535u};
+            trim[i] = tr[(i + t) % 6u];
+            raw[i] = rw[(i + t) % 6u];
+        }
+        s = ac_process(&res, trim, raw, (t & 1u) ? edge_w[t % 6u] : 0, out);
+        TAG("EDGP");
+        st(s);
+        print_out6(out);
+        nl();
+        s = ac_trim(raw, trim, res.n, x);
+        TAG("EDGT");
+        st(s);
+        for (i = 0u; i < res.n; i++) {
+            h16(x[i]);
+        }
+        nl();
+    }
+}
+
 /* ---- inversion and table build ----------------------------------------------------------- */
 
 /* seed prototype: 1250 counts per g (127.4645 counts per m/s^2) in Q16, the
@@ -1091,6 +1175,7 @@ int main(void)
     vec_triad();
     vec_triad_build();
     vec_resolve();
+    vec_resolve_edges();
     vec_build();
     vec_invert6();
     vec_rate();
