@@ -1,24 +1,41 @@
 /*
- * accelcal -- ac_resolve_kernel for the H8/300H in normal mode, in assembly
- * (selected by AC_H8_RESOLVE_ASM, ac_internal.h: __H8300H__ with
- * __NORMAL_MODE__ and no AC_NO_ASM; the C in ac_resolve.c is the reference
- * and the code on every other target).  Same results bit for bit, status and
- * saturation flag included (tools/run_h8_tests.sh: tests/c/vectors.c at -Os
- * and -O2 against the host).
+ * accelcal -- ac_process and ac_resolve_kernel for the H8/300H in normal mode,
+ * in assembly (selected by AC_H8_RESOLVE_ASM, ac_internal.h: __H8300H__ with
+ * __NORMAL_MODE__ and no AC_NO_ASM; the C in ac_resolve.c is the reference and
+ * the code on every other target).  Same results bit for bit, status,
+ * saturation flag and untouched out on an error included
+ * (tools/run_h8_tests.sh: tests/c/vectors.c at -Os and -O2 against the host).
  *
  * Why assembly: h8300-hms-gcc 3.4 made the C kernel call the rounding helpers
- * (ac_round_shift, ac_shr_u, ac_scale_round, ac_sat_sub, ac_i_from_u; 4,509
- * states a sample, one bit a loop iteration in the shifts) and spill the row
- * state: ac_process with omega took 12,280 states (-O2), 5.6x its multiply
- * floor of 2,184.  This kernel takes 4,055 of the 4,819 that ac_process with
- * omega now costs (2.21x; tools/bench_h8.py, profile in build/h8bench/).
+ * (4,509 states a sample) and spill the row state: ac_process with omega took
+ * 12,280 states (-O2), 5.6x its multiply floor of 2,184.  With the kernel alone
+ * in assembly it took 4,819 (2.21x), 716 of them in the C ac_process and
+ * ac_resolver_shape around it and the kernel's own entry; with ac_process here
+ * too it takes 4,308 at -Os and -O2 (1.97x; tools/bench_h8.py, profile in
+ * build/h8bench/, by section: the labels ac_h8_pass1, ac_h8_omega, ac_h8_pass2).
  *
- * Interface: the C calling convention of h8300-hms-gcc -mh -mn: r0 = r,
- * r1 = x, r2 = omega, out in the caller's stack slot (@(4,sp) at entry);
- * status (AC_OK / AC_SATURATED) in r0; er4-er6 saved, er0-er3 clobbered.
- * Needs a table that passed ac_resolver_shape (6 <= n <= AC_MAX_CHANNELS,
- * shifts in -31..31); 12 bytes of stack for er4-er6, 8 of locals
- * (r, omega, x, the saturation flag), 2 more in the cold paths.
+ * ac_process (r0 = r, r1 = trim, r2 = raw, omega @(4,sp), out @(8,sp)): the
+ * C's checks in the C's order, before anything is written: trim, raw, out or r
+ * NULL -> AC_ERR_NULL; n outside 6..AC_MAX_CHANNELS -> AC_ERR_SIZE; a shift
+ * outside -31..31 -> AC_ERR_FORMAT.  The 12 shift checks are branch-free: for
+ * each byte s, s + 31 then + 0xC1 carries iff s + 31 (mod 256) >= 63, and
+ * ROTXL.W gathers the carries into e5 above n - 6 (e5 = 0 iff n = 6 and every
+ * shift is valid; 132 states against 262 + the call for ac_resolver_shape).
+ * n = 6: the pre-trim (x = raw - trim clipped to int16: in range iff the
+ * borrow equals the sign; the clips out of line) goes straight into the x
+ * registers of pass 1, and the kernel's frame is the only one.  n > 6: the
+ * pre-trim into a stack buffer and a call of ac_resolve_kernel.
+ * Status: AC_SATURATED if the pre-trim or the kernel clipped, as the C.
+ *
+ * ac_resolve_kernel (r0 = r, r1 = x, r2 = omega, out @(4,sp)): the C calling
+ * convention of h8300-hms-gcc -mh -mn; status (AC_OK / AC_SATURATED) in r0;
+ * er4-er6 saved, er0-er3 clobbered.  Needs a table that passed
+ * ac_resolver_shape (6 <= n <= AC_MAX_CHANNELS, shifts in -31..31).
+ * Frame (both entries, n = 6 in ac_process): er4-er6 (12 bytes), then 8 bytes
+ * of locals: @(0) the saturation flag (a word, 0 or 1: the status), @(2)
+ * omega, @(4) r, @(6) out; 2 more in the cold paths.  ac_process with omega
+ * uses 28 bytes of stack with its return address (n > 6: a 2 AC_MAX_CHANNELS
+ * buffer and the kernel's frame more).
  *
  * Scaling (as ac_resolve.h): x Q15 counts, m and k in 2^-m_shift output LSB,
  * out Q21.10.  Three passes:
@@ -26,19 +43,21 @@
  *     e2 e3, the row through r2 by displacement (m[j][0] via @er2), k through
  *     er6 (post-increment), out through r3, the row count in e6; acc er0,
  *     product er1.  Each term MOV.W + MULXS.W + ADD.L, 32 states (floor 28).
- *     n > 6: x from memory (r4), the column count in e3.  The sum wraps in
- *     uint32 like the C's (a checked table cannot overflow: row L1 <= 65535).
+ *     n > 6: x from memory (base e4, through r4), the column count in e3.
+ *     The sum wraps in uint32 like the C's (a checked table cannot overflow:
+ *     row L1 <= 65535).
  *  2. omega: the squares and cross products (MULXS.W) in er0..er5, the block
  *     exponent s = max(0, bitlen(max w_a^2) - 14) (a 16-entry nibble table),
  *     p_q = round(sq_q 2^-s) half up: a byte move per register for 8 bits,
  *     then SHAR.L of all six a bit, the last bit's carry added; p0..p5 in
  *     e2 e3 e4 e5 r4 r5 (|p| <= 2^14).
  *  3. per row: t = sum_q g[j][q] p_q (g through er2+, 32 states a term);
- *     t = scale_round(t, g_shift - m_shift + 2 AC_OMEGA_FRAC - s) (the shift
- *     in -59..82 fits a byte; e6 holds 2 AC_OMEGA_FRAC - s in its low byte and
- *     the row count in its high byte, er6 points at m_shift[j]); then
- *     out[j] = scale_round(sat(out[j] - t), m_shift[j]).
- *     With omega = NULL: only the final rounding (a local subroutine).
+ *     t = scale_round(t, g_shift - m_shift + 2 AC_OMEGA_FRAC - s): e6 holds
+ *     2 AC_OMEGA_FRAC - s - 1 in its low byte and the row count in its high
+ *     byte, er6 points at m_shift[j]; the shift less one, in -60..81, is in
+ *     range iff it is below 31 unsigned; then out[j] = scale_round(sat(out[j]
+ *     - t), m_shift[j]).  With omega = NULL: only the final rounding (a local
+ *     subroutine).
  *
  * Rounding shifts (v in er0/er1, count n in 1..31): n >= 17 starts with a
  * word move (MOV.W e,r; EXTS.L); the rest is a jump into a chain of 16
@@ -52,7 +71,8 @@
  * t > 0 else INT32_MAX, flagged, without the final rounding.
  * Addresses: normal mode uses the low 16 bits of a register, so e2, e3 and e6
  * hold data while r2, r3 and r6 point (no array reaches 0x10000, so a
- * post-increment never carries into them while they are live).
+ * post-increment never carries into them while they are live); no load goes
+ * into the upper half of its own address register.
  */
 #include "ac_internal.h"
 
@@ -71,6 +91,9 @@ AC_STATIC_ASSERT(h8_off_g, offsetof(ac_resolver, g) == 40 + 12 * AC_MAX_CHANNELS
 AC_STATIC_ASSERT(h8_ptr16, sizeof(const int16_t *) == 2);
 /* the per-row shift g_shift - m_shift + 2 AC_OMEGA_FRAC - s must fit a signed byte */
 AC_STATIC_ASSERT(h8_omega_frac, AC_OMEGA_FRAC >= 0 && AC_OMEGA_FRAC <= 32);
+/* the status codes the assembly returns (the saturation flag word is the status) */
+AC_STATIC_ASSERT(h8_st_ok, AC_OK == 0 && AC_SATURATED == 1);
+AC_STATIC_ASSERT(h8_st_err, AC_ERR_NULL == -1 && AC_ERR_SIZE == -2 && AC_ERR_FORMAT == -6);
 
 __asm__(
     "\t.equ\tOFF_MS, 2\n"
@@ -87,6 +110,7 @@ __asm__(
     "\t.section .text\n"
     "\t.align 1\n"
     /* error returns of ac_process (er4-er6 saved) */
+    "ac_h8_process_err:\n"
     ".Lpr_null:\n"
     "\tmov.w\t#0xffff,r0\n"
     "\tbra\t.Lpr_ret\n"
@@ -116,11 +140,17 @@ __asm__(
     "\tbeq\t.Lpr_null\n"
     /* the table's shape (as ac_resolver_shape): n in 6..AC_MAX_CHANNELS, then the */
     /* 12 shifts: s + 31 (mod 256) >= 63 sets the carry of the add of 0xC1, rotated */
-    /* into e5 above n - 6 (so e5 = 0 iff n = 6 and every shift is in -31..31) */
+    /* into e5 above n - 6 (so e5 = 0 iff n = 6 and every shift is in -31..31; n - 6 must */
+    /* fit 4 bits, so with AC_MAX_CHANNELS > 21 it is made 1 first) */
     "\tmov.w\t@er0,e5\n"
     "\tadd.w\t#-6,e5\n"
     "\tcmp.w\t#MAXCH-6,e5\n"
     "\tbhi\t.Lpr_size\n"
+    "\t.if\tMAXCH > 21\n"
+    "\tbeq\t1f\n"
+    "\tmov.w\t#1,e5\n"
+    "1:\n"
+    "\t.endif\n"
     "\t.irp\toff,2,4,6,8,10,12\n"
     "\tmov.w\t@(\\off,er0),r4\n"
     "\tadd.b\t#31,r4h\n"
@@ -167,6 +197,7 @@ __asm__(
     "\tmov.w\tr6,@-er7\n"
     "\tmov.w\te0,@-er7\n"
     /* ---- pass 1, n = 6: r0 = r, r3 = out, x in registers */
+    "ac_h8_pass1:\n"
     ".Lrk_p1_init:\n"
     "\tmov.w\tr0,r6\n"
     "\tadd.w\t#OFF_K,r6\n"
@@ -201,6 +232,7 @@ __asm__(
     "\tadd.w\t#MSTRIDE,r2\n"
     "\tdec.w\t#1,e6\n"
     "\tbne\t.Lrk_p1_row\n"
+    "ac_h8_omega:\n"
     ".Lrk_p1_done:\n"
     "\tmov.w\t@(OMEGA,er7),r2\n"
     "\tbeq\t.Lrk_f0:16\n"
@@ -314,6 +346,7 @@ __asm__(
     "\tmov.w\t@(OUTL,er7),r3\n"
     /* ---- pass 2: t = g . p, aligned (scale_round by g_shift - m_shift + W2F - s), */
     /* out = round((acc - t) 2^-m_shift) */
+    "ac_h8_pass2:\n"
     ".Lrk_a_row:\n"
     "\tmov.w\t@er2+,r0\n"
     "\tmulxs.w\te2,er0\n"
@@ -409,6 +442,7 @@ __asm__(
     "\tmov.l\t@er7+,er5\n"
     "\tmov.l\t@er7+,er4\n"
     "\trts\n"
+    "ac_h8_cold:\n"
     ".Lrk_a_sat:\n"
     "\tmov.l\ter1,er0\n"
     "\tbsr\t.Lrk_sat_er0:16\n"
@@ -433,6 +467,7 @@ __asm__(
     "\tmov.b\tr0l,@(SATB,er7)\n"
     "\tbra\t.Lrk_a_st\n"
     /* ---- no omega: out = round(acc 2^-m_shift) */
+    "ac_h8_no_omega:\n"
     ".Lrk_f0:\n"
     "\tmov.w\t@(RPTR,er7),r6\n"
     "\tadds\t#OFF_MS,er6\n"
@@ -498,6 +533,7 @@ __asm__(
     "\trts\n"
     /* ---- ac_process, 6 < n <= AC_MAX_CHANNELS: the pre-trim into a stack buffer, then */
     /* the kernel called as a function (r0 = r, r1 = trim, r2 = raw, r3 = out) */
+    "ac_h8_process_n:\n"
     ".Lpr_gen:\n"
     "\tmov.w\t@er0,r5\n"
     "\tadd.w\t#-2*MAXCH,r7\n"
@@ -551,6 +587,7 @@ __asm__(
     "\tmov.w\t@(10,er1),e3\n"
     "\tbra\t.Lrk_p1_init:16\n"
     /* ---- pass 1, 6 < n <= AC_MAX_CHANNELS: x from memory (base e4, through r4), n in e5 */
+    "ac_h8_pass1_n:\n"
     ".Lrk_p1g:\n"
     "\tmov.w\tr1,e4\n"
     "\tmov.w\tr5,e5\n"
