@@ -111,6 +111,7 @@ ac_status ac_resolve(const ac_resolver *r, const int16_t *x, const int16_t *omeg
     return ac_resolve_kernel(r, x, omega, out);
 }
 
+#if !AC_H8_RESOLVE_ASM
 ac_status ac_process(const ac_resolver *r, const uint16_t *trim, const uint16_t *raw,
                      const int16_t *omega, int32_t *out)
 {
@@ -123,16 +124,11 @@ ac_status ac_process(const ac_resolver *r, const uint16_t *trim, const uint16_t 
     if (st != AC_OK) {
         return st;
     }
-#if AC_H8_RESOLVE_ASM
-    /* the trim loop inline (ac_trim's checks hold here: n >= 6) */
-    st_trim = ac_h8_trim(raw, trim, r->n, x) ? AC_SATURATED : AC_OK;
-    st = ac_resolve_kernel(r, x, omega, out);
-    return (st_trim == AC_SATURATED) ? AC_SATURATED : st;
-#else
     st_trim = ac_trim(raw, trim, r->n, x);
     if (st_trim < 0) {
         return st_trim;
     }
     return ac_merge(st_trim, ac_resolve_kernel(r, x, omega, out));
-#endif
 }
+#endif /* !AC_H8_RESOLVE_ASM: on the H8/300H ac_process is assembly too (ac_resolve_h8.c),
+        * with the checks above (ac_resolver_shape's among them) in the same order */

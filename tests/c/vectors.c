@@ -833,6 +833,175 @@ static void vec_resolve_edges(void)
     }
 }
 
+/* The checks before any arithmetic, in ac_process and ac_resolve (the H8/300H
+ * runs ac_process's in assembly, the 12 shift checks folded into one
+ * register): each NULL pointer, n outside 6..AC_MAX_CHANNELS (also with the
+ * high byte set), each of the 12 shifts at and beyond its limits for n = 6
+ * (the pre-trim into registers) and n = AC_MAX_CHANNELS, several faults at
+ * once (the C's order decides: NULL, then n, then the shifts), and out left as
+ * it was after every error. */
+static void vec_resolve_errors(void)
+{
+    static const int8_t bad[] = {32, -32, 33, -33, 63, -63, 64, -64, 96, -96, 127, -128};
+    static const int8_t good[] = {31, -31, 30, -30, 1, -1, 0};
+    static const uint16_t bad_n[] = {0u, 1u, 5u, AC_MAX_CHANNELS + 1u, 64u, 0x0106u, 0x8006u, 0xFFFFu};
+    uint16_t trim[AC_MAX_CHANNELS], raw[AC_MAX_CHANNELS];
+    int16_t x[AC_MAX_CHANNELS];
+    static const int16_t w[3] = {2100, -1300, 700};
+    int32_t out[6];
+    uint16_t i, q;
+    uint8_t j, pos, nn;
+    int8_t *sh;
+
+    random_table();
+    for (i = 0u; i < AC_MAX_CHANNELS; i++) {
+        trim[i] = (uint16_t)(20000u + 97u * i);
+        raw[i] = (uint16_t)(trim[i] + 1500u - 301u * i);
+        x[i] = (int16_t)(1500 - 301 * (int16_t)i);
+    }
+    for (j = 0u; j < 6u; j++) {
+        out[j] = 0x5A5A5A5AL + (int32_t)j;
+    }
+    for (nn = 0u; nn < 2u; nn++) {
+        res.n = nn ? (uint16_t)AC_MAX_CHANNELS : 6u;
+        TAG("ERRN");
+        h8((uint8_t)res.n);
+        st(ac_process(0, trim, raw, w, out));
+        st(ac_process(&res, 0, raw, w, out));
+        st(ac_process(&res, trim, 0, w, out));
+        st(ac_process(&res, trim, raw, w, 0));
+        st(ac_process(&res, trim, raw, 0, 0));
+        st(ac_process(0, 0, 0, 0, 0));
+        st(ac_resolve(0, x, w, out));
+        st(ac_resolve(&res, 0, w, out));
+        st(ac_resolve(&res, x, w, 0));
+        print_out6(out);
+        nl();
+    }
+    /* n out of range; with a bad shift too, and with a NULL pointer too */
+    for (q = 0u; q < sizeof bad_n / sizeof bad_n[0]; q++) {
+        res.n = bad_n[q];
+        TAG("ERRS");
+        h16((int16_t)res.n);
+        st(ac_process(&res, trim, raw, w, out));
+        st(ac_process(&res, trim, raw, 0, out));
+        st(ac_resolve(&res, x, w, out));
+        res.g_shift[5] = 32;
+        st(ac_process(&res, trim, raw, w, out));
+        st(ac_process(&res, trim, 0, w, out));
+        res.g_shift[5] = 3;
+        print_out6(out);
+        nl();
+    }
+    /* each shift out of range, for n = 6 and n = AC_MAX_CHANNELS */
+    for (nn = 0u; nn < 2u; nn++) {
+        res.n = nn ? (uint16_t)AC_MAX_CHANNELS : 6u;
+        for (pos = 0u; pos < 12u; pos++) {
+            int8_t keep;
+            sh = (pos < 6u) ? &res.m_shift[pos] : &res.g_shift[pos - 6u];
+            keep = *sh;
+            TAG("ERRF");
+            h8((uint8_t)res.n);
+            h8(pos);
+            for (q = 0u; q < sizeof bad; q++) {
+                *sh = bad[q];
+                st(ac_process(&res, trim, raw, w, out));
+                st(ac_process(&res, trim, raw, 0, out));
+                st(ac_resolve(&res, x, w, out));
+            }
+            *sh = keep;
+            print_out6(out);
+            nl();
+        }
+    }
+    /* several at once: every shift 32, then every shift -32, then one bad among limits */
+    for (pos = 0u; pos < 12u; pos++) {
+        sh = (pos < 6u) ? &res.m_shift[pos] : &res.g_shift[pos - 6u];
+        *sh = 32;
+    }
+    TAG("ERRM");
+    st(ac_process(&res, trim, raw, w, out));
+    for (pos = 0u; pos < 12u; pos++) {
+        sh = (pos < 6u) ? &res.m_shift[pos] : &res.g_shift[pos - 6u];
+        *sh = (pos & 1u) ? -32 : 31;
+    }
+    st(ac_process(&res, trim, raw, w, out));
+    st(ac_resolve(&res, x, w, out));
+    print_out6(out);
+    nl();
+    /* the shifts at their limits are accepted and run through the arithmetic */
+    for (nn = 0u; nn < 2u; nn++) {
+        res.n = nn ? (uint16_t)AC_MAX_CHANNELS : 6u;
+        for (pos = 0u; pos < 12u; pos++) {
+            sh = (pos < 6u) ? &res.m_shift[pos] : &res.g_shift[pos - 6u];
+            *sh = (int8_t)(8 + (int8_t)pos);
+        }
+        for (pos = 0u; pos < 12u; pos++) {
+            sh = (pos < 6u) ? &res.m_shift[pos] : &res.g_shift[pos - 6u];
+            for (q = 0u; q < sizeof good; q++) {
+                *sh = good[q];
+                TAG("ERRG");
+                h8((uint8_t)res.n);
+                h8(pos);
+                h8((uint8_t)good[q]);
+                st(ac_process(&res, trim, raw, w, out));
+                print_out6(out);
+                st(ac_process(&res, trim, raw, 0, out));
+                print_out6(out);
+                nl();
+            }
+            *sh = (int8_t)(8 + (int8_t)pos);
+        }
+    }
+}
+
+/* The centripetal term's alignment at its boundaries: t = g . p with the
+ * shift of t (2 AC_OMEGA_FRAC - s + g_shift - m_shift) from -2 to 33 around 0,
+ * 16/17 (the word step) and 31/32, for t = +-2^30 exactly, one p step beyond,
+ * and near +-1.6e9 (omega = 2^14 on every axis: s = 15, every p = 2^13; m = 0
+ * and m_shift = 0, so out = -k - round(t 2^-shift) shows the aligned t itself). */
+static void vec_tshift_edges(void)
+{
+    static const int8_t dshift[] = {-2, -1, 0, 1, 2, 15, 16, 17, 18, 29, 30, 31, 32, 33};
+    static const int16_t gq[6][6] = {{32767, 32767, 32767, 32767, 32767, 32767},
+                                     {-32768, -32768, -32768, -32768, -32768, -32768},
+                                     {32767, 32767, 32767, 32767, 4, 0},
+                                     {-32768, -32768, -32768, -32768, 0, 0},
+                                     {-32768, -32768, -32768, -32768, 0, -1},
+                                     {32767, 32767, 32767, 32767, 3, 0}};
+    static const int16_t w[3] = {16384, 16384, 16384};
+    uint16_t trim[6], raw[6];
+    int16_t x[6];
+    int32_t out[6];
+    uint8_t j, q, d;
+    res.n = 6u;
+    for (j = 0u; j < 6u; j++) {
+        for (q = 0u; q < AC_MAX_CHANNELS; q++) {
+            res.m[j][q] = 0;
+        }
+        for (q = 0u; q < 6u; q++) {
+            res.g[j][q] = gq[j][q];
+        }
+        res.k[j] = (j & 1u) ? 0 : 7;
+        res.m_shift[j] = 0;
+        trim[j] = 100u;
+        raw[j] = 200u;
+        x[j] = 100;
+    }
+    for (d = 0u; d < sizeof dshift; d++) {
+        for (j = 0u; j < 6u; j++) {
+            res.g_shift[j] = (int8_t)(dshift[d] - (2 * AC_OMEGA_FRAC - 15));
+        }
+        TAG("TSH");
+        h8((uint8_t)dshift[d]);
+        st(ac_resolve(&res, x, w, out));
+        print_out6(out);
+        st(ac_process(&res, trim, raw, w, out));
+        print_out6(out);
+        nl();
+    }
+}
+
 /* ---- inversion and table build ----------------------------------------------------------- */
 
 /* seed prototype: 1250 counts per g (127.4645 counts per m/s^2) in Q16, the
@@ -1179,6 +1348,8 @@ int main(void)
     vec_build();
     vec_invert6();
     vec_rate();
+    vec_resolve_errors();
+    vec_tshift_edges();
     framing = 0u;
     OUT_S("END accelcal-vectors ");
     out_hex(n_lines, 8u);
