@@ -14,13 +14,14 @@ the stepwise search):
   verdict when its held-out shrink alone is as large (within OCCAM_SHRINK).
 * both significant after the other: both act; the stepwise search names both.
 * B after A not significant, A after B significant, B with fewer parameters as large
-  alone (within OCCAM_SHRINK), A's form holds B's change and B's form does not hold A's
-  (:func:`holds`): A is B plus more, so B is the first step and what A adds beyond it is
-  the next step's to claim (a drift's path that also took an offset).  Where A's form
-  cannot hold B's, A explains all B does and more, and stays; where each holds the
-  other's (one change, described better by A), A stays too, unless B follows a recorded
-  covariate and A time alone (:func:`tied`: a temperature term and the drift path that
-  follows it): the measured cause is the first step.
+  alone (within OCCAM_SHRINK), and A's form holds B's change (:func:`holds`): A is B plus
+  more, so B is the first step and what A adds beyond it is the next step's to claim (a
+  drift's path that also took an offset, a temperature-dependent gain that took a gain).
+  Where A's form cannot hold B's, A explains all B does and more, and stays; so it does
+  where both follow time and each holds the other's (:func:`one_change`: one change,
+  described better by A, such as a temperature through its lag and a ramp), unless B is
+  tied to a recorded covariate and A to time alone (:func:`tied`: the temperature that a
+  drift's path follows is the measured cause, and the first step).
 
 On data that cannot tell time from pose (:func:`time_separable`: static poses only, no
 orientation held twice at different times), a time-dependent effect (drift, temperature)
@@ -171,7 +172,7 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
                             "significant after it)")
         elif (not c_after.significant and b_after.significant and c.k < best.k
               and c.shrink >= best.shrink - OCCAM_SHRINK and swap is None and holds(D, cands, best, c, pcur)
-              and (not holds(D, cands, c, best, pcur) or tied(cands, c, best))):
+              and not one_change(D, cands, c, best, pcur)):
             # the simpler rival explains as much alone and nothing beyond it is left to it: it is the
             # first step, and what the verdict adds beyond it is the next step's to claim (a drift's
             # path that also took an offset, or the temperature that a path follows)
@@ -215,6 +216,15 @@ def tied(cands, a: Cand, b: Cand) -> bool:
     follows time alone (a drift): of two descriptions of one change, the one tied to a
     measurement is the more specific."""
     return cands[a.name].covariate is not None and cands[b.name].covariate is None
+
+
+def one_change(D, cands, simple: Cand, best: Cand, pcur) -> bool:
+    """Whether the time-dependent ``simple`` and ``best`` describe one change, ``best`` the
+    better: each holds the other's (:func:`holds`), and ``simple`` is not the one tied to a
+    measurement (:func:`tied`).  Then the simpler does not take the first step (a ramp
+    against the temperature through its lag)."""
+    return (cands[simple.name].time_dependent and cands[best.name].time_dependent
+            and not tied(cands, simple, best) and holds(D, cands, simple, best, pcur))
 
 
 def holds(D, cands, big: Cand, small: Cand, pcur) -> bool:
