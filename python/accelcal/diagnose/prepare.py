@@ -39,6 +39,7 @@ def jigfree_poses(rec, device) -> list[np.ndarray]:
 
 CLIPPED_WEIGHT = 1e-6       # relative weight of a clipped channel in a jig-free pose's force
 ROUNDING_STD_MAX = 0.6      # channels whose readings scatter less than this (counts) within the rests ...
+ROUNDING_MODEL_MAX = 0.5    # ... and whose rests' means the model predicts to this (rms, counts) ...
 ROUNDING_DITHER = QUANT_DITHER_GRID + (0.5,)   # ... get the rounding bias, at the best of these dithers
 
 
@@ -52,7 +53,10 @@ def rounding_bias(raw: np.ndarray, pred: np.ndarray, rests: list[tuple[int, int]
     whose readings scatter by less than ROUNDING_STD_MAX counts within the rests ``rests``
     (index pairs), the noise reaching the rounding is the dither of ROUNDING_DITHER that
     best fits the rests' readings (:meth:`Quantization.expected_error`, step 1, phase 0);
-    elsewhere the bias is below 0.003 counts and left at 0."""
+    elsewhere the bias is below 0.003 counts and left at 0.  The bias is a function of the
+    true reading: evaluated at a prediction that misses the rests' means by more than the
+    rounding can (rms over the rests above ROUNDING_MODEL_MAX counts: an effect is there)
+    it would be a sawtooth of the wrong phase, so such a channel is left at 0 too."""
     out = np.zeros_like(pred)
     rests = [(a, b) for a, b in rests if b - a >= 3]
     if not rests:
@@ -60,8 +64,9 @@ def rounding_bias(raw: np.ndarray, pred: np.ndarray, rests: list[tuple[int, int]
     idx = np.concatenate([np.arange(a, b) for a, b in rests])
     var = np.array([np.var(raw[a:b], axis=0, ddof=1) * (b - a - 1) for a, b in rests]).sum(axis=0)
     std = np.sqrt(var / sum(b - a - 1 for a, b in rests))
+    miss = np.sqrt(np.mean([np.mean(raw[a:b] - pred[a:b], axis=0) ** 2 for a, b in rests], axis=0))
     one = np.ones(1)
-    for i in np.flatnonzero(std < ROUNDING_STD_MAX):
+    for i in np.flatnonzero((std < ROUNDING_STD_MAX) & (miss <= ROUNDING_MODEL_MAX)):
         x, y = pred[idx, i:i + 1], raw[idx, i] - pred[idx, i]
         sse = [float(np.sum((y - Quantization.expected_error(x, one, 0 * one, r * one)[:, 0]) ** 2))
                for r in ROUNDING_DITHER]
