@@ -408,8 +408,11 @@ def main():
                   f"| host x86-64 instructions, `ac_triad_build` | {h['ac_triad_build']} | |"]
     if shutil.which("h8300-hms-gcc"):
         sizes, libcalls, linked = h8_sizes()
+        notes = {"ac_resolve_h8": " (`ac_process` and the kernel in assembly)",
+                 "ac_triad": " (`ac_triad_apply`, `ac_triad_resolve`, `ac_triad_check`)",
+                 "ac_invert": " (the on-device builds' soft-float and 6x6 inverse)"}
         for m, (tx, da, bs) in sizes.items():
-            lines.append(f"| H8/300H {m}.o text/data/bss (bytes) | {tx}/{da}/{bs} | |")
+            lines.append(f"| H8/300H {m}.o text/data/bss (bytes){notes.get(m, '')} | {tx}/{da}/{bs} | |")
         lines.append(f"| H8/300H library text linked by firmware calling `ac_process` "
                      f"(pre-trim + apply + centripetal) | {linked['per_sample']} | |")
         lines.append(f"| H8/300H library text linked by firmware calling `ac_process` and "
