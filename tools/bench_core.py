@@ -4,7 +4,8 @@
 * AVR (atmega328p, 16-bit int): exact cycles from Timer1 under simavr.
 * Host x86-64: instructions per call from valgrind --tool=callgrind.
 * H8/300H (h8300-hms-gcc -mh -mn -O2 -fomit-frame-pointer): text/data/bss per module and for the
-  firmware subset (pre-trim + apply + centripetal + inversion).
+  firmware subsets (pre-trim + apply + centripetal + inversion; for a 3-axis sensor,
+  pre-trim + apply + 3x3 inversion).
 * Host throughput of the C batch path through cffi against numpy float64.
 Writes build/bench_core.md.
 """
@@ -36,7 +37,23 @@ def make_header():
     b = d.zero_counts + rng.uniform(-0.28, 0.28, 6) * 9.80665 * d.counts_per_mps2
     BUILD.mkdir(parents=True, exist_ok=True)
     (BUILD / "cal.h").write_text(render_header(quantize(b, s, d.positions, d.name)))
+    make_triad_header(rng)
     return d, quantize(b, s, d.positions, d.name), b, s
+
+
+def make_triad_header(rng):
+    """triad.h (prefix AC_TRI): a 16-bit 3-axis sensor with the same kind of errors
+    (gain -0.7..+3.6 %, cross-axis 1.75 %, offsets +-28 % of g) for ac_triad_apply and
+    ac_triad_build."""
+    from accelcal.device import default_triad
+    from accelcal.header import render_triad_header
+    from accelcal.triad import quantize_triad
+    d = default_triad()
+    s = d.nominal_sensitivity() * (1 + rng.uniform(-0.007, 0.036, (3, 1))) + \
+        d.counts_per_mps2[:, None] * rng.normal(0, 0.0175, (3, 3))
+    b = d.zero_counts + rng.uniform(-0.28, 0.28, 3) * 9.80665 * d.counts_per_mps2
+    (BUILD / "triad.h").write_text(render_triad_header(quantize_triad(b, s), device="bench triad",
+                                                       prefix="AC_TRI"))
 
 
 def run(cmd, **kw):
@@ -51,14 +68,22 @@ def parse_bench(text):
     return {k: int(v) for k, v in (kv.split("=") for kv in m.group(1).split())}
 
 
+# the AVR/host benchmark programs: the 6-channel path (bench_main.c) and the 3-axis
+# path (bench_triad.c; apart because both builds' RAM does not fit the ATmega328P)
+BENCH_PROGRAMS = {"bench": "bench_main.c", "bench_triad": "bench_triad.c"}
+
+
 def avr_cycles(opt="-Os"):
-    elf = BUILD / f"bench{opt}.elf"
-    run(["avr-gcc", "-mmcu=atmega328p", opt, "-ffunction-sections", "-Wl,--gc-sections", "-std=c99", "-Wall", "-Wextra", "-DF_CPU=16000000UL",
-         f"-I{INC}", f"-I{ROOT / 'csrc'}", f"-I{BUILD}", str(ROOT / "tools/bench/bench_main.c"),
-         *map(str, CSRC), "-o", str(elf)])
-    res = subprocess.run(["simavr", "-m", "atmega328p", "-f", "16000000", str(elf)],
-                         capture_output=True, text=True, timeout=120)
-    return parse_bench(res.stdout + res.stderr)
+    found = {}
+    for stem, src in BENCH_PROGRAMS.items():
+        elf = BUILD / f"{stem}{opt}.elf"
+        run(["avr-gcc", "-mmcu=atmega328p", opt, "-ffunction-sections", "-Wl,--gc-sections", "-std=c99", "-Wall", "-Wextra", "-DF_CPU=16000000UL",
+             f"-I{INC}", f"-I{ROOT / 'csrc'}", f"-I{BUILD}", str(ROOT / "tools/bench" / src),
+             *map(str, CSRC), "-o", str(elf)])
+        res = subprocess.run(["simavr", "-m", "atmega328p", "-f", "16000000", str(elf)],
+                             capture_output=True, text=True, timeout=120)
+        found.update(parse_bench(res.stdout + res.stderr))
+    return found
 
 
 MUL_BENCH_C = r"""
@@ -91,9 +116,10 @@ int main(void)
 # w_a*w_b and weights them into the 6 outputs (6 + 36).  ac_rate_step: per axis a
 # 32x16 product w*leak and a 32x16 product alpha*dt_m, two 16x16 partial
 # products each (the bench's leak is non-zero).  ac_trim subtracts only.
+# ac_triad_apply applies the 3x3 table (9).
 def mul_floor(n_ch=6):
     return {"trim": 0, "process_no_omega": 6 * n_ch, "process_omega": 6 * n_ch + 6 + 36,
-            "rate_step": 3 * (2 + 2)}
+            "rate_step": 3 * (2 + 2), "triad_apply": 9}
 
 
 def avr_mul_bench(opt="-Os"):
@@ -108,7 +134,8 @@ def avr_mul_bench(opt="-Os"):
     return parse_bench(res.stdout + res.stderr)
 
 
-PER_SAMPLE = ("ac_trim", "ac_process", "ac_rate_step", "ac_resolver_build")
+PER_SAMPLE = ("ac_trim", "ac_process", "ac_rate_step", "ac_resolver_build", "ac_triad_apply",
+              "ac_triad_build")
 
 
 def avr_stack_ram(elf, functions=PER_SAMPLE):
@@ -133,14 +160,15 @@ def avr_stack_ram(elf, functions=PER_SAMPLE):
         secs = re.findall(r"^(\.\S+)\s+(\d+)\s+\d+\s*$", run(["avr-size", "-A", str(o)]).stdout, re.M)
         ram[c.stem] = (sum(int(n) for sec, n in secs if sec.startswith((".data", ".rodata"))),
                        sum(int(n) for sec, n in secs if sec.startswith(".bss")))
-    dis = run(["avr-objdump", "-d", str(elf)]).stdout
+    elfs = elf if isinstance(elf, (list, tuple)) else [elf]
+    dis = "\n".join(run(["avr-objdump", "-d", str(e)]).stdout for e in elfs)
     edges, pushes, indirect, cur = {}, {}, set(), None
     for line in dis.splitlines():
         m = re.match(r"^[0-9a-f]+ <([^>]+)>:", line)
         if m:
             cur = m.group(1)
             edges.setdefault(cur, set())
-            pushes.setdefault(cur, 0)
+            pushes[cur] = 0  # a function in two programs: its pushes once
             continue
         if cur is None:
             continue
@@ -176,23 +204,26 @@ def avr_stack_ram(elf, functions=PER_SAMPLE):
 
 
 def host_instructions():
-    exe = BUILD / "bench_host"
     reps = 1000
-    run(["gcc", "-O2", "-std=c99", f"-DBENCH_REPEAT={reps}", f"-I{INC}", f"-I{ROOT / 'csrc'}",
-         f"-I{BUILD}", str(ROOT / "tools/bench/bench_main.c"), *map(str, CSRC), "-o", str(exe)])
-    out = BUILD / "callgrind.out"
-    run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", str(exe)])
-    ann = run(["callgrind_annotate", "--inclusive=yes", str(out)]).stdout
     counts = {}
-    for line in ann.splitlines():
-        m = re.match(r"^\s*([\d,]+)\s+\([^)]*\)\s+(\S+)", line)
-        if m:
-            name = m.group(2).split(":")[-1]
-            counts.setdefault(name, int(m.group(1).replace(",", "")))
+    for stem, src in BENCH_PROGRAMS.items():
+        exe = BUILD / f"{stem}_host"
+        run(["gcc", "-O2", "-std=c99", f"-DBENCH_REPEAT={reps}", f"-I{INC}", f"-I{ROOT / 'csrc'}",
+             f"-I{BUILD}", str(ROOT / "tools/bench" / src), *map(str, CSRC), "-o", str(exe)])
+        out = BUILD / f"callgrind_{stem}.out"
+        run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", str(exe)])
+        ann = run(["callgrind_annotate", "--inclusive=yes", str(out)]).stdout
+        for line in ann.splitlines():
+            m = re.match(r"^\s*([\d,]+)\s+\([^)]*\)\s+(\S+)", line)
+            if m:
+                name = m.group(2).split(":")[-1]
+                counts.setdefault(name, int(m.group(1).replace(",", "")))
     calls = reps + 2  # the repeat loop plus the two timed calls
     return {"ac_process": counts.get("ac_process", 0) / calls,
             "ac_resolver_build": counts.get("ac_resolver_build", 0),
-            "ac_rate_step": counts.get("ac_rate_step", 0)}
+            "ac_rate_step": counts.get("ac_rate_step", 0),
+            "ac_triad_apply": counts.get("ac_triad_apply", 0) / (reps + 1),  # loop + one timed call
+            "ac_triad_build": counts.get("ac_triad_build", 0)}
 
 
 H8_GOAL_MAIN = r"""
@@ -238,6 +269,44 @@ int main(void)
 """
 
 
+H8_TRIAD_MAIN = r"""
+/* H8 size probe (generated by tools/bench_core.py): firmware for one 3-axis
+ * sensor that calls only ac_triad_apply and, with WITH_BUILD, the triad's
+ * on-device table build (ac_triad_build). */
+#include <accelcal/accelcal.h>
+volatile uint16_t cap[3];
+volatile int32_t res[3];
+volatile uint8_t recal;
+static ac_triad table;
+#ifdef WITH_BUILD
+static ac_channel_cal cal[3];
+static const uint16_t trim[3] = {32768u, 32768u, 32768u};
+static ac_build_work work;
+#endif
+int main(void)
+{
+    uint16_t raw[3];
+    int32_t out[3];
+    uint8_t i;
+    for (;;) {
+#ifdef WITH_BUILD
+        if (recal) {
+            (void)ac_triad_build(cal, trim, &work, &table);
+        }
+#endif
+        for (i = 0u; i < 3u; i++) {
+            raw[i] = cap[i];
+        }
+        (void)ac_triad_apply(&table, raw, out);
+        for (i = 0u; i < 3u; i++) {
+            res[i] = out[i];
+        }
+    }
+    return 0;
+}
+"""
+
+
 def h8_sizes():
     """Per-module H8/300H sizes, the libgcc symbols any module needs, and the
     library text two probe firmwares link (per-sample path; plus the build):
@@ -257,10 +326,14 @@ def h8_sizes():
     lib.unlink(missing_ok=True)
     run(["h8300-hms-ar", "rcs", str(lib), *map(str, objs)])
     (BUILD / "h8_goal_main.c").write_text(H8_GOAL_MAIN)
+    (BUILD / "h8_triad_main.c").write_text(H8_TRIAD_MAIN)
     linked = {}
-    for name, defs in (("per_sample", []), ("with_build", ["-DWITH_BUILD"])):
+    for name, main, defs in (("per_sample", "h8_goal_main.c", []),
+                             ("with_build", "h8_goal_main.c", ["-DWITH_BUILD"]),
+                             ("triad", "h8_triad_main.c", []),
+                             ("triad_build", "h8_triad_main.c", ["-DWITH_BUILD"])):
         mo, out = BUILD / f"h8_goal_{name}.o", BUILD / f"h8_goal_{name}.out"
-        run(["h8300-hms-gcc", *flags, *defs, "-c", str(BUILD / "h8_goal_main.c"), "-o", str(mo)])
+        run(["h8300-hms-gcc", *flags, *defs, "-c", str(BUILD / main), "-o", str(mo)])
         run(["h8300-hms-gcc", "-mh", "-mn", "-nostdlib", "-nostartfiles", "-Wl,-e,_main",
              "-o", str(out), str(mo), str(lib)])
         text = lambda f: int(run(["h8300-hms-size", str(f)]).stdout.splitlines()[1].split()[0])
@@ -298,13 +371,18 @@ def main():
                   f"{c['process_no_omega']} / {c2['process_no_omega']} | |",
                   f"| AVR cycles (-Os / -O2), `ac_rate_step` (3 axes) | {c['rate_step']} / {c2['rate_step']} | |",
                   f"| AVR cycles (-Os / -O2), `ac_resolver_build` (6x6 inverse + tables) | "
-                  f"{c['resolver_build']} / {c2['resolver_build']} | |"]
+                  f"{c['resolver_build']} / {c2['resolver_build']} | |",
+                  f"| AVR cycles (-Os / -O2), `ac_triad_apply` (3-axis sensor: pre-trim + 3x3 apply) | "
+                  f"{c['triad_apply']} / {c2['triad_apply']} | |",
+                  f"| AVR cycles (-Os / -O2), `ac_triad_build` (3-axis sensor: 3x3 inverse + table) | "
+                  f"{c['triad_build']} / {c2['triad_build']} | |"]
         mb, mb2 = avr_mul_bench("-Os"), avr_mul_bench("-O2")
         c["trim"], c2["trim"] = mb["trim"], mb2["trim"]
         lines.append(f"| AVR cycles (-Os / -O2), one 16x16->32 multiply `(int32_t)a * b` | {mb['mul16']} / {mb2['mul16']} | |")
         lines.append(f"| AVR cycles (-Os / -O2), `ac_trim` (6 channels) | {mb['trim']} / {mb2['trim']} | |")
         names = {"trim": "`ac_trim`", "process_no_omega": "`ac_process`, omega = NULL",
-                 "process_omega": "`ac_process` with omega", "rate_step": "`ac_rate_step`"}
+                 "process_omega": "`ac_process` with omega", "rate_step": "`ac_rate_step`",
+                 "triad_apply": "`ac_triad_apply`"}
         for k, n_mul in mul_floor().items():
             if n_mul == 0:
                 lines.append(f"| AVR multiply floor, {names[k]}: 0 multiplies (subtract and clamp only) | "
@@ -313,7 +391,7 @@ def main():
             f1, f2 = n_mul * mb["mul16"], n_mul * mb2["mul16"]
             lines.append(f"| AVR multiply floor (-Os / -O2), {names[k]}: {n_mul} x 16x16 multiplies; "
                          f"measured/floor | {f1} / {f2} cycles; {c[k] / f1:.2f} / {c2[k] / f2:.2f} | |")
-        ram, stack = avr_stack_ram(BUILD / "bench-Os.elf")
+        ram, stack = avr_stack_ram([BUILD / f"{stem}-Os.elf" for stem in BENCH_PROGRAMS])
         for m, (da, bs) in ram.items():
             if da or bs:
                 lines.append(f"| AVR static RAM, {m}.o data+rodata/bss (bytes) | {da}/{bs} | |")
@@ -325,15 +403,24 @@ def main():
     if shutil.which("valgrind"):
         h = host_instructions()
         lines += [f"| host x86-64 instructions, `ac_process` per sample | {h['ac_process']:.0f} | |",
-                  f"| host x86-64 instructions, `ac_resolver_build` | {h['ac_resolver_build']} | |"]
+                  f"| host x86-64 instructions, `ac_resolver_build` | {h['ac_resolver_build']} | |",
+                  f"| host x86-64 instructions, `ac_triad_apply` per sample | {h['ac_triad_apply']:.0f} | |",
+                  f"| host x86-64 instructions, `ac_triad_build` | {h['ac_triad_build']} | |"]
     if shutil.which("h8300-hms-gcc"):
         sizes, libcalls, linked = h8_sizes()
+        notes = {"ac_resolve_h8": " (`ac_process` and the kernel in assembly)",
+                 "ac_triad": " (`ac_triad_apply`, `ac_triad_resolve`, `ac_triad_check`)",
+                 "ac_invert": " (the on-device builds' soft-float and 6x6 inverse)"}
         for m, (tx, da, bs) in sizes.items():
-            lines.append(f"| H8/300H {m}.o text/data/bss (bytes) | {tx}/{da}/{bs} | |")
+            lines.append(f"| H8/300H {m}.o text/data/bss (bytes){notes.get(m, '')} | {tx}/{da}/{bs} | |")
         lines.append(f"| H8/300H library text linked by firmware calling `ac_process` "
                      f"(pre-trim + apply + centripetal) | {linked['per_sample']} | |")
         lines.append(f"| H8/300H library text linked by firmware calling `ac_process` and "
                      f"`ac_resolver_build` (+ inversion) | {linked['with_build']} | <= 3072 |")
+        lines.append(f"| H8/300H library text linked by firmware calling `ac_triad_apply` "
+                     f"(3-axis sensor: pre-trim + apply) | {linked['triad']} | |")
+        lines.append(f"| H8/300H library text linked by firmware calling `ac_triad_apply` and "
+                     f"`ac_triad_build` (+ 3x3 inversion) | {linked['triad_build']} | |")
         lines.append(f"| H8/300H libgcc / soft-float symbols needed | {', '.join(libcalls) or 'none'} | none |")
     n, tc, tf = throughput(d, t, b, s)
     lines += [f"| host C batch resolve via cffi, 6-ch samples/s | {n / tc:,.0f} ({6 * n / tc / 1e6:.1f} M channel-samples/s) | >= 20 M ch-samples/s |",

@@ -30,7 +30,7 @@ What it does
    The simulator's own cycle total is not used (its opcode table is approximate).
 4. Multiply floor of a per-sample function: its 16 x 16 multiplies (the algorithm's
    count where the AVR table states it -- 36 for ac_process without omega, 78 with,
-   12 for ac_rate_step -- else the MULXS.W/MULXU.W the H8 code executes) times
+   12 for ac_rate_step, 9 for ac_triad_apply (3x3) -- else the MULXS.W/MULXU.W the H8 code executes) times
    (24 states of MULXS.W + 4 of the cheapest load of one operand, MOV.W @ERs,Rd).
 5. RAM: static .data + .bss of the two firmware links of tools/build_h8.sh (per-sample
    path; with the on-device build) plus the stack: fw_main's frame (from its
@@ -60,9 +60,9 @@ RAM_BYTES = 2048
 MULXS_W_STATES = 24
 MIN_LOAD_STATES = 4  # MOV.W @ERs,Rd: one word fetched, one word read
 ALGORITHM_MULS = {"ac_process": 36, "ac_process_omega": 78, "ac_resolve_omega": 78,
-                  "ac_rate_step": 12, "ac_process_batch_omega": 78}
+                  "ac_rate_step": 12, "ac_process_batch_omega": 78, "ac_triad_apply": 9}
 PER_SAMPLE = ("ac_trim", "ac_process", "ac_process_omega", "ac_resolve_omega", "ac_rate_step",
-              "ac_att_step", "ac_disp_step", "ac_process_batch_omega")
+              "ac_att_step", "ac_disp_step", "ac_process_batch_omega", "ac_triad_apply")
 LABELS = {
     "ac_trim": "`ac_trim` (6 channels)",
     "ac_process": "`ac_process`, omega = NULL (pre-trim + apply)",
@@ -73,6 +73,8 @@ LABELS = {
     "ac_disp_step": "`ac_disp_step` (displacement, 3-axis)",
     "ac_process_batch_omega": "`ac_process_batch` with omega, per sample (8 per call)",
     "ac_resolver_build": "`ac_resolver_build` (6 channels, on-device table build)",
+    "ac_triad_apply": "`ac_triad_apply` (3-axis sensor: pre-trim + 3x3 apply)",
+    "ac_triad_build": "`ac_triad_build` (3-axis sensor, on-device table build)",
 }
 
 BRANCHES = {"bra", "brn", "bt", "bf", "bhi", "bls", "bcc", "bhs", "bcs", "blo", "bne", "beq",
@@ -273,7 +275,7 @@ def main():
         return " / ".join(fmt.format(fn(o)) for o in OPTS)
 
     rows = ["| measure (H8/300H, 16 MHz, normal mode; -Os / -O2) | value |", "| --- | ---: |"]
-    for name in PER_SAMPLE + ("ac_resolver_build",):
+    for name in PER_SAMPLE + ("ac_resolver_build", "ac_triad_build"):
         rows.append(f"| states, {LABELS[name]} | {pair(lambda o: res[(o, name)][0])} |")
     rows.append(f"| instructions, `ac_process` with omega | {pair(lambda o: res[(o, 'ac_process_omega')][1])} |")
     for name in PER_SAMPLE:
@@ -290,6 +292,8 @@ def main():
                 f"omega + `ac_rate_step` | {pair(lambda o: 100 * (res[(o, 'ac_process_omega')][0] + res[(o, 'ac_rate_step')][0]) / frame_states, '{:.2f} %')} |")
     rows.append("| share of the 60 Hz frame, the on-device table build | "
                 f"{pair(lambda o: 100 * res[(o, 'ac_resolver_build')][0] / frame_states, '{:.0f} %')} |")
+    rows.append("| share of the 60 Hz frame, the triad's on-device table build | "
+                f"{pair(lambda o: 100 * res[(o, 'ac_triad_build')][0] / frame_states, '{:.0f} %')} |")
     for fwname, calls, label in (("sample", ("ac_trim", "ac_process_omega", "ac_rate_step"), "per-sample path (fw_sample)"),
                                  ("full", ("ac_trim", "ac_process_omega", "ac_rate_step", "ac_resolver_build"),
                                   "per-sample path + on-device build (fw_full)")):
@@ -303,7 +307,8 @@ def main():
         rows.append(f"| flash, {label}: text bytes | {pair(lambda o: fw[(o, f'fw_{fwname}.out')][0])} |")
     rows.append("| deepest stack (painted, incl. return address), " + ", ".join(
         f"`{n}` {pair(lambda o: res[(o, n)][3])}" for n in ("ac_trim", "ac_process_omega", "ac_rate_step",
-                                                         "ac_att_step", "ac_disp_step", "ac_resolver_build"))
+                                                         "ac_att_step", "ac_disp_step", "ac_resolver_build",
+                                                         "ac_triad_apply", "ac_triad_build"))
                 + " | bytes |")
     table_md = "\n".join(rows) + "\n"
     (OUT / "bench_h8.md").write_text(table_md)

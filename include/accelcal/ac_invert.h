@@ -7,7 +7,10 @@
  * the ac_xf layout, csrc/ac_invert.c: 30-bit mantissas, 32-bit integer and
  * 16 x 16 multiplies only), and quantises them with the same rule as the
  * host's quantizer (python/accelcal/quantize.py).  Firmware that calls only
- * ac_resolver_build links ac_invert.o alone (no ac_xf.o, no ac_invert_api.o).
+ * ac_resolver_build links ac_resolver_build.o, ac_invert_rows.o, ac_invert.o
+ * and ac_ops64.o's exact multiply (no ac_xf.o, no ac_invert_api.o, no
+ * ac_triad_build.o); one that calls only ac_triad_build links ac_triad_build.o
+ * and ac_invert.o.
  *
  * Columns of R are equilibrated by powers of two; Gauss-Jordan elimination
  * uses partial pivoting.  A pivot below 2^-26 of the largest matrix entry

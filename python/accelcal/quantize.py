@@ -3,7 +3,7 @@
 The generated C header, ``resolve --engine fixed`` and the tests all take their
 constants from :func:`quantize`, so "the fixed engine uses exactly the header's
 constants" holds by construction.  The same rules are implemented on the device
-by ``ac_resolver_build`` (csrc/ac_invert.c); tests compare the two.
+by ``ac_resolver_build`` (csrc/ac_resolver_build.c); tests compare the two.
 
 Rules (see include/accelcal/ac_resolve.h for the arithmetic they feed):
   trim_i   = round(b_i)                       uint16 counts (int16 for a chip with signed output)

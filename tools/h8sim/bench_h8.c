@@ -40,11 +40,14 @@ enum {
     R_DISP,
     R_BATCH_W,
     R_BUILD,
+    R_TRIAD,
+    R_TRIAD_BUILD,
     R_COUNT
 };
 static const char *const region_name[R_COUNT] = {
     "", "empty", "ac_trim", "ac_process", "ac_process_omega", "ac_resolve_omega",
-    "ac_rate_step", "ac_att_step", "ac_disp_step", "ac_process_batch_omega", "ac_resolver_build"};
+    "ac_rate_step", "ac_att_step", "ac_disp_step", "ac_process_batch_omega", "ac_resolver_build",
+    "ac_triad_apply", "ac_triad_build"};
 static uint16_t entries[R_COUNT], samples[R_COUNT], deepest[R_COUNT];
 
 /* ---- output through the write trap ---- */
@@ -117,9 +120,17 @@ static int16_t rnd_range(int16_t lo, uint16_t span)
 static const int32_t seed_t[3][3] = {{0, S1, 0}, {-SC, -SH, 0}, {SC, -SH, 0}};
 static const int32_t seed_pos[3][3] = {{R1, 0, 0}, {-RH, RC, 0}, {-RH, -RC, 0}};
 
-static ac_channel_cal cal[6];
+/* one 3-axis sensor: about 127 counts per m/s^2 on its own axis, cross-axis terms of
+ * 0.5-2 %, offsets of a few counts (Q.AC_SENS_FRAC, Q.AC_OFFSET_FRAC) */
+static const int32_t triad_sens[3][3] = {{S1, 83535L, -41768L},
+                                         {-125303L, S1 + 58475L, 167070L},
+                                         {25061L, -100242L, S1 - 33414L}};
+static const int32_t triad_offset[3] = {300L, -200L, 512L};
+
+static ac_channel_cal cal[6], tcal[3];
 static ac_build_work work;
 static ac_resolver res;
+static ac_triad tri;
 static ac_rate rate;
 static ac_att att;
 static ac_disp disp;
@@ -173,6 +184,15 @@ int main(void)
         cal[2u * k + 1u].offset = -200;
     }
     MEASURE(R_BUILD, 1u, ac_resolver_build(cal, 6u, &work, &res, 0));
+    for (k = 0u; k < 3u; k++) {
+        for (a = 0u; a < 3u; a++) {
+            tcal[k].sens[a] = triad_sens[k][a];
+            tcal[k].pos[a] = 0;
+        }
+        tcal[k].offset = triad_offset[k];
+        trim[k] = (uint16_t)(5000u + 10u * k);
+    }
+    MEASURE(R_TRIAD_BUILD, 1u, ac_triad_build(tcal, trim, &work, &tri));
     (void)ac_rate_init(&rate, 34953u, 21u, 655u); /* 60 Hz */
     (void)ac_att_init(&att, 104858L, 314573L, 34953u, 21u, 512u, 1000L, 328u);
     dcfg.rest.dev_max = 51;
@@ -201,6 +221,7 @@ int main(void)
         MEASURE(R_PROCESS_W, 1u, ac_process(&res, trim, raw, w, out));
         MEASURE(R_RESOLVE_W, 1u, ac_resolve(&res, x, w, out));
         MEASURE(R_RATE, 1u, ac_rate_step(&rate, &out[3], w));
+        MEASURE(R_TRIAD, 1u, ac_triad_apply(&tri, raw, f));
         for (i = 0u; i < 6u; i++) {
             f[i] = (int32_t)rnd_range(-2000, 4000); /* +-2 m/s^2 */
         }
