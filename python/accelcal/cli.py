@@ -31,6 +31,7 @@ from .recording import read_recording, write_columns_csv, write_recording
 from .report import REPORT_FILES, write_report
 from .resolve import resolve_recording
 from .simulate import simulate
+from .units_cli import add_units_options, scale_from_args
 
 EXIT_INPUT = 2
 EXIT_INTERNAL = 3
@@ -79,9 +80,12 @@ def check_output_dir(path, option: str) -> None:
         raise AccelcalError(f"{option} {path}: directory {str(parent)!r} does not exist")
 
 
-def _read(paths, device, command: str) -> list:
-    """Read recordings; mention once, on stderr, the columns that are ignored."""
-    recs = [read_recording(p, device.n_channels) for p in paths]
+def _read(paths, device, command: str, a=None) -> list:
+    """Read recordings (in the units --units/--lsb/--full-scale state, with the file's
+    comments: units_cli, units.file_scale); mention once, on stderr, the columns that are
+    ignored."""
+    scale = None if a is None else scale_from_args(a, device, reader=True)
+    recs = [read_recording(p, device.n_channels, scale=scale) for p in paths]
     ignored = sorted({k for r in recs for k in r.extra})
     if ignored:
         print(f"accelcal {command}: note: ignored column{'s' if len(ignored) > 1 else ''} "
@@ -107,7 +111,7 @@ def cmd_resolve(a):
     check_output(a.output)
     dev = _load_device(a.device)
     cal = _load_cal(a.calibration, dev)
-    rec, = _read([a.recording], dev, "resolve")
+    rec, = _read([a.recording], dev, "resolve", a)
     f, al, flags = resolve_recording(dev, cal, rec, a.engine, a.omega)
     comments = {"engine": a.engine, "device": dev.name}
     if flags is not None and flags.any():
@@ -166,7 +170,7 @@ def cmd_calibrate(a):
     check_output(a.output)
     jig = _jig_accuracy(a.jig_accuracy)
     dev = _load_device(a.device)
-    recs = _read(a.recordings, dev, "calibrate")
+    recs = _read(a.recordings, dev, "calibrate", a)
     cal = calibrate_recordings(dev, recs, method=a.method, jig_accuracy_deg=jig)
     fit = cal.extra.get("fit", {}) if isinstance(cal.extra, dict) else {}
     warnings = []
@@ -240,7 +244,7 @@ ESTIMATORS = {"attitude": attitude_from_recording, "displacement": displacement_
 
 
 def run_estimator(kind: str, device_path, calibration_path, recording_path, output, *, engine: str = "float",
-                  report=None, **options) -> list[str]:
+                  report=None, units_args=None, **options) -> list[str]:
     """`accelcal attitude|displacement|rate --device D --calibration C REC -o OUT [--engine] [--report DIR]`.
 
     Load, estimate, write the CSV (atomically) and, with ``report``, the plots.
@@ -255,6 +259,9 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
     engine : {"float", "fixed"}
     report : path, optional
         Directory for the plots.
+    units_args : argparse.Namespace, optional
+        The parsed ``--units``/``--lsb``/``--full-scale``/``--bits``/``--gravity``
+        (units_cli.add_units_options) the recording is read with.
     **options
         To the estimator (attitude: gain, w2_gate, leak_tau_s; displacement: form, axis;
         rate: leak_tau_s).
@@ -277,7 +284,8 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
         check_output_dir(report, "--report")
     dev = _load_device(device_path)
     cal = _load_cal(calibration_path, dev)
-    rec = read_recording(recording_path, dev.n_channels)
+    scale = None if units_args is None else scale_from_args(units_args, dev, reader=True)
+    rec = read_recording(recording_path, dev.n_channels, scale=scale)
     cols = fn(dev, cal, rec, engine, **options)
     write_columns_csv(output, cols, cols.meta)
     if report is not None:
@@ -289,7 +297,7 @@ def _estimator(a, kind):
     options = {k: v for k, v in (("axis", getattr(a, "axis", None)), ("form", getattr(a, "form", None)))
                if v is not None}
     for w in run_estimator(kind, a.device, a.calibration, a.recording, a.output, engine=a.engine,
-                           report=a.report, **options):
+                           report=a.report, units_args=a, **options):
         print(w, file=sys.stderr)
     return 0
 
@@ -312,7 +320,7 @@ def cmd_diagnose(a):
         check_output_dir(a.report, "--report")
     dev = _load_device(a.device)
     cal = _load_cal(a.calibration, dev)
-    recs = _read(a.recordings, dev, "diagnose")
+    recs = _read(a.recordings, dev, "diagnose", a)
     with _progress("diagnose: scoring candidates", unit=" fits") as bar:
         def scored(name):
             bar.set_postfix_str(name, refresh=False)
@@ -396,6 +404,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "poses (a warning names the accuracy the residuals imply): state your jig's accuracy.  "
                    "Ignored by jigfree")
     s.add_argument("-o", "--output", required=True, metavar="CAL.json", help="the calibration JSON to write")
+    add_units_options(s)
     s.set_defaults(func=cmd_calibrate)
 
     s = sub.add_parser("header", help="emit the C header for firmware")
@@ -413,6 +422,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--omega", choices=["auto", "reference", "none"], default="auto",
                    help="omega for the centripetal correction (auto: the w_* columns when complete)")
     s.add_argument("-o", "--output", required=True, metavar="OUT.csv", help="t, f_x, f_y, f_z, dw_x, dw_y, dw_z")
+    add_units_options(s)
     s.set_defaults(func=cmd_resolve)
 
     for name, func, what in (("attitude", cmd_attitude, "pendulum attitude from two triads: t, theta_rad, w_y, dw_y"),
@@ -430,6 +440,7 @@ def build_parser() -> argparse.ArgumentParser:
                            help="1-D along this body axis (the seed's actuator; nothing removed)")
             s.add_argument("--form", choices=["offline", "stream"],
                            help="float engine: offline (default) or the firmware's streaming form")
+        add_units_options(s)
         s.set_defaults(func=func)
 
     s = sub.add_parser("diagnose", help="sim-to-real diagnosis: where the gap lies, which effect, how far "
@@ -441,6 +452,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--report", metavar="DIR", help="plots and a written summary")
     s.add_argument("--folds", type=int, default=5, help="blocked cross-validation folds")
     s.add_argument("--seed", type=int, default=0, help="seed of the cross-validation folds (default %(default)s)")
+    add_units_options(s)
     s.set_defaults(func=cmd_diagnose)
     add_convert_parser(sub, check_output)
     return p

@@ -34,7 +34,7 @@ from .errors import InputError
 from .jsonfields import JsonFields, read_json
 from .recording import Recording, read_recording
 from .textinput import is_whitespace_header, read_preamble, read_text_bytes, split_whitespace_header, whitespace_to_commas
-from .units import STANDARD_GRAVITY, Scale, scale_from_metadata, to_counts
+from .units import STANDARD_GRAVITY, Scale, file_scale, to_counts
 from .xsens import load_xsens
 
 __all__ = ["FORMATS", "POSE_DIRECTIONS", "Converted", "detect_format", "convert_file", "read_regions"]
@@ -327,7 +327,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
     else:
         pose, f, names = label_poses(index, part, opts.regions, opts.stated_f, gravity, source, opts.regions_source)
     metadata = {"source_file": " ".join(source.splitlines()), "source_format": fmt, **metadata}
-    if scale is not None:
+    if scale is not None and (scale.converts or scale.lsb_g):
         metadata["source_scale"] = scale.describe()
     if opts.regions_source:
         metadata["source_regions"] = " ".join(opts.regions_source.splitlines())
@@ -358,7 +358,7 @@ def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metada
         missing = ACC[fmt][acc.index(None)]
         raise InputError(source, f"the header has no {missing} column (expected {', '.join(ACC[fmt])})",
                          row=pre.header_line)
-    scale = opts.scale or scale_from_metadata(pre.metadata, pre.metadata_lines, source)
+    scale = file_scale(opts.scale, pre.metadata, pre.metadata_lines, source)
     converts = scale is not None and scale.converts
     want = {a: ("t" if converts else "raw") for a in acc}
     index_column = next((n for n in names if n.lower() in INDEX_COLUMNS), None)
@@ -427,8 +427,9 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     fmt : {"auto", "imu_tk", "imucal", "mpu6050", "csv"}
         ``auto`` tells it from the first line (:func:`detect_format`).
     scale : units.Scale, optional
-        The readings' unit and LSB (``--units``/``--lsb``/``--full-scale``); else the
-        file's ``# units:``/``# lsb:`` comments; else counts.
+        The readings' unit and LSB (``--units``/``--lsb``/``--full-scale``), or the
+        file's ``# units:``/``# lsb:`` comments, else counts; stated by both, they must
+        agree (:func:`units.file_scale`).
     rate_hz : float, optional
         Sample rate, Hz, for files without a time column (imucal; the MPU-6050 log's
         ``Fs`` otherwise).
@@ -465,7 +466,7 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
             raise InputError(source, "imu_tk's readings are counts: --units mps2|g and --lsb do not apply")
         if fmt == "imu_tk":
             device, rec = load_xsens(path)
-            device = device if scale is None else None  # a stated full scale: the nominal device from it
+            device = device if scale is None or scale.lsb_g is None else None  # a stated full scale: the nominal device from it
         else:
             device, rec = None, read_recording(path, scale=scale)
             if rec.n_channels != 3:

@@ -11,7 +11,7 @@ from .convert import FORMATS, convert_file
 from .device import save_device
 from .errors import AccelcalError
 from .recording import write_recording
-from .units import UNITS, scale_from_options
+from .units_cli import add_units_options, scale_from_args
 
 __all__ = ["add_convert_parser", "cmd_convert"]
 
@@ -51,7 +51,7 @@ def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int
         bits = 0
     if not 2 <= bits <= 32:
         raise AccelcalError(f"--bits {a.bits!r}: expected an integer 2..32 (the ADC's bits)")
-    scale = scale_from_options(a.units, a.lsb, a.full_scale, bits, a.gravity)
+    scale = scale_from_args(a)
     conv = convert_file(a.input, a.format, scale=scale, rate_hz=positive(a.rate, "--rate"), regions=a.regions,
                         stated_f=a.stated_f, gravity_mps2=positive(a.gravity, "--gravity"), bits=bits)
     write_recording(a.output, conv.recording)
@@ -70,17 +70,10 @@ def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
     s.add_argument("input", metavar="FILE", help="the file to convert (gzip-compressed or not)")
     s.add_argument("--format", choices=FORMATS, default="auto",
                    help="the input's format (default auto: told from its first line)")
-    s.add_argument("--units", choices=UNITS, help="the unit of the file's accelerometer readings: counts "
-                   "(default), mps2 (m/s^2) or g; mps2 and g need --lsb or --full-scale, and every reading must "
-                   "then be a whole number of LSBs (within 1e-6), else the first that is not is named")
-    s.add_argument("--lsb", metavar="VALUE", help="one count, in --units (m/s^2 or g per count), e.g. "
-                   "0.0047900390625 for 9.81/2048")
-    s.add_argument("--full-scale", metavar="G", help="the range's full scale in g (16 for +-16 g): one count "
-                   "is 2*G/2**bits g; with counts it sets only the device's nominal scale")
-    s.add_argument("--bits", default="16", metavar="N", help="the ADC's bits (default 16): the device's "
-                   "raw range, and the LSB of --full-scale")
-    s.add_argument("--gravity", metavar="MPS2", help="g in m/s^2 for --full-scale with mps2, the stated f and "
-                   "the device (default 9.80665; imu_tk 9.81744)")
+    add_units_options(s, bits_default="16", full_scale_counts="sets only the device's nominal scale",
+                      bits_help="the ADC's bits (default 16): the device's raw range, and the LSB of --full-scale",
+                      gravity_help="g in m/s^2 for --full-scale with mps2, the stated f and the device (default "
+                      "9.80665; imu_tk 9.81744)")
     s.add_argument("--rate", metavar="HZ", help="sample rate of a file without a time column (imucal: "
                    "required; the MPU-6050 log: its Fs line otherwise)")
     s.add_argument("--regions", metavar="JSON", help="pose regions {name: {\"start\": s, \"end\": e}} in "

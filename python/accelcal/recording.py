@@ -25,7 +25,7 @@ from .csvtable import (FLOAT_RE, META_KEY_RE, RAW_RE, REFERENCE_NAMES, VECTOR_CO
 from .errors import InputError, atomic_write
 from .recording_checks import check_core_input, check_for_device
 from .textinput import is_whitespace_header, read_preamble, read_text_bytes, split_whitespace_header, whitespace_to_commas
-from .units import Scale, converted_metadata, scale_from_metadata, to_counts
+from .units import Scale, converted_metadata, file_scale, to_counts
 
 __all__ = ["Recording", "check_for_device", "check_core_input", "read_recording", "write_recording", "write_columns_csv",
            "recording_from_arrays", "VECTOR_COLUMNS"]
@@ -256,8 +256,10 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
         The device's channel count; raw_0..raw_{N-1} must then be present and no other
         raw_k.  Without it, N is the number of contiguous raw_k columns.
     scale : units.Scale, optional
-        The raw_k readings' unit and LSB, overriding the file's ``# units:``/``# lsb:``
-        comments (:mod:`accelcal.units`): m/s^2 or g become counts exactly or not at all.
+        The raw_k readings' unit and LSB as stated by options (:mod:`accelcal.units`):
+        m/s^2 or g become counts exactly or not at all.  The file's ``# units:``/``# lsb:``
+        comments state them too; where both do, they must agree (:func:`units.file_scale`:
+        a contradiction is an InputError naming the comment's line).
     columns : list of str, optional
         The column names of a file without a header row (its first non-comment line is data).
 
@@ -288,8 +290,7 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
                          "table without one, such as imu_tk's 't ax ay az', is read by 'accelcal convert')",
                          row=header_line)
     cols = classify_columns(names, n_channels, source, header_line)
-    if scale is None:
-        scale = scale_from_metadata(metadata, pre.metadata_lines, source)
+    scale = file_scale(scale, metadata, pre.metadata_lines, source)
     if scale is not None and scale.converts:  # raw_k as finite numbers, then counts
         cols = {k: (j, "t" if kind == "raw" else kind) for k, (j, kind) in cols.items()}
 

@@ -8,6 +8,10 @@ the file's metadata comments (``# units: mps2``, ``# lsb: 0.0047900390625``) -- 
 counts are ``value / lsb``, and they are taken only when each is a whole number (within
 :data:`REL_TOL` of one); else the first value that is not is named by row and column.
 Used by the recording reader and by ``accelcal convert``.
+
+An option and a comment may both state the scale (:func:`file_scale`): where they agree
+the option's is used, and where they contradict each other (another unit, another
+count size) the file is refused naming the comment's line -- neither silently wins.
 """
 from __future__ import annotations
 
@@ -21,7 +25,7 @@ from .errors import AccelcalError, InputError
 
 __all__ = ["UNITS", "REL_TOL", "Scale", "scale_from_options", "scale_from_metadata", "to_counts",
            "METADATA_KEYS", "STANDARD_GRAVITY", "OPTION_NAMES",
-           "converted_metadata"]
+           "converted_metadata", "file_scale", "COUNTS_STATED"]
 
 UNITS = ("counts", "mps2", "g")
 REL_TOL = 1e-6
@@ -178,6 +182,74 @@ def scale_from_metadata(metadata: dict[str, str], lines: dict[str, int], source:
         return None
     key = "lsb" if "lsb" in given else "full_scale_g"
     return Scale(scale.units, scale.lsb, scale.lsb_g, f"{METADATA_NAMES[key]} (row {lines.get(key)})")
+
+
+COUNTS_STATED = Scale("counts", None, None, "--units counts")
+"""An explicit ``--units counts`` without a count size: converts nothing, but a file whose
+comments say m/s^2 or g contradicts it (:func:`file_scale`)."""
+
+
+def _same_size(a: float | None, b: float | None) -> bool:
+    return a is None or b is None or abs(a - b) <= REL_TOL * max(abs(a), abs(b))
+
+
+def _size(scale: Scale) -> str:
+    if scale.converts:
+        return f"one count = {scale.lsb:.12g} {UNIT_TEXT[scale.units]}"
+    return f"one count = {scale.lsb_g:.12g} g" if scale.lsb_g else "counts of unstated size"
+
+
+def file_scale(option: Scale | None, metadata: dict[str, str], lines: dict[str, int],
+               source: str) -> Scale | None:
+    """The Scale of a file's readings from what the caller states and the file's comments.
+
+    The one rule for every reader (``read_recording``, so every command, and
+    ``accelcal convert``): without ``option`` the comments decide
+    (:func:`scale_from_metadata`); with it, a comment that states something else -- a
+    ``# units:`` other than the option's unit, a ``# lsb:`` or ``# full_scale_g:`` (with
+    ``# bits:``, ``# gravity_mps2:``) giving another count size (beyond :data:`REL_TOL`)
+    -- is an error naming the comment's line, and comments that agree (or state nothing)
+    leave the option's Scale.  A size comment without ``# units:`` is read in the option's
+    unit.
+
+    Parameters
+    ----------
+    option : Scale or None
+        Stated by options (:func:`scale_from_options`, or :data:`COUNTS_STATED`).
+    metadata, lines : dict
+        The file's ``# key: value`` comments and the line of each.
+    source : str
+        The file, for messages.
+
+    Returns
+    -------
+    Scale or None
+        None: the readings are counts, and nothing states their size.
+
+    Raises
+    ------
+    InputError
+        A bad comment, or one that contradicts the option (naming its line).
+    """
+    if option is None:
+        return scale_from_metadata(metadata, lines, source)
+    by = option.how or "the option"
+    unit = metadata.get("units")
+    if unit is not None and unit in UNITS and unit != option.units:
+        raise InputError(source, f"the comment '# units: {unit}' contradicts {by} (readings in "
+                         f"{UNIT_TEXT[option.units]}): state the unit once, by the options or by the comments",
+                         row=lines.get("units"))
+    if not any(k in metadata for k in ("lsb", "full_scale_g")):
+        if unit is not None and unit not in UNITS:
+            scale_from_metadata(metadata, lines, source)  # the comment's own error
+        return option
+    stated = scale_from_metadata({"units": option.units, **metadata}, lines, source)
+    key = "lsb" if "lsb" in metadata else "full_scale_g"
+    if stated is not None and not (_same_size(stated.lsb, option.lsb) and _same_size(stated.lsb_g, option.lsb_g)):
+        raise InputError(source, f"the comment '# {key}: {metadata[key]}' ({_size(stated)}) contradicts "
+                         f"{by} ({_size(option)}): state the count's size once, by the options or by the "
+                         "comments", row=lines.get(key))
+    return option
 
 
 def converted_metadata(metadata: dict[str, str], scale: Scale) -> dict[str, str]:
