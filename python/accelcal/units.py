@@ -236,16 +236,20 @@ def file_scale(option: Scale | None, metadata: dict[str, str], lines: dict[str, 
     by = option.how or "the option"
     unit = metadata.get("units")
     if unit is not None and unit in UNITS and unit != option.units:
-        raise InputError(source, f"the comment '# units: {unit}' contradicts {by} (readings in "
-                         f"{UNIT_TEXT[option.units]}): state the unit once, by the options or by the comments",
-                         row=lines.get("units"))
+        with_ = "" if by.startswith(OPTION_NAMES["units"]) else f", with {by}"
+        raise InputError(source, f"the comment '# units: {unit}' contradicts the options' unit, "
+                         f"{UNIT_TEXT[option.units]} ({OPTION_NAMES['units']} {option.units}{with_}): state the "
+                         "unit once, by the options or by the comments", row=lines.get("units"))
     if not any(k in metadata for k in ("lsb", "full_scale_g")):
         if unit is not None and unit not in UNITS:
             scale_from_metadata(metadata, lines, source)  # the comment's own error
         return option
     stated = scale_from_metadata({"units": option.units, **metadata}, lines, source)
+    if stated is None:
+        return option
     key = "lsb" if "lsb" in metadata else "full_scale_g"
-    if stated is not None and not (_same_size(stated.lsb, option.lsb) and _same_size(stated.lsb_g, option.lsb_g)):
+    same = _same_size(stated.lsb, option.lsb) if option.converts else _same_size(stated.lsb_g, option.lsb_g)
+    if not same:
         raise InputError(source, f"the comment '# {key}: {metadata[key]}' ({_size(stated)}) contradicts "
                          f"{by} ({_size(option)}): state the count's size once, by the options or by the "
                          "comments", row=lines.get(key))

@@ -1,0 +1,265 @@
+"""``--units``, ``--lsb``, ``--full-scale`` (with ``--bits``, ``--gravity``) on every command
+that reads recordings (issue 14, "left"): a recording in m/s^2 or g read with them gives the
+result of the same recording in integer counts; a reading that is not a whole number of
+LSBs is refused with its row and column; an option that contradicts the file's ``# units:``
+/ ``# lsb:`` comment is refused naming the comment's line (``convert`` too: one rule,
+units.file_scale); ``--help`` shows them.  Bad input: one line, exit 2, nothing written."""
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import re
+import tempfile
+import warnings
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from accelcal.calibration import Calibration, save_calibration
+from accelcal.cli import main
+from accelcal.device import pendulum_device, save_device
+from accelcal.recording import write_recording
+from accelcal.simulate import run_simulation
+
+FAST = settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
+                                                                         HealthCheck.too_slow])
+READERS = ["calibrate", "resolve", "diagnose", "attitude", "displacement", "rate"]
+G = 9.80665
+# (units, LSB in those units, the options that state it)
+FORMS = {
+    "mps2-lsb": ("mps2", 9.81 / 2048, ["--units", "mps2", "--lsb", repr(9.81 / 2048)]),
+    "g-lsb": ("g", 1 / 16384, ["--units", "g", "--lsb", repr(1 / 16384)]),
+    "g-full-scale": ("g", 1 / 16384, ["--units", "g", "--full-scale", "2"]),  # 2*2/2**16 g
+    "mps2-full-scale": ("mps2", 9.81 / 2048, ["--units", "mps2", "--full-scale", "16", "--gravity", "9.81"]),
+}
+
+
+def run(argv, capfd):
+    """main(argv) in-process: (exit code, stdout, stderr, Python warnings)."""
+    capfd.readouterr()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        rc = main([str(a) for a in argv])
+    out, err = capfd.readouterr()
+    return rc, out, err, [str(w.message) for w in caught]
+
+
+@pytest.fixture(scope="module")
+def good(tmp_path_factory):
+    """Counts recordings: the default 6-channel device (static poses, a calibration from
+    them, a short rate-table run) and the pendulum device (nominal calibration, a swing)."""
+    d = tmp_path_factory.mktemp("units")
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        assert main(["simulate", "--device", "default", "--motion", "static_poses", "--param", 'poses="6"',
+                     "--seed", "1", "-o", str(d / "poses.csv")]) == 0
+        assert main(["calibrate", "--device", "default", str(d / "poses.csv"), "-o", str(d / "cal.json")]) == 0
+        assert main(["simulate", "--device", "default", "--motion", "rate_table", "--param", "duration_s=3",
+                     "--seed", "2", "-o", str(d / "motion.csv")]) == 0
+    pd = pendulum_device()
+    save_device(pd, d / "pend.json")
+    save_calibration(Calibration.nominal(pd), d / "pend_cal.json")
+    write_recording(d / "swing.csv", run_simulation(pd, "pendulum", seed=5, duration_s=3.0).recording)
+    return d
+
+
+def inputs(good: Path, cmd: str) -> tuple[list[str], str]:
+    """(the command's arguments before the recording, the counts recording's name)."""
+    if cmd == "calibrate":
+        return ["calibrate", "--device", "default"], "poses.csv"
+    if cmd == "attitude":
+        return ["attitude", "--device", good / "pend.json", "--calibration", good / "pend_cal.json"], "swing.csv"
+    return [cmd, "--device", "default", "--calibration", good / "cal.json"], "motion.csv"
+
+
+def outputs(cmd: str) -> list[str]:
+    if cmd == "calibrate":
+        return ["-o", "out.json"]
+    if cmd == "diagnose":
+        return ["--folds", "3", "--json", "out.json"]
+    return ["-o", "out.csv"] + (["--engine", "fixed"] if cmd == "resolve" else [])
+
+
+def physical(text: str, units: str, lsb: float, comments=()) -> tuple[str, int]:
+    """The recording with every raw_k reading written as count * lsb (shortest repr), the
+    comment lines ``comments`` before the header; and the header's line number."""
+    lines = text.splitlines()
+    k = next(i for i, ln in enumerate(lines) if not ln.startswith("#"))
+    names = lines[k].split(",")
+    raw = [j for j, n in enumerate(names) if n.startswith("raw_")]
+    rows = []
+    for ln in lines[k + 1:]:
+        cells = ln.split(",")
+        for j in raw:
+            cells[j] = repr(int(cells[j]) * lsb)
+        rows.append(",".join(cells))
+    head = lines[:k] + list(comments)
+    return "\n".join(head + [lines[k]] + rows) + "\n", len(head) + 1
+
+
+@contextlib.contextmanager
+def workdir(good: Path):
+    """A fresh directory, the current one while it lasts (the outputs have the same
+    relative names whatever the input), with an empty out/ for the outputs."""
+    with tempfile.TemporaryDirectory(dir=good) as d:
+        old = Path.cwd()
+        try:
+            os.chdir(d)
+            Path("out").mkdir()
+            yield Path(d)
+        finally:
+            os.chdir(old)
+
+
+def stable(text: str) -> str:
+    """An output's text without what varies from run to run (diagnose's elapsed_s)."""
+    return re.sub(r'"elapsed_s": [0-9.e-]+', '"elapsed_s": ...', text)
+
+
+def run_in(good, cmd, rec_text, options, capfd, name="rec.csv"):
+    """Run ``cmd`` on a recording with that text in a fresh directory: (rc, stdout, stderr,
+    warnings, {output file: text}, the directory's out/ listing)."""
+    pre, _ = inputs(good, cmd)
+    with workdir(good) as d:
+        (d / name).write_text(rec_text)
+        argv = pre + [name] + [a.replace("out.", "out/out.") for a in outputs(cmd)] + options
+        rc, out, err, caught = run(argv, capfd)
+        files = {p.name: stable(p.read_text()) for p in (d / "out").iterdir()}
+    return rc, out, err, caught, files
+
+
+def check_rejected(rc, err, caught, files, what):
+    assert rc == 2, f"{what}: exit {rc}: {err!r}"
+    assert len(err.splitlines()) == 1 and "Traceback" not in err, f"{what}: {err!r}"
+    assert not caught, f"{what}: {caught}"
+    assert not files, f"{what}: left {sorted(files)}"
+
+
+@pytest.mark.parametrize("form", sorted(FORMS))
+@pytest.mark.parametrize("cmd", READERS)
+def test_physical_units_give_the_counts_result(good, cmd, form, capfd):
+    """The same readings in counts and in m/s^2 or g (with the options): the same output,
+    byte for byte, and the same stdout."""
+    units, lsb, options = FORMS[form]
+    _, name = inputs(good, cmd)
+    text = (good / name).read_text()
+    base = run_in(good, cmd, text, [], capfd)
+    assert base[0] == 0, base[2]
+    phys, _ = physical(text, units, lsb)
+    got = run_in(good, cmd, phys, options, capfd)
+    assert got[0] == 0, got[2]
+    assert got[1] == base[1] and got[4] == base[4], f"{cmd} {form}: the outputs differ"
+    assert got[4], "no output written"
+    # without the options the floats are not counts: refused, one line
+    rc, _, err, caught, files = run_in(good, cmd, phys, [], capfd)
+    check_rejected(rc, err, caught, files, f"{cmd} without options")
+    # the same scale stated by the file's comments instead, or by both (agreeing)
+    meta = [f"# units: {units}", f"# lsb: {lsb!r}"]
+    phys_meta, _ = physical(text, units, lsb, meta)
+    for opts in ([], options):
+        got = run_in(good, cmd, phys_meta, opts, capfd)
+        assert got[0] == 0 and got[4] == base[4], (opts, got[2])
+
+
+@pytest.mark.parametrize("cmd", READERS)
+@FAST
+@given(data=st.data())
+def test_not_a_whole_number_of_lsbs_is_refused_with_its_row(good, cmd, data, capfd):
+    form = data.draw(st.sampled_from(sorted(FORMS)), label="form")
+    units, lsb, options = FORMS[form]
+    _, name = inputs(good, cmd)
+    text, header_line = physical((good / name).read_text(), units, lsb)
+    lines = text.splitlines()
+    names = lines[header_line - 1].split(",")
+    i = data.draw(st.integers(header_line, len(lines) - 1), label="line index")
+    j = data.draw(st.sampled_from([k for k, n in enumerate(names) if n.startswith("raw_")]), label="column")
+    cells = lines[i].split(",")
+    bad = data.draw(st.sampled_from(["third", "half", "x", "", "nan", "1e999", "-inf"]), label="cell")
+    if bad in ("third", "half"):
+        cells[j] = repr((round(float(cells[j]) / lsb) + {"third": 1 / 3, "half": 0.5}[bad]) * lsb)
+    else:
+        cells[j] = bad
+    lines[i] = ",".join(cells)
+    rc, _, err, caught, files = run_in(good, cmd, "\n".join(lines) + "\n", options, capfd)
+    what = f"{cmd} {form}: line {i + 1} {names[j]} = {cells[j]!r}"
+    check_rejected(rc, err, caught, files, what)
+    assert f"rec.csv: row {i + 1}, column {names[j]}:" in err, f"{what}: {err!r}"
+    if bad in ("third", "half"):
+        assert "not a whole number" in err, err
+
+
+# (the file's comments, the options, the comment that must be named)
+CONTRADICTIONS = [
+    (["# units: g", f"# lsb: {1 / 16384!r}"], ["--units", "mps2", "--lsb", repr(9.81 / 2048)], "# units: g"),
+    (["# units: g", f"# lsb: {1 / 16384!r}"], ["--units", "g", "--lsb", repr(1 / 8192)], "# lsb:"),
+    (["# units: g", f"# lsb: {1 / 16384!r}"], ["--units", "g", "--full-scale", "4"], "# lsb:"),
+    (["# units: g", f"# lsb: {1 / 16384!r}"], ["--units", "counts"], "# units: g"),
+    (["# units: g", f"# lsb: {1 / 16384!r}"], ["--full-scale", "2"], "# units: g"),
+    (["# units: mps2", "# full_scale_g: 16", "# gravity_mps2: 9.81"],
+     ["--units", "mps2", "--lsb", repr(9.80665 / 2048)], "# full_scale_g:"),
+    (["# units: g"], ["--units", "mps2", "--lsb", repr(9.81 / 2048)], "# units: g"),
+]
+
+
+@pytest.mark.parametrize("case", range(len(CONTRADICTIONS)))
+@pytest.mark.parametrize("cmd", READERS + ["convert"])
+def test_an_option_that_contradicts_a_comment_is_refused(good, cmd, case, capfd):
+    comments, options, named = CONTRADICTIONS[case]
+    units = "mps2" if "mps2" in comments[0] else "g"
+    lsb = 9.81 / 2048 if units == "mps2" else 1 / 16384
+    name = "poses.csv" if cmd in ("calibrate", "convert") else inputs(good, cmd)[1]
+    text, header_line = physical((good / name).read_text(), units, lsb, comments)
+    line = header_line - len(comments) + next(k for k, c in enumerate(comments) if c.startswith(named))
+    if cmd == "convert":
+        with workdir(good) as d:
+            (d / "rec.csv").write_text(text)
+            rc, _, err, caught = run(["convert", "rec.csv", "--format", "csv", *options, "-o", "out/o.csv"], capfd)
+            files = list((d / "out").iterdir())
+    else:
+        rc, _, err, caught, files = run_in(good, cmd, text, options, capfd)
+    check_rejected(rc, err, caught, files, f"{cmd} {options} on {comments}")
+    assert f"rec.csv: row {line}: the comment '{named}" in err and "contradicts" in err, err
+
+
+def test_a_comment_that_agrees_in_another_form_is_accepted(good, capfd):
+    """# full_scale_g: 16 with # gravity_mps2: 9.81 is the LSB 9.81/2048 m/s^2: --lsb agrees."""
+    text, _ = physical((good / "poses.csv").read_text(), "mps2", 9.81 / 2048,
+                       ["# units: mps2", "# full_scale_g: 16", "# gravity_mps2: 9.81"])
+    base = run_in(good, "calibrate", (good / "poses.csv").read_text(), [], capfd)
+    got = run_in(good, "calibrate", text, FORMS["mps2-lsb"][2], capfd)
+    assert got[0] == 0 and got[4] == base[4], got[2]
+
+
+@pytest.mark.parametrize("options,frag", [
+    (["--bits", "12"], "--bits 12: it sizes only --full-scale's LSB"),
+    (["--gravity", "9.81", "--units", "g", "--lsb", "0.001"], "--gravity 9.81: it sizes only"),
+    (["--units", "mps2"], "--lsb VALUE"),
+    (["--lsb", "0.001"], "--units mps2|g"),
+    (["--units", "g", "--lsb", "0.001", "--full-scale", "2"], "both given"),
+    (["--units", "g", "--lsb", "-1"], "--lsb '-1'"),
+    (["--units", "g", "--full-scale", "2", "--bits", "40"], "--bits '40'"),
+])
+def test_bad_options_one_line(good, options, frag, capfd):
+    rc, _, err, caught, files = run_in(good, "resolve", (good / "motion.csv").read_text(), options, capfd)
+    check_rejected(rc, err, caught, files, str(options))
+    assert frag in err, err
+
+
+@pytest.mark.parametrize("cmd", READERS + ["convert"])
+def test_help_shows_the_options(cmd, capsys):
+    with pytest.raises(SystemExit):
+        main([cmd, "--help"])
+    text = capsys.readouterr().out
+    assert "readings in physical units" in text
+    for opt in ("--units {counts,mps2,g}", "--lsb VALUE", "--full-scale G", "--bits N", "--gravity MPS2"):
+        assert opt in text, f"{cmd} --help: no {opt}"
+    assert "must agree" in " ".join(text.split())
+
+
+@pytest.mark.parametrize("cmd", ["header", "simulate", "demo"])
+def test_commands_that_read_no_recording_have_none(cmd, capsys):
+    with pytest.raises(SystemExit):
+        main([cmd, "--help"])
+    assert "--lsb" not in capsys.readouterr().out
