@@ -35,7 +35,7 @@ from .header import calibration_header
 from .recording import Recording, read_recording as _read_recording_file, write_recording
 from .convert import Converted, convert_file
 from .resolve import resolve_recording
-from .units import scale_from_options
+from .units import COUNTS_STATED, scale_from_options
 from .simulate import simulate as _simulate_impl
 
 __all__ = ["Device", "Recording", "Calibration", "Columns", "ResolveResult", "AccelcalError",
@@ -64,22 +64,46 @@ def as_calibration(calibration: Any, device: Device) -> Calibration:
     raise TypeError(f"calibration: expected a Calibration or a JSON path, not {type(calibration).__name__}")
 
 
-def read_recording(path: Any, device: Any = None) -> Recording:
+def read_recording(path: Any, device: Any = None, *, units: str | None = None, lsb: float | None = None,
+                   full_scale_g: float | None = None, bits: int = 16,
+                   gravity_mps2: float | None = None) -> Recording:
     """Read a recording CSV (the data contract's format).
 
     Parameters
     ----------
     path : str or os.PathLike
-        The CSV file.
+        The CSV file (gzip-compressed or whitespace-separated text too).
     device : Device, path or int, optional
         When given, the file must have that device's ``raw_0 .. raw_{N-1}`` (an int is N).
+    units : {"counts", "mps2", "g"}, optional
+        The unit of the file's raw readings (as ``--units``); m/s^2 or g with ``lsb`` (one
+        count in that unit) or ``full_scale_g`` (+-range in g at ``bits`` bits; m/s^2 with
+        ``gravity_mps2``, default 9.80665).  The readings become counts exactly, or the
+        first that is not a whole number of LSBs is refused with its row.  Default: the
+        file's ``# units:`` / ``# lsb:`` comments, else counts; stated by both, they must
+        agree.
 
     Returns
     -------
     Recording
+        Raw readings in counts.
+
+    Raises
+    ------
+    AccelcalError
+        Bad input (one line naming the file, row and column); a comment that
+        contradicts ``units``/``lsb``/``full_scale_g`` (naming the comment's line).
+
+    Examples
+    --------
+    >>> rec = ac.read_recording("phone.csv", dev, units="mps2", lsb=9.81 / 2048)   # doctest: +SKIP
     """
     n = device if isinstance(device, int) else (None if device is None else as_device(device).n_channels)
-    return _read_recording_file(path, n)
+    scale = None
+    if units is not None or lsb is not None or full_scale_g is not None:
+        scale = scale_from_options(units, lsb, full_scale_g, bits, gravity_mps2)
+        scale = COUNTS_STATED if scale is None else scale
+    return _read_recording_file(path, n, scale=scale)
 
 
 def as_recording(recording: Any, device: Device) -> Recording:
@@ -315,7 +339,8 @@ def convert(path: Any, fmt: str = "auto", *, units: str | None = None, lsb: floa
     units : {"counts", "mps2", "g"}, optional
         The unit of the readings in the file; with ``lsb`` (one count in that unit) or
         ``full_scale_g`` (+-range in g at ``bits`` bits).  Default: the file's ``# units:`` /
-        ``# lsb:`` comments, else counts.
+        ``# lsb:`` comments, else counts; stated by both, they must agree (a contradiction
+        is refused, naming the comment's line).
     rate_hz : float, optional
         Hz, for files without a time column.
     regions : path, optional
@@ -346,5 +371,6 @@ def convert(path: Any, fmt: str = "auto", *, units: str | None = None, lsb: floa
     scale = None
     if units is not None or lsb is not None or full_scale_g is not None:
         scale = scale_from_options(units, lsb, full_scale_g, bits, gravity_mps2)
+        scale = COUNTS_STATED if scale is None else scale
     return convert_file(path, fmt, scale=scale, rate_hz=rate_hz, regions=regions, stated_f=stated_f,
                         gravity_mps2=gravity_mps2, bits=bits)

@@ -263,3 +263,22 @@ def test_commands_that_read_no_recording_have_none(cmd, capsys):
     with pytest.raises(SystemExit):
         main([cmd, "--help"])
     assert "--lsb" not in capsys.readouterr().out
+
+
+def test_python_read_recording_takes_the_same_units(good):
+    """ac.read_recording(..., units=, lsb=, full_scale_g=): the counts, the same rule."""
+    import accelcal as ac
+    from accelcal.errors import AccelcalError
+
+    counts = ac.read_recording(good / "poses.csv", ac.default_device())
+    text, _ = physical((good / "poses.csv").read_text(), "g", 1 / 16384)
+    (good / "api_g.csv").write_text(text)
+    for kw in (dict(units="g", lsb=1 / 16384), dict(units="g", full_scale_g=2)):
+        back = ac.read_recording(good / "api_g.csv", 6, **kw)
+        assert (back.raw == counts.raw).all()
+    text, header_line = physical((good / "poses.csv").read_text(), "g", 1 / 16384, ["# units: g"])
+    (good / "api_g.csv").write_text(text)
+    with pytest.raises(AccelcalError, match=rf"row {header_line - 1}: the comment '# units: g' contradicts"):
+        ac.read_recording(good / "api_g.csv", 6, units="mps2", lsb=9.81 / 2048)
+    with pytest.raises(AccelcalError, match="not a whole number"):
+        ac.read_recording(good / "api_g.csv", 6, units="g", lsb=1 / 12000)
