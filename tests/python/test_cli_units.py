@@ -11,7 +11,6 @@ import io
 import os
 import re
 import tempfile
-import warnings
 from pathlib import Path
 
 import pytest
@@ -23,6 +22,7 @@ from accelcal.cli import main
 from accelcal.device import pendulum_device, save_device
 from accelcal.recording import write_recording
 from accelcal.simulate import run_simulation
+from cli_run import run
 
 FAST = settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
                                                                          HealthCheck.too_slow])
@@ -35,16 +35,6 @@ FORMS = {
     "g-full-scale": ("g", 1 / 16384, ["--units", "g", "--full-scale", "2"]),  # 2*2/2**16 g
     "mps2-full-scale": ("mps2", 9.81 / 2048, ["--units", "mps2", "--full-scale", "16", "--gravity", "9.81"]),
 }
-
-
-def run(argv, capfd):
-    """main(argv) in-process: (exit code, stdout, stderr, Python warnings)."""
-    capfd.readouterr()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        rc = main([str(a) for a in argv])
-    out, err = capfd.readouterr()
-    return rc, out, err, [str(w.message) for w in caught]
 
 
 @pytest.fixture(scope="module")

@@ -8,7 +8,6 @@ import gzip
 import json
 import re
 import tempfile
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -16,11 +15,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from accelcal.cli import main
 from accelcal.device import default_triad, save_device
 from accelcal.errors import AccelcalError, InputError
 from accelcal.recording import read_recording, recording_from_arrays, write_recording
 from accelcal.units import Scale, scale_from_options, to_counts
+from cli_run import run
 
 FAST = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
                                                                          HealthCheck.too_slow])
@@ -189,16 +188,6 @@ def test_to_counts_names_the_first_bad_value():
 
 
 # ---- accelcal convert ----------------------------------------------------------
-
-def run(argv, capfd):
-    """main(argv) in-process: (exit code, stdout, stderr, Python warnings)."""
-    capfd.readouterr()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        rc = main([str(a) for a in argv])
-    out, err = capfd.readouterr()
-    return rc, out, err, [str(w.message) for w in caught]
-
 
 def convert_then_calibrate(src, tmp_path, capfd, convert_args, method):
     rec, dev, cal = tmp_path / "rec.csv", tmp_path / "dev.json", tmp_path / "cal.json"

@@ -14,40 +14,36 @@ from accelcal.diagnose import diagnose
 prepare = importlib.import_module("accelcal.diagnose.prepare")
 
 
+def _rest_errors(rng, sigma: float, m: int) -> tuple[float, float]:
+    """40 rests of m samples at random fractional levels x, read as round(x + n) with
+    n ~ N(0, sigma^2), predicted as x: the rms over rests and channels of each rest's mean
+    error without and with the rounding bias."""
+    rests, raw, pred = [], [], []
+    for k in range(40):
+        x = rng.uniform(-50, 50, size=3)
+        raw.append(np.round(x + rng.normal(scale=sigma, size=(m, 3))))
+        pred.append(np.broadcast_to(x, (m, 3)))
+        rests.append((m * k, m * (k + 1)))
+    raw, pred = np.concatenate(raw), np.concatenate(pred)
+    bias = prepare.rounding_bias(raw, pred, rests)
+    before = np.array([np.mean(raw[a:b] - pred[a:b], axis=0) for a, b in rests])
+    after = np.array([np.mean(raw[a:b] - pred[a:b] - bias[a:b], axis=0) for a, b in rests])
+    return float(np.sqrt(np.mean(before ** 2))), float(np.sqrt(np.mean(after ** 2)))
+
+
 @pytest.mark.parametrize("sigma", [0.0, 0.05, 0.15])
 def test_the_bias_of_each_rest_is_predicted(sigma):
     """Rests at random fractional levels, read through round(x + n): the rounding bias
     takes out most of each rest's mean error (the sawtooth of a noise-free reading, its
     smoothed form under a dither).  At 0.3 counts of noise the bias (0.05 rms) is the size
     of a 200-sample mean's own scatter: test_a_larger_dither_is_not_made_worse."""
-    rng = np.random.default_rng(4)
-    rests, raw, pred = [], [], []
-    for k in range(40):
-        x = rng.uniform(-50, 50, size=3)
-        n = rng.normal(scale=sigma, size=(200, 3))
-        raw.append(np.round(x + n))
-        pred.append(np.broadcast_to(x, (200, 3)))
-        rests.append((200 * k, 200 * (k + 1)))
-    raw, pred = np.concatenate(raw), np.concatenate(pred)
-    bias = prepare.rounding_bias(raw, pred, rests)
-    before = np.array([np.mean(raw[a:b] - pred[a:b], axis=0) for a, b in rests])
-    after = np.array([np.mean(raw[a:b] - pred[a:b] - bias[a:b], axis=0) for a, b in rests])
-    assert np.sqrt(np.mean(after ** 2)) < 0.35 * np.sqrt(np.mean(before ** 2))
+    before, after = _rest_errors(np.random.default_rng(4), sigma, 200)
+    assert after < 0.35 * before
 
 
 def test_a_larger_dither_is_not_made_worse():
-    rng = np.random.default_rng(6)
-    rests, raw, pred = [], [], []
-    for k in range(40):
-        x = rng.uniform(-50, 50, size=3)
-        raw.append(np.round(x + rng.normal(scale=0.3, size=(2000, 3))))
-        pred.append(np.broadcast_to(x, (2000, 3)))
-        rests.append((2000 * k, 2000 * (k + 1)))
-    raw, pred = np.concatenate(raw), np.concatenate(pred)
-    bias = prepare.rounding_bias(raw, pred, rests)
-    before = np.array([np.mean(raw[a:b] - pred[a:b], axis=0) for a, b in rests])
-    after = np.array([np.mean(raw[a:b] - pred[a:b] - bias[a:b], axis=0) for a, b in rests])
-    assert np.sqrt(np.mean(after ** 2)) < np.sqrt(np.mean(before ** 2))
+    before, after = _rest_errors(np.random.default_rng(6), 0.3, 2000)
+    assert after < before
 
 
 def test_noisy_channels_are_left_alone():
