@@ -6,9 +6,11 @@ which effect of the data contract causes it, and how far it shrinks once the eff
 
 The method and the JSON format are documented in docs/diagnosis-json.md.  Modules:
 ``inputs`` (coercion), ``prepare`` (the model's prediction and the data to fit),
-``floor`` (noise floor), ``scoring`` (held-out gain and significance), ``where`` (the
-breakdown), ``text`` (JSON entries and prose), ``result`` (the stepwise search and the
-verdict).  Each effect's own fit lives with the effect (:mod:`accelcal.effects`).
+``floor`` (noise floor), ``scoring`` (held-out gain and significance), ``compare`` (can
+the data tell the verdict from its rivals), ``relinearise`` (the joint fit about the
+corrected calibration), ``leftover`` (what is left: ``unexplained``), ``settling`` (a
+ringing after the stops), ``where`` (the breakdown), ``text`` (JSON entries and prose),
+``result`` (the stepwise search and the verdict).  Each effect's own fit lives with the effect (:mod:`accelcal.effects`).
 """
 from ..report import write_report
 from .result import DiagnosisResult, diagnose
