@@ -2,6 +2,7 @@
 the bounds of ac_attitude.h, its constants, its errors, and the estimator against the
 simulator's truth."""
 import dataclasses
+import gc
 import math
 
 import numpy as np
@@ -208,3 +209,20 @@ def test_attitude_flags_pivot_that_moves():
     sim = run_simulation(d, "rate_table", seed=2, axis="z", freq_hz=2.0, amplitude_deg=90.0, duration_s=3.0)
     cols = E.attitude_from_recording(d, Calibration.nominal(d), sim.recording)
     assert any("|g|" in w for w in cols.warnings)
+
+
+def test_the_fixed_run_keeps_its_configuration_after_the_state_is_gone():
+    """attitude_fixed's 'cfg' is an owned copy: the C state it came from is freed when the
+    call returns, and a view into it read garbage once the memory was reused (the rate
+    bound then came out wrong now and then)."""
+    f = np.zeros((5, 3), np.int32)
+    f[:, 2] = -10000
+    p = E.AttitudeParams(r1=0.03, r2=0.05, dt=1 / 60, gain=7.5, w2_gate=None, noise_mps2=0.005, leak_tau_s=2.0)
+    fx = E.attitude_fixed(f, f.copy(), p)
+    before = (fx["cfg"].kdt_shift, fx["cfg"].kdt_m, fx["cfg"].w2_gate)
+    gc.collect()
+    size = ffi.sizeof("ac_att")
+    reuse = [ffi.new("ac_att *") for _ in range(2000)]
+    for r in reuse:
+        ffi.memmove(r, b"\xff" * size, size)
+    assert (fx["cfg"].kdt_shift, fx["cfg"].kdt_m, fx["cfg"].w2_gate) == before

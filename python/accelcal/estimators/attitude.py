@@ -194,7 +194,7 @@ def attitude_fixed(f1_q, f2_q, p: AttitudeParams) -> dict:
     """ac_att_batch on int32 Q.AC_OUT_FRAC inputs (m/s^2).  Returns int arrays theta
     (Q.AC_ANGLE_FRAC rad), w (Q.AC_OMEGA_FRAC rad/s), dw (Q.AC_OUT_FRAC rad/s^2), w2
     (Q.AC_ATT_W2_FRAC (rad/s)^2), gmag (Q.AC_OUT_FRAC m/s^2), flags (ATT_*), plus 'consts'
-    (AttitudeConsts as stored) and 'cfg' (the C ac_att_cfg)."""
+    (AttitudeConsts as stored) and 'cfg' (an owned copy of the C ac_att_cfg)."""
     st, C = att_init_fixed(p)
     f = np.ascontiguousarray(np.hstack([np.asarray(f1_q, np.int32), np.asarray(f2_q, np.int32)]), dtype=np.int32)
     n = f.shape[0]
@@ -207,7 +207,12 @@ def attitude_fixed(f1_q, f2_q, p: AttitudeParams) -> dict:
     rec = np.frombuffer(buf, dtype=dt, count=n).copy() if n else np.zeros(0, dt)
     res = {k: rec[k].astype(np.int64) for k in ("theta", "w", "dw", "w2", "gmag", "flags")}
     res["consts"] = C
-    res["cfg"] = st.cfg
+    # an owned copy: st.cfg is a view into st's memory that does not keep st alive (cffi), so
+    # once this function returns it would read freed memory (the rate bound's kdt_m and
+    # kdt_shift came out as garbage now and then: a flaky property test)
+    cfg = ffi.new("struct ac_att_cfg *")
+    cfg[0] = st.cfg
+    res["cfg"] = cfg
     return res
 
 
