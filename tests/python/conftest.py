@@ -14,7 +14,8 @@ settings.load_profile(PROFILE)
 
 import pytest  # noqa: E402
 
-from shared_data import SHARED_DATA, shared_data_dir  # noqa: E402
+import indep_model as im  # noqa: E402
+from shared_data import SHARED_DATA, shared_data_dir, shared_file  # noqa: E402
 
 
 @pytest.fixture(scope="session")
@@ -28,3 +29,21 @@ def shared_data():
         pytest.skip(f"real recordings not found: {SHARED_DATA} does not exist "
                     "(CI has it; a bare clone skips the tests that need it)")
     return base
+
+
+@pytest.fixture(scope="session")
+def real_model(shared_data):
+    """name -> (device, recording, native code step, its own calibration) of a real recording
+    of ``../shared/data`` (:func:`indep_model.real_model`, loaded and calibrated once a
+    session; the tests must not change what it returns).  Skips, naming the file, when that
+    recording is missing."""
+    cache = {}
+
+    def get(name):
+        if name not in cache:
+            cache[name] = im.real_model(name, shared_file)
+        if cache[name] is None:
+            pytest.skip(f"{'/'.join(im.REAL[name][0])} not in {shared_data}")
+        return cache[name]
+
+    return get

@@ -16,7 +16,6 @@ import pytest
 
 import indep_model as im
 from accelcal.diagnose import diagnose
-from shared_data import XSENS_ACC, shared_file
 
 SEEDS = (0, 1, 2)
 
@@ -163,10 +162,8 @@ def test_a_misalignment_on_six_faces_is_flagged_as_a_possible_tilt(seed):
 
 # ------------------------------------------------------------------ the real Xsens recording
 @pytest.fixture(scope="module")
-def xsens(shared_data):
-    if shared_file(*XSENS_ACC) is None:
-        pytest.skip(f"{'/'.join(XSENS_ACC)} not in {shared_data}")
-    return im.real_model("xsens", shared_file)
+def xsens(real_model):
+    return real_model("xsens")
 
 
 def test_xsens_clean_against_its_own_calibration_is_none(xsens):
@@ -221,19 +218,12 @@ def test_on_the_jig_a_lagged_temperature_takes_the_first_step_over_a_drift_path(
 
 
 # ------------------------------------------------------------------ the other real recordings
-def _real(name):
-    got = im.real_model(name, shared_file)
-    if got is None:
-        pytest.skip(f"{'/'.join(im.REAL[name][0])} not in ../shared/data")
-    return got
-
-
 @pytest.mark.parametrize("seed", [872050, 872051, 872053])
-def test_imucal_an_offset_through_a_thermal_lag_is_temperature_offset(shared_data, seed):
+def test_imucal_an_offset_through_a_thermal_lag_is_temperature_offset(real_model, seed):
     """imucal's six poses (the model holding their real tilt) with an offset through a 30-120 s
     lag: the lag is fitted across the samples between the poses, which the diagnosis leaves
     out (it was fitted as ~20 s there and the verdict was bias_drift)."""
-    dev, rec, step, cal = _real("imucal")
+    dev, rec, step, cal = real_model("imucal")
     rec = im.as_posed(rec, cal)
     rec2, params, ratio = im.inject(dev, cal, rec, "temperature_offset", seed, step=step)
     res = diagnose(dev, cal, [rec2], seed=seed)
@@ -243,12 +233,12 @@ def test_imucal_an_offset_through_a_thermal_lag_is_temperature_offset(shared_dat
 
 
 @pytest.mark.parametrize("seed", [636270, 636271, 636272])
-def test_mpu6050_a_large_gain_error_is_gain_not_a_bend(shared_data, seed):
+def test_mpu6050_a_large_gain_error_is_gain_not_a_bend(real_model, seed):
     """A 5-14 % gain change injected into the MPU-6050's hand-turned poses: the calibration
     terms, fitted together before they are folded into the calibration, leave the bend
     nothing (fitted one by one and folded at once they overshot, the re-linearisation ran
     away and the bend kept the verdict: seed 636271)."""
-    dev, rec, step, cal = _real("mpu6050")
+    dev, rec, step, cal = real_model("mpu6050")
     rec2, _, ratio = im.inject(dev, cal, rec, "gain", seed, step=step)
     res = diagnose(dev, cal, [rec2], seed=seed)
     assert res["verdict"] == "gain", (res["verdict"], res["model"]["effects"], ratio)

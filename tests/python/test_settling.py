@@ -10,27 +10,19 @@ import indep_model as im
 from accelcal.diagnose import diagnose
 from accelcal.diagnose.settling import settling_ringing
 from accelcal.recording import recording_from_arrays
-from shared_data import shared_file
 
 SEEDS = (0, 1, 2)
 
 
-def _real(name):
-    got = im.real_model(name, shared_file)
-    if got is None:
-        pytest.skip(f"{'/'.join(im.REAL[name][0])} not in ../shared/data")
-    return got
-
-
 @pytest.mark.parametrize("name", ["xsens", "mpu6050", "imucal"])
-def test_clean_real_recordings_ring_nowhere(shared_data, name):
-    dev, rec, _, _ = _real(name)
+def test_clean_real_recordings_ring_nowhere(real_model, name):
+    dev, rec, _, _ = real_model(name)
     assert settling_ringing([rec], dev) is None
 
 
 @pytest.mark.parametrize("seed", SEEDS)
-def test_a_ringing_injected_into_the_xsens_recording_is_unexplained_at_its_frequency(shared_data, seed):
-    dev, rec, step, cal = _real("xsens")
+def test_a_ringing_injected_into_the_xsens_recording_is_unexplained_at_its_frequency(real_model, seed):
+    dev, rec, step, cal = real_model("xsens")
     rec2, params, ratio = im.inject(dev, cal, rec, "resonance", seed, step=step)
     res = diagnose(dev, cal, [rec2], seed=seed)
     assert res["verdict"] == "unexplained", (res["verdict"], ratio)

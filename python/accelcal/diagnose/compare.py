@@ -172,7 +172,7 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
             swap = (c.name, f"{c.name} explains all that {best.name} does and more ({best.name} adds nothing "
                             "significant after it)")
         elif (not c_after.significant and b_after.significant and c.k < best.k
-              and c.shrink >= best.shrink - OCCAM_SHRINK and swap is None and holds(D, cands, best, c, pcur)
+              and as_far(c, best) and swap is None and holds(D, cands, best, c, pcur)
               and not one_change(D, cands, c, best, pcur)):
             # the simpler rival explains as much alone and nothing beyond it is left to it: it is the
             # first step, and what the verdict adds beyond it is the next step's to claim (a drift's
@@ -181,7 +181,7 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
                             f"{best.k}); what {best.name} adds beyond it is tested after it")
         elif not c_after.significant and not b_after.significant and not separable(best, c):
             out.ambiguous.append(c.name)
-            if c.k < best.k and c.shrink >= best.shrink - OCCAM_SHRINK and swap is None:
+            if c.k < best.k and as_far(c, best) and swap is None:
                 swap = (c.name, f"{c.name} explains the same part of the gap with fewer parameters "
                                 f"({c.k} against {best.k})")
     if swap is not None:
@@ -213,8 +213,9 @@ class Given:
 
 
 def as_far(c: Cand, best: Cand) -> bool:
-    """Whether ``c`` alone shrinks the gap as far as ``best`` (within OCCAM_SHRINK): a rival
-    that explains "all the verdict does and more" by the nested tests but clearly less on its
+    """Whether ``c`` alone shrinks the gap as far as ``best`` (within OCCAM_SHRINK).  Asked of
+    a simpler rival before it takes the first step, and of a rival that explains "all the
+    verdict does and more" by the nested tests: one that explains clearly less on its
     own (a temperature-dependent gain at 0.85 against the gain's 0.91) has taken part of
     the verdict's change and added something small; it is the next step's, not the verdict."""
     return c.shrink >= best.shrink - OCCAM_SHRINK
@@ -246,7 +247,7 @@ def holds(D, cands, big: Cand, small: Cand, pcur) -> bool:
     if total <= 0.0:
         return True
     S0w, S0u = block_ss(D, D.rows(target))
-    fit = cands[big.name].cv(D, target, pcur, S0w, S0u)
+    fit = cands[big.name].cv(D, target, pcur, S0w, S0u, folds=False)   # only its all-data fit is read
     left = float(np.sum(D.W * D.rows(target - fit.delta) ** 2))
     return left <= HOLDS_LEFT * total
 

@@ -61,20 +61,21 @@ def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, 
     timed = [c for c in sorted(results.values(), key=rank_key)
              if c.name != best.name and c.significant and c.gain > 0 and c.name in remaining
              and cands[c.name].time_dependent and claims_time(Dk, y, c, best, share=0.0)[0]]
-    names = [c.name for c in terms + timed]
+    joined = terms + timed
+    start = {c.name: c for c in joined}
+    names = list(start)
+    # the terms fitted together: each one's fit alone took the same part of the gap, and folding
+    # all of them into the calibration at once overshoots (a 14 % gain on the MPU-6050 recording:
+    # the re-linearisation ran away to 70 x the gap)
+    together_fit = joint_fit(Dk, cands, names, y, start=start, passes=TERMS_PASSES)
     if Dk.mode == "jigfree":
         names = [c.name for c, _ in steps if c.gain > 0] + names
         fits = {c.name: c for c, _ in steps}
-        # the terms fitted together first: each one's fit alone took the same part of the gap, and
-        # folding all of them into the calibration at once overshoots (a 14 % gain on the MPU-6050
-        # recording: the re-linearisation ran away to 70 x the gap)
-        fits.update(joint_fit(Dk, cands, [c.name for c in terms + timed], y,
-                              start={c.name: c for c in terms + timed}, passes=TERMS_PASSES))
+        fits.update(together_fit)
         rl = relinearise(dev, cal, recs, int(folds), int(seed), m0, cands, names, fits, D)  # terms absorb: not None
         Dc, yc, pc, joint = rl["D"], rl["e"], rl["D"].p0, rl["joint"]
     else:
-        Dc, yc, pc = Dk, y, pcur
-        joint = joint_fit(Dk, cands, names, y, start={c.name: c for c in terms + timed}, passes=TERMS_PASSES)
+        Dc, yc, pc, joint = Dk, y, pcur, together_fit
     done = sum((joint[nm].delta for nm in names), np.zeros_like(yc))
     after = conditional(Dc, cands, best.name, Given(done), yc, pc)
     # with a drift among them, the terms' own held-out figure (with the steps before, at the final
@@ -84,7 +85,7 @@ def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, 
     terms_after = (rl["path"][-1].after if Dk.mode == "jigfree"
                    else heldout_path(Dk, cands, names, y)[-1].after)
     terms_shrink = 1.0 - terms_after / best.before if best.before > 0 else 0.0
-    together = ' and '.join(c.name for c in terms + timed)
+    together = ' and '.join(c.name for c in joined)
     if after.significant and (not timed or terms_shrink < best.shrink - OCCAM_SHRINK):
         return duel, best
     if after.significant:
@@ -94,7 +95,7 @@ def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, 
     else:
         why = (f"{together} together leave nothing significant to {best.name} "
                f"(held-out shrink {after.shrink:.3f} after them)")
-    tests = dict(duel.tests, together={"terms": [c.name for c in terms + timed], "verdict_after_them": after.shrink})
+    tests = dict(duel.tests, together={"terms": [c.name for c in joined], "verdict_after_them": after.shrink})
     # nothing significant left to the verdict after the terms: on these poses the data cannot tell
     # the two descriptions apart (a cube on poses near the axes is a gain)
     amb = [best.name] if not after.significant else []
