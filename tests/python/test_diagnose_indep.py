@@ -258,3 +258,17 @@ def test_the_thermal_lag_is_the_same_in_seconds_with_samples_left_out(tau):
     step = float(np.ptp(sc.temp_amb))
     assert np.max(np.abs(lagged(sc.temp_amb, sc.t, tau) - truth)) <= 0.01 * step
     assert np.max(np.abs(lagged(sc.temp_amb[keep], sc.t[keep], tau) - truth[keep])) <= 0.01 * step
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_jig_quantization_and_offset_are_not_a_drift(seed):
+    """A jig's readings on a coarse lattice (steps 2-16 counts, the noise well below a step)
+    with an offset: each pose keeps the quantiser's error of its reading, the same at a repeated
+    orientation.  A drift's path through the poses visited in turn took that pattern along with
+    the offset and was named (4 of 10 such jig cases); the data at the repeats do not change as
+    the path says, so the verdict is one of the two effects, and both are in the model."""
+    ds = im.make_jig(["quantization", "offset"], seed, device="seed6", rate=100.0, noise=0.004, motion=False,
+                     temperature=False, repeats=True)
+    res = _diagnose(ds, seed)
+    assert res["verdict"] in ("quantization", "offset"), (res["verdict"], res["model"]["effects"], ds["ratio"])
+    assert {"quantization", "offset"} <= set(res["model"]["effects"]), (res["model"]["effects"], ds["ratio"])

@@ -36,7 +36,11 @@ goes to the pose-dependent rival and the time-dependent effect is listed in
 ``ambiguous_with``; it is not added later in the stepwise search either.  Nor does a
 time-dependent rival displace, by the nested test, a verdict that does not follow time (a
 clip of one pose, which a drift's path takes as that pose's level) unless the poses bear
-out its slope.
+out its slope.  So on any data a drift fitted as a path through many knots
+(``Effect.takes_pose_levels``) against a pose-dependent rival that stays significant after it
+(the path took part of the rival's pattern over the poses visited in turn, as a quantiser's
+error per pose); there two static poses of one orientation held at different times count as
+evidence too (:func:`within_pose_support`).
 """
 from __future__ import annotations
 
@@ -46,6 +50,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..effects.fitdata import time_separable
+from ..effects.settings import REPEAT_DEG, REPEAT_MIN_S
 from ..effects.fitting import Cand, block_ss
 from .scoring import score
 
@@ -93,23 +98,49 @@ def conditional(D, cands, name: str, given: Cand, y, pcur) -> Cand:
 
 
 def within_pose_support(D, y, best: Cand, rival: Cand) -> tuple[float, float]:
-    """How far the data within static poses bear out a time-dependent fit.
+    """How far the data bear out a time-dependent fit where a pattern fixed per pose cannot
+    stand in for it.
 
-    Within each static segment the fit's change (``best.delta`` less its segment mean) is
-    the shape it claims there; the residual left by the ``rival`` (less its segment means)
-    is regressed on it.  Returns the weighted slope ``a`` (1: the data change within the
-    poses as the fit says; 0: they do not change at all) and its standard error."""
+    The fit's change ``best.delta`` is compared with the residual left by the ``rival`` in
+    the two places where a change with time shows apart from one with the pose: within each
+    segment, static or moving (both less their segment means: the shape the fit claims
+    there), and between two static segments that hold one orientation at different times
+    (REPEAT_DEG, REPEAT_MIN_S: the difference of their means, weighted by n1 n2 / (n1 + n2)
+    samples; there the residual ``y`` itself, as an effect of the orientation reads the same at
+    both and a rival fitted per hold, a tilt, would take the difference the drift claims).  Returns the weighted slope ``a`` of the residual on
+    the change (1: the data change there as the fit says; 0: they do not change at all) and
+    its standard error.  A drift's path that took each pose's level (a table tilt, a
+    quantiser's error per pose, identical at a repeat) has no slope there."""
     r = D.rows(y - rival.delta)
+    y_r = D.rows(y)
     d = D.rows(best.delta)
     W = D.W
     num = den = 0.0
+    segs = []
     for lo, hi in zip(D.seg_lo, D.seg_hi):
-        if not D.static[lo] or hi - lo < 3:
+        if hi - lo < 3:
             continue
         rw = r[lo:hi] - r[lo:hi].mean(axis=0)
         dw = d[lo:hi] - d[lo:hi].mean(axis=0)
         num += float(np.sum(W[lo:hi] * rw * dw))
         den += float(np.sum(W[lo:hi] * dw * dw))
+        if not D.static[lo]:
+            continue
+        f = np.nanmean(D.f[lo:hi], axis=0)
+        nf = float(np.linalg.norm(f))
+        if nf > 0:
+            segs.append((f / nf, float(np.mean(D.tg[lo:hi])), hi - lo, y_r[lo:hi].mean(axis=0), d[lo:hi].mean(axis=0),
+                         W[lo:hi].mean(axis=0)))
+    cos_max = math.cos(math.radians(REPEAT_DEG))
+    for j in range(len(segs)):
+        for k in range(j + 1, len(segs)):
+            uj, tj, nj, rj, dj, wj = segs[j]
+            uk, tk, nk, rk, dk, wk = segs[k]
+            if float(uj @ uk) < cos_max or abs(tk - tj) < REPEAT_MIN_S:
+                continue
+            w = 0.5 * (wj + wk) * (nj * nk / (nj + nk))
+            num += float(np.sum(w * (rk - rj) * (dk - dj)))
+            den += float(np.sum(w * (dk - dj) ** 2))
     if den <= 0:
         return 0.0, math.inf
     return num / den, 1.0 / math.sqrt(den)
@@ -122,7 +153,8 @@ def claims_time(D, y, best: Cand, rival: Cand, share: float = WITHIN_MIN) -> tup
     change within the poses as the fit does at all (its size then comes from a joint fit)."""
     a, sa = within_pose_support(D, y, best, rival)
     ok = a >= share and a >= WITHIN_Z * sa
-    return ok, f"within the poses the data change by {a:.2f} +- {sa:.2f} of what {best.name} claims there"
+    return ok, (f"where time shows apart from pose (within the poses, at a repeated orientation) the data change "
+                f"by {a:.2f} +- {sa:.2f} of what {best.name} claims there")
 
 
 def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
@@ -133,9 +165,11 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
     if best.gain <= 0:
         return out
     # without a repeated orientation (or motion) a drift can take each pose's level: then a
-    # time-dependent effect must earn its claim beyond a pose-dependent rival
+    # time-dependent effect must earn its claim beyond a pose-dependent rival where its change
+    # shows apart from a pattern per pose (within_pose_support).  So must a path through many
+    # knots anywhere, against a rival it does not explain away (significant after it: the path
+    # took part of the rival's pattern over the poses, as a quantiser's error per pose)
     judge_time = not time_separable(D)
-    b_time = cands[best.name].time_dependent and judge_time
     swap = None
     for c in rivals:
         c_after = conditional(D, cands, c.name, best, y, pcur)
@@ -144,10 +178,14 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
                                                      "gain_chi2": c_after.gain},
                              "verdict_after_rival": {"significant": b_after.significant, "shrink": b_after.shrink,
                                                      "gain_chi2": b_after.gain}}
-        c_time = cands[c.name].time_dependent and judge_time
+        b_path = cands[best.name].time_dependent and cands[best.name].takes_pose_levels(best)
+        b_time = cands[best.name].time_dependent and (judge_time or b_path)
+        c_time = cands[c.name].time_dependent and (judge_time or cands[c.name].takes_pose_levels(c))
         c_pose = cands[c.name].varies_by_pose
         b_pose = cands[best.name].varies_by_pose
-        if b_time and c_pose:
+        # a path is judged against a constant rival too: what it adds beyond an offset may be a
+        # pattern over the poses (a quantiser's error per pose)
+        if b_time and (c_pose or (b_path and not cands[c.name].time_dependent)):
             ok, how = claims_time(D, y, best, c)
             out.tests[c.name]["within_poses"] = how
             if not ok:
@@ -246,8 +284,7 @@ def holds(D, cands, big: Cand, small: Cand, pcur) -> bool:
     total = float(np.sum(D.W * D.rows(target) ** 2))
     if total <= 0.0:
         return True
-    S0w, S0u = block_ss(D, D.rows(target))
-    fit = cands[big.name].cv(D, target, pcur, S0w, S0u, folds=False)   # only its all-data fit is read
+    fit = cands[big.name].refit(D, target, pcur, big)
     left = float(np.sum(D.W * D.rows(target - fit.delta) ** 2))
     return left <= HOLDS_LEFT * total
 

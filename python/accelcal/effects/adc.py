@@ -142,6 +142,7 @@ class Saturation(Candidate, Effect):
 
 class Quantization(Candidate, Effect):
     name = "quantization"
+    varies_by_pose = True      # the quantiser's error is a function of the reading: fixed per pose
     tell_apart = "a slow, smooth change of the input, such as a ramp between poses (coarse codes show as steps)"
     summary = "readings are quantised in steps coarser than one count"
     doc = ("counts_i -> step_i round(counts_i / step_i) (step in counts, >= 1), instead of rounding to 1 "

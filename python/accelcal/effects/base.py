@@ -64,6 +64,13 @@ class Effect:
     #: the pose or motion that shows this effect distinctly (the diagnosis's ``separate_by``)
     tell_apart: str = ""
 
+    def takes_pose_levels(self, fit) -> bool:
+        """Whether a time-dependent fit ``fit`` (a Cand) has the freedom to take a level of its
+        own at each of the poses visited in turn (a drift's path through many knots), so that
+        a pattern fixed per pose can pass for it even where the data could tell time from
+        pose.  False for the fixed shapes (a ramp, a temperature through its lag)."""
+        return False
+
     def alike(self, D, fit) -> tuple[str, ...]:
         """Effects that this one's fit ``fit`` (a Cand) on the data ``D`` cannot be told from,
         although their held-out gains differ (its parameters have the other's signature: every

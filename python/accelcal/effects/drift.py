@@ -10,7 +10,7 @@ from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_float_array, as_list, channel_mask, per_channel, start_time, strongest
 from .channel import Misalignment
 from .fitdata import FitData, force_at, temp_skip
-from .fitting import Cand, LinearCandidate, linear_fit
+from .fitting import Cand, LinearCandidate, block_ss, linear_fit
 from .settings import BLOCK_S, DRIFT_KNOT_FRACTIONS, DRIFT_MIN_BLOCKS, PENALTY_PER_PARAM
 
 
@@ -160,6 +160,19 @@ class BiasDrift(LinearCandidate, Effect):
             if pgain_of(np.concatenate([best_X, Z], axis=2)) <= pgain_of(np.concatenate([self.columns(D), Z], axis=2)):
                 return ramp
         return best
+
+    def takes_pose_levels(self, fit):
+        return np.size(fit.params.get("path_t", ())) > 0
+
+    def refit(self, D, y, pcur, like):
+        knots = np.asarray(like.params.get("path_t", ()), float).ravel()
+        if knots.size < 2:
+            return super().refit(D, y, pcur, like)
+        S0w, S0u = block_ss(D, D.rows(y))
+        X = np.broadcast_to(hat_basis(D.t, float(knots[0]), float(knots[1] - knots[0]), knots.size - 1)[:, None, :],
+                            (D.n, D.N, knots.size - 1))
+        Sw, Su, theta, cov, k, delta = linear_fit(D, X, y, S0w, S0u)
+        return Cand(self.name, k, Sw, Su, delta, dict(like.params), dict(like.sigma))
 
     # -- the benchmark --------------------------------------------------------
 

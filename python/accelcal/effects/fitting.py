@@ -158,6 +158,14 @@ class Candidate:
     def cv(self, D: FitData, y: np.ndarray, pcur: np.ndarray, S0w, S0u) -> Cand:
         raise NotImplementedError
 
+    def refit(self, D: FitData, y: np.ndarray, pcur: np.ndarray, like: Cand) -> Cand:
+        """The all-data fit of ``y`` in the form ``like`` (a fit of this effect) took: where the
+        effect chooses among forms by the data (a drift's ramp or path), the form is kept, so
+        that "can this fit take that change" asks the fitted form, not whichever form the
+        new target selects."""
+        S0w, S0u = block_ss(D, D.rows(y))
+        return self.cv(D, y, pcur, S0w, S0u, folds=False)
+
 
 class LinearCandidate(Candidate):
     pname = ""
