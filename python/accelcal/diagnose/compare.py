@@ -49,8 +49,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..effects.fitdata import time_separable
-from ..effects.settings import REPEAT_DEG, REPEAT_MIN_S
+from ..effects.fitdata import static_repeats, time_separable
 from ..effects.fitting import Cand, block_ss
 from .scoring import score
 
@@ -97,64 +96,54 @@ def conditional(D, cands, name: str, given: Cand, y, pcur) -> Cand:
     return score(D, cands[name].cv(D, yb, pb, S0w, S0u), S0w, S0u)
 
 
-def within_pose_support(D, y, best: Cand, rival: Cand) -> tuple[float, float]:
+def within_pose_support(D, y, best: Cand, rival: Cand, repeats: bool = False) -> tuple[float, float]:
     """How far the data bear out a time-dependent fit where a pattern fixed per pose cannot
     stand in for it.
 
-    The fit's change ``best.delta`` is compared with the residual left by the ``rival`` in
-    the two places where a change with time shows apart from one with the pose: within each
-    segment, static or moving (both less their segment means: the shape the fit claims
-    there), and between two static segments that hold one orientation at different times
-    (REPEAT_DEG, REPEAT_MIN_S: the difference of their means, weighted by n1 n2 / (n1 + n2)
-    samples; there the residual ``y`` itself, as an effect of the orientation reads the same at
-    both and a rival fitted per hold, a tilt, would take the difference the drift claims).  Returns the weighted slope ``a`` of the residual on
-    the change (1: the data change there as the fit says; 0: they do not change at all) and
-    its standard error.  A drift's path that took each pose's level (a table tilt, a
+    The fit's change ``best.delta`` is compared with the residual left by the ``rival`` where
+    a change with time shows apart from one with the pose: within each static segment (both
+    less their segment means: the shape the fit claims there), and with ``repeats`` between two
+    static segments that hold one orientation at different times (:func:`static_repeats`: the
+    difference of their means, weighted by n1 n2 / (n1 + n2) samples; there the residual ``y`` itself, as an effect of the orientation reads the same at
+    both and a rival fitted per hold, a tilt, would take the difference the drift claims).
+    Returns the weighted slope ``a`` of the residual on the change (1: the data change there
+    as the fit says; 0: they do not change at all) and its standard error.  A drift's path that took each pose's level (a table tilt, a
     quantiser's error per pose, identical at a repeat) has no slope there."""
     r = D.rows(y - rival.delta)
     y_r = D.rows(y)
     d = D.rows(best.delta)
     W = D.W
     num = den = 0.0
-    segs = []
     for lo, hi in zip(D.seg_lo, D.seg_hi):
-        if hi - lo < 3:
+        if not D.static[lo] or hi - lo < 3:
             continue
         rw = r[lo:hi] - r[lo:hi].mean(axis=0)
         dw = d[lo:hi] - d[lo:hi].mean(axis=0)
         num += float(np.sum(W[lo:hi] * rw * dw))
         den += float(np.sum(W[lo:hi] * dw * dw))
-        if not D.static[lo]:
-            continue
-        f = np.nanmean(D.f[lo:hi], axis=0)
-        nf = float(np.linalg.norm(f))
-        if nf > 0:
-            segs.append((f / nf, float(np.mean(D.tg[lo:hi])), hi - lo, y_r[lo:hi].mean(axis=0), d[lo:hi].mean(axis=0),
-                         W[lo:hi].mean(axis=0)))
-    cos_max = math.cos(math.radians(REPEAT_DEG))
-    for j in range(len(segs)):
-        for k in range(j + 1, len(segs)):
-            uj, tj, nj, rj, dj, wj = segs[j]
-            uk, tk, nk, rk, dk, wk = segs[k]
-            if float(uj @ uk) < cos_max or abs(tk - tj) < REPEAT_MIN_S:
-                continue
-            w = 0.5 * (wj + wk) * (nj * nk / (nj + nk))
-            num += float(np.sum(w * (rk - rj) * (dk - dj)))
-            den += float(np.sum(w * (dk - dj) ** 2))
+    for j, k in (static_repeats(D) if repeats else ()):
+        (aj, bj), (ak, bk) = (D.seg_lo[j], D.seg_hi[j]), (D.seg_lo[k], D.seg_hi[k])
+        nj, nk = bj - aj, bk - ak
+        w = 0.5 * (W[aj:bj].mean(axis=0) + W[ak:bk].mean(axis=0)) * (nj * nk / (nj + nk))
+        dr = y_r[ak:bk].mean(axis=0) - y_r[aj:bj].mean(axis=0)
+        dd = d[ak:bk].mean(axis=0) - d[aj:bj].mean(axis=0)
+        num += float(np.sum(w * dr * dd))
+        den += float(np.sum(w * dd * dd))
     if den <= 0:
         return 0.0, math.inf
     return num / den, 1.0 / math.sqrt(den)
 
 
-def claims_time(D, y, best: Cand, rival: Cand, share: float = WITHIN_MIN) -> tuple[bool, str]:
+def claims_time(D, y, best: Cand, rival: Cand, share: float = WITHIN_MIN, repeats: bool = False) -> tuple[bool, str]:
     """A time-dependent fit ``best`` is claimed over a pose-dependent ``rival`` when the
-    data within the poses bear out its change there: slope >= ``share`` and >= WITHIN_Z
-    standard errors (:func:`within_pose_support`).  ``share`` 0 asks only whether the data
-    change within the poses as the fit does at all (its size then comes from a joint fit)."""
-    a, sa = within_pose_support(D, y, best, rival)
+    data within the poses (and with ``repeats`` at a repeated orientation) bear out its
+    change there: slope >= ``share`` and >= WITHIN_Z standard errors
+    (:func:`within_pose_support`).  ``share`` 0 asks only whether the data change within the
+    poses as the fit does at all (its size then comes from a joint fit)."""
+    a, sa = within_pose_support(D, y, best, rival, repeats)
     ok = a >= share and a >= WITHIN_Z * sa
-    return ok, (f"where time shows apart from pose (within the poses, at a repeated orientation) the data change "
-                f"by {a:.2f} +- {sa:.2f} of what {best.name} claims there")
+    where = "within the poses" + (" and at a repeated orientation" if repeats and static_repeats(D) else "")
+    return ok, f"{where} the data change by {a:.2f} +- {sa:.2f} of what {best.name} claims there"
 
 
 def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
@@ -170,6 +159,10 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
     # knots anywhere, against a rival it does not explain away (significant after it: the path
     # took part of the rival's pattern over the poses, as a quantiser's error per pose)
     judge_time = not time_separable(D)
+    # where a static orientation is held twice at different times, that is evidence of its own
+    # for any time-dependent claim (a temperature term that took a pattern over the poses along
+    # with a gain reads the same at both, and is no temperature)
+    judge_time = judge_time or bool(static_repeats(D))
     swap = None
     for c in rivals:
         c_after = conditional(D, cands, c.name, best, y, pcur)
@@ -186,7 +179,7 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
         # a path is judged against a constant rival too: what it adds beyond an offset may be a
         # pattern over the poses (a quantiser's error per pose)
         if b_time and (c_pose or (b_path and not cands[c.name].time_dependent)):
-            ok, how = claims_time(D, y, best, c)
+            ok, how = claims_time(D, y, best, c, repeats=True)
             out.tests[c.name]["within_poses"] = how
             if not ok:
                 # the time-dependent verdict rests on what a pose-dependent rival explains too; the
@@ -200,7 +193,7 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
         elif c_time and (b_pose or not cands[best.name].time_dependent):
             # a drift's path takes each pose's level: it does not displace a verdict that does not
             # follow time (a tilt, a clip of one pose) unless the poses bear out its slope
-            ok, how = claims_time(D, y, c, best)
+            ok, how = claims_time(D, y, c, best, repeats=True)
             out.tests[c.name]["within_poses"] = how
             if not ok:
                 out.ambiguous.append(c.name)

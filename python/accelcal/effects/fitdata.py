@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .settings import AXIS_POSE_DEG, REPEAT_DEG, REPEAT_MIN_S, ROTATING_RADPS, TEMP_MIN_SPAN_C
+from .settings import AXIS_POSE_DEG, REPEAT_DEG, REPEAT_MIN_S, REPEAT_SAME_DEG, ROTATING_RADPS, TEMP_MIN_SPAN_C
 
 
 @dataclass
@@ -165,6 +165,28 @@ def time_separable(D) -> bool:
     apart = np.abs(t[:, None] - t[None, :]) >= REPEAT_MIN_S
     np.fill_diagonal(close, False)
     return bool(np.any(close & apart))
+
+
+def static_repeats(D) -> list[tuple[int, int]]:
+    """Pairs (j, k) of static segments (indices into seg_lo/seg_hi, j < k) that hold one
+    orientation (within REPEAT_SAME_DEG: a jig's repeated pose) at times at least REPEAT_MIN_S
+    apart: where a change with time shows apart from an effect of the orientation, which
+    reads the same at both."""
+    segs, u, t = [], [], []
+    for j, (lo, hi) in enumerate(zip(D.seg_lo, D.seg_hi)):
+        if not D.static[lo] or hi - lo < 3:
+            continue
+        f = np.nanmean(D.f[lo:hi], axis=0)
+        nf = float(np.linalg.norm(f))
+        if nf > 0:
+            segs.append(j)
+            u.append(f / nf)
+            t.append(float(np.mean(D.tg[lo:hi])))
+    if len(segs) < 2:
+        return []
+    u, t = np.array(u), np.array(t)
+    ok = np.triu((u @ u.T) >= math.cos(math.radians(REPEAT_SAME_DEG)), 1) & (np.abs(t[:, None] - t[None, :]) >= REPEAT_MIN_S)
+    return [(segs[a], segs[b]) for a, b in zip(*np.nonzero(ok))]
 
 
 def poses_on_axes(D) -> bool:

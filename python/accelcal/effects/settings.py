@@ -30,4 +30,6 @@ DELAY_GRID = np.array([0.0, 0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0])  # sample
 PENALTY_PER_PARAM = 2.0    # chi2 units per parameter an effect adds (AIC-like)
 REPEAT_DEG = 5.0           # two static poses within this angle are one orientation, repeated ...
 REPEAT_MIN_S = 2.0         # ... when their mid-times are at least this far apart (s)
+REPEAT_SAME_DEG = 1.0      # a repeat whose readings are compared as those of one orientation: within this
+                           # angle (an effect of the orientation, a 3 % cube, changes by < 0.2 % of g there)
 AXIS_POSE_DEG = 10.0       # a stated pose within this angle of a channel's axis is a face pose (poses_on_axes)
