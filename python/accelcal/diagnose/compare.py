@@ -36,11 +36,12 @@ goes to the pose-dependent rival and the time-dependent effect is listed in
 ``ambiguous_with``; it is not added later in the stepwise search either.  Nor does a
 time-dependent rival displace, by the nested test, a verdict that does not follow time (a
 clip of one pose, which a drift's path takes as that pose's level) unless the poses bear
-out its slope.  So on any data a drift fitted as a path through many knots
-(``Effect.takes_pose_levels``) against a pose-dependent rival that stays significant after it
-(the path took part of the rival's pattern over the poses visited in turn, as a quantiser's
-error per pose); there two static poses of one orientation held at different times count as
-evidence too (:func:`within_pose_support`).
+out its slope.  The same holds on data with a static orientation held twice at different
+times (there the two holds' readings count as evidence too, :func:`within_pose_support`:
+an effect of the orientation reads the same at both), and on any data for a drift fitted as a
+path through many knots (``Effect.takes_pose_levels``), also against an offset: the path
+takes each pose's level visited in turn, so what it adds beyond an offset may be a pattern
+over the poses (a quantiser's error per pose).
 """
 from __future__ import annotations
 
@@ -104,11 +105,13 @@ def within_pose_support(D, y, best: Cand, rival: Cand, repeats: bool = False) ->
     a change with time shows apart from one with the pose: within each static segment (both
     less their segment means: the shape the fit claims there), and with ``repeats`` between two
     static segments that hold one orientation at different times (:func:`static_repeats`: the
-    difference of their means, weighted by n1 n2 / (n1 + n2) samples; there the residual ``y`` itself, as an effect of the orientation reads the same at
-    both and a rival fitted per hold, a tilt, would take the difference the drift claims).
-    Returns the weighted slope ``a`` of the residual on the change (1: the data change there
-    as the fit says; 0: they do not change at all) and its standard error.  A drift's path that took each pose's level (a table tilt, a
-    quantiser's error per pose, identical at a repeat) has no slope there."""
+    difference of their means, weighted by n1 n2 / (n1 + n2) samples; there the residual
+    ``y`` itself, as an effect of the orientation reads the same at both and a rival fitted
+    per hold, a tilt, would take the difference the drift claims).  Returns the weighted
+    slope ``a`` of the residual on the change (1: the data change there as the fit says; 0:
+    they do not change at all) and its standard error.  A drift's path that took each pose's
+    level (a table tilt, a quantiser's error per pose, identical at a repeat) has no slope
+    there."""
     r = D.rows(y - rival.delta)
     y_r = D.rows(y)
     d = D.rows(best.delta)
@@ -155,14 +158,11 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
         return out
     # without a repeated orientation (or motion) a drift can take each pose's level: then a
     # time-dependent effect must earn its claim beyond a pose-dependent rival where its change
-    # shows apart from a pattern per pose (within_pose_support).  So must a path through many
-    # knots anywhere, against a rival it does not explain away (significant after it: the path
-    # took part of the rival's pattern over the poses, as a quantiser's error per pose)
-    judge_time = not time_separable(D)
-    # where a static orientation is held twice at different times, that is evidence of its own
-    # for any time-dependent claim (a temperature term that took a pattern over the poses along
-    # with a gain reads the same at both, and is no temperature)
-    judge_time = judge_time or bool(static_repeats(D))
+    # shows apart from a pattern per pose (within_pose_support).  Where a static orientation is
+    # held twice at different times, that is evidence of its own for any time-dependent claim (a
+    # temperature term that took a gain and a pattern over the poses reads the same at both); and
+    # a path through many knots is judged so on any data (it can take each pose's level)
+    judge_time = not time_separable(D) or bool(static_repeats(D))
     swap = None
     for c in rivals:
         c_after = conditional(D, cands, c.name, best, y, pcur)
