@@ -177,7 +177,8 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
         c_pose = cands[c.name].varies_by_pose
         b_pose = cands[best.name].varies_by_pose
         # a path is judged against a constant rival too: what it adds beyond an offset may be a
-        # pattern over the poses (a quantiser's error per pose)
+        # pattern over the poses (a quantiser's error per pose).  Where the data bear the time term
+        # out, the nested tests below decide as for any two effects
         if b_time and (c_pose or (b_path and not cands[c.name].time_dependent)):
             ok, how = claims_time(D, y, best, c, repeats=True)
             out.tests[c.name]["within_poses"] = how
@@ -190,6 +191,7 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
                 if swap is None:
                     swap = (to.name, f"{best.name} changes with time, but {how}: a time-dependent effect is not "
                                      f"claimed from data that cannot tell it from {c.name} (fixed per pose)")
+                continue
         elif c_time and (b_pose or not cands[best.name].time_dependent):
             # a drift's path takes each pose's level: it does not displace a verdict that does not
             # follow time (a tilt, a clip of one pose) unless the poses bear out its slope
@@ -197,9 +199,11 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
             out.tests[c.name]["within_poses"] = how
             if not ok:
                 out.ambiguous.append(c.name)
-            elif c_after.significant and not b_after.significant and swap is None and as_far(c, best):
+                continue
+            if c_after.significant and not b_after.significant and swap is None and as_far(c, best):
                 swap = (c.name, f"{c.name} explains all that {best.name} does and more, and {how}")
-        elif c_after.significant and not b_after.significant and swap is None and as_far(c, best):
+                continue
+        if c_after.significant and not b_after.significant and swap is None and as_far(c, best):
             swap = (c.name, f"{c.name} explains all that {best.name} does and more ({best.name} adds nothing "
                             "significant after it)")
         elif (not c_after.significant and b_after.significant and c.k < best.k
