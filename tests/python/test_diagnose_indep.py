@@ -286,3 +286,14 @@ def test_jig_offset_and_gain_with_a_recorded_temperature_are_not_a_temperature_e
     res = _diagnose(ds, seed)
     assert res["verdict"] in ("offset", "gain"), (res["verdict"], res["model"]["effects"], ds["ratio"])
     assert {"offset", "gain"} <= set(res["model"]["effects"]), (res["model"]["effects"], ds["ratio"])
+
+
+def test_jig_thermal_lag_is_temperature_offset_over_a_drift_path():
+    """An offset that follows the recorded temperature through a 53 s lag, on a 12-bit jig whose
+    poses also keep their rounding (the independent benchmark's case indep-jig /
+    temperature_offset, seed 90149): a drift's path took the temperature's change and a little
+    more (what the fitted lag misses) and displaced the temperature, the measured cause.  The
+    temperature is the verdict; the path's rest may follow."""
+    ds = im.make_jig(["temperature_offset"], 90149)
+    res = _diagnose(ds, 90149)
+    assert res["verdict"] == "temperature_offset", (res["verdict"], res["model"]["effects"], ds["ratio"])

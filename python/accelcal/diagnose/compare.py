@@ -8,6 +8,12 @@ the stepwise search):
 
 * A after B significant, B after A not, and A alone as large as B (within OCCAM_SHRINK,
   :func:`as_far`): A explains all B does and more; A is the verdict.
+  Two exceptions: where both follow time and B is tied to a recorded covariate and A to
+  time alone (:func:`tied`: a temperature through its lag against a drift's path, which also
+  takes what the lag model misses), B stays the first step and A's rest is the next step's;
+  and a path through many knots (``Effect.takes_pose_levels``) displaces B only where what it
+  adds beyond B changes with time within the poses and at a repeated orientation (else its
+  "more" is each pose's level: the ADC's rounding per pose).
 * neither significant after the other, and their held-out gains alone within the
   uncertainty of each other (:func:`separable`): they explain the same thing; the data
   cannot tell them apart (``ambiguous_with``), and ``separate_by`` names the poses or
@@ -97,7 +103,8 @@ def conditional(D, cands, name: str, given: Cand, y, pcur) -> Cand:
     return score(D, cands[name].cv(D, yb, pb, S0w, S0u), S0w, S0u)
 
 
-def within_pose_support(D, y, best: Cand, rival: Cand, repeats: bool = False) -> tuple[float, float]:
+def within_pose_support(D, y, best: Cand, rival: Cand, repeats: bool = False,
+                        rival_at_repeats: bool = False) -> tuple[float, float]:
     """How far the data bear out a time-dependent fit where a pattern fixed per pose cannot
     stand in for it.
 
@@ -107,13 +114,14 @@ def within_pose_support(D, y, best: Cand, rival: Cand, repeats: bool = False) ->
     static segments that hold one orientation at different times (:func:`static_repeats`: the
     difference of their means, weighted by n1 n2 / (n1 + n2) samples; there the residual
     ``y`` itself, as an effect of the orientation reads the same at both and a rival fitted
-    per hold, a tilt, would take the difference the drift claims).  Returns the weighted
+    per hold, a tilt, would take the difference the drift claims; with ``rival_at_repeats``
+    the rival's residual there too, for a rival that follows time itself).  Returns the weighted
     slope ``a`` of the residual on the change (1: the data change there as the fit says; 0:
     they do not change at all) and its standard error.  A drift's path that took each pose's
     level (a table tilt, a quantiser's error per pose, identical at a repeat) has no slope
     there."""
     r = D.rows(y - rival.delta)
-    y_r = D.rows(y)
+    y_r = r if rival_at_repeats else D.rows(y)
     d = D.rows(best.delta)
     W = D.W
     num = den = 0.0
@@ -137,13 +145,14 @@ def within_pose_support(D, y, best: Cand, rival: Cand, repeats: bool = False) ->
     return num / den, 1.0 / math.sqrt(den)
 
 
-def claims_time(D, y, best: Cand, rival: Cand, share: float = WITHIN_MIN, repeats: bool = False) -> tuple[bool, str]:
+def claims_time(D, y, best: Cand, rival: Cand, share: float = WITHIN_MIN, repeats: bool = False,
+                rival_at_repeats: bool = False) -> tuple[bool, str]:
     """A time-dependent fit ``best`` is claimed over a pose-dependent ``rival`` when the
     data within the poses (and with ``repeats`` at a repeated orientation) bear out its
     change there: slope >= ``share`` and >= WITHIN_Z standard errors
     (:func:`within_pose_support`).  ``share`` 0 asks only whether the data change within the
     poses as the fit does at all (its size then comes from a joint fit)."""
-    a, sa = within_pose_support(D, y, best, rival, repeats)
+    a, sa = within_pose_support(D, y, best, rival, repeats, rival_at_repeats)
     ok = a >= share and a >= WITHIN_Z * sa
     where = "within the poses" + (" and at a repeated orientation" if repeats and static_repeats(D) else "")
     return ok, f"{where} the data change by {a:.2f} +- {sa:.2f} of what {best.name} claims there"
@@ -204,6 +213,18 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
                 swap = (c.name, f"{c.name} explains all that {best.name} does and more, and {how}")
                 continue
         if c_after.significant and not b_after.significant and swap is None and as_far(c, best):
+            if cands[c.name].time_dependent and cands[best.name].time_dependent and tied(cands, best, c):
+                # one change over time, the verdict tied to its measured cause (a temperature through
+                # its lag) and the rival to time alone (a drift's path, which also takes what the lag
+                # model misses): the measured cause is the first step, the path's rest the next one's
+                continue
+            if c_time and cands[c.name].takes_pose_levels(c):
+                # a path's "more" may be each pose's level (a quantiser's or the ADC's rounding per
+                # pose): it displaces the verdict only where what it adds changes with time there
+                ok, how = claims_time(D, y, c_after, best, repeats=True, rival_at_repeats=True)
+                out.tests[c.name]["what_it_adds"] = how
+                if not ok:
+                    continue
             swap = (c.name, f"{c.name} explains all that {best.name} does and more ({best.name} adds nothing "
                             "significant after it)")
         elif (not c_after.significant and b_after.significant and c.k < best.k

@@ -7,7 +7,9 @@ hides in them (the real Xsens recording against its nominal calibration: gains o
 -0.42 % where its jig-free calibration has +0.5 to +1.1 %).  :func:`relinearise` folds the
 fitted calibration effects (``Effect.absorbs``: offset, gain, misalignment) into the
 calibration, prepares the data again about it (new pose forces), fits the chosen effects
-again and repeats until the fitted change is below RELIN_TOL of the noise; the parameters
+again and repeats until the fitted change is below RELIN_TOL of the noise (or, should the
+in-sample chi2 after the joint fit grow from one point to the next, stops at the best point
+reached); the parameters
 reported are then those that take the given calibration to the final one, and the held-out
 figures are scored at the final point.
 """
@@ -73,6 +75,7 @@ def relinearise(device, cal, recs, K: int, seed: int, m0: float, cands, names: l
     cal_k = cal
     converged = False
     it = 0
+    best = None
     for it in range(1, RELIN_MAX + 1):
         for nm in absorbed:
             cal_k = cands[nm].absorb(cal_k, joint[nm].params)
@@ -80,10 +83,19 @@ def relinearise(device, cal, recs, K: int, seed: int, m0: float, cands, names: l
         e = D.raw - D.p0
         setup_rows(D, e)
         joint = joint_fit(D, cands, names, e)
+        total = sum((joint[nm].delta for nm in names), np.zeros_like(e))
+        left = float(np.sum(D.W * D.rows(e - total) ** 2))     # in-sample weighted chi2 at this point
+        if best is not None and left > best[0]:
+            # the iteration runs away (an effect outside the chosen ones, a ramp of 6 % of g on the
+            # MPU-6050's hand-turned poses, moved the pose forces further at each step): keep the
+            # best point reached
+            break
+        best = (left, cal_k, D, e, joint, it)
         change = D.rows(sum((joint[nm].delta for nm in absorbed), np.zeros_like(e)))   # what the data see
         if float(np.max(np.abs(change))) < tol:
             converged = True
             break
+    _, cal_k, D, e, joint, it = best
     final = cal_k
     for nm in absorbed:
         final = cands[nm].absorb(final, joint[nm].params)
