@@ -20,6 +20,8 @@ the stepwise search):
   motions that would (each effect's ``tell_apart``); the one with fewer parameters is the
   verdict when its held-out shrink alone is as large (within OCCAM_SHRINK).
 * both significant after the other: both act; the stepwise search names both.
+* neither significant after the other, both following time, B tied to a recorded covariate
+  and A to time alone (:func:`tied`): one change; B, the measured cause, is the verdict.
 * B after A not significant, A after B significant, B with fewer parameters as large
   alone (within OCCAM_SHRINK), and A's form holds B's change (:func:`holds`): A is B plus
   more, so B is the first step and what A adds beyond it is the next step's to claim (a
@@ -56,16 +58,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..effects.fitdata import static_repeats, time_separable
+from ..effects.fitdata import static_repeats, time_separable, time_slope
 from ..effects.fitting import Cand, block_ss
+from ..effects.settings import WITHIN_MIN, WITHIN_Z
 from .scoring import score
 
 OCCAM_SHRINK = 0.02        # ... and the one with fewer parameters is chosen when it shrinks the gap as far (to this)
 SEPARATE_T = 3.0           # paired block t of two candidates' held-out chi2 that tells them apart
 RIVAL_GAIN_SHARE = 0.5     # rivals: significant candidates with at least this share of the best one's gain
 MAX_RIVALS = 3             # ... at most this many, by gain
-WITHIN_MIN = 0.5           # a time-dependent fit is borne out within the poses at >= this share of its claim ...
-WITHIN_Z = 3.0             # ... and this many standard errors above 0
 HOLDS_LEFT = 0.1           # one form holds another's change when it leaves at most this share of it
 
 
@@ -121,28 +122,7 @@ def within_pose_support(D, y, best: Cand, rival: Cand, repeats: bool = False,
     level (a table tilt, a quantiser's error per pose, identical at a repeat) has no slope
     there."""
     r = D.rows(y - rival.delta)
-    y_r = r if rival_at_repeats else D.rows(y)
-    d = D.rows(best.delta)
-    W = D.W
-    num = den = 0.0
-    for lo, hi in zip(D.seg_lo, D.seg_hi):
-        if not D.static[lo] or hi - lo < 3:
-            continue
-        rw = r[lo:hi] - r[lo:hi].mean(axis=0)
-        dw = d[lo:hi] - d[lo:hi].mean(axis=0)
-        num += float(np.sum(W[lo:hi] * rw * dw))
-        den += float(np.sum(W[lo:hi] * dw * dw))
-    for j, k in (static_repeats(D) if repeats else ()):
-        (aj, bj), (ak, bk) = (D.seg_lo[j], D.seg_hi[j]), (D.seg_lo[k], D.seg_hi[k])
-        nj, nk = bj - aj, bk - ak
-        w = 0.5 * (W[aj:bj].mean(axis=0) + W[ak:bk].mean(axis=0)) * (nj * nk / (nj + nk))
-        dr = y_r[ak:bk].mean(axis=0) - y_r[aj:bj].mean(axis=0)
-        dd = d[ak:bk].mean(axis=0) - d[aj:bj].mean(axis=0)
-        num += float(np.sum(w * dr * dd))
-        den += float(np.sum(w * dd * dd))
-    if den <= 0:
-        return 0.0, math.inf
-    return num / den, 1.0 / math.sqrt(den)
+    return time_slope(D, r, r if rival_at_repeats else D.rows(y), D.rows(best.delta), repeats)
 
 
 def claims_time(D, y, best: Cand, rival: Cand, share: float = WITHIN_MIN, repeats: bool = False,
@@ -235,6 +215,13 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
             # path that also took an offset, or the temperature that a path follows)
             swap = (c.name, f"{c.name} explains as much of the gap alone with fewer parameters ({c.k} against "
                             f"{best.k}); what {best.name} adds beyond it is tested after it")
+        elif (not c_after.significant and not b_after.significant and swap is None
+              and cands[c.name].time_dependent and cands[best.name].time_dependent and tied(cands, c, best)):
+            # one change over time, neither adding anything after the other: the description tied to
+            # its measured cause is the verdict (a drift's path that follows a temperature through
+            # its lag, fitting it a little closer than the lag model)
+            swap = (c.name, f"{c.name} and {best.name} describe one change (neither adds anything after the "
+                            f"other); {c.name} follows the recorded {cands[c.name].covariate}, {best.name} time alone")
         elif not c_after.significant and not b_after.significant and not separable(best, c):
             out.ambiguous.append(c.name)
             if c.k < best.k and as_far(c, best) and swap is None:

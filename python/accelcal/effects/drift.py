@@ -9,9 +9,9 @@ import numpy as np
 from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_float_array, as_list, channel_mask, per_channel, start_time, strongest
 from .channel import Misalignment
-from .fitdata import FitData, force_at, temp_skip
+from .fitdata import FitData, force_at, temp_skip, time_slope
 from .fitting import Cand, LinearCandidate, block_ss, linear_fit
-from .settings import BLOCK_S, DRIFT_KNOT_FRACTIONS, DRIFT_MIN_BLOCKS, PENALTY_PER_PARAM
+from .settings import BLOCK_S, DRIFT_KNOT_FRACTIONS, DRIFT_MIN_BLOCKS, PENALTY_PER_PARAM, WITHIN_MIN, WITHIN_Z
 
 
 def random_walk(t: np.ndarray, sigma: np.ndarray, seed: int) -> np.ndarray:
@@ -132,7 +132,7 @@ class BiasDrift(LinearCandidate, Effect):
 
     def cv(self, D, y, pcur, S0w, S0u, folds=True):
         ramp = super().cv(D, y, pcur, S0w, S0u, folds)
-        spacings = self._spacings(D) if D.mode == "reference" else []
+        spacings = self._spacings(D)
 
         def pgain(Sw, k):
             return float((S0w - Sw).sum()) - PENALTY_PER_PARAM * k
@@ -159,6 +159,14 @@ class BiasDrift(LinearCandidate, Effect):
             Z = self._nuisance(D)
             if pgain_of(np.concatenate([best_X, Z], axis=2)) <= pgain_of(np.concatenate([self.columns(D), Z], axis=2)):
                 return ramp
+            if D.mode != "reference":
+                # jig-free, the blocks of a pose share its orientation's error (its rounding, the
+                # hand's slow sway), which a path through the poses visited in turn can take: the
+                # path must show within the poses (and at a repeat) as the path says
+                yr = D.rows(y)
+                a, sa = time_slope(D, yr, yr, D.rows(best.delta))
+                if not (a >= WITHIN_MIN and a >= WITHIN_Z * sa):
+                    return ramp
         return best
 
     def takes_pose_levels(self, fit):

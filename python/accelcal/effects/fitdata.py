@@ -189,6 +189,37 @@ def static_repeats(D) -> list[tuple[int, int]]:
     return [(segs[a], segs[b]) for a, b in zip(*np.nonzero(ok))]
 
 
+def time_slope(D, r: np.ndarray, r_rep: np.ndarray, d: np.ndarray, repeats: bool = True) -> tuple[float, float]:
+    """Weighted slope of a residual on a time-dependent change where time shows apart from
+    pose, and its standard error (rows arrays, (n, R)).
+
+    Within each static segment the residual ``r`` and the change ``d``, each less its
+    segment mean (the shape the change claims there); with ``repeats`` also the difference
+    of ``r_rep``'s means and of ``d``'s means between two static segments that hold one
+    orientation at different times (:func:`static_repeats`), weighted by n1 n2 / (n1 + n2)
+    samples.  1: the data change there as ``d`` says; 0: they do not change at all."""
+    W = D.W
+    num = den = 0.0
+    for lo, hi in zip(D.seg_lo, D.seg_hi):
+        if not D.static[lo] or hi - lo < 3:
+            continue
+        rw = r[lo:hi] - r[lo:hi].mean(axis=0)
+        dw = d[lo:hi] - d[lo:hi].mean(axis=0)
+        num += float(np.sum(W[lo:hi] * rw * dw))
+        den += float(np.sum(W[lo:hi] * dw * dw))
+    for j, k in (static_repeats(D) if repeats else ()):
+        (aj, bj), (ak, bk) = (D.seg_lo[j], D.seg_hi[j]), (D.seg_lo[k], D.seg_hi[k])
+        nj, nk = bj - aj, bk - ak
+        w = 0.5 * (W[aj:bj].mean(axis=0) + W[ak:bk].mean(axis=0)) * (nj * nk / (nj + nk))
+        dr = r_rep[ak:bk].mean(axis=0) - r_rep[aj:bj].mean(axis=0)
+        dd = d[ak:bk].mean(axis=0) - d[aj:bj].mean(axis=0)
+        num += float(np.sum(w * dr * dd))
+        den += float(np.sum(w * dd * dd))
+    if den <= 0:
+        return 0.0, math.inf
+    return num / den, 1.0 / math.sqrt(den)
+
+
 def poses_on_axes(D) -> bool:
     """Whether every static pose with a stated f holds gravity along a channel's axis (within
     AXIS_POSE_DEG): the six faces of a box.  On such poses a tilt of each pose reproduces a
