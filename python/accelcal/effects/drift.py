@@ -91,15 +91,19 @@ class BiasDrift(LinearCandidate, Effect):
 
     # -- fit to a residual (the diagnosis) ------------------------------------
 
-    # fit: A ramp (one rate per channel) or, with a reference f, a bias path: piecewise linear in
-    #     time through knots every ``spacing`` seconds (a random walk's path, estimated at the knots),
-    #     for the spacings DRIFT_KNOT_FRACTIONS of the time span whose intervals hold DRIFT_MIN_BLOCKS
-    #     CV blocks.  A path is the fit only if its penalised held-out gain beats the ramp's both
-    #     alone and with the other linear effects that a path could pass for fitted alongside in
-    #     either (offset, gain, misalignment, nonlinearity, and the temperature terms: a constant, a
-    #     pose-wise pattern of poses visited in turn, a temperature that changes with time).  Jig-free, where every pose's orientation is fitted too, only the ramp is tried (on
-    #     the real Xsens recording a path there took over a 0.5 % gain error).  Both are in recording
-    #     time from the earliest first sample (recordings that share a time base share the drift).
+    # fit: A ramp (one rate per channel) or a bias path: piecewise linear in time through knots
+    #     every ``spacing`` seconds (a random walk's path, estimated at the knots), for the spacings
+    #     DRIFT_KNOT_FRACTIONS of the time span whose intervals hold DRIFT_MIN_BLOCKS CV blocks.  A
+    #     path is the fit only if its penalised held-out gain beats the ramp's both alone and with
+    #     the other linear effects that a path could pass for fitted alongside in either (offset,
+    #     gain, misalignment, nonlinearity, and the temperature terms: a constant, a pose-wise
+    #     pattern of poses visited in turn, a temperature that changes with time).  Jig-free, where
+    #     every pose's orientation is fitted too and a pose's blocks share its orientation's error,
+    #     the path must also show within the poses (and at a repeat) as it says (time_slope >=
+    #     WITHIN_MIN and WITHIN_Z standard errors; without that check a path took over a 0.5 % gain
+    #     error on the real Xsens recording, and named 2 of 10 clean hand-held sessions).  Both are in
+    #     recording time from the earliest first sample (recordings that share a time base share the
+    #     drift).
 
     pname = 'rate'
 
