@@ -159,10 +159,6 @@ class BiasDrift(LinearCandidate, Effect):
             s = {"rate": zero, "rw": zero, "path": np.concatenate([np.zeros((D.N, 1)), sd], axis=1)}
             best, best_pg, best_X = Cand(self.name, k, Sw, Su, delta, p, s), pgain(Sw, k), X
         if best_X is not None:
-            # the path must also win with every other smooth or pose-wise linear effect alongside
-            Z = self._nuisance(D)
-            if pgain_of(np.concatenate([best_X, Z], axis=2)) <= pgain_of(np.concatenate([self.columns(D), Z], axis=2)):
-                return ramp
             if D.mode != "reference":
                 # jig-free, the blocks of a pose share its orientation's error (its rounding, the
                 # hand's slow sway), which a path through the poses visited in turn can take: the
@@ -171,6 +167,10 @@ class BiasDrift(LinearCandidate, Effect):
                 a, sa = time_slope(D, yr, yr, D.rows(best.delta))
                 if not (a >= WITHIN_MIN and a >= WITHIN_Z * sa):
                     return ramp
+            # the path must also win with every other smooth or pose-wise linear effect alongside
+            Z = self._nuisance(D)
+            if pgain_of(np.concatenate([best_X, Z], axis=2)) <= pgain_of(np.concatenate([self.columns(D), Z], axis=2)):
+                return ramp
         return best
 
     def takes_pose_levels(self, fit):
