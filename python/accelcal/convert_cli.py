@@ -11,6 +11,7 @@ from .convert import FORMATS, convert_file
 from .device import save_device
 from .errors import AccelcalError
 from .recording import write_recording
+from .units import parse_bits
 from .units_cli import add_units_options, scale_from_args
 
 __all__ = ["add_convert_parser", "cmd_convert"]
@@ -45,12 +46,7 @@ def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int
         check_output(a.device_out, "--device-out")
         if a.device_out == a.output:
             raise AccelcalError(f"--device-out {a.device_out}: the same file as -o")
-    try:
-        bits = int(a.bits)
-    except ValueError:
-        bits = 0
-    if not 2 <= bits <= 32:
-        raise AccelcalError(f"--bits {a.bits!r}: expected an integer 2..32 (the ADC's bits)")
+    bits = parse_bits(a.bits, AccelcalError, "--bits")
     scale = scale_from_args(a)
     conv = convert_file(a.input, a.format, scale=scale, rate_hz=positive(a.rate, "--rate"), regions=a.regions,
                         stated_f=a.stated_f, gravity_mps2=positive(a.gravity, "--gravity"), bits=bits)

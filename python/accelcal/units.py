@@ -25,7 +25,7 @@ from .errors import AccelcalError, InputError
 
 __all__ = ["UNITS", "REL_TOL", "Scale", "scale_from_options", "scale_from_metadata", "to_counts",
            "METADATA_KEYS", "STANDARD_GRAVITY", "OPTION_NAMES",
-           "converted_metadata", "file_scale", "COUNTS_STATED"]
+           "converted_metadata", "file_scale", "COUNTS_STATED", "parse_bits"]
 
 UNITS = ("counts", "mps2", "g")
 REL_TOL = 1e-6
@@ -94,7 +94,9 @@ def _positive(text: Any, what: str, fail: Callable[[str], Exception]) -> float:
     return v
 
 
-def _bits(text: Any, fail: Callable[[str], Exception], what: str) -> int:
+def parse_bits(text: Any, fail: Callable[[str], Exception], what: str) -> int:
+    """An ADC's bits (2..32) from ``text``; else ``fail`` (an exception class taking the
+    message) naming ``what`` (the option or comment)."""
     try:
         b = int(str(text).strip())
     except ValueError:
@@ -154,7 +156,7 @@ def scale_from_options(units: str | None = None, lsb: Any = None, full_scale_g: 
         v = _positive(lsb, opt("lsb"), fail)
         return Scale(units, v, v if units == "g" else v / g, opt("lsb"))
     fs = _positive(full_scale_g, opt("full_scale_g"), fail)
-    lsb_g = 2.0 * fs / 2.0 ** _bits(bits, fail, opt("bits"))
+    lsb_g = 2.0 * fs / 2.0 ** parse_bits(bits, fail, opt("bits"))
     units = units or "counts"
     return Scale(units, None if units == "counts" else lsb_g * (g if units == "mps2" else 1.0), lsb_g,
                  opt("full_scale_g"))

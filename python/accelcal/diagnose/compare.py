@@ -59,15 +59,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..effects.fitdata import static_repeats, time_separable, time_slope
+from ..effects.fitdata import static_repeats, time_separable
 from ..effects.fitting import Cand, block_ss
-from ..effects.settings import WITHIN_MIN, WITHIN_Z
 from .scoring import score
 
 OCCAM_SHRINK = 0.02        # ... and the one with fewer parameters is chosen when it shrinks the gap as far (to this)
 SEPARATE_T = 3.0           # paired block t of two candidates' held-out chi2 that tells them apart
 RIVAL_GAIN_SHARE = 0.5     # rivals: significant candidates with at least this share of the best one's gain
 MAX_RIVALS = 3             # ... at most this many, by gain
+WITHIN_MIN = 0.5           # a time-dependent fit is borne out within the poses at >= this share of its claim ...
+WITHIN_Z = 3.0             # ... and this many standard errors above 0
 HOLDS_LEFT = 0.1           # one form holds another's change when it leaves at most this share of it
 
 
@@ -105,37 +106,58 @@ def conditional(D, cands, name: str, given: Cand, y, pcur) -> Cand:
     return score(D, cands[name].cv(D, yb, pb, S0w, S0u), S0w, S0u)
 
 
-def within_pose_support(D, y, best: Cand, rival: Cand, repeats: bool = False,
+def within_pose_support(D, y, best: Cand, rival: Cand, repeats=(),
                         rival_at_repeats: bool = False) -> tuple[float, float]:
     """How far the data bear out a time-dependent fit where a pattern fixed per pose cannot
     stand in for it.
 
     The fit's change ``best.delta`` is compared with the residual left by the ``rival`` where
     a change with time shows apart from one with the pose: within each static segment (both
-    less their segment means: the shape the fit claims there), and with ``repeats`` between two
-    static segments that hold one orientation at different times (:func:`static_repeats`: the
-    difference of their means, weighted by n1 n2 / (n1 + n2) samples; there the residual
-    ``y`` itself, as an effect of the orientation reads the same at both and a rival fitted
-    per hold, a tilt, would take the difference the drift claims; with ``rival_at_repeats``
-    the rival's residual there too, for a rival that follows time itself).  Returns the weighted
-    slope ``a`` of the residual on the change (1: the data change there as the fit says; 0:
-    they do not change at all) and its standard error.  A drift's path that took each pose's
-    level (a table tilt, a quantiser's error per pose, identical at a repeat) has no slope
-    there."""
+    less their segment means: the shape the fit claims there), and between the two static
+    segments of each pair in ``repeats`` (:func:`static_repeats`: one orientation held at
+    different times; the difference of their means, weighted by n1 n2 / (n1 + n2) samples;
+    there the residual ``y`` itself, as an effect of the orientation reads the same at both
+    and a rival fitted per hold, a tilt, would take the difference the drift claims; with
+    ``rival_at_repeats`` the rival's residual there too, for a rival that follows time
+    itself).  Returns the weighted slope ``a`` of the residual on the change (1: the data
+    change there as the fit says; 0: they do not change at all) and its standard error.  A
+    drift's path that took each pose's level (a table tilt, a quantiser's error per pose,
+    identical at a repeat) has no slope there."""
     r = D.rows(y - rival.delta)
-    return time_slope(D, r, r if rival_at_repeats else D.rows(y), D.rows(best.delta), repeats)
+    r_rep = r if rival_at_repeats else D.rows(y)
+    d = D.rows(best.delta)
+    W = D.W
+    num = den = 0.0
+    for lo, hi in zip(D.seg_lo, D.seg_hi):
+        if not D.static[lo] or hi - lo < 3:
+            continue
+        rw = r[lo:hi] - r[lo:hi].mean(axis=0)
+        dw = d[lo:hi] - d[lo:hi].mean(axis=0)
+        num += float(np.sum(W[lo:hi] * rw * dw))
+        den += float(np.sum(W[lo:hi] * dw * dw))
+    for j, k in repeats:
+        (aj, bj), (ak, bk) = (D.seg_lo[j], D.seg_hi[j]), (D.seg_lo[k], D.seg_hi[k])
+        nj, nk = bj - aj, bk - ak
+        w = 0.5 * (W[aj:bj].mean(axis=0) + W[ak:bk].mean(axis=0)) * (nj * nk / (nj + nk))
+        dr = r_rep[ak:bk].mean(axis=0) - r_rep[aj:bj].mean(axis=0)
+        dd = d[ak:bk].mean(axis=0) - d[aj:bj].mean(axis=0)
+        num += float(np.sum(w * dr * dd))
+        den += float(np.sum(w * dd * dd))
+    if den <= 0:
+        return 0.0, math.inf
+    return num / den, 1.0 / math.sqrt(den)
 
 
-def claims_time(D, y, best: Cand, rival: Cand, share: float = WITHIN_MIN, repeats: bool = False,
+def claims_time(D, y, best: Cand, rival: Cand, share: float = WITHIN_MIN, repeats=(),
                 rival_at_repeats: bool = False) -> tuple[bool, str]:
     """A time-dependent fit ``best`` is claimed over a pose-dependent ``rival`` when the
-    data within the poses (and with ``repeats`` at a repeated orientation) bear out its
+    data within the poses (and at the repeated orientations ``repeats``) bear out its
     change there: slope >= ``share`` and >= WITHIN_Z standard errors
     (:func:`within_pose_support`).  ``share`` 0 asks only whether the data change within the
     poses as the fit does at all (its size then comes from a joint fit)."""
     a, sa = within_pose_support(D, y, best, rival, repeats, rival_at_repeats)
     ok = a >= share and a >= WITHIN_Z * sa
-    where = "within the poses" + (" and at a repeated orientation" if repeats and static_repeats(D) else "")
+    where = "within the poses" + (" and at a repeated orientation" if len(repeats) else "")
     return ok, f"{where} the data change by {a:.2f} +- {sa:.2f} of what {best.name} claims there"
 
 
@@ -152,7 +174,11 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
     # held twice at different times, that is evidence of its own for any time-dependent claim (a
     # temperature term that took a gain and a pattern over the poses reads the same at both); and
     # a path through many knots is judged so on any data (it can take each pose's level)
-    judge_time = not time_separable(D) or bool(static_repeats(D))
+    reps = static_repeats(D)
+    judge_time = not time_separable(D) or bool(reps)
+    b_path = cands[best.name].time_dependent and cands[best.name].takes_pose_levels(best)
+    b_time = cands[best.name].time_dependent and (judge_time or b_path)
+    b_pose = cands[best.name].varies_by_pose
     swap = None
     for c in rivals:
         c_after = conditional(D, cands, c.name, best, y, pcur)
@@ -161,16 +187,13 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
                                                      "gain_chi2": c_after.gain},
                              "verdict_after_rival": {"significant": b_after.significant, "shrink": b_after.shrink,
                                                      "gain_chi2": b_after.gain}}
-        b_path = cands[best.name].time_dependent and cands[best.name].takes_pose_levels(best)
-        b_time = cands[best.name].time_dependent and (judge_time or b_path)
         c_time = cands[c.name].time_dependent and (judge_time or cands[c.name].takes_pose_levels(c))
         c_pose = cands[c.name].varies_by_pose
-        b_pose = cands[best.name].varies_by_pose
         # a path is judged against a constant rival too: what it adds beyond an offset may be a
         # pattern over the poses (a quantiser's error per pose).  Where the data bear the time term
         # out, the nested tests below decide as for any two effects
         if b_time and (c_pose or (b_path and not cands[c.name].time_dependent)):
-            ok, how = claims_time(D, y, best, c, repeats=True)
+            ok, how = claims_time(D, y, best, c, repeats=reps)
             out.tests[c.name]["within_poses"] = how
             if not ok:
                 # the time-dependent verdict rests on what a pose-dependent rival explains too; the
@@ -185,7 +208,7 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
         elif c_time and (b_pose or not cands[best.name].time_dependent):
             # a drift's path takes each pose's level: it does not displace a verdict that does not
             # follow time (a tilt, a clip of one pose) unless the poses bear out its slope
-            ok, how = claims_time(D, y, c, best, repeats=True)
+            ok, how = claims_time(D, y, c, best, repeats=reps)
             out.tests[c.name]["within_poses"] = how
             if not ok:
                 out.ambiguous.append(c.name)
@@ -194,7 +217,7 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
                 swap = (c.name, f"{c.name} explains all that {best.name} does and more, and {how}")
                 continue
         if c_after.significant and not b_after.significant and swap is None and as_far(c, best):
-            if cands[c.name].time_dependent and cands[best.name].time_dependent and tied(cands, best, c):
+            if tied(cands, best, c):
                 # one change over time, the verdict tied to its measured cause (a temperature through
                 # its lag) and the rival to time alone (a drift's path, which also takes what the lag
                 # model misses): the measured cause is the first step, the path's rest the next one's
@@ -202,7 +225,7 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
             if c_time and cands[c.name].takes_pose_levels(c):
                 # a path's "more" may be each pose's level (a quantiser's or the ADC's rounding per
                 # pose): it displaces the verdict only where what it adds changes with time there
-                ok, how = claims_time(D, y, c_after, best, repeats=True, rival_at_repeats=True)
+                ok, how = claims_time(D, y, c_after, best, repeats=reps, rival_at_repeats=True)
                 out.tests[c.name]["what_it_adds"] = how
                 if not ok:
                     continue
@@ -216,8 +239,7 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
             # path that also took an offset, or the temperature that a path follows)
             swap = (c.name, f"{c.name} explains as much of the gap alone with fewer parameters ({c.k} against "
                             f"{best.k}); what {best.name} adds beyond it is tested after it")
-        elif (not c_after.significant and not b_after.significant and swap is None
-              and cands[c.name].time_dependent and cands[best.name].time_dependent and tied(cands, c, best)):
+        elif not c_after.significant and not b_after.significant and swap is None and tied(cands, c, best):
             # one change over time, neither adding anything after the other: the description tied to
             # its measured cause is the verdict (a drift's path that follows a temperature through
             # its lag, fitting it a little closer than the lag model)
@@ -272,10 +294,11 @@ def as_far(c: Cand, best: Cand) -> bool:
 
 
 def tied(cands, a: Cand, b: Cand) -> bool:
-    """Whether ``a`` follows a recorded covariate (``Effect.covariate``: temperature) and ``b``
-    follows time alone (a drift): of two descriptions of one change, the one tied to a
-    measurement is the more specific."""
-    return cands[a.name].covariate is not None and cands[b.name].covariate is None
+    """Whether both follow time, ``a`` a recorded covariate (``Effect.covariate``:
+    temperature) and ``b`` time alone (a drift): of two descriptions of one change, the one
+    tied to a measurement is the more specific."""
+    ea, eb = cands[a.name], cands[b.name]
+    return ea.time_dependent and eb.time_dependent and ea.covariate is not None and eb.covariate is None
 
 
 def one_change(D, cands, simple: Cand, best: Cand, pcur) -> bool:

@@ -100,7 +100,7 @@ class BiasDrift(LinearCandidate, Effect):
     #     pose-wise pattern of poses visited in turn, a temperature that changes with time).
     #     Jig-free, where every pose's orientation is fitted too, only the ramp is tried: a path there
     #     took over a 0.5 % gain error on the real Xsens recording; accepted only where the data
-    #     change within the poses as it says (fitdata.time_slope), it named 3 more of 50 hand-held
+    #     change within the poses as it says (the contest's within_pose_support), it named 3 more of 50 hand-held
     #     random walks, but the real Xsens recording's own slow wander ahead of 8 of 10 injected
     #     quantisations and of a misalignment, at 2.3 x the benchmark's time (up to 72 s a case).
     #     Both are in recording time from the earliest first sample (recordings that share a time
@@ -123,6 +123,12 @@ class BiasDrift(LinearCandidate, Effect):
         span = float(np.max(D.t)) - float(np.min(D.rec_t0))
         return [(span * frac, int(round(1.0 / frac))) for frac in DRIFT_KNOT_FRACTIONS
                 if span * frac >= DRIFT_MIN_BLOCKS * BLOCK_S]
+
+    @staticmethod
+    def _path_columns(D, t0: float, spacing: float, K: int) -> np.ndarray:
+        """(n, N, K): the path's hat functions at the knots t0 + k spacing, k = 1..K, the same
+        for every channel."""
+        return np.broadcast_to(hat_basis(D.t, t0, spacing, K)[:, None, :], (D.n, D.N, K))
 
     @staticmethod
     def _nuisance(D) -> np.ndarray:
@@ -149,7 +155,7 @@ class BiasDrift(LinearCandidate, Effect):
         best, best_pg, best_X = ramp, pgain(ramp.Sw, ramp.k), None
         t0 = float(np.min(D.rec_t0))
         for spacing, K in spacings:
-            X = np.broadcast_to(hat_basis(D.t, t0, spacing, K)[:, None, :], (D.n, D.N, K))
+            X = self._path_columns(D, t0, spacing, K)
             Sw, Su, theta, cov, k, delta = linear_fit(D, X, y, S0w, S0u)
             if pgain(Sw, k) <= best_pg:
                 continue
@@ -174,8 +180,7 @@ class BiasDrift(LinearCandidate, Effect):
         if knots.size < 2:
             return super().refit(D, y, pcur, like)
         S0w, S0u = block_ss(D, D.rows(y))
-        X = np.broadcast_to(hat_basis(D.t, float(knots[0]), float(knots[1] - knots[0]), knots.size - 1)[:, None, :],
-                            (D.n, D.N, knots.size - 1))
+        X = self._path_columns(D, float(knots[0]), float(knots[1] - knots[0]), knots.size - 1)
         Sw, Su, theta, cov, k, delta = linear_fit(D, X, y, S0w, S0u)
         return Cand(self.name, k, Sw, Su, delta, dict(like.params), dict(like.sigma))
 

@@ -144,6 +144,22 @@ def t_ref_known(D: FitData) -> float | None:
     return None
 
 
+def _repeated(u: np.ndarray, t: np.ndarray, deg: float) -> np.ndarray:
+    """(P, P) upper-triangle mask of pairs of unit orientations ``u`` (P, 3) within ``deg``
+    of each other whose mid-times ``t`` (s) are at least REPEAT_MIN_S apart."""
+    close = (u @ u.T) >= math.cos(math.radians(deg))
+    apart = np.abs(t[:, None] - t[None, :]) >= REPEAT_MIN_S
+    return np.triu(close & apart, 1)
+
+
+def _orientation(D, m) -> tuple[np.ndarray, float]:
+    """Unit mean stated or fitted f of the samples ``m`` (zero when it has none) and their
+    mean global time."""
+    f = np.nanmean(D.f[m], axis=0)
+    nf = float(np.linalg.norm(f))
+    return (f / nf if nf > 0 else np.zeros(3)), float(np.mean(D.tg[m]))
+
+
 def time_separable(D) -> bool:
     """Whether the data can tell time from pose: some orientation held in two static poses
     at different times (a pose repeated later, a rest before and after a motion), or data
@@ -153,18 +169,8 @@ def time_separable(D) -> bool:
     P = len(D.pose_labels)
     if P < 2:
         return False
-    u = np.zeros((P, 3))
-    t = np.zeros(P)
-    for p in range(P):
-        m = D.pose == p
-        f = np.nanmean(D.f[m], axis=0)
-        nf = np.linalg.norm(f)
-        u[p] = f / nf if nf > 0 else 0.0
-        t[p] = float(np.mean(D.tg[m]))
-    close = (u @ u.T) >= math.cos(math.radians(REPEAT_DEG))
-    apart = np.abs(t[:, None] - t[None, :]) >= REPEAT_MIN_S
-    np.fill_diagonal(close, False)
-    return bool(np.any(close & apart))
+    u, t = zip(*(_orientation(D, D.pose == p) for p in range(P)))
+    return bool(np.any(_repeated(np.array(u), np.array(t), REPEAT_DEG)))
 
 
 def static_repeats(D) -> list[tuple[int, int]]:
@@ -172,52 +178,12 @@ def static_repeats(D) -> list[tuple[int, int]]:
     orientation (within REPEAT_SAME_DEG: a jig's repeated pose) at times at least REPEAT_MIN_S
     apart: where a change with time shows apart from an effect of the orientation, which
     reads the same at both."""
-    segs, u, t = [], [], []
-    for j, (lo, hi) in enumerate(zip(D.seg_lo, D.seg_hi)):
-        if not D.static[lo] or hi - lo < 3:
-            continue
-        f = np.nanmean(D.f[lo:hi], axis=0)
-        nf = float(np.linalg.norm(f))
-        if nf > 0:
-            segs.append(j)
-            u.append(f / nf)
-            t.append(float(np.mean(D.tg[lo:hi])))
+    segs = [j for j, (lo, hi) in enumerate(zip(D.seg_lo, D.seg_hi)) if D.static[lo] and hi - lo >= 3]
     if len(segs) < 2:
         return []
-    u, t = np.array(u), np.array(t)
-    ok = np.triu((u @ u.T) >= math.cos(math.radians(REPEAT_SAME_DEG)), 1) & (np.abs(t[:, None] - t[None, :]) >= REPEAT_MIN_S)
+    u, t = zip(*(_orientation(D, slice(D.seg_lo[j], D.seg_hi[j])) for j in segs))
+    ok = _repeated(np.array(u), np.array(t), REPEAT_SAME_DEG)   # a segment without f matches none
     return [(segs[a], segs[b]) for a, b in zip(*np.nonzero(ok))]
-
-
-def time_slope(D, r: np.ndarray, r_rep: np.ndarray, d: np.ndarray, repeats: bool = True) -> tuple[float, float]:
-    """Weighted slope of a residual on a time-dependent change where time shows apart from
-    pose, and its standard error (rows arrays, (n, R)).
-
-    Within each static segment the residual ``r`` and the change ``d``, each less its
-    segment mean (the shape the change claims there); with ``repeats`` also the difference
-    of ``r_rep``'s means and of ``d``'s means between two static segments that hold one
-    orientation at different times (:func:`static_repeats`), weighted by n1 n2 / (n1 + n2)
-    samples.  1: the data change there as ``d`` says; 0: they do not change at all."""
-    W = D.W
-    num = den = 0.0
-    for lo, hi in zip(D.seg_lo, D.seg_hi):
-        if not D.static[lo] or hi - lo < 3:
-            continue
-        rw = r[lo:hi] - r[lo:hi].mean(axis=0)
-        dw = d[lo:hi] - d[lo:hi].mean(axis=0)
-        num += float(np.sum(W[lo:hi] * rw * dw))
-        den += float(np.sum(W[lo:hi] * dw * dw))
-    for j, k in (static_repeats(D) if repeats else ()):
-        (aj, bj), (ak, bk) = (D.seg_lo[j], D.seg_hi[j]), (D.seg_lo[k], D.seg_hi[k])
-        nj, nk = bj - aj, bk - ak
-        w = 0.5 * (W[aj:bj].mean(axis=0) + W[ak:bk].mean(axis=0)) * (nj * nk / (nj + nk))
-        dr = r_rep[ak:bk].mean(axis=0) - r_rep[aj:bj].mean(axis=0)
-        dd = d[ak:bk].mean(axis=0) - d[aj:bj].mean(axis=0)
-        num += float(np.sum(w * dr * dd))
-        den += float(np.sum(w * dd * dd))
-    if den <= 0:
-        return 0.0, math.inf
-    return num / den, 1.0 / math.sqrt(den)
 
 
 def poses_on_axes(D) -> bool:

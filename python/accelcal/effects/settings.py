@@ -33,5 +33,3 @@ REPEAT_MIN_S = 2.0         # ... when their mid-times are at least this far apar
 REPEAT_SAME_DEG = 1.0      # a repeat whose readings are compared as those of one orientation: within this
                            # angle (an effect of the orientation, a 3 % cube, changes by < 0.2 % of g there)
 AXIS_POSE_DEG = 10.0       # a stated pose within this angle of a channel's axis is a face pose (poses_on_axes)
-WITHIN_MIN = 0.5           # a time-dependent fit is borne out within the poses at >= this share of its claim ...
-WITHIN_Z = 3.0             # ... and this many standard errors above 0
