@@ -1,6 +1,8 @@
 """A ringing after the stops (diagnose/settling.py): found in the samples the model does not
 score, on data the diagnosis did not make; nothing found on clean real recordings, nor
-for a broadband knock at each stop, hand tremor or mains pickup."""
+for a broadband knock at each stop, a vibration that lasts as long as the motion (also
+where every motion starts with a knock far rougher than the stop), hand tremor or mains
+pickup."""
 from __future__ import annotations
 
 import numpy as np
@@ -30,6 +32,57 @@ def test_a_ringing_injected_into_the_xsens_recording_is_unexplained_at_its_frequ
     assert ring["peak_hz"] == pytest.approx(params["resonance"]["freq"], abs=2.0 + dev.sample_rate_hz / 50)
     assert "settling" in res["unexplained"]["where"]["regime"]
     assert 0.0 < res["unexplained"]["fraction"] <= 1.0
+
+
+@pytest.mark.parametrize("name", ["imucal", "mpu6050"])
+@pytest.mark.parametrize("seed", SEEDS)
+def test_a_ringing_in_real_sessions_whose_motions_start_rougher_than_they_stop(real_model, name, seed):
+    """imucal's and the MPU-6050's hand-turned poses: the hand picks the sensor up far more
+    abruptly than it sets it down, so the motion's start has more power at the ringing's
+    frequency than the stop's last half second, where a long ringing (tau up to 0.4 s) that
+    the static detector took for motion is left only as a tail.  The ringing goes on,
+    below the detector's threshold, into the rest's first window, and is found there."""
+    dev, rec, step, cal = real_model(name)
+    rec2, params, ratio = im.inject(dev, cal, rec, "resonance", seed, step=step)
+    ring = settling_ringing([rec2], dev)
+    assert ring is not None, (params, ratio)
+    assert ring["peak_hz"] == pytest.approx(params["resonance"]["freq"], abs=2.0 + dev.sample_rate_hz / 50)
+    assert ring["rms_counts"] > 0.0
+
+
+def with_motion_vibration(ds, seed, amp, knock):
+    """A clean hand-held session with a steady line (amp x the noise, 20-45 Hz) through every
+    motion and, where knock > 0, a 0.1 s burst of white noise (knock x the noise) at every
+    motion's start (the hand picking the sensor up)."""
+    dev = ds["device"]
+    rec = ds["recordings"][0]
+    raw = rec.raw.astype(float)
+    fs = dev.sample_rate_hz
+    still = im.static_mask(rec.raw, fs)
+    sig = np.maximum(im.real_noise(rec.raw, fs), 1.0)
+    rng = np.random.default_rng(seed)
+    f0 = rng.uniform(20.0, min(45.0, 0.4 * fs))
+    moving = ~still
+    raw[moving] += amp * sig[None, :] * np.sin(2 * np.pi * f0 * rec.t[moving])[:, None]
+    m = max(2, int(0.1 * fs))
+    for e in np.flatnonzero(np.diff(still.astype(int)) == -1) + 1:
+        seg = slice(e, min(e + m, raw.shape[0]))
+        raw[seg] += rng.normal(size=(seg.stop - seg.start, raw.shape[1])) * knock * sig
+    raw = np.clip(np.round(raw), dev.raw_min, dev.raw_max).astype(np.int64)
+    return recording_from_arrays(rec.t, raw, metadata={"test": "motion vibration"})
+
+
+@pytest.mark.parametrize("amp,knock", [(3.0, 0.0), (3.0, 10.0), (10.0, 10.0), (30.0, 30.0)])
+@pytest.mark.parametrize("seed", range(5))
+def test_a_vibration_that_lasts_as_long_as_the_motion_is_not_a_ringing(seed, amp, knock):
+    """A motor or fan running while the sensor moves: a line in the stop's last half second
+    that is as much a line at the motion's start and ends with the motion.  The knocks make
+    the start rougher than the stop, so the start's power alone no longer rules it out.
+    (Left open: a line of 3x the noise that the static detector takes for rest, with knocks
+    of 30x the noise or more: 3 of 40 such sessions are taken for a ringing.)"""
+    ds = im.make_handheld([], seed)
+    rec = with_motion_vibration(ds, seed, amp, knock)
+    assert settling_ringing([rec], ds["device"]) is None
 
 
 @pytest.mark.parametrize("seed", SEEDS)

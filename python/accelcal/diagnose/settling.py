@@ -11,16 +11,24 @@ it lies, per recording, in three kinds of windows of SETTLE_WINDOW_S:
   ringing that the detector still took for motion);
 * onset: the samples just after each static interval ends (the start of the next motion:
   as rough as a stop, but with nothing ringing);
-* rest: samples inside each static interval, past its settling margin (the noise).
+* rest: the last samples of each static interval (the noise);
+* early rest: the first samples of each static interval, where a long ringing goes on below
+  the detector's threshold.
 
 Per channel every window is detrended (a line) and Hann-windowed, and its periodogram is
 averaged over the stops.  A ringing is a bin at or above SETTLE_MIN_HZ (above hand motion
-and tremor) whose settling power stands out of all three references, each by the quantile
-that chance alone exceeds with probability SETTLE_FALSE_ALARM over every bin and channel
-tested: the onset spectrum and the rest spectrum at that frequency (F ratio of two averages
-of 2 x stops degrees of freedom each), and the settling spectrum's own running median over
-SETTLE_BACKGROUND_BINS bins (a line, not the broadband knock of a hand setting the sensor
-down).  At least SETTLE_MIN_STOPS stops are needed.
+and tremor) whose settling power stands out of the rest spectrum at that frequency and of
+the settling spectrum's own running median over SETTLE_BACKGROUND_BINS bins (a line, not
+the broadband knock of a hand setting the sensor down), and is no line of the motion
+itself: it stands out of the onset spectrum at that frequency, or, where the motions
+start far more roughly than they stop (a hand picking the sensor up; imucal's and the
+MPU-6050's sessions, where the onset is tens of times the stop's power at 15-50 Hz), it
+is still there in the early rest beyond the rest and the onset shows no line there (a
+vibration that runs with the motion is a line at its start too, and ends with it).  Each
+comparison is passed by chance with probability SETTLE_FALSE_ALARM over every bin and
+channel tested (F ratio of two averages of 2 x stops degrees of freedom each; the
+running-median test by the chi-square quantile).  At least SETTLE_MIN_STOPS stops are
+needed.
 """
 from __future__ import annotations
 
@@ -50,7 +58,8 @@ def settling_ringing(recs, device, sigma: np.ndarray | None = None) -> dict | No
 
     ``sigma``: per-channel noise (counts) for the static detector (default: from the data).
     Returns ``peak_hz``, ``channels``, ``n_stops``, ``rms_counts`` (the ringing's rms in the
-    settling windows beyond the onset's power at the lines' bins, per channel) and
+    settling windows beyond the rest's power at the lines' bins, and beyond the onset's where
+    that comparison was passed; per channel) and
     ``ratio_to_onset`` / ``ratio_to_rest`` (settling / reference power at the peak)."""
     fs = float(device.sample_rate_hz)
     L = max(SETTLE_MIN_SAMPLES, int(round(SETTLE_WINDOW_S * fs)))
@@ -59,7 +68,7 @@ def settling_ringing(recs, device, sigma: np.ndarray | None = None) -> dict | No
     band[-1] &= L % 2 == 1          # not the Nyquist bin of an even window (a real tone's alias sits there)
     if not band.any():
         return None
-    acc = {"settle": None, "onset": None, "rest": None}
+    acc = {"settle": None, "onset": None, "rest": None, "early": None}
     n_stops = 0
     for rec in recs:
         raw = np.asarray(rec.raw, float)
@@ -74,25 +83,34 @@ def settling_ringing(recs, device, sigma: np.ndarray | None = None) -> dict | No
             nxt = ivs[k + 1][0] if k + 1 < len(ivs) else n
             if b + L > nxt:
                 continue
-            parts = {"settle": raw[a - L:a], "onset": raw[b:b + L], "rest": raw[b - L:b]}
+            parts = {"settle": raw[a - L:a], "onset": raw[b:b + L], "rest": raw[b - L:b], "early": raw[a:a + L]}
             for key, x in parts.items():
                 P = _spectrum(x)
                 acc[key] = P if acc[key] is None else acc[key] + P
             n_stops += 1
     if n_stops < SETTLE_MIN_STOPS:
         return None
-    Ps, Po, Pr = (acc[k] / n_stops for k in ("settle", "onset", "rest"))
+    Ps, Po, Pr, Pe = (acc[k] / n_stops for k in ("settle", "onset", "rest", "early"))
     tests = int(band.sum()) * Ps.shape[1]
     dof = 2.0 * n_stops
     f_ratio = stats.f.ppf(1.0 - SETTLE_FALSE_ALARM / tests, dof, dof)
     bg = median_filter(Ps, size=(SETTLE_BACKGROUND_BINS, 1), mode="mirror")
     line_ratio = stats.chi2.ppf(1.0 - SETTLE_FALSE_ALARM / tests, dof) / stats.chi2.median(dof)
     tiny = 1e-300
-    hit = (band[:, None] & (Ps > f_ratio * np.maximum(Po, tiny)) & (Ps > f_ratio * np.maximum(Pr, tiny))
-           & (Ps > line_ratio * np.maximum(bg, tiny)))
+
+    def above(p, q):
+        return p > f_ratio * np.maximum(q, tiny)
+
+    bg_o = median_filter(Po, size=(SETTLE_BACKGROUND_BINS, 1), mode="mirror")
+    over_onset = above(Ps, Po)
+    # where the motions start rougher than they stop: still there in the rest's first window,
+    # and no line at the motion's start (a line of the motion itself starts and ends with it)
+    lingers = above(Pe, Pr) & above(Ps / np.maximum(bg, tiny), np.maximum(Po / np.maximum(bg_o, tiny), 1.0))
+    hit = band[:, None] & (over_onset | lingers) & above(Ps, Pr) & (Ps > line_ratio * np.maximum(bg, tiny))
     if not hit.any():
         return None
-    excess = np.where(hit, Ps - np.maximum(Po, Pr), 0.0)
+    # the ringing's power: the settling's beyond the rest, and beyond the onset where that was passed
+    excess = np.where(hit, Ps - np.where(over_onset, np.maximum(Po, Pr), Pr), 0.0)
     j, ch = np.unravel_index(np.argmax(excess), excess.shape)
     # the periodogram (scaling "spectrum") gives power per bin; a Hann window spreads a line
     # over about 1.5 bins' worth of equivalent noise bandwidth
