@@ -911,7 +911,7 @@ def inject(dev: Device, cal: Calibration, rec, effect, seed=0, *, ratio=None, st
     thermal lag; pose_error (recordings with stated f only) the stated f of each labelled
     pose turned by 0.3-2 deg about a random axis; saturation a clip at 90 % of the largest
     excursion from b of one axis in the still intervals (so that a pose clips; the ratio is
-    what it is); quantization steps of 4-16 counts (multiples of the native step);
+    what it is); quantization the native step times a power of two whose rounding noise is 0.5-4 x the floor;
     crosstalk 0.5-2 % of channel j into i; mains 50 Hz; resonance a damped 20-45 Hz
     sinusoid at the start of every still interval.  The result is rounded to the
     native code step.  Returns (recording, effects' parameters, ratio reached by each)."""
@@ -1019,7 +1019,12 @@ def inject(dev: Device, cal: Calibration, rec, effect, seed=0, *, ratio=None, st
         measured[nm] = float(np.sqrt(np.mean(d ** 2))) / floor
     y = step * np.round(x / step)
     if "quantization" in names:
-        choices = [q for q in (4, 8, 12, 16) if q % step == 0 and q > step] or [16]
+        # a coarser converter: the native step times a power of two whose rounding noise
+        # (q / sqrt 12) is 0.5-4 x the floor (the MPU-6050's floor of ~60 counts would hide
+        # any step of 4-16 counts: such a step explains no gap, and none is the right answer)
+        pows = [step * 2 ** k for k in range(1, 16)]
+        choices = [q for q in pows if 0.5 <= q / math.sqrt(12.0) / floor <= 4.0] or \
+            [min(pows, key=lambda q: abs(math.log(q / math.sqrt(12.0) / floor)))]
         q = int(rng.choice(choices))
         yq = q * np.round(x / q)
         measured["quantization"] = float(np.sqrt(np.mean((yq - y) ** 2))) / floor
