@@ -4,8 +4,8 @@
 Only what the diagnosis was seen to do on every one of several seeds is asserted here
 (each case below runs 3 seeds).  Cases it gets wrong are measured by
 tools/bench_diagnose_indep.py, not asserted: a second-order low-pass is often time_skew,
-a resonance that rings only after each stop none on hand-held data, crosstalk
-misalignment (the same change of every reading).
+crosstalk misalignment (the same change of every reading), an offset of half a coarse step
+on six poses that each sit on one code a pose error.
 """
 from __future__ import annotations
 
@@ -297,3 +297,21 @@ def test_jig_thermal_lag_is_temperature_offset_over_a_drift_path():
     ds = im.make_jig(["temperature_offset"], 90149)
     res = _diagnose(ds, 90149)
     assert res["verdict"] == "temperature_offset", (res["verdict"], res["model"]["effects"], ds["ratio"])
+
+
+@pytest.mark.parametrize("seed", (0, 1, 2, 7))
+def test_six_poses_on_a_coarse_lattice_keep_the_rounding_in_the_floor(real_model, seed):
+    """imucal's six hand-placed poses with their readings on a lattice of 32 counts (its noise is
+    ~3 counts, so each pose sits on one code of a channel or two) and an offset.  Within the poses
+    such a channel does not move, yet each pose reads up to 16 counts off its true value: the floor
+    is at least the rounding noise q/sqrt(12) (it was 1/sqrt(12), and every fit that moved a
+    pose's level scored thousands of chi2 on that channel), and a pose held on one code at the
+    channel's extreme is no clip (saturation had been named with the model 4-6 counts beyond)."""
+    dev, rec, step, cal = real_model("imucal")
+    rec = im.as_posed(rec, cal)
+    rec2, params, ratio = im.inject(dev, cal, rec, ("quantization", "offset"), seed, step=step)
+    q = params["quantization"]["step"]
+    assert q == 32
+    res = diagnose(dev, cal, [rec2], seed=seed)
+    assert min(res["gap"]["noise_floor_per_channel"]) >= q / np.sqrt(12.0) * (1 - 1e-9)
+    assert "saturation" not in res["model"]["effects"], (res["model"]["effects"], params)

@@ -5,13 +5,21 @@ import math
 
 import numpy as np
 
+from ..effects.adc import lattice
 from ..effects.fitdata import FitData, tangent_basis, unit_rows3
-from ..effects.settings import ROUND_SIGMA
 from .settings import MIN_NOISE_DOF
 
 
 def noise_floor(D: FitData, e: np.ndarray) -> tuple[np.ndarray, str]:
+    """Per-channel noise (counts) of the residual e, and how it was found.  At least the rounding
+    noise q/sqrt(12) of the converter's code step q (effects.adc.lattice; 1 count when the readings
+    show none): a channel that sits on one code through each pose shows no spread within the
+    poses, yet its readings are off the true value by up to q/2, differently at each pose."""
     N = D.N
+    if D.code_step is None:
+        D.code_step = lattice(D, np.ones(D.n, bool))[0]
+    step = D.code_step
+    rounding = np.maximum(step, 1.0) / math.sqrt(12.0)
     st = [(a, b) for a, b in zip(D.seg_lo, D.seg_hi) if D.static[a] and b - a >= 3]
     if st:
         var = np.array([np.var(e[a:b], axis=0, ddof=1) for a, b in st])      # (S, N)
@@ -27,7 +35,7 @@ def noise_floor(D: FitData, e: np.ndarray) -> tuple[np.ndarray, str]:
                 o = np.argsort(v[:, i])
                 cw = np.cumsum(nu[o])
                 sig[i] = math.sqrt(v[o[np.searchsorted(cw, 0.5 * cw[-1])], i])
-            return (np.maximum(sig, ROUND_SIGMA),
+            return (np.maximum(sig, rounding),
                     f"median within-segment std of the residual over {len(st)} static segments ({dof} dof)")
     # fourth differences inside segments
     ok = np.zeros(D.n, bool)
@@ -36,11 +44,11 @@ def noise_floor(D: FitData, e: np.ndarray) -> tuple[np.ndarray, str]:
             ok[a + 2:b - 2] = True
     idx = np.flatnonzero(ok)
     if idx.size < 10:
-        return np.full(N, max(ROUND_SIGMA, float(np.std(e)) if e.size else 1.0)), "residual std (too few samples)"
+        return np.maximum(rounding, float(np.std(e)) if e.size else 1.0), "residual std (too few samples)"
     d = e[idx - 2] - 4 * e[idx - 1] + 6 * e[idx] - 4 * e[idx + 1] + e[idx + 2]
     mad = np.median(np.abs(d - np.median(d, axis=0)), axis=0)
     sig = 1.4826 * mad / math.sqrt(70.0)
-    return np.maximum(sig, ROUND_SIGMA), f"robust (MAD) fourth differences of the residual ({idx.size} samples)"
+    return np.maximum(sig, rounding), f"robust (MAD) fourth differences of the residual ({idx.size} samples)"
 
 
 def setup_rows(D: FitData, e: np.ndarray) -> None:

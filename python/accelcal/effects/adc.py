@@ -22,6 +22,36 @@ def normal_tail(z: np.ndarray) -> np.ndarray:
     return 0.5 * ERFC(np.asarray(z, float) / math.sqrt(2.0)).astype(float)
 
 
+def lattice(D, mask):
+    """The converter's code lattice per channel of the readings D.raw[mask]: (step, phase, share,
+    distinct), each (N,); step 0 where the channel shows none (noise.code_lattice per channel,
+    then the gcd of the steps found tried on every channel)."""
+    N = D.N
+    step = np.zeros(N)
+    phase = np.zeros(N)
+    frac = np.ones(N)
+    nd = np.zeros(N, np.int64)
+    for i in range(N):
+        q, ph, fr, n_d = code_lattice(D.raw[mask, i])
+        if q >= 2:
+            step[i], phase[i], frac[i], nd[i] = q, ph, fr, n_d
+    # one converter, one lattice: the gcd of the steps found is tried on every channel (a channel
+    # that sits on a few levels shows no lattice, or a multiple of the step, on its own)
+    found = step[step >= 2].astype(np.int64)
+    if found.size:
+        qc = int(np.gcd.reduce(found))
+        if qc >= 2:
+            for i in range(N):
+                v = D.raw[mask, i].astype(np.int64)
+                u, cnt = np.unique(v, return_counts=True)
+                bc = np.bincount(u % qc, weights=cnt, minlength=qc)
+                ph = int(np.argmax(bc))
+                share = float(bc[ph] / cnt.sum())
+                if u.size >= 2 and share >= QUANT_MIN_FRAC:
+                    step[i], phase[i], frac[i], nd[i] = qc, ph, share, int(np.count_nonzero(u % qc == ph))
+    return step, phase, frac, nd
+
+
 class Saturation(Candidate, Effect):
     name = "saturation"
     tell_apart = "poses and motions that keep every reading well inside the range (a clip flattens only the readings beyond its level)"
@@ -71,11 +101,15 @@ class Saturation(Candidate, Effect):
         lo = np.full(N, -math.inf)
         hi = np.full(N, math.inf)
         proof = []
+        steps = D.code_step if D.code_step is not None else lattice(D, mask)[0]
         for i in range(N):
             v = D.raw[mask, i]
             pc = pcur[mask, i]
             sig = float(D.sigma[i])
-            band = max(4.0 * sig, 4.0)
+            # on a lattice of step q (coarse codes) a pose can sit on one code, with the model up to
+            # q/2 beyond it: a pile is a clip only against the codes next to it and beyond q/2
+            q = float(max(steps[i], 1.0))
+            band = max(4.0 * sig, 4.0, 2.0 * q)
             for side in (1, -1):
                 ext = v.max() if side > 0 else v.min()
                 if (side > 0 and ext >= D.device.raw_max) or (side < 0 and ext <= D.device.raw_min):
@@ -89,7 +123,7 @@ class Saturation(Candidate, Effect):
                 if c < 4.0 * dens + 5:
                     continue
                 beyond = side * float(np.median(pc[at] - ext))
-                if beyond <= max(sig, 0.5):
+                if beyond <= max(sig, 0.5, 0.5 * q):
                     continue
                 if side > 0:
                     hi[i] = ext
@@ -204,30 +238,7 @@ class Quantization(Candidate, Effect):
     # -- fit to a residual (the diagnosis) ------------------------------------
 
     def _fit(self, D, mask):
-        N = D.N
-        step = np.zeros(N)
-        phase = np.zeros(N)
-        frac = np.ones(N)
-        nd = np.zeros(N, np.int64)
-        for i in range(N):
-            q, ph, fr, n_d = code_lattice(D.raw[mask, i])
-            if q >= 2:
-                step[i], phase[i], frac[i], nd[i] = q, ph, fr, n_d
-        # one converter, one lattice: the gcd of the steps found is tried on every channel (a channel
-        # that sits on a few levels shows no lattice, or a multiple of the step, on its own)
-        found = step[step >= 2].astype(np.int64)
-        if found.size:
-            qc = int(np.gcd.reduce(found))
-            if qc >= 2:
-                for i in range(N):
-                    v = D.raw[mask, i].astype(np.int64)
-                    u, cnt = np.unique(v, return_counts=True)
-                    bc = np.bincount(u % qc, weights=cnt, minlength=qc)
-                    ph = int(np.argmax(bc))
-                    share = float(bc[ph] / cnt.sum())
-                    if u.size >= 2 and share >= QUANT_MIN_FRAC:
-                        step[i], phase[i], frac[i], nd[i] = qc, ph, share, int(np.count_nonzero(u % qc == ph))
-        return step, phase, frac, nd
+        return lattice(D, mask)
 
     def _delta(self, pcur, step, phase, dither):
         return self.expected_error(pcur, step, phase, dither)

@@ -1,9 +1,8 @@
 """Settings of the effects' fits (grids, thresholds), documented defaults."""
 from __future__ import annotations
 
-import math
-
 import numpy as np
+
 BLOCK_S = 2.0              # longest cross-validation block in a moving segment (s)
 ROTATING_RADPS = 0.05      # |w| above this counts as rotating (regimes, position_error)
 TEMP_MIN_SPAN_C = 1.0      # temperature candidates need this span of temp_c
@@ -23,7 +22,6 @@ SAT_PROOF_COUNT = 10       # readings at one extreme value, the model >= 5 sigma
 BACKFIT_PASSES = 3
 DRIFT_KNOT_FRACTIONS = (1 / 2, 1 / 4, 1 / 8, 1 / 16)  # bias_drift paths: knot spacing / time span
 DRIFT_MIN_BLOCKS = 2       # ... each knot interval at least this many CV blocks long
-ROUND_SIGMA = math.sqrt(1.0 / 12.0)
 SKEW_GRID = np.array([0.0, 0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 12.0])
 SKEW_GRID = np.concatenate([-SKEW_GRID[:0:-1], SKEW_GRID])          # in samples
 DELAY_GRID = np.array([0.0, 0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0])  # samples
