@@ -7,8 +7,10 @@ scored on the residual the other leaves (:func:`conditional`, the same held-out 
 the stepwise search):
 
 * A after B significant, B after A not, and A alone as large as B (within OCCAM_SHRINK,
-  :func:`as_far`): A explains all B does and more; A is the verdict.
-  Two exceptions: where both follow time and B is tied to a recorded covariate and A to
+  :func:`as_far`): A explains all B does and more; A is the verdict, unless B has fewer
+  parameters, shrinks the gap as far and A's form holds B's change (the rule below, which
+  does not hang on which of the two ranked first: an offset and a temperature through its
+  lag at 0.516 each, the temperature's "more" each pose's rounding).  Two more exceptions: where both follow time and B is tied to a recorded covariate and A to
   time alone (:func:`tied`: a temperature through its lag against a drift's path, which also
   takes what the lag model misses), B stays the first step and A's rest is the next step's;
   and a path through many knots (``Effect.takes_pose_levels``) displaces B only where what it
@@ -229,6 +231,12 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
                 out.tests[c.name]["what_it_adds"] = how
                 if not ok:
                     continue
+            if (best.k < c.k and as_far(best, c) and holds(D, cands, c, best, pcur)
+                    and not one_change(D, cands, best, c, pcur)):
+                # the verdict is the simpler and shrinks the gap as far: it stays the first step and
+                # what the rival adds beyond it is the next step's (as where the rival had ranked
+                # first, below: the outcome does not hang on which of the two ranked first)
+                continue
             swap = (c.name, f"{c.name} explains all that {best.name} does and more ({best.name} adds nothing "
                             "significant after it)")
         elif (not c_after.significant and b_after.significant and c.k < best.k
