@@ -328,3 +328,19 @@ def test_hand_held_offset_on_a_lattice_is_not_a_temperature_offset(seed):
     res = _diagnose(ds, seed)
     assert res["verdict"] in ("offset", "quantization"), (res["verdict"], res["model"]["effects"], ds["ratio"])
     assert {"quantization", "offset"} <= set(res["model"]["effects"]), (res["model"]["effects"], ds["ratio"])
+
+
+def test_an_offset_with_a_drift_in_the_model_says_the_drift_may_have_reached_it():
+    """The independent benchmark's hand-held session with a random-walk drift (154078): the
+    model is offset, gain and bias_drift, the offset being the level the walk had reached when
+    the recording began.  The data cannot say which the constant part is, and the verdict
+    says so, with a recording from right after the calibration as what would tell."""
+    seed = 154078
+    ds = im.make_handheld(["bias_drift"], seed)
+    res = _diagnose(ds, seed)
+    assert res["verdict"] == "bias_drift" or (
+        "bias_drift" in res["model"]["effects"] and "bias_drift" in _ambiguous(res)), \
+        (res["verdict"], res["model"]["effects"], _ambiguous(res))
+    if res["verdict"] == "offset":
+        assert "right after the calibration" in res["separate_by"]
+        assert any("reached since the calibration" in n for n in res["notes"])

@@ -332,13 +332,18 @@ def holds(D, cands, big: Cand, small: Cand, pcur) -> bool:
     return left <= HOLDS_LEFT * total
 
 
-def separate_by(cands, verdict: str, ambiguous: list[str]) -> str:
-    """One sentence: the poses or motions that would tell ``verdict`` from ``ambiguous``."""
+def separate_by(cands, verdict: str, ambiguous: list[str], reached: tuple[str, ...] = ()) -> str:
+    """One sentence: the poses or motions that would tell ``verdict`` from ``ambiguous``;
+    ``reached``: those of them ambiguous only as the level they reached since the calibration
+    (``Effect.reaches_level_of``), which a recording that begins right after it tells."""
     if not ambiguous:
         return ""
     hints = []
-    for nm in [verdict] + list(ambiguous):
-        h = cands[nm].tell_apart
-        if h and h not in hints:
-            hints.append(h)
+    if any(nm not in reached for nm in ambiguous):
+        for nm in [verdict] + [nm for nm in ambiguous if nm not in reached]:
+            h = cands[nm].tell_apart
+            if h and h not in hints:
+                hints.append(h)
+    if any(nm in reached for nm in ambiguous):
+        hints.append("from right after the calibration (a drift has then reached nothing yet)")
     return (f"To tell {verdict} from {' or '.join(ambiguous)}, record " + "; or ".join(hints) + ".")

@@ -233,6 +233,16 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         notes.append("effects after the first were scored on the residual left by the ones before (their in-sample "
                      "fits subtracted); 'model' gives the joint refit")
     ambiguous = list(duel.ambiguous) if duel is not None and steps else []
+    reached = []
+    for c, _ in steps[1:]:
+        # a later step whose level at the recording makes the verdict's constant change too (a drift
+        # since the calibration reads as an offset): the data do not say which the constant part is
+        if verdict in cands[c.name].reaches_level_of and c.name not in ambiguous:
+            ambiguous.append(c.name)
+            reached.append(c.name)
+            notes.append(f"{c.name} is in the model too: its level when the recording began reads as {verdict}, "
+                         f"so the data cannot say how much of the {verdict} is {c.name} reached since the "
+                         "calibration (a recording that begins right after the calibration would)")
     if steps:
         effects[0]["ambiguous_with"] = ambiguous
         effects[0]["contest"] = {"first_ranked": duel.swapped_from or verdict, "rivals": duel.tests}
@@ -308,7 +318,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
             "relinearised": relin_info,
         },
         "ambiguous_with": ambiguous,
-        "separate_by": separate_by(cands, verdict, ambiguous) if steps else "",
+        "separate_by": separate_by(cands, verdict, ambiguous, tuple(reached)) if steps else "",
         "unexplained": left,
         "skipped": skipped,
         "where": to_json(where_breakdown(D, e)),

@@ -63,6 +63,10 @@ class Effect:
     varies_by_pose: bool = False
     #: the pose or motion that shows this effect distinctly (the diagnosis's ``separate_by``)
     tell_apart: str = ""
+    #: effects whose constant change this one's level at the recording also makes, since the
+    #: calibration was made at another time (a drift since then reads as an offset): a verdict
+    #: among them with this effect also in the model is reported ambiguous with it
+    reaches_level_of: tuple[str, ...] = ()
 
     def takes_pose_levels(self, fit) -> bool:
         """Whether a time-dependent fit ``fit`` (a Cand) has the freedom to take a level of its
