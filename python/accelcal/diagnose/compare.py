@@ -85,6 +85,9 @@ class Contest:
     tests: dict = field(default_factory=dict)
     swapped_from: str | None = None
     why: str = ""
+    #: the swap gave the first step to a simpler rival and left what the first-ranked adds beyond it
+    #: to the next steps
+    deferred: bool = False
 
 
 def separable(a: Cand, b: Cand) -> bool:
@@ -247,6 +250,7 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
             # path that also took an offset, or the temperature that a path follows)
             swap = (c.name, f"{c.name} explains as much of the gap alone with fewer parameters ({c.k} against "
                             f"{best.k}); what {best.name} adds beyond it is tested after it")
+            out.deferred = True
         elif not c_after.significant and not b_after.significant and swap is None and tied(cands, c, best):
             # one change over time, neither adding anything after the other: the description tied to
             # its measured cause is the verdict (a drift's path that follows a temperature through

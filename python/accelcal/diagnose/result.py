@@ -243,6 +243,17 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
             notes.append(f"{c.name} is in the model too: its level when the recording began reads as {verdict}, "
                          f"so the data cannot say how much of the {verdict} is {c.name} reached since the "
                          "calibration (a recording that begins right after the calibration would)")
+    if duel is not None and steps and duel.deferred and duel.swapped_from not in chosen \
+            and duel.swapped_from not in ambiguous:
+        # the first-ranked yielded the first step to the simpler verdict, what it adds beyond it left
+        # to the next steps, which then gave it to other terms: the model explains the gap as the
+        # first-ranked alone does, and the data do not tell which
+        a = duel.swapped_from
+        ambiguous.append(a)
+        later = chosen[1:]
+        notes.append(f"{a} alone shrinks the gap as far as {verdict} and adds to it in the nested test, but what it "
+                     "adds " + (f"went to {', '.join(later)}" if later else "was not significant as a later step")
+                     + f": the data do not tell {' + '.join(chosen)} from {a}")
     if steps:
         effects[0]["ambiguous_with"] = ambiguous
         effects[0]["contest"] = {"first_ranked": duel.swapped_from or verdict, "rivals": duel.tests}
