@@ -10,7 +10,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .fitdata import FitData, is_moving
-from .settings import SKEW_GRID
+from .settings import SEARCH_GROW, SEARCH_MAX_S, SKEW_GRID
 
 
 @dataclass
@@ -271,11 +271,32 @@ class SearchCandidate(Candidate):
         self.prepare(D, pcur)
         N, K, bf = D.N, D.K, D.bfold
         wch = D.W[0]
-        grid = self.grid
+        grid = np.asarray(self.grid, float)
         Sg = np.empty((grid.size, D.B, N))                  # unweighted block SS per channel
         for gi, u in enumerate(grid):
             R = y - self.delta(np.full(N, u))
             Sg[gi] = D.bsum(R * R)
+        # a minimum at an end of the grid lies beyond it (a logger's skew of 100 ms and more, a
+        # low-pass far below the motion's band): the grid grows there by SEARCH_GROW per point, up
+        # to SEARCH_MAX_S
+        limit = SEARCH_MAX_S / D.h
+        while True:
+            j = np.argmin(Sg.sum(axis=1), axis=0)
+            grow = []
+            if np.any(j == grid.size - 1) and grid[-1] > 0 and grid[-1] * SEARCH_GROW <= limit:
+                grow.append(grid[-1] * SEARCH_GROW)
+            if np.any(j == 0) and grid[0] < 0 and -grid[0] * SEARCH_GROW <= limit:
+                grow.append(grid[0] * SEARCH_GROW)
+            if not grow:
+                break
+            extra = np.empty((len(grow), D.B, N))
+            for gi, u in enumerate(grow):
+                R = y - self.delta(np.full(N, u))
+                extra[gi] = D.bsum(R * R)
+            grid = np.concatenate([grid, grow])
+            Sg = np.concatenate([Sg, extra])
+            o = np.argsort(grid)
+            grid, Sg = grid[o], Sg[o]
         tot = Sg.sum(axis=1)                                # (G,N)
         cols = np.arange(N)
 
