@@ -53,6 +53,10 @@ an effect of the orientation reads the same at both), and on any data for a drif
 path through many knots (``Effect.takes_pose_levels``), also against an offset: the path
 takes each pose's level visited in turn, so what it adds beyond an offset may be a pattern
 over the poses (a quantiser's error per pose).
+
+A verdict tied to a recorded covariate whose readings change within the poses at least
+1 / WITHIN_MIN times as much as it says lists the effects of time alone in ``ambiguous_with``
+(a random-walk drift that a temperature through its lag follows only roughly).
 """
 from __future__ import annotations
 
@@ -268,6 +272,17 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
             if c.k < best.k and as_far(c, best) and swap is None:
                 swap = (c.name, f"{c.name} explains the same part of the gap with fewer parameters "
                                 f"({c.k} against {best.k})")
+    if swap is None and cands[best.name].time_dependent and cands[best.name].covariate is not None:
+        # a verdict tied to a recorded covariate (a temperature through its lag) whose readings change
+        # within the poses far more than it says: what changes with time is not the covariate's
+        # alone, and an effect of time alone (a drift) may be the cause
+        a, sa = within_pose_support(D, y, best, Given(np.zeros_like(best.delta)))
+        if a >= 1.0 / WITHIN_MIN and a - 1.0 >= WITHIN_Z * sa:
+            how = f"within the poses the data change by {a:.2f} +- {sa:.2f} of what {best.name} claims there"
+            for nm, eff in cands.items():
+                if eff.time_dependent and eff.covariate is None and nm in first and nm not in out.ambiguous:
+                    out.ambiguous.append(nm)
+                    out.tests.setdefault(nm, {})["verdict_within_poses"] = how
     if swap is not None:
         name, why = swap
         out.swapped_from, out.why = best.name, why
