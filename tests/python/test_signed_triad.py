@@ -122,12 +122,17 @@ def test_triad_against_the_float_reference(tri, raw):
 
 
 @estimator
-@given(st.one_of(signed_triads(), unsigned_triads()), st.booleans())
-def test_triad_device_build_matches_host_quantizer(tri, signed):
+@given(st.one_of(signed_triads().map(lambda t: (t, True)), unsigned_triads().map(lambda t: (t, False))),
+       st.booleans())
+@example(((np.array([32767.0, 32767.0, 32767.5]), np.eye(3) * 200.0), False), False)
+def test_triad_device_build_matches_host_quantizer(drawn, signed):
     """ac_triad_build from the header's channel entries gives the host's table: the same
-    shifts, and m and k within one mantissa LSB (30-bit soft-float against float64)."""
-    b, S = tri
-    if signed != bool(np.all(b < 32768)):
+    shifts, and m and k within one mantissa LSB (30-bit soft-float against float64).  The
+    offsets move by 32768 between the signed and the offset-binary form as asked (an
+    unsigned triad whose offsets all sit below 32768 stays unsigned: it had been taken for a
+    signed one and moved out of range)."""
+    (b, S), drawn_signed = drawn
+    if signed != drawn_signed:
         b = b - 32768 if signed else b + 32768
     tab = E.quantize_triad(b, S, signed)
     dev = build_triad_on_device(tab)

@@ -366,3 +366,39 @@ def separate_by(cands, verdict: str, ambiguous: list[str], reached: tuple[str, .
     if any(nm in reached for nm in ambiguous):
         hints.append("from right after the calibration (a drift has then reached nothing yet)")
     return (f"To tell {verdict} from {' or '.join(ambiguous)}, record " + "; or ".join(hints) + ".")
+
+
+def model_ambiguity(cands, chosen: list[str], duel: Contest, ambiguous: list[str]):
+    """What the whole stepwise model says about the verdict ``chosen[0]`` beyond its contest
+    ``duel``: returns (names to add to ``ambiguous_with``, those of them ambiguous only as the
+    level reached since the calibration, notes).
+
+    * an effect in the model too, or one that the first contest found acting beside the
+      verdict (significant after it in the nested test, where the verdict ranked first), whose
+      level when the recording began makes the verdict's constant change
+      (``Effect.reaches_level_of``: a drift since the calibration reads as an offset): the
+      data do not say which the constant part is;
+    * a first-ranked effect that yielded the first step to the simpler verdict
+      (``Contest.deferred``), what it adds left to the next steps, and that is not in the model
+      in the end: the model explains the gap as it alone does."""
+    verdict, later = chosen[0], chosen[1:]
+    add, reached, notes = [], [], []
+    # (the nested tests are the verdict's own only where it ranked first; after a swap they are the
+    # first-ranked's: a bend's rival drift, which an offset plus a gain would then list)
+    beside = [] if duel.swapped_from else \
+        [r for r, t in duel.tests.items() if t.get("rival_after_verdict", {}).get("significant")]
+    for nm in later + beside:
+        if verdict in cands[nm].reaches_level_of and nm not in ambiguous and nm not in add:
+            add.append(nm)
+            reached.append(nm)
+            notes.append(f"{nm} " + ("is in the model too" if nm in later else f"acts beside {verdict} in the nested "
+                                     "tests") + f": its level when the recording began reads as {verdict}, so the data "
+                         f"cannot say how much of the {verdict} is {nm} reached since the calibration (a recording "
+                         "that begins right after the calibration would)")
+    a = duel.swapped_from
+    if duel.deferred and a not in chosen and a not in ambiguous and a not in add:
+        add.append(a)
+        notes.append(f"{a} alone shrinks the gap as far as {verdict} and adds to it in the nested test, but what it "
+                     "adds " + (f"went to {', '.join(later)}" if later else "was not significant as a later step")
+                     + f": the data do not tell {' + '.join(chosen)} from {a}")
+    return add, reached, notes

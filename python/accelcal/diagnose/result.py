@@ -15,7 +15,7 @@ from ..noise import code_lattice
 from .floor import setup_rows
 from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare
-from .compare import OCCAM_SHRINK, Contest, Given, claims_time, conditional, contest, separate_by
+from .compare import OCCAM_SHRINK, Contest, Given, claims_time, conditional, contest, model_ambiguity, separate_by
 from .relinearise import heldout_path, joint_fit, relinearise
 from .leftover import leftover, with_settling
 from .scoring import rank_key, run_candidates
@@ -234,27 +234,10 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
                      "fits subtracted); 'model' gives the joint refit")
     ambiguous = list(duel.ambiguous) if duel is not None and steps else []
     reached = []
-    for c, _ in steps[1:]:
-        # a later step whose level at the recording makes the verdict's constant change too (a drift
-        # since the calibration reads as an offset): the data do not say which the constant part is
-        if verdict in cands[c.name].reaches_level_of and c.name not in ambiguous:
-            ambiguous.append(c.name)
-            reached.append(c.name)
-            notes.append(f"{c.name} is in the model too: its level when the recording began reads as {verdict}, "
-                         f"so the data cannot say how much of the {verdict} is {c.name} reached since the "
-                         "calibration (a recording that begins right after the calibration would)")
-    if duel is not None and steps and duel.deferred and duel.swapped_from not in chosen \
-            and duel.swapped_from not in ambiguous:
-        # the first-ranked yielded the first step to the simpler verdict, what it adds beyond it left
-        # to the next steps, which then gave it to other terms: the model explains the gap as the
-        # first-ranked alone does, and the data do not tell which
-        a = duel.swapped_from
-        ambiguous.append(a)
-        later = chosen[1:]
-        notes.append(f"{a} alone shrinks the gap as far as {verdict} and adds to it in the nested test, but what it "
-                     "adds " + (f"went to {', '.join(later)}" if later else "was not significant as a later step")
-                     + f": the data do not tell {' + '.join(chosen)} from {a}")
     if steps:
+        more, reached, why = model_ambiguity(cands, chosen, duel, ambiguous)
+        ambiguous += more
+        notes += why
         effects[0]["ambiguous_with"] = ambiguous
         effects[0]["contest"] = {"first_ranked": duel.swapped_from or verdict, "rivals": duel.tests}
     if duel is not None and duel.swapped_from:
