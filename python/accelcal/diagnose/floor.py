@@ -16,9 +16,7 @@ def noise_floor(D: FitData, e: np.ndarray) -> tuple[np.ndarray, str]:
     show none): a channel that sits on one code through each pose shows no spread within the
     poses, yet its readings are off the true value by up to q/2, differently at each pose."""
     N = D.N
-    if D.code_step is None:
-        D.code_step = lattice(D, np.ones(D.n, bool))[0]
-    step = D.code_step
+    step = D.code_step if D.code_step is not None else lattice(D, np.ones(D.n, bool))[0]
     rounding = np.maximum(step, 1.0) / math.sqrt(12.0)
     st = [(a, b) for a, b in zip(D.seg_lo, D.seg_hi) if D.static[a] and b - a >= 3]
     if st:
@@ -52,6 +50,9 @@ def noise_floor(D: FitData, e: np.ndarray) -> tuple[np.ndarray, str]:
 
 
 def setup_rows(D: FitData, e: np.ndarray) -> None:
+    """The data's code step, noise floor and row weights (D.code_step, D.sigma, D.W, and
+    jig-free the per-pose projections D.Qp), from the residual e of the model."""
+    D.code_step = lattice(D, np.ones(D.n, bool))[0]
     sig, how = noise_floor(D, e)
     D.sigma, D.noise_method = sig, how
     if D.mode == "jigfree":
