@@ -78,8 +78,10 @@ def read_recording(path: Any, device: Any = None, *, units: str | None = None, l
     units : {"counts", "mps2", "g"}, optional
         The unit of the file's raw readings (as ``--units``); m/s^2 or g with ``lsb`` (one
         count in that unit) or ``full_scale_g`` (+-range in g at ``bits`` bits; m/s^2 with
-        ``gravity_mps2``, default 9.80665).  The readings become counts exactly, or the
-        first that is not a whole number of LSBs is refused with its row.  Default: the
+        ``gravity_mps2``, default 9.80665).  The readings become counts exactly (a value
+        printed with few digits, as '%g' does, is the count it rounds to where its last
+        digit's half unit is at most a quarter of a count), or the first that is not a whole
+        number of LSBs is refused with its row.  Default: the
         file's ``# units:`` / ``# lsb:`` comments, else counts; stated by both, they must
         agree.
 

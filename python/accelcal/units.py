@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from decimal import Decimal
 from typing import Any, Callable
 
 import numpy as np
@@ -29,6 +30,7 @@ __all__ = ["UNITS", "REL_TOL", "Scale", "scale_from_options", "scale_from_metada
 
 UNITS = ("counts", "mps2", "g")
 REL_TOL = 1e-6
+PRINT_TOL_COUNTS = 0.25    # a value printed with few digits: its last digit's half unit, in counts, at most this
 """How far value / lsb may be from an integer n: ``REL_TOL * max(|n|, 1)``.  A float
 written by ``n * lsb`` and read back is within ~1e-15 of n; a wrong LSB is off by far more."""
 STANDARD_GRAVITY = 9.80665
@@ -291,12 +293,30 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
     ------
     InputError
         At the first reading (earliest row, then leftmost column) that is not a whole
-        number of LSBs within ``REL_TOL``, or whose count does not fit 64 bits.
+        number of LSBs within ``REL_TOL``, nor within the rounding of the last significant
+        digit the values are printed with (the most any of them shows) where that is at most
+        PRINT_TOL_COUNTS of a count (a value printed by '%g' as -0.020752 g is -340 counts of
+        1/16384 g: -340.0008), or whose count does not fit 64 bits.
     """
     with np.errstate(invalid="ignore", over="ignore"):
-        x = np.asarray(values, dtype=np.float64) / scale.lsb
+        v = np.asarray(values, dtype=np.float64)
+        x = v / scale.lsb
         n = np.round(x)
-        bad = ~(np.abs(x - n) <= REL_TOL * np.maximum(np.abs(n), 1.0)) | ~(np.abs(n) < 2.0 ** 62)
+        big = ~(np.abs(n) < 2.0 ** 62)
+        bad = ~(np.abs(x - n) <= REL_TOL * np.maximum(np.abs(n), 1.0)) | big
+    if (bad & ~big).any():
+        # a logger that prints its values with few digits ('%g': six significant, trailing zeros
+        # dropped) leaves each off its count by up to half a unit in its last significant place, at the
+        # most digits any of them shows: such a value is the count it rounds to, where that half unit
+        # is at most PRINT_TOL_COUNTS of a count (the count is then unambiguous)
+        u, inv = np.unique(v[bad & ~big], return_inverse=True)
+        digits = max(_significant_digits(float(w)) for w in u)
+        mag = np.floor(np.log10(np.maximum(np.abs(u), np.finfo(float).tiny)))
+        tol = (0.5 * 10.0 ** (mag - (digits - 1)) / scale.lsb)[inv.ravel()]
+        fine = tol <= PRINT_TOL_COUNTS
+        sel = bad & ~big
+        ok = fine & (np.abs(x[sel] - n[sel]) <= tol * (1.0 + 1e-9) + REL_TOL * np.maximum(np.abs(n[sel]), 1.0))
+        bad[sel] = ~ok
     if bad.any():
         i, j = (int(v) for v in np.argwhere(bad)[0])
         row, column = locate(i, j)
@@ -305,3 +325,9 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
                          f"{scale.lsb:.12g} {unit} (the LSB stated by {scale.how}), not a whole number: "
                          "wrong LSB or units, or the values were rounded when written", row=row, column=column)
     return n.astype(np.int64)
+
+
+def _significant_digits(v: float) -> int:
+    """Significant digits of ``repr(v)``, the shortest text that reads back as ``v``
+    (-0.020752 -> 5, -0.142090 printed by '%g' as -0.14209 -> 5, 1/3 -> 16)."""
+    return len(Decimal(repr(v)).normalize().as_tuple().digits)

@@ -16,7 +16,8 @@ from .units import COUNTS_STATED, UNITS, Scale, scale_from_options
 __all__ = ["add_units_options", "scale_from_args", "device_bits"]
 
 UNITS_HELP = ("the unit of the recording's readings: counts (default), mps2 (m/s^2) or g; mps2 and g need "
-              "--lsb or --full-scale, and every reading must then be a whole number of LSBs (within 1e-6), "
+              "--lsb or --full-scale, and every reading must then be a whole number of LSBs (within 1e-6, "
+              "or within the rounding of the digits it is printed with, up to a quarter of a count), "
               "else the first that is not is named by row and column.  The file's '# units:'/'# lsb:' "
               "comments state the same; given both, they must agree (a contradiction is refused, naming the "
               "comment)")

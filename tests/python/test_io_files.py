@@ -187,6 +187,23 @@ def test_to_counts_names_the_first_bad_value():
         to_counts(np.array([[1e300]]), Scale("g", 1e-30, 1e-30), "f", lambda i, j: (1, "x"))
 
 
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.integers(-32768, 32767), min_size=20, max_size=200), st.sampled_from(["%g", "%.6g", "%.7g"]))
+def test_to_counts_takes_values_printed_with_few_digits(counts, fmt):
+    """A logger that prints g with '%g' (six significant digits, trailing zeros dropped: -0.14209
+    for -2328 / 16384 = -0.14208984375) leaves each value up to half a unit in its last place off
+    its count (here <= 0.08 of a count): each is the count it rounds to.  The same values with a
+    wrong LSB (1/12000 g) are still refused."""
+    n = np.array(counts, float).reshape(-1, 1)
+    printed = np.array([[float(fmt % (c / 16384.0))] for c in n[:, 0]])
+    got = to_counts(printed, Scale("g", 1 / 16384, 1 / 16384, "--lsb"), "f", lambda i, j: (i + 1, "ax"))
+    assert np.array_equal(got[:, 0], n[:, 0].astype(np.int64))
+    off = np.abs(printed[:, 0] * 12000.0 - np.round(printed[:, 0] * 12000.0))
+    if np.any(off > 0.25):   # a count of 1/12000 g that is also a whole count of 1/16384: not a test
+        with pytest.raises(InputError, match="not a whole number"):
+            to_counts(printed, Scale("g", 1 / 12000, 1 / 12000, "--lsb"), "f", lambda i, j: (i + 1, "ax"))
+
+
 # ---- accelcal convert ----------------------------------------------------------
 
 def convert_then_calibrate(src, tmp_path, capfd, convert_args, method):
