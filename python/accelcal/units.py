@@ -30,9 +30,12 @@ __all__ = ["UNITS", "REL_TOL", "Scale", "scale_from_options", "scale_from_metada
 
 UNITS = ("counts", "mps2", "g")
 REL_TOL = 1e-6
-PRINT_TOL_COUNTS = 0.25    # a value printed with few digits: its last digit's half unit, in counts, at most this
 """How far value / lsb may be from an integer n: ``REL_TOL * max(|n|, 1)``.  A float
 written by ``n * lsb`` and read back is within ~1e-15 of n; a wrong LSB is off by far more."""
+PRINT_TOL_COUNTS = 0.25
+"""A value printed with few digits ('%g') may be off its count by half a unit in its last
+significant place, where that half unit is at most this many counts (the count is then
+unambiguous)."""
 STANDARD_GRAVITY = 9.80665
 METADATA_KEYS = ("units", "lsb", "full_scale_g", "bits", "gravity_mps2")
 UNIT_TEXT = {"counts": "counts", "mps2": "m/s^2", "g": "g"}
@@ -304,17 +307,17 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
         n = np.round(x)
         big = ~(np.abs(n) < 2.0 ** 62)
         bad = ~(np.abs(x - n) <= REL_TOL * np.maximum(np.abs(n), 1.0)) | big
-    if (bad & ~big).any():
+    sel = bad & ~big
+    if sel.any():
         # a logger that prints its values with few digits ('%g': six significant, trailing zeros
         # dropped) leaves each off its count by up to half a unit in its last significant place, at the
         # most digits any of them shows: such a value is the count it rounds to, where that half unit
         # is at most PRINT_TOL_COUNTS of a count (the count is then unambiguous)
-        u, inv = np.unique(v[bad & ~big], return_inverse=True)
+        u, inv = np.unique(v[sel], return_inverse=True)
         digits = max(_significant_digits(float(w)) for w in u)
         mag = np.floor(np.log10(np.maximum(np.abs(u), np.finfo(float).tiny)))
         tol = (0.5 * 10.0 ** (mag - (digits - 1)) / scale.lsb)[inv.ravel()]
         fine = tol <= PRINT_TOL_COUNTS
-        sel = bad & ~big
         ok = fine & (np.abs(x[sel] - n[sel]) <= tol * (1.0 + 1e-9) + REL_TOL * np.maximum(np.abs(n[sel]), 1.0))
         bad[sel] = ~ok
     if bad.any():

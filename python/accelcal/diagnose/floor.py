@@ -5,18 +5,18 @@ import math
 
 import numpy as np
 
-from ..effects.adc import lattice
+from ..effects.adc import data_lattice
 from ..effects.fitdata import FitData, tangent_basis, unit_rows3
 from .settings import MIN_NOISE_DOF
 
 
 def noise_floor(D: FitData, e: np.ndarray) -> tuple[np.ndarray, str]:
     """Per-channel noise (counts) of the residual e, and how it was found.  At least the rounding
-    noise q/sqrt(12) of the converter's code step q (effects.adc.lattice; 1 count when the readings
+    noise q/sqrt(12) of the converter's code step q (effects.adc.data_lattice; 1 count when the readings
     show none): a channel that sits on one code through each pose shows no spread within the
     poses, yet its readings are off the true value by up to q/2, differently at each pose."""
     N = D.N
-    step = D.code_step if D.code_step is not None else lattice(D, np.ones(D.n, bool))[0]
+    step = data_lattice(D)[0]
     rounding = np.maximum(step, 1.0) / math.sqrt(12.0)
     st = [(a, b) for a, b in zip(D.seg_lo, D.seg_hi) if D.static[a] and b - a >= 3]
     if st:
@@ -50,9 +50,8 @@ def noise_floor(D: FitData, e: np.ndarray) -> tuple[np.ndarray, str]:
 
 
 def setup_rows(D: FitData, e: np.ndarray) -> None:
-    """The data's code step, noise floor and row weights (D.code_step, D.sigma, D.W, and
-    jig-free the per-pose projections D.Qp), from the residual e of the model."""
-    D.code_step = lattice(D, np.ones(D.n, bool))[0]
+    """The data's noise floor and row weights (D.sigma, D.W, and jig-free the per-pose
+    projections D.Qp), from the residual e of the model."""
     sig, how = noise_floor(D, e)
     D.sigma, D.noise_method = sig, how
     if D.mode == "jigfree":

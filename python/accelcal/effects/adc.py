@@ -22,17 +22,25 @@ def normal_tail(z: np.ndarray) -> np.ndarray:
     return 0.5 * ERFC(np.asarray(z, float) / math.sqrt(2.0)).astype(float)
 
 
-def lattice(D, mask):
-    """The converter's code lattice per channel of the readings D.raw[mask]: (step, phase, share,
+def data_lattice(D):
+    """The converter's code lattice per channel of the readings D.raw: (step, phase, share,
     distinct), each (N,); step 0 where the channel shows none (noise.code_lattice per channel,
-    then the gcd of the steps found tried on every channel)."""
-    N = D.N
+    then the gcd of the steps found tried on every channel).  Read off the raw values once per
+    FitData (kept in ``D.lattice``): the noise floor, the clip test and the quantiser's fit
+    share it."""
+    if D.lattice is None:
+        D.lattice = _lattice(D.raw)
+    return D.lattice
+
+
+def _lattice(raw: np.ndarray):
+    N = raw.shape[1]
     step = np.zeros(N)
     phase = np.zeros(N)
     frac = np.ones(N)
     nd = np.zeros(N, np.int64)
     for i in range(N):
-        q, ph, fr, n_d = code_lattice(D.raw[mask, i])
+        q, ph, fr, n_d = code_lattice(raw[:, i])
         if q >= 2:
             step[i], phase[i], frac[i], nd[i] = q, ph, fr, n_d
     # one converter, one lattice: the gcd of the steps found is tried on every channel (a channel
@@ -42,8 +50,7 @@ def lattice(D, mask):
         qc = int(np.gcd.reduce(found))
         if qc >= 2:
             for i in range(N):
-                v = D.raw[mask, i].astype(np.int64)
-                u, cnt = np.unique(v, return_counts=True)
+                u, cnt = np.unique(raw[:, i].astype(np.int64), return_counts=True)
                 bc = np.bincount(u % qc, weights=cnt, minlength=qc)
                 ph = int(np.argmax(bc))
                 share = float(bc[ph] / cnt.sum())
@@ -101,7 +108,7 @@ class Saturation(Candidate, Effect):
         lo = np.full(N, -math.inf)
         hi = np.full(N, math.inf)
         proof = []
-        steps = D.code_step if D.code_step is not None else lattice(D, mask)[0]
+        steps = data_lattice(D)[0]
         for i in range(N):
             v = D.raw[mask, i]
             pc = pcur[mask, i]
@@ -237,9 +244,6 @@ class Quantization(Candidate, Effect):
 
     # -- fit to a residual (the diagnosis) ------------------------------------
 
-    def _fit(self, D, mask):
-        return lattice(D, mask)
-
     def _delta(self, pcur, step, phase, dither):
         return self.expected_error(pcur, step, phase, dither)
 
@@ -259,11 +263,12 @@ class Quantization(Candidate, Effect):
         # The lattice is read off the raw values, not fitted to the residual; a training fold can
         # miss it on a channel with few distinct values (static poses): the lattice comes from all
         # the data and every block is scored with it.
-        step, phase, frac, nd = self._fit(D, np.ones(D.n, bool))
+        step, phase, frac, nd = data_lattice(D)
         dither = self._dither(y, pcur, step, phase)
         delta = self._delta(pcur, step, phase, dither)
         Sw, Su = block_ss(D, D.rows(y - delta))
-        c = Cand(self.name, int(np.count_nonzero(step)), Sw, Su, delta, {"step": step}, {"step": np.zeros(D.N)})
+        # (the parameters are copies: the lattice stays as read for the next candidate and step)
+        c = Cand(self.name, int(np.count_nonzero(step)), Sw, Su, delta, {"step": step.copy()}, {"step": np.zeros(D.N)})
         strong = (step > 0) & (frac >= QUANT_STRONG_FRAC) & (nd >= QUANT_STRONG_VALUES)
         # a lattice is the cause of a gap only where its rounding noise (step / sqrt(12)) is a real
         # part of the noise: the MPU-6050's 4-count steps under 50-80 counts of noise are not
@@ -279,7 +284,7 @@ class Quantization(Candidate, Effect):
             c.notes.append("raw values on a lattice: " + ", ".join(
                 f"channel {i}: step {int(step[i])} ({100 * frac[i]:.2f} % of readings, {nd[i]} values)"
                 for i in np.flatnonzero(strong)))
-        c.params["phase"] = phase
+        c.params["phase"] = phase.copy()
         c.params["dither"] = dither
         return c
 

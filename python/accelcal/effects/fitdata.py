@@ -52,7 +52,7 @@ class FitData:
     Qp: np.ndarray | None = None  # (P, M, N) jig-free projections per pose
     sigma: np.ndarray | None = None   # (N,) noise floor
     noise_method: str = ""
-    code_step: np.ndarray | None = None  # (N,) the converter's code step of the readings (0 = none found)
+    lattice: tuple | None = None  # (step, phase, share, distinct) per channel: effects.adc.data_lattice's cache
     W: np.ndarray | None = None   # (n, R) row weights
     h: float = 0.0                # sample period (s)
 

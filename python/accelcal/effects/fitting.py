@@ -271,11 +271,17 @@ class SearchCandidate(Candidate):
         self.prepare(D, pcur)
         N, K, bf = D.N, D.K, D.bfold
         wch = D.W[0]
+
+        def block_ss_at(points):
+            """Unweighted block SS per channel (G, B, N) with every channel at each grid point."""
+            out = np.empty((len(points), D.B, N))
+            for gi, u in enumerate(points):
+                R = y - self.delta(np.full(N, u))
+                out[gi] = D.bsum(R * R)
+            return out
+
         grid = np.asarray(self.grid, float)
-        Sg = np.empty((grid.size, D.B, N))                  # unweighted block SS per channel
-        for gi, u in enumerate(grid):
-            R = y - self.delta(np.full(N, u))
-            Sg[gi] = D.bsum(R * R)
+        Sg = block_ss_at(grid)
         # a minimum at an end of the grid lies beyond it (a logger's skew of 100 ms and more, a
         # low-pass far below the motion's band): the grid grows there by SEARCH_GROW per point, up
         # to SEARCH_MAX_S
@@ -289,12 +295,8 @@ class SearchCandidate(Candidate):
                 grow.append(grid[0] * SEARCH_GROW)
             if not grow:
                 break
-            extra = np.empty((len(grow), D.B, N))
-            for gi, u in enumerate(grow):
-                R = y - self.delta(np.full(N, u))
-                extra[gi] = D.bsum(R * R)
             grid = np.concatenate([grid, grow])
-            Sg = np.concatenate([Sg, extra])
+            Sg = np.concatenate([Sg, block_ss_at(grow)])
             o = np.argsort(grid)
             grid, Sg = grid[o], Sg[o]
         tot = Sg.sum(axis=1)                                # (G,N)
