@@ -35,6 +35,9 @@ ONE_REGIME_RATIO = 3.0     # a recording with no rest/motion split: its window s
                            # the white noise level (the rest/motion ratio: more is motion throughout)
 
 
+MAD_TO_STD = 1.4826        # std of a normal distribution per unit of median absolute deviation
+
+
 QUANT_MIN_FRAC = 0.99      # a lattice must hold this share of the readings (a few strays allowed)
 
 
@@ -182,7 +185,7 @@ def white_noise(v: np.ndarray) -> float:
     if v.size < 10:
         return 0.0
     d = v[:-4] - 4 * v[1:-3] + 6 * v[2:-2] - 4 * v[3:-1] + v[4:]
-    return float(1.4826 * np.median(np.abs(d - np.median(d))) / math.sqrt(70.0))
+    return float(MAD_TO_STD * np.median(np.abs(d - np.median(d))) / math.sqrt(70.0))
 
 
 def estimate_noise(x: np.ndarray, window: int, *, integer: bool | None = None) -> np.ndarray:

@@ -17,7 +17,7 @@ import numpy as np
 
 from .clipping import ClipLevels, clip_levels
 from .errors import InputError
-from .noise import estimate_noise, noise_for, window_std
+from .noise import MAD_TO_STD, estimate_noise, noise_for, window_std
 from .recording import check_for_device
 
 
@@ -27,10 +27,14 @@ STATIC_WINDOW_S = 0.5      # window over which the moving std is taken
 STATIC_THRESHOLD = 2.0     # static while every channel's window std <= this x its noise
 
 
-MIN_POSE_S = 1.0           # shortest static interval kept as a pose
+MIN_POSE_S = 1.0           # shortest static interval kept as a pose where an end is a motion (a pause in
+                           # a movement is no pose); a piece whose ends are both instant steps (or the
+                           # recording's ends) needs one window only: no motion touches it
 
 
-EDGE_SIGMA = 4.0           # static interval ends: the nearest samples this x noise off the median
+EDGE_SIGMA = 4.0           # static interval ends: the nearest samples this x noise off the median (noise:
+                           # the larger of the recording's and the piece's own robust std, MAD x MAD_TO_STD,
+                           # as hand-held tremor differs from pose to pose)
 
 
 MOVE_RANGE = 8.0           # a labelled pose "moves" when a channel's mean over an eighth of it strays
@@ -111,7 +115,8 @@ def window_len(device, window_s: float, n: int) -> int:
 def step_splits(raw: np.ndarray, a: int, b: int, m: int, sig: np.ndarray) -> list[int]:
     """Sample indices in (a, b) at which the readings step: the means of the m samples
     before and after differ by more than STEP_SIGMA x noise on some channel (the local
-    maximum of each run of such indices)."""
+    maximum of each run of such indices), and so do the medians of the pieces between
+    neighbouring splits (the least distinct split is dropped until all are)."""
     L = b - a
     if L < 2 * m + 1:
         return []
@@ -128,6 +133,16 @@ def step_splits(raw: np.ndarray, a: int, b: int, m: int, sig: np.ndarray) -> lis
     out = []
     for s0, e0 in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
         out.append(a + int(i[s0 + int(np.argmax(z[s0:e0]))]))
+    # a step joins two levels: a split whose pieces' medians do not differ by that much
+    # was a swing of coloured (tremor) noise inside one pose
+    while out:
+        cuts = [a] + out + [b]
+        med = [np.median(raw[cuts[j]:cuts[j + 1]], axis=0) for j in range(len(cuts) - 1)]
+        z = [float(np.max(np.abs(med[j + 1] - med[j]) / sig)) for j in range(len(out))]
+        j = int(np.argmin(z))
+        if z[j] > STEP_SIGMA:
+            break
+        del out[j]
     return out
 
 
@@ -145,9 +160,13 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
     3. Each piece is refined to the sample: with med its median, its ends move to the
        nearest samples (searching one window beyond and a block inside, never into a
        neighbouring piece) at which some channel is more than EDGE_SIGMA x noise away
-       from med.  The window test alone would admit an edge sample up to about
-       sqrt(3 w) x noise off.
-    4. Intervals shorter than ``min_s`` (or one window) are dropped.
+       from med, the noise here being the larger of the recording's and the piece's own
+       robust std (hand-held tremor is uneven from pose to pose).  The window test alone
+       would admit an edge sample up to about sqrt(3 w) x noise off.
+    4. Intervals shorter than ``min_s`` are dropped, except that a piece whose two ends
+       are instant steps or the recording's ends (a logger that records only static
+       blocks) needs one window only: no motion touches it, so it is no pause in a
+       movement.
 
     The noise is the device's ``noise_mps2`` (plus rounding) when it is given for
     every channel, else estimated from the data (:func:`accelcal.noise.estimate_noise`),
@@ -180,7 +199,6 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
     min_n = max(w, int(math.ceil(min_s * device.sample_rate_hz)))
     ext = k * h
     out: list[tuple[int, int]] = []
-    lim = EDGE_SIGMA * sig
     for r, (a, b, cut_a, cut_b) in enumerate(runs):
         lo_lim = max(out[-1][1] if out else 0, runs[r - 1][1] if r else 0)
         hi_lim = runs[r + 1][0] if r + 1 < len(runs) else n
@@ -188,15 +206,21 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
         hi = b if cut_b else min(hi_lim, b + ext)
         if b - a < 1:
             continue
-        med = np.median(raw[a:b:max(1, (b - a) // 2000)], axis=0)
+        sub = raw[a:b:max(1, (b - a) // 2000)]
+        med = np.median(sub, axis=0)
+        lim = EDGE_SIGMA * np.maximum(sig, MAD_TO_STD * np.median(np.abs(sub - med), axis=0))
         left = np.flatnonzero(np.any(np.abs(raw[lo:min(a + h, b)] - med) > lim, axis=1))
         start = lo + (int(left[-1]) + 1 if left.size else 0)
         r0 = max(b - h, a)
         right = np.flatnonzero(np.any(np.abs(raw[r0:hi] - med) > lim, axis=1))
         stop = r0 + int(right[0]) if right.size else hi
-        if stop - start >= min_n:
+        if stop - start >= w:
             out.append((int(start), int(stop)))
-    return out
+    # a piece joined to its neighbours (or the recording's ends) with no sample between
+    # them was recorded as a static block: no motion touches it
+    stops = {0} | {iv[1] for iv in out}
+    starts = {n} | {iv[0] for iv in out}
+    return [iv for iv in out if iv[1] - iv[0] >= min_n or (iv[0] in stops and iv[1] in starts)]
 
 
 def nyquist_tone(raw: np.ndarray) -> np.ndarray:
@@ -253,7 +277,9 @@ def pose_means(rec, intervals: Sequence[Any], device, *, labels: Sequence[Any] |
     one whose mean over an eighth of it differs from another eighth's by more than
     MOVE_RANGE x the channel's noise, or whose std exceeds MOVE_STD x it; the noise
     is the larger of the recording's and the median within-pose std of the poses
-    (tremor that every hand-held pose shows is noise, not motion).  Clipped readings
+    (tremor that every hand-held pose shows is noise, not motion), and for the mean
+    test also of the pose's own median std within its eighths (strong tremor in one
+    pose swings its eighths' means; a move or a ramp moves them by many times that).  Clipped readings
     are the caller's to set aside (:func:`poses_from_recording`).
     Returns means (P,N), counts (P,), std (P,N).
     """
@@ -290,16 +316,21 @@ def pose_means(rec, intervals: Sequence[Any], device, *, labels: Sequence[Any] |
                 continue
             parts = np.array_split(raw[idx].astype(float), MOVE_PARTS)
             pm = np.array([q.mean(axis=0) for q in parts])
-            spread = (pm.max(axis=0) - pm.min(axis=0)) / ref_sig
+            # the level's yardstick also takes the pose's own noise within its parts (the
+            # median over the parts): strong tremor swings the parts' means, a move or a
+            # ramp moves them by many times what each part varies within
+            part_sig = np.maximum(ref_sig, np.median([q.std(axis=0, ddof=1) for q in parts], axis=0))
+            spread = (pm.max(axis=0) - pm.min(axis=0)) / part_sig
             ratio = std[p] / ref_sig
             bad = np.flatnonzero((spread > MOVE_RANGE) | (ratio > MOVE_STD))
             if bad.size:
                 c = int(bad[np.argmax(np.maximum(spread[bad] / MOVE_RANGE, ratio[bad] / MOVE_STD))])
-                what = (f"its mean moves by {spread[c] * ref_sig[c]:.4g} counts" if spread[c] > MOVE_RANGE
+                moves = spread[c] > MOVE_RANGE
+                what = (f"its mean moves by {spread[c] * part_sig[c]:.4g} counts" if moves
                         else f"it varies by {std[p, c]:.4g} counts rms")
                 raise InputError(rec.source, f"{names[p]} (t = {float(rec.t[idx[0]]):.6g} .. {float(rec.t[idx[-1]]):.6g} s, "
                                  f"samples {int(idx[0])}..{int(idx[-1])}) is labelled static but moves: on raw_{c} "
-                                 f"{what}, its noise is {ref_sig[c]:.3g} counts",
+                                 f"{what}, its noise is {(part_sig if moves else ref_sig)[c]:.3g} counts",
                                  column="pose" if labels is not None else f"raw_{c}")
     return mean, cnt, std
 

@@ -135,6 +135,53 @@ def test_mains_aliased_to_half_the_sampling_rate_is_not_motion():
         assert not bad, (with_tone, bad)
 
 
+def test_static_blocks_shorter_than_the_minimum_hold_are_poses_where_instant_steps_join_them():
+    """A logger that records only static blocks (CK-Explorer's acc_log.csv: 160 blocks of
+    100 samples, no time column) joins its poses by instant steps: a block shorter than
+    MIN_POSE_S is a pose, as no motion touches it.  A pause of the same length inside a
+    movement is not (the window test sees a block that holds two windows)."""
+    rng = np.random.default_rng(11)
+    dev, raw, lab = hand_held(rng, P=60, hold=int(0.75 * 100))
+    iv = detect_static(recording(raw, 100.0), dev)
+    assert len(iv) >= 0.5 * 60                      # none of them before
+    assert all(lab[a] == lab[b - 1] for a, b in iv)
+    # 12 poses of 2 s joined by 1 s moves that pause for 0.6 s half-way
+    F = Rotation.random(12, random_state=3).apply([0.0, 0.0, G])
+    s = np.linspace(0.0, 1.0, 50)[:, None]
+    ease = 3 * s ** 2 - 2 * s ** 3
+    segs = []
+    for i in range(11):
+        mid = 0.5 * (F[i] + F[i + 1])
+        segs += [np.repeat(F[i][None], 200, 0), F[i] + (mid - F[i]) * ease, np.repeat(mid[None], 60, 0),
+                 mid + (F[i + 1] - mid) * ease]
+    f = np.concatenate(segs + [np.repeat(F[11][None], 200, 0)])
+    f = f + 0.02 * rng.standard_normal(f.shape)
+    iv = detect_static(recording(np.round(32768 + dev.counts_per_mps2[0] * f).astype(np.int64), 100.0), dev)
+    assert len(iv) == 12
+    assert min(b - a for a, b in iv) >= 200
+
+
+def test_labelled_pose_with_strong_tremor_is_not_motion_but_a_slow_turn_is():
+    """One labelled pose sways at 2 Hz four times as hard as the others shake (its eighths'
+    means swing with it, as in CK-Explorer's hand-held blocks): it is a pose (refused
+    before).  A slow 8 deg turn across a pose of ordinary tremor moves its eighths' means by
+    many times what each eighth varies within: refused."""
+    rng = np.random.default_rng(12)
+    dev, raw, lab = hand_held(rng, P=20)
+    k = dev.counts_per_mps2[0]
+    shaky = raw.copy()
+    idx = np.flatnonzero(lab == 5)
+    shaky[idx] += np.round(0.2 * k * tremor(rng, idx.size, 100.0, hz=2.0)).astype(np.int64)  # others: 0.02-0.08
+    cal = calibrate_recordings(dev, [recording(shaky, 100.0, pose=lab)], method="jigfree")
+    assert len(cal.poses_used) == 20
+    turned = raw.copy()
+    idx = np.flatnonzero(lab == 7)
+    ang = np.radians(np.linspace(0.0, 8.0, idx.size))
+    turned[idx, 0] += np.round(k * G * np.sin(ang)).astype(np.int64)
+    with pytest.raises(InputError, match=r"pose 7 .* is labelled static but moves: on raw_0 its mean moves"):
+        calibrate_recordings(dev, [recording(turned, 100.0, pose=lab, source="slow.csv")], method="jigfree")
+
+
 def test_labelled_pose_that_turns_is_refused_naming_label_time_and_channel():
     rng = np.random.default_rng(6)
     dev, raw, lab = hand_held(rng, P=20)

@@ -7,6 +7,7 @@ import numpy as np
 
 from ..effects.adc import data_lattice
 from ..effects.fitdata import FitData, tangent_basis, unit_rows3
+from ..noise import MAD_TO_STD
 from .settings import MIN_NOISE_DOF
 
 
@@ -45,7 +46,7 @@ def noise_floor(D: FitData, e: np.ndarray) -> tuple[np.ndarray, str]:
         return np.maximum(rounding, float(np.std(e)) if e.size else 1.0), "residual std (too few samples)"
     d = e[idx - 2] - 4 * e[idx - 1] + 6 * e[idx] - 4 * e[idx + 1] + e[idx + 2]
     mad = np.median(np.abs(d - np.median(d, axis=0)), axis=0)
-    sig = 1.4826 * mad / math.sqrt(70.0)
+    sig = MAD_TO_STD * mad / math.sqrt(70.0)
     return np.maximum(sig, rounding), f"robust (MAD) fourth differences of the residual ({idx.size} samples)"
 
 
