@@ -17,7 +17,7 @@ import numpy as np
 
 from .clipping import ClipLevels, clip_levels
 from .errors import InputError
-from .noise import MAD_TO_STD, estimate_noise, noise_for, window_std
+from .noise import estimate_noise, noise_for, window_std
 from .recording import check_for_device
 
 
@@ -32,9 +32,7 @@ MIN_POSE_S = 1.0           # shortest static interval kept as a pose where an en
                            # recording's ends) needs one window only: no motion touches it
 
 
-EDGE_SIGMA = 4.0           # static interval ends: the nearest samples this x noise off the median (noise:
-                           # the larger of the recording's and the piece's own robust std, MAD x MAD_TO_STD,
-                           # as hand-held tremor differs from pose to pose)
+EDGE_SIGMA = 4.0           # static interval ends: the nearest samples this x noise off the median
 
 
 MOVE_RANGE = 8.0           # a labelled pose "moves" when a channel's mean over an eighth of it strays
@@ -160,9 +158,8 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
     3. Each piece is refined to the sample: with med its median, its ends move to the
        nearest samples (searching one window beyond and a block inside, never into a
        neighbouring piece) at which some channel is more than EDGE_SIGMA x noise away
-       from med, the noise here being the larger of the recording's and the piece's own
-       robust std (hand-held tremor is uneven from pose to pose).  The window test alone
-       would admit an edge sample up to about sqrt(3 w) x noise off.
+       from med.  The window test alone would admit an edge sample up to about
+       sqrt(3 w) x noise off.
     4. Intervals shorter than ``min_s`` are dropped, except that a piece whose two ends
        are instant steps or the recording's ends (a logger that records only static
        blocks) needs one window only: no motion touches it, so it is no pause in a
@@ -199,6 +196,7 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
     min_n = max(w, int(math.ceil(min_s * device.sample_rate_hz)))
     ext = k * h
     out: list[tuple[int, int]] = []
+    lim = EDGE_SIGMA * sig
     for r, (a, b, cut_a, cut_b) in enumerate(runs):
         lo_lim = max(out[-1][1] if out else 0, runs[r - 1][1] if r else 0)
         hi_lim = runs[r + 1][0] if r + 1 < len(runs) else n
@@ -206,9 +204,7 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
         hi = b if cut_b else min(hi_lim, b + ext)
         if b - a < 1:
             continue
-        sub = raw[a:b:max(1, (b - a) // 2000)]
-        med = np.median(sub, axis=0)
-        lim = EDGE_SIGMA * np.maximum(sig, MAD_TO_STD * np.median(np.abs(sub - med), axis=0))
+        med = np.median(raw[a:b:max(1, (b - a) // 2000)], axis=0)
         left = np.flatnonzero(np.any(np.abs(raw[lo:min(a + h, b)] - med) > lim, axis=1))
         start = lo + (int(left[-1]) + 1 if left.size else 0)
         r0 = max(b - h, a)
