@@ -75,6 +75,9 @@ RIVAL_GAIN_SHARE = 0.5     # rivals: significant candidates with at least this s
 MAX_RIVALS = 3             # ... at most this many, by gain
 WITHIN_MIN = 0.5           # a time-dependent fit is borne out within the poses at >= this share of its claim ...
 WITHIN_Z = 3.0             # ... and this many standard errors above 0
+TIME_SHOWS = 0.2           # the readings change with time within the poses when a drift's path, fitted
+                           # alone, is met there with a slope of either sign this large (and WITHIN_Z
+                           # standard errors): a path that only took the poses' levels meets ~0 there
 HOLDS_LEFT = 0.1           # one form holds another's change when it leaves at most this share of it
 
 
@@ -402,3 +405,33 @@ def model_ambiguity(cands, chosen: list[str], duel: Contest, ambiguous: list[str
                      "adds " + (f"went to {', '.join(later)}" if later else "was not significant as a later step")
                      + f": the data do not tell {' + '.join(chosen)} from {a}")
     return add, reached, notes
+
+
+def time_unmodelled(D, y, first: dict[str, Cand], cands, chosen: list[str], ambiguous: list[str]):
+    """Effects of time that the model leaves out although the readings change with time
+    within the poses: returns (names to add to ``ambiguous_with``, notes).
+
+    Where the model holds no term that follows time, each time-dependent effect that is
+    significant alone is set against the verdict within the poses
+    (:func:`within_pose_support` on the first residual ``y``).  A path that took only the
+    poses' levels (what a pose-dependent verdict explains as well) meets a slope of ~0
+    there; a slope of at least TIME_SHOWS of either sign, WITHIN_Z standard errors from 0,
+    says that the readings do change with time inside the poses, and that the verdict may
+    have taken the levels such a change left from pose to pose (on poses each held once, a
+    bend's square term or an offset reads a drift's level per pose)."""
+    if not chosen or any(cands[nm].time_dependent for nm in chosen):
+        return [], []
+    verdict = first.get(chosen[0])
+    if verdict is None:
+        return [], []
+    add, notes = [], []
+    for nm, c in first.items():
+        if not cands[nm].time_dependent or not c.significant or c.gain <= 0 or nm in ambiguous:
+            continue
+        a, sa = within_pose_support(D, y, c, verdict)
+        if abs(a) >= TIME_SHOWS and abs(a) >= WITHIN_Z * sa:
+            add.append(nm)
+            notes.append(f"the readings change with time within the poses ({nm} alone is met there with a slope of "
+                         f"{a:.2f} +- {sa:.2f} of its path) but the model holds no term that follows time: "
+                         f"{chosen[0]} may have taken the levels such a change left from pose to pose")
+    return add, notes
