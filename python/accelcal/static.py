@@ -132,16 +132,26 @@ def step_splits(raw: np.ndarray, a: int, b: int, m: int, sig: np.ndarray) -> lis
     for s0, e0 in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
         out.append(a + int(i[s0 + int(np.argmax(z[s0:e0]))]))
     # a step joins two levels: a split whose pieces' medians do not differ by that much
-    # was a swing of coloured (tremor) noise inside one pose
-    while out:
-        cuts = [a] + out + [b]
-        med = [np.median(raw[cuts[j]:cuts[j + 1]], axis=0) for j in range(len(cuts) - 1)]
-        z = [float(np.max(np.abs(med[j + 1] - med[j]) / sig)) for j in range(len(out))]
+    # was a swing of coloured (tremor) noise inside one pose (the least distinct goes first;
+    # only the merged piece's median and its two splits' distinctness change)
+    cuts = [a] + out + [b]
+    med = [np.median(raw[cuts[j]:cuts[j + 1]], axis=0) for j in range(len(cuts) - 1)]
+
+    def apart(j):
+        return float(np.max(np.abs(med[j + 1] - med[j]) / sig))
+
+    z = [apart(j) for j in range(len(out))]
+    while z:
         j = int(np.argmin(z))
         if z[j] > STEP_SIGMA:
             break
-        del out[j]
-    return out
+        del cuts[j + 1], med[j + 1], z[j]
+        med[j] = np.median(raw[cuts[j]:cuts[j + 1]], axis=0)
+        if j > 0:
+            z[j - 1] = apart(j - 1)
+        if j < len(z):
+            z[j] = apart(j)
+    return cuts[1:-1]
 
 
 def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: float = STATIC_THRESHOLD,
