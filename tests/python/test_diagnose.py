@@ -180,6 +180,31 @@ def test_two_effects_stepwise():
     assert np.allclose(tau, 0.002, atol=2e-4)
 
 
+@pytest.mark.parametrize("profile", ["ramp", "sine"])
+def test_a_temperature_that_only_rises_cannot_be_told_from_a_drift(profile):
+    """An offset that follows the recorded temperature, 18 jig poses.  Where the temperature
+    only rises, it is a function of time and a drift changes the readings as it does: the
+    verdict lists bias_drift and separate_by asks for the temperature apart from time.  Where
+    it rises and falls twice, the same temperature recurs at other times, and nothing is
+    listed."""
+    dev = default_device()
+    cal = seed_prototype_truth(dev, 6)
+    rng = np.random.default_rng(1)
+    span = B.MOTIONS["static_poses"](dev, np.random.default_rng(1), poses="18").t[-1]
+    kw = (dict(temp_c=20, temp_end_c=35) if profile == "ramp"
+          else dict(temp_c=27, temp_amplitude_c=8, temp_period_s=span / 2))
+    traj = B.MOTIONS["static_poses"](dev, rng, poses="18", temp_profile=profile, **kw)
+    sim = run_simulation(dev, traj, seed=6, calibration=cal, effects=["temperature_offset:coeff=3"])
+    res = diagnose(dev, cal, [sim.recording])
+    assert res["verdict"] == "temperature_offset"
+    if profile == "ramp":
+        assert "bias_drift" in res["ambiguous_with"]
+        assert "temperature apart from time" in res["separate_by"]
+        assert "pose repeated at the end" not in res["separate_by"]
+    else:
+        assert "bias_drift" not in res["ambiguous_with"]
+
+
 @pytest.fixture(scope="module")
 def xsens(shared_data):
     dev, rec = load_xsens(shared_data.joinpath(*XSENS_ACC))

@@ -362,7 +362,12 @@ def separate_by(cands, verdict: str, ambiguous: list[str], reached: tuple[str, .
         return ""
     hints = []
     if any(nm not in reached for nm in ambiguous):
-        for nm in [verdict] + [nm for nm in ambiguous if nm not in reached]:
+        names = [verdict] + [nm for nm in ambiguous if nm not in reached]
+        if all(cands[nm].time_dependent for nm in names) and any(cands[nm].covariate for nm in names):
+            # changes of time alone and of a recorded covariate: only the covariate apart from time
+            # tells them (a pose repeated later changes with both)
+            names = [nm for nm in names if cands[nm].covariate]
+        for nm in names:
             h = cands[nm].tell_apart
             if h and h not in hints:
                 hints.append(h)

@@ -9,7 +9,7 @@ import numpy as np
 from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_float_array, as_list, channel_mask, per_channel, start_time, strongest
 from .channel import Misalignment
-from .fitdata import FitData, force_at, temp_skip
+from .fitdata import FitData, force_at, temp_follows_time, temp_skip
 from .fitting import Cand, LinearCandidate, block_ss, linear_fit
 from .settings import BLOCK_S, DRIFT_KNOT_FRACTIONS, DRIFT_MIN_BLOCKS, PENALTY_PER_PARAM
 
@@ -108,6 +108,13 @@ class BiasDrift(LinearCandidate, Effect):
     #     base share the drift).
 
     pname = 'rate'
+
+    def looks_like(self, D):
+        # a temperature that only rises (or only falls) is a function of time: an offset that
+        # follows it is a drift's change too (a random walk that the temperature through its lag
+        # follows roughly).  Not the other way round: a drift that a monotone temperature cannot
+        # follow is told from it by the held-out test (the contest's separable)
+        return ("temperature_offset",) if temp_follows_time(D) else ()
 
     def columns(self, D):
         dt = D.t - float(np.min(D.rec_t0))

@@ -9,7 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from .settings import AXIS_POSE_DEG, REPEAT_DEG, REPEAT_MIN_S, REPEAT_SAME_DEG, ROTATING_RADPS, TEMP_MIN_SPAN_C
+from .settings import (AXIS_POSE_DEG, REPEAT_DEG, REPEAT_MIN_S, REPEAT_SAME_DEG, ROTATING_RADPS, TEMP_MIN_SPAN_C,
+                       TEMP_MONOTONE, TEMP_TIME_BINS)
 
 
 @dataclass
@@ -120,6 +121,20 @@ def force_at(D: FitData) -> np.ndarray:
     w = D.w[:, None, :]
     c = np.cross(w, np.cross(w, r)) * D.m0
     return f + a + c
+
+
+def temp_follows_time(D: FitData) -> bool:
+    """Whether the recorded temperature is a monotone function of time (it rises, or falls,
+    and never comes back: the medians of TEMP_TIME_BINS stretches of time change by at least
+    TEMP_MONOTONE of their total variation from first to last).  An effect of such a
+    temperature is also an effect of time: a drift can change the readings as it does, and
+    only a temperature that returns to a value at a later time tells the two apart."""
+    if temp_skip(D) is not None:
+        return False
+    T = D.temp[np.argsort(D.tg, kind="stable")]
+    m = np.array([np.median(b) for b in np.array_split(T, min(TEMP_TIME_BINS, T.size))])
+    tv = float(np.abs(np.diff(m)).sum())
+    return tv > 0 and abs(float(m[-1] - m[0])) >= TEMP_MONOTONE * tv
 
 
 def temp_skip(D: FitData) -> str | None:

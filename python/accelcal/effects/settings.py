@@ -6,6 +6,8 @@ import numpy as np
 BLOCK_S = 2.0              # longest cross-validation block in a moving segment (s)
 ROTATING_RADPS = 0.05      # |w| above this counts as rotating (regimes, position_error)
 TEMP_MIN_SPAN_C = 1.0      # temperature candidates need this span of temp_c
+TEMP_TIME_BINS = 20        # temp_c follows time when the medians of this many stretches of time ...
+TEMP_MONOTONE = 0.9        # ... go one way: their net change at least this share of their total variation
 T_LAG_GRID_S = (0.0, 10.0, 30.0, 60.0, 120.0, 300.0)   # thermal lags (s) the temperature fits try
 T_LAG_MAX_SPANS = 2.0   # ... up to this many times the span of the samples the diagnosis uses
 T_REF_SPANS = 2.0          # a fitted reference temperature stays within this many spans of temp_c

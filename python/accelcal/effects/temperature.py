@@ -236,8 +236,6 @@ class TemperatureOffset(TemperatureFit, Effect):
 
     bench_size = 0.1
 
-
-
     # -- report prose ---------------------------------------------------------
 
     def describe(self, p: dict, s: dict, D: FitData) -> str:
