@@ -11,7 +11,11 @@ least CLIP_MIN_COUNT readings, and more than CLIP_PILE_RATIO times as many as an
 average code within CLIP_BAND_SIGMA noise sigmas below it (a Gaussian tail puts only
 a few readings on its extreme code).  It needs the noise to span a few codes (sigma >=
 the channel's code step); a coarsely quantised channel whose pose sits on one code
-looks the same as a clip, so no level inside the range is claimed there.
+looks the same as a clip.  On such a channel a pile is a clip only where the device
+moves throughout its hold and the channel comes to it from far (:func:`pile_moves`: in
+a pose every channel rests, and so it does in the rest before a push across the axis of a
+channel held steady through both; a clip that the motion reaches holds while the others
+swing by hundreds of their noise).
 """
 from __future__ import annotations
 
@@ -29,6 +33,13 @@ CLIP_PILE_RATIO = 4.0      # ... and this many times an average code just below 
 
 
 CLIP_BAND_SIGMA = 4.0      # "just below": within this many noise sigmas
+
+
+CLIP_MOVING_SIGMA = 20.0   # a channel quieter than a code: its pile is a clip where another channel
+                           # spans this many of its noise sigmas throughout the pile's runs ...
+
+
+CLIP_MOVING_SHARE = 0.5    # ... for at least this share of the pile's readings
 
 
 @dataclass
@@ -84,7 +95,43 @@ def pile_level(v: np.ndarray, side: int, sigma: float, step: int) -> float | Non
     return float(ext)
 
 
-def clip_levels(raw: np.ndarray, device, noise: np.ndarray) -> ClipLevels:
+def pile_moves(raw: np.ndarray, i: int, level: float, noise: np.ndarray, window: int) -> bool:
+    """Whether channel ``i``'s readings at ``level`` are a clip reached while the device moves.
+
+    For CLIP_MOVING_SHARE of them, their run must be in motion throughout (in each stretch of
+    ``window`` readings of it, at a stride of half that, with a sample either side, some other
+    channel spans CLIP_MOVING_SIGMA of its noise sigmas, at least its rounding noise
+    q / sqrt(12)), and channel ``i`` must come from, or leave for, that many of its own sigmas
+    away within ``window`` readings of the run.  A pose that sits on one code holds the level
+    with every channel at rest; so does a channel held steady from a rest on into a push
+    across its axis, through the rest.  False with no other channel."""
+    n, N = raw.shape
+    if N < 2:
+        return False
+    window = max(int(window), 3)
+    v = raw[:, i].astype(np.int64)
+    at = v == level
+    edge = np.diff(np.concatenate(([0], at.astype(np.int8), [0])))
+    starts, ends = np.flatnonzero(edge == 1), np.flatnonzero(edge == -1)
+    floor = np.array([max(float(noise[j]), code_step(raw[:, j]) / np.sqrt(12.0)) for j in range(N)])
+    others = [j for j in range(N) if j != i]
+    big = CLIP_MOVING_SIGMA * floor[others]
+
+    def moves(lo, hi):
+        seg = raw[max(lo, 0):min(hi, n)][:, others].astype(np.int64)
+        return bool(np.any(np.ptp(seg, axis=0) >= big))
+
+    moving = 0
+    for a, b in zip(starts, ends):
+        heads = range(a, max(b - window, a) + 1, max(window // 2, 1))
+        near = np.concatenate((v[max(a - window, 0):a], v[b:min(b + window, n)]))
+        if (all(moves(h - 1, min(h + window, b) + 1) for h in heads) and near.size
+                and np.max(np.abs(near - level)) >= CLIP_MOVING_SIGMA * floor[i]):
+            moving += int(b - a)
+    return moving >= CLIP_MOVING_SHARE * int(np.count_nonzero(at))
+
+
+def clip_levels(raw: np.ndarray, device, noise: np.ndarray, window: int) -> ClipLevels:
     """The clip levels of each channel of integer readings.
 
     Parameters
@@ -95,6 +142,9 @@ def clip_levels(raw: np.ndarray, device, noise: np.ndarray) -> ClipLevels:
         For raw_min / raw_max.
     noise : array_like (N,)
         Noise std per channel (counts), e.g. from :func:`accelcal.noise.noise_for`.
+    window : int
+        Readings in a static-detection window (``static.window_len``): on a channel quieter
+        than a code, the stretch over which a pile must show motion (:func:`pile_moves`).
 
     Returns
     -------
@@ -110,12 +160,12 @@ def clip_levels(raw: np.ndarray, device, noise: np.ndarray) -> ClipLevels:
         v = raw[:, i]
         q = code_step(v)
         sig = float(noise[i])
-        if sig < q:          # coarse steps: a pose on one code looks like a clip
-            continue
+        # coarse steps: a pose on one code looks like a pile, which is a clip only while moving
+        coarse = sig < q
         top = pile_level(v, 1, sig, q)
-        if top is not None and top < device.raw_max:
+        if top is not None and top < device.raw_max and not (coarse and not pile_moves(raw, i, top, noise, window)):
             hi[i], in_hi[i] = top, True
         bot = pile_level(v, -1, sig, q)
-        if bot is not None and bot > device.raw_min:
+        if bot is not None and bot > device.raw_min and not (coarse and not pile_moves(raw, i, bot, noise, window)):
             lo[i], in_lo[i] = bot, True
     return ClipLevels(lo=lo, hi=hi, inside_lo=in_lo, inside_hi=in_hi)

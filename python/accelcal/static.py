@@ -392,7 +392,7 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
     else:
         intervals = detect_static(rec, device, noise=noise)
         labels = None
-    levels = clip_levels(rec.raw, device, noise)
+    levels = clip_levels(rec.raw, device, noise, w)
     intervals, labels, aside = set_aside_clipped(rec, intervals, labels, levels.mask(rec.raw), levels)
     empty = PoseSet(np.zeros((0, device.n_channels)), np.zeros(0, dtype=np.int64),
                     np.zeros((0, device.n_channels)), np.zeros((0, 3)), np.zeros(0), [], aside)

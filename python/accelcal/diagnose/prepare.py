@@ -126,7 +126,8 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
         state = state.replace(centripetal=np.full(N, float(m0)))
         pose_lab = np.asarray(rec.pose, np.int64)
         raw_i = np.asarray(rec.raw)
-        levels = clip_levels(raw_i, device, noise_for(device, raw_i, window_len(device, STATIC_WINDOW_S, n))[0])
+        wl = window_len(device, STATIC_WINDOW_S, n)
+        levels = clip_levels(raw_i, device, noise_for(device, raw_i, wl)[0], wl)
         clipped = levels.mask(raw_i)
         if mode == "reference":
             traj = Trajectory.from_recording(rec, g)
@@ -196,9 +197,17 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
                                       "clipped_per_channel": clipped.sum(axis=0).astype(int).tolist(),
                                       "left_out_at_adc_limits": int(np.count_nonzero(at_limit & usable0))}})
         if levels.any_inside():
+            hit = clipped.any(axis=1)
+            out = int(np.count_nonzero(hit & ~usable))
             notes.append(f"{rec.source}: readings pile up at levels inside the range ({levels.describe()}): "
-                         f"{int(clipped.any(axis=1).sum())} samples clipped; kept, so that `saturation` can "
-                         "explain them")
+                         f"{int(hit.sum())} samples clipped; "
+                         + ("kept, so that `saturation` can explain them" if not out else
+                            "none of them among the samples scored" if out == int(hit.sum()) else
+                            f"{int(hit.sum()) - out} of them among the samples scored (kept, so that `saturation` "
+                            f"can explain them), {out} outside them")
+                         + (" (jig-free the static poses alone are scored: a clip that only the motion reaches "
+                            "is seen in the readings, but no model reading is there to measure it against)"
+                            if out and mode == "jigfree" else ""))
 
     # --- concatenate the usable samples, segments, global pose indices -----------------
     cols: dict[str, list] = {k: [] for k in ("t", "tg", "rec", "raw", "pred", "off", "gain", "f", "w", "dw", "T",
