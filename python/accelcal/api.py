@@ -329,15 +329,15 @@ def rate(device: Any, calibration: Any, recording: Any, engine: str = "float", *
 
 def convert(path: Any, fmt: str = "auto", *, units: str | None = None, lsb: float | None = None,
             full_scale_g: float | None = None, bits: int = 16, rate_hz: float | None = None, regions: Any = None,
-            stated_f: bool = False, gravity_mps2: float | None = None) -> Converted:
+            stated_f: bool = False, gravity_mps2: float | None = None, blocks: bool = False) -> Converted:
     """Another tool's file as a contract recording and a nominal device (as ``accelcal convert``).
 
     Parameters
     ----------
     path : str or os.PathLike
-        imu_tk's text, imucal's CSV, the MPU-6050 logger's CSV or a contract-like CSV,
-        gzip-compressed or not.
-    fmt : {"auto", "imu_tk", "imucal", "mpu6050", "csv"}
+        imu_tk's text, imucal's CSV, the MPU-6050 logger's CSV, a contract-like CSV or a
+        serial monitor's log, gzip-compressed or not.
+    fmt : {"auto", "imu_tk", "imucal", "mpu6050", "csv", "log"}
     units : {"counts", "mps2", "g"}, optional
         The unit of the readings in the file; with ``lsb`` (one count in that unit) or
         ``full_scale_g`` (+-range in g at ``bits`` bits).  Default: the file's ``# units:`` /
@@ -351,6 +351,8 @@ def convert(path: Any, fmt: str = "auto", *, units: str | None = None, lsb: floa
         Poses named ``x_p ... z_a`` get the reference f = +-g along their axis (m/s^2).
     gravity_mps2 : float, optional
         g of the stated f and the device (default 9.80665).
+    blocks : bool
+        log: each run of readings between the logger's text lines is a pose.
 
     Returns
     -------
@@ -375,4 +377,4 @@ def convert(path: Any, fmt: str = "auto", *, units: str | None = None, lsb: floa
         scale = scale_from_options(units, lsb, full_scale_g, bits, gravity_mps2)
         scale = COUNTS_STATED if scale is None else scale
     return convert_file(path, fmt, scale=scale, rate_hz=rate_hz, regions=regions, stated_f=stated_f,
-                        gravity_mps2=gravity_mps2, bits=bits)
+                        gravity_mps2=gravity_mps2, bits=bits, blocks=blocks)

@@ -187,6 +187,8 @@ def cmd_calibrate(a):
                         f"'{fit.get('model', cal.method)}' model has no cross-axis terms, which a real sensor "
                         "has; use --method full if the poses determine it")
     save_calibration(cal, a.output)
+    for n in cal.extra.get("notes", []) if isinstance(cal.extra, dict) else []:
+        print(f"accelcal calibrate: note: {n}", file=sys.stderr)
     for w in warnings:
         print(f"accelcal calibrate: warning: {w}", file=sys.stderr)
     print(calibration_summary(cal, len(recs), a.output))

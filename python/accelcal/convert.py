@@ -13,6 +13,9 @@ Formats (``detect_format`` tells them from the first line that is not a comment)
   ``ax,ay,az,gx,gy,gz`` in signed counts, no time column.
 - ``csv``: a recording per the contract (or any form ``read_recording`` takes: gzip,
   whitespace, physical units), rewritten as plain CSV in counts.
+- ``log``: a serial monitor's capture: lines of three numbers among the logger's text
+  (prompts, banners), no header, no time column (``--rate``); with ``blocks`` each run of
+  readings between text lines is a pose (:mod:`accelcal.convert_log`).
 
 Gyroscope columns are dropped (one note).  Pose regions named ``x_p, x_a, y_p, y_a, z_p,
 z_a`` (imucal's: that axis pointing up, or down) can state the reference specific force
@@ -28,10 +31,11 @@ from typing import Any
 
 import numpy as np
 
+from .convert_log import held_note, is_log, read_log
+from .convert_regions import POSE_DIRECTIONS, label_poses, read_regions
 from .csvtable import convert_columns, make_table, split_header
 from .device import Device
 from .errors import InputError
-from .jsonfields import JsonFields, read_json
 from .recording import Recording, read_recording
 from .textinput import is_whitespace_header, read_preamble, read_text_bytes, split_whitespace_header, whitespace_to_commas
 from .units import STANDARD_GRAVITY, Scale, file_scale, to_counts
@@ -39,9 +43,7 @@ from .xsens import load_xsens
 
 __all__ = ["FORMATS", "POSE_DIRECTIONS", "Converted", "detect_format", "convert_file", "read_regions"]
 
-FORMATS = ("auto", "imu_tk", "imucal", "mpu6050", "csv")
-POSE_DIRECTIONS = {"x_p": (1, 0, 0), "x_a": (-1, 0, 0), "y_p": (0, 1, 0), "y_a": (0, -1, 0),
-                   "z_p": (0, 0, 1), "z_a": (0, 0, -1)}
+FORMATS = ("auto", "imu_tk", "imucal", "mpu6050", "csv", "log")
 ACC = {"imucal": ("acc_x", "acc_y", "acc_z"), "mpu6050": ("ax", "ay", "az")}
 INDEX_COLUMNS = ("n_samples", "samples")
 GYRO_RE = re.compile(r"(gyr|gyro|g)[_ ]?[xyz]|w_?[xyz]", re.I)
@@ -125,90 +127,12 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
         return "mpu6050"
     if is_whitespace_header(pre.header) and all(NUMBER_RE.fullmatch(c) for c in cells):
         return "imu_tk"
+    if is_log(data):
+        return "log"
     raise InputError(source, f"cannot tell the format from this line ({pre.header[:60]!r}): expected a "
                      "recording CSV (t, raw_0, ...), imucal's acc_x/acc_y/acc_z, the MPU-6050 log (Fs,... "
-                     "then ax,ay,az,...) or imu_tk's 't ax ay az' text; give --format", row=pre.header_line)
-
-
-# ---- regions -------------------------------------------------------------------------
-
-def read_regions(path: Any) -> list[tuple[str, int, int]]:
-    """Pose regions from a JSON object ``{name: {"start": s, "end": e}, ...}``.
-
-    Returns
-    -------
-    list of (name, start, end)
-        In the file's order; samples ``start <= k < end``.
-
-    Raises
-    ------
-    InputError
-        Naming the field (``x_p.start``) that is missing, not an integer >= 0, or whose
-        range is empty or overlaps another.
-    """
-    doc, source = read_json(path)
-    v = JsonFields(source)
-    v.no_nonfinite(doc, "")
-    doc = v.obj(doc, "")
-    if not doc:
-        raise v.fail("", "no regions (expected {name: {\"start\": ..., \"end\": ...}, ...})")
-    out = []
-    for name, reg in doc.items():
-        reg = v.obj(reg, name)
-        v.known(reg, name, ("start", "end"))
-        start = v.integer(v.get(reg, "start", name), f"{name}.start")
-        end = v.integer(v.get(reg, "end", name), f"{name}.end")
-        if start < 0:
-            raise v.fail(f"{name}.start", f"expected a sample number >= 0, got {start}")
-        if end <= start:
-            raise v.fail(f"{name}.end", f"expected end > start ({start}), got {end}")
-        for other, s, e in out:
-            if start < e and s < end:
-                raise v.fail(name, f"[{start}, {end}) overlaps region {other!r} [{s}, {e})")
-        out.append((name, start, end))
-    return out
-
-
-def is_motion(name: str) -> bool:
-    return name.lower().endswith("_rot")
-
-
-def label_poses(index: np.ndarray, names_per_sample: list[str] | None, regions, stated_f: bool,
-                gravity: float, source: str, regions_source: str | None):
-    """(pose (n,), f (n, 3) or None, pose names) from regions of sample numbers or per-sample names."""
-    n = index.shape[0]
-    pose = np.full(n, -1, dtype=np.int64)
-    names: list[str] = []
-    if regions is not None:
-        for name, start, end in regions:
-            sel = (index >= start) & (index < end)
-            if not sel.any():
-                raise InputError(regions_source, f"[{start}, {end}) holds none of the recording's samples "
-                                 f"({int(index[0])}..{int(index[-1])})", field=name)
-            if not is_motion(name):
-                pose[sel] = len(names)
-                names.append(name)
-    elif names_per_sample is not None:
-        code: dict[str, int] = {}
-        for i, nm in enumerate(names_per_sample):
-            nm = nm.strip()
-            if nm and not is_motion(nm):
-                if nm not in code:
-                    code[nm] = len(names)
-                    names.append(nm)
-                pose[i] = code[nm]
-    f = None
-    if stated_f:
-        if not names:
-            raise InputError(source, "--stated-f: no pose regions (give --regions JSON or a part column)")
-        unknown = [nm for nm in names if nm not in POSE_DIRECTIONS]
-        if unknown:
-            raise InputError(regions_source or source, f"--stated-f: pose {unknown[0]!r} states no direction "
-                             f"(names that do: {', '.join(POSE_DIRECTIONS)})",
-                             field=unknown[0] if regions_source else None)
-        dirs = np.array([POSE_DIRECTIONS[nm] for nm in names], dtype=float) * gravity
-        f = np.where(pose[:, None] >= 0, dirs[np.maximum(pose, 0)], np.nan)
-    return pose, f, names
+                     "then ax,ay,az,...), imu_tk's 't ax ay az' text or a monitor's log (lines of three "
+                     "numbers among text); give --format", row=pre.header_line)
 
 
 # ---- tables --------------------------------------------------------------------------
@@ -415,17 +339,49 @@ def mpu6050_preamble(source: str, data: bytes, pre) -> tuple[Any, dict[str, str]
     return pre, meta, rate
 
 
+def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Converted:
+    """A serial monitor's capture (:mod:`accelcal.convert_log`)."""
+    values, lines, block, info = read_log(source, data)
+
+    def locate(i: int, j: int) -> tuple[int, str]:
+        return lines[i], f"field {j + 1}"
+
+    scale = opts.scale
+    if scale is not None and scale.converts:
+        raw = to_counts(values, scale, source, locate)
+    else:
+        frac = np.argwhere(values != np.round(values))
+        if frac.size:
+            i, j = (int(v) for v in frac[0])
+            row, column = locate(i, j)
+            raise InputError(source, f"reading {values[i, j]:.10g} is not a whole count (readings in m/s^2 or g: "
+                             "state --units mps2|g with --lsb VALUE or --full-scale G)", row=row, column=column)
+        raw = values.astype(np.int64)
+    if opts.rate_hz is None:
+        raise InputError(source, "log files have no time column: give the sample rate with --rate HZ")
+    if blocks and opts.regions is not None:
+        raise InputError(source, "--blocks and --regions both label the poses: give one")
+    notes = [f"{info['text_lines']} line(s) of text (the first: {info['first_text']!r}) split the readings into "
+             f"{info['blocks']} block(s)" + ("; each block is a pose" if blocks else
+                                            "; --blocks labels each as a pose")] if info["text_lines"] else []
+    notes += held_note(info, opts.rate_hz)
+    meta = {"log.text_lines": str(info["text_lines"]), "log.blocks": str(info["blocks"]),
+            "log.held_share": f"{info['held_share']:.4f}"}
+    return finish(source, "log", raw, np.arange(raw.shape[0]), None, block if blocks else None, opts, scale,
+                  bool(np.any(raw < 0)), opts.rate_hz, meta, notes, locate, None)
+
+
 def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, rate_hz: float | None = None,
                  regions: Any = None, stated_f: bool = False, gravity_mps2: float | None = None,
-                 bits: int = 16) -> Converted:
+                 bits: int = 16, blocks: bool = False) -> Converted:
     """Read another tool's file as a contract recording of a triad.
 
     Parameters
     ----------
     path : str or os.PathLike
         The file (gzip-compressed or not).
-    fmt : {"auto", "imu_tk", "imucal", "mpu6050", "csv"}
-        ``auto`` tells it from the first line (:func:`detect_format`).
+    fmt : {"auto", "imu_tk", "imucal", "mpu6050", "csv", "log"}
+        ``auto`` tells it from the first line (:func:`detect_format`; a log from its lines).
     scale : units.Scale, optional
         The readings' unit and LSB (``--units``/``--lsb``/``--full-scale``), or the
         file's ``# units:``/``# lsb:`` comments, else counts; stated by both, they must
@@ -441,6 +397,8 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         g for the stated f and the device (default 9.80665; imu_tk: 9.81744).
     bits : int
         The ADC's bits: the device's range, and the readings must fit it.
+    blocks : bool
+        log: each block of readings between text lines is a pose (``block_1``, ...).
 
     Returns
     -------
@@ -459,6 +417,10 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     opts = Options(scale, rate_hz, None, None, stated_f, gravity_mps2, bits)
     if regions is not None:
         opts.regions, opts.regions_source = read_regions(regions), str(regions)
+    if blocks and fmt != "log":
+        raise InputError(source, f"--blocks: {fmt} files have no blocks (it labels a log's poses)")
+    if fmt == "log":
+        return convert_log(source, data, opts, blocks)
     if fmt in ("imu_tk", "csv"):
         if rate_hz is not None:
             raise InputError(source, f"--rate: {fmt} files have a time column")

@@ -22,8 +22,10 @@ the poses state their orientation) from another tool's file, and with --device-o
 device JSON for it.  Formats: imu_tk (whitespace 't ax ay az' in counts, no header), imucal
 (CSV with acc_x, acc_y, acc_z; no time column: --rate; poses from --regions JSON or a 'part'
 column), mpu6050 (the logger's 'Fs,100'... lines, then ax,ay,az,gx,gy,gz in signed counts),
-csv (a recording: gzip, whitespace and physical units rewritten as plain counts).  Any of them
-may be gzip-compressed.  Gyroscope columns are dropped with a note."""
+csv (a recording: gzip, whitespace and physical units rewritten as plain counts), log (a serial
+monitor's capture: lines of three numbers among the logger's prompts, no header: --rate; with
+--blocks each run of readings between text lines is a pose).  Any of them may be
+gzip-compressed.  Gyroscope columns are dropped with a note."""
 
 
 def positive(text: Any, option: str) -> float | None:
@@ -49,7 +51,8 @@ def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int
     bits = parse_bits(a.bits, AccelcalError, "--bits")
     scale = scale_from_args(a)
     conv = convert_file(a.input, a.format, scale=scale, rate_hz=positive(a.rate, "--rate"), regions=a.regions,
-                        stated_f=a.stated_f, gravity_mps2=positive(a.gravity, "--gravity"), bits=bits)
+                        stated_f=a.stated_f, gravity_mps2=positive(a.gravity, "--gravity"), bits=bits,
+                        blocks=a.blocks)
     write_recording(a.output, conv.recording)
     if a.device_out is not None:
         save_device(conv.device, a.device_out)
@@ -70,10 +73,12 @@ def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
                       bits_help="the ADC's bits (default 16): the device's raw range, and the LSB of --full-scale",
                       gravity_help="g in m/s^2 for --full-scale with mps2, the stated f and the device (default "
                       "9.80665; imu_tk 9.81744)")
-    s.add_argument("--rate", metavar="HZ", help="sample rate of a file without a time column (imucal: "
+    s.add_argument("--rate", metavar="HZ", help="sample rate of a file without a time column (imucal, log: "
                    "required; the MPU-6050 log: its Fs line otherwise)")
     s.add_argument("--regions", metavar="JSON", help="pose regions {name: {\"start\": s, \"end\": e}} in "
                    "sample numbers, end excluded (imucal's session list); names ending in _rot are motions")
+    s.add_argument("--blocks", action="store_true", help="log: each run of readings between the logger's text "
+                   "lines (a prompt before each pose) is a pose, labelled block_1, block_2, ...")
     s.add_argument("--stated-f", action="store_true", help="poses named x_p, x_a, y_p, y_a, z_p, z_a (that "
                    "axis up, p, or down, a) get the reference f = +-g along it, for a known-pose calibration")
     s.add_argument("--device-out", metavar="D.json", help="also write a nominal device JSON for the "

@@ -166,6 +166,7 @@ class Recording:
             metadata=dict(self.metadata),
             extra={k: [v[i] for i in ilist] for k, v in self.extra.items()},
             source=self.source,
+            lines=None if self.lines is None else np.array([self.line(i) for i in ilist], dtype=np.int64),
         )
 
     def __eq__(self, other: object) -> bool:

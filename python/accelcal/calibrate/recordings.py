@@ -6,6 +6,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import InputError
+from ..held import distinct_recordings
 from ..static import PoseSet, poses_from_recording
 from .checks import jig_accuracy_rad, pose_label
 from .known_poses import fit_known_poses
@@ -27,7 +28,9 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     (known poses only; see the module notes; default 0 = exact references).
     Temperature coefficients are fitted when the pose temperatures span at least
     TEMP_MIN_SPAN_C; lever arms when samples rotate (|w| > ROTATION_MIN_RADPS) with
-    reference f, w and dw.
+    reference f, w and dw.  Readings held for several rows by a logger faster than the
+    sensor are counted once (:func:`accelcal.held.distinct_recordings`; the calibration's
+    ``extra["notes"]`` says so).
     """
     jig_accuracy_rad(jig_accuracy_deg)
     if method is not None and method not in METHODS + ("jigfree",):
@@ -35,6 +38,7 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
                          f"{', '.join(METHODS + ('jigfree',))}", field="method")
     if not recordings:
         raise InputError("<command line>", "no recording given")
+    recordings, device, notes = distinct_recordings(list(recordings), device)
     rotating = [rotating_samples(rec) for rec in recordings]
     sets = [poses_from_recording(rec, device, required=not rot.any()) for rec, rot in zip(recordings, rotating)]
     poses = PoseSet.concat(sets)
@@ -94,7 +98,10 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
         noise = fit.poses.channel_noise()
         pos_fit = calibrate_positions(device, b, S, raw, f, w, dw, segments=segs, noise=noise,
                                       source=rot[0][0].source)
-    return to_calibration(device, fit, "jigfree" if jigfree else method, pos_fit)
+    cal = to_calibration(device, fit, "jigfree" if jigfree else method, pos_fit)
+    if notes:
+        cal.extra["notes"] = notes
+    return cal
 
 
 def rotating_samples(rec) -> np.ndarray:

@@ -67,7 +67,8 @@ def relinearise(device, cal, recs, K: int, seed: int, m0: float, cands, names: l
     """Re-linearise the chosen effects ``names`` (fits ``joint`` about ``cal``) as the module
     doc says.  Returns None when none of them is a calibration parameter, else a dict:
     ``params`` (name -> parameters from ``cal``), ``joint`` (the final fits), ``path`` (the
-    held-out stepwise figures at the final point), ``iterations``, ``converged``, ``D``, ``e``."""
+    held-out stepwise figures at the final point), ``iterations``, ``converged``, ``D``, ``e``,
+    ``delta`` (the final fits' change of the readings together, the sum of their deltas)."""
     absorbed = [nm for nm in names if cands[nm].absorbs and nm in joint]
     if not absorbed:
         return None
@@ -90,16 +91,16 @@ def relinearise(device, cal, recs, K: int, seed: int, m0: float, cands, names: l
             # MPU-6050's hand-turned poses, moved the pose forces further at each step): keep the
             # best point reached
             break
-        best = (left, cal_k, D, e, joint, it)
+        best = (left, cal_k, D, e, joint, it, total)
         change = D.rows(sum((joint[nm].delta for nm in absorbed), np.zeros_like(e)))   # what the data see
         if float(np.max(np.abs(change))) < tol:
             converged = True
             break
-    _, cal_k, D, e, joint, it = best
+    _, cal_k, D, e, joint, it, total = best
     final = cal_k
     for nm in absorbed:
         final = cands[nm].absorb(final, joint[nm].params)
     params = {nm: (cands[nm].params_between(cal, final) if nm in absorbed else joint[nm].params) for nm in names}
     return {"params": params, "joint": joint, "path": heldout_path(D, cands, names, e), "iterations": it,
-            "converged": converged, "D": D, "e": e}
+            "converged": converged, "D": D, "e": e, "delta": total}
 

@@ -11,6 +11,7 @@ from ..effects import EFFECT_NAMES
 from ..effects.fitting import Cand
 from ..effects.settings import BLOCK_S
 from ..errors import AccelcalError
+from ..held import distinct_recordings
 from ..noise import code_lattice
 from .floor import setup_rows
 from .inputs import as_calibration, as_device, as_recordings
@@ -74,10 +75,10 @@ def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, 
         fits = {c.name: c for c, _ in steps}
         fits.update(together_fit)
         rl = relinearise(dev, cal, recs, int(folds), int(seed), m0, cands, names, fits, D)  # terms absorb: not None
-        Dc, yc, pc, joint = rl["D"], rl["e"], rl["D"].p0, rl["joint"]
+        Dc, yc, pc, done = rl["D"], rl["e"], rl["D"].p0, rl["delta"]
     else:
-        Dc, yc, pc, joint = Dk, y, pcur, together_fit
-    done = sum((joint[nm].delta for nm in names), np.zeros_like(yc))
+        Dc, yc, pc = Dk, y, pcur
+        done = sum((together_fit[nm].delta for nm in names), np.zeros_like(yc))
     after = conditional(Dc, cands, best.name, Given(done), yc, pc)
     # with a drift among them, the terms' own held-out figure (with the steps before, at the final
     # linearisation): as far as the verdict goes, they are the first step, and what it adds beyond
@@ -121,7 +122,8 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         raise AccelcalError(f"diagnose: folds must be an integer >= 2, got {folds!r}")
     dev = as_device(device)
     cal, cal_src = as_calibration(calibration, dev)
-    recs = as_recordings(recordings, dev)
+    # readings held for several rows (a logger faster than the sensor) are counted once
+    recs, dev, held_notes = distinct_recordings(as_recordings(recordings, dev), dev)
     cands = dict(EFFECTS)
     if candidates is None:
         names = list(EFFECT_NAMES)
@@ -191,9 +193,8 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
             now = [c.name for c, _ in steps if c.gain > 0]
             rl = relinearise(dev, cal, recs, int(folds), int(seed), m0, cands, now, {c.name: c for c, _ in steps}, Dk)
             Dk = rl["D"]
-            done = sum((rl["joint"][nm].delta for nm in now), np.zeros_like(rl["e"]))
-            y = rl["e"] - done
-            pcur = Dk.p0 + done
+            y = rl["e"] - rl["delta"]
+            pcur = Dk.p0 + rl["delta"]
         results, _, _ = run_candidates(Dk, cands, remaining, y, pcur, progress)
 
     # --- joint refit of the chosen effects (backfitting), re-linearised about the corrected calibration
@@ -226,7 +227,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     floor = float(np.sqrt(np.mean(D.sigma ** 2)))
     rms_ch = np.sqrt(np.mean(e * e, axis=0))
     gap_rms = float(np.sqrt(np.mean(rms_ch ** 2)))
-    notes = list(D.notes)
+    notes = held_notes + list(D.notes)
     if D.mode == "jigfree":
         notes.append("jig-free: the static poses with |f| = g are the reference; fitted and scored on the "
                      f"{D.R} direction(s) per sample the pose angles cannot absorb")
@@ -272,8 +273,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         lattice.append(ent)
     gap_extra = pose_mean_gap(D, e)
     if relin is not None:
-        left = leftover(relin["D"], relin["e"] - sum((relin["joint"][nm].delta for nm in fitted),
-                                                     np.zeros_like(relin["e"])), base_rms, model_after)
+        left = leftover(relin["D"], relin["e"] - relin["delta"], base_rms, model_after)
     else:
         left = leftover(D, e - total_delta, base_rms, model_after)
     ring = settling_ringing(recs, dev)

@@ -1,0 +1,78 @@
+"""Held readings: a logger that reads the sensor faster than the sensor updates writes each
+reading several times in a row (a serial monitor at 400 lines/s of a 100 Hz sensor: every
+row four times).  Its rows are then not independent samples, and every figure that counts
+them -- a pose mean's uncertainty, a calibration's chi2, a diagnosis's held-out chi2 --
+would take each reading as several.
+
+:func:`held_factor` tells such a recording from one whose rows repeat by chance (a sensor
+quieter than a code in all channels at rest): held rows come in runs of one length, the
+ratio of the two rates; chance repeats in runs whose most common length is 1 (a geometric
+law).  :func:`distinct_rows` keeps the first row of each run, so that the statistical
+commands (calibrate, diagnose) count each reading once.  The per-sample commands (resolve,
+attitude, displacement, rate) keep every row: their output is one line per input row.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from .recording import Recording
+
+__all__ = ["HELD_MODAL_SHARE", "held_factor", "distinct_rows", "distinct_recordings"]
+
+HELD_MODAL_SHARE = 0.8     # rows are held when at least this share of the runs of identical rows share one length >= 2
+
+
+def _runs(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(first row of each run of identical rows, the runs' lengths)."""
+    raw = np.asarray(raw)
+    new = np.ones(raw.shape[0], bool)
+    new[1:] = np.any(raw[1:] != raw[:-1], axis=1)
+    first = np.flatnonzero(new)
+    return first, np.diff(np.append(first, raw.shape[0]))
+
+
+def held_factor(raw: np.ndarray) -> int:
+    """How many rows each reading is held for: the runs' most common length k when it is at
+    least 2 and at least HELD_MODAL_SHARE of the runs have it, else 1 (rows not held)."""
+    if np.asarray(raw).shape[0] < 2:
+        return 1
+    _, lengths = _runs(raw)
+    counts = np.bincount(lengths)
+    k = int(np.argmax(counts))
+    return k if k >= 2 and counts[k] >= HELD_MODAL_SHARE * lengths.size else 1
+
+
+def distinct_rows(rec: Recording) -> tuple[Recording, str | None]:
+    """``rec`` with only the first row of each run of identical rows when its readings are
+    held (:func:`held_factor`), and a note saying so; else ``rec`` itself and None."""
+    k = held_factor(rec.raw)
+    if k == 1:
+        return rec, None
+    first, _ = _runs(rec.raw)
+    span = float(rec.t[-1] - rec.t[0]) if rec.n_samples > 1 else 0.0
+    rate = f", about {(first.size - 1) / span:.4g} Hz" if span > 0 else ""
+    note = (f"{rec.source}: each reading is held for {k} rows (the logger read the sensor faster than it "
+            f"updates): the {first.size} distinct readings of the {rec.n_samples} rows are used{rate}")
+    return rec.select(first), note
+
+
+def distinct_recordings(recordings: list[Recording], device) -> tuple[list[Recording], object, list[str]]:
+    """:func:`distinct_rows` of each recording, and the device with the rate its distinct
+    readings come at (``sample_rate_hz`` / k) when every recording holds its readings for
+    the same k rows (the device's windows and grids in samples then span the times they
+    mean); returns (recordings, device, notes)."""
+    factors = [held_factor(r.raw) for r in recordings]
+    out, notes = [], []
+    for r in recordings:
+        r2, note = distinct_rows(r)
+        out.append(r2)
+        if note:
+            notes.append(note)
+    if factors and factors[0] > 1 and len(set(factors)) == 1:
+        k = factors[0]
+        device = dataclasses.replace(device, sample_rate_hz=device.sample_rate_hz / k)
+        notes.append(f"the device's {device.sample_rate_hz * k:g} Hz is taken as {device.sample_rate_hz:g} Hz, the "
+                     "rate of the distinct readings")
+    return out, device, notes

@@ -1,0 +1,131 @@
+"""A serial monitor's capture (``accelcal convert --format log``) and readings held for several
+rows by a logger faster than its sensor (``accelcal.held``).
+
+The captures are written here from the shape such files have (FastAhrs's calibration
+notebooks' data_sample*.csv, which carry no licence and are not used): a banner, a prompt
+before each pose, three readings a line in m/s^2 on the chip's LSB, each reading printed on
+four lines because the monitor reads 400 lines/s of a 100 Hz sensor.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from accelcal.calibrate import calibrate_recordings
+from accelcal.convert import convert_file, detect_format
+from accelcal.device import load_device
+from accelcal.diagnose import diagnose
+from accelcal.held import distinct_rows, held_factor
+from accelcal.recording import read_recording
+from accelcal.units import scale_from_options
+from cli_run import run
+
+G = 9.80665
+LSB = 0.000244 * G                      # m/s^2 per count (0.244 mg, +-8 g)
+ZERO = np.array([112.0, -135.0, 236.0])  # counts
+
+
+def _scale():
+    return scale_from_options("mps2", LSB, None, 16, None)
+
+
+def capture(path, seed=0, poses=8, distinct=100, hold=4, noise=3.0, jitter=0.0):
+    """Write a capture; returns the counts of every row (n, 3) and each row's pose."""
+    rng = np.random.default_rng(seed)
+    F = Rotation.random(poses, random_state=seed).apply([0.0, 0.0, G])
+    rows, lab = [], []
+    lines = ["--- Available filters and text transformations: colorize, debug, default",
+             "--- More details at http://bit.ly/pio-monitor-filters", ">>> Place accelerometer on flat surface!"]
+    for p in range(poses):
+        lines += [">>> Type key when ready...", ">>> Gathering data for 10 seconds..."]
+        c = np.round(ZERO + F[p] / LSB + noise * rng.standard_normal((distinct, 3)))
+        reps = np.full(distinct, hold)
+        if jitter:
+            odd = rng.random(distinct) < jitter
+            reps[odd] += rng.choice([-1, 1], odd.sum())
+        c = np.repeat(c, reps, axis=0)
+        rows.append(c)
+        lab.append(np.full(c.shape[0], p))
+        lines += [", ".join(f"{v * LSB:.10f}" for v in r) for r in c]
+    path.write_text("\n".join(lines) + "\n")
+    return np.concatenate(rows).astype(np.int64), np.concatenate(lab)
+
+
+def test_a_monitor_capture_converts_with_a_pose_per_block(tmp_path, capfd):
+    src = tmp_path / "data_sample.csv"
+    counts, lab = capture(src)
+    assert detect_format(src) == "log"
+    rc, out, err, _ = run(["convert", src, "--units", "mps2", "--lsb", repr(LSB), "--rate", "400", "--blocks",
+                           "-o", tmp_path / "r.csv", "--device-out", tmp_path / "d.json"], capfd)
+    assert rc == 0, err
+    assert out.startswith("log: 3200 rows, 3 channels") and "8 poses (block_1, " in out
+    assert "split the readings into 8 block(s); each block is a pose" in err
+    assert "100 % of the rows repeat" not in err and "held for 4 rows" in err and "about 100 Hz" in err
+    rec = read_recording(tmp_path / "r.csv")
+    np.testing.assert_array_equal(rec.raw, counts)
+    np.testing.assert_array_equal(rec.pose, lab)
+    assert rec.t[1] - rec.t[0] == pytest.approx(1 / 400)
+    # without --blocks: one stretch, the blocks joined by instant steps, no labels
+    conv = convert_file(src, scale=_scale(), rate_hz=400.0)
+    assert conv.format == "log" and not conv.recording.has_pose()
+
+
+def test_held_rows_count_once_in_a_calibration_and_a_diagnosis(tmp_path, capfd):
+    src = tmp_path / "data_sample.csv"
+    capture(src, seed=3, poses=12, jitter=0.1)
+    conv = convert_file(src, "log", scale=_scale(), rate_hz=400.0, blocks=True)
+    rec, dev = conv.recording, conv.device
+    assert held_factor(rec.raw) == 4
+    once, note = distinct_rows(rec)
+    assert note and "held for 4 rows" in note and 1150 <= once.n_samples <= 1250
+    cal = calibrate_recordings(dev, [rec], method="jigfree")
+    ref = calibrate_recordings(dev, [once], method="jigfree")
+    assert any("held for 4 rows" in n for n in cal.extra["notes"])
+    np.testing.assert_allclose(cal.offsets, ref.offsets, atol=1e-9)
+    assert cal.extra["fit"]["chi2"] == pytest.approx(ref.extra["fit"]["chi2"], rel=1e-9)
+    np.testing.assert_allclose(cal.offsets, ZERO, atol=3.0)
+    res = diagnose(dev, cal, [rec])
+    assert res["n_samples"] <= once.n_samples and any("held for 4 rows" in n for n in res["notes"])
+    # rows read once: nothing to note
+    assert calibrate_recordings(dev, [once], method="jigfree").extra.get("notes") is None
+
+
+def test_chance_repeats_are_not_held():
+    """A sensor quieter than a code repeats rows by chance: runs of geometric lengths, whose
+    most common length is 1."""
+    rng = np.random.default_rng(5)
+    quiet = np.round(1000 + 0.25 * rng.standard_normal((5000, 3))).astype(np.int64)
+    same = np.mean(np.all(quiet[1:] == quiet[:-1], axis=1))
+    assert same > 0.5                       # most rows repeat the one before
+    assert held_factor(quiet) == 1
+    held = np.repeat(np.round(1000 + 3 * rng.standard_normal((1000, 3))), 3, axis=0).astype(np.int64)
+    assert held_factor(held) == 3 and held_factor(held[:1]) == 1
+
+
+@pytest.mark.parametrize("body,args,where", [
+    ("banner\n0.1, 0.2, 0.3\n" * 6 + "0.1, 0.2\n", ["--rate", "100"], "row 13"),
+    ("banner\n" + "1, 2, 3\n" * 12, [], "--rate"),
+    ("banner\n" + "1, 2, 3\n" * 12 + "1.5, 2, 3\n", ["--rate", "100"], "row 14, column field 1"),
+    ("banner\n" + "1, 2, 3\n" * 12, ["--rate", "100", "--blocks", "--regions", "{r}"], "--blocks and --regions"),
+])
+def test_bad_logs_are_one_line_naming_the_row(tmp_path, capfd, body, args, where):
+    src = tmp_path / "cap.txt"
+    src.write_text(body)
+    (tmp_path / "r.json").write_text('{"a": {"start": 0, "end": 5}}')
+    args = [a.replace("{r}", str(tmp_path / "r.json")) for a in args]
+    rc, out, err, _ = run(["convert", src, "--format", "log", *args, "-o", tmp_path / "o.csv"], capfd)
+    assert rc == 2 and where in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_blocks_is_for_logs(tmp_path, capfd):
+    src = tmp_path / "cap.txt"
+    capture(src, poses=2, distinct=10)
+    dev_path = tmp_path / "d.json"
+    rc, _, err, _ = run(["convert", src, "--units", "mps2", "--lsb", repr(LSB), "--rate", "400", "-o",
+                         tmp_path / "r.csv", "--device-out", dev_path], capfd)
+    assert rc == 0, err
+    assert load_device(dev_path).sample_rate_hz == 400.0
+    rc, _, err, _ = run(["convert", tmp_path / "r.csv", "--blocks", "-o", tmp_path / "o.csv"], capfd)
+    assert rc == 2 and "--blocks: csv files have no blocks" in err
