@@ -19,6 +19,7 @@ from .clipping import ClipLevels, clip_levels
 from .errors import InputError
 from .noise import estimate_noise, noise_for, window_std
 from .recording import check_for_device
+from .steps import MOVE_PARTS, MOVE_RANGE, MOVE_STD, block_log_intervals, part_spread, step_splits
 
 
 STATIC_WINDOW_S = 0.5      # window over which the moving std is taken
@@ -33,21 +34,6 @@ MIN_POSE_S = 1.0           # shortest static interval kept as a pose where an en
 
 
 EDGE_SIGMA = 4.0           # static interval ends: the nearest samples this x noise off the median
-
-
-MOVE_RANGE = 8.0           # a labelled pose "moves" when a channel's mean over an eighth of it strays
-                           # this x its noise from another eighth's ...
-
-
-MOVE_STD = 6.0             # ... or its std exceeds this x its noise (noise: the larger of the recording's
-                           # and the median within-pose std of the labelled poses: hand-held tremor is noise)
-
-
-MOVE_PARTS = 8             # the parts a pose is cut into for the mean test
-
-
-STEP_SIGMA = 4.0           # an instant step inside a static run: means of the h samples either side
-                           # differ by this x noise (the same size EDGE_SIGMA calls an edge)
 
 
 QUANT_VAR = 1.0 / 12.0    # variance of rounding to integer counts
@@ -110,50 +96,6 @@ def window_len(device, window_s: float, n: int) -> int:
     return max(3, min(w, n))
 
 
-def step_splits(raw: np.ndarray, a: int, b: int, m: int, sig: np.ndarray) -> list[int]:
-    """Sample indices in (a, b) at which the readings step: the means of the m samples
-    before and after differ by more than STEP_SIGMA x noise on some channel (the local
-    maximum of each run of such indices), and so do the medians of the pieces between
-    neighbouring splits (the least distinct split is dropped until all are)."""
-    L = b - a
-    if L < 2 * m + 1:
-        return []
-    x = np.asarray(raw[a:b], float)
-    c = np.concatenate([np.zeros((1, x.shape[1])), np.cumsum(x - x[0], axis=0)])
-    i = np.arange(m, L - m + 1)                       # split before local sample i
-    left = (c[i] - c[i - m]) / m
-    right = (c[i + m] - c[i]) / m
-    z = np.max(np.abs(right - left) / sig[None, :], axis=1)
-    over = z > STEP_SIGMA
-    if not over.any():
-        return []
-    edges = np.diff(np.concatenate([[0], over.astype(np.int8), [0]]))
-    out = []
-    for s0, e0 in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
-        out.append(a + int(i[s0 + int(np.argmax(z[s0:e0]))]))
-    # a step joins two levels: a split whose pieces' medians do not differ by that much
-    # was a swing of coloured (tremor) noise inside one pose (the least distinct goes first;
-    # only the merged piece's median and its two splits' distinctness change)
-    cuts = [a] + out + [b]
-    med = [np.median(raw[cuts[j]:cuts[j + 1]], axis=0) for j in range(len(cuts) - 1)]
-
-    def apart(j):
-        return float(np.max(np.abs(med[j + 1] - med[j]) / sig))
-
-    z = [apart(j) for j in range(len(out))]
-    while z:
-        j = int(np.argmin(z))
-        if z[j] > STEP_SIGMA:
-            break
-        del cuts[j + 1], med[j + 1], z[j]
-        med[j] = np.median(raw[cuts[j]:cuts[j + 1]], axis=0)
-        if j > 0:
-            z[j - 1] = apart(j - 1)
-        if j < len(z):
-            z[j] = apart(j)
-    return cuts[1:-1]
-
-
 def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: float = STATIC_THRESHOLD,
                   min_s: float = MIN_POSE_S, noise: np.ndarray | None = None) -> list[tuple[int, int]]:
     """Static intervals of a continuous recording, as sample index pairs [start, stop).
@@ -174,6 +116,10 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
        are instant steps or the recording's ends (a logger that records only static
        blocks) needs one window only: no motion touches it, so it is no pause in a
        movement.
+    5. A recording made of static blocks alone (:func:`accelcal.steps.logger_steps`: its
+       large changes are nearly all isolated steps) gives its blocks whose means hold
+       still, however much a hand trembles in them (:func:`accelcal.steps.block_log_intervals`),
+       in place of the intervals found in them above.
 
     The noise is the device's ``noise_mps2`` (plus rounding) when it is given for
     every channel, else estimated from the data (:func:`accelcal.noise.estimate_noise`),
@@ -226,7 +172,14 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
     # them was recorded as a static block: no motion touches it
     stops = {0} | {iv[1] for iv in out}
     starts = {n} | {iv[0] for iv in out}
-    return [iv for iv in out if iv[1] - iv[0] >= min_n or (iv[0] in stops and iv[1] in starts)]
+    out = [iv for iv in out if iv[1] - iv[0] >= min_n or (iv[0] in stops and iv[1] in starts)]
+    # a recording of static blocks alone: its blocks whose means hold still, tremor or not,
+    # and the intervals above that none of them overlaps
+    blocks = block_log_intervals(raw, sig, w, h)
+    if blocks:
+        free = [iv for iv in out if not any(iv[0] < b and a < iv[1] for a, b in blocks)]
+        out = sorted(blocks + free)
+    return out
 
 
 def nyquist_tone(raw: np.ndarray) -> np.ndarray:
@@ -320,13 +273,7 @@ def pose_means(rec, intervals: Sequence[Any], device, *, labels: Sequence[Any] |
         for p, idx in enumerate(idx_list):
             if idx.size < 2 * MOVE_PARTS:
                 continue
-            parts = np.array_split(raw[idx].astype(float), MOVE_PARTS)
-            pm = np.array([q.mean(axis=0) for q in parts])
-            # the level's yardstick also takes the pose's own noise within its parts (the
-            # median over the parts): strong tremor swings the parts' means, a move or a
-            # ramp moves them by many times what each part varies within
-            part_sig = np.maximum(ref_sig, np.median([q.std(axis=0, ddof=1) for q in parts], axis=0))
-            spread = (pm.max(axis=0) - pm.min(axis=0)) / part_sig
+            spread, part_sig = part_spread(raw[idx], ref_sig)
             ratio = std[p] / ref_sig
             bad = np.flatnonzero((spread > MOVE_RANGE) | (ratio > MOVE_STD))
             if bad.size:
