@@ -440,3 +440,23 @@ def time_unmodelled(D, y, first: dict[str, Cand], cands, chosen: list[str], ambi
                          f"{a:.2f} +- {sa:.2f} of its path) but the model holds no term that follows time: "
                          f"{chosen[0]} may have taken the levels such a change left from pose to pose")
     return add, notes
+
+
+def time_beside_pose(D, cands, chosen: list[str], ambiguous: list[str]):
+    """Effects of time later in the model beside a verdict that varies by pose, on data that
+    cannot tell time from pose (:func:`~accelcal.effects.fitdata.time_separable`: static poses
+    only, no orientation held twice): returns (names to add to ``ambiguous_with``, notes).
+
+    On poses each held once, the level a change with time reached at each pose is a pattern
+    over the poses, which a verdict that varies by pose can take (a bend's square term took a
+    drift's ramp through the MPU-6050's hand-turned poses, with the drift only third in the
+    model); the drift's being in the model says the readings do change with time, so how much
+    of the verdict's pattern is the drift's the data do not say."""
+    if len(chosen) < 2 or not cands[chosen[0]].varies_by_pose or time_separable(D):
+        return [], []
+    add = [nm for nm in chosen[1:] if cands[nm].time_dependent and nm not in ambiguous]
+    notes = [f"{nm} is in the model too, and no orientation is held twice: on poses each held once the level "
+             f"{nm} reached at each pose is a pattern over the poses that {chosen[0]} can take, so the data do "
+             f"not say how much of {chosen[0]} is {nm}" for nm in add]
+    return add, notes
+

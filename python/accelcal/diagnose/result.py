@@ -17,7 +17,7 @@ from .floor import setup_rows
 from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare
 from .compare import (OCCAM_SHRINK, Contest, Given, claims_time, conditional, contest, model_ambiguity, separate_by,
-                      time_unmodelled)
+                      time_beside_pose, time_unmodelled)
 from .relinearise import heldout_path, joint_fit, relinearise
 from .leftover import leftover, with_settling
 from .scoring import rank_key, run_candidates
@@ -241,6 +241,9 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         ambiguous += more
         notes += why
         more, why = time_unmodelled(D, e, first, cands, chosen, ambiguous)
+        ambiguous += more
+        notes += why
+        more, why = time_beside_pose(D, cands, chosen, ambiguous)
         ambiguous += more
         notes += why
         effects[0]["ambiguous_with"] = ambiguous
