@@ -19,9 +19,13 @@ import numpy as np
 
 from .recording import Recording
 
-__all__ = ["HELD_MODAL_SHARE", "held_factor", "distinct_rows", "distinct_recordings"]
+__all__ = ["HELD_MODAL_SHARE", "HELD_MAX", "HELD_MIN_RUNS", "held_factor", "distinct_rows", "distinct_recordings"]
 
-HELD_MODAL_SHARE = 0.8     # rows are held when at least this share of the runs of identical rows share one length >= 2
+HELD_MODAL_SHARE = 0.8     # rows are held when at least this share of the runs of identical rows
+                           # share one length >= 2 ...
+HELD_MAX = 16              # ... of at most this many rows (a pose on one code of every channel is a
+                           # run as long as the pose) ...
+HELD_MIN_RUNS = 50         # ... over at least this many runs
 
 
 def _runs(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -34,14 +38,17 @@ def _runs(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def held_factor(raw: np.ndarray) -> int:
-    """How many rows each reading is held for: the runs' most common length k when it is at
-    least 2 and at least HELD_MODAL_SHARE of the runs have it, else 1 (rows not held)."""
+    """How many rows each reading is held for: the runs' most common length k when it is
+    2..HELD_MAX, at least HELD_MODAL_SHARE of at least HELD_MIN_RUNS runs have it, else 1
+    (rows not held; a coarsely quantised jig that holds every channel on one code through
+    poses of one length makes runs as long as its poses)."""
     if np.asarray(raw).shape[0] < 2:
         return 1
     _, lengths = _runs(raw)
     counts = np.bincount(lengths)
     k = int(np.argmax(counts))
-    return k if k >= 2 and counts[k] >= HELD_MODAL_SHARE * lengths.size else 1
+    held = 2 <= k <= HELD_MAX and lengths.size >= HELD_MIN_RUNS and counts[k] >= HELD_MODAL_SHARE * lengths.size
+    return k if held else 1
 
 
 def distinct_rows(rec: Recording) -> tuple[Recording, str | None]:

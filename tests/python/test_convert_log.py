@@ -101,6 +101,9 @@ def test_chance_repeats_are_not_held():
     assert held_factor(quiet) == 1
     held = np.repeat(np.round(1000 + 3 * rng.standard_normal((1000, 3))), 3, axis=0).astype(np.int64)
     assert held_factor(held) == 3 and held_factor(held[:1]) == 1
+    # a static jig on a coarse lattice: 60 poses of 200 rows, each on one code of every channel
+    poses = np.repeat(64 * rng.integers(-200, 200, (60, 3)), 200, axis=0)
+    assert held_factor(poses) == 1
 
 
 @pytest.mark.parametrize("body,args,where", [
