@@ -50,26 +50,40 @@ def test_a_ringing_in_real_sessions_whose_motions_start_rougher_than_they_stop(r
     assert ring["rms_counts"] > 0.0
 
 
+def clean_session(ds):
+    """The device, the first recording, its readings as floats, its rest mask and its noise
+    (at least one count) of an independent hand-held session."""
+    dev = ds["device"]
+    rec = ds["recordings"][0]
+    fs = dev.sample_rate_hz
+    return dev, rec, rec.raw.astype(float), im.static_mask(rec.raw, fs), np.maximum(im.real_noise(rec.raw, fs), 1.0)
+
+
+def add_burst(raw, rng, lo, hi, size):
+    """White noise of ``size`` (per channel, counts rms) added to the readings raw[lo:hi]."""
+    seg = slice(max(lo, 0), min(hi, raw.shape[0]))
+    raw[seg] += rng.normal(size=(seg.stop - seg.start, raw.shape[1])) * size
+
+
+def as_recording(dev, rec, raw, tag):
+    raw = np.clip(np.round(raw), dev.raw_min, dev.raw_max).astype(np.int64)
+    return recording_from_arrays(rec.t, raw, metadata={"test": tag})
+
+
 def with_motion_vibration(ds, seed, amp, knock):
     """A clean hand-held session with a steady line (amp x the noise, 20-45 Hz) through every
     motion and, where knock > 0, a 0.1 s burst of white noise (knock x the noise) at every
     motion's start (the hand picking the sensor up)."""
-    dev = ds["device"]
-    rec = ds["recordings"][0]
-    raw = rec.raw.astype(float)
+    dev, rec, raw, still, sig = clean_session(ds)
     fs = dev.sample_rate_hz
-    still = im.static_mask(rec.raw, fs)
-    sig = np.maximum(im.real_noise(rec.raw, fs), 1.0)
     rng = np.random.default_rng(seed)
     f0 = rng.uniform(20.0, min(45.0, 0.4 * fs))
     moving = ~still
     raw[moving] += amp * sig[None, :] * np.sin(2 * np.pi * f0 * rec.t[moving])[:, None]
     m = max(2, int(0.1 * fs))
     for e in np.flatnonzero(np.diff(still.astype(int)) == -1) + 1:
-        seg = slice(e, min(e + m, raw.shape[0]))
-        raw[seg] += rng.normal(size=(seg.stop - seg.start, raw.shape[1])) * knock * sig
-    raw = np.clip(np.round(raw), dev.raw_min, dev.raw_max).astype(np.int64)
-    return recording_from_arrays(rec.t, raw, metadata={"test": "motion vibration"})
+        add_burst(raw, rng, e, e + m, knock * sig)
+    return as_recording(dev, rec, raw, "motion vibration")
 
 
 @pytest.mark.parametrize("amp,knock", [(3.0, 0.0), (3.0, 10.0), (10.0, 10.0), (30.0, 30.0)])
@@ -103,21 +117,12 @@ def test_a_broadband_knock_at_each_stop_is_not_a_ringing(seed):
     """A hand setting the sensor down: a 40 ms burst of white noise at each stop, tens of
     times the noise, in every channel.  It is louder at the stops than anywhere else, but
     it is no line."""
-    ds = im.make_handheld([], seed)
-    dev = ds["device"]
-    rec = ds["recordings"][0]
-    raw = rec.raw.astype(float)
-    still = im.static_mask(rec.raw, dev.sample_rate_hz)
-    starts = np.flatnonzero(np.diff(still.astype(int)) == 1) + 1
+    dev, rec, raw, still, sig = clean_session(im.make_handheld([], seed))
     rng = np.random.default_rng(seed)
     m = max(2, int(0.04 * dev.sample_rate_hz))
-    sig = im.real_noise(rec.raw, dev.sample_rate_hz)
-    for s0 in starts:
-        seg = slice(max(s0 - m, 0), s0)
-        raw[seg] += rng.normal(size=(seg.stop - seg.start, raw.shape[1])) * 30.0 * np.maximum(sig, 1.0)
-    raw = np.clip(np.round(raw), dev.raw_min, dev.raw_max).astype(np.int64)
-    knocked = recording_from_arrays(rec.t, raw, metadata={"test": "knock"})
-    assert settling_ringing([knocked], dev) is None
+    for s0 in np.flatnonzero(np.diff(still.astype(int)) == 1) + 1:
+        add_burst(raw, rng, s0 - m, s0, 30.0 * sig)
+    assert settling_ringing([as_recording(dev, rec, raw, "knock")], dev) is None
 
 
 def test_too_few_stops_say_nothing():
