@@ -64,8 +64,8 @@ def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int
 
 def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
     """Add ``convert`` to the subcommands (``check_output``: the CLI's output-path check)."""
-    s = sub.add_parser("convert", help="the contract's recording CSV from imu_tk, imucal, MPU-6050 or other "
-                       "recording files", description=DESCRIPTION)
+    s = sub.add_parser("convert", help="the contract's recording CSV from imu_tk, imucal, MPU-6050, serial-monitor "
+                       "logs or other recording files", description=DESCRIPTION)
     s.add_argument("input", metavar="FILE", help="the file to convert (gzip-compressed or not)")
     s.add_argument("--format", choices=FORMATS, default="auto",
                    help="the input's format (default auto: told from its first line)")
