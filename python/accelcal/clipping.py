@@ -163,9 +163,9 @@ def clip_levels(raw: np.ndarray, device, noise: np.ndarray, window: int) -> Clip
         # coarse steps: a pose on one code looks like a pile, which is a clip only while moving
         coarse = sig < q
         top = pile_level(v, 1, sig, q)
-        if top is not None and top < device.raw_max and not (coarse and not pile_moves(raw, i, top, noise, window)):
+        if top is not None and top < device.raw_max and (not coarse or pile_moves(raw, i, top, noise, window)):
             hi[i], in_hi[i] = top, True
         bot = pile_level(v, -1, sig, q)
-        if bot is not None and bot > device.raw_min and not (coarse and not pile_moves(raw, i, bot, noise, window)):
+        if bot is not None and bot > device.raw_min and (not coarse or pile_moves(raw, i, bot, noise, window)):
             lo[i], in_lo[i] = bot, True
     return ClipLevels(lo=lo, hi=hi, inside_lo=in_lo, inside_hi=in_hi)

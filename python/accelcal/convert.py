@@ -31,11 +31,12 @@ from typing import Any
 
 import numpy as np
 
-from .convert_log import held_note, is_log, read_log
+from .convert_log import is_log, read_log
 from .convert_regions import POSE_DIRECTIONS, label_poses, read_regions
 from .csvtable import convert_columns, make_table, split_header
 from .device import Device
 from .errors import InputError
+from .held import held_runs
 from .recording import Recording, read_recording
 from .textinput import is_whitespace_header, read_preamble, read_text_bytes, split_whitespace_header, whitespace_to_commas
 from .units import STANDARD_GRAVITY, Scale, file_scale, to_counts
@@ -364,9 +365,15 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
     notes = [f"{info['text_lines']} line(s) of text (the first: {info['first_text']!r}) split the readings into "
              f"{info['blocks']} block(s)" + ("; each block is a pose" if blocks else
                                             "; --blocks labels each as a pose")] if info["text_lines"] else []
-    notes += held_note(info, opts.rate_hz)
+    k, first = held_runs(raw)
+    n = raw.shape[0]
+    share = (n - first.size) / (n - 1) if n > 1 else 0.0      # rows that repeat the row before
+    if k > 1:
+        notes.append(f"{100 * share:.0f} % of the rows repeat the row before in all three readings (each reading "
+                     f"held for {k} rows): the logger read the sensor faster than it updates; the distinct readings "
+                     f"come at about {opts.rate_hz / k:.4g} Hz, and successive rows are not independent samples")
     meta = {"log.text_lines": str(info["text_lines"]), "log.blocks": str(info["blocks"]),
-            "log.held_share": f"{info['held_share']:.4f}"}
+            "log.held_share": f"{share:.4f}"}
     return finish(source, "log", raw, np.arange(raw.shape[0]), None, block if blocks else None, opts, scale,
                   bool(np.any(raw < 0)), opts.rate_hz, meta, notes, locate, None)
 

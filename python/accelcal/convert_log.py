@@ -14,9 +14,9 @@ before each pose -- which splits the readings into blocks.
   after a prompt.  Without it the blocks are one stretch of samples, joined by instant
   steps, which static detection splits where the readings step.
 * The sample rate is the caller's (``--rate``): the lines carry no time.
-* A row that repeats the row before in all three readings is counted: where most rows do,
-  the monitor read the sensor faster than it updates (each reading held for several
-  rows), and a note gives the share and the rate the distinct readings have.
+* Readings held for several rows (the monitor read the sensor faster than it updates) are
+  told by :func:`accelcal.held.held_runs`, the rule ``calibrate`` and ``diagnose`` use; the
+  converter notes the share of repeated rows and the rate of the distinct readings.
 """
 from __future__ import annotations
 
@@ -27,10 +27,9 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["LOG_MIN_READINGS", "held_note", "is_log", "read_log"]
+__all__ = ["LOG_MIN_READINGS", "is_log", "read_log"]
 
 LOG_MIN_READINGS = 10      # a file is told to be a log from this many reading lines among its first 200
-LOG_HELD_SHARE = 0.5       # a note on held readings when at least this share of rows repeats the one before
 
 SPLIT_RE = re.compile(r"\s*[,;\t ]\s*")
 NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
@@ -80,8 +79,7 @@ def read_log(source: str, data: bytes) -> tuple[np.ndarray, list[int], list[str]
         ``block_k`` of each reading (k from 1: the k-th run of readings between text lines).
     info : dict
         ``text_lines`` (count), ``first_text`` (the first text line, shortened), ``blocks``
-        (count), ``held_share`` (share of rows that repeat the row before, 0..1),
-        ``held_run`` (median length of a run of repeated rows).
+        (count).
 
     Raises
     ------
@@ -113,20 +111,6 @@ def read_log(source: str, data: bytes) -> tuple[np.ndarray, list[int], list[str]
         block.append(f"block_{k}")
     if not values:
         raise InputError(source, "no reading (a line of three numbers) in the file")
-    v = np.array(values, dtype=float)
-    same = np.all(v[1:] == v[:-1], axis=1)
-    runs = np.diff(np.flatnonzero(np.concatenate(([True], ~same, [True]))))
-    info = {"text_lines": n_text, "first_text": first_text, "blocks": k,
-            "held_share": float(np.mean(same)) if same.size else 0.0,
-            "held_run": float(np.median(runs)) if runs.size else 1.0}
-    return v, lines, block, info
+    info = {"text_lines": n_text, "first_text": first_text, "blocks": k}
+    return np.array(values, dtype=float), lines, block, info
 
-
-def held_note(info: dict[str, Any], rate: float) -> list[str]:
-    """The note on held readings (module doc), if most rows repeat the one before."""
-    if info["held_share"] < LOG_HELD_SHARE:
-        return []
-    run = info["held_run"]
-    return [f"{100 * info['held_share']:.0f} % of the rows repeat the row before in all three readings (each "
-            f"reading held for {run:g} rows, median): the logger read the sensor faster than it updates; the "
-            f"distinct readings come at about {rate / run:.4g} Hz, and successive rows are not independent samples"]

@@ -4,7 +4,7 @@ row four times).  Its rows are then not independent samples, and every figure th
 them -- a pose mean's uncertainty, a calibration's chi2, a diagnosis's held-out chi2 --
 would take each reading as several.
 
-:func:`held_factor` tells such a recording from one whose rows repeat by chance (a sensor
+:func:`held_runs` tells such a recording from one whose rows repeat by chance (a sensor
 quieter than a code in all channels at rest): held rows come in runs of one length, the
 ratio of the two rates; chance repeats in runs whose most common length is 1 (a geometric
 law).  :func:`distinct_rows` keeps the first row of each run, so that the statistical
@@ -19,7 +19,8 @@ import numpy as np
 
 from .recording import Recording
 
-__all__ = ["HELD_MODAL_SHARE", "HELD_MAX", "HELD_MIN_RUNS", "held_factor", "distinct_rows", "distinct_recordings"]
+__all__ = ["HELD_MODAL_SHARE", "HELD_MAX", "HELD_MIN_RUNS", "held_runs", "held_factor", "distinct_rows",
+           "distinct_recordings"]
 
 HELD_MODAL_SHARE = 0.8     # rows are held when at least this share of the runs of identical rows
                            # share one length >= 2 ...
@@ -28,41 +29,46 @@ HELD_MAX = 16              # ... of at most this many rows (a pose on one code o
 HELD_MIN_RUNS = 50         # ... over at least this many runs
 
 
-def _runs(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(first row of each run of identical rows, the runs' lengths)."""
+def held_runs(raw: np.ndarray) -> tuple[int, np.ndarray]:
+    """(k, first): how many rows each reading is held for -- the most common length k of the
+    runs of identical rows when it is 2..HELD_MAX and at least HELD_MODAL_SHARE of at least
+    HELD_MIN_RUNS runs have it, else 1 (rows not held; a coarsely quantised jig that holds
+    every channel on one code through poses of one length makes runs as long as its poses)
+    -- and the first row of each run."""
     raw = np.asarray(raw)
     new = np.ones(raw.shape[0], bool)
     new[1:] = np.any(raw[1:] != raw[:-1], axis=1)
     first = np.flatnonzero(new)
-    return first, np.diff(np.append(first, raw.shape[0]))
-
-
-def held_factor(raw: np.ndarray) -> int:
-    """How many rows each reading is held for: the runs' most common length k when it is
-    2..HELD_MAX, at least HELD_MODAL_SHARE of at least HELD_MIN_RUNS runs have it, else 1
-    (rows not held; a coarsely quantised jig that holds every channel on one code through
-    poses of one length makes runs as long as its poses)."""
-    if np.asarray(raw).shape[0] < 2:
-        return 1
-    _, lengths = _runs(raw)
+    lengths = np.diff(np.append(first, raw.shape[0]))
+    if lengths.size == 0:
+        return 1, first
     counts = np.bincount(lengths)
     k = int(np.argmax(counts))
     held = 2 <= k <= HELD_MAX and lengths.size >= HELD_MIN_RUNS and counts[k] >= HELD_MODAL_SHARE * lengths.size
-    return k if held else 1
+    return (k if held else 1), first
 
 
-def distinct_rows(rec: Recording) -> tuple[Recording, str | None]:
-    """``rec`` with only the first row of each run of identical rows when its readings are
-    held (:func:`held_factor`), and a note saying so; else ``rec`` itself and None."""
-    k = held_factor(rec.raw)
+def held_factor(raw: np.ndarray) -> int:
+    """How many rows each reading is held for (:func:`held_runs`; 1: not held)."""
+    return held_runs(raw)[0]
+
+
+def _distinct(rec: Recording) -> tuple[Recording, int, str | None]:
+    k, first = held_runs(rec.raw)
     if k == 1:
-        return rec, None
-    first, _ = _runs(rec.raw)
+        return rec, 1, None
     span = float(rec.t[-1] - rec.t[0]) if rec.n_samples > 1 else 0.0
     rate = f", about {(first.size - 1) / span:.4g} Hz" if span > 0 else ""
     note = (f"{rec.source}: each reading is held for {k} rows (the logger read the sensor faster than it "
             f"updates): the {first.size} distinct readings of the {rec.n_samples} rows are used{rate}")
-    return rec.select(first), note
+    return rec.select(first), k, note
+
+
+def distinct_rows(rec: Recording) -> tuple[Recording, str | None]:
+    """``rec`` with only the first row of each run of identical rows when its readings are
+    held (:func:`held_runs`), and a note saying so; else ``rec`` itself and None."""
+    out, _, note = _distinct(rec)
+    return out, note
 
 
 def distinct_recordings(recordings: list[Recording], device) -> tuple[list[Recording], object, list[str]]:
@@ -70,15 +76,12 @@ def distinct_recordings(recordings: list[Recording], device) -> tuple[list[Recor
     readings come at (``sample_rate_hz`` / k) when every recording holds its readings for
     the same k rows (the device's windows and grids in samples then span the times they
     mean); returns (recordings, device, notes)."""
-    factors = [held_factor(r.raw) for r in recordings]
-    out, notes = [], []
-    for r in recordings:
-        r2, note = distinct_rows(r)
-        out.append(r2)
-        if note:
-            notes.append(note)
-    if factors and factors[0] > 1 and len(set(factors)) == 1:
-        k = factors[0]
+    done = [_distinct(r) for r in recordings]
+    out = [r for r, _, _ in done]
+    notes = [note for _, _, note in done if note]
+    factors = {k for _, k, _ in done}
+    if len(factors) == 1 and min(factors) > 1:
+        k = min(factors)
         device = dataclasses.replace(device, sample_rate_hz=device.sample_rate_hz / k)
         notes.append(f"the device's {device.sample_rate_hz * k:g} Hz is taken as {device.sample_rate_hz:g} Hz, the "
                      "rate of the distinct readings")

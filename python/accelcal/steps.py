@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .noise import MAD_TO_STD
+
 __all__ = ["STEP_SIGMA", "MOVE_PARTS", "MOVE_RANGE", "MOVE_STD", "BLOCK_JUMP", "BLOCK_SPAN", "BLOCK_LEVELS",
            "BLOCK_SHARE", "BLOCK_EDGE", "step_splits", "part_spread", "logger_steps", "block_log_intervals"]
 
@@ -128,7 +130,7 @@ def logger_steps(raw: np.ndarray, sig: np.ndarray, w: int) -> list[tuple[int, in
     if n < 3:
         return None
     d = np.diff(raw.astype(float), axis=0)
-    s_d = np.maximum(1.4826 * np.median(np.abs(d - np.median(d, axis=0)), axis=0), 1.0)
+    s_d = np.maximum(MAD_TO_STD * np.median(np.abs(d - np.median(d, axis=0)), axis=0), 1.0)
     big = np.flatnonzero(np.any(np.abs(d) > BLOCK_JUMP * s_d, axis=1)) + 1   # first sample after the change
     if big.size < 2:
         return None
@@ -165,6 +167,7 @@ def block_log_intervals(raw: np.ndarray, sig: np.ndarray, w: int, h: int) -> lis
     steps = logger_steps(raw, sig, w)
     if steps is None:
         return []
+
     def pieces_between(cuts):
         return [(a, b) for a, b in zip(cuts[:-1], cuts[1:]) if b - a >= w]
 

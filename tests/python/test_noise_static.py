@@ -140,6 +140,20 @@ def test_mains_aliased_to_half_the_sampling_rate_is_not_motion():
         assert not bad, (with_tone, bad)
 
 
+def eased_poses(seed, pause):
+    """f (m/s^2) of 12 random poses held 2 s at 100 Hz, joined by moves eased over 0.5 s to
+    the half-way direction, held there ``pause`` samples, and eased over 0.5 s on."""
+    F = Rotation.random(12, random_state=seed).apply([0.0, 0.0, G])
+    s = np.linspace(0.0, 1.0, 50)[:, None]
+    ease = 3 * s ** 2 - 2 * s ** 3
+    segs = []
+    for i in range(11):
+        mid = 0.5 * (F[i] + F[i + 1])
+        segs += [np.repeat(F[i][None], 200, 0), F[i] + (mid - F[i]) * ease, np.repeat(mid[None], pause, 0),
+                 mid + (F[i + 1] - mid) * ease]
+    return np.concatenate(segs + [np.repeat(F[11][None], 200, 0)])
+
+
 def test_static_blocks_shorter_than_the_minimum_hold_are_poses_where_instant_steps_join_them():
     """A logger that records only static blocks (CK-Explorer's acc_log.csv: 160 blocks of
     100 samples, no time column) joins its poses by instant steps: a block shorter than
@@ -151,15 +165,7 @@ def test_static_blocks_shorter_than_the_minimum_hold_are_poses_where_instant_ste
     assert len(iv) >= 0.5 * 60                      # none of them before
     assert all(lab[a] == lab[b - 1] for a, b in iv)
     # 12 poses of 2 s joined by 1 s moves that pause for 0.6 s half-way
-    F = Rotation.random(12, random_state=3).apply([0.0, 0.0, G])
-    s = np.linspace(0.0, 1.0, 50)[:, None]
-    ease = 3 * s ** 2 - 2 * s ** 3
-    segs = []
-    for i in range(11):
-        mid = 0.5 * (F[i] + F[i + 1])
-        segs += [np.repeat(F[i][None], 200, 0), F[i] + (mid - F[i]) * ease, np.repeat(mid[None], 60, 0),
-                 mid + (F[i + 1] - mid) * ease]
-    f = np.concatenate(segs + [np.repeat(F[11][None], 200, 0)])
+    f = eased_poses(3, pause=60)
     f = f + 0.02 * rng.standard_normal(f.shape)
     iv = detect_static(recording(np.round(32768 + dev.counts_per_mps2[0] * f).astype(np.int64), 100.0), dev)
     assert len(iv) == 12
@@ -183,13 +189,10 @@ def test_motions_between_poses_are_no_logger_of_blocks(shared_data):
     """Recordings with motions between their poses (the real MPU-6050 and Xsens ones, and
     poses joined by eased moves) make runs of large changes, not isolated steps."""
     dev = bare(default_triad())
-    F = Rotation.random(12, random_state=4).apply([0.0, 0.0, G])
-    s = np.linspace(0.0, 1.0, 50)[:, None]
-    ease = 3 * s ** 2 - 2 * s ** 3
-    f = np.concatenate([seg for i in range(11)
-                        for seg in (np.repeat(F[i][None], 200, 0), F[i] + (F[i + 1] - F[i]) * ease)])
+    f = eased_poses(4, pause=0)
     raw = np.round(32768 + dev.counts_per_mps2[0] * (f + 0.02 * np.random.default_rng(4).standard_normal(f.shape)))
-    assert logger_steps(raw.astype(np.int64), np.full(3, 33.0), 50) is None
+    raw = raw.astype(np.int64)
+    assert logger_steps(raw, estimate_noise(raw, 50), 50) is None
     mpu = convert_file(shared_data / "mpu6050_tomisuarez" / "example_data_calibration.csv.gz", scale=None).recording
     _, xs = load_xsens(shared_data.joinpath(*XSENS_ACC))
     # the independent model's hand-held session at 50 Hz and 0.047 m/s^2 whose quick moves peak in
