@@ -29,7 +29,8 @@ from .errors import AccelcalError
 from .model import centripetal_matrix, omega_products
 
 __all__ = ["ChannelState", "Context", "make_context", "evaluate", "true_state", "interp_truth",
-           "lowpass_first_order", "rotation_matrix", "calibration_arrays"]
+           "lowpass_first_order", "lowpass_butterworth2", "BUTTER2_MODE", "rotation_matrix",
+           "calibration_arrays"]
 
 
 def rotation_matrix(rotvec: Any) -> np.ndarray:
@@ -182,7 +183,7 @@ def evaluate(truth: Any, state: ChannelState, f: np.ndarray | None = None) -> np
     return sensed + state.total_offset()
 
 
-def lowpass_first_order(t: np.ndarray, x: np.ndarray, fc_hz: Any) -> np.ndarray:
+def lowpass_first_order(t: np.ndarray, x: np.ndarray, fc_hz: Any, rate: complex | None = None) -> np.ndarray:
     """First-order low-pass y' = 2 pi fc (x - y), sampled at ``t``.
 
     Parameters
@@ -203,11 +204,15 @@ def lowpass_first_order(t: np.ndarray, x: np.ndarray, fc_hz: Any) -> np.ndarray:
         Uniform spacing (every step within 1e-9 of the mean) runs through
         ``scipy.signal.lfilter``; other spacings use the same recursion in closed
         form, blockwise (cumulative sums scaled by exp(w t)).
+    rate : complex, optional
+        The rate w itself (1/s, Re w > 0) for every channel instead of 2 pi fc: a complex
+        rate gives one complex mode of a higher-order filter (:func:`lowpass_butterworth2`);
+        the result is then complex.
     """
     t = np.asarray(t, float)
     x = np.asarray(x, float)
     fc = np.broadcast_to(np.asarray(fc_hz, float), (x.shape[1],))
-    y = x.copy()
+    y = x.astype(np.result_type(x, rate if rate is not None else 0.0))
     if x.shape[0] < 2:
         return y
     active = np.isfinite(fc) & (fc > 0)
@@ -216,16 +221,46 @@ def lowpass_first_order(t: np.ndarray, x: np.ndarray, fc_hz: Any) -> np.ndarray:
     uniform = bool(np.all(np.abs(steps - h) <= 1e-9 * h))
     for f_c in np.unique(fc[active]):
         idx = np.flatnonzero(fc == f_c)
-        w = 2.0 * math.pi * float(f_c)
+        w = 2.0 * math.pi * float(f_c) if rate is None else rate
         y[:, idx] = _lowpass_uniform(x[:, idx], w, h) if uniform else _lowpass_any(t, x[:, idx], w)
     return y
 
 
-def _lowpass_uniform(x: np.ndarray, w: float, h: float) -> np.ndarray:
-    a = math.exp(-w * h)
-    beta = -math.expm1(-w * h) / (w * h)
+#: a second-order Butterworth low-pass of angular cut-off w is 2 Re(c z), z the first-order
+#: low-pass of complex rate w BUTTER2_MODE[0] (its pole), c = BUTTER2_MODE[1]: the partial
+#: fraction w^2 / (s^2 + sqrt(2) w s + w^2) = 2 Re(c q / (s + q)), q = w (1 - j) / sqrt(2)
+BUTTER2_MODE = ((1.0 - 1.0j) / math.sqrt(2.0), (1.0 - 1.0j) / 2.0)
+
+
+def lowpass_butterworth2(t: np.ndarray, x: np.ndarray, fc_hz: Any) -> np.ndarray:
+    """Second-order Butterworth low-pass y'' + sqrt(2) w y' + w^2 y = w^2 x, w = 2 pi fc,
+    sampled at ``t`` (the analog filter of a MEMS chip's or an anti-alias stage's response; a
+    pure delay of sqrt(2) / w to second order in the frequency).
+
+    Parameters and conventions as :func:`lowpass_first_order`: exact for an input linear
+    between samples, steady state at the first sample, any spacing.  Computed as the real part
+    of one complex first-order mode (:data:`BUTTER2_MODE`).
+    """
+    t = np.asarray(t, float)
+    x = np.asarray(x, float)
+    fc = np.broadcast_to(np.asarray(fc_hz, float), (x.shape[1],))
+    y = x.copy()
+    if x.shape[0] < 2:
+        return y
+    q, c = BUTTER2_MODE
+    active = np.isfinite(fc) & (fc > 0)
+    for f_c in np.unique(fc[active]):
+        idx = np.flatnonzero(fc == f_c)
+        z = lowpass_first_order(t, x[:, idx], 1.0, rate=2.0 * math.pi * float(f_c) * q)
+        y[:, idx] = 2.0 * np.real(c * z)
+    return y
+
+
+def _lowpass_uniform(x: np.ndarray, w: complex, h: float) -> np.ndarray:
+    a = np.exp(-w * h)
+    beta = -np.expm1(-w * h) / (w * h)
     b0, b1 = 1.0 - beta, beta - a
-    y = np.empty_like(x)
+    y = np.empty(x.shape, np.result_type(x, a))
     y[0] = x[0]
     if x.shape[0] > 1:
         zi = (b1 * x[0] + a * y[0])[None, :]
@@ -236,11 +271,12 @@ def _lowpass_uniform(x: np.ndarray, w: float, h: float) -> np.ndarray:
 _BLOCK_PHASE = 400.0  # exp(400) ~ 5e173: the closed form stays far from overflow
 
 
-def _lowpass_any(t: np.ndarray, x: np.ndarray, w: float) -> np.ndarray:
+def _lowpass_any(t: np.ndarray, x: np.ndarray, w: complex) -> np.ndarray:
     h = np.diff(t)
     xh = w * h
     a = np.exp(-xh)
     beta = -np.expm1(-xh) / xh
+    x = x.astype(np.result_type(x, a))
     c = np.empty_like(x)
     c[0] = 0.0
     c[1:] = (beta - a)[:, None] * x[:-1] + (1.0 - beta)[:, None] * x[1:]
@@ -250,7 +286,7 @@ def _lowpass_any(t: np.ndarray, x: np.ndarray, w: float) -> np.ndarray:
     start, n = 0, x.shape[0]
     while start < n:
         # block [start, stop): phase span below _BLOCK_PHASE
-        stop = int(np.searchsorted(phase, phase[start] + _BLOCK_PHASE, side="right"))
+        stop = int(np.searchsorted(phase.real, phase[start].real + _BLOCK_PHASE, side="right"))
         stop = max(stop, start + 1)
         ph = phase[start:stop] - phase[start]
         e = np.exp(ph)[:, None]

@@ -7,10 +7,11 @@ import time
 import numpy as np
 import pytest
 from hypothesis import given, strategies as st
+from scipy.signal import lsim, tf2ss
 
 from accelcal.device import GRAVITY, Device, default_device, default_triad, pendulum_device
 from accelcal.effects import EFFECT_NAMES, EFFECTS, parse_effect_spec, parse_effect_specs
-from accelcal.sensor import lowpass_first_order, make_context, rotation_matrix, true_state
+from accelcal.sensor import lowpass_butterworth2, lowpass_first_order, make_context, rotation_matrix, true_state
 from accelcal.errors import AccelcalError
 from accelcal.model import predict_counts, specific_force_at
 from accelcal.motions import MOTION_NAMES, MOTIONS, Trajectory, parse_motion_spec, pose_directions
@@ -373,6 +374,33 @@ def test_bandwidth_attenuates_the_rate_table_signal():
     tail = a.trajectory.t > 2
     ratio = bc[tail].std() / ac[tail].std()
     assert abs(ratio - 1 / math.sqrt(1 + (2 / 4) ** 2)) < 0.03
+    assert np.array_equal(a.clean_counts[:, 1:], b.clean_counts[:, 1:])
+
+
+def test_second_order_bandwidth_is_the_analog_butterworth():
+    """lowpass_butterworth2 against scipy.signal.lsim of the analog Butterworth from steady
+    state: uniform sampling (the input linear between samples is exact) and random spacing
+    (against lsim on a fine grid of the same piecewise-linear input)."""
+    w = 2 * math.pi * 5.0
+    A, B, C, D = tf2ss([w * w], [1.0, math.sqrt(2) * w, w * w])
+    rng = np.random.default_rng(3)
+    for t in (np.arange(0.0, 3.0, 0.01), np.sort(rng.uniform(0.0, 3.0, 400))):
+        x = np.sin(2 * math.pi * 1.3 * t) + 0.3 * t + 1.0
+        y = lowpass_butterworth2(t, np.stack([x, x], axis=1), [5.0, math.inf])
+        tf = np.linspace(t[0], t[-1], 200_001)
+        xf = np.interp(tf, t, x)
+        _, yf, _ = lsim((A, B, C, D), xf, tf - tf[0], X0=np.linalg.solve(A, -B[:, 0] * xf[0]), interp=True)
+        assert np.max(np.abs(y[:, 0] - np.interp(t, tf, yf))) < 1e-6
+        assert np.array_equal(y[:, 1], x)
+
+
+def test_bandwidth_of_order_two_attenuates_as_a_butterworth():
+    a, b = _pair("rate_table", "bandwidth:fc_hz=4,order=2,channel=0", duration_s=6)
+    ac = a.clean_counts[:, 0] - a.clean_counts[:, 0].mean()
+    bc = b.clean_counts[:, 0] - b.clean_counts[:, 0].mean()
+    tail = a.trajectory.t > 2
+    ratio = bc[tail].std() / ac[tail].std()
+    assert abs(ratio - 1 / math.sqrt(1 + (2 / 4) ** 4)) < 0.03
     assert np.array_equal(a.clean_counts[:, 1:], b.clean_counts[:, 1:])
 
 

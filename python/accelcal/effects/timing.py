@@ -6,38 +6,48 @@ import math
 import numpy as np
 from scipy.signal import lfilter
 
-from ..sensor import lowpass_first_order
+from ..sensor import BUTTER2_MODE, lowpass_butterworth2, lowpass_first_order
 from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_float_array, as_list, channel_mask, per_channel, strongest
 from .fitdata import FitData
-from .fitting import SearchCandidate, Shifter
+from .fitting import SearchCandidate, Shifter, block_ss
 from .settings import DELAY_GRID, SKEW_GRID
 
 
-def lowpass_runs(t: np.ndarray, x: np.ndarray, w: float, h: float) -> np.ndarray:
-    """The registry's first-order low-pass (effects.lowpass_first_order: exact for an input linear
+def lowpass_runs(t: np.ndarray, x: np.ndarray, w: complex, h: float) -> np.ndarray:
+    """The registry's first-order low-pass (sensor.lowpass_first_order: exact for an input linear
     between samples, steady state at the first sample) with angular cut-off w, computed with
-    lfilter over runs of samples at the nominal period h (gaps > 1.5 h get their exact update)."""
+    lfilter over runs of samples at the nominal period h (gaps > 1.5 h get their exact update).
+    A complex w gives one complex mode of a higher-order filter (complex result)."""
     n = t.shape[0]
-    y = np.empty_like(x)
+    a = np.exp(-w * h)
+    y = np.empty(x.shape, np.result_type(x, a))
     gaps = np.flatnonzero(np.diff(t) > 1.5 * h) + 1
     starts = np.concatenate([[0], gaps])
     ends = np.append(gaps, n)
-    a = math.exp(-w * h)
-    beta = -math.expm1(-w * h) / (w * h)
+    beta = -np.expm1(-w * h) / (w * h)
     b0, b1 = 1.0 - beta, beta - a
     for a0, e0 in zip(starts, ends):
         if a0 == 0:
             y[0] = x[0]
         else:
             hg = float(t[a0] - t[a0 - 1])
-            ag = math.exp(-w * hg)
-            bg = -math.expm1(-w * hg) / (w * hg)
+            ag = np.exp(-w * hg)
+            bg = -np.expm1(-w * hg) / (w * hg)
             y[a0] = ag * y[a0 - 1] + (bg - ag) * x[a0 - 1] + (1.0 - bg) * x[a0]
         if e0 - a0 > 1:
             zi = (b1 * x[a0] + a * y[a0])[None, :]
             y[a0 + 1:e0] = lfilter([b0, b1], [1.0, -a], x[a0 + 1:e0], axis=0, zi=zi)[0]
     return y
+
+
+def lowpass_order_runs(t: np.ndarray, x: np.ndarray, w: float, h: float, order: int) -> np.ndarray:
+    """:func:`lowpass_runs` of the first-order low-pass (order 1) or of the second-order
+    Butterworth (order 2, sensor.lowpass_butterworth2) of angular cut-off w."""
+    if order == 1:
+        return lowpass_runs(t, x, w, h)
+    q, c = BUTTER2_MODE
+    return 2.0 * np.real(c * lowpass_runs(t, x, w * q, h))
 
 
 #: a skew of every channel late by the same time, within this share of it, is also a low-pass's
@@ -123,30 +133,47 @@ class Bandwidth(SearchCandidate, Effect):
     name = "bandwidth"
     tell_apart = "motion at several frequencies (a low-pass damps and lags the faster ones more, a time shift only delays)"
     summary = "the channel responds through a first-order low-pass of cut-off f_c"
-    doc = ("y' = 2 pi fc (x - y) on the noise-free readings, exact ramp-invariant discretisation at "
-           "the sample times, starting in steady state (fc = inf: no filter).")
+    doc = ("y' = 2 pi fc (x - y) on the noise-free readings (order 2: the second-order Butterworth "
+           "y'' + sqrt(2) w y' + w^2 (y - x) = 0, w = 2 pi fc), exact for an input linear between the "
+           "sample times, starting in steady state (fc = inf: no filter).")
     stage = "signal"
     params = (
         Param("fc_hz", 5.0, "Hz", "cut-off frequency", "floats", minimum=0.0, exclusive_min=True),
+        Param("order", 1, "-", "1: first-order low-pass (the contract's); 2: second-order Butterworth "
+              "(a MEMS chip's digital low-pass, an anti-alias filter)", "int", minimum=1, maximum=2),
         CHANNEL_PARAM,
     )
-    fit = (FitParam("fc_hz", "channel", "Hz", "cut-off frequency (inf = none)"),)
+    fit = (FitParam("fc_hz", "channel", "Hz", "cut-off frequency (inf = none)"),
+           FitParam("order", "scalar", "-", "1: first-order low-pass, 2: second-order Butterworth", free=False))
+
+    #: the fit's orders: the contract's first-order low-pass, and the second-order Butterworth
+    #: whose response is closer to a pure delay below its cut-off (flat to the fourth power of
+    #: the frequency); the one with the smaller held-out residual is kept (the same parameters)
+    ORDERS = (1, 2)
 
     def _resolve(self, spec, ctx, rng):
         m = channel_mask(spec, ctx, self.name)
-        return {"fc_hz": per_channel(spec["fc_hz"], 5.0, m, None, self.name, "fc_hz", off_value=math.inf)}
+        return {"fc_hz": per_channel(spec["fc_hz"], 5.0, m, None, self.name, "fc_hz", off_value=math.inf),
+                "order": int(spec["order"])}
 
     def identity(self, ctx):
-        return {"fc_hz": np.full(ctx.n_channels, math.inf)}
+        return {"fc_hz": np.full(ctx.n_channels, math.inf), "order": 1}
 
     def apply_signal(self, counts, p, ctx):
-        return lowpass_first_order(np.asarray(ctx.truth.t, float), counts, np.asarray(p["fc_hz"], float))
+        filt = lowpass_butterworth2 if int(p.get("order", 1)) == 2 else lowpass_first_order
+        return filt(np.asarray(ctx.truth.t, float), counts, np.asarray(p["fc_hz"], float))
 
     # -- fit to a residual (the diagnosis) ------------------------------------
 
     grid = DELAY_GRID
 
     lower = 0.0
+
+    #: group delay at low frequency per 1/w: first order 1, second-order Butterworth sqrt(2) (u,
+    #: the searched delay in samples, maps to one cut-off per order)
+    DELAY_PER_W = {1: 1.0, 2: math.sqrt(2.0)}
+
+    order = 1
 
     def prepare(self, D, pcur):
         self.D = D
@@ -158,19 +185,42 @@ class Bandwidth(SearchCandidate, Effect):
         out = np.zeros_like(self.x)
         if not np.any(u > 0):
             return out
+        k = self.DELAY_PER_W[self.order]
         for v in np.unique(u[u > 0]):
             cols = np.flatnonzero(u == v)
             for idx in self.recs:
                 xs = self.x[idx][:, cols]
-                out[np.ix_(idx, cols)] = lowpass_runs(self.D.t[idx], xs, 1.0 / (v * self.D.h), self.D.h) - xs
+                out[np.ix_(idx, cols)] = lowpass_order_runs(self.D.t[idx], xs, k / (v * self.D.h), self.D.h,
+                                                            self.order) - xs
         return out
+
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
+        # each order searched; kept: the smaller held-out residual (all-data fits: in-sample)
+        best = None
+        for order in self.ORDERS:
+            self.order = order
+            c = SearchCandidate.cv(self, D, y, pcur, S0w, S0u, folds)
+            ss = float(np.sum(c.Sw)) if folds else float(np.sum(block_ss(D, D.rows(y - c.delta))[0]))
+            if best is None or ss < best[0]:
+                best = (ss, c)
+        self.order = 1
+        return best[1]
+
+    def refit(self, D, y, pcur, like):
+        # the order the fit ``like`` took is kept
+        self.order = int(like.params.get("order", 1))
+        S0w, S0u = block_ss(D, D.rows(y))
+        c = SearchCandidate.cv(self, D, y, pcur, S0w, S0u, folds=False)
+        self.order = 1
+        return c
 
     def to_params(self, D, u, su):
         d = u * D.h
-        fc = np.where(d > 0, 1.0 / (2 * math.pi * np.maximum(d, 1e-300)), math.inf)
+        k = self.DELAY_PER_W[self.order]
+        fc = np.where(d > 0, k / (2 * math.pi * np.maximum(d, 1e-300)), math.inf)
         with np.errstate(divide="ignore", invalid="ignore"):
             sfc = np.where(d > 0, fc * (su * D.h) / np.maximum(d, 1e-300), math.inf)
-        return {"fc_hz": fc}, {"fc_hz": sfc, "delay_s": su * D.h}
+        return {"fc_hz": fc, "order": self.order}, {"fc_hz": sfc, "delay_s": su * D.h}
 
     # -- the benchmark --------------------------------------------------------
 
@@ -192,5 +242,6 @@ class Bandwidth(SearchCandidate, Effect):
         """One line in physical units for the report (p: parameters, s: their 1-sigma)."""
         fc = np.asarray(p["fc_hz"], float)
         i = int(np.argmin(fc))
-        return (f"low-pass cut-off down to {fc[i]:.4g} Hz (delay {1e3 * s['delay_s'][i]:.2g} ms 1-sigma) "
-                f"on channel {i}")
+        kind = "second-order Butterworth" if int(p.get("order", 1)) == 2 else "first-order"
+        return (f"{kind} low-pass cut-off down to {fc[i]:.4g} Hz (delay {1e3 * s['delay_s'][i]:.2g} ms "
+                f"1-sigma) on channel {i}")
