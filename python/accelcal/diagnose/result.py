@@ -18,6 +18,7 @@ from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare
 from .compare import (OCCAM_SHRINK, Contest, Given, claims_time, conditional, contest, model_ambiguity, separate_by,
                       time_beside_pose, time_unmodelled)
+from .parsimony import simpler_model
 from .relinearise import heldout_path, joint_fit, relinearise
 from .leftover import leftover, with_settling
 from .scoring import rank_key, run_candidates
@@ -196,6 +197,15 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
             y = rl["e"] - rl["delta"]
             pcur = Dk.p0 + rl["delta"]
         results, _, _ = run_candidates(Dk, cands, remaining, y, pcur, progress)
+
+    # --- a much simpler model that, refitted as a whole, leaves less (parsimony.py)
+    alt, why = simpler_model(D, cands, first, [c for c, _ in steps], e)
+    if alt is not None:
+        path = heldout_path(D, cands, alt, e)
+        steps = [(c, "the calibrated model" + ("" if k == 0 else " + " + " + ".join(alt[:k])))
+                 for k, c in enumerate(path)]
+        duel = Contest(best=path[0], swapped_from=chosen[0], why=why)
+        chosen = list(alt)
 
     # --- joint refit of the chosen effects (backfitting), re-linearised about the corrected calibration
     fitted = [c.name for c, _ in steps if c.gain > 0]
