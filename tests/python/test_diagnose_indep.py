@@ -441,10 +441,13 @@ def test_an_offset_and_coarse_steps_refitted_together_beat_a_per_pose_tilt():
     missed, so the per-pose tilt (68 parameters), which takes the offset and each pose's
     rounding at once, won the first step and the verdict was pose_error, with no word of doubt.
     Refitted together, the offset and the steps leave less with 6 parameters: they are the
-    model (diagnose.parsimony)."""
+    model (diagnose.parsimony), and scored as the model holds them (each after the other's
+    joint fit) they leave nothing beyond the noise; after the stepwise fits 9 % of the gap was
+    reported unexplained."""
     seed = 798611
     ds = im.make_jig(["quantization", "offset"], seed)
     res = _diagnose(ds, seed)
     assert set(res["model"]["effects"]) >= {"offset", "quantization"}, (res["verdict"], res["model"]["effects"])
     assert "pose_error" not in res["model"]["effects"]
     assert any("refitted together" in n for n in res["notes"])
+    assert res["unexplained"] is None, res["unexplained"]

@@ -46,9 +46,12 @@ def joint_fit(D, cands, names: list[str], e: np.ndarray, start: dict[str, Cand] 
     return joint
 
 
-def heldout_path(D, cands, names: list[str], e: np.ndarray) -> list[Cand]:
+def heldout_path(D, cands, names: list[str], e: np.ndarray, joint: dict[str, Cand] | None = None) -> list[Cand]:
     """The effects ``names`` added in order, each cross-validated on what the ones before
-    leave (the stepwise search's figures, at this linearisation)."""
+    leave (the stepwise search's figures, at this linearisation).  With ``joint`` (their fits
+    together, :func:`joint_fit`), the ones before leave what their joint fits leave: an
+    effect whose prediction depends on the others' (the converter's rounding after an offset)
+    is scored as the model holds it, not after fits that carried part of it."""
     out = []
     y = e.copy()
     pcur = D.p0.copy()
@@ -56,9 +59,10 @@ def heldout_path(D, cands, names: list[str], e: np.ndarray) -> list[Cand]:
         s0w, s0u = block_ss(D, D.rows(y))
         c = score(D, cands[nm].cv(D, y, pcur, s0w, s0u), s0w, s0u)
         out.append(c)
-        if c.gain > 0:
-            y = y - c.delta
-            pcur = pcur + c.delta
+        d = joint[nm].delta if joint is not None else (c.delta if c.gain > 0 else None)
+        if d is not None:
+            y = y - d
+            pcur = pcur + d
     return out
 
 
@@ -101,6 +105,6 @@ def relinearise(device, cal, recs, K: int, seed: int, m0: float, cands, names: l
     for nm in absorbed:
         final = cands[nm].absorb(final, joint[nm].params)
     params = {nm: (cands[nm].params_between(cal, final) if nm in absorbed else joint[nm].params) for nm in names}
-    return {"params": params, "joint": joint, "path": heldout_path(D, cands, names, e), "iterations": it,
+    return {"params": params, "joint": joint, "path": heldout_path(D, cands, names, e, joint), "iterations": it,
             "converged": converged, "D": D, "e": e, "delta": total}
 

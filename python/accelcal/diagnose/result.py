@@ -227,6 +227,9 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     model_params = {nm: joint[nm].params for nm in chosen}
     model_sigma = {nm: joint[nm].sigma for nm in chosen}
     relin_info = None
+    if relin is None and len(fitted) > 1:
+        # the model as it is fitted together: each effect scored after the others' joint fits
+        model_after = min(model_after, heldout_path(D, cands, fitted, e, joint)[-1].after)
     if relin is not None:
         model_after = min(model_after, relin["path"][-1].after)
         model_params.update(relin["params"])
