@@ -72,7 +72,8 @@ def read_recording(path: Any, device: Any = None, *, units: str | None = None, l
     Parameters
     ----------
     path : str or os.PathLike
-        The CSV file (gzip-compressed or whitespace-separated text too).
+        The CSV file (compressed -- gzip, bzip2, xz, zstd, a zip of one file -- or
+        whitespace-separated text too).
     device : Device, path or int, optional
         When given, the file must have that device's ``raw_0 .. raw_{N-1}`` (an int is N).
     units : {"counts", "mps2", "g"}, optional
@@ -336,7 +337,7 @@ def convert(path: Any, fmt: str = "auto", *, units: str | None = None, lsb: floa
     ----------
     path : str or os.PathLike
         imu_tk's text, imucal's CSV, the MPU-6050 logger's CSV, a contract-like CSV or a
-        serial monitor's log, gzip-compressed or not.
+        serial monitor's log, compressed or not (gzip, bzip2, xz, zstd, a zip of one file).
     fmt : {"auto", "imu_tk", "imucal", "mpu6050", "csv", "log"}
     units : {"counts", "mps2", "g"}, optional
         The unit of the readings in the file; with ``lsb`` (one count in that unit) or

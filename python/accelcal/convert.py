@@ -11,7 +11,7 @@ Formats (``detect_format`` tells them from the first line that is not a comment)
   end}}`` sample ranges (end excluded) or from a ``part`` column.
 - ``mpu6050``: the MPU-6050 logger's CSV: ``key,value`` lines (``Fs,100`` the rate), then
   ``ax,ay,az,gx,gy,gz`` in signed counts, no time column.
-- ``csv``: a recording per the contract (or any form ``read_recording`` takes: gzip,
+- ``csv``: a recording per the contract (or any form ``read_recording`` takes: compressed,
   whitespace, physical units), rewritten as plain CSV in counts.
 - ``log``: a serial monitor's capture: lines of three numbers among the logger's text
   (prompts, banners), no header, no time column (``--rate``); with ``blocks`` each run of
@@ -386,7 +386,7 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     Parameters
     ----------
     path : str or os.PathLike
-        The file (gzip-compressed or not).
+        The file (compressed or not: gzip, bzip2, xz, zstd, a zip of one file).
     fmt : {"auto", "imu_tk", "imucal", "mpu6050", "csv", "log"}
         ``auto`` tells it from the first line (:func:`detect_format`; a log from its lines).
     scale : units.Scale, optional

@@ -22,10 +22,10 @@ the poses state their orientation) from another tool's file, and with --device-o
 device JSON for it.  Formats: imu_tk (whitespace 't ax ay az' in counts, no header), imucal
 (CSV with acc_x, acc_y, acc_z; no time column: --rate; poses from --regions JSON or a 'part'
 column), mpu6050 (the logger's 'Fs,100'... lines, then ax,ay,az,gx,gy,gz in signed counts),
-csv (a recording: gzip, whitespace and physical units rewritten as plain counts), log (a serial
+csv (a recording: compressed, whitespace and physical units rewritten as plain counts), log (a serial
 monitor's capture: lines of three numbers among the logger's prompts, no header: --rate; with
 --blocks each run of readings between text lines is a pose).  Any of them may be
-gzip-compressed.  Gyroscope columns are dropped with a note."""
+compressed (gzip, bzip2, xz, zstd, a zip of one file).  Gyroscope columns are dropped with a note."""
 
 
 def positive(text: Any, option: str) -> float | None:
@@ -66,7 +66,7 @@ def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
     """Add ``convert`` to the subcommands (``check_output``: the CLI's output-path check)."""
     s = sub.add_parser("convert", help="the contract's recording CSV from imu_tk, imucal, MPU-6050, serial-monitor "
                        "logs or other recording files", description=DESCRIPTION)
-    s.add_argument("input", metavar="FILE", help="the file to convert (gzip-compressed or not)")
+    s.add_argument("input", metavar="FILE", help="the file to convert (compressed or not: gzip, bzip2, xz, zstd, a zip of one file)")
     s.add_argument("--format", choices=FORMATS, default="auto",
                    help="the input's format (default auto: told from its first line)")
     add_units_options(s, bits_default="16", full_scale_counts="sets only the device's nominal scale",

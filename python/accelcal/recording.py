@@ -252,7 +252,8 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
     ----------
     path : str or os.PathLike
         A CSV file, or text whose header has no comma and whose cells are separated by
-        runs of blanks or tabs; either may be gzip-compressed (told by its first bytes).
+        runs of blanks or tabs; either may be compressed (gzip, bzip2, xz, zstd or a zip
+        of one file, told by its first bytes).
     n_channels : int, optional
         The device's channel count; raw_0..raw_{N-1} must then be present and no other
         raw_k.  Without it, N is the number of contiguous raw_k columns.

@@ -1,5 +1,6 @@
-"""The text of a recording file before its rows are read: the bytes (gzip-compressed or
-not, told by the magic bytes 1f 8b and never by the name), checked to be UTF-8, a
+"""The text of a recording file before its rows are read: the bytes (compressed with gzip,
+bzip2, xz or zstd, or a zip archive of one file, each told by its magic bytes and never by
+the name; :data:`COMPRESSIONS`), checked to be UTF-8, a
 spreadsheet's byte-order mark and CR line ends dropped; the preamble of ``#`` comments
 (``# key: value`` metadata, with the line each came from) up to the header; and text
 whose cells are separated by runs of blanks or tabs rewritten as comma-separated cells,
@@ -7,30 +8,100 @@ line for line, so that the one CSV reader (and its errors naming row and column)
 both."""
 from __future__ import annotations
 
+import bz2
 import gzip
+import io
+import lzma
 import re
+import zipfile
 import zlib
 from dataclasses import dataclass, field
 from typing import Any
 
+import zstandard
+
 from .csvtable import META_RE
 from .errors import InputError, read_input
 
-__all__ = ["GZIP_MAGIC", "Preamble", "read_text_bytes", "read_preamble", "is_whitespace_header",
+__all__ = ["GZIP_MAGIC", "COMPRESSIONS", "decompress", "Preamble", "read_text_bytes", "read_preamble", "is_whitespace_header",
            "split_whitespace_header", "whitespace_to_commas"]
 
 GZIP_MAGIC = b"\x1f\x8b"
+
+
+class NotOneFile(ValueError):
+    """A zip archive that does not hold exactly one file."""
+
+
+def _unzip(data: bytes) -> bytes:
+    """The one file of a zip archive (directories aside)."""
+    with zipfile.ZipFile(io.BytesIO(data)) as z:
+        files = [i for i in z.infolist() if not i.is_dir()]
+        if len(files) != 1:
+            names = ", ".join(i.filename for i in files[:4]) + (", ..." if len(files) > 4 else "")
+            raise NotOneFile(f"a zip archive of {len(files)} files ({names or 'none'}): give one recording")
+        return z.read(files[0])
+
+
+def _unzstd(data: bytes) -> bytes:
+    """A zstd stream of one or more frames (with or without the content size in their headers)."""
+    out = []
+    rest = data
+    try:
+        while rest:
+            d = zstandard.ZstdDecompressor().decompressobj()
+            out.append(d.decompress(rest))
+            if not d.eof:
+                raise ValueError("the stream ends inside a frame (truncated)")
+            rest = d.unused_data
+    except zstandard.ZstdError as e:
+        raise ValueError(str(e)) from None
+    return b"".join(out)
+
+
+def _is_bzip2(data: bytes) -> bool:
+    # "BZh", the block size 1-9, then a block's or the end of stream's magic: plain text does not
+    # start so
+    return (data[:3] == b"BZh" and data[3:4] in tuple(b"%d" % k for k in range(1, 10))
+            and data[4:10] in (b"1AY&SY", b"\x17rE8P\x90"))
+
+
+#: (name, test on the first bytes, decompress): the forms a recording may come in
+COMPRESSIONS = (
+    ("gzip", lambda d: d.startswith(GZIP_MAGIC), gzip.decompress),
+    ("bzip2", _is_bzip2, bz2.decompress),
+    ("xz", lambda d: d.startswith(b"\xfd7zXZ\x00"), lzma.decompress),
+    ("zstd", lambda d: d.startswith(b"\x28\xb5\x2f\xfd"), _unzstd),
+    ("zip", lambda d: d.startswith(b"PK\x03\x04"), _unzip),
+)
+
+
+def decompress(source: str, data: bytes) -> tuple[bytes, str | None]:
+    """``data`` decompressed by the form its first bytes show (:data:`COMPRESSIONS`), and the
+    form's name (None: not compressed).  A stream that starts as one but cannot be
+    decompressed is an :class:`InputError` naming the form."""
+    for name, test, unpack in COMPRESSIONS:
+        if test(data):
+            try:
+                return unpack(data), name
+            except NotOneFile as e:
+                raise InputError(source, str(e)) from None
+            except (OSError, EOFError, ValueError, zlib.error, lzma.LZMAError, zipfile.BadZipFile) as e:
+                raise InputError(source, f"starts as {name} but cannot be decompressed: {e}") from None
+    return data, None
 BLANKS = re.compile(rb"[ \t]+")
 EDGE_BLANKS = re.compile(rb"^[ \t]+|[ \t]+$", re.M)
 
 
 def read_text_bytes(path: Any) -> tuple[str, bytes]:
-    """The bytes of a text file, decompressed when they start with gzip's magic bytes.
+    """The bytes of a text file, decompressed when its first bytes show a compression
+    (:data:`COMPRESSIONS`: gzip, bzip2, xz, zstd, a zip archive of one file).
 
     Parameters
     ----------
     path : str or os.PathLike
-        The file.  ``.gz`` in the name is neither needed nor looked at.
+        The file.  ``.gz``, ``.bz2``, ``.xz``, ``.zst`` or ``.zip`` in the name is neither
+        needed nor looked at.
 
     Returns
     -------
@@ -43,16 +114,12 @@ def read_text_bytes(path: Any) -> tuple[str, bytes]:
     Raises
     ------
     InputError
-        Unreadable file, a damaged or truncated gzip stream, or text that is not UTF-8
+        Unreadable file, a damaged or truncated compressed stream, a zip archive of more
+        than one file, or text that is not UTF-8
         (naming the line of the first bad byte in the decompressed text).
     """
     source, data = read_input(path)
-    compressed = data.startswith(GZIP_MAGIC)
-    if compressed:
-        try:
-            data = gzip.decompress(data)
-        except (OSError, EOFError, zlib.error) as e:
-            raise InputError(source, f"starts as gzip (bytes 1f 8b) but cannot be decompressed: {e}") from None
+    data, compressed = decompress(source, data)
     try:
         data.decode("utf-8")
     except UnicodeDecodeError as e:

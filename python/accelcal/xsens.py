@@ -1,6 +1,6 @@
 """The real Xsens accelerometer recording from imu_tk (shared/data/imu_tk_xsens).
 
-File: whitespace-separated ASCII (optionally gzip), no header, one sample a row: t [s], then
+File: whitespace-separated ASCII (optionally compressed), no header, one sample a row: t [s], then
 raw x, y, z in 16-bit ADC counts, 100 Hz.  No reference orientation: a jig-free
 calibration problem (about 50 s at rest, then about 40 hand-held static poses).
 
@@ -42,8 +42,8 @@ def load_xsens(path: Any) -> tuple[Device, Recording]:
     ----------
     path : str or os.PathLike
         imu_tk's text: no header, whitespace-separated ``t ax ay az`` (s, then counts;
-        integral values may be written as ``3.3108000e+04``), gzip-compressed or not (told
-        by the first bytes).
+        integral values may be written as ``3.3108000e+04``), compressed or not (told by
+        the first bytes: textinput.COMPRESSIONS).
 
     Raises
     ------

@@ -1,17 +1,23 @@
-"""The files users have (issue 14, item 3): gzip-compressed and whitespace-separated
+"""The files users have (issue 14, item 3): compressed (gzip, bzip2, xz, zstd, a zip of one
+file) and whitespace-separated
 recordings, readings in physical units with a stated LSB, and ``accelcal convert`` from
 imu_tk's text, imucal's CSV (+ JSON pose regions) and the MPU-6050 logger's CSV."""
 from __future__ import annotations
 
+import bz2
 import contextlib
 import gzip
+import io
 import json
+import lzma
 import re
 import tempfile
+import zipfile
 from pathlib import Path
 
 import numpy as np
 import pytest
+import zstandard
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -54,13 +60,53 @@ def as_whitespace(text: str, rng) -> str:
 
 # ---- gzip and whitespace -------------------------------------------------------
 
+def zipped(data: bytes, names=("rec.csv",)) -> bytes:
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("data/", b"")                    # a directory entry is not a file
+        for nm in names:
+            z.writestr(nm, data)
+    return buf.getvalue()
+
+
+#: every compression a recording may come in (textinput.COMPRESSIONS), by the stdlib or the
+#: zstandard package's own compressor
+COMPRESS = {"gzip": gzip.compress, "bzip2": bz2.compress, "xz": lzma.compress,
+            "zstd": lambda d: zstandard.ZstdCompressor().compress(d), "zip": zipped}
+
+
 @FAST
-@given(seed=st.integers(0, 10 ** 6), name=st.sampled_from(["rec.csv.gz", "rec.csv", "rec", "rec.gz.txt"]))
-def test_gzip_reads_the_same(tmp_path, seed, name):
+@given(seed=st.integers(0, 10 ** 6), name=st.sampled_from(["rec.csv.gz", "rec.csv", "rec", "rec.gz.txt"]),
+       form=st.sampled_from(sorted(COMPRESS)))
+def test_compressed_reads_the_same(tmp_path, seed, name, form):
     rec = a_recording(seed=seed)
     write_recording(tmp_path / "plain.csv", rec)
-    (tmp_path / name).write_bytes(gzip.compress((tmp_path / "plain.csv").read_bytes()))
+    (tmp_path / name).write_bytes(COMPRESS[form]((tmp_path / "plain.csv").read_bytes()))
     assert read_recording(tmp_path / name) == read_recording(tmp_path / "plain.csv")
+
+
+def test_zstd_frames_without_a_content_size_and_several_frames(tmp_path):
+    text = b"t,raw_0\n0,1\n0.1,2\n0.2,3\n"
+    (tmp_path / "plain.csv").write_bytes(text)
+    streamed = io.BytesIO()
+    with zstandard.ZstdCompressor().stream_writer(streamed, closefd=False) as w:
+        w.write(text)                                # a stream: no content size in the frame
+    two = zstandard.ZstdCompressor().compress(text[:12]) + zstandard.ZstdCompressor().compress(text[12:])
+    for data in (streamed.getvalue(), two):
+        (tmp_path / "r.zst").write_bytes(data)
+        assert read_recording(tmp_path / "r.zst") == read_recording(tmp_path / "plain.csv")
+
+
+@pytest.mark.parametrize("form", sorted(COMPRESS))
+def test_a_damaged_compressed_file_is_one_line(tmp_path, form):
+    whole = COMPRESS[form](b"t,raw_0\n0,1\n0.1,2\n")
+    e = read_error(tmp_path, whole[:-6])
+    assert f"starts as {form} but cannot be decompressed" in str(e) or (form == "zip" and "zip" in str(e)), str(e)
+
+
+def test_a_zip_of_several_files_is_refused_naming_them(tmp_path):
+    e = read_error(tmp_path, zipped(b"t,raw_0\n0,1\n", ("a.csv", "b.csv")))
+    assert "a zip archive of 2 files (a.csv, b.csv): give one recording" in str(e), str(e)
 
 
 @FAST
