@@ -28,6 +28,7 @@ from .estimators import attitude_from_recording, displacement_from_recording, ra
 from .header import calibration_header
 from .motions import describe_motions
 from .recording import read_recording, write_columns_csv, write_recording
+from .recording_checks import seconds
 from .report import REPORT_FILES, write_report
 from .resolve import resolve_recording
 from .simulate import simulate
@@ -86,11 +87,20 @@ def _read(paths, device, command: str, a=None) -> list:
     ignored."""
     scale = None if a is None else scale_from_args(a, device, reader=True)
     recs = [read_recording(p, device.n_channels, scale=scale) for p in paths]
+    for r in recs:
+        _time_note(r, device, command)
     ignored = sorted({k for r in recs for k in r.extra})
     if ignored:
         print(f"accelcal {command}: note: ignored column{'s' if len(ignored) > 1 else ''} "
               f"{', '.join(ignored)} (not part of the accelerometer model)", file=sys.stderr)
     return recs
+
+
+def _time_note(rec, device, command: str) -> None:
+    """t in milliseconds (or micro-, nanoseconds) read as such, said once on stderr."""
+    note = seconds(rec, device)
+    if note is not None:
+        print(f"accelcal {command}: note: {rec.source}: {note}", file=sys.stderr)
 
 
 def _write_csv(path, header: list[str], columns: list[np.ndarray], comments: dict):
@@ -288,6 +298,7 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
     cal = _load_cal(calibration_path, dev)
     scale = None if units_args is None else scale_from_args(units_args, dev, reader=True)
     rec = read_recording(recording_path, dev.n_channels, scale=scale)
+    _time_note(rec, dev, kind)
     cols = fn(dev, cal, rec, engine, **options)
     write_columns_csv(output, cols, cols.meta)
     if report is not None:

@@ -78,6 +78,8 @@ class Recording:
     source: str = "<memory>"
     # file line of each sample when read from CSV (see line())
     lines: Any = field(default=None, repr=False)
+    # what a check changed in reading the file (recording_checks.seconds: t in milliseconds)
+    notes: list = field(default_factory=list, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         self.t = np.asarray(self.t, dtype=np.float64)

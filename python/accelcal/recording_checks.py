@@ -1,5 +1,6 @@
 """Checks of a recording against what a consumer needs: a device's channels and range
-(:func:`check_for_device`), the C core's input types (:func:`check_core_input`)."""
+(:func:`check_for_device`), its time stamps in seconds (:func:`seconds`), the C core's input
+types (:func:`check_core_input`)."""
 from __future__ import annotations
 
 from typing import Any
@@ -8,13 +9,42 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["check_for_device", "check_core_input"]
+__all__ = ["check_for_device", "check_core_input", "seconds", "TIME_UNITS", "TIME_UNIT_TOL"]
+
+#: time stamps in these units are read as such (a logger's millis() or micros()) ...
+TIME_UNITS = ((1e3, "milliseconds"), (1e6, "microseconds"), (1e9, "nanoseconds"))
+#: ... when t's median step is the unit times the device's sample period within this share
+TIME_UNIT_TOL = 0.2
+
+
+def seconds(rec: Any, device) -> str | None:
+    """Time stamps in milliseconds, microseconds or nanoseconds read as such.
+
+    The data contract's t is in seconds.  When the median step of ``rec.t`` is 10^3, 10^6 or
+    10^9 times the device's sample period (``1 / sample_rate_hz``) within TIME_UNIT_TOL, t is
+    divided by that factor in place and a note is added to ``rec.notes`` and returned; any
+    other step leaves t alone (None).  A second call finds seconds and does nothing."""
+    if rec.n_samples < 3:
+        return None
+    steps = np.diff(rec.t)
+    step = float(np.median(steps[steps > 0])) if np.any(steps > 0) else 0.0
+    ratio = step * float(device.sample_rate_hz)
+    for k, unit in TIME_UNITS:
+        if abs(ratio / k - 1.0) <= TIME_UNIT_TOL:
+            rec.t = rec.t / k
+            note = (f"t read as {unit}: its median step {step:.6g} is {ratio:.4g} times the device's "
+                    f"sample period ({1.0 / device.sample_rate_hz:.4g} s at {device.sample_rate_hz:g} Hz); "
+                    "the data contract's t is in seconds")
+            rec.notes.append(note)
+            return note
+    return None
 
 
 def check_for_device(rec: Any, device, *, min_samples: int = 1) -> None:
     """One check, for every command, that a recording can be used with a device:
     its raw channel count, at least ``min_samples`` samples, finite strictly
-    increasing t, and every raw reading inside the device's [raw_min, raw_max]
+    increasing t (in milliseconds, microseconds or nanoseconds read as such: :func:`seconds`),
+    and every raw reading inside the device's [raw_min, raw_max]
     (the device clips there, so a reading outside means the wrong device file
     or a damaged recording).  InputError names the file, row and column."""
     if rec.n_channels != device.n_channels:
@@ -31,6 +61,7 @@ def check_for_device(rec: Any, device, *, min_samples: int = 1) -> None:
         i = int(bad[0]) + 1
         raise InputError(rec.source, f"t must be strictly increasing: t = {float(rec.t[i]):.6g} s follows "
                          f"t = {float(rec.t[i - 1]):.6g} s", row=rec.line(i), column="t")
+    seconds(rec, device)
     out = (rec.raw < device.raw_min) | (rec.raw > device.raw_max)
     if out.any():
         i, c = (int(v) for v in np.argwhere(out)[0])

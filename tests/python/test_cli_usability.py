@@ -7,7 +7,9 @@ import numpy as np
 import pytest
 
 from accelcal.cli import build_parser, main
+from accelcal.device import default_device
 from accelcal.recording import read_recording, write_recording
+from accelcal.recording_checks import seconds
 
 
 def _subparsers(parser):
@@ -99,3 +101,41 @@ def test_jig_warning_only_with_cross_axis_terms(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "--jig-accuracy" not in err
     assert "no cross-axis terms" in err
+
+
+@pytest.mark.parametrize("factor,unit", [(1e3, "milliseconds"), (1e6, "microseconds")])
+def test_time_stamps_in_milliseconds_are_read_as_such(poses, tmp_path, capsys, factor, unit):
+    """A logger's millis() or micros() as t: every command reads it in seconds and says so once;
+    resolve writes the same rows as from the file in seconds."""
+    cal = tmp_path / "cal.json"
+    assert main(["calibrate", "--device", "default", str(poses), "-o", str(cal)]) == 0
+    rec = read_recording(poses, 6)
+    scaled = tmp_path / "scaled.csv"
+    rec.t = rec.t * factor
+    write_recording(scaled, rec)
+    capsys.readouterr()
+    out_s, out_x = tmp_path / "s.csv", tmp_path / "x.csv"
+    assert main(["resolve", "--device", "default", "--calibration", str(cal), str(poses), "-o", str(out_s)]) == 0
+    assert capsys.readouterr().err == ""
+    assert main(["resolve", "--device", "default", "--calibration", str(cal), str(scaled), "-o", str(out_x)]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"t read as {unit}" in err[0], err
+    a, b = (np.array([[float(v) for v in line.split(",")]
+                      for line in [x for x in p.read_text().splitlines() if x and not x.startswith("#")][1:]])
+            for p in (out_s, out_x))
+    assert np.allclose(a, b, rtol=1e-9, atol=1e-9)
+    js = tmp_path / "d.json"
+    assert main(["diagnose", "--device", "default", "--calibration", str(cal), str(scaled), "--json", str(js)]) == 0
+    assert f"t read as {unit}" in capsys.readouterr().err
+    assert any(f"t read as {unit}" in n for n in json.loads(js.read_text())["notes"])
+
+
+def test_a_rate_that_differs_otherwise_leaves_t_alone(poses):
+    """Steps twice the device's period (a logger at half the rate) are not a unit: t stays."""
+    rec = read_recording(poses, 6)
+    rec.t = rec.t * 2
+    t = rec.t.copy()
+    assert seconds(rec, default_device()) is None and np.array_equal(rec.t, t) and rec.notes == []
+    rec.t = rec.t * 500                                   # now milliseconds of the device's period
+    assert "milliseconds" in seconds(rec, default_device())
+    assert seconds(rec, default_device()) is None and len(rec.notes) == 1   # a second call finds seconds

@@ -240,7 +240,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     floor = float(np.sqrt(np.mean(D.sigma ** 2)))
     rms_ch = np.sqrt(np.mean(e * e, axis=0))
     gap_rms = float(np.sqrt(np.mean(rms_ch ** 2)))
-    notes = held_notes + list(D.notes)
+    notes = [f"{r.source}: {n}" for r in recs for n in r.notes] + held_notes + list(D.notes)
     if D.mode == "jigfree":
         notes.append("jig-free: the static poses with |f| = g are the reference; fitted and scored on the "
                      f"{D.R} direction(s) per sample the pose angles cannot absorb")
