@@ -1,11 +1,11 @@
 """The text of a recording file before its rows are read: the bytes (compressed with gzip,
 bzip2, xz or zstd, or a zip archive of one file, each told by its magic bytes and never by
 the name; :data:`COMPRESSIONS`), checked to be UTF-8, a
-spreadsheet's byte-order mark and CR line ends dropped; the preamble of ``#`` comments
-(``# key: value`` metadata, with the line each came from) up to the header; and text
-whose cells are separated by runs of blanks or tabs rewritten as comma-separated cells,
-line for line, so that the one CSV reader (and its errors naming row and column) reads
-both."""
+spreadsheet's byte-order mark and CR line ends dropped, a spreadsheet's semicolon-separated
+export with decimal commas rewritten as CSV; the preamble of ``#`` comments (``# key: value``
+metadata, with the line each came from) up to the header; and text whose cells are separated
+by runs of blanks or tabs rewritten as comma-separated cells, line for line, so that the one
+CSV reader (and its errors naming row and column) reads them all."""
 from __future__ import annotations
 
 import bz2
@@ -23,7 +23,7 @@ import zstandard
 from .csvtable import META_RE
 from .errors import InputError, read_input
 
-__all__ = ["GZIP_MAGIC", "COMPRESSIONS", "decompress", "Preamble", "read_text_bytes", "read_preamble", "is_whitespace_header",
+__all__ = ["GZIP_MAGIC", "COMPRESSIONS", "decompress", "semicolons_to_commas", "Preamble", "read_text_bytes", "read_preamble", "is_whitespace_header",
            "split_whitespace_header", "whitespace_to_commas"]
 
 GZIP_MAGIC = b"\x1f\x8b"
@@ -130,7 +130,22 @@ def read_text_bytes(path: Any) -> tuple[str, bytes]:
         data = data[3:]
     if b"\r" in data:
         data = data.replace(b"\r\n", b"\n")
-    return source, data
+    return source, semicolons_to_commas(data)
+
+
+def semicolons_to_commas(data: bytes) -> bytes:
+    """A spreadsheet's export in a locale whose decimal mark is the comma (cells separated by
+    ``;``, numbers written ``0,0167``) rewritten as CSV: when the header (the first line that
+    is neither a comment nor blank) has a ``;`` and no ``,``, every later line that is not a
+    comment has its commas made points and its semicolons commas.  Every line stays the line
+    it was; any other text is returned as it is."""
+    pre = read_preamble(data)
+    if pre.header is None or ";" not in pre.header or "," in pre.header:
+        return data
+    lines = data[pre.header_pos:].split(b"\n")
+    body = b"\n".join(line if line.startswith(b"#") else line.replace(b",", b".").replace(b";", b",")
+                      for line in lines)
+    return data[:pre.header_pos] + body
 
 
 @dataclass

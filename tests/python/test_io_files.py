@@ -121,6 +121,29 @@ def test_whitespace_text_reads_the_same(tmp_path, seed, compress):
     assert back == read_recording(tmp_path / "plain.csv")
 
 
+def as_semicolons(text: str) -> str:
+    """A spreadsheet's export where the decimal mark is the comma: cells split by ';'."""
+    return "\n".join(line if line.startswith("#") else line.replace(",", ";").replace(".", ",")
+                     for line in text.split("\n"))
+
+
+@FAST
+@given(seed=st.integers(0, 10 ** 6), compress=st.booleans())
+def test_semicolons_and_decimal_commas_read_the_same(tmp_path, seed, compress):
+    rec = a_recording(seed=seed)
+    write_recording(tmp_path / "plain.csv", rec)
+    text = as_semicolons((tmp_path / "plain.csv").read_text())
+    (tmp_path / "eu.csv").write_bytes(gzip.compress(text.encode()) if compress else text.encode())
+    assert read_recording(tmp_path / "eu.csv") == read_recording(tmp_path / "plain.csv")
+
+
+def test_semicolon_errors_name_row_and_column(tmp_path):
+    e = read_error(tmp_path, "t;raw_0;raw_1\n0;1;2\n0,1;2;x\n")
+    assert (e.row, e.column) == (3, "raw_1") and "'x'" in str(e), str(e)
+    e = read_error(tmp_path, "# a comment; with a semicolon\nt;raw_0\n0,0;1\n0,0;2\n")
+    assert (e.row, e.column) == (4, "t") and "strictly increasing" in str(e), str(e)
+
+
 def read_error(tmp_path, data, **kw) -> InputError:
     p = tmp_path / "bad.txt"
     p.write_bytes(data if isinstance(data, bytes) else data.encode())

@@ -181,8 +181,11 @@ def test_no_t_column_case_hint(tmp_path):
     expect_error(tmp_path, "T,raw_0\n0,1\n", 1, None, "found 'T'")
 
 
-def test_semicolon_separated_hint(tmp_path):
-    expect_error(tmp_path, "t;raw_0\n0;1\n", 1, None, "separated by commas")
+def test_semicolon_separated_is_read(tmp_path):
+    # a spreadsheet's export where the decimal mark is the comma (textinput.semicolons_to_commas)
+    (tmp_path / "eu.csv").write_text("t;raw_0\n0;1\n0,5;2\n")
+    rec = read_recording(tmp_path / "eu.csv")
+    assert rec.t.tolist() == [0.0, 0.5] and rec.raw[:, 0].tolist() == [1, 2]
 
 
 def test_no_raw_columns(tmp_path):
