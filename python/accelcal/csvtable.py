@@ -409,8 +409,6 @@ def classify_columns(
             cols[name] = (j, "ref")
     if "t" not in cols:
         hint = next((f" (found {n!r}; names are case-sensitive)" for n in names if n.strip().lower() == "t"), "")
-        if len(names) == 1 and (";" in names[0] or "\t" in names[0]):
-            hint = " (cells must be separated by commas, or by blanks or tabs; this header uses ';')"
         raise InputError(source, f"the header has no 't' column{hint}", row=row)
     if not raw_idx:
         raise InputError(source, "the header has no raw_0, raw_1, ... columns", row=row)
