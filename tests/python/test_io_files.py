@@ -391,7 +391,8 @@ IMUTK_GOOD = "".join(f"   {0.01 * (i + 1):.7e}   {33108 + i:.7e}   3.3329000e+04
 @st.composite
 def bad_text(draw, good: str, kind: str):
     """A damaged copy of a good file: a cell made bad, a row cut short or lengthened, a
-    non-number, a huge or fractional count, the header broken, truncated gzip, garbage."""
+    non-number, a huge or fractional count, the header broken, a truncated compressed stream
+    (any form of textinput.COMPRESSIONS), garbage after a compression's magic bytes."""
     lines = good.splitlines()
     first = next(i for i, ln in enumerate(lines) if re.match(r"[-\s\d]", ln) and not ln.startswith("Fs"))
     r = draw(st.integers(first, len(lines) - 1))
@@ -416,11 +417,14 @@ def bad_text(draw, good: str, kind: str):
     elif how == "empty_line":  # inside the data (blank lines before the first row are allowed)
         lines.insert(max(r, first + 1), "")
     text = "\n".join(lines) + "\n"
+    form = draw(st.sampled_from(sorted(COMPRESS)))
     if how == "gz_cut":
-        return gzip.compress(text.encode())[:-draw(st.integers(1, 12))]
+        return COMPRESS[form](text.encode())[:-draw(st.integers(1, 12))]
     if how == "garbage":
-        return b"\x1f\x8b" + draw(st.binary(min_size=0, max_size=40))
-    return gzip.compress(text.encode()) if draw(st.booleans()) else text.encode()
+        magic = {"gzip": b"\x1f\x8b", "bzip2": b"BZh91AY&SY", "xz": b"\xfd7zXZ\x00", "zstd": b"\x28\xb5\x2f\xfd",
+                 "zip": b"PK\x03\x04"}[form]
+        return magic + draw(st.binary(min_size=0, max_size=40))
+    return COMPRESS[form](text.encode()) if draw(st.booleans()) else text.encode()
 
 
 @contextlib.contextmanager
