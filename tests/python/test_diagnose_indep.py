@@ -451,3 +451,16 @@ def test_an_offset_and_coarse_steps_refitted_together_beat_a_per_pose_tilt():
     assert "pose_error" not in res["model"]["effects"]
     assert any("refitted together" in n for n in res["notes"])
     assert res["unexplained"] is None, res["unexplained"]
+
+
+def test_mpu6050_coarse_steps_that_a_bend_outranked_are_the_verdict(real_model):
+    """512-count steps injected into the MPU-6050's hand-turned poses (773720): a bend ranked
+    first, the calibration terms left it nothing and the step went to the strongest term, an
+    offset of shrink 0.07, although the lattice, proven from the raw values, ranked above it.
+    A candidate proven on its own evidence that ranks above the terms takes the step."""
+    dev, rec, step, cal = real_model("mpu6050")
+    seed = 773720
+    rec2, params, _ = im.inject(dev, cal, rec, "quantization", seed, step=step)
+    res = diagnose(dev, cal, [rec2], seed=seed)
+    assert res["verdict"] == "quantization", (res["verdict"], res["model"]["effects"], params)
+    assert res["effects"][0]["contest"]["first_ranked"] == "nonlinearity"

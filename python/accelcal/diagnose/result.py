@@ -102,7 +102,16 @@ def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, 
     # nothing significant left to the verdict after the terms: on these poses the data cannot tell
     # the two descriptions apart (a cube on poses near the axes is a gain)
     amb = [best.name] if not after.significant else []
-    return Contest(best=terms[0], ambiguous=amb, swapped_from=best.name, why=why, tests=tests), terms[0]
+    # the step goes to the strongest term, unless a candidate proven on its own evidence (a lattice
+    # of coarse steps, a pile of clipped readings) ranks above it: the MPU-6050 with 512-count steps,
+    # whose lattice ranked between the bend and the offset
+    nxt = terms[0]
+    proven = [c for c in results.values() if c.proof and c.significant and c.gain > 0 and c.name != best.name
+              and c.name in remaining]
+    if proven and rank_key(min(proven, key=rank_key)) < rank_key(nxt):
+        nxt = min(proven, key=rank_key)
+        why += f"; {nxt.name}, proven by {nxt.evidence}, ranks above them"
+    return Contest(best=nxt, ambiguous=amb, swapped_from=best.name, why=why, tests=tests), nxt
 
 
 def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, seed: int = 0,
