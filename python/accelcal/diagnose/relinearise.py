@@ -11,7 +11,9 @@ again and repeats until the fitted change is below RELIN_TOL of the noise (or, s
 in-sample chi2 after the joint fit grow from one point to the next, stops at the best point
 reached); the parameters
 reported are then those that take the given calibration to the final one, and the held-out
-figures are scored at the final point.
+figures are scored at the final point.  With a reference f and only offsets and gains among
+the absorbed effects there is nothing to re-linearise: their fits are exact changes of the
+readings there (``Effect.exact_with_reference``), and the joint fit is the final one.
 """
 from __future__ import annotations
 
@@ -69,12 +71,14 @@ def heldout_path(D, cands, names: list[str], e: np.ndarray, joint: dict[str, Can
 def relinearise(device, cal, recs, K: int, seed: int, m0: float, cands, names: list[str],
                 joint: dict[str, Cand], D0) -> dict[str, Any] | None:
     """Re-linearise the chosen effects ``names`` (fits ``joint`` about ``cal``) as the module
-    doc says.  Returns None when none of them is a calibration parameter, else a dict:
+    doc says.  Returns None when none of them is a calibration parameter, or when, with a
+    reference, each one absorbed is exact there (``Effect.exact_with_reference``: an offset,
+    a gain), else a dict:
     ``params`` (name -> parameters from ``cal``), ``joint`` (the final fits), ``path`` (the
     held-out stepwise figures at the final point), ``iterations``, ``converged``, ``D``, ``e``,
     ``delta`` (the final fits' change of the readings together, the sum of their deltas)."""
     absorbed = [nm for nm in names if cands[nm].absorbs and nm in joint]
-    if not absorbed:
+    if not absorbed or (D0.mode != "jigfree" and all(cands[nm].exact_with_reference for nm in absorbed)):
         return None
     tol = RELIN_TOL * float(np.min(D0.sigma))
     cal_k = cal

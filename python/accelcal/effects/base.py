@@ -148,6 +148,11 @@ class Effect:
     #: the diagnosis then folds its fit into the calibration and fits again (re-linearisation)
     absorbs: bool = False
 
+    #: True when, with a reference f, the fit's change of the readings is exactly the change the
+    #: absorbed parameters make (an offset; a gain, which scales s.f): folding it into the
+    #: calibration and fitting again changes nothing there, and the diagnosis skips it
+    exact_with_reference: bool = False
+
     def absorb(self, cal, p: Mapping[str, Any]):
         """The calibration ``cal`` with this effect's fitted parameters ``p`` built in."""
         raise NotImplementedError(f"{self.name} is not a calibration parameter")

@@ -29,6 +29,7 @@ class Offset(LinearCandidate, Effect):
     )
     fit = (FitParam("db", "channel", "counts", "offset change"),)
     absorbs = True
+    exact_with_reference = True
 
     def absorb(self, cal, p):
         return dataclasses.replace(cal, offsets=cal.offsets + np.asarray(p["db"], float))
@@ -88,6 +89,7 @@ class Gain(LinearCandidate, Effect):
     )
     fit = (FitParam("scale", "channel", "fraction", "relative gain change"),)
     absorbs = True
+    exact_with_reference = True
 
     def absorb(self, cal, p):
         return dataclasses.replace(cal, sensitivity=cal.sensitivity * (1.0 + np.asarray(p["scale"], float))[:, None])
