@@ -183,7 +183,7 @@ def evaluate(truth: Any, state: ChannelState, f: np.ndarray | None = None) -> np
     return sensed + state.total_offset()
 
 
-def lowpass_first_order(t: np.ndarray, x: np.ndarray, fc_hz: Any, rate: complex | None = None) -> np.ndarray:
+def lowpass_first_order(t: np.ndarray, x: np.ndarray, fc_hz: Any, pole: complex = 1.0) -> np.ndarray:
     """First-order low-pass y' = 2 pi fc (x - y), sampled at ``t``.
 
     Parameters
@@ -204,15 +204,15 @@ def lowpass_first_order(t: np.ndarray, x: np.ndarray, fc_hz: Any, rate: complex 
         Uniform spacing (every step within 1e-9 of the mean) runs through
         ``scipy.signal.lfilter``; other spacings use the same recursion in closed
         form, blockwise (cumulative sums scaled by exp(w t)).
-    rate : complex, optional
-        The rate w itself (1/s, Re w > 0) for every channel instead of 2 pi fc: a complex
-        rate gives one complex mode of a higher-order filter (:func:`lowpass_butterworth2`);
-        the result is then complex.
+    pole : complex, optional
+        The rate is w = 2 pi fc pole (Re pole > 0; default 1): a complex pole gives one
+        complex mode of a higher-order filter (:func:`lowpass_butterworth2`), and the result
+        is then complex.
     """
     t = np.asarray(t, float)
     x = np.asarray(x, float)
     fc = np.broadcast_to(np.asarray(fc_hz, float), (x.shape[1],))
-    y = x.astype(np.result_type(x, rate if rate is not None else 0.0))
+    y = x.astype(np.result_type(x, pole))
     if x.shape[0] < 2:
         return y
     active = np.isfinite(fc) & (fc > 0)
@@ -221,7 +221,7 @@ def lowpass_first_order(t: np.ndarray, x: np.ndarray, fc_hz: Any, rate: complex 
     uniform = bool(np.all(np.abs(steps - h) <= 1e-9 * h))
     for f_c in np.unique(fc[active]):
         idx = np.flatnonzero(fc == f_c)
-        w = 2.0 * math.pi * float(f_c) if rate is None else rate
+        w = 2.0 * math.pi * float(f_c) * pole
         y[:, idx] = _lowpass_uniform(x[:, idx], w, h) if uniform else _lowpass_any(t, x[:, idx], w)
     return y
 
@@ -239,21 +239,11 @@ def lowpass_butterworth2(t: np.ndarray, x: np.ndarray, fc_hz: Any) -> np.ndarray
 
     Parameters and conventions as :func:`lowpass_first_order`: exact for an input linear
     between samples, steady state at the first sample, any spacing.  Computed as the real part
-    of one complex first-order mode (:data:`BUTTER2_MODE`).
+    of one complex first-order mode (:data:`BUTTER2_MODE`; a channel with fc = inf comes back
+    as it is, 2 Re(c) = 1).
     """
-    t = np.asarray(t, float)
-    x = np.asarray(x, float)
-    fc = np.broadcast_to(np.asarray(fc_hz, float), (x.shape[1],))
-    y = x.copy()
-    if x.shape[0] < 2:
-        return y
     q, c = BUTTER2_MODE
-    active = np.isfinite(fc) & (fc > 0)
-    for f_c in np.unique(fc[active]):
-        idx = np.flatnonzero(fc == f_c)
-        z = lowpass_first_order(t, x[:, idx], 1.0, rate=2.0 * math.pi * float(f_c) * q)
-        y[:, idx] = 2.0 * np.real(c * z)
-    return y
+    return 2.0 * np.real(c * lowpass_first_order(t, x, fc_hz, pole=q))
 
 
 def _lowpass_uniform(x: np.ndarray, w: complex, h: float) -> np.ndarray:

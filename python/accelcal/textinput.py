@@ -1,11 +1,11 @@
 """The text of a recording file before its rows are read: the bytes (compressed with gzip,
 bzip2, xz or zstd, or a zip archive of one file, each told by its magic bytes and never by
-the name; :data:`COMPRESSIONS`), checked to be UTF-8, a
-spreadsheet's byte-order mark and CR line ends dropped, a spreadsheet's semicolon-separated
-export with decimal commas rewritten as CSV; the preamble of ``#`` comments (``# key: value``
-metadata, with the line each came from) up to the header; and text whose cells are separated
-by runs of blanks or tabs rewritten as comma-separated cells, line for line, so that the one
-CSV reader (and its errors naming row and column) reads them all."""
+the name; :data:`COMPRESSIONS`), checked to be UTF-8, a spreadsheet's byte-order mark and CR
+line ends dropped, a spreadsheet's semicolon-separated export with decimal commas rewritten
+as CSV; the preamble of ``#`` comments (``# key: value`` metadata, with the line each came
+from) up to the header; and text whose cells are separated by runs of blanks or tabs rewritten
+as comma-separated cells, line for line, so that the one CSV reader (and its errors naming row
+and column) reads them all."""
 from __future__ import annotations
 
 import bz2
@@ -23,8 +23,8 @@ import zstandard
 from .csvtable import META_RE
 from .errors import InputError, read_input
 
-__all__ = ["GZIP_MAGIC", "COMPRESSIONS", "decompress", "semicolons_to_commas", "Preamble", "read_text_bytes", "read_preamble", "is_whitespace_header",
-           "split_whitespace_header", "whitespace_to_commas"]
+__all__ = ["GZIP_MAGIC", "COMPRESSIONS", "decompress", "semicolons_to_commas", "Preamble", "read_text_bytes",
+           "read_preamble", "is_whitespace_header", "split_whitespace_header", "whitespace_to_commas"]
 
 GZIP_MAGIC = b"\x1f\x8b"
 
@@ -89,6 +89,8 @@ def decompress(source: str, data: bytes) -> tuple[bytes, str | None]:
             except (OSError, EOFError, ValueError, zlib.error, lzma.LZMAError, zipfile.BadZipFile) as e:
                 raise InputError(source, f"starts as {name} but cannot be decompressed: {e}") from None
     return data, None
+
+
 BLANKS = re.compile(rb"[ \t]+")
 EDGE_BLANKS = re.compile(rb"^[ \t]+|[ \t]+$", re.M)
 

@@ -106,10 +106,10 @@ def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, 
     # of coarse steps, a pile of clipped readings) ranks above it: the MPU-6050 with 512-count steps,
     # whose lattice ranked between the bend and the offset
     nxt = terms[0]
-    proven = [c for c in results.values() if c.proof and c.significant and c.gain > 0 and c.name != best.name
-              and c.name in remaining]
-    if proven and rank_key(min(proven, key=rank_key)) < rank_key(nxt):
-        nxt = min(proven, key=rank_key)
+    proven = min((c for c in results.values() if c.proof and c.significant and c.gain > 0 and c.name != best.name
+                  and c.name in remaining), key=rank_key, default=None)
+    if proven is not None and rank_key(proven) < rank_key(nxt):
+        nxt = proven
         why += f"; {nxt.name}, proven by {nxt.evidence}, ranks above them"
     return Contest(best=nxt, ambiguous=amb, swapped_from=best.name, why=why, tests=tests), nxt
 

@@ -194,25 +194,28 @@ class Bandwidth(SearchCandidate, Effect):
                                                             self.order) - xs
         return out
 
+    def _search(self, order, D, y, pcur, S0w, S0u, folds):
+        """The search of SearchCandidate.cv with the filter of ``order``."""
+        self.order = order
+        try:
+            return SearchCandidate.cv(self, D, y, pcur, S0w, S0u, folds)
+        finally:
+            self.order = 1
+
     def cv(self, D, y, pcur, S0w, S0u, folds=True):
         # each order searched; kept: the smaller held-out residual (all-data fits: in-sample)
         best = None
         for order in self.ORDERS:
-            self.order = order
-            c = SearchCandidate.cv(self, D, y, pcur, S0w, S0u, folds)
+            c = self._search(order, D, y, pcur, S0w, S0u, folds)
             ss = float(np.sum(c.Sw)) if folds else float(np.sum(block_ss(D, D.rows(y - c.delta))[0]))
             if best is None or ss < best[0]:
                 best = (ss, c)
-        self.order = 1
         return best[1]
 
     def refit(self, D, y, pcur, like):
         # the order the fit ``like`` took is kept
-        self.order = int(like.params.get("order", 1))
         S0w, S0u = block_ss(D, D.rows(y))
-        c = SearchCandidate.cv(self, D, y, pcur, S0w, S0u, folds=False)
-        self.order = 1
-        return c
+        return self._search(int(like.params.get("order", 1)), D, y, pcur, S0w, S0u, folds=False)
 
     def to_params(self, D, u, su):
         d = u * D.h
