@@ -15,7 +15,8 @@ from .device import Device
 from .jsonfields import JsonFields, check_limits, json_number, read_json, show_json
 from .errors import atomic_write
 
-__all__ = ["Calibration", "load_calibration", "save_calibration", "calibration_from_dict", "calibration_to_dict"]
+__all__ = ["Calibration", "KNOWN_KEYS", "load_calibration", "save_calibration", "calibration_from_dict",
+           "calibration_to_dict"]
 
 # Per-channel optional JSON keys: (Calibration attribute, JSON key, width).
 # Width 1 is a number per channel, 3 a 3-vector.  A channel may leave one out
@@ -30,6 +31,9 @@ _OPTIONAL_CHANNEL_FIELDS = (
 )
 _NONNEGATIVE = {"offset_sigma", "sensitivity_sigma", "position_sigma"}
 _KNOWN_TOP = {"device", "method", "channels", "temperature_ref_c", "residual_rms_counts", "poses_used"}
+#: every top-level key a calibration file's reader knows ("fit" and "poses" are kept in ``extra``);
+#: an unknown key close to one of these is refused as a misspelling (jsonfields.KEY_CUTOFF)
+KNOWN_KEYS = tuple(sorted(_KNOWN_TOP | {"fit", "poses"}))
 
 
 def _opt_array(value: Any, shape: tuple[int, ...], name: str) -> np.ndarray | None:
@@ -201,7 +205,7 @@ def calibration_from_dict(d: Any, source: str = "<dict>", device: Device | None 
     v = JsonFields(source)
     v.no_nonfinite(d, "")
     d = v.obj(d, "")
-    v.known(d, "", sorted(_KNOWN_TOP | {"fit", "poses"}))
+    v.known(d, "", KNOWN_KEYS)
     dev_name = v.string(v.get(d, "device", ""), "device")
     method = v.string(v.get(d, "method", ""), "method")
     chans = v.get(d, "channels", "")

@@ -1,6 +1,7 @@
 """Calibration JSON: layout per the contract, validation messages, device
 checks, round trips and fuzzed corruptions."""
 
+import difflib
 import json
 import os
 
@@ -9,6 +10,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from accelcal.calibration import (
+    KNOWN_KEYS,
     Calibration,
     calibration_from_dict,
     calibration_to_dict,
@@ -17,6 +19,7 @@ from accelcal.calibration import (
 )
 from accelcal.device import default_device, default_triad
 from accelcal.errors import InputError
+from accelcal.jsonfields import KEY_CUTOFF
 
 from json_strategies import json_paths, json_values
 
@@ -260,6 +263,15 @@ def test_constructor_shapes():
 fin = st.floats(-1e6, 1e6, allow_nan=False)
 
 
+def extension_key(k: str) -> bool:
+    """A key the reader keeps in ``extra``: not one of the calibration's own fields, and not
+    so close to a key it knows (jsonfields.KEY_CUTOFF) that it is refused as its misspelling
+    ('poes' for 'poses')."""
+    if k in {"device", "method", "channels", "temperature_ref_c", "residual_rms_counts", "poses_used"}:
+        return False
+    return k in KNOWN_KEYS or not difflib.get_close_matches(k, KNOWN_KEYS, n=1, cutoff=KEY_CUTOFF)
+
+
 @st.composite
 def calibrations(draw):
     n = draw(st.integers(1, 8))
@@ -291,9 +303,8 @@ def calibrations(draw):
         residual_rms_per_channel=arr((n,), st.floats(0, 1e3)),
         residual_rms_per_pose=draw(st.none() | st.dictionaries(st.text(max_size=5), st.floats(0, 1e3), max_size=3)),
         poses_used=draw(st.none() | st.lists(st.integers(-5, 100) | st.text(max_size=5), max_size=4)),
-        extra=draw(st.dictionaries(st.text(max_size=5).filter(lambda k: k not in {
-            "device", "method", "channels", "temperature_ref_c", "residual_rms_counts", "poses_used"}),
-            st.integers() | st.text(max_size=5), max_size=2)),
+        extra=draw(st.dictionaries(st.text(max_size=5).filter(extension_key), st.integers() | st.text(max_size=5),
+                                   max_size=2)),
     )
 
 
