@@ -79,7 +79,10 @@ class Converted:
     def summary(self, output: Any) -> str:
         """One line: rows, channels, rate, poses, where it went."""
         rec = self.recording
-        rate = 1.0 / float(np.median(np.diff(rec.t))) if rec.n_samples > 1 else float("nan")
+        if self.device is not None:
+            rate = self.device.sample_rate_hz
+        else:
+            rate = 1.0 / float(np.median(np.diff(rec.t))) if rec.n_samples > 1 else float("nan")
         what = f"{self.format}: {rec.n_samples} rows, {rec.n_channels} channels"
         if self.scale is not None and self.scale.converts:
             what += f" ({self.scale.describe()})"
@@ -182,6 +185,7 @@ class Options:
     stated_f: bool = False
     gravity_mps2: float | None = None
     bits: int = 16
+    time_unit: str = "auto"
 
 
 def adc_range(bits: int, signed: bool) -> tuple[int, int]:
@@ -232,10 +236,95 @@ def in_sample_order(index: np.ndarray, source: str, column: str | None, line) ->
     return order
 
 
+#: the unit of a time column: its factor to seconds
+TIME_FACTORS = {"s": 1.0, "ms": 1e3, "us": 1e6, "ns": 1e9}
+TIME_WORDS = {"ms": ("ms", "msec", "millis", "millisecond", "milliseconds"),
+              "us": ("us", "\u00b5s", "usec", "micros", "microsecond", "microseconds"),
+              "ns": ("ns", "nsec", "nanos", "nanosecond", "nanoseconds"),
+              "s": ("s", "sec", "secs", "second", "seconds")}
+#: below this rate t read as seconds is taken for a finer unit (auto)
+MIN_PLAUSIBLE_HZ = 2.0
+#: t's median step and its mean step disagreeing by more than this share: bursty time stamps
+BURST_SHARE = 0.25
+
+
+def unit_in_name(name: str | None) -> str | None:
+    """The time unit a column's name states (``Time (ms)``, ``timestamp_us``, ``t[ns]``,
+    ``Time (s)``), or None."""
+    if not name:
+        return None
+    words = [w for w in re.findall(r"[a-z\u00b5]+", name.lower())
+             if w not in ("t", "time", "times", "timestamp", "timestamps", "stamp", "elapsed", "sample", "in")]
+    for unit, spelled in TIME_WORDS.items():
+        if any(w in spelled for w in words):
+            return unit
+    return None
+
+
+def time_in_seconds(t: np.ndarray, unit: str, column: str | None, source: str,
+                    notes: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """``t`` in seconds: divided by the factor of ``unit`` (s, ms, us, ns), or with ``auto`` of
+    the unit the column's name states, else, for time stamps whose steps read as seconds
+    would give under MIN_PLAUSIBLE_HZ, of the smallest unit that gives more (a logger's
+    millis(), micros() or an epoch in nanoseconds), with a note.  Returns (t, every time stamp
+    less the first), in seconds: an epoch in seconds keeps ~0.2 us, too coarse for the steps
+    of a fast logger, so the rate is taken from the differences."""
+    t0 = float(t[0]) if t.size else 0.0
+
+    def divided(k: float) -> tuple[np.ndarray, np.ndarray]:
+        return (t, t - t0) if k == 1.0 else (t0 / k + (t - t0) / k, (t - t0) / k)
+
+    if unit != "auto":
+        if unit not in TIME_FACTORS:
+            raise InputError(source, f"--time-unit {unit!r}: expected one of auto, {', '.join(TIME_FACTORS)}")
+        k = TIME_FACTORS[unit]
+        return divided(k)
+    named = unit_in_name(column)
+    if named == "s":
+        return divided(1.0)
+    if named is not None:
+        k = TIME_FACTORS[named]
+        if k != 1.0:
+            notes.append(f"t read in {named}, as its column's name {column!r} says; the recording's t is in seconds")
+        return divided(k)
+    if t.size < 3:
+        return divided(1.0)
+    steps = np.diff(t)
+    step = float(np.median(steps[steps > 0])) if np.any(steps > 0) else 0.0
+    if step <= 0 or 1.0 / step >= MIN_PLAUSIBLE_HZ:
+        return divided(1.0)
+    for unit_name, k in list(TIME_FACTORS.items())[1:]:
+        if k / step >= MIN_PLAUSIBLE_HZ:
+            notes.append(f"t read in {unit_name}: its steps (median {step:.6g}) would give "
+                         f"{1.0 / step:.4g} Hz in seconds, {k / step:.6g} Hz in {unit_name} (state --time-unit s, "
+                         "ms, us or ns when that is not its unit)")
+            return divided(k)
+    return divided(1.0)
+
+
+def rate_from_t(t: np.ndarray, notes: list[str]) -> float:
+    """The sample rate t's steps give: from the median step, unless it and the mean step
+    (duration over samples) disagree by more than BURST_SHARE -- time stamps taken by a host
+    that reads the sensor in bursts -- when the mean is taken, with a note."""
+    if t.size < 2:
+        return 1.0
+    steps = np.diff(t)
+    median = float(np.median(steps))
+    mean = float(t[-1] - t[0]) / (t.size - 1)
+    if median > 0 and mean > 0 and abs(mean / median - 1.0) <= BURST_SHARE:
+        return 1.0 / median
+    if mean <= 0:
+        return 1.0 / median if median > 0 else 1.0
+    notes.append(f"t's median step gives {1.0 / median if median > 0 else float('inf'):.6g} Hz but its {t.size} samples "
+                 f"over {float(t[-1] - t[0]):.6g} s give {1.0 / mean:.6g} Hz: the time stamps come in bursts (a host's "
+                 "clock, not the sensor's); the device's rate is the latter (--rate HZ states it)")
+    return 1.0 / mean
+
+
 def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndarray | None, part: list[str] | None,
            opts: Options, scale: Scale | None, signed: bool, rate: float | None, metadata: dict[str, str],
            notes: list[str], locate, index_column: str | None, device: Device | None = None,
-           kept: tuple[np.ndarray, np.ndarray] | None = None) -> Converted:
+           kept: tuple[np.ndarray, np.ndarray] | None = None, time_column: str | None = None) -> Converted:
     """Range check, sample order, time, poses, metadata and the nominal device, shared by the formats."""
     check_range(raw, opts.bits, signed, source, locate)
     order = in_sample_order(index, source, index_column, lambda i: locate(i, 0)[0]) if t is None else None
@@ -244,9 +333,10 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
         part = None if part is None else [part[i] for i in order.tolist()]
     if t is None:
         t = index / rate
+    else:
+        t, rel = time_in_seconds(np.asarray(t, dtype=float), opts.time_unit, time_column, source, notes)
+        rate = opts.rate_hz if opts.rate_hz is not None else rate_from_t(rel, notes)
     gravity = opts.gravity_mps2 or (device.gravity_mps2 if device is not None else STANDARD_GRAVITY)
-    if t is not None:
-        rate = 1.0 / float(np.median(np.diff(t))) if t.size > 1 else 1.0
     if kept is not None:  # a contract recording without --regions keeps its labels and references
         (pose, f), names = kept, [str(k) for k in np.unique(kept[0][kept[0] >= 0])]
     else:
@@ -380,7 +470,7 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
 
 def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, rate_hz: float | None = None,
                  regions: Any = None, stated_f: bool = False, gravity_mps2: float | None = None,
-                 bits: int = 16, blocks: bool = False) -> Converted:
+                 bits: int = 16, blocks: bool = False, time_unit: str = "auto") -> Converted:
     """Read another tool's file as a contract recording of a triad.
 
     Parameters
@@ -395,7 +485,8 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         agree (:func:`units.file_scale`).
     rate_hz : float, optional
         Sample rate, Hz, for files without a time column (imucal; the MPU-6050 log's
-        ``Fs`` otherwise).
+        ``Fs`` otherwise); with a time column (csv), the device's rate where t's steps
+        do not give it (a host's time stamps).
     regions : path, optional
         JSON ``{name: {"start": s, "end": e}}`` of sample numbers (end excluded): pose labels.
     stated_f : bool
@@ -406,6 +497,12 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         The ADC's bits: the device's range, and the readings must fit it.
     blocks : bool
         log: each block of readings between text lines is a pose (``block_1``, ...).
+    time_unit : {"auto", "s", "ms", "us", "ns"}
+        The time column's unit (csv, imu_tk).  ``auto``: the unit its name states, else
+        seconds, except time stamps whose steps in seconds would give under
+        MIN_PLAUSIBLE_HZ (then the smallest of ms, us, ns that gives more; a note says so).
+        The recording's t is written in seconds; the device's rate is from t's median
+        step, or from its mean step where the two disagree (bursts; a note).
 
     Returns
     -------
@@ -421,16 +518,18 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         fmt = detect_format(source, data)
     if fmt not in FORMATS:
         raise ValueError(f"unknown format {fmt!r}")
-    opts = Options(scale, rate_hz, None, None, stated_f, gravity_mps2, bits)
+    opts = Options(scale, rate_hz, None, None, stated_f, gravity_mps2, bits, time_unit)
     if regions is not None:
         opts.regions, opts.regions_source = read_regions(regions), str(regions)
     if blocks and fmt != "log":
         raise InputError(source, f"--blocks: {fmt} files have no blocks (it labels a log's poses)")
     if fmt == "log":
         return convert_log(source, data, opts, blocks)
+    if time_unit != "auto" and fmt not in ("imu_tk", "csv"):
+        raise InputError(source, f"--time-unit: {fmt} files have no time column (--rate states their rate)")
     if fmt in ("imu_tk", "csv"):
-        if rate_hz is not None:
-            raise InputError(source, f"--rate: {fmt} files have a time column")
+        if rate_hz is not None and fmt == "imu_tk":
+            raise InputError(source, "--rate: imu_tk files have a time column and their own rate")
         if fmt == "imu_tk" and scale is not None and scale.converts:
             raise InputError(source, "imu_tk's readings are counts: --units mps2|g and --lsb do not apply")
         if fmt == "imu_tk":
@@ -445,7 +544,8 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         if kept is not None and stated_f:
             raise InputError(source, "--stated-f: a recording's poses are its own; give --regions to name them")
         return finish(source, fmt, rec.raw, np.arange(rec.n_samples), rec.t, None, opts, scale, signed, None,
-                      dict(rec.metadata), [], lambda i, j: (rec.line(i), f"raw_{j}"), None, device, kept)
+                      dict(rec.metadata), [], lambda i, j: (rec.line(i), f"raw_{j}"), None, device, kept,
+                      time_column="t" if fmt == "csv" else None)
     pre = read_preamble(data)
     if pre.header is None:
         raise InputError(source, "the file is empty (nothing but comments and blank lines)")

@@ -52,7 +52,7 @@ def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int
     scale = scale_from_args(a)
     conv = convert_file(a.input, a.format, scale=scale, rate_hz=positive(a.rate, "--rate"), regions=a.regions,
                         stated_f=a.stated_f, gravity_mps2=positive(a.gravity, "--gravity"), bits=bits,
-                        blocks=a.blocks)
+                        blocks=a.blocks, time_unit=a.time_unit)
     write_recording(a.output, conv.recording)
     if a.device_out is not None:
         save_device(conv.device, a.device_out)
@@ -74,7 +74,12 @@ def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
                       gravity_help="g in m/s^2 for --full-scale with mps2, the stated f and the device (default "
                       "9.80665; imu_tk 9.81744)")
     s.add_argument("--rate", metavar="HZ", help="sample rate of a file without a time column (imucal, log: "
-                   "required; the MPU-6050 log: its Fs line otherwise)")
+                   "required; the MPU-6050 log: its Fs line otherwise); with a time column, the device's rate "
+                   "(where a host's time stamps do not give it)")
+    s.add_argument("--time-unit", choices=("auto", "s", "ms", "us", "ns"), default="auto",
+                   help="the time column's unit (default auto: the unit its name states, else seconds, but "
+                   "time stamps that would be under 2 Hz in seconds are read in the smallest of "
+                   "ms, us, ns that gives more, with a note); t is written in seconds")
     s.add_argument("--regions", metavar="JSON", help="pose regions {name: {\"start\": s, \"end\": e}} in "
                    "sample numbers, end excluded (imucal's session list); names ending in _rot are motions")
     s.add_argument("--blocks", action="store_true", help="log: each run of readings between the logger's text "

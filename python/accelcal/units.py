@@ -297,7 +297,8 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
     InputError
         At the first reading (earliest row, then leftmost column) that is not a whole
         number of LSBs within ``REL_TOL``, nor within the rounding of the last significant
-        digit the values are printed with (the most any of them shows) where that is at most
+        digit the values are printed with (the most any value of that column shows; a column of
+        zeros and one such value does not show it) where that is at most
         PRINT_TOL_COUNTS of a count (a value printed by '%g' as -0.020752 g is -340 counts of
         1/16384 g: -340.0008), or whose count does not fit 64 bits.
     """
@@ -314,7 +315,9 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
         # most digits any of them shows: such a value is the count it rounds to, where that half unit
         # is at most PRINT_TOL_COUNTS of a count (the count is then unambiguous)
         u, inv = np.unique(v[sel], return_inverse=True)
-        digits = max(_significant_digits(float(w)) for w in u)
+        # the printing precision shows in every value of the columns at fault, the whole ones too
+        shown = np.unique(v[:, np.flatnonzero(sel.any(axis=0))])
+        digits = max(_significant_digits(float(w)) for w in shown[np.isfinite(shown)])
         mag = np.floor(np.log10(np.maximum(np.abs(u), np.finfo(float).tiny)))
         tol = (0.5 * 10.0 ** (mag - (digits - 1)) / scale.lsb)[inv.ravel()]
         fine = tol <= PRINT_TOL_COUNTS

@@ -1,0 +1,119 @@
+"""Time columns in other units and time stamps taken by a host (``accelcal convert``).
+
+Loggers write t as millis(), micros() or an epoch in nanoseconds, and a host that reads
+the sensor in bursts stamps each burst's samples a few microseconds apart.  Either way
+``convert`` must write t in seconds and give the device the sensor's rate (a rate 1000 x
+too low made ``displacement`` report kilometres).  The files are written here; the
+expected values come from the times they were written with.
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from accelcal.convert import convert_file, unit_in_name
+from accelcal.recording import read_recording
+from cli_run import run
+
+FACTOR = {"s": 1.0, "ms": 1e3, "us": 1e6, "ns": 1e9}
+
+
+def _write(path, t_text, counts, header="t,raw_0,raw_1,raw_2"):
+    lines = [header] + [f"{a},{b},{c},{d}" for a, (b, c, d) in zip(t_text, counts)]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def _counts(n, seed=0):
+    rng = np.random.default_rng(seed)
+    return np.round([100.0, -50.0, 16384.0] + 3.0 * rng.standard_normal((n, 3))).astype(int)
+
+
+@pytest.mark.parametrize("unit", ["ms", "us", "ns"])
+@pytest.mark.parametrize("rate", [50.0, 100.0, 1000.0])
+@pytest.mark.parametrize("epoch", [False, True])
+def test_finer_time_units_are_read_as_such(tmp_path, capfd, unit, rate, epoch):
+    n = 400
+    t_s = np.arange(n) / rate + (1.73e9 if epoch else 0.0)
+    ticks = t_s * FACTOR[unit]
+    text = [f"{int(round(v))}" for v in ticks] if unit == "ns" else [f"{v:.3f}" for v in ticks]
+    src = tmp_path / "log.csv"
+    _write(src, text, _counts(n))
+    rc, out, err, _ = run(["convert", src, "-o", tmp_path / "r.csv", "--device-out", tmp_path / "d.json"], capfd)
+    assert rc == 0, err
+    assert f"t read in {unit}" in err
+    rec = read_recording(tmp_path / "r.csv")
+    np.testing.assert_allclose(rec.t - rec.t[0], t_s - t_s[0], atol=2e-6)
+    dev = json.loads((tmp_path / "d.json").read_text())
+    assert dev["sample_rate_hz"] == pytest.approx(rate, rel=1e-4)
+    # an epoch in ns is past float64's 2**53: each stamp keeps ~256 ns, so the rate to 1e-4
+    said = float(out.split(" Hz")[0].rsplit(", ", 1)[1])
+    assert said == pytest.approx(rate, rel=1e-4)
+
+
+@pytest.mark.parametrize("rate", [10.0, 100.0, 400.0])
+def test_seconds_stay_seconds_without_a_note(tmp_path, capfd, rate):
+    n = 300
+    t = np.arange(n) / rate
+    src = tmp_path / "log.csv"
+    _write(src, [f"{v:.6f}" for v in t], _counts(n))
+    rc, out, err, _ = run(["convert", src, "-o", tmp_path / "r.csv", "--device-out", tmp_path / "d.json"], capfd)
+    assert rc == 0, err
+    assert "t read in" not in err and "bursts" not in err
+    np.testing.assert_allclose(read_recording(tmp_path / "r.csv").t, t, atol=1e-6)
+    assert json.loads((tmp_path / "d.json").read_text())["sample_rate_hz"] == pytest.approx(rate, rel=1e-6)
+
+
+def test_a_stated_unit_wins_over_the_guess(tmp_path, capfd):
+    """A 1 Hz logger in seconds is read as milliseconds by the guess (the note says how to
+    state otherwise); --time-unit s keeps it, --time-unit ms on a 10 Hz log in ms divides."""
+    n = 50
+    src = tmp_path / "slow.csv"
+    _write(src, [f"{v:.1f}" for v in np.arange(n, dtype=float)], _counts(n))
+    conv = convert_file(src)
+    assert conv.device.sample_rate_hz == pytest.approx(1000.0) and any("--time-unit" in m for m in conv.notes)
+    conv = convert_file(src, time_unit="s")
+    assert conv.device.sample_rate_hz == pytest.approx(1.0) and not conv.notes
+    np.testing.assert_allclose(conv.recording.t, np.arange(n))
+    src2 = tmp_path / "ten.csv"
+    _write(src2, [f"{100 * k}" for k in range(n)], _counts(n))
+    conv = convert_file(src2, time_unit="ms")
+    np.testing.assert_allclose(conv.recording.t, np.arange(n) / 10.0)
+    assert conv.device.sample_rate_hz == pytest.approx(10.0)
+
+
+@pytest.mark.parametrize("name, unit", [("t", None), ("Time (s)", "s"), ("Time (ms)", "ms"), ("timestamp_us", "us"),
+                                        ("t[ns]", "ns"), ("time_usec", "us"), ("millis", "ms"), ("timestamp", None),
+                                        ("seconds_elapsed", "s")])
+def test_the_unit_a_column_name_states(name, unit):
+    assert unit_in_name(name) == unit
+
+
+@pytest.mark.parametrize("burst", [4, 10])
+def test_host_time_stamps_in_bursts_give_the_sensor_s_rate(tmp_path, capfd, burst):
+    """A 100 Hz sensor read by a host every ``burst`` samples: the samples of a read are
+    stamped 50 us apart, so t's median step says ~20 kHz.  The device gets the rate of the
+    samples over the duration, and a note says why; --rate states it outright."""
+    n, rate = 1000, 100.0
+    k = np.arange(n)
+    t = (k // burst) * burst / rate + (k % burst) * 50e-6
+    src = tmp_path / "host.csv"
+    _write(src, [f"{v:.6f}" for v in t], _counts(n))
+    rc, out, err, _ = run(["convert", src, "-o", tmp_path / "r.csv", "--device-out", tmp_path / "d.json"], capfd)
+    assert rc == 0, err
+    assert "bursts" in err
+    got = json.loads((tmp_path / "d.json").read_text())["sample_rate_hz"]
+    assert got == pytest.approx((n - 1) / (t[-1] - t[0]), rel=1e-4)
+    assert abs(got - rate) < 0.05 * rate
+    conv = convert_file(src, rate_hz=100.0)
+    assert conv.device.sample_rate_hz == pytest.approx(100.0)
+    np.testing.assert_allclose(conv.recording.t, t, atol=1e-6)
+
+
+def test_a_time_unit_for_a_file_without_time_is_refused(tmp_path, capfd):
+    src = tmp_path / "imucal.csv"
+    src.write_text("acc_x,acc_y,acc_z\n1,2,3\n4,5,6\n")
+    rc, _, err, _ = run(["convert", src, "--rate", "100", "--time-unit", "ms", "-o", tmp_path / "r.csv"], capfd)
+    assert rc == 2 and err.count("\n") == 1 and "--time-unit" in err and "no time column" in err
+    assert not (tmp_path / "r.csv").exists()
