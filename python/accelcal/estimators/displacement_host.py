@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import AccelcalError, InputError
 from ..recording import check_core_input, check_for_device
-from .common import CLIP, CLIP_LO, Columns, alpha_noise, channel_noise, force_noise, resolve_array, uniform_dt
+from .common import CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_noise, force_noise, resolve_array, uniform_dt
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
@@ -178,6 +178,41 @@ def _max_rotation_deg(device, cal, rec, at_rest, dt, noise) -> float:
     return math.degrees(worst)
 
 
+def still_but_turned(f, t, at_rest, rp: RestParams) -> tuple[float, float, float] | None:
+    """A stretch where the body is still but not at rest: blocks of ``rp.hold`` samples whose
+    f stays within ``rp.dev_max`` of its mean with |f| within ``rp.g_tol`` of g, away from the
+    rest's direction by more than ``rp.ref_max``.  For a body that only translates (a rail)
+    every still stretch is a rest; such a stretch is a turn, which no accelerometer alone
+    tells from an acceleration.  Returns (its largest angle from the first rest's f, deg;
+    the first such stretch's start and end, s) or None.  ``f`` in m/s^2, (n, 3)."""
+    f = np.asarray(f, float)
+    at_rest = np.asarray(at_rest, bool)
+    if not at_rest.any():
+        return None
+    ref = f[at_rest][: max(rp.hold, 1)].mean(axis=0)
+    hold = max(int(rp.hold), 2)
+    worst, first = 0.0, None
+    for i in range(0, f.shape[0] - hold + 1, hold):
+        blk = f[i:i + hold]
+        if at_rest[i:i + hold].any():
+            continue
+        m = blk.mean(axis=0)
+        if float(np.max(np.abs(blk - m))) > rp.dev_max:
+            continue
+        if rp.g is not None and abs(float(np.linalg.norm(m)) - rp.g) > rp.g_tol:
+            continue
+        if float(np.linalg.norm(m - ref)) <= rp.ref_max:
+            continue
+        cosang = float(np.dot(m, ref) / (np.linalg.norm(m) * np.linalg.norm(ref)))
+        ang = math.degrees(math.acos(min(1.0, max(-1.0, cosang))))
+        worst = max(worst, ang)
+        if first is None:
+            first = (float(t[i]), float(t[i + hold - 1]))
+        elif first[1] >= float(t[i]) - 1.5 * (float(t[i + hold - 1]) - float(t[i])):
+            first = (first[0], float(t[i + hold - 1]))
+    return None if first is None else (worst, first[0], first[1])
+
+
 def _axis_arg(axis) -> int | None:
     if axis is None or axis in ("3d", "xyz", "all"):
         return None
@@ -276,6 +311,16 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
             warnings.append(f"displacement: the body turned by up to {rot:.1f} deg during a motion (from the "
                             "resolved alpha): gravity removal assumes no rotation between rests (a rail), so "
                             "the result is doubtful")
+    f_host = f if engine == "float" else np.asarray(f, float) / 2.0**OUT_FRAC
+    turned = still_but_turned(f_host, t, at, rp)
+    if turned is not None:
+        ang, a0, a1 = turned
+        warnings.append(f"displacement: the body is still at t = {a0:.3f}-{a1:.3f} s (the first such stretch) but "
+                        f"turned from the first rest (by up to {ang:.1f} deg over the recording): an accelerometer "
+                        "alone cannot "
+                        "tell a turn from an acceleration, so gravity leaks into the path from there on (up to "
+                        f"{2 * math.sin(math.radians(ang) / 2) * float(device.gravity_mps2):.3g} m/s^2) and such "
+                        "a stretch is not taken as a rest; the result after it is not valid")
     meta = {"engine": engine, "form": form, "device": device.name, "signal": note,
             "mode": "3-axis, gravity removed in the frame of the first rest" if ax is None else
             f"1-D along body {'xyz'[ax]}", "segments": str(len(zps))}
