@@ -317,6 +317,11 @@ def set_aside_clipped(rec, intervals: list, labels: list | None, clipped: np.nda
     return keep, keep_lab, aside
 
 
+#: what a recording without a static pose lacks (the calibration's error and its note)
+NO_POSE = (f"no static pose found (no 'pose' labels, and no interval of at least {MIN_POSE_S:g} s in which every "
+           f"channel is within {STATIC_THRESHOLD:g} x its noise)")
+
+
 def poses_from_recording(rec, device, *, use_labels: bool | None = None, required: bool = True) -> PoseSet:
     """The static poses of one recording: its ``pose`` labels when it has them (and
     ``use_labels`` is not False), else :func:`detect_static`.  Poses with clipped
@@ -346,8 +351,7 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
     if not intervals and (not required or aside):
         return empty
     if not intervals:
-        raise InputError(rec.source, "no static pose found (no 'pose' labels, and no interval of at least "
-                         f"{MIN_POSE_S:g} s in which every channel is within {STATIC_THRESHOLD:g} x its noise)")
+        raise InputError(rec.source, NO_POSE)
     means, cnt, std = pose_means(rec, intervals, device, labels=labels, noise=noise, check_motion=labelled)
     P = len(intervals)
     f_ref = np.full((P, 3), np.nan)

@@ -568,3 +568,28 @@ def test_bad_csv_cells_name_file_row_and_column(tmp_path):
     missing.write_text("\n".join(",".join(l.split(",")[j] for j in keep) for l in lines) + "\n")
     with pytest.raises(InputError, match=r"missing\.csv: row 1: .*f_y"):
         read_recording(missing, dev.n_channels)
+
+
+def test_a_recording_without_a_pose_among_several_is_named_and_adds_none():
+    """Several recordings, one of them a motion with no static pose (a sweep recorded beside
+    the poses): the calibration is that of the others, and a note names the one that added
+    none; alone, it is refused as before; with no pose in any, refused."""
+    d = default_triad()
+    rng = np.random.default_rng(5)
+    b, S = draw_truth(d, rng)
+    poses = make_recording(d, b, S, d.gravity_mps2 * fib_dirs(16), rng, labels=False,
+                           hold=int(2 * d.sample_rate_hz), move=int(0.5 * d.sample_rate_hz))
+    tt = np.arange(600) / d.sample_rate_hz
+    f = np.column_stack([3 * np.sin(7 * tt), 2 * np.cos(5 * tt), d.gravity_mps2 + 3 * np.sin(3 * tt)])
+    raw = np.round(model.predict_counts(b, S, d.positions, f) + rng.normal(size=f.shape))
+    sweep = recording_from_arrays(tt, raw.astype(np.int64))
+    sweep.source = "sweep.csv"
+    alone = calibrate_recordings(d, [poses], "jigfree")
+    both = calibrate_recordings(d, [poses, sweep], "jigfree")
+    np.testing.assert_allclose(both.offsets, alone.offsets)
+    np.testing.assert_allclose(both.sensitivity, alone.sensitivity)
+    assert any(n.startswith("sweep.csv: no static pose found") for n in both.extra["notes"])
+    with pytest.raises(InputError, match="no static pose found"):
+        calibrate_recordings(d, [sweep], "jigfree")
+    with pytest.raises(InputError, match="no usable static pose in any recording"):
+        calibrate_recordings(d, [sweep, sweep], "jigfree")

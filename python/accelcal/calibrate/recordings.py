@@ -7,7 +7,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..held import distinct_recordings
-from ..static import PoseSet, poses_from_recording
+from ..static import NO_POSE, PoseSet, poses_from_recording
 from .checks import jig_accuracy_rad, pose_label
 from .known_poses import fit_known_poses
 from .lever_arms import calibrate_positions
@@ -30,7 +30,8 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     TEMP_MIN_SPAN_C; lever arms when samples rotate (|w| > ROTATION_MIN_RADPS) with
     reference f, w and dw.  Readings held for several rows by a logger faster than the
     sensor are counted once (:func:`accelcal.held.distinct_recordings`; the calibration's
-    ``extra["notes"]`` says so).
+    ``extra["notes"]`` says so).  Of several recordings, one without a static pose adds none
+    and is named in those notes; with no pose in any, InputError.
     """
     jig_accuracy_rad(jig_accuracy_deg)
     if method is not None and method not in METHODS + ("jigfree",):
@@ -40,7 +41,14 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
         raise InputError("<command line>", "no recording given")
     recordings, device, notes = distinct_recordings(list(recordings), device)
     rotating = [rotating_samples(rec) for rec in recordings]
-    sets = [poses_from_recording(rec, device, required=not rot.any()) for rec, rot in zip(recordings, rotating)]
+    # with several recordings, one without a static pose (a motion, a sweep) adds none and is named
+    several = len(recordings) > 1
+    sets = [poses_from_recording(rec, device, required=not (rot.any() or several))
+            for rec, rot in zip(recordings, rotating)]
+    for rec, rot, ps in zip(recordings, rotating, sets):
+        if several and not rot.any() and ps.n_poses == 0:
+            clipped = f" ({len(ps.set_aside)} set aside: their readings clip)" if ps.set_aside else ""
+            notes.append(f"{rec.source}: {NO_POSE}{clipped}: it adds none")
     poses = PoseSet.concat(sets)
     if poses.n_poses == 0:
         why = (f" ({len(poses.set_aside)} set aside because their readings clip: "
