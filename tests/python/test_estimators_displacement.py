@@ -252,3 +252,53 @@ def test_a_triad_still_but_turned_is_named(engine):
     c = E.displacement_from_recording(d, cal, _triad_move(d, 0.0), engine)
     assert not any("turned" in w for w in c.warnings), c.warnings
     assert abs(c["p_x"][-1] - 0.3) < 0.01
+
+
+def _thinned(rec, drop, jitter_steps=0.0, seed=0):
+    """The recording with the samples ``drop`` removed and its time stamps moved by up to
+    ``jitter_steps`` of a step (uniformly), as a logger that drops samples and a host clock
+    that stamps them late or early give."""
+    rng = np.random.default_rng(seed)
+    keep = np.ones(rec.n_samples, bool)
+    keep[drop] = False
+    dt = float(np.median(np.diff(rec.t)))
+    t = rec.t[keep] + rng.uniform(-jitter_steps, jitter_steps, int(keep.sum())) * dt
+    return recording_from_arrays(t, rec.raw[keep])
+
+
+@pytest.mark.parametrize("engine", ["float", "fixed"])
+def test_dropped_samples_and_jittered_stamps_are_put_on_the_grid(engine):
+    """A logger that drops 1 % of the samples (gaps of 1-4) and stamps the rest with +-0.2
+    of a step of jitter (a public foot-mounted recording had both, and was refused): the
+    samples go back on their uniform grid, the dropped ones filled by interpolation and
+    flagged, and the stroke comes out as from the whole recording."""
+    d = default_triad()
+    sim = run_simulation(d, "linear_actuator", seed=22, distance_m=0.5, travel_s=2.0, rest_s=2.0, strokes=2)
+    rec = sim.recording
+    rng = np.random.default_rng(3)
+    starts = rng.choice(np.arange(50, rec.n_samples - 60, 7), size=rec.n_samples // 300, replace=False)
+    drop = np.unique(np.concatenate([s + np.arange(rng.integers(1, 5)) for s in starts]))
+    cal = Calibration.nominal(d)
+    whole = E.displacement_from_recording(d, cal, rec, engine)
+    c = E.displacement_from_recording(d, cal, _thinned(rec, drop, 0.2), engine)
+    assert len(c["t"]) == rec.n_samples
+    assert int(c["filled"].sum()) == drop.size
+    assert any(f"{drop.size} dropped sample(s)" in w for w in c.warnings)
+    assert any("stray by up to" in w for w in c.warnings)
+    for ax in ("p_x", "p_y", "p_z"):
+        assert abs(c[ax][-1] - whole[ax][-1]) <= 0.005 * 0.5
+    # nothing dropped, no jitter: nothing said, no column
+    assert "filled" not in whole and not any("dropped" in w for w in whole.warnings)
+
+
+def test_gaps_beyond_filling_and_stamps_off_the_grid_are_refused():
+    d = default_triad()
+    rec = run_simulation(d, "linear_actuator", seed=2).recording
+    cal = Calibration.nominal(d)
+    with pytest.raises(InputError, match=r"12 sample\(s\) missing in 1 gap\(s\), the longest 12"):
+        E.displacement_from_recording(d, cal, _thinned(rec, np.arange(200, 212)))
+    t = rec.t.copy()
+    t[300:] = t[300] + 1.3 * (t[300:] - t[300])       # the rate changes: no grid holds both halves
+    with pytest.raises(InputError, match="not uniform") as ei:
+        E.displacement_from_recording(d, cal, recording_from_arrays(t, rec.raw))
+    assert "steps off a uniform grid" in str(ei.value)

@@ -19,7 +19,8 @@ from ..errors import AccelcalError, InputError
 from ..native import FORMATS, check, cptr, ffi, lib
 from ..quantize import round_half_up
 from ..recording import check_core_input, check_for_device
-from .common import CLIP, CLIP_LO, OMEGA_FRAC, OUT_FRAC, Columns, channel_noise, clip_i16, dt_fixed, force_noise, uniform_dt
+from .common import (CLIP, CLIP_LO, OMEGA_FRAC, OUT_FRAC, Columns, channel_noise, clip_i16, dt_fixed, force_noise,
+                     on_uniform_grid, uniform_dt)
 from ..triad import triad_forces
 
 __all__ = ["ATT_GATED", "ATT_W2_NEG", "ATT_UNSETTLED", "ATT_NO_GRAVITY", "ATT_SAT", "ATT_SIGN_NEG",
@@ -323,6 +324,9 @@ def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: fl
         raise ValueError(f"unknown engine {engine!r}")
     check_for_device(rec, device, min_samples=2)
     r1, r2 = triad_geometry(device, cal)
+    if engine == "fixed":
+        check_core_input(rec, device.raw_min < 0)
+    rec, filled, fill_note = on_uniform_grid(rec)
     dt = uniform_dt(rec)
     p = AttitudeParams(r1=r1, r2=r2, dt=dt, gain=gain, w2_gate=w2_gate,
                        noise_mps2=max(force_noise(device, cal, channel_noise(device, rec), (0, 1, 2)), 1e-4),
@@ -331,7 +335,7 @@ def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: fl
         p.check()
     except AccelcalError as e:
         raise InputError(device.name, str(e)) from None
-    warnings = []
+    warnings = [f"attitude: {fill_note}"] if fill_note else []
     if engine == "float":
         f1, _ = triad_forces(cal, rec, (0, 1, 2), "float")
         f2, _ = triad_forces(cal, rec, (3, 4, 5), "float")
@@ -340,7 +344,6 @@ def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: fl
         gated, unsettled = r["gated"], ~r["settled"]
         sat = np.zeros(rec.n_samples, bool)
     else:
-        check_core_input(rec, device.raw_min < 0)
         f1, s1 = triad_forces(cal, rec, (0, 1, 2), "fixed", device.raw_min < 0)
         f2, s2 = triad_forces(cal, rec, (3, 4, 5), "fixed", device.raw_min < 0)
         r = attitude_fixed(f1, f2, p)
@@ -368,6 +371,7 @@ def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: fl
     cols = Columns(t=np.asarray(rec.t, float), theta_rad=np.asarray(theta, float), w_y=np.asarray(w, float),
                    dw_y=np.asarray(dw, float), g_mps2=np.asarray(gmag, float), gated=gated.astype(float),
                    unsettled=unsettled.astype(float), saturated=sat.astype(float),
+                   **({"filled": filled.astype(float)} if filled.any() else {}),
                    warnings=warnings,
                    meta={"engine": engine, "device": device.name, "r1_m": f"{r1:.6g}", "r2_m": f"{r2:.6g}",
                          "w2_gate": f"{p.gate():.6g}", "gain": f"{gain:g}", "leak_tau_s": f"{leak_tau_s:g}"})

@@ -10,7 +10,8 @@ import numpy as np
 
 from ..errors import AccelcalError, InputError
 from ..recording import check_core_input, check_for_device
-from .common import CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_noise, force_noise, resolve_array, uniform_dt
+from .common import (CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_noise, force_noise, on_uniform_grid,
+                     resolve_array, uniform_dt)
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
@@ -234,7 +235,9 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     host from the core's per-motion zero-point estimate.  ``axis`` x/y/z: 1-D along that body
     axis (the seed's case: nothing removed).  Errors: no rest at all (nothing can be anchored).
     Flagged (warnings, column corrected = 0): a recording that does not start at rest (the part
-    before the first rest is not estimated), a motion that does not end at rest (uncorrected)."""
+    before the first rest is not estimated), a motion that does not end at rest (uncorrected).
+    Samples a logger dropped are filled first (:func:`~.common.on_uniform_grid`: warning and
+    column ``filled``)."""
     if engine not in ("float", "fixed"):
         raise ValueError(f"unknown engine {engine!r}")
     form = form or ("offline" if engine == "float" else "stream")
@@ -242,9 +245,10 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         raise ValueError(f"form {form!r} with engine {engine!r}: fixed has only 'stream'")
     check_for_device(rec, device, min_samples=2)
     ax = _axis_arg(axis)
-    dt = uniform_dt(rec)
     if engine == "fixed":
         check_core_input(rec, device.raw_min < 0)
+    rec, filled, fill_note = on_uniform_grid(rec)
+    dt = uniform_dt(rec)
     f, note = _body_forces(device, cal, rec, engine)
     noise = channel_noise(device, rec)
     rp = rest or default_rest_params(device, 1.0 / dt, f_sigma=force_noise(
@@ -252,7 +256,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     p = DisplaceParams(dt=dt, axis=ax, rest=rp)
     t = np.asarray(rec.t, float)
     n = len(t)
-    warnings = []
+    warnings = [f"displacement: {fill_note}"] if fill_note else []
     if engine == "float" and form == "offline":
         r = displace_offline(f, p)
         if r["no_rest"]:
@@ -329,5 +333,6 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     cols = Columns(t=t, v_x=v[:, 0], v_y=v[:, 1], v_z=v[:, 2], p_x=pp[:, 0], p_y=pp[:, 1], p_z=pp[:, 2],
                    p_raw_x=p_raw[:, 0], p_raw_y=p_raw[:, 1], p_raw_z=p_raw[:, 2],
                    rest=np.asarray(at, float), corrected=np.asarray(corrected, float),
+                   **({"filled": filled.astype(float)} if filled.any() else {}),
                    warnings=warnings, meta=meta)
     return cols

@@ -14,8 +14,9 @@ from scipy.signal import lfilter
 from ..errors import InputError
 from ..native import check, cptr, ffi, lib
 from ..quantize import round_half_up
-from ..recording import check_for_device
-from .common import OMEGA_FRAC, Columns, alpha_noise, channel_noise, dt_fixed, force_noise, resolve_array, uniform_dt
+from ..recording import check_core_input, check_for_device
+from .common import (OMEGA_FRAC, Columns, alpha_noise, channel_noise, dt_fixed, force_noise, resolve_array,
+                     on_uniform_grid, uniform_dt)
 from .rest import REST_AT_REST, RestParams, default_rest_params, rest_cfg_fixed, rest_detect
 
 __all__ = ["LEAK_FRAC", "rate_rest_float", "rate_rest_fixed", "rate_from_recording"]
@@ -125,6 +126,9 @@ def rate_from_recording(device, cal, rec, engine: str = "float", *, leak_tau_s: 
     if not device.is_array():
         raise InputError(device.name, "rate needs a 6-DOF array (alpha from the resolver)")
     check_for_device(rec, device, min_samples=2)
+    if engine == "fixed":
+        check_core_input(rec, device.raw_min < 0)
+    rec, filled, fill_note = on_uniform_grid(rec)
     dt = uniform_dt(rec)
     if rest is None:
         k = channel_noise(device, rec)
@@ -143,4 +147,6 @@ def rate_from_recording(device, cal, rec, engine: str = "float", *, leak_tau_s: 
         raise ValueError(f"unknown engine {engine!r}")
     return Columns(t=np.asarray(rec.t, float), w_x=w[:, 0], w_y=w[:, 1], w_z=w[:, 2],
                    rest=((np.asarray(fl) & REST_AT_REST) != 0).astype(float),
+                   **({"filled": filled.astype(float)} if filled.any() else {}),
+                   warnings=[f"rate: {fill_note}"] if fill_note else [],
                    meta={"engine": engine, "leak_tau_s": f"{leak_tau_s:g}"})
