@@ -16,6 +16,13 @@ Formats (``detect_format`` tells them from the first line that is not a comment)
 - ``log``: a serial monitor's capture: lines of three numbers among the logger's text
   (prompts, banners), no header, no time column (``--rate``); with ``blocks`` each run of
   readings between text lines is a pose (:mod:`accelcal.convert_log`).
+- ``table``: a CSV or whitespace table with named columns (phyphox, x-io's NGIMU, a
+  LORD/MicroStrain log, a logger's ``time_ms,accX,accY,accZ``): one column per axis named
+  acc/accel/accelerometer/acceleration (optionally scaled/raw) and x, y or z, with an
+  optional unit (``Accelerometer X (g)``, ``AccX [g]``, ``acc_x_mps2``) that states the
+  readings' unit; an optional time column (``t``, ``Time (s)``, ``timestamp_us``), else
+  ``--rate``.  Rows whose three readings are all empty (another packet's) are skipped.
+  Told last, after the formats above.
 
 Gyroscope columns are dropped (one note).  Pose regions named ``x_p, x_a, y_p, y_a, z_p,
 z_a`` (imucal's: that axis pointing up, or down) can state the reference specific force
@@ -33,22 +40,34 @@ import numpy as np
 
 from .convert_log import is_log, read_log
 from .convert_regions import POSE_DIRECTIONS, label_poses, read_regions
-from .csvtable import convert_columns, make_table, split_header
+from .csvtable import convert_columns, got_text, make_table, split_header
 from .device import Device
 from .errors import InputError
 from .held import held_runs
 from .recording import Recording, read_recording
 from .textinput import is_whitespace_header, read_preamble, read_text_bytes, split_whitespace_header, whitespace_to_commas
-from .units import STANDARD_GRAVITY, Scale, file_scale, to_counts
+from .units import STANDARD_GRAVITY, UNIT_TEXT, Scale, file_scale, to_counts
 from .xsens import load_xsens
 
 __all__ = ["FORMATS", "POSE_DIRECTIONS", "Converted", "detect_format", "convert_file", "read_regions"]
 
-FORMATS = ("auto", "imu_tk", "imucal", "mpu6050", "csv", "log")
+FORMATS = ("auto", "imu_tk", "imucal", "mpu6050", "csv", "log", "table")
 ACC = {"imucal": ("acc_x", "acc_y", "acc_z"), "mpu6050": ("ax", "ay", "az")}
 INDEX_COLUMNS = ("n_samples", "samples")
 GYRO_RE = re.compile(r"(gyr|gyro|g)[_ ]?[xyz]|w_?[xyz]", re.I)
 NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+#: a table's accelerometer axis column: a prefix, the word, the axis, a unit in () or [] or after _
+AXIS_RE = re.compile(r"(?P<pre>.*?)(?:accelerometer|acceleration|accel|acc)[\s_.-]*(?P<axis>[xyz])"
+                     r"(?:\s*[(\[](?P<unit>[^)\]]*)[)\]]|_(?P<tail>g|mps2|ms2|counts|lsb|raw))?", re.I)
+#: the prefixes of an accelerometer's own axis columns (LORD's scaledAccelX)
+AXIS_PREFIXES = ("", "scaled", "raw")
+#: prefixes of a phone's virtual sensors: not an accelerometer's specific force
+VIRTUAL_WORDS = ("linear", "gravity")
+#: a unit in an axis column's name (lower case, blanks dropped) -> units.UNITS
+NAMED_UNITS = {"g": "g", "m/s^2": "mps2", "m/s\u00b2": "mps2", "m/s/s": "mps2", "mps2": "mps2", "m/s2": "mps2",
+               "ms2": "mps2", "counts": "counts", "count": "counts", "lsb": "counts", "raw": "counts"}
+#: a table's time column: t, time, timestamp, with a unit in () or [] or after _ (``time_ms``)
+TIME_COLUMN_RE = re.compile(r"(?:t|time|timestamp|time[ _]stamp)(?:\s*[(\[][^)\]]*[)\]]|_[a-z\u00b5]+)?", re.I)
 
 
 @dataclass
@@ -133,10 +152,13 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
         return "imu_tk"
     if is_log(data):
         return "log"
+    if any(AXIS_RE.fullmatch(c.strip()) for c in cells):
+        return "table"
     raise InputError(source, f"cannot tell the format from this line ({pre.header[:60]!r}): expected a "
                      "recording CSV (t, raw_0, ...), imucal's acc_x/acc_y/acc_z, the MPU-6050 log (Fs,... "
-                     "then ax,ay,az,...), imu_tk's 't ax ay az' text or a monitor's log (lines of three "
-                     "numbers among text); give --format", row=pre.header_line)
+                     "then ax,ay,az,...), imu_tk's 't ax ay az' text, a monitor's log (lines of three "
+                     "numbers among text) or a table with accelerometer columns (accX, 'Acceleration y "
+                     "(m/s^2)', ...); give --format", row=pre.header_line)
 
 
 # ---- tables --------------------------------------------------------------------------
@@ -393,7 +415,9 @@ def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metada
     index = values[index_column] if index_column else np.arange(n)
     rate = opts.rate_hz
     if rate is None:
-        raise InputError(source, f"{fmt} files have no time column: give the sample rate with --rate HZ")
+        timed = next((n for n in names if TIME_COLUMN_RE.fullmatch(n)), None)
+        hint = f" (--format table reads the time column {timed!r})" if timed else ""
+        raise InputError(source, f"{fmt} files have no time column: give the sample rate with --rate HZ{hint}")
     used = set(want)
     dropped = [c for c in names if c and c not in used and GYRO_RE.fullmatch(c)]
     ignored = [c for c in names if c and c not in used and c not in dropped]
@@ -430,6 +454,224 @@ def mpu6050_preamble(source: str, data: bytes, pre) -> tuple[Any, dict[str, str]
     return pre, meta, rate
 
 
+# ---- named-column tables ---------------------------------------------------------------
+
+@dataclass
+class AxisColumn:
+    """An accelerometer axis column of a table: its name, axis (x, y, z), the unit its name
+    states (a key of NAMED_UNITS, lower case, blanks dropped; None when none) and whether
+    it is a phone's virtual sensor (linear acceleration, gravity)."""
+
+    name: str
+    axis: str
+    unit: str | None
+    virtual: bool
+
+
+def axis_column(name: str) -> AxisColumn | None:
+    """The accelerometer axis ``name`` is (``Acceleration x (m/s^2)``, ``scaledAccelX``,
+    ``AccX [g]``, ``acc_x_g``), or None: another column (a prefix other than scaled, raw,
+    or one naming linear acceleration or gravity, is not an accelerometer's axis)."""
+    m = AXIS_RE.fullmatch(name.strip())
+    if m is None:
+        return None
+    pre = re.sub(r"[\s_.-]+", "", m.group("pre")).lower()
+    virtual = any(w in pre for w in VIRTUAL_WORDS)
+    if pre not in AXIS_PREFIXES and not virtual:
+        return None
+    unit = m.group("unit") if m.group("unit") is not None else m.group("tail")
+    unit = None if unit is None else re.sub(r"\s+", "", unit).lower()
+    return AxisColumn(name, m.group("axis").lower(), unit, virtual)
+
+
+def table_axes(source: str, names: list[str], row: int) -> list[AxisColumn]:
+    """The x, y, z columns of a table's header (``row``: its line).
+
+    Raises
+    ------
+    InputError
+        No column for an axis, more than one, or only a phone's virtual sensor
+        (linear acceleration, gravity), naming the candidates.
+    """
+    found = [c for c in (axis_column(n) for n in names) if c is not None]
+    real = [c for c in found if not c.virtual]
+    if not real and found:
+        raise InputError(source, f"the accelerometer columns {', '.join(repr(c.name) for c in found)} are a phone's "
+                         "virtual sensor (linear acceleration or gravity), not an accelerometer's specific force: "
+                         "export the accelerometer's own readings (phyphox 'Acceleration with g')", row=row)
+    axes = []
+    for axis in "xyz":
+        on = [c for c in real if c.axis == axis]
+        if len(on) != 1:
+            what = (f"{len(on)} columns for axis {axis} ({', '.join(repr(c.name) for c in on)}): expected one"
+                    if on else f"no column for axis {axis}")
+            raise InputError(source, f"{what} among the accelerometer columns "
+                             f"{', '.join(repr(c.name) for c in real) or '(none)'} (names such as accX, "
+                             "'Acceleration y (m/s^2)', scaledAccelZ)", row=row)
+        axes.append(on[0])
+    return axes
+
+
+def names_unit(source: str, axes: list[AxisColumn], row: int) -> str | None:
+    """The unit (a key of units.UNITS) all three axis columns' names state, or None when none
+    does.
+
+    Raises
+    ------
+    InputError
+        A unit not read (``mg``), or one stated by some of the names and not the others.
+    """
+    for c in axes:
+        if c.unit is not None and c.unit not in NAMED_UNITS:
+            raise InputError(source, f"column {c.name!r}: unit {c.unit!r} is not one accelcal reads (g, m/s^2, "
+                             "counts)", row=row)
+    units = {NAMED_UNITS[c.unit] if c.unit is not None else None for c in axes}
+    if len(units) > 1:
+        raise InputError(source, f"the columns {', '.join(repr(c.name) for c in axes)} state different units: "
+                         "expected the same unit in all three names, or in none", row=row)
+    return units.pop()
+
+
+def table_scale(source: str, pre, option: Scale | None, unit: str | None, units_stated: bool,
+                gravity: float, axes: list[AxisColumn]) -> Scale | None:
+    """The Scale of a table's readings: the unit its axis names state weighed against the
+    options and the ``# units:``/``# lsb:`` comments by :func:`units.file_scale` (the names'
+    unit taken as the file's ``units``); ``--full-scale`` without ``--units``
+    (``units_stated`` False) is read in the names' unit.
+
+    Raises
+    ------
+    InputError
+        A contradiction (options or comment against the names), or readings in m/s^2 or g
+        with no LSB stated anywhere.
+    """
+    meta, lines = dict(pre.metadata), dict(pre.metadata_lines)
+    if unit is None:
+        return file_scale(option, meta, lines, source)
+    cols = ", ".join(c.name for c in axes)
+    said = meta.get("units")
+    if said is not None and said != unit:
+        raise InputError(source, f"the comment '# units: {said}' contradicts the unit the header's columns state, "
+                         f"{UNIT_TEXT[unit]} ({cols}): state the unit once", row=lines.get("units"))
+    if option is not None and not units_stated and not option.converts and option.lsb_g and unit != "counts":
+        option = Scale(unit, option.lsb_g * (gravity if unit == "mps2" else 1.0), option.lsb_g, option.how)
+    sized = any(k in meta for k in ("lsb", "full_scale_g")) or (option is not None and bool(option.lsb or option.lsb_g))
+    if unit != "counts" and not sized and (option is None or option.units == unit):
+        raise InputError(source, f"the readings are in {UNIT_TEXT[unit]} (the header's {cols}) and no LSB is "
+                         "stated: give --full-scale G (or --units {0} --lsb VALUE, or a '# lsb:' comment) to "
+                         "make them counts".format(unit), row=pre.header_line)
+    meta["units"], lines["units"] = unit, pre.header_line
+    return file_scale(option, meta, lines, source,
+                      unit_source=f"the unit the header's columns state, {UNIT_TEXT[unit]} ({cols}),")
+
+
+def present_rows(source: str, matrix: np.ndarray, table, axes: list[AxisColumn], js: list[int],
+                 notes: list[str]) -> np.ndarray:
+    """The indices of the rows with readings (``matrix``: the three axis columns, NaN where
+    empty; ``js``: their indices in the table); rows whose three readings are all empty (a
+    LORD log's other packets) are skipped with a note.
+
+    Raises
+    ------
+    InputError
+        A row with one or two of its readings empty, naming its line and the column.
+    """
+    empty = np.isnan(matrix)
+    gone = empty.all(axis=1)
+    partly = np.flatnonzero(empty.any(axis=1) & ~gone)
+    if partly.size:
+        i = int(partly[0])
+        j = int(np.flatnonzero(empty[i])[0])
+        others = [axes[k].name for k in range(3) if not empty[i, k]]
+        raise InputError(source, f"expected a reading, got {got_text(table.cell(i, js[j]))} where "
+                         f"{' and '.join(others)} {'has' if len(others) == 1 else 'have'} one (a row's three readings "
+                         "are all given, or all empty for another packet)", row=table.line(i), column=axes[j].name)
+    if gone.any():
+        notes.append(f"skipped {int(gone.sum())} row(s) whose readings ({', '.join(c.name for c in axes)}) are all "
+                     "empty (other packets)")
+    return np.flatnonzero(~gone)
+
+
+def table_time(source: str, stamps: np.ndarray, table, rows: np.ndarray, column: str, j: int) -> np.ndarray:
+    """The time stamps of the rows read (``rows``), as written: finite and increasing.
+
+    Raises
+    ------
+    InputError
+        An empty or unknown stamp, or one not after the stamp before, naming its line.
+    """
+    t = stamps[rows]
+    bad = np.flatnonzero(~np.isfinite(t))
+    if bad.size:
+        i = int(rows[bad[0]])
+        raise InputError(source, f"expected a time stamp, got {got_text(table.cell(i, j))}", row=table.line(i),
+                         column=column)
+    back = np.flatnonzero(np.diff(t) <= 0)
+    if back.size:
+        h, i = int(rows[back[0]]), int(rows[back[0] + 1])
+        raise InputError(source, f"time stamp {table.cell(i, j).strip()!r} is not after {table.cell(h, j).strip()!r} "
+                         f"(row {table.line(h)}): time stamps must increase", row=table.line(i), column=column)
+    return t
+
+
+def whole_counts(values: np.ndarray, source: str, locate) -> np.ndarray:
+    """Readings in counts (no unit stated) as int64.
+
+    Raises
+    ------
+    InputError
+        The first reading that is not a whole number, naming its row and column.
+    """
+    frac = np.argwhere(values != np.round(values))
+    if frac.size:
+        i, j = (int(v) for v in frac[0])
+        row, column = locate(i, j)
+        raise InputError(source, f"reading {values[i, j]:.10g} is not a whole count (readings in m/s^2 or g: "
+                         "state --units mps2|g with --lsb VALUE or --full-scale G)", row=row, column=column)
+    return values.astype(np.int64)
+
+
+def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bool) -> Converted:
+    """A table with named columns: the three accelerometer axes (:func:`table_axes`), their
+    unit (:func:`table_scale`), an optional time column (else ``--rate``); rows without
+    readings skipped (:func:`present_rows`)."""
+    names = [c.strip() for c in header_cells(pre.header)]
+    axes = table_axes(source, names, pre.header_line)
+    acc = [c.name for c in axes]
+    scale = table_scale(source, pre, opts.scale, names_unit(source, axes, pre.header_line), units_stated,
+                        opts.gravity_mps2 or STANDARD_GRAVITY, axes)
+    time_column = next((n for n in names if n not in acc and TIME_COLUMN_RE.fullmatch(n)), None)
+    if time_column is None and opts.rate_hz is None:
+        raise InputError(source, "the table has no time column (t, time, timestamp, 'Time (s)', time_ms, ...): give "
+                         "the sample rate with --rate HZ", row=pre.header_line)
+    if time_column is None and opts.time_unit != "auto":
+        raise InputError(source, "--time-unit: the table has no time column (--rate states its rate)")
+    want = {a: "ref" for a in acc}
+    if time_column is not None:
+        want[time_column] = "ref"
+    names, values, table = read_columns(source, data, pre, want)
+    js = [names.index(a) for a in acc]
+    notes: list[str] = []
+    rows = present_rows(source, np.column_stack([values[a] for a in acc]), table, axes, js, notes)
+    if rows.size == 0:
+        raise InputError(source, f"no row has readings in {', '.join(acc)}", row=pre.header_line)
+    matrix = np.column_stack([values[a][rows] for a in acc])
+
+    def locate(i: int, j: int) -> tuple[int, str]:
+        return table.line(int(rows[i])), acc[j]
+
+    converts = scale is not None and scale.converts
+    raw = to_counts(matrix, scale, source, locate) if converts else whole_counts(matrix, source, locate)
+    t = None if time_column is None else table_time(source, values[time_column], table, rows, time_column,
+                                                    names.index(time_column))
+    used = set(want)
+    dropped = [c for c in names if c and c not in used and re.search(r"gyr", c, re.I)]
+    ignored = [c for c in names if c and c not in used and c not in dropped]
+    meta = {"table.columns": ", ".join(acc + ([time_column] if time_column else []))}
+    return finish(source, "table", raw, np.arange(rows.size), t, None, opts, scale, converts or bool(np.any(raw < 0)),
+                  opts.rate_hz, meta, drop_note(dropped, ignored) + notes, locate, None, time_column=time_column)
+
+
 def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Converted:
     """A serial monitor's capture (:mod:`accelcal.convert_log`)."""
     values, lines, block, info = read_log(source, data)
@@ -438,16 +680,8 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
         return lines[i], f"field {j + 1}"
 
     scale = opts.scale
-    if scale is not None and scale.converts:
-        raw = to_counts(values, scale, source, locate)
-    else:
-        frac = np.argwhere(values != np.round(values))
-        if frac.size:
-            i, j = (int(v) for v in frac[0])
-            row, column = locate(i, j)
-            raise InputError(source, f"reading {values[i, j]:.10g} is not a whole count (readings in m/s^2 or g: "
-                             "state --units mps2|g with --lsb VALUE or --full-scale G)", row=row, column=column)
-        raw = values.astype(np.int64)
+    raw = to_counts(values, scale, source, locate) if scale is not None and scale.converts else \
+        whole_counts(values, source, locate)
     if opts.rate_hz is None:
         raise InputError(source, "log files have no time column: give the sample rate with --rate HZ")
     if blocks and opts.regions is not None:
@@ -470,23 +704,25 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
 
 def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, rate_hz: float | None = None,
                  regions: Any = None, stated_f: bool = False, gravity_mps2: float | None = None,
-                 bits: int = 16, blocks: bool = False, time_unit: str = "auto") -> Converted:
+                 bits: int = 16, blocks: bool = False, time_unit: str = "auto",
+                 units_stated: bool = True) -> Converted:
     """Read another tool's file as a contract recording of a triad.
 
     Parameters
     ----------
     path : str or os.PathLike
         The file (compressed or not: gzip, bzip2, xz, zstd, a zip of one file).
-    fmt : {"auto", "imu_tk", "imucal", "mpu6050", "csv", "log"}
+    fmt : {"auto", "imu_tk", "imucal", "mpu6050", "csv", "log", "table"}
         ``auto`` tells it from the first line (:func:`detect_format`; a log from its lines).
     scale : units.Scale, optional
         The readings' unit and LSB (``--units``/``--lsb``/``--full-scale``), or the
         file's ``# units:``/``# lsb:`` comments, else counts; stated by both, they must
-        agree (:func:`units.file_scale`).
+        agree (:func:`units.file_scale`).  A table's axis names may state the unit
+        (``Accelerometer X (g)``): the same rule, the names taken as the file's unit.
     rate_hz : float, optional
-        Sample rate, Hz, for files without a time column (imucal; the MPU-6050 log's
-        ``Fs`` otherwise); with a time column (csv), the device's rate where t's steps
-        do not give it (a host's time stamps).
+        Sample rate, Hz, for files without a time column (imucal, log, a table without one;
+        the MPU-6050 log's ``Fs`` otherwise); with a time column (csv, table), the device's
+        rate where t's steps do not give it (a host's time stamps).
     regions : path, optional
         JSON ``{name: {"start": s, "end": e}}`` of sample numbers (end excluded): pose labels.
     stated_f : bool
@@ -498,11 +734,14 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     blocks : bool
         log: each block of readings between text lines is a pose (``block_1``, ...).
     time_unit : {"auto", "s", "ms", "us", "ns"}
-        The time column's unit (csv, imu_tk).  ``auto``: the unit its name states, else
+        The time column's unit (csv, imu_tk, table).  ``auto``: the unit its name states, else
         seconds, except time stamps whose steps in seconds would give under
         MIN_PLAUSIBLE_HZ (then the smallest of ms, us, ns that gives more; a note says so).
         The recording's t is written in seconds; the device's rate is from t's median
         step, or from its mean step where the two disagree (bursts; a note).
+    units_stated : bool
+        Whether ``scale``'s unit was stated (``--units``); when not, a ``--full-scale``
+        alone (a Scale in counts) is read in the unit a table's axis names state.
 
     Returns
     -------
@@ -525,7 +764,7 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         raise InputError(source, f"--blocks: {fmt} files have no blocks (it labels a log's poses)")
     if fmt == "log":
         return convert_log(source, data, opts, blocks)
-    if time_unit != "auto" and fmt not in ("imu_tk", "csv"):
+    if time_unit != "auto" and fmt not in ("imu_tk", "csv", "table"):
         raise InputError(source, f"--time-unit: {fmt} files have no time column (--rate states their rate)")
     if fmt in ("imu_tk", "csv"):
         if rate_hz is not None and fmt == "imu_tk":
@@ -549,6 +788,8 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     pre = read_preamble(data)
     if pre.header is None:
         raise InputError(source, "the file is empty (nothing but comments and blank lines)")
+    if fmt == "table":
+        return convert_named(source, data, pre, opts, units_stated)
     meta: dict[str, str] = {}
     if fmt == "mpu6050":
         pre, meta, fs = mpu6050_preamble(source, data, pre)

@@ -24,8 +24,13 @@ device JSON for it.  Formats: imu_tk (whitespace 't ax ay az' in counts, no head
 column), mpu6050 (the logger's 'Fs,100'... lines, then ax,ay,az,gx,gy,gz in signed counts),
 csv (a recording: compressed, whitespace and physical units rewritten as plain counts), log (a serial
 monitor's capture: lines of three numbers among the logger's prompts, no header: --rate; with
---blocks each run of readings between text lines is a pose).  Any of them may be
-compressed (gzip, bzip2, xz, zstd, a zip of one file).  Gyroscope columns are dropped with a note."""
+--blocks each run of readings between text lines is a pose), table (a CSV or whitespace table
+with named columns, told last: one accelerometer column per axis such as accX, acc_y, 'Acceleration
+z (m/s^2)', 'Accelerometer X (g)' or scaledAccelX, a unit in all three names being the readings'
+unit (with --full-scale or --lsb for the LSB); an optional time column t, time, timestamp,
+'Time (s)', time_ms, ..., else --rate; rows whose three readings are all empty are skipped, linear
+acceleration and gravity columns are refused).  Any of them may be compressed (gzip, bzip2, xz,
+zstd, a zip of one file).  Gyroscope columns are dropped with a note."""
 
 
 def positive(text: Any, option: str) -> float | None:
@@ -52,7 +57,7 @@ def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int
     scale = scale_from_args(a)
     conv = convert_file(a.input, a.format, scale=scale, rate_hz=positive(a.rate, "--rate"), regions=a.regions,
                         stated_f=a.stated_f, gravity_mps2=positive(a.gravity, "--gravity"), bits=bits,
-                        blocks=a.blocks, time_unit=a.time_unit)
+                        blocks=a.blocks, time_unit=a.time_unit, units_stated=a.units is not None)
     write_recording(a.output, conv.recording)
     if a.device_out is not None:
         save_device(conv.device, a.device_out)
@@ -65,7 +70,7 @@ def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int
 def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
     """Add ``convert`` to the subcommands (``check_output``: the CLI's output-path check)."""
     s = sub.add_parser("convert", help="the contract's recording CSV from imu_tk, imucal, MPU-6050, serial-monitor "
-                       "logs or other recording files", description=DESCRIPTION)
+                       "logs, tables with named accelerometer columns or other recording files", description=DESCRIPTION)
     s.add_argument("input", metavar="FILE", help="the file to convert (compressed or not: gzip, bzip2, xz, zstd, a zip of one file)")
     s.add_argument("--format", choices=FORMATS, default="auto",
                    help="the input's format (default auto: told from its first line)")
@@ -73,7 +78,7 @@ def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
                       bits_help="the ADC's bits (default 16): the device's raw range, and the LSB of --full-scale",
                       gravity_help="g in m/s^2 for --full-scale with mps2, the stated f and the device (default "
                       "9.80665; imu_tk 9.81744)")
-    s.add_argument("--rate", metavar="HZ", help="sample rate of a file without a time column (imucal, log: "
+    s.add_argument("--rate", metavar="HZ", help="sample rate of a file without a time column (imucal, log, a table: "
                    "required; the MPU-6050 log: its Fs line otherwise); with a time column, the device's rate "
                    "(where a host's time stamps do not give it)")
     s.add_argument("--time-unit", choices=("auto", "s", "ms", "us", "ns"), default="auto",

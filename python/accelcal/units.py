@@ -207,7 +207,7 @@ def _size(scale: Scale) -> str:
 
 
 def file_scale(option: Scale | None, metadata: dict[str, str], lines: dict[str, int],
-               source: str) -> Scale | None:
+               source: str, unit_source: str | None = None) -> Scale | None:
     """The Scale of a file's readings from what the caller states and the file's comments.
 
     The one rule for every reader (``read_recording``, so every command, and
@@ -227,6 +227,9 @@ def file_scale(option: Scale | None, metadata: dict[str, str], lines: dict[str, 
         The file's ``# key: value`` comments and the line of each.
     source : str
         The file, for messages.
+    unit_source : str, optional
+        What states ``metadata["units"]`` when it is not a comment (``accelcal convert``'s
+        table: the axis columns' names), for the message of a contradiction.
 
     Returns
     -------
@@ -244,9 +247,11 @@ def file_scale(option: Scale | None, metadata: dict[str, str], lines: dict[str, 
     unit = metadata.get("units")
     if unit is not None and unit in UNITS and unit != option.units:
         with_ = "" if by.startswith(OPTION_NAMES["units"]) else f", with {by}"
-        raise InputError(source, f"the comment '# units: {unit}' contradicts the options' unit, "
+        what = unit_source or f"the comment '# units: {unit}'"
+        raise InputError(source, f"{what} contradicts the options' unit, "
                          f"{UNIT_TEXT[option.units]} ({OPTION_NAMES['units']} {option.units}{with_}): state the "
-                         "unit once, by the options or by the comments", row=lines.get("units"))
+                         f"unit once, by the options or by the {'file' if unit_source else 'comments'}",
+                         row=lines.get("units"))
     if not any(k in metadata for k in ("lsb", "full_scale_g")):
         if unit is not None and unit not in UNITS:
             scale_from_metadata(metadata, lines, source)  # the comment's own error

@@ -1,0 +1,253 @@
+"""``accelcal convert`` of tables with named columns (format ``table``): phyphox, x-io's
+NGIMU, a LORD/MicroStrain log, a logger's ``time_ms,accX,accY,accZ``.
+
+Each file is written here from known counts (and times), so the expected recording is
+those counts; bad files give one line naming the file, row and column, exit 2, and no
+output.
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from accelcal.convert import axis_column, convert_file, detect_format
+from accelcal.errors import InputError
+from accelcal.recording import read_recording
+from cli_run import run
+
+G = 9.80665
+LSB_G = 4.0 / 2 ** 16        # --full-scale 2, 16 bits: 1/16384 g
+
+
+def _counts(n, seed=0):
+    rng = np.random.default_rng(seed)
+    return np.round([100.0, -50.0, 16384.0] + 40.0 * rng.standard_normal((n, 3))).astype(int)
+
+
+def _write(path, header, rows, comments=()):
+    path.write_text("".join(f"{c}\n" for c in comments) + header + "\n" + "".join(r + "\n" for r in rows))
+    return path
+
+
+def _convert(tmp_path, capfd, src, *args):
+    out, dev = tmp_path / "o.csv", tmp_path / "d.json"
+    rc, said, err, _ = run(["convert", src, *args, "-o", out, "--device-out", dev], capfd)
+    assert rc == 0, err
+    assert len(said.splitlines()) == 1 and said.startswith("table: ")
+    return read_recording(out), json.loads(dev.read_text()), err
+
+
+def _refused(tmp_path, capfd, src, *args):
+    out = tmp_path / "out"
+    out.mkdir()
+    rc, _, err, _ = run(["convert", src, *args, "-o", out / "o.csv"], capfd)
+    assert rc == 2 and len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert not list(out.iterdir())
+    assert str(src.name) in err
+    return err
+
+
+def _cells(values):
+    return ",".join(repr(float(v)) for v in values)
+
+
+# ---- each header style -------------------------------------------------------------
+
+def test_phyphox(tmp_path, capfd):
+    c, rate = _counts(200), 100.0
+    rows = [f"{k / rate:.4f},{_cells(r * LSB_G * G)},{float(np.linalg.norm(r * LSB_G * G)):.6g}"
+            for k, r in enumerate(c)]
+    src = _write(tmp_path / "Raw Data.csv", '"Time (s)","Acceleration x (m/s^2)","Acceleration y (m/s^2)",'
+                 '"Acceleration z (m/s^2)","Absolute acceleration (m/s^2)"', rows)
+    assert detect_format(src) == "table"
+    rec, dev, err = _convert(tmp_path, capfd, src, "--full-scale", "2")
+    assert np.array_equal(rec.raw, c)
+    np.testing.assert_allclose(rec.t, np.arange(200) / rate, atol=1e-9)
+    assert dev["sample_rate_hz"] == pytest.approx(rate)
+    assert dev["channels"][0]["counts_per_mps2"] == pytest.approx(16384 / G)
+    assert "ignored column Absolute acceleration (m/s^2)" in err
+    assert rec.metadata["source_format"] == "table"
+
+
+def test_ngimu_gait_tracking(tmp_path, capfd):
+    c, rate = _counts(150, seed=1), 100.0
+    rows = [f"{k / rate:.6f},0.5,-0.25,1,{_cells(r * LSB_G)}" for k, r in enumerate(c)]
+    src = _write(tmp_path / "short_walk.csv", "Time (s),Gyroscope X (deg/s),Gyroscope Y (deg/s),Gyroscope Z (deg/s),"
+                 "Accelerometer X (g),Accelerometer Y (g),Accelerometer Z (g)", rows)
+    rec, dev, err = _convert(tmp_path, capfd, src, "--full-scale", "2")
+    assert np.array_equal(rec.raw, c) and dev["sample_rate_hz"] == pytest.approx(rate)
+    assert err.count("\n") == 1 and "dropped gyroscope columns Gyroscope X (deg/s)" in err
+    # the same with the unit stated by the options too (they agree)
+    rec2, _, _ = _convert(tmp_path, capfd, src, "--units", "g", "--lsb", repr(LSB_G))
+    assert np.array_equal(rec2.raw, c)
+
+
+def lord_file(path, c, rate=500.0, t0=1_700_000_000_000_000_000, comments=()):
+    """A LORD/MicroStrain log as AirbrakesV2 writes it: each IMU row followed by an estimate
+    row whose accelerometer cells are empty."""
+    step = int(1e9 / rate)
+    rows = []
+    for k, r in enumerate(c):
+        rows.append(f"{t0 + k * step},,{_cells(r * LSB_G)},0.01,-0.02,,,")
+        rows.append(f"{t0 + k * step + step // 2},,,,,,,0.1,0.2,0.3")
+    return _write(path, "timestamp,invalid_fields,scaledAccelX,scaledAccelY,scaledAccelZ,scaledGyroX,scaledGyroY,"
+                  "estLinearAccelX,estLinearAccelY,estLinearAccelZ", rows, comments)
+
+
+def test_lord_rows_without_readings_are_skipped(tmp_path, capfd):
+    c = _counts(300, seed=2)
+    src = lord_file(tmp_path / "log.csv", c)
+    rec, dev, err = _convert(tmp_path, capfd, src, "--units", "g", "--full-scale", "2")
+    assert np.array_equal(rec.raw, c)
+    assert "skipped 300 row(s) whose readings (scaledAccelX, scaledAccelY, scaledAccelZ) are all empty" in err
+    assert "t read in ns" in err and "ignored columns invalid_fields, estLinearAccelX" in err
+    # an epoch in ns keeps ~256 ns a stamp in float64
+    assert dev["sample_rate_hz"] == pytest.approx(500.0, rel=1e-4)
+    np.testing.assert_allclose(rec.t - rec.t[0], np.arange(300) / 500.0, atol=1e-6)
+
+
+def test_lord_without_units_reads_counts_and_names_the_fraction(tmp_path, capfd):
+    src = lord_file(tmp_path / "log.csv", _counts(20, seed=3), comments=["# a comment", ""])
+    err = _refused(tmp_path, capfd, src, "--full-scale", "2")
+    assert "row 4, column scaledAccelX" in err and "not a whole count" in err
+
+
+@pytest.mark.parametrize("header, unit, factor", [("time_ms,accX,accY,accZ", "ms", 1e3),
+                                                  ("timestamp_us,acc_x,acc_y,acc_z", "us", 1e6),
+                                                  ("t,Accel_X,Accel_Y,Accel_Z", None, 1.0)])
+def test_generic_counts_with_time(tmp_path, capfd, header, unit, factor):
+    c, rate = _counts(100, seed=4), 200.0
+    rows = [f"{k / rate * factor:.3f},{r[0]},{r[1]},{r[2]}" for k, r in enumerate(c)]
+    src = _write(tmp_path / "logger.csv", header, rows)
+    args = ["--format", "table"] if "acc_x" in header else []
+    if "acc_x" in header:  # auto: imucal's columns, told first as before; the refusal points to --format table
+        err = _refused(tmp_path, capfd, src)
+        assert "--format table reads the time column 'timestamp_us'" in err
+    rec, dev, err = _convert(tmp_path, capfd, src, *args)
+    assert np.array_equal(rec.raw, c)
+    np.testing.assert_allclose(rec.t, np.arange(100) / rate, atol=1e-9)
+    assert dev["sample_rate_hz"] == pytest.approx(rate)
+    assert (f"t read in {unit}" in err) == (unit is not None)
+
+
+def test_units_in_brackets_with_the_lsb_from_a_comment(tmp_path, capfd):
+    c, rate = _counts(80, seed=5), 50.0
+    rows = [f"{k / rate:.4f},{_cells(r * LSB_G)}" for k, r in enumerate(c)]
+    src = _write(tmp_path / "g.csv", "Time (s),AccX [g],AccY [g],AccZ [g]", rows, [f"# lsb: {LSB_G!r}"])
+    rec, dev, _ = _convert(tmp_path, capfd, src)
+    assert np.array_equal(rec.raw, c) and dev["sample_rate_hz"] == pytest.approx(rate)
+    assert rec.metadata["source_scale"].startswith("g / ")
+
+
+def test_whitespace_table_without_time_needs_a_rate(tmp_path, capfd):
+    c = _counts(40, seed=6)
+    src = _write(tmp_path / "w.txt", "accX  accY\taccZ  temp", [f"{a}  {b}\t{d}  21.5" for a, b, d in c])
+    err = _refused(tmp_path, capfd, src, "--format", "table")
+    assert "no time column" in err and "--rate" in err
+    rec, dev, err = _convert(tmp_path, capfd, src, "--format", "table", "--rate", "25")
+    assert np.array_equal(rec.raw, c) and np.allclose(rec.t, np.arange(40) / 25)
+    assert "ignored column temp" in err and dev["raw_min"] == -32768
+
+
+# ---- refusals ------------------------------------------------------------------------
+
+def _phyphox_g(tmp_path, header="Time (s),Acceleration x (g),Acceleration y (g),Acceleration z (g)"):
+    c = _counts(30, seed=7)
+    return _write(tmp_path / "p.csv", header, [f"{k / 100:.2f},{_cells(r * LSB_G)}" for k, r in enumerate(c)],
+                  ["# phone export"])
+
+
+@pytest.mark.parametrize("args", [["--units", "mps2", "--full-scale", "2"], ["--units", "counts"],
+                                  ["--units", "counts", "--full-scale", "2"]])
+def test_a_unit_that_contradicts_the_names_is_refused(tmp_path, capfd, args):
+    err = _refused(tmp_path, capfd, _phyphox_g(tmp_path), *args)
+    assert "row 2" in err and "the unit the header's columns state, g" in err and "contradicts" in err
+
+
+def test_a_comment_that_contradicts_the_names_is_refused(tmp_path, capfd):
+    src = _phyphox_g(tmp_path)
+    src.write_text("# units: mps2\n" + src.read_text())
+    err = _refused(tmp_path, capfd, src, "--full-scale", "2")
+    assert "row 1" in err and "'# units: mps2' contradicts" in err
+
+
+def test_physical_units_without_an_lsb_are_refused(tmp_path, capfd):
+    err = _refused(tmp_path, capfd, _phyphox_g(tmp_path))
+    assert "row 2" in err and "in g" in err and "no LSB" in err and "--full-scale" in err
+
+
+def test_a_partly_empty_row_is_refused_naming_its_file_row(tmp_path, capfd):
+    c = _counts(10, seed=8)
+    src = lord_file(tmp_path / "log.csv", c, comments=["# logger v2", "# units: g"])
+    lines = src.read_text().splitlines()
+    # data rows start at line 4: IMU rows on lines 4, 6, 8, ...; blank y on the 4th IMU row (line 10)
+    cells = lines[9].split(",")
+    cells[3] = ""
+    lines[9] = ",".join(cells)
+    src.write_text("\n".join(lines) + "\n")
+    err = _refused(tmp_path, capfd, src, "--units", "g", "--full-scale", "2")
+    assert "row 10, column scaledAccelY" in err and "an empty cell" in err
+
+
+def test_a_time_stamp_going_back_is_refused(tmp_path, capfd):
+    src = _write(tmp_path / "t.csv", "t,accX,accY,accZ", ["0.00,1,2,3", "0.01,1,2,3", "0.01,1,2,3"])
+    err = _refused(tmp_path, capfd, src)
+    assert "row 4, column t" in err and "increase" in err
+
+
+@pytest.mark.parametrize("header, named", [("t,accX,accY,accZ,AccelX (g)", "'accX', 'AccelX (g)'"),
+                                           ("t,accX,accY,gyroZ", "no column for axis z")])
+def test_ambiguous_or_missing_axis_columns_are_refused(tmp_path, capfd, header, named):
+    src = _write(tmp_path / "a.csv", header, ["0,1,2,3,4", "1,1,2,3,4"] if header.count(",") == 4 else ["0,1,2,3"])
+    err = _refused(tmp_path, capfd, src)
+    assert "row 1" in err and named in err
+
+
+def test_linear_acceleration_is_refused(tmp_path, capfd):
+    src = _phyphox_g(tmp_path, '"Time (s)","Linear Acceleration x (m/s^2)","Linear Acceleration y (m/s^2)",'
+                     '"Linear Acceleration z (m/s^2)"')
+    err = _refused(tmp_path, capfd, src, "--full-scale", "2")
+    assert "row 2" in err and "linear acceleration" in err and "not an accelerometer's specific force" in err
+
+
+def test_a_bad_cell_names_row_and_column(tmp_path, capfd):
+    src = _write(tmp_path / "b.csv", "time_ms,accX,accY,accZ", ["0,1,2,3", "10,1,x,3"], ["# c"])
+    err = _refused(tmp_path, capfd, src)
+    assert "row 4, column accY" in err
+
+
+# ---- names and detection ---------------------------------------------------------------
+
+@pytest.mark.parametrize("name, axis, unit, virtual", [
+    ("Acceleration x (m/s^2)", "x", "m/s^2", False), ("Accelerometer Y (g)", "y", "g", False),
+    ("scaledAccelZ", "z", None, False), ("AccX [g]", "x", "g", False), ("acc_y_mps2", "y", "mps2", False),
+    ("rawAccelX", "x", None, False), ("accel z (m/s\u00b2)", "z", "m/s\u00b2", False),
+    ("Linear Acceleration x (m/s^2)", "x", "m/s^2", True), ("estLinearAccelY", "y", None, True),
+    ("gravityAccZ", "z", None, True)])
+def test_axis_names(name, axis, unit, virtual):
+    c = axis_column(name)
+    assert (c.axis, c.unit, c.virtual) == (axis, unit, virtual)
+
+
+@pytest.mark.parametrize("name", ["Absolute acceleration (m/s^2)", "estCompensatedAccelX", "Gyroscope X (deg/s)",
+                                  "accel", "ax", "acc_x_filtered"])
+def test_not_axis_names(name):
+    assert axis_column(name) is None
+
+
+@pytest.mark.parametrize("text, fmt", [
+    ("t,raw_0,raw_1,raw_2\n0,1,2,3\n", "csv"), ("acc_x,acc_y,acc_z\n1,2,3\n", "imucal"),
+    ("timestamp,acc_x,acc_y,acc_z\n0,1,2,3\n", "imucal"), ("Fs,100\nax,ay,az\n1,2,3\n", "mpu6050"),
+    ("ax,ay,az,gx,gy,gz\n1,2,3,4,5,6\n", "mpu6050"), ("0.01 1 2 3\n0.02 1 2 3\n", "imu_tk"),
+    ("accX,accY,accZ\n" + "1,2,3\n" * 20, "log"), ("time,accX,accY,accZ\n0,1,2,3\n", "table")])
+def test_existing_formats_are_told_as_before(tmp_path, text, fmt):
+    (tmp_path / "f").write_text(text)
+    assert detect_format(tmp_path / "f") == fmt
+
+
+def test_nothing_like_an_axis_still_cannot_be_told(tmp_path):
+    (tmp_path / "f").write_text("time,speed,heading\n0,1,2\n")
+    with pytest.raises(InputError, match="cannot tell the format"):
+        convert_file(tmp_path / "f")
