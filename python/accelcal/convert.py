@@ -57,7 +57,7 @@ INDEX_COLUMNS = ("n_samples", "samples")
 GYRO_RE = re.compile(r"(gyr|gyro|g)[_ ]?[xyz]|w_?[xyz]", re.I)
 NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 #: a table's accelerometer axis column: a prefix, the word, the axis, a unit in () or [] or after _
-AXIS_RE = re.compile(r"(?P<pre>.*?)(?:accelerometer|acceleration|accel|acc)[\s_.-]*(?P<axis>[xyz])"
+AXIS_RE = re.compile(r"(?P<pre>.*?)(?:accelerometer|acceleration|accel|acc|(?<![a-z])a)[\s_.-]*(?P<axis>[xyz])"
                      r"(?:\s*[(\[](?P<unit>[^)\]]*)[)\]]|_(?P<tail>g|mps2|ms2|counts|lsb|raw))?", re.I)
 #: the prefixes of an accelerometer's own axis columns (LORD's scaledAccelX)
 AXIS_PREFIXES = ("", "scaled", "raw")
@@ -144,6 +144,9 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
     low = {c.strip().lower() for c in cells}
     if "t" in cells and "raw_0" in cells:
         return "csv"
+    if any(TIME_COLUMN_RE.fullmatch(c.strip()) for c in cells) and any(axis_column(c) for c in cells):
+        # a time column beside the axes: neither imucal's nor the MPU-6050 logger's (they have none)
+        return "table"
     if set(ACC["imucal"]) <= low:
         return "imucal"
     if set(ACC["mpu6050"]) <= low or cells[0].strip().lower() == "fs":
@@ -152,7 +155,7 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
         return "imu_tk"
     if is_log(data):
         return "log"
-    if any(AXIS_RE.fullmatch(c.strip()) for c in cells):
+    if any(axis_column(c) for c in cells):
         return "table"
     raise InputError(source, f"cannot tell the format from this line ({pre.header[:60]!r}): expected a "
                      "recording CSV (t, raw_0, ...), imucal's acc_x/acc_y/acc_z, the MPU-6050 log (Fs,... "

@@ -121,11 +121,8 @@ def test_generic_counts_with_time(tmp_path, capfd, header, unit, factor):
     c, rate = _counts(100, seed=4), 200.0
     rows = [f"{k / rate * factor:.3f},{r[0]},{r[1]},{r[2]}" for k, r in enumerate(c)]
     src = _write(tmp_path / "logger.csv", header, rows)
-    args = ["--format", "table"] if "acc_x" in header else []
-    if "acc_x" in header:  # auto: imucal's columns, told first as before; the refusal points to --format table
-        err = _refused(tmp_path, capfd, src)
-        assert "--format table reads the time column 'timestamp_us'" in err
-    rec, dev, err = _convert(tmp_path, capfd, src, *args)
+    # imucal's acc_x columns beside a time column: a table (imucal's files have no time column)
+    rec, dev, err = _convert(tmp_path, capfd, src)
     assert np.array_equal(rec.raw, c)
     np.testing.assert_allclose(rec.t, np.arange(100) / rate, atol=1e-9)
     assert dev["sample_rate_hz"] == pytest.approx(rate)
@@ -232,16 +229,19 @@ def test_axis_names(name, axis, unit, virtual):
 
 
 @pytest.mark.parametrize("name", ["Absolute acceleration (m/s^2)", "estCompensatedAccelX", "Gyroscope X (deg/s)",
-                                  "accel", "ax", "acc_x_filtered"])
+                                  "accel", "max", "acc_x_filtered", "alpha_x", "gx"])
 def test_not_axis_names(name):
     assert axis_column(name) is None
 
 
 @pytest.mark.parametrize("text, fmt", [
     ("t,raw_0,raw_1,raw_2\n0,1,2,3\n", "csv"), ("acc_x,acc_y,acc_z\n1,2,3\n", "imucal"),
-    ("timestamp,acc_x,acc_y,acc_z\n0,1,2,3\n", "imucal"), ("Fs,100\nax,ay,az\n1,2,3\n", "mpu6050"),
+    ("Fs,100\nax,ay,az\n1,2,3\n", "mpu6050"),
     ("ax,ay,az,gx,gy,gz\n1,2,3,4,5,6\n", "mpu6050"), ("0.01 1 2 3\n0.02 1 2 3\n", "imu_tk"),
-    ("accX,accY,accZ\n" + "1,2,3\n" * 20, "log"), ("time,accX,accY,accZ\n0,1,2,3\n", "table")])
+    ("accX,accY,accZ\n" + "1,2,3\n" * 20, "log"), ("time,accX,accY,accZ\n0,1,2,3\n", "table"),
+    # a time column beside imucal's or the MPU-6050 logger's axis names: a user's table (neither has one)
+    ("timestamp,acc_x,acc_y,acc_z\n0,1,2,3\n", "table"), ("t,ax,ay,az\n0,1,2,3\n", "table"),
+    ("time_ms,ax,ay,az,gx,gy,gz\n0,1,2,3,4,5,6\n", "table"), ("t\tax\tay\taz\n0\t1\t2\t3\n", "table")])
 def test_existing_formats_are_told_as_before(tmp_path, text, fmt):
     (tmp_path / "f").write_text(text)
     assert detect_format(tmp_path / "f") == fmt
