@@ -27,6 +27,7 @@ HELD_MODAL_SHARE = 0.8     # rows are held when at least this share of the runs 
 HELD_MAX = 16              # ... of at most this many rows (a pose on one code of every channel is a
                            # run as long as the pose) ...
 HELD_MIN_RUNS = 50         # ... over at least this many runs
+RATE_TOL = 0.2             # a device rate within this share of the rows' rate / k is the sensor's own
 
 
 def held_runs(raw: np.ndarray) -> tuple[int, np.ndarray]:
@@ -73,16 +74,30 @@ def distinct_rows(rec: Recording) -> tuple[Recording, str | None]:
 
 def distinct_recordings(recordings: list[Recording], device) -> tuple[list[Recording], object, list[str]]:
     """:func:`distinct_rows` of each recording, and the device with the rate its distinct
-    readings come at (``sample_rate_hz`` / k) when every recording holds its readings for
-    the same k rows (the device's windows and grids in samples then span the times they
-    mean); returns (recordings, device, notes)."""
+    readings come at when every recording holds its readings for the same k rows (the
+    device's windows and grids in samples then span the times they mean): its own rate when
+    that is the rows' rate (from t) / k within RATE_TOL -- the device file states the
+    sensor's rate --, else ``sample_rate_hz`` / k; returns (recordings, device, notes)."""
     done = [_distinct(r) for r in recordings]
     out = [r for r, _, _ in done]
     notes = [note for _, _, note in done if note]
     factors = {k for _, k, _ in done}
     if len(factors) == 1 and min(factors) > 1:
         k = min(factors)
-        device = dataclasses.replace(device, sample_rate_hz=device.sample_rate_hz / k)
-        notes.append(f"the device's {device.sample_rate_hz * k:g} Hz is taken as {device.sample_rate_hz:g} Hz, the "
-                     "rate of the distinct readings")
+        rows_hz = _rows_rate(recordings)
+        if rows_hz is not None and abs(device.sample_rate_hz * k / rows_hz - 1.0) <= RATE_TOL:
+            # the device file states the sensor's own rate (the rows come k times as fast): it stands
+            notes.append(f"the device's {device.sample_rate_hz:g} Hz is the rate of the distinct readings (the rows "
+                         f"come at {rows_hz:.4g} Hz)")
+        else:
+            device = dataclasses.replace(device, sample_rate_hz=device.sample_rate_hz / k)
+            notes.append(f"the device's {device.sample_rate_hz * k:g} Hz is taken as {device.sample_rate_hz:g} Hz, "
+                         "the rate of the distinct readings")
     return out, device, notes
+
+
+def _rows_rate(recordings: list[Recording]) -> float | None:
+    """The rows' rate, Hz, from the median step of t over the recordings (None without steps)."""
+    steps = np.concatenate([np.diff(np.asarray(r.t, float)) for r in recordings]) if recordings else np.zeros(0)
+    steps = steps[steps > 0]
+    return 1.0 / float(np.median(steps)) if steps.size else None

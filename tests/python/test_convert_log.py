@@ -16,7 +16,7 @@ from accelcal.calibrate import calibrate_recordings
 from accelcal.convert import convert_file, detect_format
 from accelcal.device import load_device
 from accelcal.diagnose import diagnose
-from accelcal.held import distinct_rows, held_factor
+from accelcal.held import distinct_recordings, distinct_rows, held_factor
 from accelcal.recording import read_recording
 from accelcal.units import scale_from_options
 from cli_run import run
@@ -89,6 +89,26 @@ def test_held_rows_count_once_in_a_calibration_and_a_diagnosis(tmp_path, capfd):
     assert res["n_samples"] <= once.n_samples and any("held for 4 rows" in n for n in res["notes"])
     # rows read once: nothing to note
     assert calibrate_recordings(dev, [once], method="jigfree").extra.get("notes") is None
+
+
+def test_held_rows_with_a_device_at_the_sensor_s_rate_keep_that_rate(tmp_path):
+    """The device file may state the sensor's own rate (100 Hz) while the rows come at 400 Hz:
+    that rate stands (it was divided again, to 25 Hz, and the static windows then spanned 4 x
+    their time: 16 poses and a residual 7x larger on a real MPU-6050 log held 4 times); with
+    the rows' rate in the device file it is divided as before.  Both calibrate alike."""
+    import dataclasses
+    src = tmp_path / "data_sample.csv"
+    capture(src, seed=3, poses=12, jitter=0.1)
+    conv = convert_file(src, "log", scale=_scale(), rate_hz=400.0, blocks=True)
+    rec, dev400 = conv.recording, conv.device
+    dev100 = dataclasses.replace(dev400, sample_rate_hz=100.0)
+    _, d, notes = distinct_recordings([rec], dev100)
+    assert d.sample_rate_hz == 100.0 and any("is the rate of the distinct readings" in n for n in notes)
+    _, d, notes = distinct_recordings([rec], dev400)
+    assert d.sample_rate_hz == 100.0 and any("is taken as 100 Hz" in n for n in notes)
+    a = calibrate_recordings(dev100, [rec], method="jigfree")
+    b = calibrate_recordings(dev400, [rec], method="jigfree")
+    np.testing.assert_allclose(a.offsets, b.offsets, atol=1e-9)
 
 
 def test_chance_repeats_are_not_held():
