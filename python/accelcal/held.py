@@ -18,6 +18,7 @@ import dataclasses
 import numpy as np
 
 from .recording import Recording
+from .recording_checks import rate_for
 
 __all__ = ["HELD_MODAL_SHARE", "HELD_MAX", "HELD_MIN_RUNS", "held_runs", "held_factor", "distinct_rows",
            "distinct_recordings"]
@@ -77,11 +78,16 @@ def distinct_recordings(recordings: list[Recording], device) -> tuple[list[Recor
     readings come at when every recording holds its readings for the same k rows (the
     device's windows and grids in samples then span the times they mean): its own rate when
     that is the rows' rate (from t) / k within RATE_TOL -- the device file states the
-    sensor's rate --, else ``sample_rate_hz`` / k; returns (recordings, device, notes)."""
+    sensor's rate --, else ``sample_rate_hz`` / k.  Rows not held: the device with the rate
+    their time stamps give where its own is off (:func:`~accelcal.recording_checks.rate_for`).
+    Returns (recordings, device, notes)."""
     done = [_distinct(r) for r in recordings]
     out = [r for r, _, _ in done]
     notes = [note for _, _, note in done if note]
     factors = {k for _, k, _ in done}
+    if factors == {1}:
+        device, note = rate_for(out, device)
+        return out, device, notes + ([note] if note else [])
     if len(factors) == 1 and min(factors) > 1:
         k = min(factors)
         rows_hz = _rows_rate(recordings)

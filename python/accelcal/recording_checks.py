@@ -3,18 +3,21 @@
 types (:func:`check_core_input`)."""
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
 
 from .errors import InputError
 
-__all__ = ["check_for_device", "check_core_input", "seconds", "TIME_UNITS", "TIME_UNIT_TOL"]
+__all__ = ["check_for_device", "check_core_input", "seconds", "rate_for", "TIME_UNITS", "TIME_UNIT_TOL", "RATE_TOL"]
 
 #: time stamps in these units are read as such (a logger's millis() or micros()) ...
 TIME_UNITS = ((1e3, "milliseconds"), (1e6, "microseconds"), (1e9, "nanoseconds"))
 #: ... when t's median step is the unit times the device's sample period within this share
 TIME_UNIT_TOL = 0.2
+#: a device rate more than this share off the recordings' own (from t) gives way to theirs
+RATE_TOL = 0.2
 
 
 def seconds(rec: Any, device) -> str | None:
@@ -38,6 +41,40 @@ def seconds(rec: Any, device) -> str | None:
             rec.notes.append(note)
             return note
     return None
+
+
+def rate_for(recordings: list, device) -> tuple[Any, str | None]:
+    """The device with the rate the recordings' time stamps give, where that is not its own.
+
+    Windows and grids in samples (static detection, the diagnosis's blocks) take the
+    device's ``sample_rate_hz``; a recording decimated by its user (every 4th row of a
+    100 Hz log) or a device file of another setting would have them span 4 x the time they
+    mean.  When every recording's median step and mean step agree within RATE_TOL (no
+    bursts of host stamps, no long pauses), and the recordings agree with each other, but
+    the device's rate is more than RATE_TOL off theirs, a copy of the device with their rate
+    is returned with a note; else the device itself and None.  Time stamps in ms, us or ns
+    are first read as such (:func:`seconds`)."""
+    rates = []
+    for rec in recordings:
+        if rec.n_samples >= 3 and np.all(np.diff(rec.t) > 0):
+            seconds(rec, device)
+        t = np.asarray(rec.t, float)
+        if t.size < 3:
+            return device, None
+        d = np.diff(t)
+        med, mean = float(np.median(d)), float(t[-1] - t[0]) / (t.size - 1)
+        if not (med > 0 and mean > 0) or abs(mean / med - 1.0) > RATE_TOL:
+            return device, None
+        rates.append(1.0 / med)
+    if not rates or max(rates) > (1.0 + RATE_TOL) * min(rates):
+        return device, None
+    rate = float(np.median(rates))
+    if abs(device.sample_rate_hz / rate - 1.0) <= RATE_TOL:
+        return device, None
+    rate = float(f"{rate:.6g}")
+    note = (f"the device's {device.sample_rate_hz:g} Hz is taken as {rate:g} Hz, the rate the recordings' time "
+            "stamps give (a recording decimated, or a device file of another setting)")
+    return dataclasses.replace(device, sample_rate_hz=rate), note
 
 
 def check_for_device(rec: Any, device, *, min_samples: int = 1) -> None:

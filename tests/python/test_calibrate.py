@@ -593,3 +593,23 @@ def test_a_recording_without_a_pose_among_several_is_named_and_adds_none():
         calibrate_recordings(d, [sweep], "jigfree")
     with pytest.raises(InputError, match="no usable static pose in any recording"):
         calibrate_recordings(d, [sweep, sweep], "jigfree")
+
+
+def test_too_few_orientations_are_counted_as_such_and_a_tilted_pose_is_asked_for():
+    """imucal's session converted without its regions: 13 static runs in only its six face
+    orientations.  The jig-free fit needs 9 orientations; a pose held twice gives the same
+    equation twice, so the count is of orientations (it had gone on and failed to converge,
+    blaming "moving poses, or another device?"), and with every face already there the pose
+    to add is a tilted one (it asked for f along -z, which the file had)."""
+    d = default_triad()
+    rng = np.random.default_rng(7)
+    b, S = draw_truth(d, rng)
+    faces = d.gravity_mps2 * np.vstack([np.eye(3), -np.eye(3)])
+    F = np.vstack([faces, faces[[0, 2, 4, 1, 3, 5, 0]]])
+    rec = make_recording(d, b, S, F, rng, labels=False, hold=int(2 * d.sample_rate_hz),
+                         move=int(0.5 * d.sample_rate_hz))
+    with pytest.raises(InputError) as ei:
+        calibrate_recordings(d, [rec], "jigfree")
+    msg = str(ei.value)
+    assert "needs at least 9 static poses in different orientations, got 6 (13 poses, 6 orientations" in msg
+    assert "a corner: equally along x, y and z" in msg

@@ -87,8 +87,9 @@ def test_held_rows_count_once_in_a_calibration_and_a_diagnosis(tmp_path, capfd):
     np.testing.assert_allclose(cal.offsets, ZERO, atol=3.0)
     res = diagnose(dev, cal, [rec])
     assert res["n_samples"] <= once.n_samples and any("held for 4 rows" in n for n in res["notes"])
-    # rows read once: nothing to note
-    assert calibrate_recordings(dev, [once], method="jigfree").extra.get("notes") is None
+    # rows read once: nothing held to note (the 400 Hz device gives way to the distinct rows' 100 Hz)
+    notes = calibrate_recordings(dev, [once], method="jigfree").extra.get("notes")
+    assert not any("held" in n for n in notes) and any("taken as 100 Hz" in n for n in notes)
 
 
 def test_held_rows_with_a_device_at_the_sensor_s_rate_keep_that_rate(tmp_path):
@@ -109,6 +110,28 @@ def test_held_rows_with_a_device_at_the_sensor_s_rate_keep_that_rate(tmp_path):
     a = calibrate_recordings(dev100, [rec], method="jigfree")
     b = calibrate_recordings(dev400, [rec], method="jigfree")
     np.testing.assert_allclose(a.offsets, b.offsets, atol=1e-9)
+
+
+@pytest.mark.parametrize("factor", [4, 2])
+def test_a_decimated_recording_takes_the_rate_of_its_time_stamps(tmp_path, factor):
+    """Every 2nd or 4th row of a 100 Hz log, read with the 100 Hz device:
+    the device's rate gives way to the one the time stamps give, with a note, and the
+    calibration is that with a device at that rate (with 100 Hz the static windows spanned
+    4 x their time: 5 poses instead of 10 on a real MPU-6050 log).  Read whole, no note."""
+    import dataclasses
+    src = tmp_path / "data_sample.csv"
+    capture(src, seed=5, poses=12, hold=1, distinct=400)
+    conv = convert_file(src, "log", scale=_scale(), rate_hz=100.0, blocks=True)
+    rec, dev = conv.recording, conv.device
+    sub = rec.select(np.arange(0, rec.n_samples, factor))
+    _, d, notes = distinct_recordings([sub], dev)
+    assert d.sample_rate_hz == pytest.approx(100.0 / factor) and any("taken as" in n for n in notes)
+    a = calibrate_recordings(dev, [sub], method="jigfree")
+    sub2 = rec.select(np.arange(0, rec.n_samples, factor))
+    b = calibrate_recordings(dataclasses.replace(dev, sample_rate_hz=100.0 / factor), [sub2], method="jigfree")
+    np.testing.assert_allclose(a.offsets, b.offsets, atol=1e-9)
+    _, d, notes = distinct_recordings([rec], dev)
+    assert d.sample_rate_hz == 100.0 and not notes
 
 
 def test_chance_repeats_are_not_held():

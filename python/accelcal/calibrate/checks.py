@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..static import PoseSet
-from .settings import CANDIDATES
+from .settings import CANDIDATES, SAME_ORIENTATION_DEG, TILTED, TILTED_AFTER_DEG
 
 
 def as_means(device, means, what="means") -> np.ndarray:
@@ -141,14 +141,35 @@ def min_poses(device, method: str, temp: bool) -> int:
 
 
 def missing_direction(device, F: np.ndarray) -> str:
-    """The body axis direction (of +-x, +-y, +-z) farthest from every pose."""
+    """The body axis direction (of +-x, +-y, +-z) farthest from every pose; where every
+    axis direction has a pose within TILTED_AFTER_DEG, the farthest tilted one (a cube's
+    edge or corner: six faces alone do not determine a jig-free fit)."""
     fh = F / np.linalg.norm(F, axis=1, keepdims=True)
-    best, name = -2.0, ""
-    for nm, d in CANDIDATES:
-        score = -float(np.max(fh @ np.asarray(d)))
-        if score > best + 1e-9:
-            best, name = score, nm
+
+    def farthest(options) -> tuple[float, str]:
+        best, name = -2.0, ""
+        for nm, d in options:
+            score = -float(np.max(fh @ np.asarray(d)))
+            if score > best + 1e-9:
+                best, name = score, nm
+        return best, name
+
+    score, name = farthest(CANDIDATES)
+    if -score > math.cos(math.radians(TILTED_AFTER_DEG)):
+        name = farthest(TILTED)[1]
     return name
+
+
+def distinct_orientations(F: np.ndarray, same_deg: float = SAME_ORIENTATION_DEG) -> int:
+    """How many of the poses' directions ``F`` (P, 3) differ by more than ``same_deg``: a pose
+    held twice gives the jig-free fit the same equation twice."""
+    fh = F / np.linalg.norm(F, axis=1, keepdims=True)
+    kept: list[np.ndarray] = []
+    c = math.cos(math.radians(same_deg))
+    for u in fh:
+        if all(float(np.dot(u, v)) < c for v in kept):
+            kept.append(u)
+    return len(kept)
 
 
 def initial_forces(device, m: np.ndarray) -> np.ndarray:

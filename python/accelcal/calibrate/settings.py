@@ -1,8 +1,7 @@
 """The calibration's settings: methods, rank thresholds, jig accuracy default, spans."""
 from __future__ import annotations
 
-
-
+import numpy as np
 
 METHODS = ("offset", "gain", "full")
 
@@ -37,3 +36,15 @@ CANDIDATES = (
     ("+x", (1.0, 0.0, 0.0)), ("-x", (-1.0, 0.0, 0.0)),
     ("+y", (0.0, 1.0, 0.0)), ("-y", (0.0, -1.0, 0.0)),
 )
+#: beyond the axes, the tilted directions a pose to add may take (edges of a cube, then corners)
+TILTED = tuple((f"{a}{b} (45 deg between {a} and {b})",
+                tuple(float(v) for v in (np.asarray(da) + np.asarray(db)) / np.sqrt(2.0)))
+               for i, (a, da) in enumerate(CANDIDATES) for (b, db) in CANDIDATES[i + 1:]
+               if abs(float(np.dot(da, db))) < 0.5) + \
+    tuple((f"{x}{y}{z} (a corner: equally along x, y and z)", tuple(float(v) / np.sqrt(3.0) for v in (sx, sy, sz)))
+          for x, sx in (("+x", 1.0), ("-x", -1.0)) for y, sy in (("+y", 1.0), ("-y", -1.0))
+          for z, sz in (("+z", 1.0), ("-z", -1.0)))
+#: a pose to add is a tilted one when every axis direction has a pose within this (deg)
+TILTED_AFTER_DEG = 20.0
+#: poses closer than this (deg) are one orientation for the count a jig-free fit needs
+SAME_ORIENTATION_DEG = 3.0

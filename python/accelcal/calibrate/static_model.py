@@ -9,10 +9,11 @@ from scipy.optimize import least_squares
 
 from ..errors import InputError
 from ..static import PoseSet, QUANT_VAR
-from .checks import as_means, bare_poses, birge_ratio, check_identifiable, initial_forces, jig_accuracy_rad, min_poses, missing_direction, pose_label
+from .checks import (as_means, bare_poses, birge_ratio, check_identifiable, distinct_orientations, initial_forces,
+                     jig_accuracy_rad, min_poses, missing_direction, pose_label)
 from .problem import StaticProblem, channel_cov, constrained_inverse, gauge_constraint, gauge_rotation
 from .results import StaticFit, to_calibration
-from .settings import JIG_ACCURACY_DEG, METHODS, MIN_RCOND, MIN_RCOND_JAC
+from .settings import JIG_ACCURACY_DEG, METHODS, MIN_RCOND, MIN_RCOND_JAC, SAME_ORIENTATION_DEG
 
 
 def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, temperature: bool = False,
@@ -47,10 +48,16 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
         T0 = float(np.mean(poses.temp))
         dT = poses.temp - T0
     need = min_poses(device, method, temperature) if jigfree else 0
-    if jigfree and P < need:
-        raise InputError("<poses>", f"jig-free '{method}' calibration of {N} channels needs at least {need} static "
-                         f"poses in different orientations, got {P}; add poses (e.g. f along "
-                         f"{missing_direction(device, initial_forces(device, m))})", field="poses")
+    if jigfree:
+        F0 = initial_forces(device, m)
+        distinct = distinct_orientations(F0)
+        if 1 < distinct < need or (distinct == 1 and P < need):   # one orientation: said below, more closely
+            same = (f" ({P} poses, {distinct} orientations: poses within {SAME_ORIENTATION_DEG:g} deg of each other "
+                    "count once)" if distinct < P else "")
+            aside = (f" ({len(poses.set_aside)} more set aside: their readings clip)" if poses.set_aside else "")
+            raise InputError("<poses>", f"jig-free '{method}' calibration of {N} channels needs at least {need} static "
+                             f"poses in different orientations, got {distinct}{same}{aside}; add poses (e.g. f "
+                             f"along {missing_direction(device, F0)})", field="poses")
     if not jigfree:
         F = np.asarray(poses.f_ref, float)
         if not np.all(np.isfinite(F)):
