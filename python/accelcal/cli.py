@@ -88,6 +88,8 @@ def _read(paths, device, command: str, a=None) -> list:
     scale = None if a is None else scale_from_args(a, device, reader=True)
     recs = [read_recording(p, device.n_channels, scale=scale) for p in paths]
     for r in recs:
+        for note in r.notes:
+            print(f"accelcal {command}: note: {r.source}: {note}", file=sys.stderr)
         _time_note(r, device, command)
     ignored = sorted({k for r in recs for k in r.extra})
     if ignored:

@@ -40,7 +40,7 @@ import numpy as np
 
 from .convert_log import is_log, read_log
 from .convert_regions import POSE_DIRECTIONS, label_poses, read_regions
-from .csvtable import convert_columns, got_text, make_table, split_header
+from .csvtable import convert_columns, cut_short_end, got_text, make_table, split_header
 from .device import Device
 from .errors import InputError
 from .held import held_runs
@@ -177,10 +177,12 @@ def read_columns(source: str, data: bytes, pre, want: dict[str, str]) -> tuple[l
     if end <= pos:
         raise InputError(source, "no data rows after the header", row=pre.header_line)
     first = pre.header_line + 1
+    end, cut_note = cut_short_end(data, pos, end, len(names), first)
     if spaced:
         data = whitespace_to_commas(data, pos, end, names, first, source)
         end = len(data)
     table = make_table(data, pos, end, len(names), first, source)
+    table.cut_note = cut_note             # a last line cut short, left out (csvtable.cut_short_end)
     values = {name: table.strings(names.index(name)) for name, kind in want.items() if kind == "text"}
     numbers, err = convert_columns(table, {name: (names.index(name), kind) for name, kind in want.items()
                                            if kind != "text"})
@@ -425,7 +427,7 @@ def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metada
     dropped = [c for c in names if c and c not in used and GYRO_RE.fullmatch(c)]
     ignored = [c for c in names if c and c not in used and c not in dropped]
     return finish(source, fmt, raw, index, None, values.get(part_column), opts, scale, True, rate, metadata,
-                  drop_note(dropped, ignored), locate, index_column)
+                  drop_note(dropped, ignored) + ([table.cut_note] if table.cut_note else []), locate, index_column)
 
 
 def mpu6050_preamble(source: str, data: bytes, pre) -> tuple[Any, dict[str, str], float | None]:
@@ -672,7 +674,8 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
     ignored = [c for c in names if c and c not in used and c not in dropped]
     meta = {"table.columns": ", ".join(acc + ([time_column] if time_column else []))}
     return finish(source, "table", raw, np.arange(rows.size), t, None, opts, scale, converts or bool(np.any(raw < 0)),
-                  opts.rate_hz, meta, drop_note(dropped, ignored) + notes, locate, None, time_column=time_column)
+                  opts.rate_hz, meta, drop_note(dropped, ignored) + notes + ([table.cut_note] if table.cut_note else []),
+                  locate, None, time_column=time_column)
 
 
 def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Converted:
@@ -786,7 +789,7 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         if kept is not None and stated_f:
             raise InputError(source, "--stated-f: a recording's poses are its own; give --regions to name them")
         return finish(source, fmt, rec.raw, np.arange(rec.n_samples), rec.t, None, opts, scale, signed, None,
-                      dict(rec.metadata), [], lambda i, j: (rec.line(i), f"raw_{j}"), None, device, kept,
+                      dict(rec.metadata), list(rec.notes), lambda i, j: (rec.line(i), f"raw_{j}"), None, device, kept,
                       time_column="t" if fmt == "csv" else None)
     pre = read_preamble(data)
     if pre.header is None:

@@ -278,6 +278,26 @@ def convert_column(table: Any, j: int, kind: str) -> np.ndarray:
     return slow_float(table.strings(j), allow_unknown)
 
 
+def cut_short_end(data: bytes, pos: int, end: int, m: int, first: int) -> tuple[int, str | None]:
+    """Where the data rows ``data[pos:end]`` end when the file's last line was cut short: a
+    last line with no line end after it and fewer than ``m`` cells (split at commas, or at
+    runs of blanks) -- what a logger stopped mid-write leaves -- is not a row.  Returns the
+    new end and a note naming its line (``first``: the first data row's line), or ``end``
+    and None.  A short line anywhere else, or one that ends its line, stays an error."""
+    if b"\n" in data[end:]:
+        return end, None
+    cut = data.rfind(b"\n", pos, end)
+    if cut < pos:
+        return end, None
+    text = data[cut + 1:end]
+    cells = text.count(b",") + 1 if b"," in data[pos:cut] else len(text.split())
+    if cells >= m:
+        return end, None
+    line = first + data.count(b"\n", pos, cut + 1)
+    return cut, (f"line {line}, the last, is cut short ({cells} of {m} cells, no line end after it: a logger "
+                 "stopped mid-write); it is left out")
+
+
 def make_table(data: bytes, pos: int, end: int, m: int, first: int, source: str) -> Any:
     """The data rows data[pos:end] of m columns (first data line ``first``): through the csv
     module when a cell is quoted (ListTable), else split as bytes (ByteTable)."""

@@ -21,7 +21,7 @@ import numpy as np
 
 from .csvformat import INT, REPR, TEXT, csv_cell, csv_rows
 from .csvtable import (FLOAT_RE, META_KEY_RE, RAW_RE, REFERENCE_NAMES, VECTOR_COLUMNS, ByteTable, ListTable,
-                       classify_columns, convert_columns, fast_columns, make_table, quote_cell, split_header)
+                       classify_columns, convert_columns, cut_short_end, fast_columns, make_table, quote_cell, split_header)
 from .errors import InputError, atomic_write
 from .recording_checks import check_core_input, check_for_device
 from .textinput import is_whitespace_header, read_preamble, read_text_bytes, split_whitespace_header, whitespace_to_commas
@@ -308,6 +308,7 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
         end = max(cut, pos)
     if end <= pos:
         raise InputError(source, "no data rows after the header", row=header_line)
+    end, cut_note = cut_short_end(data, pos, end, len(names), header_line + 1)
     if spaced:
         data = whitespace_to_commas(data, pos, end, names, header_line + 1, source)
         end = len(data)
@@ -379,7 +380,7 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
     for j, name in enumerate(names):
         if name and name not in cols and name not in extra:
             extra[name] = located().strings(j)
-    return Recording(
+    rec = Recording(
         t=t,
         raw=raw,
         f=vecs["f"],
@@ -392,6 +393,9 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
         source=source,
         lines=first if not isinstance(table, ListTable) else table.lines,
     )
+    if cut_note:
+        rec.notes.append(cut_note)
+    return rec
 
 
 def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> None:

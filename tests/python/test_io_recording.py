@@ -681,3 +681,30 @@ def test_header_with_stray_carriage_return_and_quote_is_one_line_error(tmp_path)
         read_recording(p)
     msg = str(ei.value)
     assert msg.startswith(str(p) + ": ") and "\n" not in msg and "header" in msg
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(3, 40), st.data(), st.sampled_from(["plain", "quoted", "spaced"]))
+def test_a_last_line_cut_short_is_left_out_with_a_note(tmp_path_factory, n, data, form):
+    """A logger stopped mid-write leaves a last line with fewer cells and no line end after
+    it: the rows before it are read as they are, and a note names the line; the same short
+    line followed by a line end stays an error naming its row."""
+    tmp = tmp_path_factory.mktemp("cut")
+    rng = np.random.default_rng(n)
+    raw = rng.integers(0, 4096, (n, 3))
+    t = np.arange(n) / 100.0
+    sep = " " if form == "spaced" else ","
+    names = ["t", "raw_0", "raw_1", "raw_2"]
+    head = sep.join(f'"{c}"' if form == "quoted" else c for c in names)
+    lines = [head] + [sep.join([repr(float(a))] + [str(int(v)) for v in r]) for a, r in zip(t, raw)]
+    last = lines[-1]
+    cut = data.draw(st.integers(1, last.rfind(sep)))           # before the last separator: short
+    body = "\n".join(lines[:-1]) + "\n" + last[:cut].rstrip()
+    (tmp / "a.csv").write_text("# a log\n" + body)
+    rec = read_recording(tmp / "a.csv")
+    np.testing.assert_array_equal(rec.raw, raw[:-1])
+    assert len(rec.notes) == 1 and f"line {n + 2}, the last, is cut short" in rec.notes[0]
+    (tmp / "b.csv").write_text("# a log\n" + body + "\n")
+    with pytest.raises(InputError) as ei:
+        read_recording(tmp / "b.csv")
+    assert ei.value.row == n + 2
