@@ -473,10 +473,33 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: the options that name files a command reads, and those it writes
+INPUT_OPTIONS = ("device", "calibration", "recordings", "recording", "input", "regions")
+OUTPUT_OPTIONS = (("output", "-o"), ("json", "--json"), ("device_out", "--device-out"))
+
+
+def check_not_an_input(a: argparse.Namespace) -> None:
+    """Refuse an output path that is one of the command's input files (``-o rec.csv`` on
+    ``rec.csv`` would replace the recording by the result)."""
+    inputs = []
+    for name in INPUT_OPTIONS:
+        v = getattr(a, name, None)
+        inputs += [str(p) for p in (v if isinstance(v, list) else [v]) if p is not None]
+    for name, option in OUTPUT_OPTIONS:
+        out = getattr(a, name, None)
+        if out is None or not Path(out).exists():
+            continue
+        for p in inputs:
+            if Path(p).exists() and Path(p).resolve() == Path(out).resolve():
+                raise AccelcalError(f"{option} {out}: is also an input of this command ({p}); write the "
+                                    "result to another file")
+
+
 def main(argv=None) -> int:
     parser = build_parser()
     a = parser.parse_args(argv)
     try:
+        check_not_an_input(a)
         return int(a.func(a) or 0)
     except AccelcalError as e:
         print(f"accelcal {a.command}: error: {e}", file=sys.stderr)

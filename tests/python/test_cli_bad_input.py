@@ -621,3 +621,25 @@ def test_unknown_fields_accepted(good, cmd, key, value, capfd):
         assert rc == 0, err
         assert any(out.iterdir())
         assert "Traceback" not in err
+
+
+@pytest.mark.parametrize("argv", [
+    ["resolve", "--device", "{six}/device.json", "--calibration", "{six}/calibration.json", "{rec}", "-o", "{rec}"],
+    ["calibrate", "--device", "{six}/device.json", "{poses}", "-o", "{poses}"],
+    ["calibrate", "--device", "{six}/device.json", "{poses}", "-o", "{six}/device.json"],
+    ["diagnose", "--device", "{six}/device.json", "--calibration", "{six}/calibration.json", "{rec}",
+     "--json", "{six}/calibration.json"],
+])
+def test_an_output_that_is_an_input_is_refused(good, argv, capfd, tmp_path):
+    """-o on the recording it reads would replace the recording by the result (it did, exit 0)."""
+    import shutil
+
+    from cli_run import run
+    six = tmp_path / "six"
+    shutil.copytree(good["six"], six)
+    paths = {"six": six, "rec": six / "small.csv", "poses": six / "poses_small.csv"}
+    argv = [x.format(**paths) for x in argv]
+    before = {p: p.read_bytes() for p in six.iterdir() if p.is_file()}
+    rc, _, err, _ = run(argv, capfd)
+    assert rc == 2 and err.count("\n") == 1 and "is also an input of this command" in err, err
+    assert {p: p.read_bytes() for p in six.iterdir() if p.is_file()} == before
