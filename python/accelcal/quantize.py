@@ -139,8 +139,11 @@ def quantize(offsets, sensitivity, positions, device: str = "", signed: bool = F
     r_t = pos_q / 2.0**f.pos_frac
     o_t = offset_q / 2.0**f.offset_frac
     R = model.sensor_matrix(r_t, s_t)
-    if np.linalg.matrix_rank(R) < 6:
-        raise SingularError(-3, "sensor matrix has rank < 6: the geometry does not determine f and alpha")
+    rank = int(np.linalg.matrix_rank(R))
+    if rank < 6:
+        raise SingularError(-3, f"device {device or '(unnamed)'}: the sensor matrix of its {n} channels has rank "
+                                f"{rank} < 6, so the 6-DOF resolver's table cannot be built (two triads on one line, "
+                                "a pendulum's, leave the turn about that line open: 'accelcal attitude' resolves them)")
     cl2 = cond_log2_equilibrated(R)
     if cl2 > f.cond_log2_max:
         raise IllConditionedError(-4, f"geometry too ill-conditioned: cond ~ 2^{cl2} > 2^{f.cond_log2_max}")
