@@ -17,6 +17,7 @@ from tqdm import tqdm
 
 from . import __version__
 from .calibrate import JIG_ACCURACY_DEG, calibrate_recordings
+from .calibrate.checks import far_from_nominal
 from .calibration import load_calibration, save_calibration
 from .convert_cli import add_convert_parser
 from .demo import run_demo
@@ -198,6 +199,9 @@ def cmd_calibrate(a):
         warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}): the "
                         f"'{fit.get('model', cal.method)}' model has no cross-axis terms, which a real sensor "
                         "has; use --method full if the poses determine it")
+    far = far_from_nominal(dev, cal.sensitivity)
+    if far:
+        warnings.append(far)
     save_calibration(cal, a.output)
     for n in cal.extra.get("notes", []) if isinstance(cal.extra, dict) else []:
         print(f"accelcal calibrate: note: {n}", file=sys.stderr)
@@ -335,6 +339,8 @@ def cmd_diagnose(a):
         check_output_dir(a.report, "--report")
     dev = _load_device(a.device)
     cal = _load_cal(a.calibration, dev)
+    if isinstance(cal.extra, dict):
+        cal.extra["source"] = str(a.calibration)          # named so in the JSON's calibration.source
     recs = _read(a.recordings, dev, "diagnose", a)
     with _progress("diagnose: scoring candidates", unit=" fits") as bar:
         def scored(name):

@@ -613,3 +613,15 @@ def test_too_few_orientations_are_counted_as_such_and_a_tilted_pose_is_asked_for
     msg = str(ei.value)
     assert "needs at least 9 static poses in different orientations, got 6 (13 poses, 6 orientations" in msg
     assert "a corner: equally along x, y and z" in msg
+
+
+def test_a_sensitivity_far_from_the_device_file_s_is_warned_of():
+    """A calibration 8 x or 0.5 x the device file's counts per m/s^2 (the device file of
+    another chip, or --full-scale 4 for a +-2 g log) is warned of; within a few % it is not."""
+    from accelcal.calibrate.checks import far_from_nominal
+    d = default_triad()
+    S = d.nominal_sensitivity()
+    assert far_from_nominal(d, S * 1.03) is None
+    for k in (8.17, 0.5):
+        w = far_from_nominal(d, S * k)
+        assert w is not None and f"{k:.3g} x the device file's" in w

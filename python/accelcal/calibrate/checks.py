@@ -193,3 +193,23 @@ def static_force(offsets, sensitivity, means, sigma=None) -> np.ndarray:
     for p in range(m.shape[0]):
         out[p] = np.linalg.lstsq(S * w[p][:, None], m[p] * w[p], rcond=None)[0]
     return out
+
+
+#: a channel's fitted sensitivity beyond this factor of the device file's nominal (either way)
+NOMINAL_FACTOR = 1.25
+
+
+def far_from_nominal(device, sensitivity) -> str | None:
+    """A warning when a fitted sensitivity |s_i| (counts per m/s^2) is more than
+    NOMINAL_FACTOR above or below the device file's ``counts_per_mps2`` (a real chip is
+    within a few %: a wrong device file, full scale or LSB), else None."""
+    got = np.linalg.norm(np.asarray(sensitivity, float), axis=1)
+    nominal = np.asarray(device.counts_per_mps2, float)
+    ratio = got / nominal
+    off = np.flatnonzero((ratio > NOMINAL_FACTOR) | (ratio < 1.0 / NOMINAL_FACTOR))
+    if not off.size:
+        return None
+    i = int(off[np.argmax(np.abs(np.log(ratio[off])))])
+    return (f"channel {i}'s sensitivity, {got[i]:.4g} counts per m/s^2, is {ratio[i]:.3g} x the device file's "
+            f"{nominal[i]:.4g} ({off.size} of {ratio.size} channels beyond {NOMINAL_FACTOR:g} x either way): a real "
+            "chip is within a few %; check the device file and the recording's scale (--full-scale, --lsb)")
