@@ -686,3 +686,12 @@ def test_quantization_expected_error_matches_monte_carlo(x0, q, r, phase):
     se = np.std(qy - shifted, axis=1) / math.sqrt(y.shape[1])
     got = eff.expected_error(x, np.full(1, float(q)), np.full(1, float(phase % q)), np.full(1, sigma))[:, 0]
     assert np.all(np.abs(got - mc) <= 6.0 * se + 1e-3 * q), (got, mc, se)  # 6 sigma: no false alarms
+
+
+@pytest.mark.parametrize("motion, param", [("rate_table", "duration_s=1e7"), ("static_poses", "samples_per_pose=2000000")])
+def test_a_simulation_too_large_for_memory_is_refused_before_it_starts(motion, param, capfd):
+    """10^9 samples took 24 GB and were killed; now one line names the size, exit 2."""
+    from cli_run import run
+    rc, _, err, _ = run(["simulate", "--device", "default", "--motion", motion, "--param", param, "-o", "/dev/null"],
+                        capfd)
+    assert rc == 2 and err.count("\n") == 1 and "more than the 10,000,000 a simulation makes" in err

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import AccelcalError
-from .trajectory import EZ, Segments
+from .trajectory import EZ, MAX_SAMPLES, Segments
 
 
 def faces() -> np.ndarray:
@@ -79,5 +79,8 @@ def static_times(P: int, spp: int, rate: float, dwell: float | None) -> tuple[np
         raise AccelcalError(
             f"motion parameter 'dwell_s': expected at least samples_per_pose / rate = {rec:g} s, got {period:g}"
         )
+    if P * spp > MAX_SAMPLES:
+        raise AccelcalError(f"{P} poses of {spp} samples: {P * spp:,} samples, more than the {MAX_SAMPLES:,} a "
+                            "simulation makes; simulate them in parts")
     t = (np.arange(P)[:, None] * period + np.arange(spp)[None, :] / rate).ravel()
     return t, period

@@ -8,7 +8,8 @@ import numpy as np
 from ..errors import AccelcalError
 from ..sensor import rotation_matrix
 from .poses import pose_directions, random_directions, static_segments, static_times
-from .trajectory import AxisRotation, EZ, Kinematics, Segments, random_tones, rot_z, rotvecs_between, sincos, smooth_profile, sum_of_tones, to_body, up_attitude, up_attitudes
+from .trajectory import (AxisRotation, EZ, Kinematics, Segments, random_tones, rot_z, rotvecs_between, sample_times,
+                         sincos, smooth_profile, sum_of_tones, to_body, up_attitude, up_attitudes)
 
 
 def static_poses(device, rng, *, poses, samples_per_pose, dwell_s, heading_deg):
@@ -59,7 +60,7 @@ def handheld(device, rng, *, n_poses, hold_s, move_s, initial_rest_s, move_cm):
     ev = Segments(t0, dur, Cs, axes, angles, p0, dp, labels, g)
     rate = float(device.sample_rate_hz)
     total = float(t0[-1] + dur[-1])
-    times = np.arange(int(math.floor(total * rate + 1e-9))) / rate
+    times = sample_times(total, rate)
     return times, ev
 
 
@@ -84,7 +85,7 @@ def rate_table(device, rng, *, axis, freq_hz, amplitude_deg, duration_s, mount, 
 
     ev = AxisRotation(M, axis, center_m, theta, device.gravity_mps2)
     rate = float(device.sample_rate_hz)
-    times = np.arange(int(math.floor((rest_s + duration_s) * rate + 1e-9))) / rate
+    times = sample_times(rest_s + duration_s, rate)
     labels = np.where(times < rest_s, 0, -1)
     return times, ev, labels
 
@@ -105,7 +106,7 @@ def pendulum(device, rng, *, amplitude_deg, freq_hz, center_deg, duration_s, dec
 
     ev = AxisRotation(np.eye(3), np.array([0.0, 1.0, 0.0]), np.zeros(3), theta, device.gravity_mps2)
     rate = float(device.sample_rate_hz)
-    times = np.arange(int(math.floor(duration_s * rate + 1e-9))) / rate
+    times = sample_times(duration_s, rate)
     return times, ev, np.full(times.shape, -1)
 
 
@@ -126,7 +127,7 @@ def linear_actuator(device, rng, *, axis, distance_m, travel_s, rest_s, strokes,
             p = p + d
     ev = Segments(t0, dur, Cs, ax, ang, p0, dp, lab, device.gravity_mps2, profile)
     rate = float(device.sample_rate_hz)
-    times = np.arange(int(math.floor(t * rate + 1e-9))) / rate
+    times = sample_times(t, rate)
     return times, ev
 
 
@@ -178,7 +179,7 @@ def lane_change(device, rng, *, speed_mps, offset_m, lead_m, shift_m, hold_m, re
     ev = LaneChange(speed_mps, offset_m, x1, shift_m, x3, return_m, device.gravity_mps2)
     total = (x3 + return_m + exit_m) / speed_mps
     rate = float(device.sample_rate_hz)
-    times = np.arange(int(math.floor(total * rate + 1e-9)) + 1) / rate
+    times = sample_times(total, rate, extra=1)
     return times, ev, np.full(times.shape, -1)
 
 
@@ -231,7 +232,7 @@ def random_6dof(device, rng, *, duration_s, bandwidth_hz, angle_rms_deg, accel_r
     tc = [random_tones(rng, tones, max(lo, 0.2 * bandwidth_hz), bandwidth_hz, accel_rms_mps2) for _ in range(3)]
     ev = Random6Dof(ta, tc, device.gravity_mps2)
     rate = float(device.sample_rate_hz)
-    times = np.arange(int(math.floor(duration_s * rate + 1e-9))) / rate
+    times = sample_times(duration_s, rate)
     return times, ev, np.full(times.shape, -1)
 
 

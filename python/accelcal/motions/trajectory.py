@@ -8,6 +8,7 @@ from typing import Any, Callable, NamedTuple
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ..errors import AccelcalError
 from ..sensor import interp_truth, rotation_matrix
 from ..spec import format_spec
 
@@ -266,3 +267,21 @@ def random_tones(rng: np.random.Generator, k: int, f_lo: float, f_hi: float, rms
     amp = rng.rayleigh(1.0, k)
     amp *= rms / math.sqrt(0.5 * float(np.sum(amp * amp)))
     return amp, 2.0 * math.pi * f, rng.uniform(0.0, 2.0 * math.pi, k)
+
+
+#: the most samples a simulation makes (its trajectory takes ~250 bytes a sample: 2.5 GB)
+MAX_SAMPLES = 10_000_000
+
+
+def sample_times(seconds: float, rate: float, extra: int = 0) -> np.ndarray:
+    """The sample times 0, 1/rate, ... of ``seconds`` of recording (``extra`` samples more).
+
+    Raises
+    ------
+    AccelcalError
+        More than MAX_SAMPLES samples (one line, before any memory is taken)."""
+    n = int(math.floor(seconds * rate + 1e-9)) + extra
+    if n > MAX_SAMPLES:
+        raise AccelcalError(f"the motion lasts {seconds:g} s at {rate:g} Hz: {n:,} samples, more than the "
+                            f"{MAX_SAMPLES:,} a simulation makes; simulate it in parts, or at a lower rate")
+    return np.arange(n) / rate
