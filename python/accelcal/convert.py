@@ -415,7 +415,8 @@ def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metada
     def locate(i: int, j: int) -> tuple[int, str]:
         return table.line(i), acc[j]
 
-    raw = to_counts(matrix, scale, source, locate) if converts else matrix.astype(np.int64)
+    shifted: list[str] = []
+    raw = to_counts(matrix, scale, source, locate, notes=shifted) if converts else matrix.astype(np.int64)
     n = raw.shape[0]
     index = values[index_column] if index_column else np.arange(n)
     rate = opts.rate_hz
@@ -427,7 +428,8 @@ def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metada
     dropped = [c for c in names if c and c not in used and GYRO_RE.fullmatch(c)]
     ignored = [c for c in names if c and c not in used and c not in dropped]
     return finish(source, fmt, raw, index, None, values.get(part_column), opts, scale, True, rate, metadata,
-                  drop_note(dropped, ignored) + ([table.cut_note] if table.cut_note else []), locate, index_column)
+                  drop_note(dropped, ignored) + shifted + ([table.cut_note] if table.cut_note else []), locate,
+                  index_column)
 
 
 def mpu6050_preamble(source: str, data: bytes, pre) -> tuple[Any, dict[str, str], float | None]:
@@ -666,7 +668,7 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
         return table.line(int(rows[i])), acc[j]
 
     converts = scale is not None and scale.converts
-    raw = to_counts(matrix, scale, source, locate) if converts else whole_counts(matrix, source, locate)
+    raw = to_counts(matrix, scale, source, locate, notes=notes) if converts else whole_counts(matrix, source, locate)
     t = None if time_column is None else table_time(source, values[time_column], table, rows, time_column,
                                                     names.index(time_column))
     used = set(want)
@@ -686,7 +688,8 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
         return lines[i], f"field {j + 1}"
 
     scale = opts.scale
-    raw = to_counts(values, scale, source, locate) if scale is not None and scale.converts else \
+    shifted: list[str] = []
+    raw = to_counts(values, scale, source, locate, notes=shifted) if scale is not None and scale.converts else \
         whole_counts(values, source, locate)
     if opts.rate_hz is None:
         raise InputError(source, "log files have no time column: give the sample rate with --rate HZ")
@@ -695,6 +698,7 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
     notes = [f"{info['text_lines']} line(s) of text (the first: {info['first_text']!r}) split the readings into "
              f"{info['blocks']} block(s)" + ("; each block is a pose" if blocks else
                                             "; --blocks labels each as a pose")] if info["text_lines"] else []
+    notes += shifted
     k, first = held_runs(raw)
     n = raw.shape[0]
     share = (n - first.size) / (n - 1) if n > 1 else 0.0      # rows that repeat the row before

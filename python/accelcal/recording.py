@@ -349,9 +349,10 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
         )
 
     n_raw = sum(1 for name in cols if RAW_RE.fullmatch(name))
+    read_notes = [cut_note] if cut_note else []
     if scale is not None and scale.converts:
         raw = to_counts(np.column_stack([values[f"raw_{k}"] for k in range(n_raw)]), scale, source,
-                        lambda i, k: (located().line(i), f"raw_{k}"))
+                        lambda i, k: (located().line(i), f"raw_{k}"), notes=read_notes)
         metadata = converted_metadata(metadata, scale)
     else:
         raw = np.empty((n, n_raw), dtype=np.int64)
@@ -393,8 +394,7 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
         source=source,
         lines=first if not isinstance(table, ListTable) else table.lines,
     )
-    if cut_note:
-        rec.notes.append(cut_note)
+    rec.notes.extend(read_notes)
     return rec
 
 

@@ -278,7 +278,7 @@ def converted_metadata(metadata: dict[str, str], scale: Scale) -> dict[str, str]
 
 
 def to_counts(values: np.ndarray, scale: Scale, source: str,
-              locate: Callable[[int, int], tuple[int, str]]) -> np.ndarray:
+              locate: Callable[[int, int], tuple[int, str]], notes: list | None = None) -> np.ndarray:
     """Readings in physical units as integer counts, exactly.
 
     Parameters
@@ -291,11 +291,16 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
         The file, for messages.
     locate : callable
         ``locate(i, j)`` -> (row, column name) of reading ``values[i, j]`` in the file.
+    notes : list, optional
+        Where a column whose every reading is a whole number of LSBs plus one constant
+        fraction (a grid shifted by an OS's offset: 0.5 LSB on a phone's axis) is said to be
+        read as counts less that fraction (with at least SHIFT_MIN_VALUES readings);
+        without it, such a column is refused like any other.
 
     Returns
     -------
     ndarray of int64, shape (n, k)
-        ``round(values / lsb)``.
+        ``round(values / lsb)`` (less the column's constant fraction where ``notes`` allows).
 
     Raises
     ------
@@ -328,6 +333,15 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
         fine = tol <= PRINT_TOL_COUNTS
         ok = fine & (np.abs(x[sel] - n[sel]) <= tol * (1.0 + 1e-9) + REL_TOL * np.maximum(np.abs(n[sel]), 1.0))
         bad[sel] = ~ok
+    if bad.any() and notes is not None:
+        for j in np.flatnonzero(bad.any(axis=0) & ~big.any(axis=0)):
+            shift = grid_shift(x[:, j])
+            if shift is not None:
+                n[:, j] = np.round(x[:, j] - shift)
+                bad[:, j] = False
+                notes.append(f"column {locate(0, int(j))[1]}: every reading is a whole number of LSBs plus {shift:+.3f} "
+                             "(a grid shifted by a constant, as an offset applied before writing leaves): read as "
+                             "counts less that fraction, which the calibration's offset takes")
     if bad.any():
         i, j = (int(v) for v in np.argwhere(bad)[0])
         row, column = locate(i, j)
@@ -336,6 +350,27 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
                          f"{scale.lsb:.12g} {unit} (the LSB stated by {scale.how}), not a whole number: "
                          "wrong LSB or units, or the values were rounded when written", row=row, column=column)
     return n.astype(np.int64)
+
+
+#: readings a column needs before a constant fraction of an LSB is taken for a shifted grid
+SHIFT_MIN_VALUES = 20
+#: ... each within this much of a count of the grid
+SHIFT_TOL_COUNTS = 0.01
+
+
+def grid_shift(x: np.ndarray) -> float | None:
+    """The constant fraction (in (-0.5, 0.5], not ~0) by which every value of ``x`` (counts,
+    as floats) is off a whole number, within SHIFT_TOL_COUNTS, or None."""
+    x = np.asarray(x, float)
+    x = x[np.isfinite(x)]
+    if x.size < SHIFT_MIN_VALUES:
+        return None
+    frac = x - np.round(x)
+    phase = float(np.angle(np.mean(np.exp(2j * np.pi * frac)))) / (2 * np.pi)
+    off = (frac - phase + 0.5) % 1.0 - 0.5
+    if abs(phase) <= SHIFT_TOL_COUNTS or float(np.max(np.abs(off))) > SHIFT_TOL_COUNTS:
+        return None
+    return 0.5 if abs(abs(phase) - 0.5) < 1e-6 else phase     # half a step: +0.5, one convention
 
 
 def _significant_digits(v: float) -> int:

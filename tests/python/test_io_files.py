@@ -566,3 +566,26 @@ def test_readme_convert_examples_run(shared_data, tmp_path, capfd, monkeypatch):
     rows = [ln.split(",") for ln in (tmp_path / "mpu_f.csv").read_text().splitlines() if not ln.startswith("#")]
     f = np.array([[float(v) for v in r[1:4]] for r in rows[1:3000]])          # the first 30 s at rest
     assert abs(np.linalg.norm(f.mean(axis=0)) - 9.80665) < 0.01
+
+
+@pytest.mark.parametrize("shift", [0.5, 0.25, -0.3])
+def test_a_column_on_a_shifted_grid_is_read_with_a_note(tmp_path, capfd, shift):
+    """A phone's axis written after an offset of a fraction of an LSB (the LIS3DH x axis of
+    a public recording sits on a grid shifted by half a step): every reading of that column is
+    a whole count plus one fraction; it is read as counts less it, with a note; the other
+    columns as they are.  A wrong LSB, whose fractions scatter, is still refused."""
+    lsb = 9.80665 / 256
+    rng = np.random.default_rng(3)
+    c = rng.integers(-300, 300, (200, 3))
+    vals = c * lsb
+    vals[:, 0] += shift * lsb
+    src = tmp_path / "phone.csv"
+    src.write_text("acc_x,acc_y,acc_z\n" + "\n".join(",".join(f"{v:.9g}" for v in r) for r in vals) + "\n")
+    rc, _, err, _ = run(["convert", src, "--units", "mps2", "--lsb", repr(lsb), "--rate", "100", "-o",
+                         tmp_path / "o.csv"], capfd)
+    assert rc == 0, err
+    assert f"column acc_x: every reading is a whole number of LSBs plus {shift:+.3f}" in err
+    np.testing.assert_array_equal(read_recording(tmp_path / "o.csv").raw, c)
+    rc, _, err, _ = run(["convert", src, "--units", "mps2", "--lsb", repr(lsb * 1.37), "--rate", "100", "-o",
+                         tmp_path / "p.csv"], capfd)
+    assert rc == 2 and "not a whole number" in err
