@@ -310,3 +310,24 @@ def test_weak_quantization_is_named(seed):
     assert res["verdict"] == "quantization", [(e["name"], e["shrink"]) for e in res["effects"][:3]]
     e = _entry(res, "quantization")
     assert abs(e["alone"]["shrink"] - ds["true_shrink"]) < 0.1
+
+
+def test_one_long_rest_names_the_simplest_of_the_effects_that_change_it_alike():
+    """A single static pose held for minutes, jig-free (the MPU-6050's 449 s rest against the
+    calibration of its posed session): its pose angles absorb all but |f|, and an offset, a
+    gain and a bend each move that one number alike -- exactly the same change of every
+    reading.  The verdict is the simplest of them, the others are listed, and the notes say
+    their sizes are not measurements (the verdict was a gain of +74.67 %, picked among exact
+    ties by rounding)."""
+    d = default_triad()
+    rng = np.random.default_rng(11)
+    n = int(120 * d.sample_rate_hz)
+    t = np.arange(n) / d.sample_rate_hz
+    f = np.tile([0.0, 0.0, d.gravity_mps2], (n, 1))
+    S = d.nominal_sensitivity()
+    b = d.nominal_offsets() + np.array([0.0, 0.0, 40.0])          # the model's offset is off on z
+    raw = np.round(b + f @ S.T + 2.0 * rng.standard_normal((n, 3))).astype(np.int64)
+    res = diagnose(d, Calibration.nominal(d), [recording_from_arrays(t, raw)])
+    assert res["verdict"] == "offset", (res["verdict"], res["ambiguous_with"])
+    assert "gain" in res["ambiguous_with"]
+    assert any("not measurements" in n for n in res["notes"])

@@ -139,6 +139,16 @@ def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, 
     return Contest(best=nxt, ambiguous=amb, swapped_from=best.name, why=why, tests=tests), nxt
 
 
+def same_change(best: Cand, cands: list[Cand], rtol: float = 1e-6) -> list[Cand]:
+    """The candidates (other than ``best``) whose in-sample change of every reading is
+    ``best``'s within ``rtol`` of its size: the data cannot tell them apart at all."""
+    size = float(np.linalg.norm(best.delta))
+    if size == 0.0:
+        return []
+    return [c for c in cands if c is not best and c.delta.shape == best.delta.shape
+            and float(np.linalg.norm(c.delta - best.delta)) <= rtol * size]
+
+
 def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, seed: int = 0,
              candidates: Sequence[str] | None = None, max_steps: int = MAX_STEPS, model_centripetal: bool = True,
              progress: Any = None) -> DiagnosisResult:
@@ -198,8 +208,15 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         if not sig:
             break
         best = sorted(sig, key=rank_key)[0]
+        # candidates that change every reading exactly as the best one does (on a single pose, an
+        # offset, a gain, a tilt and a bend all move its one |f| alike): the first in the registry's
+        # order (the simplest) is the verdict, the others are listed with it
+        alike = [best] + same_change(best, sig)
+        best = min(alike, key=lambda c: EFFECT_NAMES.index(c.name))
         step_duel = contest(Dk, cands, best, first if not chosen else results, y, pcur)
         best = step_duel.best
+        if best.name in {c.name for c in alike}:
+            step_duel.ambiguous += [c.name for c in alike if c.name != best.name and c.name not in step_duel.ambiguous]
         if cands[best.name].mimics_calibration(best):
             step_duel, best = _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, remaining,
                                            step_duel, best, y, pcur)
@@ -302,7 +319,9 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
                      "them apart (separate_by says what would)")
     if D.mode == "jigfree" and len(D.pose_labels) < 6:
         notes.append(f"only {len(D.pose_labels)} static pose(s) found: effects that are constant within a pose "
-                     "(offset, gain, misalignment, nonlinearity) can hardly be told apart")
+                     "(offset, gain, misalignment, nonlinearity) can hardly be told apart, and their parameters are "
+                     "not all determined (the poses fix a few combinations of them): the sizes given are those of the "
+                     "smallest change that fits, not measurements")
     lattice = []
     for i in range(D.N):
         q, ph, fr, nd = code_lattice(D.raw[:, i])
