@@ -1,0 +1,239 @@
+"""What every format of ``accelcal convert`` shares: the result (:class:`Converted`), the
+options the command line states, reading a table's named columns, and :func:`finish` --
+range check, sample order, time, poses, metadata and the nominal device."""
+from __future__ import annotations
+
+import csv
+import re
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .convert_regions import label_poses
+from .convert_time import rate_from_t, time_in_seconds
+from .csvtable import convert_columns, cut_short_end, make_table, split_header
+from .device import Device
+from .errors import InputError
+from .recording import Recording
+from .textinput import is_whitespace_header, split_whitespace_header, whitespace_to_commas
+from .units import STANDARD_GRAVITY, Scale
+
+__all__ = ["Converted", "Options", "INDEX_COLUMNS", "GYRO_RE", "NUMBER_RE", "header_cells", "read_columns",
+           "find_column", "adc_range", "nominal_triad", "check_range", "in_sample_order", "finish", "drop_note",
+           "whole_counts"]
+
+INDEX_COLUMNS = ("n_samples", "samples")
+GYRO_RE = re.compile(r"(gyr|gyro|g)[_ ]?[xyz]|w_?[xyz]", re.I)
+NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+
+
+@dataclass
+class Converted:
+    """A converted file: the contract recording, a nominal device for it, and what was done.
+
+    Attributes
+    ----------
+    recording : Recording
+        Counts in raw_0..raw_2, t in s, pose labels (and f in m/s^2 when stated).
+    device : Device or None
+        A nominal triad for the recording: counts per m/s^2 from the LSB when known, else
+        from the data's spread; zero 0 (signed) or 2**(bits-1) (unsigned); the ADC's range.
+    format, pose_names, notes, scale, sorted_rows
+        The format read; the region name of pose label 0, 1, ...; lines for stderr;
+        what one count of the file's readings was; whether the rows were put in sample order.
+    """
+
+    recording: Recording
+    device: Device | None
+    format: str
+    pose_names: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    scale: Scale | None = None
+    sorted_rows: bool = False
+    device_notes: list[str] = field(default_factory=list)  # how the nominal device was made
+
+    def summary(self, output: Any) -> str:
+        """One line: rows, channels, rate, poses, where it went."""
+        rec = self.recording
+        if self.device is not None:
+            rate = self.device.sample_rate_hz
+        else:
+            rate = 1.0 / float(np.median(np.diff(rec.t))) if rec.n_samples > 1 else float("nan")
+        what = f"{self.format}: {rec.n_samples} rows, {rec.n_channels} channels"
+        if self.scale is not None and self.scale.converts:
+            what += f" ({self.scale.describe()})"
+        what += f", {rate:.6g} Hz"
+        if self.pose_names:
+            what += f", {len(self.pose_names)} poses ({', '.join(self.pose_names)})"
+            what += ", reference f stated" if rec.has_f() else ""
+        else:
+            what += ", no pose labels"
+        if self.sorted_rows:
+            what += ", rows put in sample order"
+        return f"{what}; written to {output}"
+
+
+@dataclass
+class Options:
+    """What the command line states (see :func:`convert_file`)."""
+
+    scale: Scale | None = None
+    rate_hz: float | None = None
+    regions: list[tuple[str, int, int]] | None = None
+    regions_source: str | None = None
+    stated_f: bool = False
+    gravity_mps2: float | None = None
+    bits: int = 16
+    time_unit: str = "auto"
+
+
+def header_cells(header: str) -> list[str]:
+    if is_whitespace_header(header):
+        return split_whitespace_header(header)
+    try:
+        return split_header(header)
+    except csv.Error:
+        return [header]
+
+
+def read_columns(source: str, data: bytes, pre, want: dict[str, str]) -> tuple[list[str], dict, Any]:
+    """The header's columns and the cells of the wanted ones (kinds: raw, t, text) with the
+    reader's strict errors; returns (names, {name: values}, table)."""
+    header = pre.header
+    spaced = is_whitespace_header(header)
+    names = [c.strip() for c in header_cells(header)]
+    pos = pre.pos
+    end = pos + len(data[pos:].rstrip(b"\n \t"))  # trailing blank lines are not rows
+    if end <= pos:
+        raise InputError(source, "no data rows after the header", row=pre.header_line)
+    first = pre.header_line + 1
+    end, cut_note = cut_short_end(data, pos, end, len(names), first)
+    if spaced:
+        data = whitespace_to_commas(data, pos, end, names, first, source)
+        end = len(data)
+    table = make_table(data, pos, end, len(names), first, source)
+    table.cut_note = cut_note             # a last line cut short, left out (csvtable.cut_short_end)
+    values = {name: table.strings(names.index(name)) for name, kind in want.items() if kind == "text"}
+    numbers, err = convert_columns(table, {name: (names.index(name), kind) for name, kind in want.items()
+                                           if kind != "text"})
+    values.update(numbers)
+    if err is not None:
+        i, j, msg = err
+        if want[names[j]] == "raw" and names[j] not in INDEX_COLUMNS and NUMBER_RE.fullmatch(table.cell(i, j).strip()):
+            msg += " (readings in m/s^2 or g: state --units mps2|g with --lsb VALUE or --full-scale G)"
+        raise InputError(source, msg, row=table.line(i), column=names[j])
+    return names, values, table
+
+
+def find_column(names: list[str], wanted: str) -> str | None:
+    return next((n for n in names if n.strip().lower() == wanted), None)
+
+
+def adc_range(bits: int, signed: bool) -> tuple[int, int]:
+    return (-(2 ** (bits - 1)), 2 ** (bits - 1) - 1) if signed else (0, 2 ** bits - 1)
+
+
+def nominal_triad(name: str, rate: float, gravity: float, raw: np.ndarray, bits: int, signed: bool,
+                  scale: Scale | None, notes: list[str]) -> Device:
+    """A triad at the origin along x, y, z: counts per m/s^2 from the LSB when stated, else half
+    the spread of each axis between its 1st and 99th percentiles, over g (as load_xsens)."""
+    k = scale.counts_per_mps2(gravity) if scale is not None else None
+    if k is None:
+        lo, hi = np.percentile(raw, [1.0, 99.0], axis=0)
+        k = round(float(np.mean((hi - lo) / 2.0)) / gravity, 1)
+        if k > 0:
+            notes.append(f"the device's nominal scale, {k:g} counts per m/s^2, is taken from the readings' "
+                         "spread (state --full-scale G for the chip's)")
+        else:
+            k = 2.0 ** (bits - 1) / (2.0 * gravity)
+            notes.append(f"the readings span no range: the device's nominal scale is a guess ({k:g} counts per "
+                         "m/s^2, +-2 g); state --full-scale G")
+    lo, hi = adc_range(bits, signed)
+    return Device(name=name, sample_rate_hz=round(rate, 6), gravity_mps2=gravity, raw_min=lo, raw_max=hi,
+                  positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, k),
+                  zero_counts=np.full(3, 0.0 if signed else 2.0 ** (bits - 1)), noise_mps2=0.0)
+
+
+def check_range(raw: np.ndarray, bits: int, signed: bool, source: str, locate) -> None:
+    lo, hi = adc_range(bits, signed)
+    out = np.argwhere((raw < lo) | (raw > hi))
+    if out.size:
+        i, j = (int(v) for v in out[0])
+        row, column = locate(i, j)
+        raise InputError(source, f"reading {int(raw[i, j])} counts is outside {'signed' if signed else 'unsigned'} "
+                         f"{bits}-bit [{lo}, {hi}] (state --bits N)", row=row, column=column)
+
+
+def in_sample_order(index: np.ndarray, source: str, column: str | None, line) -> np.ndarray | None:
+    """The permutation putting the rows in order of their sample numbers (None when they are)."""
+    if np.all(np.diff(index) > 0):
+        return None
+    order = np.argsort(index, kind="stable")
+    dup = np.flatnonzero(np.diff(index[order]) == 0)
+    if dup.size:
+        a, b = sorted(int(v) for v in order[dup[0]:dup[0] + 2])
+        raise InputError(source, f"sample number {int(index[b])} is also that of row {line(a)}", row=line(b),
+                         column=column)
+    return order
+
+
+def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndarray | None, part: list[str] | None,
+           opts: Options, scale: Scale | None, signed: bool, rate: float | None, metadata: dict[str, str],
+           notes: list[str], locate, index_column: str | None, device: Device | None = None,
+           kept: tuple[np.ndarray, np.ndarray] | None = None, time_column: str | None = None) -> Converted:
+    """Range check, sample order, time, poses, metadata and the nominal device, shared by the formats."""
+    check_range(raw, opts.bits, signed, source, locate)
+    order = in_sample_order(index, source, index_column, lambda i: locate(i, 0)[0]) if t is None else None
+    if order is not None:
+        raw, index = raw[order], index[order]
+        part = None if part is None else [part[i] for i in order.tolist()]
+    if t is None:
+        t = index / rate
+    else:
+        t, rel = time_in_seconds(np.asarray(t, dtype=float), opts.time_unit, time_column, source, notes)
+        rate = opts.rate_hz if opts.rate_hz is not None else rate_from_t(rel, notes)
+    gravity = opts.gravity_mps2 or (device.gravity_mps2 if device is not None else STANDARD_GRAVITY)
+    if kept is not None:  # a contract recording without --regions keeps its labels and references
+        (pose, f), names = kept, [str(k) for k in np.unique(kept[0][kept[0] >= 0])]
+    else:
+        pose, f, names = label_poses(index, part, opts.regions, opts.stated_f, gravity, source, opts.regions_source)
+    metadata = {"source_file": " ".join(source.splitlines()), "source_format": fmt, **metadata}
+    if scale is not None and (scale.converts or scale.lsb_g):
+        metadata["source_scale"] = scale.describe()
+    if opts.regions_source:
+        metadata["source_regions"] = " ".join(opts.regions_source.splitlines())
+    if names and kept is None:
+        metadata["pose_names"] = " ".join(f"{k}={nm}" for k, nm in enumerate(names))
+    rec = Recording(t=t, raw=raw, f=f, pose=pose, metadata=metadata, source=source)
+    device_notes: list[str] = []
+    if device is None:
+        device = nominal_triad(f"{fmt}-triad", rate, gravity, raw, opts.bits, signed, scale, device_notes)
+    return Converted(rec, device, fmt, names, notes, scale, order is not None, device_notes)
+
+
+def drop_note(dropped: list[str], ignored: list[str]) -> list[str]:
+    parts = []
+    if dropped:
+        parts.append(f"dropped gyroscope column{'s' if len(dropped) > 1 else ''} {', '.join(dropped)} (accelcal "
+                     "calibrates the accelerometer)")
+    if ignored:
+        parts.append(f"ignored column{'s' if len(ignored) > 1 else ''} {', '.join(ignored)}")
+    return ["; ".join(parts)] if parts else []
+
+
+def whole_counts(values: np.ndarray, source: str, locate) -> np.ndarray:
+    """Readings in counts (no unit stated) as int64.
+
+    Raises
+    ------
+    InputError
+        The first reading that is not a whole number, naming its row and column.
+    """
+    frac = np.argwhere(values != np.round(values))
+    if frac.size:
+        i, j = (int(v) for v in frac[0])
+        row, column = locate(i, j)
+        raise InputError(source, f"reading {values[i, j]:.10g} is not a whole count (readings in m/s^2 or g: "
+                         "state --units mps2|g with --lsb VALUE or --full-scale G)", row=row, column=column)
+    return values.astype(np.int64)

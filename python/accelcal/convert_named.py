@@ -1,0 +1,229 @@
+"""``accelcal convert``'s ``table`` format: a CSV or whitespace table with named columns
+(phyphox, x-io's NGIMU, a LORD/MicroStrain log, a logger's ``time_ms,accX,accY,accZ``): one
+column per accelerometer axis, the unit its name states, an optional time column, rows
+whose three readings are all empty (another packet's) skipped."""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from .convert_common import Converted, Options, drop_note, finish, read_columns, header_cells, whole_counts
+from .convert_time import TIME_COLUMN_RE
+from .csvtable import got_text
+from .errors import InputError
+from .units import STANDARD_GRAVITY, UNIT_TEXT, Scale, file_scale, to_counts
+
+__all__ = ["AXIS_RE", "NAMED_UNITS", "AxisColumn", "axis_column", "table_axes", "names_unit", "convert_named"]
+
+#: a table's accelerometer axis column: a prefix, the word, the axis, a unit in () or [] or after _
+AXIS_RE = re.compile(r"(?P<pre>.*?)(?:accelerometer|acceleration|accel|acc|(?<![a-z])a)[\s_.-]*(?P<axis>[xyz])"
+                     r"(?:\s*[(\[](?P<unit>[^)\]]*)[)\]]|_(?P<tail>g|mps2|ms2|counts|lsb|raw))?", re.I)
+#: the prefixes of an accelerometer's own axis columns (LORD's scaledAccelX)
+AXIS_PREFIXES = ("", "scaled", "raw")
+#: prefixes of a phone's virtual sensors: not an accelerometer's specific force
+VIRTUAL_WORDS = ("linear", "gravity")
+#: a unit in an axis column's name (lower case, blanks dropped) -> units.UNITS
+NAMED_UNITS = {"g": "g", "m/s^2": "mps2", "m/s\u00b2": "mps2", "m/s/s": "mps2", "mps2": "mps2", "m/s2": "mps2",
+               "ms2": "mps2", "counts": "counts", "count": "counts", "lsb": "counts", "raw": "counts"}
+
+
+@dataclass
+class AxisColumn:
+    """An accelerometer axis column of a table: its name, axis (x, y, z), the unit its name
+    states (a key of NAMED_UNITS, lower case, blanks dropped; None when none) and whether
+    it is a phone's virtual sensor (linear acceleration, gravity)."""
+
+    name: str
+    axis: str
+    unit: str | None
+    virtual: bool
+
+
+def axis_column(name: str) -> AxisColumn | None:
+    """The accelerometer axis ``name`` is (``Acceleration x (m/s^2)``, ``scaledAccelX``,
+    ``AccX [g]``, ``acc_x_g``), or None: another column (a prefix other than scaled, raw,
+    or one naming linear acceleration or gravity, is not an accelerometer's axis)."""
+    m = AXIS_RE.fullmatch(name.strip())
+    if m is None:
+        return None
+    pre = re.sub(r"[\s_.-]+", "", m.group("pre")).lower()
+    virtual = any(w in pre for w in VIRTUAL_WORDS)
+    if pre not in AXIS_PREFIXES and not virtual:
+        return None
+    unit = m.group("unit") if m.group("unit") is not None else m.group("tail")
+    unit = None if unit is None else re.sub(r"\s+", "", unit).lower()
+    return AxisColumn(name, m.group("axis").lower(), unit, virtual)
+
+
+def table_axes(source: str, names: list[str], row: int) -> list[AxisColumn]:
+    """The x, y, z columns of a table's header (``row``: its line).
+
+    Raises
+    ------
+    InputError
+        No column for an axis, more than one, or only a phone's virtual sensor
+        (linear acceleration, gravity), naming the candidates.
+    """
+    found = [c for c in (axis_column(n) for n in names) if c is not None]
+    real = [c for c in found if not c.virtual]
+    if not real and found:
+        raise InputError(source, f"the accelerometer columns {', '.join(repr(c.name) for c in found)} are a phone's "
+                         "virtual sensor (linear acceleration or gravity), not an accelerometer's specific force: "
+                         "export the accelerometer's own readings (phyphox 'Acceleration with g')", row=row)
+    axes = []
+    for axis in "xyz":
+        on = [c for c in real if c.axis == axis]
+        if len(on) != 1:
+            what = (f"{len(on)} columns for axis {axis} ({', '.join(repr(c.name) for c in on)}): expected one"
+                    if on else f"no column for axis {axis}")
+            raise InputError(source, f"{what} among the accelerometer columns "
+                             f"{', '.join(repr(c.name) for c in real) or '(none)'} (names such as accX, "
+                             "'Acceleration y (m/s^2)', scaledAccelZ)", row=row)
+        axes.append(on[0])
+    return axes
+
+
+def names_unit(source: str, axes: list[AxisColumn], row: int) -> str | None:
+    """The unit (a key of units.UNITS) all three axis columns' names state, or None when none
+    does.
+
+    Raises
+    ------
+    InputError
+        A unit not read (``mg``), or one stated by some of the names and not the others.
+    """
+    for c in axes:
+        if c.unit is not None and c.unit not in NAMED_UNITS:
+            raise InputError(source, f"column {c.name!r}: unit {c.unit!r} is not one accelcal reads (g, m/s^2, "
+                             "counts)", row=row)
+    units = {NAMED_UNITS[c.unit] if c.unit is not None else None for c in axes}
+    if len(units) > 1:
+        raise InputError(source, f"the columns {', '.join(repr(c.name) for c in axes)} state different units: "
+                         "expected the same unit in all three names, or in none", row=row)
+    return units.pop()
+
+
+def table_scale(source: str, pre, option: Scale | None, unit: str | None, units_stated: bool,
+                gravity: float, axes: list[AxisColumn]) -> Scale | None:
+    """The Scale of a table's readings: the unit its axis names state weighed against the
+    options and the ``# units:``/``# lsb:`` comments by :func:`units.file_scale` (the names'
+    unit taken as the file's ``units``); ``--full-scale`` without ``--units``
+    (``units_stated`` False) is read in the names' unit.
+
+    Raises
+    ------
+    InputError
+        A contradiction (options or comment against the names), or readings in m/s^2 or g
+        with no LSB stated anywhere.
+    """
+    meta, lines = dict(pre.metadata), dict(pre.metadata_lines)
+    if unit is None:
+        return file_scale(option, meta, lines, source)
+    cols = ", ".join(c.name for c in axes)
+    said = meta.get("units")
+    if said is not None and said != unit:
+        raise InputError(source, f"the comment '# units: {said}' contradicts the unit the header's columns state, "
+                         f"{UNIT_TEXT[unit]} ({cols}): state the unit once", row=lines.get("units"))
+    if option is not None and not units_stated and not option.converts and option.lsb_g and unit != "counts":
+        option = Scale(unit, option.lsb_g * (gravity if unit == "mps2" else 1.0), option.lsb_g, option.how)
+    sized = any(k in meta for k in ("lsb", "full_scale_g")) or (option is not None and bool(option.lsb or option.lsb_g))
+    if unit != "counts" and not sized and (option is None or option.units == unit):
+        raise InputError(source, f"the readings are in {UNIT_TEXT[unit]} (the header's {cols}) and no LSB is "
+                         "stated: give --full-scale G (or --units {0} --lsb VALUE, or a '# lsb:' comment) to "
+                         "make them counts".format(unit), row=pre.header_line)
+    meta["units"], lines["units"] = unit, pre.header_line
+    return file_scale(option, meta, lines, source,
+                      unit_source=f"the unit the header's columns state, {UNIT_TEXT[unit]} ({cols}),")
+
+
+def present_rows(source: str, matrix: np.ndarray, table, axes: list[AxisColumn], js: list[int],
+                 notes: list[str]) -> np.ndarray:
+    """The indices of the rows with readings (``matrix``: the three axis columns, NaN where
+    empty; ``js``: their indices in the table); rows whose three readings are all empty (a
+    LORD log's other packets) are skipped with a note.
+
+    Raises
+    ------
+    InputError
+        A row with one or two of its readings empty, naming its line and the column.
+    """
+    empty = np.isnan(matrix)
+    gone = empty.all(axis=1)
+    partly = np.flatnonzero(empty.any(axis=1) & ~gone)
+    if partly.size:
+        i = int(partly[0])
+        j = int(np.flatnonzero(empty[i])[0])
+        others = [axes[k].name for k in range(3) if not empty[i, k]]
+        raise InputError(source, f"expected a reading, got {got_text(table.cell(i, js[j]))} where "
+                         f"{' and '.join(others)} {'has' if len(others) == 1 else 'have'} one (a row's three readings "
+                         "are all given, or all empty for another packet)", row=table.line(i), column=axes[j].name)
+    if gone.any():
+        notes.append(f"skipped {int(gone.sum())} row(s) whose readings ({', '.join(c.name for c in axes)}) are all "
+                     "empty (other packets)")
+    return np.flatnonzero(~gone)
+
+
+def table_time(source: str, stamps: np.ndarray, table, rows: np.ndarray, column: str, j: int) -> np.ndarray:
+    """The time stamps of the rows read (``rows``), as written: finite and increasing.
+
+    Raises
+    ------
+    InputError
+        An empty or unknown stamp, or one not after the stamp before, naming its line.
+    """
+    t = stamps[rows]
+    bad = np.flatnonzero(~np.isfinite(t))
+    if bad.size:
+        i = int(rows[bad[0]])
+        raise InputError(source, f"expected a time stamp, got {got_text(table.cell(i, j))}", row=table.line(i),
+                         column=column)
+    back = np.flatnonzero(np.diff(t) <= 0)
+    if back.size:
+        h, i = int(rows[back[0]]), int(rows[back[0] + 1])
+        raise InputError(source, f"time stamp {table.cell(i, j).strip()!r} is not after {table.cell(h, j).strip()!r} "
+                         f"(row {table.line(h)}): time stamps must increase", row=table.line(i), column=column)
+    return t
+
+
+def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bool) -> Converted:
+    """A table with named columns: the three accelerometer axes (:func:`table_axes`), their
+    unit (:func:`table_scale`), an optional time column (else ``--rate``); rows without
+    readings skipped (:func:`present_rows`)."""
+    names = [c.strip() for c in header_cells(pre.header)]
+    axes = table_axes(source, names, pre.header_line)
+    acc = [c.name for c in axes]
+    scale = table_scale(source, pre, opts.scale, names_unit(source, axes, pre.header_line), units_stated,
+                        opts.gravity_mps2 or STANDARD_GRAVITY, axes)
+    time_column = next((n for n in names if n not in acc and TIME_COLUMN_RE.fullmatch(n)), None)
+    if time_column is None and opts.rate_hz is None:
+        raise InputError(source, "the table has no time column (t, time, timestamp, 'Time (s)', time_ms, ...): give "
+                         "the sample rate with --rate HZ", row=pre.header_line)
+    if time_column is None and opts.time_unit != "auto":
+        raise InputError(source, "--time-unit: the table has no time column (--rate states its rate)")
+    want = {a: "ref" for a in acc}
+    if time_column is not None:
+        want[time_column] = "ref"
+    names, values, table = read_columns(source, data, pre, want)
+    js = [names.index(a) for a in acc]
+    notes: list[str] = []
+    rows = present_rows(source, np.column_stack([values[a] for a in acc]), table, axes, js, notes)
+    if rows.size == 0:
+        raise InputError(source, f"no row has readings in {', '.join(acc)}", row=pre.header_line)
+    matrix = np.column_stack([values[a][rows] for a in acc])
+
+    def locate(i: int, j: int) -> tuple[int, str]:
+        return table.line(int(rows[i])), acc[j]
+
+    converts = scale is not None and scale.converts
+    raw = to_counts(matrix, scale, source, locate, notes=notes) if converts else whole_counts(matrix, source, locate)
+    t = None if time_column is None else table_time(source, values[time_column], table, rows, time_column,
+                                                    names.index(time_column))
+    used = set(want)
+    dropped = [c for c in names if c and c not in used and re.search(r"gyr", c, re.I)]
+    ignored = [c for c in names if c and c not in used and c not in dropped]
+    meta = {"table.columns": ", ".join(acc + ([time_column] if time_column else []))}
+    return finish(source, "table", raw, np.arange(rows.size), t, None, opts, scale, converts or bool(np.any(raw < 0)),
+                  opts.rate_hz, meta, drop_note(dropped, ignored) + notes + ([table.cut_note] if table.cut_note else []),
+                  locate, None, time_column=time_column)

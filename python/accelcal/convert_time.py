@@ -1,0 +1,99 @@
+"""Time columns in the files other tools write: their unit (seconds, or a logger's millis(),
+micros(), an epoch in nanoseconds) and the sample rate their steps give (a host that stamps
+the samples in bursts).  Used by :mod:`accelcal.convert` for every format with a time column."""
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from .errors import InputError
+
+__all__ = ["TIME_FACTORS", "TIME_COLUMN_RE", "MIN_PLAUSIBLE_HZ", "BURST_SHARE", "unit_in_name", "time_in_seconds",
+           "rate_from_t"]
+
+#: the unit of a time column: its factor to seconds
+TIME_FACTORS = {"s": 1.0, "ms": 1e3, "us": 1e6, "ns": 1e9}
+TIME_WORDS = {"ms": ("ms", "msec", "millis", "millisecond", "milliseconds"),
+              "us": ("us", "\u00b5s", "usec", "micros", "microsecond", "microseconds"),
+              "ns": ("ns", "nsec", "nanos", "nanosecond", "nanoseconds"),
+              "s": ("s", "sec", "secs", "second", "seconds")}
+#: below this rate t read as seconds is taken for a finer unit (auto)
+MIN_PLAUSIBLE_HZ = 2.0
+#: t's median step and its mean step disagreeing by more than this share: bursty time stamps
+BURST_SHARE = 0.25
+#: a table's time column: t, time, timestamp, with a unit in () or [] or after _ (``time_ms``)
+TIME_COLUMN_RE = re.compile(r"(?:t|time|timestamp|time[ _]stamp)(?:\s*[(\[][^)\]]*[)\]]|_[a-z\u00b5]+)?", re.I)
+
+
+def unit_in_name(name: str | None) -> str | None:
+    """The time unit a column's name states (``Time (ms)``, ``timestamp_us``, ``t[ns]``,
+    ``Time (s)``), or None."""
+    if not name:
+        return None
+    words = [w for w in re.findall(r"[a-z\u00b5]+", name.lower())
+             if w not in ("t", "time", "times", "timestamp", "timestamps", "stamp", "elapsed", "sample", "in")]
+    for unit, spelled in TIME_WORDS.items():
+        if any(w in spelled for w in words):
+            return unit
+    return None
+
+
+def time_in_seconds(t: np.ndarray, unit: str, column: str | None, source: str,
+                    notes: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """``t`` in seconds: divided by the factor of ``unit`` (s, ms, us, ns), or with ``auto`` of
+    the unit the column's name states, else, for time stamps whose steps read as seconds
+    would give under MIN_PLAUSIBLE_HZ, of the smallest unit that gives more (a logger's
+    millis(), micros() or an epoch in nanoseconds), with a note.  Returns (t, every time stamp
+    less the first), in seconds: an epoch in seconds keeps ~0.2 us, too coarse for the steps
+    of a fast logger, so the rate is taken from the differences."""
+    t0 = float(t[0]) if t.size else 0.0
+
+    def divided(k: float) -> tuple[np.ndarray, np.ndarray]:
+        return (t, t - t0) if k == 1.0 else (t0 / k + (t - t0) / k, (t - t0) / k)
+
+    if unit != "auto":
+        if unit not in TIME_FACTORS:
+            raise InputError(source, f"--time-unit {unit!r}: expected one of auto, {', '.join(TIME_FACTORS)}")
+        k = TIME_FACTORS[unit]
+        return divided(k)
+    named = unit_in_name(column)
+    if named == "s":
+        return divided(1.0)
+    if named is not None:
+        k = TIME_FACTORS[named]
+        if k != 1.0:
+            notes.append(f"t read in {named}, as its column's name {column!r} says; the recording's t is in seconds")
+        return divided(k)
+    if t.size < 3:
+        return divided(1.0)
+    steps = np.diff(t)
+    step = float(np.median(steps[steps > 0])) if np.any(steps > 0) else 0.0
+    if step <= 0 or 1.0 / step >= MIN_PLAUSIBLE_HZ:
+        return divided(1.0)
+    for unit_name, k in list(TIME_FACTORS.items())[1:]:
+        if k / step >= MIN_PLAUSIBLE_HZ:
+            notes.append(f"t read in {unit_name}: its steps (median {step:.6g}) would give "
+                         f"{1.0 / step:.4g} Hz in seconds, {k / step:.6g} Hz in {unit_name} (state --time-unit s, "
+                         "ms, us or ns when that is not its unit)")
+            return divided(k)
+    return divided(1.0)
+
+
+def rate_from_t(t: np.ndarray, notes: list[str]) -> float:
+    """The sample rate t's steps give: from the median step, unless it and the mean step
+    (duration over samples) disagree by more than BURST_SHARE -- time stamps taken by a host
+    that reads the sensor in bursts -- when the mean is taken, with a note."""
+    if t.size < 2:
+        return 1.0
+    steps = np.diff(t)
+    median = float(np.median(steps))
+    mean = float(t[-1] - t[0]) / (t.size - 1)
+    if median > 0 and mean > 0 and abs(mean / median - 1.0) <= BURST_SHARE:
+        return 1.0 / median
+    if mean <= 0:
+        return 1.0 / median if median > 0 else 1.0
+    notes.append(f"t's median step gives {1.0 / median if median > 0 else float('inf'):.6g} Hz but its {t.size} samples "
+                 f"over {float(t[-1] - t[0]):.6g} s give {1.0 / mean:.6g} Hz: the time stamps come in bursts (a host's "
+                 "clock, not the sensor's); the device's rate is the latter (--rate HZ states it)")
+    return 1.0 / mean
