@@ -4,6 +4,7 @@ column per accelerometer axis, the unit its name states, an optional time column
 whose three readings are all empty (another packet's) skipped."""
 from __future__ import annotations
 
+import dataclasses
 import re
 from dataclasses import dataclass
 
@@ -127,7 +128,7 @@ def table_scale(source: str, pre, option: Scale | None, unit: str | None, units_
         raise InputError(source, f"the comment '# units: {said}' contradicts the unit the header's columns state, "
                          f"{UNIT_TEXT[unit]} ({cols}): state the unit once", row=lines.get("units"))
     if option is not None and not units_stated and not option.converts and option.lsb_g and unit != "counts":
-        option = Scale(unit, option.lsb_g * (gravity if unit == "mps2" else 1.0), option.lsb_g, option.how)
+        option = dataclasses.replace(option, units=unit, lsb=option.lsb_g * (gravity if unit == "mps2" else 1.0))
     sized = any(k in meta for k in ("lsb", "full_scale_g")) or (option is not None and bool(option.lsb or option.lsb_g))
     if unit != "counts" and not sized and (option is None or option.units == unit):
         raise InputError(source, f"the readings are in {UNIT_TEXT[unit]} (the header's {cols}) and no LSB is "
@@ -187,6 +188,19 @@ def table_time(source: str, stamps: np.ndarray, table, rows: np.ndarray, column:
     return t
 
 
+def unrepeated(rows: np.ndarray, stamps: np.ndarray, readings: np.ndarray, notes: list[str]) -> np.ndarray:
+    """``rows`` less each row that repeats the one before it, time stamp and readings alike (a
+    packet written twice: 1.2 % of x-io's Gait-Tracking logs), with a note; a repeated time
+    stamp with other readings is left for :func:`table_time` to refuse."""
+    t, m = stamps[rows], readings[rows]
+    same = (t[1:] == t[:-1]) & np.all((m[1:] == m[:-1]) | (np.isnan(m[1:]) & np.isnan(m[:-1])), axis=1)
+    if not same.any():
+        return rows
+    notes.append(f"{int(same.sum())} row(s) repeat the row before, time stamp and readings (a packet written "
+                 "twice): left out")
+    return rows[np.concatenate([[True], ~same])]
+
+
 def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bool) -> Converted:
     """A table with named columns: the three accelerometer axes (:func:`table_axes`), their
     unit (:func:`table_scale`), an optional time column (else ``--rate``); rows without
@@ -211,6 +225,8 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
     rows = present_rows(source, np.column_stack([values[a] for a in acc]), table, axes, js, notes)
     if rows.size == 0:
         raise InputError(source, f"no row has readings in {', '.join(acc)}", row=pre.header_line)
+    if time_column is not None:
+        rows = unrepeated(rows, values[time_column], np.column_stack([values[a] for a in acc]), notes)
     matrix = np.column_stack([values[a][rows] for a in acc])
 
     def locate(i: int, j: int) -> tuple[int, str]:

@@ -59,12 +59,16 @@ class Scale:
         One count in g, when known (for a device's nominal scale).
     how : str
         Where the LSB came from, for messages (e.g. ``"--lsb"``, ``"# lsb: (row 3)"``).
+    rounds : bool
+        Readings are rounded to the nearest LSB (``--round``: a logger that writes calibrated
+        floats, on no grid), with a note of how far, instead of refused when not whole.
     """
 
     units: str
     lsb: float | None
     lsb_g: float | None = None
     how: str = ""
+    rounds: bool = False
 
     @property
     def converts(self) -> bool:
@@ -333,6 +337,12 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
         fine = tol <= PRINT_TOL_COUNTS
         ok = fine & (np.abs(x[sel] - n[sel]) <= tol * (1.0 + 1e-9) + REL_TOL * np.maximum(np.abs(n[sel]), 1.0))
         bad[sel] = ~ok
+    if scale.rounds:
+        off = np.abs(x - n)[~big]
+        if notes is not None and off.size:
+            notes.append(f"readings rounded to whole LSBs of {scale.lsb:.6g} {UNIT_TEXT[scale.units]} (--round): up to "
+                         f"{float(off.max()):.3g} of an LSB off, rms {float(np.sqrt(np.mean(off ** 2))):.3g}")
+        bad = big
     if bad.any() and notes is not None:
         for j in np.flatnonzero(bad.any(axis=0) & ~big.any(axis=0)):
             shift = grid_shift(x[:, j])

@@ -7,6 +7,7 @@ the readers take (:func:`accelcal.units.file_scale` then weighs it against the f
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 from typing import Any
 
@@ -57,6 +58,9 @@ def add_units_options(parser: argparse.ArgumentParser, *, bits_help: str | None 
     g.add_argument("--full-scale", metavar="G", help=FULL_SCALE_HELP.format(counts=full_scale_counts))
     g.add_argument("--bits", default=bits_default, metavar="N", help=bits_help or READER_BITS_HELP)
     g.add_argument("--gravity", metavar="MPS2", help=gravity_help or READER_GRAVITY_HELP)
+    g.add_argument("--round", action="store_true", help="round readings in m/s^2 or g to the nearest LSB (a "
+                   "logger that writes calibrated floats, on no grid: choose an LSB well below the noise); a note "
+                   "says how far they were off")
 
 
 def device_bits(device: Any) -> int:
@@ -101,6 +105,11 @@ def scale_from_args(a: argparse.Namespace, device: Any = None, *, reader: bool =
     bits = a.bits if a.bits is not None else device_bits(device)
     gravity = a.gravity if a.gravity is not None or device is None else device.gravity_mps2
     scale = scale_from_options(a.units, a.lsb, a.full_scale, bits, gravity)
+    if getattr(a, "round", False):
+        if scale is None or not scale.lsb_g:
+            raise AccelcalError("--round: it rounds readings in m/s^2 or g to their LSB; state the LSB with --lsb "
+                                "VALUE (and --units) or --full-scale G")
+        scale = dataclasses.replace(scale, rounds=True)
     if scale is None and a.units == "counts":
         return COUNTS_STATED
     return scale

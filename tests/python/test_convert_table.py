@@ -189,7 +189,7 @@ def test_a_partly_empty_row_is_refused_naming_its_file_row(tmp_path, capfd):
 
 
 def test_a_time_stamp_going_back_is_refused(tmp_path, capfd):
-    src = _write(tmp_path / "t.csv", "t,accX,accY,accZ", ["0.00,1,2,3", "0.01,1,2,3", "0.01,1,2,3"])
+    src = _write(tmp_path / "t.csv", "t,accX,accY,accZ", ["0.00,1,2,3", "0.01,1,2,3", "0.01,1,2,4"])
     err = _refused(tmp_path, capfd, src)
     assert "row 4, column t" in err and "increase" in err
 
@@ -251,3 +251,36 @@ def test_nothing_like_an_axis_still_cannot_be_told(tmp_path):
     (tmp_path / "f").write_text("time,speed,heading\n0,1,2\n")
     with pytest.raises(InputError, match="cannot tell the format"):
         convert_file(tmp_path / "f")
+
+
+def test_calibrated_floats_on_no_grid_are_rounded_when_asked(tmp_path, capfd):
+    """x-io's NGIMU writes calibrated g with 7 significant digits, on no grid of any LSB:
+    refused as not whole counts, and read with --round to the LSB chosen, with a note of how
+    far the readings were off (at most half an LSB)."""
+    rng = np.random.default_rng(8)
+    g = np.array([0.0123, -0.4937, 0.8312]) + 0.003 * rng.standard_normal((150, 3))
+    rows = [f"{k / 400.0:.7g},{','.join(f'{v:.7g}' for v in r)}" for k, r in enumerate(g)]
+    src = _write(tmp_path / "ngimu.csv", "Time (s),Accelerometer X (g),Accelerometer Y (g),Accelerometer Z (g)", rows)
+    err = _refused(tmp_path, capfd, src, "--units", "g", "--lsb", "1e-6", "--bits", "26")
+    assert "not a whole number" in err
+    rec, dev, err = _convert(tmp_path, capfd, src, "--units", "g", "--lsb", "1e-6", "--bits", "26", "--round")
+    printed = np.array([[float(f"{v:.7g}") for v in r] for r in g])
+    np.testing.assert_array_equal(rec.raw, np.round(printed / 1e-6).astype(int))
+    off = np.abs(printed / 1e-6 - np.round(printed / 1e-6))
+    assert f"rounded to whole LSBs of 1e-06 g (--round): up to {off.max():.3g} of an LSB off" in err
+    assert dev["sample_rate_hz"] == pytest.approx(400.0)
+
+
+def test_a_packet_written_twice_is_left_out_once(tmp_path, capfd):
+    """A row that repeats the one before, time stamp and readings alike, is left out with a
+    note; the same time stamp with other readings is refused naming its row."""
+    c, rate = _counts(60, seed=9), 100.0
+    rows = [f"{k / rate:.4f},{r[0]},{r[1]},{r[2]}" for k, r in enumerate(c)]
+    twice = rows[:10] + [rows[9]] + rows[10:30] + [rows[29]] + rows[30:]
+    src = _write(tmp_path / "log.csv", "t,accX,accY,accZ", twice)
+    rec, _, err = _convert(tmp_path, capfd, src)
+    np.testing.assert_array_equal(rec.raw, c)
+    assert "2 row(s) repeat the row before" in err
+    bad = rows[:10] + [rows[9].rsplit(",", 1)[0] + ",7"] + rows[10:]
+    err = _refused(tmp_path, capfd, _write(tmp_path / "bad.csv", "t,accX,accY,accZ", bad))
+    assert "row 12" in err and "not after" in err
