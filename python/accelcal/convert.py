@@ -39,6 +39,7 @@ import numpy as np
 from .convert_common import (GYRO_RE, INDEX_COLUMNS, NUMBER_RE, Converted, Options, drop_note, find_column, finish,
                              header_cells, read_columns, whole_counts)
 from .convert_log import is_log, read_log
+from .convert_mat import convert_mat, is_mat
 from .convert_named import axis_column, convert_named
 from .convert_regions import POSE_DIRECTIONS, read_regions
 from .convert_time import TIME_COLUMN_RE, unit_in_name
@@ -52,7 +53,7 @@ from .xsens import load_xsens
 __all__ = ["FORMATS", "POSE_DIRECTIONS", "Converted", "detect_format", "convert_file", "read_regions", "axis_column",
            "unit_in_name"]
 
-FORMATS = ("auto", "imu_tk", "imucal", "mpu6050", "csv", "log", "table")
+FORMATS = ("auto", "imu_tk", "imucal", "mpu6050", "csv", "log", "table", "mat")
 ACC = {"imucal": ("acc_x", "acc_y", "acc_z"), "mpu6050": ("ax", "ay", "az")}
 
 
@@ -201,7 +202,7 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
 def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, rate_hz: float | None = None,
                  regions: Any = None, stated_f: bool = False, gravity_mps2: float | None = None,
                  bits: int = 16, blocks: bool = False, time_unit: str = "auto",
-                 units_stated: bool = True) -> Converted:
+                 units_stated: bool = True, variable: str | None = None) -> Converted:
     """Read another tool's file as a contract recording of a triad.
 
     Parameters
@@ -238,6 +239,9 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     units_stated : bool
         Whether ``scale``'s unit was stated (``--units``); when not, a ``--full-scale``
         alone (a Scale in counts) is read in the unit a table's axis names state.
+    variable : str, optional
+        A MATLAB file's array of readings (:mod:`accelcal.convert_mat`), where it holds
+        more than one of 3 or 4 columns.
 
     Returns
     -------
@@ -248,6 +252,17 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     InputError
         One line naming the file and the row and column (or JSON field) at fault.
     """
+    if fmt in ("auto", "mat") and is_mat(path):
+        if regions is not None or stated_f or blocks:
+            raise InputError(str(path), "a MATLAB file's poses are not labelled: --regions, --stated-f and --blocks "
+                             "do not apply")
+        return convert_mat(str(path), path, Options(scale, rate_hz, None, None, False, gravity_mps2, bits, time_unit),
+                           variable)
+    if fmt == "mat":
+        raise InputError(str(path), "--format mat: the file does not begin with a MATLAB header ('MATLAB 5.0 MAT-file' "
+                         "or 'MATLAB 7.3 MAT-file')")
+    if variable is not None:
+        raise InputError(str(path), "--variable names an array of a MATLAB file")
     source, data = read_text_bytes(path)
     if fmt == "auto":
         fmt = detect_format(source, data)

@@ -30,7 +30,9 @@ z (m/s^2)', 'Accelerometer X (g)' or scaledAccelX, a unit in all three names bei
 unit (with --full-scale or --lsb for the LSB); an optional time column t, time, timestamp,
 'Time (s)', time_ms, ..., else --rate; rows whose three readings are all empty are skipped, linear
 acceleration and gravity columns are refused).  Any of them may be compressed (gzip, bzip2, xz,
-zstd, a zip of one file).  Gyroscope columns are dropped with a note."""
+zstd, a zip of one file).  mat: a MATLAB file (version 5 or 7.3, told by its header) holding an
+array of 3 columns x, y, z (--rate) or 4 columns t, x, y, z; --variable names it where there are
+several.  Gyroscope columns are dropped with a note."""
 
 
 def positive(text: Any, option: str) -> float | None:
@@ -57,7 +59,8 @@ def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int
     scale = scale_from_args(a)
     conv = convert_file(a.input, a.format, scale=scale, rate_hz=positive(a.rate, "--rate"), regions=a.regions,
                         stated_f=a.stated_f, gravity_mps2=positive(a.gravity, "--gravity"), bits=bits,
-                        blocks=a.blocks, time_unit=a.time_unit, units_stated=a.units is not None)
+                        blocks=a.blocks, time_unit=a.time_unit, units_stated=a.units is not None,
+                        variable=a.variable)
     write_recording(a.output, conv.recording)
     if a.device_out is not None:
         save_device(conv.device, a.device_out)
@@ -85,6 +88,8 @@ def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
                    help="the time column's unit (default auto: the unit its name states, else seconds, but "
                    "time stamps that would be under 2 Hz in seconds are read in the smallest of "
                    "ms, us, ns that gives more, with a note); t is written in seconds")
+    s.add_argument("--variable", metavar="NAME", help="mat: the array of readings (3 columns x, y, z, or 4: t, x, y, "
+                   "z) where the MATLAB file holds more than one")
     s.add_argument("--regions", metavar="JSON", help="pose regions {name: {\"start\": s, \"end\": e}} in "
                    "sample numbers, end excluded (imucal's session list); names ending in _rot are motions")
     s.add_argument("--blocks", action="store_true", help="log: each run of readings between the logger's text "

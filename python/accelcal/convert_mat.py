@@ -1,0 +1,133 @@
+"""``accelcal convert``'s ``mat`` format: a MATLAB file holding the readings as a numeric
+array of three columns (x, y, z) or four (t, x, y, z), in either layout MATLAB writes --
+version 5 (read by :func:`scipy.io.loadmat`) or 7.3 (HDF5, read by h5py; MATLAB's column-major
+arrays come out transposed there).  Told by the file's first bytes (``MATLAB 5.0 MAT-file``,
+``MATLAB 7.3 MAT-file``), never by its name."""
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import h5py
+import numpy as np
+import scipy.io
+
+from .convert_common import Converted, Options, finish, whole_counts
+from .errors import InputError
+from .units import file_scale, to_counts
+
+__all__ = ["MAT_MAGIC", "is_mat", "mat_arrays", "pick_array", "convert_mat"]
+
+#: the text every MAT-file begins with (its 128-byte header), before the version
+MAT_MAGIC = b"MATLAB "
+#: an array of readings has this many columns (x, y, z; or t, x, y, z) and more rows than that
+READING_COLUMNS = (3, 4)
+
+
+def is_mat(path: Any) -> bool:
+    """Whether the file at ``path`` begins with a MAT-file's header."""
+    try:
+        with open(os.fspath(path), "rb") as f:
+            head = f.read(128)
+    except (OSError, TypeError):
+        return False
+    return head.startswith(MAT_MAGIC) and b"MAT-file" in head[:32]
+
+
+def mat_arrays(path: Any, source: str) -> dict[str, np.ndarray]:
+    """Every real numeric 2-D array of a MAT-file by its name (nested HDF5 groups as
+    ``group/name``), oriented as MATLAB shows it.
+
+    Raises
+    ------
+    InputError
+        A damaged file, or one neither reader takes (naming the reason).
+    """
+    with open(os.fspath(path), "rb") as f:
+        head = f.read(128)
+    out: dict[str, np.ndarray] = {}
+    try:
+        if b"MATLAB 7.3" in head[:20]:
+            with h5py.File(os.fspath(path), "r") as h5:
+                def take(name: str, obj: Any) -> None:
+                    if isinstance(obj, h5py.Dataset) and obj.ndim == 2 and obj.dtype.kind in "iuf":
+                        out[name] = np.asarray(obj[()], dtype=float).T     # HDF5 holds MATLAB's transpose
+                h5.visititems(take)
+        else:
+            for name, v in scipy.io.loadmat(os.fspath(path)).items():
+                if not name.startswith("__") and isinstance(v, np.ndarray) and v.ndim == 2 and v.dtype.kind in "iuf":
+                    out[name] = v.astype(float)
+    except (OSError, ValueError, TypeError, NotImplementedError) as e:
+        raise InputError(source, f"cannot read the MATLAB file: {e}") from None
+    return out
+
+
+def pick_array(arrays: dict[str, np.ndarray], variable: str | None, source: str) -> tuple[str, np.ndarray]:
+    """The array of readings, as (name, an (n, 3 or 4) array): the one named ``variable``, or
+    the only array with 3 or 4 columns (or rows: taken transposed) and more samples than that.
+
+    Raises
+    ------
+    InputError
+        No such array, the named one missing or not of that shape, or several (naming them:
+        ``--variable NAME`` picks one).
+    """
+    def oriented(a: np.ndarray) -> np.ndarray | None:
+        if a.shape[1] in READING_COLUMNS and a.shape[0] > a.shape[1]:
+            return a
+        if a.shape[0] in READING_COLUMNS and a.shape[1] > a.shape[0]:
+            return a.T
+        return None
+
+    shapes = ", ".join(f"{k} {v.shape[0]}x{v.shape[1]}" for k, v in arrays.items()) or "none"
+    if variable is not None:
+        if variable not in arrays:
+            raise InputError(source, f"--variable {variable}: no such numeric 2-D array (the file has: {shapes})")
+        a = oriented(arrays[variable])
+        if a is None:
+            raise InputError(source, f"--variable {variable}: {arrays[variable].shape[0]}x{arrays[variable].shape[1]}; "
+                             "expected 3 columns (x, y, z) or 4 (t, x, y, z) of samples")
+        return variable, a
+    found = {k: a for k, v in arrays.items() if (a := oriented(v)) is not None}
+    if len(found) != 1:
+        what = "no array" if not found else f"{len(found)} arrays ({', '.join(found)})"
+        raise InputError(source, f"{what} of 3 columns (x, y, z) or 4 (t, x, y, z) among the file's numeric arrays "
+                         f"({shapes}): give --variable NAME")
+    return next(iter(found.items()))
+
+
+def convert_mat(source: str, path: Any, opts: Options, variable: str | None = None) -> Converted:
+    """A MAT-file's readings (:func:`pick_array`): three columns x, y, z (``--rate`` gives the
+    rate) or four t, x, y, z (t as a time column: ``--time-unit``, or read in ms/us/ns where
+    seconds would give under 2 Hz), in counts or in the unit ``opts.scale`` states."""
+    name, a = pick_array(mat_arrays(path, source), variable, source)
+    timed = a.shape[1] == 4
+    first = 1 if timed else 0
+    readings = a[:, first:]
+    column = [f"{name}[:, {j + first + 1}]" for j in range(3)]        # MATLAB's 1-based columns
+
+    def locate(i: int, j: int) -> tuple[int, str]:
+        return i + 1, column[j]
+
+    bad = np.argwhere(~np.isfinite(a))
+    if bad.size:
+        i, j = (int(v) for v in bad[0])
+        raise InputError(source, f"{a[i, j]!r} is not a finite number", row=i + 1, column=f"{name}[:, {j + 1}]")
+    t = None
+    if timed:
+        t = a[:, 0]
+        back = np.flatnonzero(np.diff(t) <= 0)
+        if back.size:
+            i = int(back[0]) + 1
+            raise InputError(source, f"t = {t[i]!r} is not after {t[i - 1]!r}: the first column is taken as time "
+                             "stamps, which must increase (--variable names another array)", row=i + 1,
+                             column=f"{name}[:, 1]")
+    elif opts.rate_hz is None:
+        raise InputError(source, f"array {name} has no time column (3 columns): give the sample rate with --rate HZ")
+    scale = file_scale(opts.scale, {}, {}, source)
+    converts = scale is not None and scale.converts
+    notes: list[str] = []
+    raw = to_counts(readings, scale, source, locate, notes=notes) if converts else \
+        whole_counts(readings, source, locate)
+    return finish(source, "mat", raw, np.arange(raw.shape[0]), t, None, opts, scale, converts or bool(np.any(raw < 0)),
+                  opts.rate_hz, {"mat.variable": name}, notes, locate, None)

@@ -1,0 +1,94 @@
+"""``accelcal convert`` of MATLAB files (format ``mat``), both layouts MATLAB writes: version 5
+(scipy.io) and 7.3 (HDF5 with MATLAB's 512-byte header block, arrays stored transposed), as
+two public recordings hold their readings (a phone's LIS3DH in m/s^2; an MPU-6050's t, x, y,
+z in g).  The files are written here from known counts."""
+from __future__ import annotations
+
+import json
+
+import h5py
+import numpy as np
+import pytest
+import scipy.io
+
+from accelcal.recording import read_recording
+from cli_run import run
+
+LSB_G = 1.0 / 4096                      # +-8 g at 16 bits
+
+
+def _counts(n, seed=0):
+    rng = np.random.default_rng(seed)
+    return np.round([30.0, -20.0, 4096.0] + 12.0 * rng.standard_normal((n, 3))).astype(int)
+
+
+def write_v73(path, arrays):
+    """A MATLAB 7.3 file: HDF5 behind a 512-byte block that begins with MATLAB's header."""
+    with h5py.File(path, "w", userblock_size=512) as f:
+        for name, a in arrays.items():
+            f[name] = np.asarray(a, float).T          # MATLAB's column-major array, as HDF5 holds it
+    head = b"MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Thu Nov 26 10:00:00 2026 HDF5 schema 1.00 ."
+    with open(path, "r+b") as f:
+        f.write(head.ljust(128, b" "))
+
+
+def _convert(tmp_path, capfd, src, *args):
+    out, dev = tmp_path / "o.csv", tmp_path / "d.json"
+    rc, said, err, _ = run(["convert", src, *args, "-o", out, "--device-out", dev], capfd)
+    assert rc == 0, err
+    assert said.startswith("mat: ")
+    return read_recording(out), json.loads(dev.read_text()), err
+
+
+@pytest.mark.parametrize("layout", ["v5", "v7.3"])
+def test_t_x_y_z_in_g(tmp_path, capfd, layout):
+    c, rate = _counts(300), 100.0
+    a = np.column_stack([np.arange(300) / rate, c * LSB_G])
+    src = tmp_path / "accel.mat"
+    if layout == "v5":
+        scipy.io.savemat(src, {"accelBuffer": a})
+    else:
+        write_v73(src, {"accelBuffer": a})
+    rec, dev, _ = _convert(tmp_path, capfd, src, "--units", "g", "--full-scale", "8")
+    np.testing.assert_array_equal(rec.raw, c)
+    np.testing.assert_allclose(rec.t, a[:, 0])
+    assert dev["sample_rate_hz"] == pytest.approx(rate) and rec.metadata["mat.variable"] == "accelBuffer"
+
+
+@pytest.mark.parametrize("layout", ["v5", "v7.3"])
+def test_three_columns_need_a_rate_and_several_arrays_a_name(tmp_path, capfd, layout):
+    c = _counts(200, seed=1)
+    src = tmp_path / "phone.mat"
+    arrays = {"acc": c * 9.80665 * LSB_G, "gyro": np.zeros((200, 3)), "note": np.ones((1, 2))}
+    scipy.io.savemat(src, arrays) if layout == "v5" else write_v73(src, arrays)
+    out = tmp_path / "out"
+    out.mkdir()
+    rc, _, err, _ = run(["convert", src, "--units", "mps2", "--full-scale", "8", "--rate", "50", "-o", out / "o.csv"],
+                        capfd)
+    assert rc == 2 and "2 arrays (acc, gyro)" in err and "--variable NAME" in err and not list(out.iterdir())
+    rc, _, err, _ = run(["convert", src, "--units", "mps2", "--full-scale", "8", "--variable", "acc", "-o",
+                         out / "o.csv"], capfd)
+    assert rc == 2 and "no time column" in err and "--rate" in err
+    rec, dev, _ = _convert(tmp_path, capfd, src, "--units", "mps2", "--full-scale", "8", "--rate", "50",
+                           "--variable", "acc")
+    np.testing.assert_array_equal(rec.raw, c)
+    assert dev["sample_rate_hz"] == 50.0
+
+
+def test_a_text_file_is_not_a_mat_file(tmp_path, capfd):
+    src = tmp_path / "a.csv"
+    src.write_text("t,raw_0,raw_1,raw_2\n0,1,2,3\n")
+    rc, _, err, _ = run(["convert", src, "--format", "mat", "-o", tmp_path / "o.csv"], capfd)
+    assert rc == 2 and "does not begin with a MATLAB header" in err
+    rc, _, err, _ = run(["convert", src, "--variable", "x", "-o", tmp_path / "o.csv"], capfd)
+    assert rc == 2 and "--variable names an array of a MATLAB file" in err
+
+
+def test_time_stamps_that_go_back_are_refused_naming_the_row(tmp_path, capfd):
+    c = _counts(50, seed=2)
+    t = np.arange(50) / 100.0
+    t[20] = t[19]
+    src = tmp_path / "a.mat"
+    scipy.io.savemat(src, {"buf": np.column_stack([t, c * LSB_G])})
+    rc, _, err, _ = run(["convert", src, "--units", "g", "--full-scale", "8", "-o", tmp_path / "o.csv"], capfd)
+    assert rc == 2 and "row 21, column buf[:, 1]" in err and "must increase" in err
