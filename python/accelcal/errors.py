@@ -171,13 +171,18 @@ def atomic_write(path: Any, write_fn: Callable[[IO[Any]], Any], mode: str = "w")
     ``write_fn(f)`` writes to a temporary file in the same directory (so the
     final ``os.replace`` is atomic on one filesystem); on any exception the
     temporary file is removed and the exception re-raised, leaving an existing
-    ``path`` untouched.  Text modes use UTF-8 and ``\\n`` line ends.
+    ``path`` untouched.  Text modes use UTF-8 and ``\\n`` line ends.  A directory that
+    does not exist, or a path that is a directory, is :class:`AccelcalError` (one line).
     """
     if mode not in ("w", "wb", "wt"):
         raise ValueError(f"atomic_write mode must be 'w', 'wt' or 'wb', not {mode!r}")
     path = os.fspath(path)
     directory = os.path.dirname(os.path.abspath(path))
     base = os.path.basename(path)
+    if not os.path.isdir(directory):
+        raise AccelcalError(f"{path}: directory {os.path.dirname(path) or directory!r} does not exist")
+    if os.path.isdir(path):
+        raise AccelcalError(f"{path}: is a directory, expected a file name")
     fd, tmp = tempfile.mkstemp(prefix=f".{base}.", suffix=".tmp", dir=directory)
     try:
         if "b" in mode:

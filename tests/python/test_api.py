@@ -86,3 +86,21 @@ def test_readme_python_session_runs(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     exec(compile(block, "README.md", "exec"), {})
     assert (tmp_path / "cal.json").exists() and (tmp_path / "calibration.h").exists()
+
+
+def test_writing_into_a_missing_directory_is_an_accelcal_error(tmp_path):
+    """The README promises AccelcalError for bad input from Python too: an output in a
+    directory that does not exist was a FileNotFoundError naming a temporary file."""
+    dev = ac.default_device()
+    cal = ac.Calibration.nominal(dev)
+    with pytest.raises(ac.AccelcalError, match="does not exist"):
+        ac.header(dev, cal, output=tmp_path / "nope" / "x.h")
+    with pytest.raises(ac.AccelcalError, match="is a directory"):
+        ac.header(dev, cal, output=tmp_path)
+
+
+@pytest.mark.parametrize("deg", [25.0, 90.0])
+def test_a_jig_accuracy_no_jig_has_is_refused(deg):
+    with pytest.raises(ac.AccelcalError, match="small-angle"):
+        ac.calibrate(ac.default_device(), ac.simulate(ac.default_device(), "static_poses", poses="24", seed=1),
+                     jig_accuracy_deg=deg)

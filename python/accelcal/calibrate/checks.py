@@ -89,6 +89,10 @@ def check_identifiable(device, method: str, F: np.ndarray, min_rcond: float) -> 
                          f"pose with f along {add} (body {add} axis up)", field="poses")
 
 
+#: the largest jig accuracy a known-pose fit takes (its priors are small-angle ones)
+MAX_JIG_ACCURACY_DEG = 20.0
+
+
 def jig_accuracy_rad(jig_accuracy_deg: Any) -> float:
     """Validate a stated jig accuracy (degrees, finite, >= 0) and return it in radians."""
     try:
@@ -98,6 +102,10 @@ def jig_accuracy_rad(jig_accuracy_deg: Any) -> float:
     if not (math.isfinite(v) and v >= 0.0):
         raise InputError("<arguments>", f"jig accuracy must be a finite angle >= 0 degrees, got {jig_accuracy_deg!r}",
                          field="jig_accuracy_deg")
+    if v > MAX_JIG_ACCURACY_DEG:
+        raise InputError("<arguments>", f"jig accuracy {v:g} deg: the poses' priors are small-angle ones (a "
+                         f"tangent-plane deviation), good to about {MAX_JIG_ACCURACY_DEG:g} deg; poses that far off "
+                         "are not a jig's: calibrate with --method jigfree", field="jig_accuracy_deg")
     return math.radians(v)
 
 

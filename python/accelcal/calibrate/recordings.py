@@ -35,10 +35,10 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     """
     jig_accuracy_rad(jig_accuracy_deg)
     if method is not None and method not in METHODS + ("jigfree",):
-        raise InputError("<command line>", f"unknown method {method!r}; expected one of "
+        raise InputError("<arguments>", f"unknown method {method!r}; expected one of "
                          f"{', '.join(METHODS + ('jigfree',))}", field="method")
     if not recordings:
-        raise InputError("<command line>", "no recording given")
+        raise InputError("<arguments>", "no recording given")
     recordings, device, notes = distinct_recordings(list(recordings), device)
     rotating = [rotating_samples(rec) for rec in recordings]
     # with several recordings, one without a static pose (a motion, a sweep) adds none and is named

@@ -48,5 +48,5 @@ def as_recordings(recordings: Any, device) -> list:
         check_for_device(r, device, min_samples=2)
         out.append(r)
     if not out:
-        raise InputError("<command line>", "no recording given")
+        raise InputError("<arguments>", "no recording given")
     return out
