@@ -161,6 +161,10 @@ def cmd_calibrate(a):
         warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}), as a jig "
                         f"error of about {hint:.2g} deg would; if the jig is that inaccurate, state it with "
                         "--jig-accuracy (else the offsets absorb it)")
+    elif red is not None and red > 4 and cal.method == "jigfree":
+        warnings.append(f"the poses scatter about the fit beyond their noise (chi2/dof {red:.3g}; the uncertainties are "
+                        "scaled up by it): poses that move while held (a hand's tremor, a slow turn) or an effect the "
+                        "model lacks; 'accelcal diagnose' with this calibration says which")
     elif red is not None and red > 4 and not cross_axis:
         warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}): the "
                         f"'{fit.get('model', cal.method)}' model has no cross-axis terms, which a real sensor "
