@@ -24,7 +24,7 @@ from .convert_cli import add_convert_parser
 from .demo import run_demo
 from .device import default_device, load_device
 from .diagnose import diagnose
-from .effects import describe_effects, parse_effect_spec
+from .effects import describe_effects, params_to_json, parse_effect_spec
 from .errors import AccelcalError, atomic_write
 from .estimators import attitude_from_recording, displacement_from_recording, rate_from_recording, report_plots
 from .header import calibration_header
@@ -33,7 +33,7 @@ from .recording import read_recording, write_columns_csv, write_recording
 from .recording_checks import seconds
 from .report import REPORT_FILES, write_report
 from .resolve import resolve_recording
-from .simulate import simulate
+from .simulate import run_simulation
 from .units_cli import add_units_options, scale_from_args
 
 EXIT_INPUT = 2
@@ -128,8 +128,11 @@ def cmd_simulate(a):
         except json.JSONDecodeError:
             params[k] = v
     cal = _load_cal(a.calibration, dev) if a.calibration else None
-    rec = simulate(dev, a.motion, effects=effects, seed=a.seed, calibration=cal, **params)
-    write_recording(a.output, rec)
+    sim = run_simulation(dev, a.motion, effects=effects, seed=a.seed, calibration=cal, **params)
+    write_recording(a.output, sim.recording)
+    for name in sim.unchanged:
+        print(f"accelcal simulate: note: effect {name} changed no reading ({params_to_json(sim.effects[name])}): "
+              "the motion never reaches it; see 'accelcal simulate --help' for its parameters", file=sys.stderr)
     return 0
 
 

@@ -63,6 +63,8 @@ class Simulation:
     effects (before noise and ADC).  ``state`` is the true channel state after
     the state effects, ``base_state`` before them.  ``effects`` maps each
     effect name to its concrete parameters (see ``effects.Effect.fit``).
+    ``unchanged``: the signal and ADC effects that changed no reading (a clip
+    limit the motion never reaches), for a note.
     """
 
     recording: Recording
@@ -72,6 +74,7 @@ class Simulation:
     clean_counts: np.ndarray
     effects: dict[str, dict[str, Any]] = field(default_factory=dict)
     context: Context | None = None
+    unchanged: list[str] = field(default_factory=list)
 
 
 def _rngs(seed: int) -> tuple[np.random.Generator, np.random.Generator]:
@@ -131,16 +134,23 @@ def run_simulation(device: Any, motion: Any, *, effects: Iterable[Any] = (), see
             ctx = ctx.replace(state=s.effect.modify_state(ctx.state, p, ctx))
     counts = evaluate(traj, ctx.state)
     ctx = ctx.replace(counts=counts)
+    unchanged = []
     for s in ordered:
         if s.effect.stage == "signal":
+            before = ctx.counts
             ctx = ctx.replace(counts=s.effect.apply_signal(ctx.counts, concrete[s.name], ctx))
+            if np.array_equal(before, ctx.counts):
+                unchanged.append(s.name)
     clean = ctx.counts
 
     noise = device.noise_counts()
     x = clean + rng_noise.standard_normal((n, N)) * noise[None, :] if np.any(noise > 0) else clean.copy()
     for s in ordered:
         if s.effect.stage == "adc":
+            before = x
             x = s.effect.apply_signal(x, concrete[s.name], ctx)
+            if np.array_equal(before, x):
+                unchanged.append(s.name)
     raw = np.clip(np.rint(x), device.raw_min, device.raw_max).astype(np.int64)
 
     f_ref = traj.f
@@ -164,7 +174,7 @@ def run_simulation(device: Any, motion: Any, *, effects: Iterable[Any] = (), see
     else:
         rec = recording_from_arrays(traj.t, raw, metadata=meta)
     return Simulation(recording=rec, trajectory=traj, base_state=base, state=ctx.state, clean_counts=clean,
-                      effects=concrete, context=ctx)
+                      effects=concrete, context=ctx, unchanged=unchanged)
 
 
 def simulate(device: Any, motion: Any, *, effects: Iterable[Any] = (), seed: int = 0,

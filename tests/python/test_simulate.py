@@ -695,3 +695,15 @@ def test_a_simulation_too_large_for_memory_is_refused_before_it_starts(motion, p
     rc, _, err, _ = run(["simulate", "--device", "default", "--motion", motion, "--param", param, "-o", "/dev/null"],
                         capfd)
     assert rc == 2 and err.count("\n") == 1 and "more than the 10,000,000 a simulation makes" in err
+
+
+def test_an_effect_that_changes_no_reading_is_noted(capfd, tmp_path):
+    """A clip at 1.5 g (the default) that a hand-held session never reaches changed nothing,
+    without a word; a clip it reaches gives no note."""
+    from cli_run import run
+    rc, _, err, _ = run(["simulate", "--device", "default", "--motion", "static_poses", "--effect", "saturation",
+                         "-o", tmp_path / "a.csv"], capfd)
+    assert rc == 0 and "note: effect saturation changed no reading" in err
+    rc, _, err, _ = run(["simulate", "--device", "default", "--motion", "static_poses", "--effect",
+                         "saturation:limit_g=0.5", "-o", tmp_path / "b.csv"], capfd)
+    assert rc == 0 and "changed no reading" not in err
