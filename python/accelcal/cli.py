@@ -164,10 +164,11 @@ def cmd_calibrate(a):
         warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}), as a jig "
                         f"error of about {hint:.2g} deg would; if the jig is that inaccurate, state it with "
                         "--jig-accuracy (else the offsets absorb it)")
-    elif red is not None and red > 4 and cal.method == "jigfree":
+    elif red is not None and red > 4 and cross_axis:
+        known = "" if cal.method == "jigfree" else ", stated f off the poses' real one"
         warnings.append(f"the poses scatter about the fit beyond their noise (chi2/dof {red:.3g}; the uncertainties are "
-                        "scaled up by it): poses that move while held (a hand's tremor, a slow turn) or an effect the "
-                        "model lacks; 'accelcal diagnose' with this calibration says which")
+                        f"scaled up by it): poses that move while held (a hand's tremor, a slow turn){known} or an "
+                        "effect the model lacks; 'accelcal diagnose' with this calibration says which")
     elif red is not None and red > 4 and not cross_axis:
         warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}): the "
                         f"'{fit.get('model', cal.method)}' model has no cross-axis terms, which a real sensor "
@@ -277,12 +278,13 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
     cal = _load_cal(calibration_path, dev)
     scale = None if units_args is None else scale_from_args(units_args, dev, reader=True)
     rec = read_recording(recording_path, dev.n_channels, scale=scale)
+    notes = [f"accelcal {kind}: note: {rec.source}: {n}" for n in rec.notes]   # the reader's, before t's unit
     _time_note(rec, dev, kind)
     cols = fn(dev, cal, rec, engine, **options)
     write_columns_csv(output, cols, cols.meta)
     if report is not None:
         report_plots(report, cols, rec, kind)
-    return [f"accelcal {kind}: warning: {w}" for w in cols.warnings]
+    return notes + [f"accelcal {kind}: warning: {w}" for w in cols.warnings]
 
 
 def _estimator(a, kind):

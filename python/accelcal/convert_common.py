@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from .convert_regions import label_poses
-from .convert_time import rate_from_t, time_in_seconds
+from .convert_time import bursty, rate_from_t, time_in_seconds
 from .csvtable import convert_columns, cut_short_end, make_table, split_header
 from .device import Device
 from .errors import InputError
@@ -184,6 +184,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
            kept: tuple[np.ndarray, np.ndarray] | None = None, time_column: str | None = None) -> Converted:
     """Range check, sample order, time, poses, metadata and the nominal device, shared by the formats."""
     check_range(raw, opts.bits, signed, source, locate)
+    extra_columns: dict[str, list[str]] = {}
     order = in_sample_order(index, source, index_column, lambda i: locate(i, 0)[0]) if t is None else None
     if order is not None:
         raw, index = raw[order], index[order]
@@ -193,6 +194,12 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
     else:
         t, rel = time_in_seconds(np.asarray(t, dtype=float), opts.time_unit, time_column, source, notes)
         rate = opts.rate_hz if opts.rate_hz is not None else rate_from_t(rel, notes)
+        if bursty(rel):
+            # the samples are the sensor's, evenly spaced; the host's stamps are kept beside them
+            extra_columns["t_host"] = [repr(float(v)) for v in t]
+            t = t[0] + np.arange(t.size) / rate
+            notes.append(f"t is written on the {rate:.6g} Hz grid from the first stamp (the integrators need the "
+                         "sensor's even spacing); the host's stamps are kept as column t_host")
     gravity = opts.gravity_mps2 or (device.gravity_mps2 if device is not None else STANDARD_GRAVITY)
     if kept is not None:  # a contract recording without --regions keeps its labels and references
         (pose, f), names = kept, [str(k) for k in np.unique(kept[0][kept[0] >= 0])]
@@ -205,7 +212,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
         metadata["source_regions"] = " ".join(opts.regions_source.splitlines())
     if names and kept is None:
         metadata["pose_names"] = " ".join(f"{k}={nm}" for k, nm in enumerate(names))
-    rec = Recording(t=t, raw=raw, f=f, pose=pose, metadata=metadata, source=source)
+    rec = Recording(t=t, raw=raw, f=f, pose=pose, metadata=metadata, extra=extra_columns, source=source)
     device_notes: list[str] = []
     if device is None:
         device = nominal_triad(f"{fmt}-triad", rate, gravity, raw, opts.bits, signed, scale, device_notes)
@@ -228,8 +235,16 @@ def whole_counts(values: np.ndarray, source: str, locate) -> np.ndarray:
     Raises
     ------
     InputError
-        The first reading that is not a whole number, naming its row and column.
+        The first reading that is not a whole number, or beyond 2**62, naming its row and
+        column.
     """
+    with np.errstate(invalid="ignore"):
+        big = np.argwhere(~(np.abs(values) < 2.0 ** 62))
+    if big.size:
+        i, j = (int(v) for v in big[0])
+        row, column = locate(i, j)
+        raise InputError(source, f"reading {float(values[i, j]):.10g} does not fit a count of 64 bits", row=row,
+                         column=column)
     frac = np.argwhere(values != np.round(values))
     if frac.size:
         i, j = (int(v) for v in frac[0])

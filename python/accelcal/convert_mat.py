@@ -104,7 +104,7 @@ def convert_mat(source: str, path: Any, opts: Options, variable: str | None = No
     timed = a.shape[1] == 4
     first = 1 if timed else 0
     readings = a[:, first:]
-    column = [f"{name}[:, {j + first + 1}]" for j in range(3)]        # MATLAB's 1-based columns
+    column = [f"{name}(:,{j + first + 1})" for j in range(3)]          # as MATLAB names them (1-based)
 
     def locate(i: int, j: int) -> tuple[int, str]:
         return i + 1, column[j]
@@ -112,18 +112,20 @@ def convert_mat(source: str, path: Any, opts: Options, variable: str | None = No
     bad = np.argwhere(~np.isfinite(a))
     if bad.size:
         i, j = (int(v) for v in bad[0])
-        raise InputError(source, f"{a[i, j]!r} is not a finite number", row=i + 1, column=f"{name}[:, {j + 1}]")
+        raise InputError(source, f"{float(a[i, j])} is not a finite number", row=i + 1, column=f"{name}(:,{j + 1})")
     t = None
     if timed:
         t = a[:, 0]
         back = np.flatnonzero(np.diff(t) <= 0)
         if back.size:
             i = int(back[0]) + 1
-            raise InputError(source, f"t = {t[i]!r} is not after {t[i - 1]!r}: the first column is taken as time "
-                             "stamps, which must increase (--variable names another array)", row=i + 1,
-                             column=f"{name}[:, 1]")
+            raise InputError(source, f"t = {float(t[i]):.10g} is not after {float(t[i - 1]):.10g}: the first column "
+                             "is taken as time stamps, which must increase (--variable names another array)",
+                             row=i + 1, column=f"{name}(:,1)")
     elif opts.rate_hz is None:
         raise InputError(source, f"array {name} has no time column (3 columns): give the sample rate with --rate HZ")
+    elif opts.time_unit != "auto":
+        raise InputError(source, f"--time-unit: array {name} has no time column (3 columns; --rate states its rate)")
     scale = file_scale(opts.scale, {}, {}, source)
     converts = scale is not None and scale.converts
     notes: list[str] = []

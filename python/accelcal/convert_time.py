@@ -10,7 +10,7 @@ import numpy as np
 from .errors import InputError
 
 __all__ = ["TIME_FACTORS", "TIME_COLUMN_RE", "MIN_PLAUSIBLE_HZ", "BURST_SHARE", "unit_in_name", "time_in_seconds",
-           "rate_from_t"]
+           "bursty", "rate_from_t"]
 
 #: the unit of a time column: its factor to seconds
 TIME_FACTORS = {"s": 1.0, "ms": 1e3, "us": 1e6, "ns": 1e9}
@@ -80,18 +80,24 @@ def time_in_seconds(t: np.ndarray, unit: str, column: str | None, source: str,
     return divided(1.0)
 
 
+def bursty(t: np.ndarray) -> bool:
+    """Whether t's median step and its mean step (duration over samples) disagree by more
+    than BURST_SHARE: time stamps taken by a host that reads the sensor in bursts."""
+    if t.size < 3:
+        return False
+    median = float(np.median(np.diff(t)))
+    mean = float(t[-1] - t[0]) / (t.size - 1)
+    return not (median > 0 and mean > 0 and abs(mean / median - 1.0) <= BURST_SHARE)
+
+
 def rate_from_t(t: np.ndarray, notes: list[str]) -> float:
-    """The sample rate t's steps give: from the median step, unless it and the mean step
-    (duration over samples) disagree by more than BURST_SHARE -- time stamps taken by a host
-    that reads the sensor in bursts -- when the mean is taken, with a note."""
+    """The sample rate t's steps give: from the median step, unless the stamps come in
+    bursts (:func:`bursty`), when the mean step is taken, with a note."""
     if t.size < 2:
         return 1.0
-    steps = np.diff(t)
-    median = float(np.median(steps))
+    median = float(np.median(np.diff(t)))
     mean = float(t[-1] - t[0]) / (t.size - 1)
-    if median > 0 and mean > 0 and abs(mean / median - 1.0) <= BURST_SHARE:
-        return 1.0 / median
-    if mean <= 0:
+    if not bursty(t) or mean <= 0:
         return 1.0 / median if median > 0 else 1.0
     notes.append(f"t's median step gives {1.0 / median if median > 0 else float('inf'):.6g} Hz but its {t.size} samples "
                  f"over {float(t[-1] - t[0]):.6g} s give {1.0 / mean:.6g} Hz: the time stamps come in bursts (a host's "

@@ -281,7 +281,8 @@ def convert_column(table: Any, j: int, kind: str) -> np.ndarray:
 def cut_short_end(data: bytes, pos: int, end: int, m: int, first: int) -> tuple[int, str | None]:
     """Where the data rows ``data[pos:end]`` end when the file's last line was cut short: a
     last line with no line end after it and fewer than ``m`` cells (split at commas, or at
-    runs of blanks) -- what a logger stopped mid-write leaves -- is not a row.  Returns the
+    runs of blanks), or ending in an empty last cell -- what a logger stopped mid-write
+    leaves -- is not a row.  Returns the
     new end and a note naming its line (``first``: the first data row's line), or ``end``
     and None.  A short line anywhere else, or one that ends its line, stays an error."""
     if b"\n" in data[end:]:
@@ -290,12 +291,14 @@ def cut_short_end(data: bytes, pos: int, end: int, m: int, first: int) -> tuple[
     if cut < pos:
         return end, None
     text = data[cut + 1:end]
-    cells = text.count(b",") + 1 if b"," in data[pos:cut] else len(text.split())
-    if cells >= m:
+    comma = b"," in data[pos:cut]
+    cells = text.count(b",") + 1 if comma else len(text.split())
+    if cells > m or (cells == m and not (comma and text.rstrip().endswith(b","))):   # '1,2,3,' cut in its last cell
         return end, None
     line = first + data.count(b"\n", pos, cut + 1)
-    return cut, (f"line {line}, the last, is cut short ({cells} of {m} cells, no line end after it: a logger "
-                 "stopped mid-write); it is left out")
+    what = f"{cells} of {m} cells" if cells < m else "its last cell empty"
+    return cut, (f"line {line}, the last, is cut short ({what}, no line end after it: a logger stopped "
+                 "mid-write); it is left out")
 
 
 def make_table(data: bytes, pos: int, end: int, m: int, first: int, source: str) -> Any:

@@ -468,7 +468,9 @@ def write_columns_csv(path: Any, columns: Any, meta: dict | None = None) -> None
         Destination file; replaced only once the whole text is written.
     columns : mapping of str to array_like
         Column name -> (n,) values, in output order (any unit; written as ``'%.9g' % x``
-        per cell, NaN as ``nan``, as ``numpy.savetxt(fmt="%.9g")`` writes them).
+        per cell, NaN as ``nan``, as ``numpy.savetxt(fmt="%.9g")`` writes them; the time
+        column ``t`` exactly, as :func:`write_recording` does: an epoch in seconds needs 16
+        digits).
     meta : dict, optional
         Written first, one ``# key: value`` comment line per item.
     """
@@ -479,7 +481,7 @@ def write_columns_csv(path: Any, columns: Any, meta: dict | None = None) -> None
         for k, v in (meta or {}).items():
             f.write(f"# {k}: {v}\n")
         f.write(",".join(names) + "\n")
-        for chunk in csv_rows(arrays, ["%.9g"] * len(names)):
+        for chunk in csv_rows(arrays, [REPR if k == "t" else "%.9g" for k in names]):
             f.write(chunk)
 
     atomic_write(path, write)

@@ -362,7 +362,7 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
     return n.astype(np.int64)
 
 
-#: readings a column needs before a constant fraction of an LSB is taken for a shifted grid
+#: distinct readings a column needs before a constant fraction of an LSB is taken for a shifted grid
 SHIFT_MIN_VALUES = 20
 #: ... each within this much of a count of the grid
 SHIFT_TOL_COUNTS = 0.01
@@ -373,7 +373,7 @@ def grid_shift(x: np.ndarray) -> float | None:
     as floats) is off a whole number, within SHIFT_TOL_COUNTS, or None."""
     x = np.asarray(x, float)
     x = x[np.isfinite(x)]
-    if x.size < SHIFT_MIN_VALUES:
+    if np.unique(x).size < SHIFT_MIN_VALUES:      # a column of a few values sits on any grid
         return None
     frac = x - np.round(x)
     phase = float(np.angle(np.mean(np.exp(2j * np.pi * frac)))) / (2 * np.pi)

@@ -91,4 +91,4 @@ def test_time_stamps_that_go_back_are_refused_naming_the_row(tmp_path, capfd):
     src = tmp_path / "a.mat"
     scipy.io.savemat(src, {"buf": np.column_stack([t, c * LSB_G])})
     rc, _, err, _ = run(["convert", src, "--units", "g", "--full-scale", "8", "-o", tmp_path / "o.csv"], capfd)
-    assert rc == 2 and "row 21, column buf[:, 1]" in err and "must increase" in err
+    assert rc == 2 and "row 21, column buf(:,1)" in err and "must increase" in err

@@ -284,3 +284,9 @@ def test_a_packet_written_twice_is_left_out_once(tmp_path, capfd):
     bad = rows[:10] + [rows[9].rsplit(",", 1)[0] + ",7"] + rows[10:]
     err = _refused(tmp_path, capfd, _write(tmp_path / "bad.csv", "t,accX,accY,accZ", bad))
     assert "row 12" in err and "not after" in err
+
+
+def test_a_count_beyond_64_bits_is_one_line_naming_it(tmp_path, capfd):
+    src = _write(tmp_path / "h.csv", "t,accX,accY,accZ", ["0.00,99999999999999999999,3,4", "0.01,1,3,4"])
+    err = _refused(tmp_path, capfd, src)
+    assert "row 2, column accX" in err and "1e+20 does not fit a count of 64 bits" in err

@@ -94,7 +94,9 @@ def test_the_unit_a_column_name_states(name, unit):
 def test_host_time_stamps_in_bursts_give_the_sensor_s_rate(tmp_path, capfd, burst):
     """A 100 Hz sensor read by a host every ``burst`` samples: the samples of a read are
     stamped 50 us apart, so t's median step says ~20 kHz.  The device gets the rate of the
-    samples over the duration, and a note says why; --rate states it outright."""
+    samples over the duration, and a note says why; --rate states it outright.  t is written
+    on that rate's grid (the estimators need the even spacing: they refused the host's
+    stamps as 11 M missing samples), the host's stamps as column t_host."""
     n, rate = 1000, 100.0
     k = np.arange(n)
     t = (k // burst) * burst / rate + (k % burst) * 50e-6
@@ -106,9 +108,12 @@ def test_host_time_stamps_in_bursts_give_the_sensor_s_rate(tmp_path, capfd, burs
     got = json.loads((tmp_path / "d.json").read_text())["sample_rate_hz"]
     assert got == pytest.approx((n - 1) / (t[-1] - t[0]), rel=1e-4)
     assert abs(got - rate) < 0.05 * rate
+    rec = read_recording(tmp_path / "r.csv")
+    np.testing.assert_allclose(rec.t, t[0] + np.arange(n) / got, atol=1e-9)
+    np.testing.assert_allclose(np.array(rec.extra["t_host"], float), t, atol=1e-9)
     conv = convert_file(src, rate_hz=100.0)
     assert conv.device.sample_rate_hz == pytest.approx(100.0)
-    np.testing.assert_allclose(conv.recording.t, t, atol=1e-6)
+    np.testing.assert_allclose(conv.recording.t, np.arange(n) / 100.0, atol=1e-9)
 
 
 def test_a_time_unit_for_a_file_without_time_is_refused(tmp_path, capfd):

@@ -302,3 +302,42 @@ def test_gaps_beyond_filling_and_stamps_off_the_grid_are_refused():
     with pytest.raises(InputError, match="not uniform") as ei:
         E.displacement_from_recording(d, cal, recording_from_arrays(t, rec.raw))
     assert "steps off a uniform grid" in str(ei.value)
+
+
+def test_jitter_of_a_quarter_step_is_taken_and_a_stamp_off_the_grid_is_named_at_its_row():
+    """Stamps up to 1/4 step off, some at exactly +-1/4 (a step of 1.5 between two of them was
+    counted as a dropped sample, and the grid then ran off); one stamp 0.3 of a step after another is named at its
+    own row (the straight-line fit had blamed the first rows)."""
+    d = default_triad()
+    rec = run_simulation(d, "linear_actuator", seed=2).recording
+    cal = Calibration.nominal(d)
+    dt = float(np.median(np.diff(rec.t)))
+    jit = np.random.default_rng(4).uniform(-0.25, 0.25, rec.n_samples)
+    jit[100:104] = [0.25, -0.25, 0.25, -0.25]                  # steps of 0.5 and exactly 1.5
+    t = rec.t + jit * dt
+    c = E.displacement_from_recording(d, cal, recording_from_arrays(t, rec.raw))
+    assert len(c["t"]) == rec.n_samples and "filled" not in c
+    t2 = np.insert(rec.t, 300, rec.t[299] + 0.3 * dt)
+    raw2 = np.insert(rec.raw, 300, rec.raw[299], axis=0)
+    with pytest.raises(InputError, match="the step to t = ") as ei:
+        E.displacement_from_recording(d, cal, recording_from_arrays(t2, raw2))
+    assert ei.value.row == 301
+
+
+def test_the_estimator_commands_print_the_reader_s_notes(tmp_path, capfd):
+    """A last line cut short is left out by the reader with a note; displacement (and attitude,
+    rate) printed none of the reader's notes, so the row went silently."""
+    from accelcal.calibration import save_calibration
+    from accelcal.device import save_device
+    from accelcal.recording import write_recording
+    from cli_run import run
+    d = default_triad()
+    save_device(d, tmp_path / "d.json")
+    save_calibration(Calibration.nominal(d), tmp_path / "c.json")
+    write_recording(tmp_path / "r.csv", run_simulation(d, "linear_actuator", seed=2).recording)
+    text = (tmp_path / "r.csv").read_text()
+    (tmp_path / "r.csv").write_text(text + "9.99,12")
+    rc, _, err, _ = run(["displacement", "--device", tmp_path / "d.json", "--calibration", tmp_path / "c.json",
+                         tmp_path / "r.csv", "-o", tmp_path / "o.csv"], capfd)
+    assert rc == 0, err
+    assert "accelcal displacement: note: " in err and "the last, is cut short" in err

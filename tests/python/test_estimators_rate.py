@@ -102,13 +102,17 @@ def test_run_estimator_writes_csv_and_plots(tmp_path):
 
 def test_write_columns_csv_text(tmp_path):
     """'# key: value' comments, the header, then '%.9g' per cell (NaN as 'nan'), as
-    numpy.savetxt(fmt='%.9g') writes the rows."""
-    cols = {"t": np.array([0.0, 1 / 3, 2.5e-12]), "x": np.array([math.pi, np.nan, -1e300])}
+    numpy.savetxt(fmt='%.9g') writes the rows; t exactly (repr), as an epoch in seconds needs
+    16 digits (at 9 every row of a recording stamped 1.7e9 s read 1.7e+09)."""
+    cols = {"t": np.array([0.0, 1 / 3, 1.7e9 + 0.01]), "x": np.array([math.pi, np.nan, -1e300])}
     write_columns_csv(tmp_path / "o.csv", cols, {"engine": "float", "note": "a, b"})
     text = (tmp_path / "o.csv").read_text()
     buf = io.StringIO()
-    np.savetxt(buf, np.column_stack(list(cols.values())), fmt="%.9g", delimiter=",")
-    assert text == "# engine: float\n# note: a, b\nt,x\n" + buf.getvalue()
+    np.savetxt(buf, cols["x"][:, None], fmt="%.9g", delimiter=",")
+    rows = [f"{float(t)!r},{x}" for t, x in zip(cols["t"], buf.getvalue().splitlines())]
+    assert text == "# engine: float\n# note: a, b\nt,x\n" + "\n".join(rows) + "\n"
+    back = np.loadtxt(tmp_path / "o.csv", delimiter=",", skiprows=3, usecols=0)
+    np.testing.assert_array_equal(back, cols["t"])
     write_columns_csv(tmp_path / "e.csv", {})
     assert (tmp_path / "e.csv").read_text() == "\n"
 

@@ -589,3 +589,11 @@ def test_a_column_on_a_shifted_grid_is_read_with_a_note(tmp_path, capfd, shift):
     rc, _, err, _ = run(["convert", src, "--units", "mps2", "--lsb", repr(lsb * 1.37), "--rate", "100", "-o",
                          tmp_path / "p.csv"], capfd)
     assert rc == 2 and "not a whole number" in err
+
+
+def test_a_column_of_a_few_values_is_not_taken_for_a_shifted_grid():
+    """One or two values sit on a grid of any shift: they are refused as not whole, as before."""
+    from accelcal.units import Scale, to_counts
+    vals = np.tile([[3.5, 1.0, 2.0], [7.5, 1.0, 2.0]], (20, 1)) * 0.01
+    with pytest.raises(InputError, match="not a whole number"):
+        to_counts(vals, Scale("g", 0.01, 0.01, "--lsb"), "f", lambda i, j: (i + 1, "c"), notes=[])

@@ -708,3 +708,10 @@ def test_a_last_line_cut_short_is_left_out_with_a_note(tmp_path_factory, n, data
     with pytest.raises(InputError) as ei:
         read_recording(tmp / "b.csv")
     assert ei.value.row == n + 2
+
+
+def test_a_last_line_cut_in_its_last_cell_is_left_out(tmp_path):
+    """'0.30,12,3,' with no line end: the writer stopped after the separator."""
+    (tmp_path / "a.csv").write_text("t,raw_0,raw_1,raw_2\n0.1,1,2,3\n0.2,4,5,6\n0.3,12,3,")
+    rec = read_recording(tmp_path / "a.csv")
+    assert rec.n_samples == 2 and "its last cell empty" in rec.notes[0]

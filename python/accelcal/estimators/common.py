@@ -149,11 +149,20 @@ def on_uniform_grid(rec) -> tuple[Any, np.ndarray, str | None]:
         raise InputError(rec.source, "the recording needs at least 2 samples")
     d = np.diff(t)
     dt = float(np.median(d))
-    k = np.maximum(np.round(d / dt), 1.0)
+    # whole steps, a step of exactly k + 1/2 taken as k (two stamps each a quarter step off)
+    k = np.maximum(np.ceil(d / dt - 0.5 - 1e-9), 1.0)
+    odd = np.flatnonzero(np.abs(d / dt - k) > 2.5 * MAX_JITTER_STEPS)   # two stamps' jitter, and the median's own error
+    if odd.size:
+        i = int(odd[0]) + 1
+        raise InputError(rec.source, f"sample times are not uniform: the step to t = {t[i]:.6g} s is {d[i - 1]:.6g} s, "
+                         f"{d[i - 1] / dt:.3g} of the median step {dt:.6g} s (time stamps up to {MAX_JITTER_STEPS:g} of a "
+                         "step off a uniform grid are taken as jitter): the integrators need a constant rate",
+                         row=rec.line(i), column="t")
     at = np.concatenate([[0], np.cumsum(k).astype(np.int64)])     # each sample's place on the grid
     slope, icpt = np.polyfit(at.astype(float), t, 1) if t.size > 2 else (dt, float(t[0]))
     resid = t - (icpt + slope * at)
-    stray = np.flatnonzero(np.abs(resid) > MAX_JITTER_STEPS * slope)
+    # the fitted grid is itself a little off the true one: a quarter of a step of room beside the jitter's
+    stray = np.flatnonzero(np.abs(resid) > 1.25 * MAX_JITTER_STEPS * slope)
     if stray.size:
         i = int(stray[0])
         raise InputError(rec.source, f"sample times are not uniform: t = {t[i]:.6g} s is {resid[i] / slope:+.2f} "
