@@ -53,6 +53,12 @@ def _read(paths, device, command: str, a=None) -> list:
     comments: units_cli, units.file_scale); mention once, on stderr, the columns that are
     ignored."""
     scale = None if a is None else scale_from_args(a, device, reader=True)
+    seen: dict[Path, str] = {}
+    for p in paths:
+        key = Path(p).resolve()
+        if key in seen:
+            raise AccelcalError(f"{p}: the same recording as {seen[key]} (given twice, its poses would count twice)")
+        seen[key] = str(p)
     recs = [read_recording(p, device.n_channels, scale=scale) for p in paths]
     for r in recs:
         for note in r.notes:

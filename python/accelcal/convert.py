@@ -185,7 +185,7 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
     notes = [f"{info['text_lines']} line(s) of text (the first: {info['first_text']!r}) split the readings into "
              f"{info['blocks']} block(s)" + ("; each block is a pose" if blocks else
                                             "; --blocks labels each as a pose")] if info["text_lines"] else []
-    notes += shifted
+    notes += shifted + ([info["cut"]] if info["cut"] else [])
     k, first = held_runs(raw)
     n = raw.shape[0]
     share = (n - first.size) / (n - 1) if n > 1 else 0.0      # rows that repeat the row before

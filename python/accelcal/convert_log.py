@@ -79,7 +79,7 @@ def read_log(source: str, data: bytes) -> tuple[np.ndarray, list[int], list[str]
         ``block_k`` of each reading (k from 1: the k-th run of readings between text lines).
     info : dict
         ``text_lines`` (count), ``first_text`` (the first text line, shortened), ``blocks``
-        (count).
+        (count), ``cut`` (a note on a last line cut short and left out, or None).
 
     Raises
     ------
@@ -90,8 +90,10 @@ def read_log(source: str, data: bytes) -> tuple[np.ndarray, list[int], list[str]
     values: list[list[str]] = []
     lines: list[int] = []
     block: list[str] = []
-    k, in_block, n_text, first_text = 0, False, 0, ""
-    for no, raw in enumerate(data.splitlines(), start=1):
+    k, in_block, n_text, first_text, cut = 0, False, 0, "", None
+    body = data.splitlines()
+    last = len(body) if not data.endswith(b"\n") else 0     # a last line with no line end after it
+    for no, raw in enumerate(body, start=1):
         text = raw.decode("utf-8", errors="replace").strip()
         if not text or text.startswith("#"):
             continue
@@ -100,6 +102,10 @@ def read_log(source: str, data: bytes) -> tuple[np.ndarray, list[int], list[str]
             n_text += 1
             first_text = first_text or text[:60]
             in_block = False
+            continue
+        if kind == "bad" and no == last and 0 < len(cells) < 3:
+            cut = f"line {no}, the last, is cut short ({len(cells)} of 3 numbers, no line end after it: a logger " \
+                  "stopped mid-write); it is left out"
             continue
         if kind == "bad":
             raise InputError(source, f"expected three numbers (a reading) or a line of text, got {len(cells)} "
@@ -111,6 +117,6 @@ def read_log(source: str, data: bytes) -> tuple[np.ndarray, list[int], list[str]
         block.append(f"block_{k}")
     if not values:
         raise InputError(source, "no reading (a line of three numbers) in the file")
-    info = {"text_lines": n_text, "first_text": first_text, "blocks": k}
+    info = {"text_lines": n_text, "first_text": first_text, "blocks": k, "cut": cut}
     return np.array(values, dtype=float), lines, block, info
 

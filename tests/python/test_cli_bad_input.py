@@ -643,3 +643,14 @@ def test_an_output_that_is_an_input_is_refused(good, argv, capfd, tmp_path):
     rc, _, err, _ = run(argv, capfd)
     assert rc == 2 and err.count("\n") == 1 and "is also an input of this command" in err, err
     assert {p: p.read_bytes() for p in six.iterdir() if p.is_file()} == before
+
+
+def test_a_recording_given_twice_is_refused(good, capfd):
+    """Its poses would count twice (the calibration's chi2 and uncertainties as for twice the
+    data); it went through without a word."""
+    from cli_run import run
+    six = good["six"]
+    rc, _, err, _ = run(["calibrate", "--device", six / "device.json", six / "poses_small.csv",
+                         f"{six}/./poses_small.csv", "-o", good["root"] / "twice.json"], capfd)
+    assert rc == 2 and err.count("\n") == 1 and "given twice" in err
+    assert not (good["root"] / "twice.json").exists()

@@ -79,9 +79,10 @@ def test_ignored_columns_are_named_once(poses, tmp_path, capsys):
     rec = read_recording(poses, 6)
     n = rec.t.shape[0]
     rec.extra = {"gyro_x": ["0.0"] * n, "gyro_y": ["0.0"] * n}
-    path = tmp_path / "with_gyro.csv"
+    path, copy = tmp_path / "with_gyro.csv", tmp_path / "with_gyro_2.csv"
     write_recording(path, rec)
-    assert main(["calibrate", "--device", "default", str(path), str(path), "-o", str(tmp_path / "c.json")]) == 0
+    write_recording(copy, rec)                  # two recordings (one file twice is refused)
+    assert main(["calibrate", "--device", "default", str(path), str(copy), "-o", str(tmp_path / "c.json")]) == 0
     err = capsys.readouterr().err
     assert err.count("ignored columns gyro_x, gyro_y") == 1
 

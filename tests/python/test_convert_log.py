@@ -175,3 +175,18 @@ def test_blocks_is_for_logs(tmp_path, capfd):
     assert load_device(dev_path).sample_rate_hz == 400.0
     rc, _, err, _ = run(["convert", tmp_path / "r.csv", "--blocks", "-o", tmp_path / "o.csv"], capfd)
     assert rc == 2 and "--blocks: csv files have no blocks" in err
+
+
+def test_a_capture_cut_short_in_its_last_line_is_read_with_a_note(tmp_path, capfd):
+    """A monitor stopped mid-line: its last line holds one or two numbers and no line end;
+    the readings before it are read, with a note.  The same line inside the file is refused."""
+    src = tmp_path / "data_sample.csv"
+    counts, _ = capture(src, poses=2, distinct=30, hold=1)
+    src.write_text(src.read_text() + "0.4354937077, -0.32")
+    conv = convert_file(src, "log", scale=_scale(), rate_hz=100.0)
+    np.testing.assert_array_equal(conv.recording.raw, counts)
+    assert any("the last, is cut short (2 of 3 numbers" in n for n in conv.notes)
+    src.write_text(src.read_text() + "\n0.1, 0.2, 0.3\n")
+    rc, _, err, _ = run(["convert", src, "--format", "log", "--units", "mps2", "--lsb", repr(LSB), "--rate", "100",
+                         "-o", tmp_path / "o.csv"], capfd)
+    assert rc == 2 and "got 2 field(s)" in err
