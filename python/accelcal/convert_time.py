@@ -94,6 +94,7 @@ def rate_from_t(t: np.ndarray, notes: list[str]) -> float:
     """The sample rate t's steps give: from the median step, unless the stamps come in
     bursts (:func:`bursty`), when the mean step is taken, with a note."""
     if t.size < 2:
+        notes.append("a single sample: t gives no rate, and the device's 1 Hz is a placeholder (--rate HZ states it)")
         return 1.0
     median = float(np.median(np.diff(t)))
     mean = float(t[-1] - t[0]) / (t.size - 1)

@@ -122,3 +122,11 @@ def test_a_time_unit_for_a_file_without_time_is_refused(tmp_path, capfd):
     rc, _, err, _ = run(["convert", src, "--rate", "100", "--time-unit", "ms", "-o", tmp_path / "r.csv"], capfd)
     assert rc == 2 and err.count("\n") == 1 and "--time-unit" in err and "no time column" in err
     assert not (tmp_path / "r.csv").exists()
+
+
+def test_a_single_sample_says_its_rate_is_a_placeholder(tmp_path):
+    src = tmp_path / "one.csv"
+    _write(src, ["0.5"], _counts(1))
+    conv = convert_file(src)
+    assert conv.device.sample_rate_hz == 1.0 and any("a single sample" in n for n in conv.notes)
+    assert convert_file(src, rate_hz=100.0).device.sample_rate_hz == 100.0
