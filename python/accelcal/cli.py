@@ -61,14 +61,20 @@ def _read(paths, device, command: str, a=None) -> list:
         seen[key] = str(p)
     recs = [read_recording(p, device.n_channels, scale=scale) for p in paths]
     for r in recs:
-        for note in r.notes:
-            print(f"accelcal {command}: note: {r.source}: {note}", file=sys.stderr)
+        for line in _reader_notes(r, command):
+            print(line, file=sys.stderr)
         _time_note(r, device, command)
     ignored = sorted({k for r in recs for k in r.extra})
     if ignored:
         print(f"accelcal {command}: note: ignored column{'s' if len(ignored) > 1 else ''} "
               f"{', '.join(ignored)} (not part of the accelerometer model)", file=sys.stderr)
     return recs
+
+
+def _reader_notes(rec, command: str) -> list[str]:
+    """What the reader did to a recording (a last line cut short, a shifted grid, rounding), one
+    stderr line each."""
+    return [f"accelcal {command}: note: {rec.source}: {n}" for n in rec.notes]
 
 
 def _time_note(rec, device, command: str) -> None:
@@ -284,7 +290,7 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
     cal = _load_cal(calibration_path, dev)
     scale = None if units_args is None else scale_from_args(units_args, dev, reader=True)
     rec = read_recording(recording_path, dev.n_channels, scale=scale)
-    notes = [f"accelcal {kind}: note: {rec.source}: {n}" for n in rec.notes]   # the reader's, before t's unit
+    notes = _reader_notes(rec, kind)            # the reader's, before t's unit adds its own
     _time_note(rec, dev, kind)
     cols = fn(dev, cal, rec, engine, **options)
     write_columns_csv(output, cols, cols.meta)

@@ -8,6 +8,7 @@ import re
 import numpy as np
 
 from .errors import InputError
+from .recording_checks import even_steps
 
 __all__ = ["TIME_FACTORS", "TIME_COLUMN_RE", "MIN_PLAUSIBLE_HZ", "BURST_SHARE", "unit_in_name", "time_in_seconds",
            "bursty", "rate_from_t"]
@@ -83,11 +84,7 @@ def time_in_seconds(t: np.ndarray, unit: str, column: str | None, source: str,
 def bursty(t: np.ndarray) -> bool:
     """Whether t's median step and its mean step (duration over samples) disagree by more
     than BURST_SHARE: time stamps taken by a host that reads the sensor in bursts."""
-    if t.size < 3:
-        return False
-    median = float(np.median(np.diff(t)))
-    mean = float(t[-1] - t[0]) / (t.size - 1)
-    return not (median > 0 and mean > 0 and abs(mean / median - 1.0) <= BURST_SHARE)
+    return t.size >= 3 and not even_steps(t, BURST_SHARE)
 
 
 def rate_from_t(t: np.ndarray, notes: list[str]) -> float:

@@ -18,7 +18,7 @@ import dataclasses
 import numpy as np
 
 from .recording import Recording
-from .recording_checks import rate_for
+from .recording_checks import RATE_TOL, rate_for
 
 __all__ = ["HELD_MODAL_SHARE", "HELD_MAX", "HELD_MIN_RUNS", "held_runs", "held_factor", "distinct_rows",
            "distinct_recordings"]
@@ -28,7 +28,6 @@ HELD_MODAL_SHARE = 0.8     # rows are held when at least this share of the runs 
 HELD_MAX = 16              # ... of at most this many rows (a pose on one code of every channel is a
                            # run as long as the pose) ...
 HELD_MIN_RUNS = 50         # ... over at least this many runs
-RATE_TOL = 0.2             # a device rate within this share of the rows' rate / k is the sensor's own
 
 
 def held_runs(raw: np.ndarray) -> tuple[int, np.ndarray]:

@@ -10,7 +10,8 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["check_for_device", "check_core_input", "seconds", "rate_for", "TIME_UNITS", "TIME_UNIT_TOL", "RATE_TOL"]
+__all__ = ["check_for_device", "check_core_input", "seconds", "even_steps", "rate_for", "TIME_UNITS", "TIME_UNIT_TOL",
+           "RATE_TOL"]
 
 #: time stamps in these units are read as such (a logger's millis() or micros()) ...
 TIME_UNITS = ((1e3, "milliseconds"), (1e6, "microseconds"), (1e9, "nanoseconds"))
@@ -43,6 +44,16 @@ def seconds(rec: Any, device) -> str | None:
     return None
 
 
+def even_steps(t: np.ndarray, share: float) -> bool:
+    """Whether t's median step and its mean step (duration over samples) are both positive
+    and agree within ``share``: no bursts of host stamps, no long pauses."""
+    if t.size < 2:
+        return False
+    median = float(np.median(np.diff(t)))
+    mean = float(t[-1] - t[0]) / (t.size - 1)
+    return median > 0 and mean > 0 and abs(mean / median - 1.0) <= share
+
+
 def rate_for(recordings: list, device) -> tuple[Any, str | None]:
     """The device with the rate the recordings' time stamps give, where that is not its own.
 
@@ -59,13 +70,9 @@ def rate_for(recordings: list, device) -> tuple[Any, str | None]:
         if rec.n_samples >= 3 and np.all(np.diff(rec.t) > 0):
             seconds(rec, device)
         t = np.asarray(rec.t, float)
-        if t.size < 3:
+        if t.size < 3 or not even_steps(t, RATE_TOL):
             return device, None
-        d = np.diff(t)
-        med, mean = float(np.median(d)), float(t[-1] - t[0]) / (t.size - 1)
-        if not (med > 0 and mean > 0) or abs(mean / med - 1.0) > RATE_TOL:
-            return device, None
-        rates.append(1.0 / med)
+        rates.append(1.0 / float(np.median(np.diff(t))))
     if not rates or max(rates) > (1.0 + RATE_TOL) * min(rates):
         return device, None
     rate = float(np.median(rates))

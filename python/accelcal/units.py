@@ -323,7 +323,13 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
         big = ~(np.abs(n) < 2.0 ** 62)
         bad = ~(np.abs(x - n) <= REL_TOL * np.maximum(np.abs(n), 1.0)) | big
     sel = bad & ~big
-    if sel.any():
+    if scale.rounds:
+        off = np.abs(x - n)[~big]
+        if notes is not None and off.size:
+            notes.append(f"readings rounded to whole LSBs of {scale.lsb:.6g} {UNIT_TEXT[scale.units]} (--round): up to "
+                         f"{float(off.max()):.3g} of an LSB off, rms {float(np.sqrt(np.mean(off ** 2))):.3g}")
+        bad = big
+    elif sel.any():
         # a logger that prints its values with few digits ('%g': six significant, trailing zeros
         # dropped) leaves each off its count by up to half a unit in its last significant place, at the
         # most digits any of them shows: such a value is the count it rounds to, where that half unit
@@ -337,12 +343,6 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
         fine = tol <= PRINT_TOL_COUNTS
         ok = fine & (np.abs(x[sel] - n[sel]) <= tol * (1.0 + 1e-9) + REL_TOL * np.maximum(np.abs(n[sel]), 1.0))
         bad[sel] = ~ok
-    if scale.rounds:
-        off = np.abs(x - n)[~big]
-        if notes is not None and off.size:
-            notes.append(f"readings rounded to whole LSBs of {scale.lsb:.6g} {UNIT_TEXT[scale.units]} (--round): up to "
-                         f"{float(off.max()):.3g} of an LSB off, rms {float(np.sqrt(np.mean(off ** 2))):.3g}")
-        bad = big
     if bad.any() and notes is not None:
         for j in np.flatnonzero(bad.any(axis=0) & ~big.any(axis=0)):
             shift = grid_shift(x[:, j])
