@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Sequence
+from typing import Any, Iterable
 
 import numpy as np
 
@@ -153,7 +153,7 @@ def _as_recordings(recordings: Any, device: Device) -> list[Recording]:
 
 
 def calibrate(device: Any, recordings: Any, method: str | None = None, *,
-              jig_accuracy_deg: float = 0.0) -> Calibration:
+              jig_accuracy_deg: float = 0.0, jigfree_model: str = "auto") -> Calibration:
     """Estimate a calibration from static poses (as ``accelcal calibrate``).
 
     Parameters
@@ -165,6 +165,10 @@ def calibrate(device: Any, recordings: Any, method: str | None = None, *,
         Default: ``full`` when every pose has a reference f, ``jigfree`` when none has.
     jig_accuracy_deg : float
         Known poses: the rms angle (deg) by which the jig's poses may be off.
+    jigfree_model : {"auto", "full", "gain", "offset"}
+        Jig-free: the channel model; ``auto`` is ``full``, or, where the poses do not
+        determine it, the first of ``gain`` and ``offset`` they do (the reason in
+        ``extra["fit"]["fallback"]``).
 
     Returns
     -------
@@ -183,7 +187,7 @@ def calibrate(device: Any, recordings: Any, method: str | None = None, *,
     """
     dev = as_device(device)
     return calibrate_recordings(dev, _as_recordings(recordings, dev), method=method,
-                                jig_accuracy_deg=jig_accuracy_deg)
+                                jig_accuracy_deg=jig_accuracy_deg, jigfree_model=jigfree_model)
 
 
 @dataclass

@@ -16,9 +16,9 @@ import numpy as np
 from tqdm import tqdm
 
 from . import __version__
-from .calibrate import JIG_ACCURACY_DEG, calibrate_recordings
-from .calibrate.checks import far_from_nominal
+from .calibrate import JIG_ACCURACY_DEG, JIGFREE_MODELS, calibrate_recordings
 from .calibration import load_calibration, save_calibration
+from .cli_calibrate import calibrate_warnings, calibration_summary, jig_accuracy_arg
 from .cli_paths import check_not_an_input, check_output, check_output_dir
 from .convert_cli import add_convert_parser
 from .demo import run_demo
@@ -148,46 +148,13 @@ def cmd_simulate(a):
     return 0
 
 
-def _jig_accuracy(text) -> float:
-    """--jig-accuracy DEG: a finite angle >= 0 (one-line error naming the option otherwise)."""
-    try:
-        v = float(text)
-    except ValueError:
-        v = float("nan")
-    if not (np.isfinite(v) and v >= 0):
-        raise AccelcalError(f"--jig-accuracy {text!r}: expected a finite angle in degrees >= 0 (the rms "
-                            "rotation angle of the jig's pose errors; 0 = exact references)")
-    return v
-
-
 def cmd_calibrate(a):
     check_output(a.output)
-    jig = _jig_accuracy(a.jig_accuracy)
+    jig = jig_accuracy_arg(a.jig_accuracy)
     dev = _load_device(a.device)
     recs = _read(a.recordings, dev, "calibrate", a)
-    cal = calibrate_recordings(dev, recs, method=a.method, jig_accuracy_deg=jig)
-    fit = cal.extra.get("fit", {}) if isinstance(cal.extra, dict) else {}
-    warnings = []
-    chi2, dof = fit.get("chi2"), fit.get("dof")
-    red = chi2 / dof if chi2 is not None and dof else None
-    cross_axis = fit.get("model", cal.method) in ("full", "jigfree")
-    hint = fit.get("jig_accuracy_consistent_with_scatter_deg")
-    if hint is not None and cross_axis:
-        warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}), as a jig "
-                        f"error of about {hint:.2g} deg would; if the jig is that inaccurate, state it with "
-                        "--jig-accuracy (else the offsets absorb it)")
-    elif red is not None and red > 4 and cross_axis:
-        known = "" if cal.method == "jigfree" else ", stated f off the poses' real one"
-        warnings.append(f"the poses scatter about the fit beyond their noise (chi2/dof {red:.3g}; the uncertainties are "
-                        f"scaled up by it): poses that move while held (a hand's tremor, a slow turn){known} or an "
-                        "effect the model lacks; 'accelcal diagnose' with this calibration says which")
-    elif red is not None and red > 4 and not cross_axis:
-        warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}): the "
-                        f"'{fit.get('model', cal.method)}' model has no cross-axis terms, which a real sensor "
-                        "has; use --method full if the poses determine it")
-    far = far_from_nominal(dev, cal.sensitivity)
-    if far:
-        warnings.append(far)
+    cal = calibrate_recordings(dev, recs, method=a.method, jig_accuracy_deg=jig, jigfree_model=a.jigfree_model)
+    warnings = calibrate_warnings(dev, cal)
     save_calibration(cal, a.output)
     for n in cal.extra.get("notes", []) if isinstance(cal.extra, dict) else []:
         print(f"accelcal calibrate: note: {n}", file=sys.stderr)
@@ -195,52 +162,6 @@ def cmd_calibrate(a):
         print(f"accelcal calibrate: warning: {w}", file=sys.stderr)
     print(calibration_summary(cal, len(recs), a.output))
     return 0
-
-
-def calibration_summary(cal, n_recordings: int, output) -> str:
-    """One paragraph on what a calibration used and how well it fits.
-
-    Parameters
-    ----------
-    cal : Calibration
-        The result of ``calibrate_recordings``.
-    n_recordings : int
-        How many recordings went in.
-    output : path
-        Where it was written.
-
-    Returns
-    -------
-    str
-    """
-    fit = cal.extra.get("fit", {}) if isinstance(cal.extra, dict) else {}
-    n = cal.offsets.shape[0]
-    poses = len(cal.poses_used) if cal.poses_used is not None else None
-    parts = [f"{cal.method} calibration of {n} channel{'s' if n != 1 else ''}"]
-    src = f"from {poses} static pose{'s' if poses != 1 else ''}" if poses is not None else "from the recordings"
-    how = fit.get("poses")
-    parts.append(f"{src} ({how}; {n_recordings} recording{'s' if n_recordings != 1 else ''})" if how
-                 else f"{src} ({n_recordings} recording{'s' if n_recordings != 1 else ''})")
-    text = " ".join(parts) + "."
-    if cal.residual_rms_per_channel is not None:
-        r = np.asarray(cal.residual_rms_per_channel, dtype=float)
-        text += f" Residual rms {np.sqrt(np.mean(r ** 2)):.3g} counts (worst channel {int(np.argmax(r))}: {r.max():.3g})."
-    chi2, dof = fit.get("chi2"), fit.get("dof")
-    if chi2 is not None and dof:
-        text += f" chi2/dof {chi2 / dof:.3g} ({dof} dof)."
-    aside = cal.extra.get("set_aside", []) if isinstance(cal.extra, dict) else []
-    if aside:
-        n_cl = sum(int(d.get("n_clipped", 0)) for d in aside)
-        text += (f" {len(aside)} pose{'s' if len(aside) != 1 else ''} set aside ({n_cl} clipped samples): "
-                 + "; ".join(f"{d['name']} ({d['levels']})" for d in aside[:3]) + ("; ..." if len(aside) > 3 else "")
-                 + ".")
-    if fit.get("jig_accuracy_deg"):
-        text += f" Jig accuracy stated: {fit['jig_accuracy_deg']:g} deg."
-    if cal.positions is not None:
-        text += " Lever arms estimated."
-    if cal.offset_tc is not None or cal.gain_tc is not None:
-        text += " Temperature coefficients fitted."
-    return text + f" Written to {output}."
 
 
 ESTIMATORS = {"attitude": attitude_from_recording, "displacement": displacement_from_recording,
@@ -411,6 +332,12 @@ def build_parser() -> argparse.ArgumentParser:
                    "larger offset errors on +-x,+-y,+-z than stating it, and 16-61x the bound on 24 general "
                    "poses (a warning names the accuracy the residuals imply): state your jig's accuracy.  "
                    "Ignored by jigfree")
+    s.add_argument("--jigfree-model", choices=JIGFREE_MODELS, default="auto",
+                   help="jigfree: the channel model.  full: offset + sensitivity vector per channel (needs 9 pose "
+                   "orientations for a triad); gain: offset + gain along the nominal axis (6); offset: offset only "
+                   "(3).  auto (the default): full, or where the poses do not determine it (too few "
+                   "orientations, a degenerate spread, no convergence) the first of gain and offset they do, "
+                   "with a warning that says why")
     s.add_argument("-o", "--output", required=True, metavar="CAL.json", help="the calibration JSON to write")
     add_units_options(s)
     s.set_defaults(func=cmd_calibrate)

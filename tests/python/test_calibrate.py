@@ -597,22 +597,76 @@ def test_a_recording_without_a_pose_among_several_is_named_and_adds_none():
 
 def test_too_few_orientations_are_counted_as_such_and_a_tilted_pose_is_asked_for():
     """imucal's session converted without its regions: 13 static runs in only its six face
-    orientations.  The jig-free fit needs 9 orientations; a pose held twice gives the same
+    orientations.  The jig-free full fit needs 9 orientations; a pose held twice gives the same
     equation twice, so the count is of orientations (it had gone on and failed to converge,
     blaming "moving poses, or another device?"), and with every face already there the pose
-    to add is a tilted one (it asked for f along -z, which the file had)."""
+    to add is a tilted one (it asked for f along -z, which the file had).  The full model,
+    asked for, is refused so; by default the gain model, which six faces determine, is fitted
+    instead, with full's reason kept, and its offsets and gains are the truth's."""
     d = default_triad()
     rng = np.random.default_rng(7)
-    b, S = draw_truth(d, rng)
+    b, S = draw_truth(d, rng, cross=0.0)
     faces = d.gravity_mps2 * np.vstack([np.eye(3), -np.eye(3)])
     F = np.vstack([faces, faces[[0, 2, 4, 1, 3, 5, 0]]])
     rec = make_recording(d, b, S, F, rng, labels=False, hold=int(2 * d.sample_rate_hz),
                          move=int(0.5 * d.sample_rate_hz))
     with pytest.raises(InputError) as ei:
-        calibrate_recordings(d, [rec], "jigfree")
+        calibrate_recordings(d, [rec], "jigfree", jigfree_model="full")
     msg = str(ei.value)
     assert "needs at least 9 static poses in different orientations, got 6 (13 poses, 6 orientations" in msg
     assert "a corner: equally along x, y and z" in msg
+    cal = calibrate_recordings(d, [rec], "jigfree")
+    fb = cal.extra["fit"]["fallback"]
+    assert fb["from"] == "full" and fb["to"] == "gain" and list(fb["reasons"]) == ["full"]
+    assert "got 6 (13 poses, 6 orientations" in fb["reasons"]["full"]
+    assert cal.extra["fit"]["model"] == "gain" and cal.method == "jigfree"
+    # the truth within 4 of the fit's own 1-sigma (offsets in counts, gains along the axes)
+    assert np.all(np.abs(cal.offsets - b) < 4 * cal.offset_sigma), (cal.offsets - b, cal.offset_sigma)
+    gain = np.sum(cal.sensitivity * d.axes, axis=1)
+    g_sig = np.sum(cal.sensitivity_sigma * d.axes, axis=1)
+    assert np.all(np.abs(gain - np.linalg.norm(S, axis=1)) < 4 * g_sig), (gain - np.linalg.norm(S, axis=1), g_sig)
+
+
+def test_jig_free_auto_falls_back_to_what_the_poses_determine_and_the_cli_says_why(tmp_path, capfd):
+    """Poses in 5 orientations (+-z, +-y, +x; a real hand-held session, sunsided/sensor-fusion's
+    tilt-around-x, had 7 poses in 6 orientations, none along x): neither full (9
+    orientations) nor gain (6) is determined, the offsets are.  The CLI writes the
+    offset model and warns, naming both reasons and --jigfree-model; --jigfree-model full keeps
+    the one-line refusal.  Poses that all face one way determine nothing: full's error."""
+    from cli_run import run
+    from accelcal.device import save_device
+    d = default_triad()
+    save_device(d, tmp_path / "d.json")
+    rng = np.random.default_rng(3)
+    b, S = draw_truth(d, rng)
+    F = d.gravity_mps2 * np.array([[0, 0, 1.0], [0, 1.0, 0], [0, 0, -1.0], [1.0, 0, 0], [0, -1.0, 0], [0, 0, 1.0]])
+    rec = make_recording(d, b, S, F, rng, labels=False, hold=int(2 * d.sample_rate_hz),
+                         move=int(0.5 * d.sample_rate_hz))
+    write_recording(tmp_path / "r.csv", rec)
+    rc, out, err, _ = run(["calibrate", "--device", tmp_path / "d.json", tmp_path / "r.csv", "-o",
+                           tmp_path / "c.json"], capfd)
+    assert rc == 0, err
+    assert "warning: fitted the jig-free 'offset' model (offsets only, no cross-axis terms), as the poses do " \
+           "not determine 'full' or 'gain'." in err, err
+    assert "'gain': jig-free 'gain' calibration of 3 channels needs at least 6 static poses in different " \
+           "orientations, got 5 (6 poses, 5 orientations" in err, err
+    assert "--jigfree-model" in err and "jigfree ('offset' model) calibration of 3 channels" in out
+    cal = json.loads((tmp_path / "c.json").read_text())
+    assert cal["fit"]["model"] == "offset" and cal["fit"]["gauge"].startswith("none needed")
+    # the offsets within 4 sigma of the truth (the cross-axis terms, absent from the model, are small)
+    got = np.array([c["offset_counts"] for c in cal["channels"]])
+    sig = np.array([c["offset_sigma_counts"] for c in cal["channels"]])
+    assert np.all(np.abs(got - b) < 4 * sig), (got - b, sig)
+    rc, _, err, files = run(["calibrate", "--device", tmp_path / "d.json", tmp_path / "r.csv", "-o",
+                             tmp_path / "c2.json", "--jigfree-model", "full"], capfd)
+    assert rc == 2 and "needs at least 9 static poses in different orientations" in err
+    assert not (tmp_path / "c2.json").exists()
+    same = make_recording(d, b, S, np.repeat(F[:1], 3, 0) + np.array([[0, 0.01, 0]]) * np.arange(3)[:, None],
+                          rng, labels=False, hold=int(2 * d.sample_rate_hz), move=int(0.5 * d.sample_rate_hz))
+    with pytest.raises(InputError, match="jig-free 'full'"):
+        calibrate_recordings(d, [same], "jigfree")
+    with pytest.raises(InputError, match="unknown jig-free model 'affine'"):
+        calibrate_recordings(d, [rec], "jigfree", jigfree_model="affine")
 
 
 def test_a_sensitivity_far_from_the_device_file_s_is_warned_of():

@@ -13,7 +13,7 @@ import pytest
 
 PKG = Path(__file__).resolve().parents[2] / "python" / "accelcal"
 METHODS = ("calibrate", "diagnose", "simulate", "estimators")
-TOP = ("cli", "demo", "__init__", "__main__", "api")
+TOP = ("cli", "cli_calibrate", "demo", "__init__", "__main__", "api")
 
 
 def _modules():

@@ -103,11 +103,11 @@ from .lever_arms import calibrate_positions
 from .problem import gauge_rotation
 from .recordings import calibrate_recordings, to_calibration
 from .results import PositionFit, StaticFit
-from .settings import JIG_ACCURACY_DEG, METHODS, TEMP_MIN_SPAN_C
+from .settings import JIG_ACCURACY_DEG, JIGFREE_MODELS, METHODS, TEMP_MIN_SPAN_C
 from .static_model import calibrate_jigfree, fit_static, fit_temperature
 
 __all__ = [
-    "METHODS", "JIG_ACCURACY_DEG", "TEMP_MIN_SPAN_C",
+    "METHODS", "JIGFREE_MODELS", "JIG_ACCURACY_DEG", "TEMP_MIN_SPAN_C",
     "PoseSet", "StaticFit", "PositionFit",
     "detect_static", "estimate_noise", "pose_means", "poses_from_recording",
     "calibrate_known_poses", "calibrate_jigfree", "fit_known_poses", "fit_static", "fit_temperature",

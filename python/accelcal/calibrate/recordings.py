@@ -12,12 +12,12 @@ from .checks import jig_accuracy_rad, pose_label
 from .known_poses import fit_known_poses
 from .lever_arms import calibrate_positions
 from .results import set_aside_entry, to_calibration
-from .settings import JIG_ACCURACY_DEG, METHODS, ROTATION_MIN_RADPS, TEMP_MIN_SPAN_C
+from .settings import JIG_ACCURACY_DEG, JIGFREE_MODELS, METHODS, ROTATION_MIN_RADPS, TEMP_MIN_SPAN_C
 from .static_model import fit_static
 
 
 def calibrate_recordings(device, recordings: Sequence[Any], method: str | None = None, *,
-                         jig_accuracy_deg: float = JIG_ACCURACY_DEG):
+                         jig_accuracy_deg: float = JIG_ACCURACY_DEG, jigfree_model: str = "auto"):
     """Calibrate ``device`` from recordings and return a Calibration.
 
     Static poses: a recording's ``pose`` labels when present, else automatic static
@@ -26,6 +26,10 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     pose has a reference, ``jigfree`` when none has.  ``jig_accuracy_deg``: rms
     rotation angle by which the jig's poses may differ from their references
     (known poses only; see the module notes; default 0 = exact references).
+    ``jigfree_model`` (jig-free only): the channel model, ``full``, ``gain`` or ``offset``;
+    ``auto`` (the default) is ``full``, or, where the poses do not determine it (too few
+    orientations, a degenerate spread, no convergence), the first of ``gain`` and ``offset``
+    they do, with the reason in ``extra["fit"]["fallback"]``.
     Temperature coefficients are fitted when the pose temperatures span at least
     TEMP_MIN_SPAN_C; lever arms when samples rotate (|w| > ROTATION_MIN_RADPS) with
     reference f, w and dw.  Readings held for several rows by a logger faster than the
@@ -34,6 +38,9 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     and is named in those notes; with no pose in any, InputError.
     """
     jig_accuracy_rad(jig_accuracy_deg)
+    if jigfree_model not in JIGFREE_MODELS:
+        raise InputError("<arguments>", f"unknown jig-free model {jigfree_model!r}; expected one of "
+                         f"{', '.join(JIGFREE_MODELS)}", field="jigfree_model")
     if method is not None and method not in METHODS + ("jigfree",):
         raise InputError("<arguments>", f"unknown method {method!r}; expected one of "
                          f"{', '.join(METHODS + ('jigfree',))}", field="method")
@@ -68,7 +75,6 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
             raise InputError(info["source"], f"{pose_label(poses.info, p)} has no reference f_x, f_y, f_z but "
                              "other poses do: give f on every pose, or choose --method jigfree", column="f_x")
     jigfree = method == "jigfree"
-    model_method = "full" if jigfree else method
     if not jigfree and not has_f.all():
         p = int(np.flatnonzero(~has_f)[0])
         info = poses.info[p]
@@ -80,13 +86,14 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     temps = poses.temp
     temperature = bool(np.all(np.isfinite(temps)) and np.ptp(temps) >= TEMP_MIN_SPAN_C)
     try:
+        fallback = None
         if jigfree:
-            fit = fit_static(device, poses, model_method, jigfree=True, temperature=temperature)
+            fit, fallback = fit_jigfree(device, poses, jigfree_model, temperature)
         elif temperature:
-            fit = fit_static(device, poses, model_method, jigfree=False, temperature=True,
+            fit = fit_static(device, poses, method, jigfree=False, temperature=True,
                              jig_accuracy_deg=jig_accuracy_deg)
         else:
-            fit = fit_known_poses(device, poses.means, poses.f_ref, model_method, poses.sem(), poses=poses,
+            fit = fit_known_poses(device, poses.means, poses.f_ref, method, poses.sem(), poses=poses,
                                   jig_accuracy_deg=jig_accuracy_deg)
     except InputError as e:
         if e.source != "<poses>":
@@ -107,9 +114,43 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
         pos_fit = calibrate_positions(device, b, S, raw, f, w, dw, segments=segs, noise=noise,
                                       source=rot[0][0].source)
     cal = to_calibration(device, fit, "jigfree" if jigfree else method, pos_fit)
+    if fallback is not None:
+        cal.extra["fit"]["fallback"] = fallback
     if notes:
         cal.extra["notes"] = notes
     return cal
+
+
+def fit_jigfree(device, poses: PoseSet, model: str, temperature: bool):
+    """The jig-free fit of ``model``; for ``auto``, of ``full``, else of the first of ``gain``
+    and ``offset`` the poses determine.
+
+    Returns
+    -------
+    fit : StaticFit
+    fallback : dict or None
+        ``{"from": "full", "to": model, "reasons": {model tried: why it was not determined}}``
+        when ``auto`` fell back; None otherwise.
+
+    Raises
+    ------
+    InputError
+        ``full``'s own error when no model is determined (for ``auto``).
+    """
+    if model != "auto":
+        return fit_static(device, poses, model, jigfree=True, temperature=temperature), None
+    failed: dict = {}
+    for m in ("full", "gain", "offset"):
+        try:
+            fit = fit_static(device, poses, m, jigfree=True, temperature=temperature)
+        except InputError as e:
+            if e.source != "<poses>":
+                raise
+            failed[m] = e
+            continue
+        return fit, (None if not failed else {"from": "full", "to": m,
+                                              "reasons": {k: v.detail for k, v in failed.items()}})
+    raise failed["full"]
 
 
 def rotating_samples(rec) -> np.ndarray:

@@ -144,6 +144,7 @@ def to_calibration(device, fit: StaticFit, method: str, positions: PositionFit |
                 if fit.jig_accuracy_deg > 0 else "reference f"),
             "gauge": ("sum_i u_i x s_i/|s_i| = 0 (Procrustes: estimated axes rotated as little as possible "
                       "from the nominal ones)") if (fit.jigfree and fit.method == "full") else (
+                "none needed (the sensitivities lie along the nominal axes)" if fit.jigfree else
                 "fixed by the references' priors (the jig's frame)" if fit.jig_accuracy_deg > 0
                 else "fixed by the reference"),
             "chi2": float(fit.chi2), "dof": int(fit.dof),

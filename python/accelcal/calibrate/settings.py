@@ -6,6 +6,11 @@ import numpy as np
 METHODS = ("offset", "gain", "full")
 
 
+#: the jig-free fit's channel model: ``auto`` is ``full``, else the first of ``gain``, ``offset`` the
+#: poses determine (and that converges), with the reason in the calibration's ``extra["fit"]["fallback"]``
+JIGFREE_MODELS = ("auto", "full", "gain", "offset")
+
+
 MIN_RCOND = 0.02           # known poses: normalised design with a smaller sv ratio cannot determine it
 
 

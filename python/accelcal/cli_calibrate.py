@@ -1,0 +1,116 @@
+"""The ``calibrate`` command's words: the --jig-accuracy argument, the warnings a
+calibration calls for and the summary paragraph."""
+from __future__ import annotations
+
+import numpy as np
+
+from .calibrate.checks import far_from_nominal
+from .errors import AccelcalError
+
+
+def jig_accuracy_arg(text) -> float:
+    """--jig-accuracy DEG: a finite angle >= 0 (one-line error naming the option otherwise)."""
+    try:
+        v = float(text)
+    except ValueError:
+        v = float("nan")
+    if not (np.isfinite(v) and v >= 0):
+        raise AccelcalError(f"--jig-accuracy {text!r}: expected a finite angle in degrees >= 0 (the rms "
+                            "rotation angle of the jig's pose errors; 0 = exact references)")
+    return v
+
+
+def calibrate_warnings(dev, cal) -> list[str]:
+    """The warnings a calibration calls for, one line each: a jig-free model reduced from
+    ``full``, poses scattered beyond their noise (with what causes it), a sensitivity far
+    from the device file's.
+
+    Parameters
+    ----------
+    dev : Device
+    cal : Calibration
+        The result of ``calibrate_recordings``.
+
+    Returns
+    -------
+    list of str
+    """
+    fit = cal.extra.get("fit", {}) if isinstance(cal.extra, dict) else {}
+    warnings = []
+    fb = fit.get("fallback")
+    if fb:
+        what = {"gain": "offsets and gains along the nominal axes", "offset": "offsets only"}[fb["to"]]
+        why = " ".join(f"'{m}': {r.rstrip('.')}." for m, r in fb["reasons"].items())
+        warnings.append(f"fitted the jig-free '{fb['to']}' model ({what}, no cross-axis terms), as the poses do not "
+                        f"determine {' or '.join(repr(m) for m in fb['reasons'])}. {why} (--jigfree-model chooses "
+                        "the model)")
+    chi2, dof = fit.get("chi2"), fit.get("dof")
+    red = chi2 / dof if chi2 is not None and dof else None
+    cross_axis = fit.get("model", cal.method) == "full"
+    hint = fit.get("jig_accuracy_consistent_with_scatter_deg")
+    if hint is not None and cross_axis:
+        warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}), as a jig "
+                        f"error of about {hint:.2g} deg would; if the jig is that inaccurate, state it with "
+                        "--jig-accuracy (else the offsets absorb it)")
+    elif red is not None and red > 4 and cross_axis:
+        known = "" if cal.method == "jigfree" else ", stated f off the poses' real one"
+        warnings.append(f"the poses scatter about the fit beyond their noise (chi2/dof {red:.3g}; the uncertainties are "
+                        f"scaled up by it): poses that move while held (a hand's tremor, a slow turn){known} or an "
+                        "effect the model lacks; 'accelcal diagnose' with this calibration says which")
+    elif red is not None and red > 4 and not cross_axis and not fb:
+        use = "--jigfree-model full" if cal.method == "jigfree" else "--method full"
+        warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}): the "
+                        f"'{fit.get('model', cal.method)}' model has no cross-axis terms, which a real sensor "
+                        f"has; use {use} if the poses determine it")
+    far = far_from_nominal(dev, cal.sensitivity)
+    if far:
+        warnings.append(far)
+    return warnings
+
+
+def calibration_summary(cal, n_recordings: int, output) -> str:
+    """One paragraph on what a calibration used and how well it fits.
+
+    Parameters
+    ----------
+    cal : Calibration
+        The result of ``calibrate_recordings``.
+    n_recordings : int
+        How many recordings went in.
+    output : path
+        Where it was written.
+
+    Returns
+    -------
+    str
+    """
+    fit = cal.extra.get("fit", {}) if isinstance(cal.extra, dict) else {}
+    n = cal.offsets.shape[0]
+    poses = len(cal.poses_used) if cal.poses_used is not None else None
+    model = f" ('{fit['model']}' model)" if cal.method == "jigfree" and fit.get("model", "full") != "full" else ""
+    parts = [f"{cal.method}{model} calibration of {n} channel{'s' if n != 1 else ''}"]
+    src = f"from {poses} static pose{'s' if poses != 1 else ''}" if poses is not None else "from the recordings"
+    how = fit.get("poses")
+    parts.append(f"{src} ({how}; {n_recordings} recording{'s' if n_recordings != 1 else ''})" if how
+                 else f"{src} ({n_recordings} recording{'s' if n_recordings != 1 else ''})")
+    text = " ".join(parts) + "."
+    if cal.residual_rms_per_channel is not None:
+        r = np.asarray(cal.residual_rms_per_channel, dtype=float)
+        text += f" Residual rms {np.sqrt(np.mean(r ** 2)):.3g} counts (worst channel {int(np.argmax(r))}: {r.max():.3g})."
+    chi2, dof = fit.get("chi2"), fit.get("dof")
+    if chi2 is not None and dof:
+        text += f" chi2/dof {chi2 / dof:.3g} ({dof} dof)."
+    aside = cal.extra.get("set_aside", []) if isinstance(cal.extra, dict) else []
+    if aside:
+        n_cl = sum(int(d.get("n_clipped", 0)) for d in aside)
+        text += (f" {len(aside)} pose{'s' if len(aside) != 1 else ''} set aside ({n_cl} clipped samples): "
+                 + "; ".join(f"{d['name']} ({d['levels']})" for d in aside[:3]) + ("; ..." if len(aside) > 3 else "")
+                 + ".")
+    if fit.get("jig_accuracy_deg"):
+        text += f" Jig accuracy stated: {fit['jig_accuracy_deg']:g} deg."
+    if cal.positions is not None:
+        text += " Lever arms estimated."
+    if cal.offset_tc is not None or cal.gain_tc is not None:
+        text += " Temperature coefficients fitted."
+    return text + f" Written to {output}."
+
