@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -15,8 +16,11 @@ from .device import Device
 from .jsonfields import JsonFields, check_limits, json_number, read_json, show_json
 from .errors import atomic_write
 
-__all__ = ["Calibration", "KNOWN_KEYS", "load_calibration", "save_calibration", "calibration_from_dict",
+__all__ = ["Calibration", "KNOWN_KEYS", "NOMINAL", "load_calibration", "save_calibration", "calibration_from_dict",
            "calibration_to_dict"]
+
+#: the calibration argument that names the device's datasheet values (load_calibration)
+NOMINAL = "nominal"
 
 # Per-channel optional JSON keys: (Calibration attribute, JSON key, width).
 # Width 1 is a number per channel, 3 a 3-vector.  A channel may leave one out
@@ -317,6 +321,10 @@ def calibration_from_dict(d: Any, source: str = "<dict>", device: Device | None 
 
 
 def load_calibration(path: Any, device: Device | None = None) -> Calibration:
-    """Read and validate a calibration JSON file (see calibration_from_dict)."""
+    """Read and validate a calibration JSON file (see calibration_from_dict).  ``"nominal"``
+    (when no file has that name) is the device's datasheet values (:meth:`Calibration.nominal`):
+    a calibration to diagnose or estimate with before any exists."""
+    if isinstance(path, str) and path == NOMINAL and device is not None and not Path(path).exists():
+        return Calibration.nominal(device)
     doc, source = read_json(path)
     return calibration_from_dict(doc, source, device)

@@ -28,6 +28,7 @@ from .effects import describe_effects, params_to_json, parse_effect_spec
 from .errors import AccelcalError, atomic_write
 from .estimators import attitude_from_recording, displacement_from_recording, rate_from_recording, report_plots
 from .header import calibration_header
+from .held import held_runs, held_text
 from .motions import describe_motions
 from .recording import read_recording, write_columns_csv, write_recording
 from .recording_checks import seconds
@@ -217,7 +218,22 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
     write_columns_csv(output, cols, cols.meta)
     if report is not None:
         report_plots(report, cols, rec, kind)
-    return notes + [f"accelcal {kind}: warning: {w}" for w in cols.warnings]
+    return notes + [f"accelcal {kind}: warning: {w}" for w in held_warnings(rec) + cols.warnings]
+
+
+def held_warnings(rec) -> list[str]:
+    """A per-sample estimator's warning for readings a logger held for several rows
+    (:func:`accelcal.held.held_runs`): its output repeats each reading, and the motion between
+    two readings is not seen."""
+    k, first = held_runs(rec.raw)
+    if k == 1:
+        return []
+    span = float(rec.t[-1] - rec.t[0]) if rec.n_samples > 1 else 0.0
+    rates = (f": the readings change at about {(first.size - 1) / span:.4g} Hz, the rows come at "
+             f"{(rec.n_samples - 1) / span:.4g} Hz") if span > 0 else ""
+    return [f"each reading is held for {held_text(k, first, rec.n_samples)} (the logger read the sensor faster "
+            f"than it updates){rates}; the motion between two readings is not seen, and a held reading looks "
+            "still: a rest found within one is no rest"]
 
 
 def _estimator(a, kind):
@@ -282,7 +298,8 @@ def _simulate_epilog() -> str:
 
 
 _DEVICE = "device description JSON (docs/data-contract.md), or 'default' for the seed's 6-channel prototype"
-_CAL = "calibration JSON, as written by accelcal calibrate"
+_CAL = ("calibration JSON, as written by accelcal calibrate, or 'nominal': the device file's datasheet values "
+        "(zero_counts, counts_per_mps2 along each axis)")
 _REC = "recording CSV (docs/data-contract.md)"
 _RECS = "one or more recording CSVs of the same device"
 _ENGINE = "float: the float64 reference; fixed: the C core with exactly the header's constants"

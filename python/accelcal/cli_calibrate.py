@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .calibrate.checks import far_from_nominal
+from .calibrate.checks import far_from_nominal, poorly_excited
 from .errors import AccelcalError
 
 
@@ -56,12 +56,17 @@ def calibrate_warnings(dev, cal) -> list[str]:
         known = "" if cal.method == "jigfree" else ", stated f off the poses' real one"
         warnings.append(f"the poses scatter about the fit beyond their noise (chi2/dof {red:.3g}; the uncertainties are "
                         f"scaled up by it): poses that move while held (a hand's tremor, a slow turn){known} or an "
-                        "effect the model lacks; 'accelcal diagnose' with this calibration says which")
+                        "effect the model lacks; 'accelcal diagnose' with this calibration tests the effects it knows")
     elif red is not None and red > 4 and not cross_axis and not fb:
         use = "--jigfree-model full" if cal.method == "jigfree" else "--method full"
         warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}): the "
                         f"'{fit.get('model', cal.method)}' model has no cross-axis terms, which a real sensor "
                         f"has; use {use} if the poses determine it")
+    poses = cal.extra.get("poses", []) if isinstance(cal.extra, dict) else []
+    if poses:
+        low = poorly_excited(dev, [p["f_mps2"] for p in poses], cal.offset_sigma)
+        if low:
+            warnings.append(low)
     far = far_from_nominal(dev, cal.sensitivity)
     if far:
         warnings.append(far)

@@ -44,7 +44,7 @@ from .convert_named import axis_column, convert_named
 from .convert_regions import POSE_DIRECTIONS, read_regions
 from .convert_time import TIME_COLUMN_RE, unit_in_name
 from .errors import InputError
-from .held import held_runs
+from .held import held_runs, held_text
 from .recording import read_recording
 from .textinput import is_whitespace_header, read_preamble, read_text_bytes
 from .units import Scale, file_scale, to_counts
@@ -191,7 +191,8 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
     share = (n - first.size) / (n - 1) if n > 1 else 0.0      # rows that repeat the row before
     if k > 1:
         notes.append(f"{100 * share:.0f} % of the rows repeat the row before in all three readings (each reading "
-                     f"held for {k} rows): the logger read the sensor faster than it updates; the distinct readings "
+                     f"held for {held_text(k, first, n)}): the logger read the sensor faster than it updates; the "
+                     "distinct readings "
                      f"come at about {opts.rate_hz / k:.4g} Hz, and successive rows are not independent samples")
     meta = {"log.text_lines": str(info["text_lines"]), "log.blocks": str(info["blocks"]),
             "log.held_share": f"{share:.4f}"}

@@ -6,8 +6,10 @@ would take each reading as several.
 
 :func:`held_runs` tells such a recording from one whose rows repeat by chance (a sensor
 quieter than a code in all channels at rest): held rows come in runs of one length, the
-ratio of the two rates; chance repeats in runs whose most common length is 1 (a geometric
-law).  :func:`distinct_rows` keeps the first row of each run, so that the statistical
+ratio of the two rates, or, where the sensor's rate is no whole fraction of the logger's
+(an LSM303 polled at 10 Hz: runs of 4-10 rows), of a few lengths none of which is 1; chance
+repeats come in runs whose most common length is 1 (a geometric law: runs of one row are
+1/mean of them, over 1/HELD_MAX for runs short enough to be held).  :func:`distinct_rows` keeps the first row of each run, so that the statistical
 commands (calibrate, diagnose) count each reading once.  The per-sample commands (resolve,
 attitude, displacement, rate) keep every row: their output is one line per input row.
 """
@@ -20,22 +22,30 @@ import numpy as np
 from .recording import Recording
 from .recording_checks import RATE_TOL, rate_for
 
-__all__ = ["HELD_MODAL_SHARE", "HELD_MAX", "HELD_MIN_RUNS", "held_runs", "held_factor", "distinct_rows",
-           "distinct_recordings"]
+__all__ = ["HELD_MODAL_SHARE", "HELD_MAX", "HELD_MIN_RUNS", "HELD_SINGLE_SHARE", "HELD_MIN_RUNS_UNEVEN",
+           "held_runs", "held_factor", "held_text", "distinct_rows", "distinct_recordings"]
 
 HELD_MODAL_SHARE = 0.8     # rows are held when at least this share of the runs of identical rows
                            # share one length >= 2 ...
 HELD_MAX = 16              # ... of at most this many rows (a pose on one code of every channel is a
                            # run as long as the pose) ...
 HELD_MIN_RUNS = 50         # ... over at least this many runs
+HELD_SINGLE_SHARE = 0.05   # or, runs of uneven lengths: at most this share of single rows, ...
+HELD_MIN_RUNS_UNEVEN = 20  # ... over at least this many runs, 90 % of them at most HELD_MAX rows long
 
 
 def held_runs(raw: np.ndarray) -> tuple[int, np.ndarray]:
-    """(k, first): how many rows each reading is held for -- the most common length k of the
-    runs of identical rows when it is 2..HELD_MAX and at least HELD_MODAL_SHARE of at least
-    HELD_MIN_RUNS runs have it, else 1 (rows not held; a coarsely quantised jig that holds
-    every channel on one code through poses of one length makes runs as long as its poses)
-    -- and the first row of each run."""
+    """(k, first): how many rows each reading is held for, and the first row of each run of
+    identical rows.
+
+    k is the most common length of the runs when it is 2..HELD_MAX and at least
+    HELD_MODAL_SHARE of at least HELD_MIN_RUNS runs have it; else, for runs of uneven
+    lengths (a sensor rate that is no whole fraction of the logger's), their mean length
+    rounded when at most HELD_SINGLE_SHARE of at least HELD_MIN_RUNS_UNEVEN runs are single
+    rows and 90 % of them at most HELD_MAX rows long; else 1 (rows not held: chance repeats of
+    a sensor quieter than a code are runs of a geometric law, single rows the most common; a
+    coarsely quantised jig that holds every channel on one code through its poses makes runs
+    as long as the poses)."""
     raw = np.asarray(raw)
     new = np.ones(raw.shape[0], bool)
     new[1:] = np.any(raw[1:] != raw[:-1], axis=1)
@@ -45,8 +55,23 @@ def held_runs(raw: np.ndarray) -> tuple[int, np.ndarray]:
         return 1, first
     counts = np.bincount(lengths)
     k = int(np.argmax(counts))
-    held = 2 <= k <= HELD_MAX and lengths.size >= HELD_MIN_RUNS and counts[k] >= HELD_MODAL_SHARE * lengths.size
-    return (k if held else 1), first
+    if 2 <= k <= HELD_MAX and lengths.size >= HELD_MIN_RUNS and counts[k] >= HELD_MODAL_SHARE * lengths.size:
+        return k, first
+    inner = lengths[1:-1]                   # the first and last runs may be cut by the recording's ends
+    if (inner.size >= HELD_MIN_RUNS_UNEVEN and np.mean(inner == 1) <= HELD_SINGLE_SHARE
+            and np.percentile(inner, 90) <= HELD_MAX):
+        return max(2, int(round(float(np.mean(inner))))), first
+    return 1, first
+
+
+def held_text(k: int, first: np.ndarray, n: int) -> str:
+    """How long readings are held, for notes: "4 rows", or "4-10 rows (8 on average)" for runs
+    of uneven lengths (:func:`held_runs`'s k and first over ``n`` rows)."""
+    inner = np.diff(np.append(first, n))[1:-1]
+    lo, hi = (int(inner.min()), int(inner.max())) if inner.size else (k, k)
+    if lo == hi or np.mean(inner == k) >= HELD_MODAL_SHARE:
+        return f"{k} rows"
+    return f"{lo}-{hi} rows ({k} on average)"
 
 
 def held_factor(raw: np.ndarray) -> int:
@@ -60,7 +85,8 @@ def _distinct(rec: Recording) -> tuple[Recording, int, str | None]:
         return rec, 1, None
     span = float(rec.t[-1] - rec.t[0]) if rec.n_samples > 1 else 0.0
     rate = f", about {(first.size - 1) / span:.4g} Hz" if span > 0 else ""
-    note = (f"{rec.source}: each reading is held for {k} rows (the logger read the sensor faster than it "
+    note = (f"{rec.source}: each reading is held for {held_text(k, first, rec.n_samples)} (the logger read the "
+            "sensor faster than it "
             f"updates): the {first.size} distinct readings of the {rec.n_samples} rows are used{rate}")
     return rec.select(first), k, note
 

@@ -16,7 +16,7 @@ from accelcal.calibrate import calibrate_recordings
 from accelcal.convert import convert_file, detect_format
 from accelcal.device import load_device
 from accelcal.diagnose import diagnose
-from accelcal.held import distinct_recordings, distinct_rows, held_factor
+from accelcal.held import distinct_recordings, distinct_rows, held_factor, held_runs, held_text
 from accelcal.recording import read_recording
 from accelcal.units import scale_from_options
 from cli_run import run
@@ -147,6 +147,43 @@ def test_chance_repeats_are_not_held():
     # a static jig on a coarse lattice: 60 poses of 200 rows, each on one code of every channel
     poses = np.repeat(64 * rng.integers(-200, 200, (60, 3)), 200, axis=0)
     assert held_factor(poses) == 1
+
+
+def test_readings_held_for_uneven_runs_are_held(tmp_path, capfd):
+    """A sensor whose rate is no whole fraction of the logger's (a real LSM303 polled at 10 Hz,
+    hu-zza/uBot_firmware: runs of 4-10 rows, no length shared by 80 % of them) holds its
+    readings too: a still recording of 63 runs had been calibrated from "58 static poses" and a
+    slide cut into 25 "rests".  Runs of one length (3) and chance repeats (geometric: single
+    rows the most common; here also with a mean of 8 rows) keep the old verdicts."""
+    from cli_run import run
+    from accelcal.device import save_device, default_triad
+    from accelcal.calibration import Calibration, save_calibration
+    from accelcal.recording import recording_from_arrays, write_recording
+    rng = np.random.default_rng(11)
+    lengths = rng.integers(5, 11, 60)
+    vals = np.round(1000 + 30 * np.cumsum(rng.standard_normal((60, 3)), axis=0)).astype(np.int64)
+    raw = np.repeat(vals, lengths, axis=0)
+    k, first = held_runs(raw)
+    assert k == int(round(float(np.mean(lengths[1:-1])))) and first.size == 60
+    assert held_text(k, first, raw.shape[0]) == f"{lengths[1:-1].min()}-{lengths[1:-1].max()} rows ({k} on average)"
+    # chance repeats with a mean run of 8 rows (p = 7/8 that all three channels repeat)
+    chance = np.cumsum(rng.random((4000, 1)) > 7 / 8, axis=0) * np.array([[1, 1, 1]]) + 1000
+    assert held_factor(chance) == 1
+    # a still sensor logged so: the poses and rests count its readings once, and the estimators say it
+    d = default_triad()
+    save_device(d, tmp_path / "d.json")
+    g = d.counts_per_mps2 * d.gravity_mps2
+    still = np.repeat(np.round(d.zero_counts + np.array([0, 0, 1.0]) * g
+                               + 2.0 * rng.standard_normal((60, 3))).astype(np.int64), lengths, axis=0)
+    rec = recording_from_arrays(np.arange(still.shape[0]) / d.sample_rate_hz, still)
+    write_recording(tmp_path / "r.csv", rec)
+    once, note = distinct_rows(rec)
+    assert once.n_samples == 60 and note and f"held for {held_text(k, first, raw.shape[0])}" in note
+    cal = Calibration(device=d.name, method="full", offsets=d.nominal_offsets(), sensitivity=d.nominal_sensitivity())
+    save_calibration(cal, tmp_path / "c.json")
+    rc, _, err, _ = run(["displacement", "--device", tmp_path / "d.json", "--calibration", tmp_path / "c.json",
+                         tmp_path / "r.csv", "-o", tmp_path / "o.csv"], capfd)
+    assert "warning: each reading is held for" in err and "a rest found within one is no rest" in err, err
 
 
 @pytest.mark.parametrize("body,args,where", [

@@ -15,6 +15,7 @@ from accelcal import estimators as E
 from accelcal.calibration import Calibration, save_calibration
 from accelcal.cli import main
 from accelcal.device import Device, default_device
+from accelcal.errors import InputError
 from accelcal.recording import recording_from_arrays, write_recording
 from accelcal.simulate import run_simulation
 from estimator_devices import G, adxl_pendulum_device
@@ -78,6 +79,45 @@ def test_cli_displacement_with_a_contract_only_device_file(tmp_path):
     lines = [ln for ln in (tmp_path / "out.csv").read_text().splitlines() if not ln.startswith("#")]
     last = dict(zip(lines[0].split(","), lines[-1].split(",")))
     assert abs(float(last["p_x"]) - DISTANCE) <= 0.01 * DISTANCE
+
+
+def test_cli_calibration_nominal_is_the_device_file_s_datasheet_values(tmp_path, capfd):
+    """--calibration nominal: the device file's values, without writing a calibration JSON by
+    hand (a new user's first run, before any calibration exists): the same output as the saved
+    Calibration.nominal."""
+    d = contract_triad(100.0, signed=False)
+    dev = {"name": d.name, "sample_rate_hz": 100.0, "gravity_mps2": G, "raw_min": 0, "raw_max": 10000,
+           "channels": [{"position_m": [0, 0, 0], "axis": list(np.eye(3)[i]), "counts_per_mps2": 1250 / G,
+                         "zero_counts": 5000} for i in range(3)]}
+    (tmp_path / "dev.json").write_text(json.dumps(dev))
+    write_recording(tmp_path / "rec.csv", stop_to_stop(d, 0.02, 7))
+    save_calibration(Calibration.nominal(d), tmp_path / "cal.json")
+    for cal, out in ((str(tmp_path / "cal.json"), "a.csv"), ("nominal", "b.csv")):
+        assert main(["displacement", "--device", str(tmp_path / "dev.json"), "--calibration", cal,
+                     "--output", str(tmp_path / out), "--axis", "x", str(tmp_path / "rec.csv")]) == 0
+    body = [[ln for ln in (tmp_path / o).read_text().splitlines() if not ln.startswith("#")] for o in ("a.csv", "b.csv")]
+    assert body[0] == body[1] and len(body[0]) > 100
+
+
+def test_no_rest_names_the_stillest_stretch_and_why_it_is_no_rest():
+    """An uncalibrated chip reading 7.7 % high (a real LSM303 with its nominal scale: |f| =
+    10.56 m/s^2) had "no rest was detected anywhere" with no word of its |f|; the error names the
+    stillest stretch, its |f| and the cause.  A body that never stops: how far its stillest
+    stretch strays."""
+    d = contract_triad(100.0, signed=False)
+    rec = stop_to_stop(d, 0.02, 3)
+    high = dataclasses.replace(rec, raw=np.round(5000 + 1.077 * (rec.raw - 5000)).astype(np.int64))
+    with pytest.raises(InputError) as ei:
+        E.displacement_from_recording(d, Calibration.nominal(d), high, "float", axis="x")
+    msg = str(ei.value)
+    assert "no rest was detected anywhere" in msg and "the calibration's scale is off" in msg, msg
+    norm = float(msg.split("read |f| = ")[1].split(" ")[0])
+    assert abs(norm - 1.077 * G) < 0.05, msg
+    t = np.arange(600) / 100.0
+    moving = recording_from_arrays(t, np.round(5000 + 1250 * np.column_stack(
+        [np.sin(2 * np.pi * t), np.cos(2 * np.pi * t), np.ones_like(t)])).astype(np.int64))
+    with pytest.raises(InputError, match=r"stray [0-9.]+ m/s\^2 from their mean, beyond the rest's .*never stops"):
+        E.displacement_from_recording(d, Calibration.nominal(d), moving, "float", axis="x")
 
 
 def test_rate_without_noise_mps2_matches_the_stated_noise():

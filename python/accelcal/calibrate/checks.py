@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..static import PoseSet
-from .settings import CANDIDATES, SAME_ORIENTATION_DEG, TILTED, TILTED_AFTER_DEG
+from .settings import CANDIDATES, EXCITATION_MIN_SPAN_G, SAME_ORIENTATION_DEG, TILTED, TILTED_AFTER_DEG
 
 
 def as_means(device, means, what="means") -> np.ndarray:
@@ -221,3 +221,49 @@ def far_from_nominal(device, sensitivity) -> str | None:
     return (f"channel {i}'s sensitivity, {got[i]:.4g} counts per m/s^2, is {ratio[i]:.3g} x the device file's "
             f"{nominal[i]:.4g} ({off.size} of {ratio.size} channels beyond {NOMINAL_FACTOR:g} x either way): a real "
             "chip is within a few %; check the device file and the recording's scale (--full-scale, --lsb)")
+
+
+def poorly_excited(device, F, offset_sigma=None) -> str | None:
+    """A warning when the poses turn some channel's axis through less than
+    EXCITATION_MIN_SPAN_G of f (in g, the largest minus the smallest f . u_i over the poses;
+    +-x, +-y, +-z span 2 g on every axis), else None.  Such a channel's offset and gain trade
+    against each other (a pose set that hardly turns x: x offset +-114 counts, +-28 mg, on a
+    real LSM303 session whose f along x stayed within +-0.29 g).
+
+    Parameters
+    ----------
+    device : Device
+    F : array_like (P, 3)
+        The poses' specific force, m/s^2 (references or jig-free estimates).
+    offset_sigma : array_like (N,), optional
+        The fitted offsets' 1-sigma, counts, to quote.
+    """
+    F = np.asarray(F, float)
+    if F.ndim != 2 or F.shape[0] == 0:
+        return None
+    g = device.gravity_mps2
+    proj = F @ device.axes.T / g                     # (P, N), in g
+    span = proj.max(axis=0) - proj.min(axis=0)
+    low = np.flatnonzero(span < EXCITATION_MIN_SPAN_G)
+    if not low.size:
+        return None
+    parts = []
+    for i in low:
+        sig = ""
+        if offset_sigma is not None and np.isfinite(offset_sigma[i]):
+            mg = 1000.0 * offset_sigma[i] / (device.counts_per_mps2[i] * g)
+            sig = f", offset +-{offset_sigma[i]:.3g} counts ({mg:.2g} mg)"
+        parts.append(f"channel {i}'s f along its axis spans {proj[:, i].min():+.2f}..{proj[:, i].max():+.2f} g{sig}")
+    want = " and ".join(f"{axis_name(device.axes[i], +1)} and {axis_name(device.axes[i], -1)}" for i in low[:3])
+    return (f"the poses hardly turn {low.size} channel(s) ({'; '.join(parts)}; +-x, +-y, +-z span 2 g): the offset "
+            f"and gain of such a channel trade against each other and are poorly determined; add poses with f "
+            f"along {want}")
+
+
+def axis_name(u, sign: int) -> str:
+    """"+x", "-y"... for a unit vector along a body axis, else the vector itself."""
+    u = sign * np.asarray(u, float)
+    j = int(np.argmax(np.abs(u)))
+    if abs(u[j]) > 0.99:
+        return f"{'+' if u[j] > 0 else '-'}{'xyz'[j]}"
+    return "(" + ", ".join(f"{v:.2f}" for v in u) + ")"

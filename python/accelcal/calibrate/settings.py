@@ -51,5 +51,7 @@ TILTED = tuple((f"{a}{b} (45 deg between {a} and {b})",
           for z, sz in (("+z", 1.0), ("-z", -1.0)))
 #: a pose to add is a tilted one when every axis direction has a pose within this (deg)
 TILTED_AFTER_DEG = 20.0
+#: a channel whose axis the poses turn through less f than this (in g; +-x, +-y, +-z: 2 g) is warned of
+EXCITATION_MIN_SPAN_G = 1.0
 #: poses closer than this (deg) are one orientation for the count a jig-free fit needs
 SAME_ORIENTATION_DEG = 3.0

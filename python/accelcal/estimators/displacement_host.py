@@ -179,6 +179,36 @@ def _max_rotation_deg(device, cal, rec, at_rest, dt, noise) -> float:
     return math.degrees(worst)
 
 
+def no_rest_reason(f, t, rp: RestParams) -> str:
+    """Why no rest was found, for the error: the stillest block of ``rp.hold`` samples (blocks
+    at a stride of half a block), how far its f strays from its mean, and, when it is still
+    enough, the |f| that kept it from being a rest (a calibration whose scale is off: an
+    uncalibrated chip 7.7 % high read with its nominal scale).  ``f`` in m/s^2, (n, 3)."""
+    f = np.asarray(f, float)
+    hold = max(int(rp.hold), 2)
+    if f.shape[0] < hold:
+        return f"the recording has {f.shape[0]} samples, fewer than a rest's {hold}"
+    starts = np.arange(0, f.shape[0] - hold + 1, max(1, hold // 2))
+    best = (math.inf, 0, 0.0)
+    for chunk in np.array_split(starts, max(1, starts.size // 4096)):
+        w = f[chunk[:, None] + np.arange(hold)[None, :]]             # (c, hold, 3)
+        m = w.mean(axis=1)
+        dev = np.max(np.abs(w - m[:, None, :]), axis=(1, 2))
+        j = int(np.argmin(dev))
+        if dev[j] < best[0]:
+            best = (float(dev[j]), int(chunk[j]), float(np.linalg.norm(m[j])))
+    dev, i, norm = best
+    if rp.g is None:
+        return f"the stillest {hold} samples stray {dev:.3g} m/s^2 from their mean"
+    where = f"t = {t[i]:.6g}..{t[i + hold - 1]:.6g} s"
+    if dev > rp.dev_max:
+        return (f"the stillest {hold} samples ({where}) stray {dev:.3g} m/s^2 from their mean, beyond the rest's "
+                f"{rp.dev_max:.3g}: the body never stops")
+    return (f"the stillest {hold} samples ({where}) are still (within {dev:.3g} m/s^2) but read |f| = {norm:.4g} "
+            f"m/s^2, beyond {rp.g:g} +- {rp.g_tol:g}: the calibration's scale is off (a chip's nominal scale?); "
+            "calibrate it (accelcal calibrate) and use that calibration")
+
+
 def still_but_turned(f, t, at_rest, rp: RestParams) -> tuple[float, float, float] | None:
     """A stretch where the body is still but not at rest: blocks of ``rp.hold`` samples whose
     f stays within ``rp.dev_max`` of its mean with |f| within ``rp.g_tol`` of g, away from the
@@ -263,7 +293,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
             raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording "
                              f"(rest = |f - mean| <= {rp.dev_max:.3g} m/s^2 for {rp.hold} samples"
                              + (f" with |f| within {rp.g_tol:g} of {rp.g:g} m/s^2" if rp.g is not None else "")
-                             + "): the stop-to-stop method needs a rest at both ends of each motion")
+                             + f"): {no_rest_reason(f, t, rp)}; the stop-to-stop method needs a rest at both ends of "
+                             "each motion")
         v, pp, p_raw = r["v"], r["p"], r["p_raw"]
         at, corrected = r["rest"], r["corrected"]
         is_open = r["open"]
@@ -284,8 +315,9 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                 warnings.append(f"displacement: {int(np.count_nonzero(fl & DISP_SAT))} samples clipped in the "
                                 "fixed-point core")
         if no_rest:
-            raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording: the "
-                             "stop-to-stop method needs a rest at both ends of each motion")
+            raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording: "
+                             f"{no_rest_reason(f, t, rp)}; the stop-to-stop method needs a rest at both ends of "
+                             "each motion")
         v, pp, corrected = retro_correct(t, vq, pq, fl, zq)
         # uncorrected path: add back each end correction zp T^2 / 2 from its sample on
         D = np.zeros((n, 3))
