@@ -10,8 +10,8 @@ import numpy as np
 from .errors import InputError
 from .recording_checks import even_steps
 
-__all__ = ["TIME_FACTORS", "TIME_COLUMN_RE", "MIN_PLAUSIBLE_HZ", "BURST_SHARE", "unit_in_name", "time_in_seconds",
-           "bursty", "rate_from_t"]
+__all__ = ["TIME_FACTORS", "TIME_COLUMN_RE", "MIN_PLAUSIBLE_HZ", "BURST_SHARE", "FLOAT_EXACT", "unit_in_name",
+           "exact_stamps", "time_in_seconds", "bursty", "rate_from_t"]
 
 #: the unit of a time column: its factor to seconds
 TIME_FACTORS = {"s": 1.0, "ms": 1e3, "us": 1e6, "ns": 1e9}
@@ -23,6 +23,11 @@ TIME_WORDS = {"ms": ("ms", "msec", "millis", "millisecond", "milliseconds"),
 MIN_PLAUSIBLE_HZ = 2.0
 #: t's median step and its mean step disagreeing by more than this share: bursty time stamps
 BURST_SHARE = 0.25
+#: float64 holds every whole number below this exactly (a time stamp beyond it, an epoch in
+#: ns, is read as an integer: :func:`exact_stamps`)
+FLOAT_EXACT = 2.0 ** 53
+#: a column of whole numbers (a sign, digits, blanks about them), one a line
+INTEGER_CELLS_RE = re.compile(r"(?:[ \t]*[+-]?[0-9]+[ \t]*\n)*[ \t]*[+-]?[0-9]+[ \t]*")
 #: a table's time column: t, time, timestamp, with a unit in () or [] or after _ (``time_ms``)
 TIME_COLUMN_RE = re.compile(r"(?:t|time|timestamp|time[ _]stamp)(?:\s*[(\[][^)\]]*[)\]]|_[a-z\u00b5]+)?", re.I)
 
@@ -40,18 +45,59 @@ def unit_in_name(name: str | None) -> str | None:
     return None
 
 
+def exact_stamps(cells: list[str]) -> np.ndarray | None:
+    """A time column's cells as int64 when every one is a whole number (digits with an optional
+    sign; no point, no exponent) below 2**62 in magnitude, else None.
+
+    float64 keeps whole numbers exactly only below FLOAT_EXACT (2**53, 104 days in ns): an
+    epoch in nanoseconds (1.7e18) would keep each stamp to 256 ns, 2.6e-4 of a 1 kHz step.
+    Read as integers, the steps are exact (:func:`time_in_seconds` subtracts the first stamp
+    before dividing).
+    """
+    joined = "\n".join(cells)
+    if not cells or joined.count("\n") != len(cells) - 1 or not INTEGER_CELLS_RE.fullmatch(joined):
+        return None
+    values = [int(c) for c in cells]
+    if max(abs(min(values)), abs(max(values))) >= 2 ** 62:      # steps must fit int64 too
+        return None
+    return np.array(values, dtype=np.int64)
+
+
 def time_in_seconds(t: np.ndarray, unit: str, column: str | None, source: str,
                     notes: list[str]) -> tuple[np.ndarray, np.ndarray]:
     """``t`` in seconds: divided by the factor of ``unit`` (s, ms, us, ns), or with ``auto`` of
     the unit the column's name states, else, for time stamps whose steps read as seconds
     would give under MIN_PLAUSIBLE_HZ, of the smallest unit that gives more (a logger's
-    millis(), micros() or an epoch in nanoseconds), with a note.  Returns (t, every time stamp
-    less the first), in seconds: an epoch in seconds keeps ~0.2 us, too coarse for the steps
-    of a fast logger, so the rate is taken from the differences."""
-    t0 = float(t[0]) if t.size else 0.0
+    millis(), micros() or an epoch in nanoseconds), with a note.
+
+    Parameters
+    ----------
+    t : ndarray (n,)
+        The time stamps as written, in their unit: float64, or int64 when written as whole
+        numbers (:func:`exact_stamps`; the differences are then taken exactly).
+    unit : {"auto", "s", "ms", "us", "ns"}
+    column : str or None
+        The time column's name (its unit, ``Time (ms)``).
+    source : str
+        The file, for the error.
+    notes : list of str
+        Appended to: the unit guessed or read from the name.
+
+    Returns
+    -------
+    t, rel : ndarray (n,) float64
+        The time stamps in s, and every stamp less the first in s (an epoch in seconds keeps
+        ~0.2 us, too coarse for the steps of a fast logger, so the rate is taken from these).
+    """
+    exact = t.dtype.kind in "iu"
+    t0 = int(t[0]) if exact and t.size else float(t[0]) if t.size else 0.0
+    steps_from_t0 = (t - t[0]).astype(np.float64) if exact and t.size else np.asarray(t, float) - t0
 
     def divided(k: float) -> tuple[np.ndarray, np.ndarray]:
-        return (t, t - t0) if k == 1.0 else (t0 / k + (t - t0) / k, (t - t0) / k)
+        rel = steps_from_t0 / k
+        if k == 1.0 and not exact:
+            return np.asarray(t, float), rel
+        return float(t0) / k + rel, rel
 
     if unit != "auto":
         if unit not in TIME_FACTORS:
@@ -68,7 +114,7 @@ def time_in_seconds(t: np.ndarray, unit: str, column: str | None, source: str,
         return divided(k)
     if t.size < 3:
         return divided(1.0)
-    steps = np.diff(t)
+    steps = np.diff(t).astype(np.float64)       # exact for int64 stamps
     step = float(np.median(steps[steps > 0])) if np.any(steps > 0) else 0.0
     if step <= 0 or 1.0 / step >= MIN_PLAUSIBLE_HZ:
         return divided(1.0)

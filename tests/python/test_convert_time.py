@@ -47,9 +47,41 @@ def test_finer_time_units_are_read_as_such(tmp_path, capfd, unit, rate, epoch):
     np.testing.assert_allclose(rec.t - rec.t[0], t_s - t_s[0], atol=2e-6)
     dev = json.loads((tmp_path / "d.json").read_text())
     assert dev["sample_rate_hz"] == pytest.approx(rate, rel=1e-4)
-    # an epoch in ns is past float64's 2**53: each stamp keeps ~256 ns, so the rate to 1e-4
+    # the stamps come from float64 seconds since the epoch (~0.2 us apart at best), so the rate to 1e-4
     said = float(out.split(" Hz")[0].rsplit(", ", 1)[1])
     assert said == pytest.approx(rate, rel=1e-4)
+
+
+@pytest.mark.parametrize("header", ["t,raw_0,raw_1,raw_2", "timestamp,accX,accY,accZ"])
+def test_epoch_nanoseconds_are_read_exactly(tmp_path, capfd, header):
+    """A 1 kHz log stamped in epoch ns (a LORD log's ``timestamp``; the csv format's t too):
+    float64 keeps such a stamp to 256 ns, so the rate came out 1e-4 off (999.936 Hz here).
+    The stamps are read as integers and the first subtracted before they become seconds:
+    1000 Hz to 1e-9, and the steps written exact to float64's rounding of the seconds."""
+    n, t0 = 2000, 1_700_000_000_123_456_789
+    ticks = [t0 + k * 1_000_000 for k in range(n)]
+    src = tmp_path / "log.csv"
+    _write(src, [str(v) for v in ticks], _counts(n), header=header)
+    rc, out, err, _ = run(["convert", src, "-o", tmp_path / "r.csv", "--device-out", tmp_path / "d.json"], capfd)
+    assert rc == 0, err
+    assert "t read in ns" in err
+    assert json.loads((tmp_path / "d.json").read_text())["sample_rate_hz"] == pytest.approx(1000.0, rel=1e-9)
+    assert float(out.split(" Hz")[0].rsplit(", ", 1)[1]) == pytest.approx(1000.0, rel=1e-9)
+    conv = convert_file(src)
+    assert conv.device.sample_rate_hz == pytest.approx(1000.0, rel=1e-9)
+    t = conv.recording.t
+    assert t[0] == pytest.approx(t0 / 1e9, abs=1e-6)
+    np.testing.assert_allclose(t - t[0], np.arange(n) / 1000.0, atol=5e-7)   # float64 of 1.7e9 s: 2.4e-7
+
+
+def test_integer_stamps_too_close_for_float64_are_still_in_order(tmp_path):
+    """Stamps 100 ns apart in epoch ns are one float64 (256 ns apart): read as integers they
+    are distinct and increasing (a table refused them as 'not after' the stamp before)."""
+    n, t0 = 50, 1_700_000_000_000_000_000
+    src = tmp_path / "fast.csv"
+    _write(src, [str(t0 + 100 * k) for k in range(n)], _counts(n), header="t_ns,accX,accY,accZ")
+    conv = convert_file(src)
+    assert conv.device.sample_rate_hz == pytest.approx(1e7, rel=1e-9)
 
 
 @pytest.mark.parametrize("rate", [10.0, 100.0, 400.0])
