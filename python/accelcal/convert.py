@@ -236,7 +236,8 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         MIN_PLAUSIBLE_HZ (then the smallest of ms, us, ns that gives more; a note says so).
         Whole-number stamps past float64's 2**53 (an epoch in ns; csv, table) are read as
         integers, their steps exactly.  The recording's t is written in seconds; the device's
-        rate is from t's median step, or from its mean step where the two disagree (bursts; a note).
+        rate is from t's median step, or where its mean step disagrees (bursts of a host's stamps)
+        from the samples between the bursts' stamps (:func:`convert_time.burst_rate`; a note).
     units_stated : bool
         Whether ``scale``'s unit was stated (``--units``); when not, a ``--full-scale``
         alone (a Scale in counts) is read in the unit a table's axis names state.

@@ -11,7 +11,7 @@ from .errors import InputError
 from .recording_checks import even_steps
 
 __all__ = ["TIME_FACTORS", "TIME_COLUMN_RE", "MIN_PLAUSIBLE_HZ", "BURST_SHARE", "FLOAT_EXACT", "unit_in_name",
-           "exact_stamps", "time_in_seconds", "bursty", "rate_from_t"]
+           "exact_stamps", "time_in_seconds", "bursty", "burst_starts", "burst_rate", "rate_from_t"]
 
 #: the unit of a time column: its factor to seconds
 TIME_FACTORS = {"s": 1.0, "ms": 1e3, "us": 1e6, "ns": 1e9}
@@ -133,9 +133,50 @@ def bursty(t: np.ndarray) -> bool:
     return t.size >= 3 and not even_steps(t, BURST_SHARE)
 
 
+def burst_starts(t: np.ndarray) -> np.ndarray:
+    """The first sample of each burst of bursty time stamps (``t`` in s, n >= 2): sample 0 and
+    every sample after a step longer than half the mean step (within a burst the host's stamps
+    are microseconds apart, between bursts several sample periods)."""
+    mean = float(t[-1] - t[0]) / (t.size - 1)
+    return np.concatenate([[0], np.flatnonzero(np.diff(t) > 0.5 * mean) + 1])
+
+
+def burst_rate(t: np.ndarray) -> tuple[float, str]:
+    """The sensor's rate, Hz, from time stamps a host took in bursts (``t`` in s, increasing).
+
+    A burst's stamp is tied to one of its samples: the first (a host that stamps when a burst
+    begins) or the last (one that stamps when it reads what the sensor has buffered).  Each
+    is fitted by least squares -- every burst's first stamp against that sample's number,
+    leaving out the burst the file may have cut (the first one's start, the last one's end)
+    -- and the fit whose residual is smaller gives the rate: samples between stamps over
+    their time.  (n - 1) / duration counted the last burst's other samples over no time:
+    biased by (burst - 1) / n, +2.08 % for 50 rows of 100 Hz in bursts of 2.
+
+    Returns
+    -------
+    rate : float
+        Hz.  With two bursts, the samples between their first stamps over that time; with
+        one, (n - 1) / duration.
+    which : str
+        The burst's sample its stamp was found tied to: "first", "last" ("" without a fit).
+    """
+    starts = burst_starts(t)
+    if starts.size < 3:
+        span = (starts[-1], float(t[starts[-1]] - t[0])) if starts.size == 2 else (t.size - 1, float(t[-1] - t[0]))
+        return span[0] / span[1], ""
+    ends = np.append(starts[1:] - 1, t.size - 1)
+    fits = []
+    for which, anchor, keep in (("first", starts, slice(1, None)), ("last", ends, slice(None, -1))):
+        x, y = anchor[keep].astype(float), t[starts[keep]] - t[0]
+        slope, icpt = np.polyfit(x, y, 1)
+        fits.append((float(np.sqrt(np.mean((y - (icpt + slope * x)) ** 2))), which, float(slope)))
+    _, which, slope = min(fits, key=lambda f: f[0])      # a tie (bursts of one size): the first's
+    return (1.0 / slope, which) if slope > 0 else ((t.size - 1) / float(t[-1] - t[0]), "")
+
+
 def rate_from_t(t: np.ndarray, notes: list[str]) -> float:
-    """The sample rate t's steps give: from the median step, unless the stamps come in
-    bursts (:func:`bursty`), when the mean step is taken, with a note."""
+    """The sample rate t's steps give, Hz (``t`` in s): from the median step, unless the stamps
+    come in bursts (:func:`bursty`), when :func:`burst_rate` gives it, with a note."""
     if t.size < 2:
         notes.append("a single sample: t gives no rate, and the device's 1 Hz is a placeholder (--rate HZ states it)")
         return 1.0
@@ -143,7 +184,10 @@ def rate_from_t(t: np.ndarray, notes: list[str]) -> float:
     mean = float(t[-1] - t[0]) / (t.size - 1)
     if not bursty(t) or mean <= 0:
         return 1.0 / median if median > 0 else 1.0
+    rate, which = burst_rate(t)
+    bursts = burst_starts(t).size
     notes.append(f"t's median step gives {1.0 / median if median > 0 else float('inf'):.6g} Hz but its {t.size} samples "
-                 f"over {float(t[-1] - t[0]):.6g} s give {1.0 / mean:.6g} Hz: the time stamps come in bursts (a host's "
-                 "clock, not the sensor's); the device's rate is the latter (--rate HZ states it)")
-    return 1.0 / mean
+                 f"come in {bursts} bursts over {float(t[-1] - t[0]):.6g} s: the time stamps are a host's clock, not the "
+                 f"sensor's; the device's rate is that of the samples between the bursts' stamps, {rate:.6g} Hz"
+                 + (f" (each burst stamped at its {which} sample)" if which else "") + " (--rate HZ states it)")
+    return rate
