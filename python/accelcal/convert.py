@@ -36,8 +36,8 @@ from typing import Any
 
 import numpy as np
 
-from .convert_common import (GYRO_RE, INDEX_COLUMNS, NUMBER_RE, Converted, Options, drop_note, find_column, finish,
-                             header_cells, read_columns, whole_counts)
+from .convert_common import (GYRO_RE, INDEX_COLUMNS, NUMBER_RE, Converted, Options, drop_note, exact_time, find_column,
+                             finish, header_cells, read_columns, whole_counts)
 from .convert_log import is_log, read_log
 from .convert_mat import convert_mat, is_mat
 from .convert_named import axis_column, convert_named
@@ -235,8 +235,10 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         The time column's unit (csv, imu_tk, table).  ``auto``: the unit its name states, else
         seconds, except time stamps whose steps in seconds would give under
         MIN_PLAUSIBLE_HZ (then the smallest of ms, us, ns that gives more; a note says so).
-        The recording's t is written in seconds; the device's rate is from t's median
-        step, or from its mean step where the two disagree (bursts; a note).
+        Whole-number stamps past float64's 2**53 (an epoch in ns; csv, table) are read as
+        integers, their steps exactly.  The recording's t is written in seconds; the device's
+        rate is from t's median step, or where its mean step disagrees (bursts of a host's stamps)
+        from the samples between the bursts' stamps (:func:`convert_time.burst_rate`; a note).
     units_stated : bool
         Whether ``scale``'s unit was stated (``--units``); when not, a ``--full-scale``
         alone (a Scale in counts) is read in the unit a table's axis names state.
@@ -294,7 +296,9 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         kept = (rec.pose, rec.f) if fmt == "csv" and opts.regions is None else None
         if kept is not None and stated_f:
             raise InputError(source, "--stated-f: a recording's poses are its own; give --regions to name them")
-        return finish(source, fmt, rec.raw, np.arange(rec.n_samples), rec.t, None, opts, scale, signed, None,
+        t = rec.t if fmt != "csv" else exact_time(      # an epoch in ns, which float64 rounds, as int64
+            rec.t, lambda: read_columns(source, data, read_preamble(data), {"t": "text"})[1]["t"])
+        return finish(source, fmt, rec.raw, np.arange(rec.n_samples), t, None, opts, scale, signed, None,
                       dict(rec.metadata), list(rec.notes), lambda i, j: (rec.line(i), f"raw_{j}"), None, device, kept,
                       time_column="t" if fmt == "csv" else None)
     pre = read_preamble(data)

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from .convert_regions import label_poses
-from .convert_time import bursty, rate_from_t, time_in_seconds
+from .convert_time import FLOAT_EXACT, bursty, exact_stamps, rate_from_t, time_in_seconds
 from .csvtable import convert_columns, cut_short_end, make_table, split_header
 from .device import Device
 from .errors import InputError
@@ -20,8 +20,8 @@ from .textinput import is_whitespace_header, split_whitespace_header, whitespace
 from .units import STANDARD_GRAVITY, Scale
 
 __all__ = ["Converted", "Options", "INDEX_COLUMNS", "GYRO_RE", "NUMBER_RE", "header_cells", "read_columns",
-           "find_column", "adc_range", "nominal_triad", "check_range", "in_sample_order", "finish", "drop_note",
-           "whole_counts"]
+           "find_column", "exact_time", "adc_range", "nominal_triad", "check_range", "in_sample_order", "finish",
+           "drop_note", "whole_counts"]
 
 INDEX_COLUMNS = ("n_samples", "samples")
 GYRO_RE = re.compile(r"(gyr|gyro|g)[_ ]?[xyz]|w_?[xyz]", re.I)
@@ -130,6 +130,34 @@ def find_column(names: list[str], wanted: str) -> str | None:
     return next((n for n in names if n.strip().lower() == wanted), None)
 
 
+def exact_time(stamps: np.ndarray, cells, rows: np.ndarray | None = None) -> np.ndarray:
+    """A time column read exactly where float64 rounds it: ``stamps`` (as read, float64, in
+    the column's unit) beyond FLOAT_EXACT in magnitude (an epoch in ns) whose cells are all
+    whole numbers (:func:`convert_time.exact_stamps`) are returned as int64; else ``stamps``.
+
+    Parameters
+    ----------
+    stamps : ndarray (n,) float64
+        The time column as read (NaN where empty).
+    cells : callable
+        Returns the column's n cells as text (called only when needed: a table's ``strings``).
+    rows : ndarray of int, optional
+        The rows that count (a table's rows with readings); the others are 0 in the int64
+        result.  Default: all.
+    """
+    rows = np.arange(stamps.size) if rows is None else rows
+    t = stamps[rows]
+    if not np.any(np.abs(t[np.isfinite(t)]) >= FLOAT_EXACT):
+        return stamps
+    text = cells()
+    exact = exact_stamps([text[i] for i in rows.tolist()])
+    if exact is None:
+        return stamps
+    out = np.zeros(stamps.size, dtype=np.int64)
+    out[rows] = exact
+    return out
+
+
 def adc_range(bits: int, signed: bool) -> tuple[int, int]:
     return (-(2 ** (bits - 1)), 2 ** (bits - 1) - 1) if signed else (0, 2 ** bits - 1)
 
@@ -192,7 +220,9 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
     if t is None:
         t = index / rate
     else:
-        t, rel = time_in_seconds(np.asarray(t, dtype=float), opts.time_unit, time_column, source, notes)
+        t = np.asarray(t)           # int64 from exact_time: an epoch in ns
+        t, rel = time_in_seconds(t if t.dtype.kind in "iu" else t.astype(float), opts.time_unit, time_column, source,
+                                 notes)
         rate = opts.rate_hz if opts.rate_hz is not None else rate_from_t(rel, notes)
         if bursty(rel):
             # the samples are the sensor's, evenly spaced; the host's stamps are kept beside them

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .convert_common import Converted, Options, drop_note, finish, read_columns, header_cells, whole_counts
+from .convert_common import Converted, Options, drop_note, exact_time, finish, read_columns, header_cells, whole_counts
 from .convert_time import TIME_COLUMN_RE
 from .csvtable import got_text
 from .errors import InputError
@@ -225,8 +225,11 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
     rows = present_rows(source, np.column_stack([values[a] for a in acc]), table, axes, js, notes)
     if rows.size == 0:
         raise InputError(source, f"no row has readings in {', '.join(acc)}", row=pre.header_line)
+    stamps = None
     if time_column is not None:
-        rows = unrepeated(rows, values[time_column], np.column_stack([values[a] for a in acc]), notes)
+        jt = names.index(time_column)
+        stamps = exact_time(values[time_column], lambda: table.strings(jt), rows)   # an epoch in ns: int64
+        rows = unrepeated(rows, stamps, np.column_stack([values[a] for a in acc]), notes)
     matrix = np.column_stack([values[a][rows] for a in acc])
 
     def locate(i: int, j: int) -> tuple[int, str]:
@@ -234,8 +237,7 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
 
     converts = scale is not None and scale.converts
     raw = to_counts(matrix, scale, source, locate, notes=notes) if converts else whole_counts(matrix, source, locate)
-    t = None if time_column is None else table_time(source, values[time_column], table, rows, time_column,
-                                                    names.index(time_column))
+    t = None if stamps is None else table_time(source, stamps, table, rows, time_column, jt)
     used = set(want)
     dropped = [c for c in names if c and c not in used and re.search(r"gyr", c, re.I)]
     ignored = [c for c in names if c and c not in used and c not in dropped]

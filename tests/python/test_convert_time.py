@@ -47,9 +47,41 @@ def test_finer_time_units_are_read_as_such(tmp_path, capfd, unit, rate, epoch):
     np.testing.assert_allclose(rec.t - rec.t[0], t_s - t_s[0], atol=2e-6)
     dev = json.loads((tmp_path / "d.json").read_text())
     assert dev["sample_rate_hz"] == pytest.approx(rate, rel=1e-4)
-    # an epoch in ns is past float64's 2**53: each stamp keeps ~256 ns, so the rate to 1e-4
+    # the stamps come from float64 seconds since the epoch (~0.2 us apart at best), so the rate to 1e-4
     said = float(out.split(" Hz")[0].rsplit(", ", 1)[1])
     assert said == pytest.approx(rate, rel=1e-4)
+
+
+@pytest.mark.parametrize("header", ["t,raw_0,raw_1,raw_2", "timestamp,accX,accY,accZ"])
+def test_epoch_nanoseconds_are_read_exactly(tmp_path, capfd, header):
+    """A 1 kHz log stamped in epoch ns (a LORD log's ``timestamp``; the csv format's t too):
+    float64 keeps such a stamp to 256 ns, so the rate came out 1e-4 off (999.936 Hz here).
+    The stamps are read as integers and the first subtracted before they become seconds:
+    1000 Hz to 1e-9, and the steps written exact to float64's rounding of the seconds."""
+    n, t0 = 2000, 1_700_000_000_123_456_789
+    ticks = [t0 + k * 1_000_000 for k in range(n)]
+    src = tmp_path / "log.csv"
+    _write(src, [str(v) for v in ticks], _counts(n), header=header)
+    rc, out, err, _ = run(["convert", src, "-o", tmp_path / "r.csv", "--device-out", tmp_path / "d.json"], capfd)
+    assert rc == 0, err
+    assert "t read in ns" in err
+    assert json.loads((tmp_path / "d.json").read_text())["sample_rate_hz"] == pytest.approx(1000.0, rel=1e-9)
+    assert float(out.split(" Hz")[0].rsplit(", ", 1)[1]) == pytest.approx(1000.0, rel=1e-9)
+    conv = convert_file(src)
+    assert conv.device.sample_rate_hz == pytest.approx(1000.0, rel=1e-9)
+    t = conv.recording.t
+    assert t[0] == pytest.approx(t0 / 1e9, abs=1e-6)
+    np.testing.assert_allclose(t - t[0], np.arange(n) / 1000.0, atol=5e-7)   # float64 of 1.7e9 s: 2.4e-7
+
+
+def test_integer_stamps_too_close_for_float64_are_still_in_order(tmp_path):
+    """Stamps 100 ns apart in epoch ns are one float64 (256 ns apart): read as integers they
+    are distinct and increasing (a table refused them as 'not after' the stamp before)."""
+    n, t0 = 50, 1_700_000_000_000_000_000
+    src = tmp_path / "fast.csv"
+    _write(src, [str(t0 + 100 * k) for k in range(n)], _counts(n), header="t_ns,accX,accY,accZ")
+    conv = convert_file(src)
+    assert conv.device.sample_rate_hz == pytest.approx(1e7, rel=1e-9)
 
 
 @pytest.mark.parametrize("rate", [10.0, 100.0, 400.0])
@@ -106,14 +138,46 @@ def test_host_time_stamps_in_bursts_give_the_sensor_s_rate(tmp_path, capfd, burs
     assert rc == 0, err
     assert "bursts" in err
     got = json.loads((tmp_path / "d.json").read_text())["sample_rate_hz"]
-    assert got == pytest.approx((n - 1) / (t[-1] - t[0]), rel=1e-4)
-    assert abs(got - rate) < 0.05 * rate
+    assert got == pytest.approx(rate, rel=1e-6)      # (n - 1) / duration said 100.3 Hz for bursts of 4
     rec = read_recording(tmp_path / "r.csv")
     np.testing.assert_allclose(rec.t, t[0] + np.arange(n) / got, atol=1e-9)
     np.testing.assert_allclose(np.array(rec.extra["t_host"], float), t, atol=1e-9)
     conv = convert_file(src, rate_hz=100.0)
     assert conv.device.sample_rate_hz == pytest.approx(100.0)
     np.testing.assert_allclose(conv.recording.t, np.arange(n) / 100.0, atol=1e-9)
+
+
+def _host_stamps(n, rate, stamp_at, seed):
+    """Time stamps a host gives a ``rate`` Hz sensor read in bursts of 5 to 12 samples: each
+    burst stamped when its first sample was taken ("first") or when the host read the buffer,
+    0 to 1 ms after its last ("last"), and its samples 20 us apart from there."""
+    rng = np.random.default_rng(seed)
+    sizes = []
+    while sum(sizes) < n:
+        sizes.append(int(rng.integers(5, 13)))
+    t, k = [], 0
+    for size in sizes:
+        anchor = k if stamp_at == "first" else k + size - 1
+        at = 1000.0 + anchor / rate + (0.0 if stamp_at == "first" else rng.uniform(0.0, 1e-3))
+        t += [at + 20e-6 * j for j in range(size)]
+        k += size
+    return np.array(t[:n])
+
+
+@pytest.mark.parametrize("stamp_at", ["first", "last"])
+@pytest.mark.parametrize("n, tol", [(50, 5e-3), (5000, 5e-4)])
+def test_bursty_stamps_give_an_unbiased_rate(tmp_path, stamp_at, n, tol):
+    """(n - 1) / duration counted the last burst's other samples over no time: 50 rows of a
+    100 Hz sensor in bursts said up to ~117 Hz ((burst - 1) / n too high).  The samples between
+    the bursts' stamps over their time give 100 Hz within 0.5 % (50 rows) and 0.05 % (5000),
+    whether a burst is stamped at its first sample or when the host read it."""
+    for seed in range(5):
+        t = _host_stamps(n, 100.0, stamp_at, seed)
+        src = tmp_path / f"host_{seed}.csv"
+        _write(src, [f"{v:.6f}" for v in t], _counts(n))
+        conv = convert_file(src)
+        assert any("bursts" in m for m in conv.notes)
+        assert conv.device.sample_rate_hz == pytest.approx(100.0, rel=tol), (seed, (n - 1) / (t[-1] - t[0]))
 
 
 def test_a_time_unit_for_a_file_without_time_is_refused(tmp_path, capfd):

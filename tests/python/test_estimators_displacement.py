@@ -6,12 +6,15 @@ import pytest
 from hypothesis import assume, given, strategies as st
 
 from accelcal import estimators as E
+from accelcal.api import calibrate
 from accelcal.calibration import Calibration
+from accelcal.convert import convert_file
 from accelcal.device import default_device, default_triad
 from accelcal.errors import InputError
 from accelcal.native import ffi, lib
 from accelcal.recording import recording_from_arrays
 from accelcal.simulate import run_simulation
+from accelcal.units import scale_from_options
 from core_settings import estimator
 from estimator_devices import G
 
@@ -183,6 +186,64 @@ def test_displacement_not_starting_at_rest_is_flagged():
     rec = sim.recording.select(sim.recording.t > 3.0)      # starts in the middle of the first stroke
     c = E.displacement_from_recording(d, Calibration.nominal(d), rec, "fixed")
     assert any("does not start at rest" in w for w in c.warnings)
+
+
+def test_rest_is_dated_back_to_where_it_began():
+    """The detector (C and float alike) declares a rest at the hold-th quiet sample, and its
+    running mean starts at the first sample: a rest from row 0 with sample 3 off by 0.07 (under
+    dev_max about the rest's level, over it about the unsettled mean) was declared at row 12.
+    Reported, it begins at row 0; a later rest at its quiet run's first sample; a start that
+    moves (off the first rest's level by more than dev_max) is not dated back over."""
+    p = E.RestParams(dev_max=0.1, hold=8, ema_shift=2)
+    f = np.tile([0.0, 0.0, G], (60, 1))
+    f[0, 2] += 0.06
+    f[3, 2] -= 0.07
+    f[30:36, 0] = 1.0                                    # a motion, then the second rest
+    flags = E.rest_detect(f, p)[0]
+    assert np.array_equal(flags, E.rest_fixed(E.q_out(f), p))   # the C core decides the same
+    at, quiet = (flags & E.REST_AT_REST) != 0, (flags & E.REST_QUIET) != 0
+    assert not quiet[3] and int(np.argmax(at)) == 3 + p.hold
+    dated = E.rest_dated_back(at, quiet, f, p)
+    assert dated[:30].all() and not at[:3 + p.hold].any()
+    # the second rest: from its quiet run's first sample (once the mean has settled after the
+    # motion: the settling is not claimed as rest), declared hold - 1 samples later
+    q0 = 36 + int(np.argmax(quiet[36:]))
+    assert quiet[q0:].all() and int(np.argmax(at[30:])) + 30 == q0 + p.hold - 1
+    assert not dated[30:q0].any() and dated[q0:].all()
+    moving = f.copy()
+    moving[:3, 0] = 0.5                                  # the first rows move: not dated back over them
+    flags = E.rest_detect(moving, p)[0]
+    quiet = (flags & E.REST_QUIET) != 0
+    dated = E.rest_dated_back((flags & E.REST_AT_REST) != 0, quiet, moving, p)
+    q0 = 3 + int(np.argmax(quiet[3:]))
+    assert quiet[q0:30].all() and not dated[:q0].any() and dated[q0:30].all()
+
+
+@pytest.mark.parametrize("engine, form", [("float", "offline"), ("float", "stream"), ("fixed", "stream")])
+def test_a_recording_at_rest_from_its_first_sample_rests_from_t0(engine, form):
+    """The seed's rail at rest for 2 s from its first sample: its first rest was reported from
+    row 24 (hold - 1 = 0.24 s at 100 Hz), the detector's latency; it begins at t[0]."""
+    d = default_triad()
+    sim = run_simulation(d, "linear_actuator", seed=23, distance_m=0.5, travel_s=2.0, rest_s=2.0)
+    c = E.displacement_from_recording(d, Calibration.nominal(d), sim.recording, engine, form=form, axis="x")
+    first_motion = int(np.argmax(c["rest"] == 0))
+    assert c["rest"][0] == 1 and c["t"][first_motion] > 1.5
+    assert not any("does not start at rest" in w for w in c.warnings)
+    assert abs(c["p_x"][-1] - 0.5) <= 0.005 * 0.5
+
+
+def test_the_mpu6050_log_rests_from_its_first_sample(shared_data):
+    """The MPU-6050 log (at rest on a table from its first row): its first rest was declared at
+    0.32 s -- 0.24 s of hold, and row 7, 0.24 m/s^2 off the running mean that started at row 0,
+    failing the test -- with a warning that the recording does not start at rest."""
+    conv = convert_file(shared_data / "mpu6050_tomisuarez" / "example_data_calibration.csv.gz",
+                        scale=scale_from_options(full_scale_g=2))
+    dev, rec = conv.device, conv.recording
+    cal = calibrate(dev, rec)
+    for engine in ("float", "fixed"):
+        c = E.displacement_from_recording(dev, cal, rec, engine)
+        assert c["rest"][0] == 1 and c["rest"][:100].all()
+        assert not any("does not start at rest" in w for w in c.warnings)
 
 
 def test_displacement_long_motion_not_corrected():

@@ -35,7 +35,7 @@ from .displacement_host import displace_offline, displacement_from_recording, re
 from .plots import report_plots
 from .rate import rate_from_recording, rate_rest_fixed, rate_rest_float
 from .rest import (REST_AT_REST, REST_CLIP, REST_ENTER, REST_LEAVE, REST_QUIET, RestParams, RestState,
-                   RestThresholds, default_rest_params, rest_cfg_fixed, rest_detect, rest_fixed,
+                   RestThresholds, default_rest_params, rest_cfg_fixed, rest_dated_back, rest_detect, rest_fixed,
                    rest_params_as_stored)
 from ..triad import (TriadTable, quantize_triad, triad_apply_fixed, triad_apply_float, triad_exact, triad_forces,
                     triad_matrix)
@@ -43,7 +43,7 @@ from ..triad import (TriadTable, quantize_triad, triad_apply_fixed, triad_apply_
 __all__ = [
     "Columns", "RestParams", "AttitudeParams", "DisplaceParams",
     "dt_fixed", "quantize_triad", "triad_apply_fixed", "triad_apply_float",
-    "rest_detect", "rest_fixed", "rest_cfg_fixed",
+    "rest_detect", "rest_fixed", "rest_cfg_fixed", "rest_dated_back",
     "attitude_float", "attitude_fixed", "attitude_twin", "attitude_rate_bound",
     "tilt_frame", "displace_stream", "displace_fixed", "displace_twin", "displace_offline",
     "displace_error_bound", "rate_rest_float", "rate_rest_fixed",

@@ -15,7 +15,7 @@ from .common import (CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_nois
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
-from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params
+from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params, rest_dated_back
 from ..triad import triad_forces
 
 __all__ = ["retro_correct", "displace_offline", "displacement_from_recording"]
@@ -72,8 +72,9 @@ def displace_offline(f, p: DisplaceParams, rest_flags=None) -> dict:
     after the first quiet sample of the final rest (not at the declaration); gravity and
     the frame from the mean of the whole first rest; the correction over the whole path.
     Returns v, p (corrected), v_raw, p_raw (uncorrected: same segments, no zero-point
-    correction), rest (n,) bool, corrected (n,) bool, segments [(anchor, end, zp)], frame,
-    open (a motion still going at the end), no_rest."""
+    correction), rest (n,) bool (as declared), quiet (n,) bool (the detector's quiet samples),
+    corrected (n,) bool, segments [(anchor, end, zp)], frame, open (a motion still going at the
+    end), no_rest."""
     f = np.clip(np.asarray(f, float), CLIP_LO, CLIP)
     n = f.shape[0]
     dt = p.dt
@@ -84,7 +85,7 @@ def displace_offline(f, p: DisplaceParams, rest_flags=None) -> dict:
     quiet = (np.asarray(rest_flags) & REST_QUIET) != 0
     pad = (2 ** p.rest.ema_shift) if p.pad is None else int(p.pad)
     res = dict(v=np.zeros((n, 3)), p=np.zeros((n, 3)), v_raw=np.zeros((n, 3)), p_raw=np.zeros((n, 3)),
-               rest=at.copy(), corrected=np.zeros(n, bool), segments=[], frame=None, open=False,
+               rest=at.copy(), quiet=quiet, corrected=np.zeros(n, bool), segments=[], frame=None, open=False,
                no_rest=not at.any())
     if not at.any():
         return res
@@ -257,8 +258,11 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                                 axis=None, rest: RestParams | None = None) -> Columns:
     """`accelcal displacement`: columns t, v_x, v_y, v_z, p_x, p_y, p_z (frame of the first rest,
     z up, gravity removed; corrected between rests) plus p_raw_* (the same without the zero-point
-    correction), rest (1 at rest) and corrected (1 on the samples of a motion closed by a rest,
-    whose correction was applied; 0 at rest and on a motion that never stopped).
+    correction), rest (1 at rest: each rest from where it began, :func:`.rest.rest_dated_back`, not
+    from where the detector declared it hold samples later) and corrected (1 on the samples of a
+    motion closed by a rest, whose correction was applied: its integration runs to the rest's
+    declaration, over the rest's first samples in the stream forms, pad samples past its first quiet
+    sample offline; 0 at rest otherwise and on a motion that never stopped).
 
     engine "float": form "offline" (default) or "stream" (the float twin of the firmware form);
     engine "fixed": the C streaming form (ac_disp), with the path between rests corrected on the
@@ -296,7 +300,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                              + f"): {no_rest_reason(f, t, rp)}; the stop-to-stop method needs a rest at both ends of "
                              "each motion")
         v, pp, p_raw = r["v"], r["p"], r["p_raw"]
-        at, corrected = r["rest"], r["corrected"]
+        at, quiet, corrected = r["rest"], r["quiet"], r["corrected"]
         is_open = r["open"]
         zps = [s[2] for s in r["segments"] if s[2] is not None]
     else:
@@ -327,16 +331,20 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                 T = int(r["nseg"][e]) * step_dt
                 D[e] = 0.5 * np.asarray(zq[e], float) * T * T
         p_raw = np.array(pq, float) + np.cumsum(D, axis=0)
-        at = (fl & DISP_REST) != 0
+        at, quiet = (fl & DISP_REST) != 0, (r["rest"] & REST_QUIET) != 0
         is_open = fin_open
         zps = [zq[e] for s, e in _segments_from_flags(fl) if e >= 0 and not fl[e] & DISP_LONG]
         if (fl & DISP_LONG).any():
             warnings.append("displacement: a motion longer than 65535 samples was not corrected")
+    f_host = f if engine == "float" else np.asarray(f, float) / 2.0**OUT_FRAC
+    declared = int(np.argmax(at)) if np.any(at) else n
+    # each rest from where it began, not from the detector's declaration hold samples later
+    at = rest_dated_back(at, quiet, f_host, rp)
     first_at = int(np.argmax(at)) if np.any(at) else n
-    if first_at > rp.hold - 1:
-        # the first rest's quiet run did not begin with the recording
+    if first_at > 0:
         warnings.append(f"displacement: the recording does not start at rest: nothing is estimated before the "
-                        f"first rest (declared at t = {t[min(first_at, n - 1)]:.3f} s; rows before are 0)")
+                        f"first rest (from t = {t[min(first_at, n - 1)]:.3f} s, declared at "
+                        f"t = {t[min(declared, n - 1)]:.3f} s; rows before are 0)")
     if is_open:
         warnings.append("displacement: the last motion does not end at rest: it is NOT corrected "
                         "(column corrected = 0 there) and its drift grows with time squared")
@@ -347,7 +355,6 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
             warnings.append(f"displacement: the body turned by up to {rot:.1f} deg during a motion (from the "
                             "resolved alpha): gravity removal assumes no rotation between rests (a rail), so "
                             "the result is doubtful")
-    f_host = f if engine == "float" else np.asarray(f, float) / 2.0**OUT_FRAC
     turned = still_but_turned(f_host, t, at, rp)
     if turned is not None:
         ang, a0, a1 = turned

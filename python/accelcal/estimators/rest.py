@@ -20,7 +20,7 @@ from .common import CLIP, CLIP_LO, OUT_FRAC
 
 __all__ = ["REST_QUIET", "REST_AT_REST", "REST_ENTER", "REST_LEAVE", "REST_CLIP", "RestParams",
            "default_rest_params", "rest_cfg_fixed", "RestThresholds", "rest_params_as_stored", "RestState",
-           "rest_detect", "rest_fixed"]
+           "rest_detect", "rest_fixed", "rest_dated_back"]
 
 # flag bits, from the compiled core (include/accelcal/ac_rest.h)
 REST_QUIET, REST_AT_REST, REST_ENTER, REST_LEAVE, REST_CLIP = (
@@ -192,3 +192,51 @@ def rest_fixed(f_q, p: RestParams, alpha_q=None) -> np.ndarray:
     check(lib.ac_rest_batch(st, cptr("int32_t *", f_q), ap, f_q.shape[0], cptr("uint8_t *", flags)),
           "ac_rest_batch")
     return flags
+
+
+def rest_dated_back(at, quiet, f, p: RestParams) -> np.ndarray:
+    """The rest intervals from when each rest began, not from when it was declared.
+
+    The detector (float and C alike, sample by sample: firmware cannot look back) declares
+    a rest at the p.hold-th quiet sample in a row, 0.24 s after it began at 100 Hz; and its
+    running mean starts at the first sample's f, so a sample of the noise can fail the test
+    against it before it settles (~2**ema_shift samples).  For reporting, each rest is dated
+    back to the first sample of the quiet run that declared it, and the first rest to the
+    recording's first sample when every sample before that run is still against that rest's
+    own level: max_k |f_k - m_k| <= dev_max about m, the mean f of the run, with |f| about g
+    (the test of :class:`RestState`, against a mean that has settled).
+
+    Parameters
+    ----------
+    at, quiet : array_like (n,) bool
+        The detector's at-rest and quiet decisions (REST_AT_REST, REST_QUIET), per sample.
+    f : array_like (n, 3)
+        Specific force, m/s^2 (clipped to the core's +-32 m/s^2 as the detector's input).
+    p : RestParams
+        The detector's parameters (dev_max, m/s^2; the |f| bounds; hold, samples).
+
+    Returns
+    -------
+    ndarray (n,) bool
+        At rest: ``at`` with each rest's start moved back.
+    """
+    at = np.asarray(at, bool)
+    quiet = np.asarray(quiet, bool)
+    out = at.copy()
+    n = at.size
+    if not at.any():
+        return out
+    run_start = np.maximum.accumulate(np.where(quiet, -1, np.arange(n))) + 1   # each sample's quiet run began
+    declared = np.flatnonzero(at & ~np.concatenate([[False], at[:-1]]))
+    for i in declared.tolist():
+        if quiet[i]:
+            out[run_start[i]:i] = True
+    s, i = int(run_start[declared[0]]), int(declared[0])
+    if 0 < s <= i and quiet[i]:
+        f = np.clip(np.asarray(f, float), CLIP_LO, CLIP)
+        m = f[s:i + 1].mean(axis=0)
+        lo, hi = p.g2_bounds()
+        g2 = np.sum(f[:s] ** 2, axis=1)
+        if np.all(np.max(np.abs(f[:s] - m), axis=1) <= p.dev_max) and np.all((g2 >= lo) & (g2 <= hi)):
+            out[:s] = True
+    return out
