@@ -23,7 +23,7 @@ from .relinearise import heldout_path, joint_fit, relinearise
 from .leftover import leftover, with_settling
 from .scoring import rank_key, run_candidates
 from .settling import settling_ringing
-from .settings import FORMAT, MAX_STEPS, MIN_SHRINK, PENALTY_PER_PARAM, T_MIN, TERMS_PASSES, Z_MIN
+from .settings import FORMAT, MAX_STEPS, MIN_SHRINK, PENALTY_PER_PARAM, POSE_MEAN_NOTE_RATIO, T_MIN, TERMS_PASSES, Z_MIN
 from .text import entry, to_json
 from .where import pose_mean_gap, where_breakdown
 from ..effects import EFFECTS
@@ -353,6 +353,13 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
                      "motions' starts): a resonance of the sensor or its mount, in samples the model does not score")
     if left is not None and not steps:
         verdict = "unexplained"
+    pm = gap_extra.get("pose_mean_ratio")
+    if verdict == "none" and pm is not None and pm > POSE_MEAN_NOTE_RATIO:
+        notes.append(f"the static poses' means scatter {pm:.3g} x beyond their noise (its colour within the poses "
+                     f"counted; {gap_extra['pose_mean_rms_counts']:.3g} counts rms over {gap_extra['n_poses']} poses), "
+                     "but no effect of the table explains that scatter on held-out data: poses that moved while "
+                     "held (a hand), or an error that differs from pose to pose at random; too little against the "
+                     "samples' own noise to be a gap")
     result = DiagnosisResult({
         "format": FORMAT,
         "verdict": verdict,

@@ -10,4 +10,7 @@ MAX_STEPS = 3              # effects found stepwise at most
 MIN_NOISE_DOF = 30         # static samples needed for the static noise-floor estimate
 TERMS_PASSES = 20          # backfitting passes of the calibration's terms that a bend must beat (they are correlated)
 
-__all__ = ["FORMAT", "T_MIN", "Z_MIN", "PENALTY_PER_PARAM", "MIN_SHRINK", "MAX_STEPS", "MIN_NOISE_DOF", "TERMS_PASSES"]
+POSE_MEAN_NOTE_RATIO = 2.0  # verdict none: a note when the poses' means scatter beyond this x their noise
+
+__all__ = ["FORMAT", "T_MIN", "Z_MIN", "PENALTY_PER_PARAM", "MIN_SHRINK", "MAX_STEPS", "MIN_NOISE_DOF", "TERMS_PASSES",
+           "POSE_MEAN_NOTE_RATIO"]

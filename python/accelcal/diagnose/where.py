@@ -8,6 +8,7 @@ import numpy as np
 
 from ..effects.fitdata import FitData
 from ..effects.settings import ROTATING_RADPS, TEMP_MIN_SPAN_C
+from ..static import colour_factor
 
 
 def bin_index(label: str, mask: np.ndarray, e: np.ndarray, sigma: np.ndarray, **extra) -> dict:
@@ -125,7 +126,9 @@ def where_breakdown(D: FitData, e: np.ndarray) -> dict:
 
 
 def pose_mean_gap(D: FitData, e: np.ndarray) -> dict:
-    """RMS of the static poses' mean residual rows against what the noise alone gives them."""
+    """RMS of the static poses' mean residual rows against what the noise alone gives them:
+    the white noise's, widened by the colour of the noise within the poses
+    (:func:`accelcal.static.colour_factor`, which widens the calibration's pose sems alike)."""
     P = len(D.pose_labels)
     if P < 2:
         return {}
@@ -140,6 +143,9 @@ def pose_mean_gap(D: FitData, e: np.ndarray) -> dict:
         ms.append((s1[ok] / cnt[ok]) ** 2)
         vs.append(iv[ok] / cnt[ok] ** 2)
     rms = float(np.sqrt(np.mean(np.concatenate(ms))))
-    noise = float(np.sqrt(np.mean(np.concatenate(vs))))
-    return {"pose_mean_rms_counts": rms, "pose_mean_noise_counts": noise,
+    white = float(np.sqrt(np.mean(np.concatenate(vs))))
+    # noise coloured within the poses (a hand's slow tremor) moves their means more than white noise
+    colour = colour_factor(Rr, [np.flatnonzero(D.pose == p) for p in range(P) if cnt[p] > 0])
+    noise = white * float(np.sqrt(np.mean(colour ** 2)))
+    return {"pose_mean_rms_counts": rms, "pose_mean_noise_counts": noise, "pose_mean_white_noise_counts": white,
             "pose_mean_ratio": rms / noise if noise > 0 else None, "n_poses": int(np.count_nonzero(cnt))}
