@@ -86,6 +86,7 @@ class Options:
     gravity_mps2: float | None = None
     bits: int = 16
     time_unit: str = "auto"
+    time_column: str | None = None
 
 
 def header_cells(header: str) -> list[str]:

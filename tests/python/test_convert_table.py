@@ -290,3 +290,87 @@ def test_a_count_beyond_64_bits_is_one_line_naming_it(tmp_path, capfd):
     src = _write(tmp_path / "h.csv", "t,accX,accY,accZ", ["0.00,99999999999999999999,3,4", "0.01,1,3,4"])
     err = _refused(tmp_path, capfd, src)
     assert "row 2, column accX" in err and "1e+20 does not fit a count of 64 bits" in err
+
+
+# ---- which column is the time column -----------------------------------------------
+
+def _refused_again(tmp_path, capfd, name, src, *args):
+    """:func:`_refused` once more in the same test (its own empty output directory)."""
+    (tmp_path / name).mkdir()
+    return _refused(tmp_path / name, capfd, src, *args)
+
+
+TW_HEADER = "Date(MM/DD/YYYY),Time(hh:mm:ss),Timestamp(Ms),Temp(Raw),ACCELX,ACCELY,ACCELZ,MAGX,MAGY,MAGZ"
+
+
+def _twlogger(path, n=120, step_ms=16):
+    """A TWLogger-shaped table (JustinPringle/TWLogger's header): a date, a clock time, a
+    millis() stamp, then the axes; the stamps and counts known."""
+    c = _counts(n, seed=5)
+    stamps = 15225 + step_ms * np.arange(n)
+    rows = [f"07/11/2018,05:34:{44 + k // 50:02d},{s},0,{r[0]}.00,{r[1]}.00,{r[2]}.00,89.00,-10.00,-327.00"
+            for k, (s, r) in enumerate(zip(stamps, c))]
+    return _write(path, TW_HEADER, rows), c, stamps
+
+
+def test_the_numeric_time_column_is_chosen_over_a_clock_time(tmp_path, capfd):
+    """'Time(hh:mm:ss)' comes first and matches the time-column names, but its cells are a
+    clock time: 'Timestamp(Ms)' (numbers, a unit in its name) is the time column, with a
+    note naming both; --time-unit and --rate read the same column."""
+    src, c, stamps = _twlogger(tmp_path / "T1D0711-00.CSV")
+    rec, dev, err = _convert(tmp_path, capfd, src)
+    np.testing.assert_array_equal(rec.raw, c)
+    np.testing.assert_allclose(rec.t, stamps / 1e3, rtol=0, atol=1e-9)
+    assert dev["sample_rate_hz"] == pytest.approx(62.5)
+    assert ("time column 'Timestamp(Ms)' used (its name states a unit); passed over 'Time(hh:mm:ss)' "
+            "(row 2: '05:34:44'), not a number") in err
+    rec, _, _ = _convert(tmp_path, capfd, src, "--format", "table", "--time-unit", "ms")
+    np.testing.assert_allclose(rec.t, stamps / 1e3, rtol=0, atol=1e-9)
+
+
+def test_of_two_numeric_time_columns_the_one_stating_a_unit_is_used(tmp_path, capfd):
+    c = _counts(50)
+    rows = [f"{k},{10 * k},{r[0]},{r[1]},{r[2]}" for k, r in enumerate(c)]
+    src = _write(tmp_path / "two.csv", "t,time_ms,accX,accY,accZ", rows)
+    rec, dev, err = _convert(tmp_path, capfd, src)
+    np.testing.assert_allclose(rec.t, np.arange(50) / 100.0, atol=1e-12)
+    assert "time column 'time_ms' used (its name states a unit); passed over 't', numeric" in err
+    rec, dev, err = _convert(tmp_path, capfd, src, "--time-column", "t", "--time-unit", "s")
+    np.testing.assert_allclose(rec.t, np.arange(50), atol=1e-12)
+    assert "passed over" not in err
+
+
+def test_time_column_option(tmp_path, capfd):
+    """--time-column names the column (any name: 'millis'); an unknown name is one line
+    listing the columns; a clock time named is refused naming its row; a name that is an
+    axis, or --time-column on another format, is refused."""
+    c = _counts(40)
+    rows = [f"05:00:{k:02d},{20 * k},{r[0]},{r[1]},{r[2]}" for k, r in enumerate(c)]
+    src = _write(tmp_path / "m.csv", "time,millis,accX,accY,accZ", rows)
+    rec, dev, _ = _convert(tmp_path, capfd, src, "--time-column", "millis", "--time-unit", "ms")
+    assert dev["sample_rate_hz"] == pytest.approx(50.0)
+    np.testing.assert_array_equal(rec.raw, c)
+    err = _refused(tmp_path, capfd, src, "--time-column", "stamp")
+    assert ("row 1: --time-column 'stamp': no such column; the columns are 'time', 'millis', 'accX', 'accY', "
+            "'accZ'") in err
+    err = _refused_again(tmp_path, capfd, 'r0', src, "--time-column", "time")
+    assert "row 2, column time" in err and "'05:00:00'" in err
+    err = _refused_again(tmp_path, capfd, 'r1', src, "--time-column", "accY")
+    assert "is an accelerometer column" in err
+    imucal = _write(tmp_path / "i.csv", "acc_x,acc_y,acc_z", ["1,2,3", "1,2,3"])
+    err = _refused_again(tmp_path, capfd, 'r2', imucal, "--time-column", "t", "--rate", "100")
+    assert "--time-column names a table's time column (--format table)" in err
+
+
+def test_no_numeric_time_column_needs_a_rate(tmp_path, capfd):
+    """Candidates that all hold clock times or dates: refused naming each without --rate;
+    with --rate, read at that rate with a note."""
+    c = _counts(30)
+    rows = [f"05:00:{k:02d},{r[0]},{r[1]},{r[2]}" for k, r in enumerate(c)]
+    src = _write(tmp_path / "clock.csv", "Time(hh:mm:ss),accX,accY,accZ", rows)
+    err = _refused(tmp_path, capfd, src)
+    assert ("row 1: no time column holds numbers: 'Time(hh:mm:ss)' (row 2: '05:00:00') is a clock time or a "
+            "date, not time stamps: give the sample rate with --rate HZ") in err
+    rec, dev, err = _convert(tmp_path, capfd, src, "--rate", "10")
+    np.testing.assert_allclose(rec.t, np.arange(30) / 10.0)
+    assert "no time column holds numbers ('Time(hh:mm:ss)' (row 2: '05:00:00'): clock times or dates" in err
