@@ -286,6 +286,28 @@ def test_a_packet_written_twice_is_left_out_once(tmp_path, capfd):
     assert "row 12" in err and "not after" in err
 
 
+def test_a_sample_delivered_twice_off_the_grid_is_left_out(tmp_path, capfd):
+    """A phone log (Oxford-step-counter's Samsung S6 at 100 Hz, t in ns) where a row repeats
+    the row before's readings exactly with a stamp 3.4 ms later: left out with a note.  A
+    repeated reading a whole step later (a quiet sensor's real sample), or with other
+    readings 3.4 ms later, stays."""
+    c, step = _counts(80, seed=11), 10_000_000
+    ns = 1012461540465 + step * np.arange(80)
+    c[40] = c[39]                                    # a real sample equal to the one before: on the grid
+    rows = [f"{t},{r[0]},{r[1]},{r[2]}" for t, r in zip(ns, c)]
+    again = rows[:20] + [f"{ns[19] + 3_384_480},{c[19][0]},{c[19][1]},{c[19][2]}"] + rows[20:60] + \
+        [f"{ns[59] + 3_000_000},{c[59][0]},{c[59][1]},{c[59][2]}"] + rows[60:]
+    src = _write(tmp_path / "phone.csv", "timestamp_ns,accx,accy,accz", again)
+    rec, dev, err = _convert(tmp_path, capfd, src)
+    np.testing.assert_array_equal(rec.raw, c)
+    np.testing.assert_allclose(rec.t - rec.t[0], np.arange(80) / 100.0, rtol=0, atol=1e-9)
+    assert ("2 row(s) repeat the readings of the row before with a time stamp less than half a step after it "
+            "(median step 1e+07 in the time column's unit; a sample delivered twice, off the grid): left out") in err
+    other = rows[:20] + [f"{ns[19] + 3_384_480},{c[19][0] + 1},{c[19][1]},{c[19][2]}"] + rows[20:]
+    rec, _, err = _convert(tmp_path, capfd, _write(tmp_path / "jitter.csv", "timestamp_ns,accx,accy,accz", other))
+    assert rec.n_samples == 81 and "left out" not in err
+
+
 def test_a_count_beyond_64_bits_is_one_line_naming_it(tmp_path, capfd):
     src = _write(tmp_path / "h.csv", "t,accX,accY,accZ", ["0.00,99999999999999999999,3,4", "0.01,1,3,4"])
     err = _refused(tmp_path, capfd, src)
