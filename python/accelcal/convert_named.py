@@ -18,7 +18,7 @@ from .errors import InputError
 from .units import STANDARD_GRAVITY, UNIT_TEXT, Scale, file_scale, to_counts
 
 __all__ = ["AXIS_RE", "NAMED_UNITS", "AxisColumn", "axis_column", "table_axes", "names_unit", "stated_time_column",
-           "choose_time_column", "convert_named"]
+           "choose_time_column", "placeholder_rows", "convert_named"]
 
 #: a table's accelerometer axis column: a prefix, the word, the axis, a unit in () or [] or after _
 AXIS_RE = re.compile(r"(?P<pre>.*?)(?:accelerometer|acceleration|accel|acc|(?<![a-z])a)[\s_.-]*(?P<axis>[xyz])"
@@ -32,6 +32,11 @@ NAMED_UNITS = {"g": "g", "m/s^2": "mps2", "m/s\u00b2": "mps2", "m/s/s": "mps2", 
                "ms2": "mps2", "counts": "counts", "count": "counts", "lsb": "counts", "raw": "counts"}
 
 
+#: leading rows of readings all exactly 0 are a placeholder when the next row's |reading| is at
+#: least this share of g (and the median |reading| after them twice that)
+PLACEHOLDER_G = 0.25
+#: ... or, where g in counts is unknown, of the median |reading|, which must be this many counts
+PLACEHOLDER_COUNTS = 64
 #: rows whose first non-empty time cell tells a numeric time column from a clock time or a date
 TIME_PROBE_ROWS = 100
 
@@ -318,6 +323,56 @@ def unrepeated(rows: np.ndarray, stamps: np.ndarray, readings: np.ndarray, notes
     return rows[np.concatenate([[True], ~(same | again)])]
 
 
+def placeholder_rows(rows: np.ndarray, readings: np.ndarray, table, scale: Scale | None, gravity: float,
+                     notes: list[str]) -> np.ndarray:
+    """``rows`` less the leading rows whose three readings are all exactly 0 where the rows after
+    are far from 0 (a phone's log that writes 0, 0, 0 before the sensor's first value), with
+    a note; else ``rows``.
+
+    Far from 0: the next row's |reading| at least PLACEHOLDER_G of g and the median |reading|
+    after the zeros at least twice that, g in the readings' unit (g, m/s^2, or counts with a
+    stated LSB); in counts of no stated LSB, the next row's |reading| at least PLACEHOLDER_G
+    of that median, and the median at least PLACEHOLDER_COUNTS.  An accelerometer reads
+    0, 0, 0 only in free fall.
+
+    Parameters
+    ----------
+    rows : ndarray of int
+        The rows with readings, in order.
+    readings : ndarray (n, 3)
+        The three axis columns as written, in the file's unit.
+    table
+        The table (its lines, for the note).
+    scale : units.Scale or None
+        The readings' unit and LSB.
+    gravity : float
+        g, m/s^2 (for readings in m/s^2, or counts of an LSB stated in g).
+    notes : list of str
+        Appended to.
+    """
+    m = readings[rows]
+    zero = np.all(m == 0, axis=1)
+    if not zero[0] or zero.all():
+        return rows
+    lead = int(np.argmin(zero))
+    norms = np.linalg.norm(m[lead:], axis=1)
+    median = float(np.median(norms))
+    units = scale.units if scale is not None else "counts"
+    g = {"g": 1.0, "mps2": gravity}.get(units)
+    if g is None and scale is not None and scale.counts_per_mps2(gravity):
+        g = scale.counts_per_mps2(gravity) * gravity
+    least = PLACEHOLDER_G * (g if g is not None else median)
+    if norms[0] < least or median < 2 * least or (g is None and median < PLACEHOLDER_COUNTS):
+        return rows
+    where = (f"rows {table.line(int(rows[0]))}-{table.line(int(rows[lead - 1]))}" if lead > 1 else
+             f"row {table.line(int(rows[0]))}")
+    size = f"{norms[0]:.4g} {UNIT_TEXT[units]}" + (f" ({norms[0] / g:.3g} g)" if g is not None and units != "g" else "")
+    notes.append(f"the first {lead} row(s) ({where}) read exactly 0, 0, 0 where the next row's |reading| is {size} "
+                 f"and the median {median:.4g} {UNIT_TEXT[units]}: a placeholder before the sensor's first value, "
+                 "left out")
+    return rows[lead:]
+
+
 def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bool) -> Converted:
     """A table with named columns: the three accelerometer axes (:func:`table_axes`), their
     unit (:func:`table_scale`), an optional time column (else ``--rate``); rows without
@@ -355,6 +410,8 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
         values[time_column] = numbers[time_column]
         stamps = exact_time(values[time_column], lambda: table.strings(jt), rows)   # an epoch in ns: int64
         rows = unrepeated(rows, stamps, np.column_stack([values[a] for a in acc]), notes)
+    rows = placeholder_rows(rows, np.column_stack([values[a] for a in acc]), table, scale,
+                            opts.gravity_mps2 or STANDARD_GRAVITY, notes)
     matrix = np.column_stack([values[a][rows] for a in acc])
 
     def locate(i: int, j: int) -> tuple[int, str]:

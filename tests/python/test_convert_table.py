@@ -308,6 +308,32 @@ def test_a_sample_delivered_twice_off_the_grid_is_left_out(tmp_path, capfd):
     assert rec.n_samples == 81 and "left out" not in err
 
 
+@pytest.mark.parametrize("lead", [1, 3])
+def test_leading_zero_readings_before_the_first_value_are_left_out(tmp_path, capfd, lead):
+    """A phone's log whose first row(s) read 0.0,0.0,0.0 (the sensor had delivered nothing yet)
+    and then gravity-sized vectors in m/s^2: those rows are left out with a note.  Zeros
+    further on, or a recording near 0 throughout (counts of no stated LSB), stay."""
+    c = _counts(60, seed=12)
+    lsb = LSB_G * G
+    rows = [f"{k * 10},0.0,0.0,0.0" for k in range(lead)] + \
+        [f"{(k + lead) * 10},{_cells(r * lsb)}" for k, r in enumerate(c)]
+    src = _write(tmp_path / "phone.csv", "time_ms,accX,accY,accZ", rows)
+    rec, _, err = _convert(tmp_path, capfd, src, "--units", "mps2", "--full-scale", "2")
+    np.testing.assert_array_equal(rec.raw, c)
+    assert rec.t[0] == pytest.approx(lead * 0.01)
+    where = "row 2" if lead == 1 else f"rows 2-{lead + 1}"
+    norm = float(np.linalg.norm(c[0] * lsb))
+    assert (f"the first {lead} row(s) ({where}) read exactly 0, 0, 0 where the next row's |reading| is "
+            f"{norm:.4g} m/s^2 ({norm / G:.3g} g) and the median") in err
+    assert "a placeholder before the sensor's first value, left out" in err
+    later = [f"{k * 10},{r[0]},{r[1]},{r[2]}" for k, r in enumerate(np.vstack([c[:5], [[0, 0, 0]], c[5:]]))]
+    rec, _, err = _convert(tmp_path, capfd, _write(tmp_path / "later.csv", "time_ms,accX,accY,accZ", later))
+    assert rec.n_samples == 61 and "placeholder" not in err
+    quiet = [f"{k * 10},0,0,0" for k in range(lead)] + [f"{(k + lead) * 10},3,-2,5" for k in range(20)]
+    rec, _, err = _convert(tmp_path, capfd, _write(tmp_path / "quiet.csv", "time_ms,accX,accY,accZ", quiet))
+    assert rec.n_samples == 20 + lead and "placeholder" not in err
+
+
 def test_a_count_beyond_64_bits_is_one_line_naming_it(tmp_path, capfd):
     src = _write(tmp_path / "h.csv", "t,accX,accY,accZ", ["0.00,99999999999999999999,3,4", "0.01,1,3,4"])
     err = _refused(tmp_path, capfd, src)
