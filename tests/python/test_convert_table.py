@@ -334,6 +334,17 @@ def test_leading_zero_readings_before_the_first_value_are_left_out(tmp_path, cap
     assert rec.n_samples == 20 + lead and "placeholder" not in err
 
 
+def test_a_headerless_csv_names_the_format_to_use(tmp_path, capfd):
+    """--format csv on a file without a header (Oxford-step-counter's phone logs) named
+    'accelcal convert', the command being run; it names the formats that read such files."""
+    src = _write(tmp_path / "user1_hand.csv", "1012461540465,0.0,0.0,0.0,0,0,0", ["1012471532132,0.5,2.5,5.0,0,0,0"])
+    err = _refused(tmp_path, capfd, src, "--format", "csv")
+    assert ("row 1: the first line is numbers, not a header (expected 't,raw_0,raw_1,...'): imu_tk's whitespace "
+            "'t ax ay az' in counts is read by 'accelcal convert --format imu_tk'; another table needs a first line "
+            "naming its columns (such as 't,accX,accY,accZ'), then 'accelcal convert --format table'") in err
+    assert "is read by 'accelcal convert')" not in err
+
+
 def test_a_count_beyond_64_bits_is_one_line_naming_it(tmp_path, capfd):
     src = _write(tmp_path / "h.csv", "t,accX,accY,accZ", ["0.00,99999999999999999999,3,4", "0.01,1,3,4"])
     err = _refused(tmp_path, capfd, src)
