@@ -203,7 +203,8 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
 def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, rate_hz: float | None = None,
                  regions: Any = None, stated_f: bool = False, gravity_mps2: float | None = None,
                  bits: int = 16, blocks: bool = False, time_unit: str = "auto",
-                 units_stated: bool = True, variable: str | None = None) -> Converted:
+                 units_stated: bool = True, variable: str | None = None,
+                 time_column: str | None = None) -> Converted:
     """Read another tool's file as a contract recording of a triad.
 
     Parameters
@@ -245,6 +246,11 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     variable : str, optional
         A MATLAB file's array of readings (:mod:`accelcal.convert_mat`), where it holds
         more than one of 3 or 4 columns.
+    time_column : str, optional
+        A table's time column (its stamps in the unit ``time_unit`` gives).  Default: of the
+        names TIME_COLUMN_RE matches, those whose cells are numbers (a clock time or a date
+        is no time stamp), the first whose name states a unit, else the first; a note names
+        the one used and those passed over.
 
     Returns
     -------
@@ -256,6 +262,9 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         One line naming the file and the row and column (or JSON field) at fault.
     """
     if fmt in ("auto", "mat") and is_mat(path):
+        if time_column is not None:
+            raise InputError(str(path), "--time-column names a table's time column: a MATLAB file's is its first "
+                             "of 4 columns")
         if regions is not None or stated_f or blocks:
             raise InputError(str(path), "a MATLAB file's poses are not labelled: --regions, --stated-f and --blocks "
                              "do not apply")
@@ -271,7 +280,10 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         fmt = detect_format(source, data)
     if fmt not in FORMATS:
         raise ValueError(f"unknown format {fmt!r}")
-    opts = Options(scale, rate_hz, None, None, stated_f, gravity_mps2, bits, time_unit)
+    if time_column is not None and fmt != "table":
+        raise InputError(source, f"--time-column names a table's time column (--format table): this file is told as "
+                         f"{fmt}")
+    opts = Options(scale, rate_hz, None, None, stated_f, gravity_mps2, bits, time_unit, time_column)
     if regions is not None:
         opts.regions, opts.regions_source = read_regions(regions), str(regions)
     if blocks and fmt != "log":

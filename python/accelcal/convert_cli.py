@@ -60,7 +60,7 @@ def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int
     conv = convert_file(a.input, a.format, scale=scale, rate_hz=positive(a.rate, "--rate"), regions=a.regions,
                         stated_f=a.stated_f, gravity_mps2=positive(a.gravity, "--gravity"), bits=bits,
                         blocks=a.blocks, time_unit=a.time_unit, units_stated=a.units is not None,
-                        variable=a.variable)
+                        variable=a.variable, time_column=a.time_column)
     write_recording(a.output, conv.recording)
     if a.device_out is not None:
         save_device(conv.device, a.device_out)
@@ -88,6 +88,9 @@ def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
                    help="the time column's unit (default auto: the unit its name states, else seconds, but "
                    "time stamps that would be under 2 Hz in seconds are read in the smallest of "
                    "ms, us, ns that gives more, with a note); t is written in seconds")
+    s.add_argument("--time-column", metavar="NAME", help="table: the time column (default: of the columns named "
+                   "t, time, timestamp, 'Time (s)', ..., those holding numbers, not a clock time or a date, the "
+                   "first whose name states a unit, else the first; a note names it)")
     s.add_argument("--variable", metavar="NAME", help="mat: the array of readings (3 columns x, y, z, or 4: t, x, y, "
                    "z) where the MATLAB file holds more than one")
     s.add_argument("--regions", metavar="JSON", help="pose regions {name: {\"start\": s, \"end\": e}} in "

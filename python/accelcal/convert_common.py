@@ -16,12 +16,13 @@ from .csvtable import convert_columns, cut_short_end, make_table, split_header
 from .device import Device
 from .errors import InputError
 from .recording import Recording
+from .recording_checks import RATE_TOL
 from .textinput import is_whitespace_header, split_whitespace_header, whitespace_to_commas
 from .units import STANDARD_GRAVITY, Scale
 
 __all__ = ["Converted", "Options", "INDEX_COLUMNS", "GYRO_RE", "NUMBER_RE", "header_cells", "read_columns",
            "find_column", "exact_time", "adc_range", "nominal_triad", "check_range", "in_sample_order", "finish",
-           "drop_note", "whole_counts"]
+           "stated_rate_off", "drop_note", "whole_counts"]
 
 INDEX_COLUMNS = ("n_samples", "samples")
 GYRO_RE = re.compile(r"(gyr|gyro|g)[_ ]?[xyz]|w_?[xyz]", re.I)
@@ -86,6 +87,7 @@ class Options:
     gravity_mps2: float | None = None
     bits: int = 16
     time_unit: str = "auto"
+    time_column: str | None = None
 
 
 def header_cells(header: str) -> list[str]:
@@ -224,12 +226,20 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
         t, rel = time_in_seconds(t if t.dtype.kind in "iu" else t.astype(float), opts.time_unit, time_column, source,
                                  notes)
         rate = opts.rate_hz if opts.rate_hz is not None else rate_from_t(rel, notes)
+        off = None if bursty(rel) else stated_rate_off(rel, opts.rate_hz)
         if bursty(rel):
             # the samples are the sensor's, evenly spaced; the host's stamps are kept beside them
             extra_columns["t_host"] = [repr(float(v)) for v in t]
             t = t[0] + np.arange(t.size) / rate
             notes.append(f"t is written on the {rate:.6g} Hz grid from the first stamp (the integrators need the "
                          "sensor's even spacing); the host's stamps are kept as column t_host")
+        elif off is not None:
+            extra_columns["t_host"] = [repr(float(v)) for v in t]
+            t = t[0] + np.arange(t.size) / rate
+            notes.append(f"the time column's steps give {off:.6g} Hz (median step), more than "
+                         f"{100 * RATE_TOL:.0f} % from --rate {rate:g} Hz: its clock is not the sensor's; t is "
+                         f"written on the {rate:g} Hz grid from the first stamp and the time column's stamps are kept "
+                         "as column t_host")
     gravity = opts.gravity_mps2 or (device.gravity_mps2 if device is not None else STANDARD_GRAVITY)
     if kept is not None:  # a contract recording without --regions keeps its labels and references
         (pose, f), names = kept, [str(k) for k in np.unique(kept[0][kept[0] >= 0])]
@@ -247,6 +257,27 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
     if device is None:
         device = nominal_triad(f"{fmt}-triad", rate, gravity, raw, opts.bits, signed, scale, device_notes)
     return Converted(rec, device, fmt, names, notes, scale, order is not None, device_notes)
+
+
+def stated_rate_off(rel: np.ndarray, stated: float | None) -> float | None:
+    """The rate t's median step gives, Hz, where ``stated`` (``--rate``) is more than RATE_TOL
+    from it either way (the test :func:`recording_checks.rate_for` makes, and its converse),
+    else None (also without ``stated``, or with fewer than 3 stamps).
+
+    Parameters
+    ----------
+    rel : ndarray (n,)
+        Every time stamp less the first, s.
+    stated : float or None
+        The rate stated, Hz.
+    """
+    if stated is None or rel.size < 3:
+        return None
+    step = float(np.median(np.diff(rel)))
+    if step <= 0:
+        return None
+    rate = 1.0 / step
+    return rate if max(abs(stated / rate - 1.0), abs(rate / stated - 1.0)) > RATE_TOL else None
 
 
 def drop_note(dropped: list[str], ignored: list[str]) -> list[str]:

@@ -10,13 +10,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .convert_common import Converted, Options, drop_note, exact_time, finish, read_columns, header_cells, whole_counts
-from .convert_time import TIME_COLUMN_RE
-from .csvtable import got_text
+from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
+                             whole_counts)
+from .convert_time import TIME_COLUMN_RE, unit_in_name
+from .csvtable import convert_columns, got_text
 from .errors import InputError
 from .units import STANDARD_GRAVITY, UNIT_TEXT, Scale, file_scale, to_counts
 
-__all__ = ["AXIS_RE", "NAMED_UNITS", "AxisColumn", "axis_column", "table_axes", "names_unit", "convert_named"]
+__all__ = ["AXIS_RE", "NAMED_UNITS", "AxisColumn", "axis_column", "table_axes", "names_unit", "stated_time_column",
+           "choose_time_column", "placeholder_rows", "convert_named"]
 
 #: a table's accelerometer axis column: a prefix, the word, the axis, a unit in () or [] or after _
 AXIS_RE = re.compile(r"(?P<pre>.*?)(?:accelerometer|acceleration|accel|acc|(?<![a-z])a)[\s_.-]*(?P<axis>[xyz])"
@@ -28,6 +30,15 @@ VIRTUAL_WORDS = ("linear", "gravity")
 #: a unit in an axis column's name (lower case, blanks dropped) -> units.UNITS
 NAMED_UNITS = {"g": "g", "m/s^2": "mps2", "m/s\u00b2": "mps2", "m/s/s": "mps2", "mps2": "mps2", "m/s2": "mps2",
                "ms2": "mps2", "counts": "counts", "count": "counts", "lsb": "counts", "raw": "counts"}
+
+
+#: leading rows of readings all exactly 0 are a placeholder when the next row's |reading| is at
+#: least this share of g (and the median |reading| after them twice that)
+PLACEHOLDER_G = 0.25
+#: ... or, where g in counts is unknown, of the median |reading|, which must be this many counts
+PLACEHOLDER_COUNTS = 64
+#: rows whose first non-empty time cell tells a numeric time column from a clock time or a date
+TIME_PROBE_ROWS = 100
 
 
 @dataclass
@@ -166,6 +177,92 @@ def present_rows(source: str, matrix: np.ndarray, table, axes: list[AxisColumn],
     return np.flatnonzero(~gone)
 
 
+def stated_time_column(source: str, names: list[str], acc: list[str], stated: str, row: int) -> str:
+    """The column ``--time-column`` names: the header's name equal to ``stated`` (blanks about
+    it dropped), else the only one equal to it ignoring case.
+
+    Raises
+    ------
+    InputError
+        No such column (listing the header's columns), or one of the accelerometer's.
+    """
+    want = stated.strip()
+    found = [n for n in names if n == want] or [n for n in names if n.lower() == want.lower()]
+    if len(found) != 1:
+        raise InputError(source, f"--time-column {stated!r}: "
+                         f"{'no such column' if not found else 'more than one column of that name'}; the columns are "
+                         f"{', '.join(repr(n) for n in names if n)}", row=row)
+    if found[0] in acc:
+        raise InputError(source, f"--time-column {stated!r} is an accelerometer column ({', '.join(acc)})", row=row)
+    return found[0]
+
+
+def first_cell(table, j: int, rows: np.ndarray) -> tuple[int, str] | None:
+    """The first of the first TIME_PROBE_ROWS ``rows`` whose cell in column j is not empty
+    or nan: (row index, its text), or None."""
+    for i in rows[:TIME_PROBE_ROWS].tolist():
+        text = table.cell(i, j).strip()
+        if text and text.lower() != "nan":
+            return i, text
+    return None
+
+
+def is_number(text: str) -> bool:
+    try:
+        return np.isfinite(float(text))
+    except ValueError:
+        return False
+
+
+def choose_time_column(source: str, names: list[str], acc: list[str], table, rows: np.ndarray, rate_stated: bool,
+                       header_row: int, notes: list[str]) -> str | None:
+    """The table's time column among the names TIME_COLUMN_RE matches (``Time (s)``,
+    ``timestamp_us``, ``Time(hh:mm:ss)``): those whose cells are numbers (a clock time
+    ``05:34:44`` or a date is no time stamp), and of those the first whose name states a
+    unit (``Timestamp(Ms)``), else the first.  A note names the column used and those passed
+    over when there was a choice.  None when there is no candidate, or (``rate_stated``: the
+    rate is given) when none is numeric, with a note.
+
+    Parameters
+    ----------
+    rows : ndarray of int
+        The rows with readings; the first non-empty cell among them tells a column.
+
+    Raises
+    ------
+    InputError
+        Candidates, none numeric, and no ``--rate``: naming each with the text it holds.
+    """
+    cands = [n for n in names if n and n not in acc and TIME_COLUMN_RE.fullmatch(n)]
+    if not cands:
+        return None
+    seen = {n: first_cell(table, names.index(n), rows) for n in cands}
+    numeric = [n for n in cands if seen[n] is None or is_number(seen[n][1])]
+
+    def holds(n: str) -> str:
+        i, text = seen[n]
+        return f"{n!r} (row {table.line(i)}: {text!r})"
+
+
+    if not numeric:
+        said = ", ".join(holds(n) for n in cands)
+        if not rate_stated:
+            raise InputError(source, f"no time column holds numbers: {said} "
+                             f"{'is a clock time or a date' if len(cands) == 1 else 'are clock times or dates'}, not "
+                             "time stamps: give the sample rate with --rate HZ, or name a numeric column with "
+                             "--time-column NAME", row=header_row)
+        notes.append(f"no time column holds numbers ({said}: clock times or dates, not time stamps): t is from "
+                     "--rate")
+        return None
+    chosen = next((n for n in numeric if unit_in_name(n) is not None), numeric[0])
+    over = [n for n in cands if n != chosen]
+    if over:
+        why = [f"{holds(n)}, not a number" if n not in numeric else f"{n!r}, numeric" for n in over]
+        notes.append(f"time column {chosen!r} used" + (" (its name states a unit)" if unit_in_name(chosen) else "")
+                     + f"; passed over {'; '.join(why)} (--time-column NAME states it)")
+    return chosen
+
+
 def table_time(source: str, stamps: np.ndarray, table, rows: np.ndarray, column: str, j: int) -> np.ndarray:
     """The time stamps of the rows read (``rows``), as written: finite and increasing.
 
@@ -189,16 +286,91 @@ def table_time(source: str, stamps: np.ndarray, table, rows: np.ndarray, column:
 
 
 def unrepeated(rows: np.ndarray, stamps: np.ndarray, readings: np.ndarray, notes: list[str]) -> np.ndarray:
-    """``rows`` less each row that repeats the one before it, time stamp and readings alike (a
-    packet written twice: 1.2 % of x-io's Gait-Tracking logs), with a note; a repeated time
-    stamp with other readings is left for :func:`table_time` to refuse."""
+    """``rows`` less the rows that repeat the row before's readings exactly, with a note for each
+    kind: with its time stamp too (a packet written twice: 1.2 % of x-io's Gait-Tracking
+    logs), or with a stamp less than half a median step after it (a sample delivered twice,
+    off the grid: 91 rows of a Samsung S6's 100 Hz log).  A repeated reading on the grid (a
+    step or more after the row before: a quiet sensor's) is a sample and stays; a repeated
+    time stamp with other readings is left for :func:`table_time` to refuse.
+
+    Parameters
+    ----------
+    rows : ndarray of int
+        The rows with readings.
+    stamps : ndarray (n,)
+        The time column as written (float64, or int64 for an epoch in ns), any unit.
+    readings : ndarray (n, 3)
+        The three axis columns as written (NaN where empty).
+    notes : list of str
+        Appended to.
+    """
     t, m = stamps[rows], readings[rows]
-    same = (t[1:] == t[:-1]) & np.all((m[1:] == m[:-1]) | (np.isnan(m[1:]) & np.isnan(m[:-1])), axis=1)
-    if not same.any():
+    repeat = np.all((m[1:] == m[:-1]) | (np.isnan(m[1:]) & np.isnan(m[:-1])), axis=1)
+    steps = np.diff(t).astype(np.float64)           # exact for int64 stamps
+    same = repeat & (steps == 0)
+    ahead = steps[steps > 0]
+    step = float(np.median(ahead)) if ahead.size else 0.0
+    again = repeat & (steps > 0) & (steps < 0.5 * step)
+    if same.any():
+        notes.append(f"{int(same.sum())} row(s) repeat the row before, time stamp and readings (a packet written "
+                     "twice): left out")
+    if again.any():
+        notes.append(f"{int(again.sum())} row(s) repeat the readings of the row before with a time stamp less than "
+                     f"half a step after it (median step {step:.6g} in the time column's unit; a sample delivered "
+                     "twice, off the grid): left out")
+    if not (same.any() or again.any()):
         return rows
-    notes.append(f"{int(same.sum())} row(s) repeat the row before, time stamp and readings (a packet written "
-                 "twice): left out")
-    return rows[np.concatenate([[True], ~same])]
+    return rows[np.concatenate([[True], ~(same | again)])]
+
+
+def placeholder_rows(rows: np.ndarray, readings: np.ndarray, table, scale: Scale | None, gravity: float,
+                     notes: list[str]) -> np.ndarray:
+    """``rows`` less the leading rows whose three readings are all exactly 0 where the rows after
+    are far from 0 (a phone's log that writes 0, 0, 0 before the sensor's first value), with
+    a note; else ``rows``.
+
+    Far from 0: the next row's |reading| at least PLACEHOLDER_G of g and the median |reading|
+    after the zeros at least twice that, g in the readings' unit (g, m/s^2, or counts with a
+    stated LSB); in counts of no stated LSB, the next row's |reading| at least PLACEHOLDER_G
+    of that median, and the median at least PLACEHOLDER_COUNTS.  An accelerometer reads
+    0, 0, 0 only in free fall.
+
+    Parameters
+    ----------
+    rows : ndarray of int
+        The rows with readings, in order.
+    readings : ndarray (n, 3)
+        The three axis columns as written, in the file's unit.
+    table
+        The table (its lines, for the note).
+    scale : units.Scale or None
+        The readings' unit and LSB.
+    gravity : float
+        g, m/s^2 (for readings in m/s^2, or counts of an LSB stated in g).
+    notes : list of str
+        Appended to.
+    """
+    m = readings[rows]
+    zero = np.all(m == 0, axis=1)
+    if not zero[0] or zero.all():
+        return rows
+    lead = int(np.argmin(zero))
+    norms = np.linalg.norm(m[lead:], axis=1)
+    median = float(np.median(norms))
+    units = scale.units if scale is not None else "counts"
+    g = {"g": 1.0, "mps2": gravity}.get(units)
+    if g is None and scale is not None and scale.counts_per_mps2(gravity):
+        g = scale.counts_per_mps2(gravity) * gravity
+    least = PLACEHOLDER_G * (g if g is not None else median)
+    if norms[0] < least or median < 2 * least or (g is None and median < PLACEHOLDER_COUNTS):
+        return rows
+    where = (f"rows {table.line(int(rows[0]))}-{table.line(int(rows[lead - 1]))}" if lead > 1 else
+             f"row {table.line(int(rows[0]))}")
+    size = f"{norms[0]:.4g} {UNIT_TEXT[units]}" + (f" ({norms[0] / g:.3g} g)" if g is not None and units != "g" else "")
+    notes.append(f"the first {lead} row(s) ({where}) read exactly 0, 0, 0 where the next row's |reading| is {size} "
+                 f"and the median {median:.4g} {UNIT_TEXT[units]}: a placeholder before the sensor's first value, "
+                 "left out")
+    return rows[lead:]
 
 
 def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bool) -> Converted:
@@ -210,26 +382,36 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
     acc = [c.name for c in axes]
     scale = table_scale(source, pre, opts.scale, names_unit(source, axes, pre.header_line), units_stated,
                         opts.gravity_mps2 or STANDARD_GRAVITY, axes)
-    time_column = next((n for n in names if n not in acc and TIME_COLUMN_RE.fullmatch(n)), None)
-    if time_column is None and opts.rate_hz is None:
-        raise InputError(source, "the table has no time column (t, time, timestamp, 'Time (s)', time_ms, ...): give "
-                         "the sample rate with --rate HZ", row=pre.header_line)
-    if time_column is None and opts.time_unit != "auto":
-        raise InputError(source, "--time-unit: the table has no time column (--rate states its rate)")
+    if opts.time_column is not None:
+        time_column = stated_time_column(source, names, acc, opts.time_column, pre.header_line)
     want = {a: "ref" for a in acc}
-    if time_column is not None:
-        want[time_column] = "ref"
     names, values, table = read_columns(source, data, pre, want)
     js = [names.index(a) for a in acc]
     notes: list[str] = []
     rows = present_rows(source, np.column_stack([values[a] for a in acc]), table, axes, js, notes)
     if rows.size == 0:
         raise InputError(source, f"no row has readings in {', '.join(acc)}", row=pre.header_line)
+    if opts.time_column is None:
+        time_column = choose_time_column(source, names, acc, table, rows, opts.rate_hz is not None, pre.header_line,
+                                         notes)
+    if time_column is None and opts.rate_hz is None:
+        raise InputError(source, "the table has no time column (t, time, timestamp, 'Time (s)', time_ms, ...): give "
+                         "the sample rate with --rate HZ (or name its column with --time-column NAME)",
+                         row=pre.header_line)
+    if time_column is None and opts.time_unit != "auto":
+        raise InputError(source, "--time-unit: the table has no time column (--rate states its rate)")
     stamps = None
     if time_column is not None:
         jt = names.index(time_column)
+        want[time_column] = "ref"
+        numbers, err = convert_columns(table, {time_column: (jt, "ref")})
+        if err is not None:
+            raise InputError(source, err[2], row=table.line(err[0]), column=time_column)
+        values[time_column] = numbers[time_column]
         stamps = exact_time(values[time_column], lambda: table.strings(jt), rows)   # an epoch in ns: int64
         rows = unrepeated(rows, stamps, np.column_stack([values[a] for a in acc]), notes)
+    rows = placeholder_rows(rows, np.column_stack([values[a] for a in acc]), table, scale,
+                            opts.gravity_mps2 or STANDARD_GRAVITY, notes)
     matrix = np.column_stack([values[a][rows] for a in acc])
 
     def locate(i: int, j: int) -> tuple[int, str]:

@@ -290,9 +290,10 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
         except csv.Error as e:
             raise InputError(source, f"the header cannot be split into columns ({e})", row=header_line) from None
     if columns is None and all(FLOAT_RE.fullmatch(c) for c in names):
-        raise InputError(source, "the first line is numbers, not a header (expected 't,raw_0,raw_1,...'; a "
-                         "table without one, such as imu_tk's 't ax ay az', is read by 'accelcal convert')",
-                         row=header_line)
+        raise InputError(source, "the first line is numbers, not a header (expected 't,raw_0,raw_1,...'): "
+                         "imu_tk's whitespace 't ax ay az' in counts is read by 'accelcal convert --format imu_tk'; "
+                         "another table needs a first line naming its columns (such as 't,accX,accY,accZ'), then "
+                         "'accelcal convert --format table'", row=header_line)
     cols = classify_columns(names, n_channels, source, header_line)
     scale = file_scale(scale, metadata, pre.metadata_lines, source)
     if scale is not None and scale.converts:  # raw_k as finite numbers, then counts

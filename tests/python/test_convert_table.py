@@ -286,7 +286,150 @@ def test_a_packet_written_twice_is_left_out_once(tmp_path, capfd):
     assert "row 12" in err and "not after" in err
 
 
+def test_a_sample_delivered_twice_off_the_grid_is_left_out(tmp_path, capfd):
+    """A phone log (Oxford-step-counter's Samsung S6 at 100 Hz, t in ns) where a row repeats
+    the row before's readings exactly with a stamp 3.4 ms later: left out with a note.  A
+    repeated reading a whole step later (a quiet sensor's real sample), or with other
+    readings 3.4 ms later, stays."""
+    c, step = _counts(80, seed=11), 10_000_000
+    ns = 1012461540465 + step * np.arange(80)
+    c[40] = c[39]                                    # a real sample equal to the one before: on the grid
+    rows = [f"{t},{r[0]},{r[1]},{r[2]}" for t, r in zip(ns, c)]
+    again = rows[:20] + [f"{ns[19] + 3_384_480},{c[19][0]},{c[19][1]},{c[19][2]}"] + rows[20:60] + \
+        [f"{ns[59] + 3_000_000},{c[59][0]},{c[59][1]},{c[59][2]}"] + rows[60:]
+    src = _write(tmp_path / "phone.csv", "timestamp_ns,accx,accy,accz", again)
+    rec, dev, err = _convert(tmp_path, capfd, src)
+    np.testing.assert_array_equal(rec.raw, c)
+    np.testing.assert_allclose(rec.t - rec.t[0], np.arange(80) / 100.0, rtol=0, atol=1e-9)
+    assert ("2 row(s) repeat the readings of the row before with a time stamp less than half a step after it "
+            "(median step 1e+07 in the time column's unit; a sample delivered twice, off the grid): left out") in err
+    other = rows[:20] + [f"{ns[19] + 3_384_480},{c[19][0] + 1},{c[19][1]},{c[19][2]}"] + rows[20:]
+    rec, _, err = _convert(tmp_path, capfd, _write(tmp_path / "jitter.csv", "timestamp_ns,accx,accy,accz", other))
+    assert rec.n_samples == 81 and "left out" not in err
+
+
+@pytest.mark.parametrize("lead", [1, 3])
+def test_leading_zero_readings_before_the_first_value_are_left_out(tmp_path, capfd, lead):
+    """A phone's log whose first row(s) read 0.0,0.0,0.0 (the sensor had delivered nothing yet)
+    and then gravity-sized vectors in m/s^2: those rows are left out with a note.  Zeros
+    further on, or a recording near 0 throughout (counts of no stated LSB), stay."""
+    c = _counts(60, seed=12)
+    lsb = LSB_G * G
+    rows = [f"{k * 10},0.0,0.0,0.0" for k in range(lead)] + \
+        [f"{(k + lead) * 10},{_cells(r * lsb)}" for k, r in enumerate(c)]
+    src = _write(tmp_path / "phone.csv", "time_ms,accX,accY,accZ", rows)
+    rec, _, err = _convert(tmp_path, capfd, src, "--units", "mps2", "--full-scale", "2")
+    np.testing.assert_array_equal(rec.raw, c)
+    assert rec.t[0] == pytest.approx(lead * 0.01)
+    where = "row 2" if lead == 1 else f"rows 2-{lead + 1}"
+    norm = float(np.linalg.norm(c[0] * lsb))
+    assert (f"the first {lead} row(s) ({where}) read exactly 0, 0, 0 where the next row's |reading| is "
+            f"{norm:.4g} m/s^2 ({norm / G:.3g} g) and the median") in err
+    assert "a placeholder before the sensor's first value, left out" in err
+    later = [f"{k * 10},{r[0]},{r[1]},{r[2]}" for k, r in enumerate(np.vstack([c[:5], [[0, 0, 0]], c[5:]]))]
+    rec, _, err = _convert(tmp_path, capfd, _write(tmp_path / "later.csv", "time_ms,accX,accY,accZ", later))
+    assert rec.n_samples == 61 and "placeholder" not in err
+    quiet = [f"{k * 10},0,0,0" for k in range(lead)] + [f"{(k + lead) * 10},3,-2,5" for k in range(20)]
+    rec, _, err = _convert(tmp_path, capfd, _write(tmp_path / "quiet.csv", "time_ms,accX,accY,accZ", quiet))
+    assert rec.n_samples == 20 + lead and "placeholder" not in err
+
+
+def test_a_headerless_csv_names_the_format_to_use(tmp_path, capfd):
+    """--format csv on a file without a header (Oxford-step-counter's phone logs) named
+    'accelcal convert', the command being run; it names the formats that read such files."""
+    src = _write(tmp_path / "user1_hand.csv", "1012461540465,0.0,0.0,0.0,0,0,0", ["1012471532132,0.5,2.5,5.0,0,0,0"])
+    err = _refused(tmp_path, capfd, src, "--format", "csv")
+    assert ("row 1: the first line is numbers, not a header (expected 't,raw_0,raw_1,...'): imu_tk's whitespace "
+            "'t ax ay az' in counts is read by 'accelcal convert --format imu_tk'; another table needs a first line "
+            "naming its columns (such as 't,accX,accY,accZ'), then 'accelcal convert --format table'") in err
+    assert "is read by 'accelcal convert')" not in err
+
+
 def test_a_count_beyond_64_bits_is_one_line_naming_it(tmp_path, capfd):
     src = _write(tmp_path / "h.csv", "t,accX,accY,accZ", ["0.00,99999999999999999999,3,4", "0.01,1,3,4"])
     err = _refused(tmp_path, capfd, src)
     assert "row 2, column accX" in err and "1e+20 does not fit a count of 64 bits" in err
+
+
+# ---- which column is the time column -----------------------------------------------
+
+def _refused_again(tmp_path, capfd, name, src, *args):
+    """:func:`_refused` once more in the same test (its own empty output directory)."""
+    (tmp_path / name).mkdir()
+    return _refused(tmp_path / name, capfd, src, *args)
+
+
+TW_HEADER = "Date(MM/DD/YYYY),Time(hh:mm:ss),Timestamp(Ms),Temp(Raw),ACCELX,ACCELY,ACCELZ,MAGX,MAGY,MAGZ"
+
+
+def _twlogger(path, n=120, step_ms=16):
+    """A TWLogger-shaped table (JustinPringle/TWLogger's header): a date, a clock time, a
+    millis() stamp, then the axes; the stamps and counts known."""
+    c = _counts(n, seed=5)
+    stamps = 15225 + step_ms * np.arange(n)
+    rows = [f"07/11/2018,05:34:{44 + k // 50:02d},{s},0,{r[0]}.00,{r[1]}.00,{r[2]}.00,89.00,-10.00,-327.00"
+            for k, (s, r) in enumerate(zip(stamps, c))]
+    return _write(path, TW_HEADER, rows), c, stamps
+
+
+def test_the_numeric_time_column_is_chosen_over_a_clock_time(tmp_path, capfd):
+    """'Time(hh:mm:ss)' comes first and matches the time-column names, but its cells are a
+    clock time: 'Timestamp(Ms)' (numbers, a unit in its name) is the time column, with a
+    note naming both; --time-unit and --rate read the same column."""
+    src, c, stamps = _twlogger(tmp_path / "T1D0711-00.CSV")
+    rec, dev, err = _convert(tmp_path, capfd, src)
+    np.testing.assert_array_equal(rec.raw, c)
+    np.testing.assert_allclose(rec.t, stamps / 1e3, rtol=0, atol=1e-9)
+    assert dev["sample_rate_hz"] == pytest.approx(62.5)
+    assert ("time column 'Timestamp(Ms)' used (its name states a unit); passed over 'Time(hh:mm:ss)' "
+            "(row 2: '05:34:44'), not a number") in err
+    rec, _, _ = _convert(tmp_path, capfd, src, "--format", "table", "--time-unit", "ms")
+    np.testing.assert_allclose(rec.t, stamps / 1e3, rtol=0, atol=1e-9)
+
+
+def test_of_two_numeric_time_columns_the_one_stating_a_unit_is_used(tmp_path, capfd):
+    c = _counts(50)
+    rows = [f"{k},{10 * k},{r[0]},{r[1]},{r[2]}" for k, r in enumerate(c)]
+    src = _write(tmp_path / "two.csv", "t,time_ms,accX,accY,accZ", rows)
+    rec, dev, err = _convert(tmp_path, capfd, src)
+    np.testing.assert_allclose(rec.t, np.arange(50) / 100.0, atol=1e-12)
+    assert "time column 'time_ms' used (its name states a unit); passed over 't', numeric" in err
+    rec, dev, err = _convert(tmp_path, capfd, src, "--time-column", "t", "--time-unit", "s")
+    np.testing.assert_allclose(rec.t, np.arange(50), atol=1e-12)
+    assert "passed over" not in err
+
+
+def test_time_column_option(tmp_path, capfd):
+    """--time-column names the column (any name: 'millis'); an unknown name is one line
+    listing the columns; a clock time named is refused naming its row; a name that is an
+    axis, or --time-column on another format, is refused."""
+    c = _counts(40)
+    rows = [f"05:00:{k:02d},{20 * k},{r[0]},{r[1]},{r[2]}" for k, r in enumerate(c)]
+    src = _write(tmp_path / "m.csv", "time,millis,accX,accY,accZ", rows)
+    rec, dev, _ = _convert(tmp_path, capfd, src, "--time-column", "millis", "--time-unit", "ms")
+    assert dev["sample_rate_hz"] == pytest.approx(50.0)
+    np.testing.assert_array_equal(rec.raw, c)
+    err = _refused(tmp_path, capfd, src, "--time-column", "stamp")
+    assert ("row 1: --time-column 'stamp': no such column; the columns are 'time', 'millis', 'accX', 'accY', "
+            "'accZ'") in err
+    err = _refused_again(tmp_path, capfd, 'r0', src, "--time-column", "time")
+    assert "row 2, column time" in err and "'05:00:00'" in err
+    err = _refused_again(tmp_path, capfd, 'r1', src, "--time-column", "accY")
+    assert "is an accelerometer column" in err
+    imucal = _write(tmp_path / "i.csv", "acc_x,acc_y,acc_z", ["1,2,3", "1,2,3"])
+    err = _refused_again(tmp_path, capfd, 'r2', imucal, "--time-column", "t", "--rate", "100")
+    assert "--time-column names a table's time column (--format table)" in err
+
+
+def test_no_numeric_time_column_needs_a_rate(tmp_path, capfd):
+    """Candidates that all hold clock times or dates: refused naming each without --rate;
+    with --rate, read at that rate with a note."""
+    c = _counts(30)
+    rows = [f"05:00:{k:02d},{r[0]},{r[1]},{r[2]}" for k, r in enumerate(c)]
+    src = _write(tmp_path / "clock.csv", "Time(hh:mm:ss),accX,accY,accZ", rows)
+    err = _refused(tmp_path, capfd, src)
+    assert ("row 1: no time column holds numbers: 'Time(hh:mm:ss)' (row 2: '05:00:00') is a clock time or a "
+            "date, not time stamps: give the sample rate with --rate HZ") in err
+    rec, dev, err = _convert(tmp_path, capfd, src, "--rate", "10")
+    np.testing.assert_allclose(rec.t, np.arange(30) / 10.0)
+    assert "no time column holds numbers ('Time(hh:mm:ss)' (row 2: '05:00:00'): clock times or dates" in err

@@ -14,7 +14,9 @@ import numpy as np
 import pytest
 
 from accelcal.convert import convert_file, unit_in_name
+from accelcal.device import load_device
 from accelcal.recording import read_recording
+from accelcal.recording_checks import rate_for
 from cli_run import run
 
 FACTOR = {"s": 1.0, "ms": 1e3, "us": 1e6, "ns": 1e9}
@@ -194,3 +196,32 @@ def test_a_single_sample_says_its_rate_is_a_placeholder(tmp_path):
     conv = convert_file(src)
     assert conv.device.sample_rate_hz == 1.0 and any("a single sample" in n for n in conv.notes)
     assert convert_file(src, rate_hz=100.0).device.sample_rate_hz == 100.0
+
+
+@pytest.mark.parametrize("fmt, header", [("table", "Timestamp(Ms),accX,accY,accZ"), ("csv", "t,raw_0,raw_1,raw_2")])
+def test_a_stated_rate_that_the_time_column_contradicts_puts_t_on_its_grid(tmp_path, capfd, fmt, header):
+    """A logger whose millis() clock runs slow (TWLogger: 16 ms steps, 62.5 Hz, for a 50 Hz
+    sensor; here 15 ms, 66.7 Hz): --rate 50 puts t on the 50 Hz grid from the first stamp with
+    a note giving both rates, the stamps kept as t_host, so that the commands keep 50 Hz
+    (rate_for took the stamps' rate); a rate within 20 % of the stamps' (60 Hz) leaves t as
+    written, no note."""
+    n = 300
+    ms = 15225 + 15 * np.arange(n)
+    ms[100:] += 80                                   # a pause for a flush: no sample lost
+    src = tmp_path / "tw.csv"
+    _write(src, [str(v) for v in ms], _counts(n), header)
+    args = ["--time-unit", "ms"] if fmt == "csv" else []
+    out, dev = tmp_path / "r.csv", tmp_path / "d.json"
+    rc, _, err, _ = run(["convert", src, "--rate", "50", *args, "-o", out, "--device-out", dev], capfd)
+    assert rc == 0, err
+    assert ("the time column's steps give 66.6667 Hz (median step), more than 20 % from --rate 50 Hz: its clock "
+            "is not the sensor's; t is written on the 50 Hz grid from the first stamp") in err
+    rec = read_recording(out)
+    np.testing.assert_allclose(rec.t, 15.225 + np.arange(n) / 50.0, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(np.array(rec.extra["t_host"], float), ms / 1e3, rtol=0, atol=1e-9)
+    device = load_device(dev)
+    assert device.sample_rate_hz == 50.0
+    assert rate_for([rec], device) == (device, None)          # the device's 50 Hz stands
+    conv = convert_file(src, fmt, rate_hz=60.0, time_unit="ms")
+    np.testing.assert_allclose(conv.recording.t, ms / 1e3, rtol=0, atol=1e-9)
+    assert "t_host" not in conv.recording.extra and not any("grid" in n for n in conv.notes)
