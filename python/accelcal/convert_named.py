@@ -243,7 +243,6 @@ def choose_time_column(source: str, names: list[str], acc: list[str], table, row
         i, text = seen[n]
         return f"{n!r} (row {table.line(i)}: {text!r})"
 
-
     if not numeric:
         said = ", ".join(holds(n) for n in cands)
         if not rate_stated:
