@@ -14,6 +14,10 @@ JIGFREE_MODELS = ("auto", "full", "gain", "offset")
 MIN_RCOND = 0.02           # known poses: normalised design with a smaller sv ratio cannot determine it
 
 
+STRUCTURED_MIN_POSES = 100  # jig-free fits of this many poses or more solve with a sparse Jacobian and take
+                            # their covariance by eliminating each pose (O(P), the dense forms O(P^3))
+
+
 MIN_RCOND_JAC = 1e-4       # nonlinear fits: column-normalised Jacobian with a smaller sv ratio (well-posed
                            # pose sets give 0.03..0.3, degenerate ones 1e-5 and below)
 
