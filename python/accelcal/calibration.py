@@ -324,7 +324,7 @@ def load_calibration(path: Any, device: Device | None = None) -> Calibration:
     """Read and validate a calibration JSON file (see calibration_from_dict).  ``"nominal"``
     (when no file has that name) is the device's datasheet values (:meth:`Calibration.nominal`):
     a calibration to diagnose or estimate with before any exists."""
-    if isinstance(path, str) and path == NOMINAL and device is not None and not Path(path).exists():
+    if isinstance(path, str) and path == NOMINAL and device is not None and not Path(path).is_file():
         return Calibration.nominal(device)
     doc, source = read_json(path)
     return calibration_from_dict(doc, source, device)

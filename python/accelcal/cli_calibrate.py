@@ -57,11 +57,13 @@ def calibrate_warnings(dev, cal) -> list[str]:
         warnings.append(f"the poses scatter about the fit beyond their noise (chi2/dof {red:.3g}; the uncertainties are "
                         f"scaled up by it): poses that move while held (a hand's tremor, a slow turn){known} or an "
                         "effect the model lacks; 'accelcal diagnose' with this calibration tests the effects it knows")
-    elif red is not None and red > 4 and not cross_axis and not fb:
-        use = "--jigfree-model full" if cal.method == "jigfree" else "--method full"
+    elif red is not None and red > 4 and not cross_axis:
+        use = ("poses in other orientations would determine them (above)" if fb else
+               f"use {'--jigfree-model full' if cal.method == 'jigfree' else '--method full'} if the poses "
+               "determine it")
         warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}): the "
                         f"'{fit.get('model', cal.method)}' model has no cross-axis terms, which a real sensor "
-                        f"has; use {use} if the poses determine it")
+                        f"has, and the poses may move while held; {use}")
     poses = cal.extra.get("poses", []) if isinstance(cal.extra, dict) else []
     if poses:
         low = poorly_excited(dev, [p["f_mps2"] for p in poses], cal.offset_sigma)

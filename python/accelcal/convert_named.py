@@ -38,6 +38,8 @@ PLACEHOLDER_G = 0.25
 #: ... or, where g in counts is unknown, of the median |reading|, which must be this many counts
 PLACEHOLDER_COUNTS = 64
 #: rows whose first non-empty time cell tells a numeric time column from a clock time or a date
+DUPLICATE_MIN_SHARE = 0.5  # rows off the grid that repeat the row before are samples delivered twice only when
+DUPLICATE_RATIO = 5.0      # at least this share of them repeat, and this x the share of the rows on the grid
 TIME_PROBE_ROWS = 100
 
 
@@ -288,7 +290,10 @@ def unrepeated(rows: np.ndarray, stamps: np.ndarray, readings: np.ndarray, notes
     """``rows`` less the rows that repeat the row before's readings exactly, with a note for each
     kind: with its time stamp too (a packet written twice: 1.2 % of x-io's Gait-Tracking
     logs), or with a stamp less than half a median step after it (a sample delivered twice,
-    off the grid: 91 rows of a Samsung S6's 100 Hz log).  A repeated reading on the grid (a
+    off the grid: 91 rows of a Samsung S6's 100 Hz log) where such repeats stand out: at least
+    DUPLICATE_MIN_SHARE of the rows off the grid, and DUPLICATE_RATIO x the share on it (readings
+    that repeat by chance -- coarse steps, a quiet sensor -- do so on and off a jittered grid
+    alike, and are samples).  A repeated reading on the grid (a
     step or more after the row before: a quiet sensor's) is a sample and stays; a repeated
     time stamp with other readings is left for :func:`table_time` to refuse.
 
@@ -309,7 +314,15 @@ def unrepeated(rows: np.ndarray, stamps: np.ndarray, readings: np.ndarray, notes
     same = repeat & (steps == 0)
     ahead = steps[steps > 0]
     step = float(np.median(ahead)) if ahead.size else 0.0
-    again = repeat & (steps > 0) & (steps < 0.5 * step)
+    off = (steps > 0) & (steps < 0.5 * step)
+    again = repeat & off
+    # delivered twice only where repeats off the grid stand out: readings that repeat by chance
+    # (coarse steps, a quiet sensor) do so on and off a jittered grid alike
+    on = steps >= 0.5 * step
+    p_on = float(np.mean(repeat[on])) if on.any() else 0.0
+    p_off = float(np.mean(repeat[off])) if off.any() else 0.0
+    if not (p_off >= DUPLICATE_MIN_SHARE and p_off >= DUPLICATE_RATIO * p_on):
+        again = np.zeros_like(again)
     if same.any():
         notes.append(f"{int(same.sum())} row(s) repeat the row before, time stamp and readings (a packet written "
                      "twice): left out")
@@ -424,5 +437,6 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
     ignored = [c for c in names if c and c not in used and c not in dropped]
     meta = {"table.columns": ", ".join(acc + ([time_column] if time_column else []))}
     return finish(source, "table", raw, np.arange(rows.size), t, None, opts, scale, converts or bool(np.any(raw < 0)),
-                  opts.rate_hz, meta, drop_note(dropped, ignored) + notes + ([table.cut_note] if table.cut_note else []),
+                  opts.rate_hz, meta,
+                  drop_note(dropped, ignored) + notes + ([table.cut_note] if table.cut_note else []),
                   locate, None, time_column=time_column)

@@ -9,7 +9,8 @@ quieter than a code in all channels at rest): held rows come in runs of one leng
 ratio of the two rates, or, where the sensor's rate is no whole fraction of the logger's
 (an LSM303 polled at 10 Hz: runs of 4-10 rows), of a few lengths none of which is 1; chance
 repeats come in runs whose most common length is 1 (a geometric law: runs of one row are
-1/mean of them, over 1/HELD_MAX for runs short enough to be held).  :func:`distinct_rows` keeps the first row of each run, so that the statistical
+1/mean of them, over 1/HELD_MAX for runs short enough to be held).  :func:`distinct_rows`
+keeps the first row of each run, so that the statistical
 commands (calibrate, diagnose) count each reading once.  The per-sample commands (resolve,
 attitude, displacement, rate) keep every row: their output is one line per input row.
 """
@@ -23,7 +24,7 @@ from .recording import Recording
 from .recording_checks import RATE_TOL, rate_for
 
 __all__ = ["HELD_MODAL_SHARE", "HELD_MAX", "HELD_MIN_RUNS", "HELD_SINGLE_SHARE", "HELD_MIN_RUNS_UNEVEN",
-           "held_runs", "held_factor", "held_text", "distinct_rows", "distinct_recordings"]
+           "HELD_CHANGED_SHARE", "held_runs", "held_factor", "held_text", "distinct_rows", "distinct_recordings"]
 
 HELD_MODAL_SHARE = 0.8     # rows are held when at least this share of the runs of identical rows
                            # share one length >= 2 ...
@@ -31,7 +32,8 @@ HELD_MAX = 16              # ... of at most this many rows (a pose on one code o
                            # run as long as the pose) ...
 HELD_MIN_RUNS = 50         # ... over at least this many runs
 HELD_SINGLE_SHARE = 0.05   # or, runs of uneven lengths: at most this share of single rows, ...
-HELD_MIN_RUNS_UNEVEN = 20  # ... over at least this many runs, 90 % of them at most HELD_MAX rows long
+HELD_MIN_RUNS_UNEVEN = 20  # ... over at least this many runs, 90 % of them at most HELD_MAX rows long,
+HELD_CHANGED_SHARE = 0.5   # ... and at least this share of the channels changing where a run ends
 
 
 def held_runs(raw: np.ndarray) -> tuple[int, np.ndarray]:
@@ -60,7 +62,11 @@ def held_runs(raw: np.ndarray) -> tuple[int, np.ndarray]:
     inner = lengths[1:-1]                   # the first and last runs may be cut by the recording's ends
     if (inner.size >= HELD_MIN_RUNS_UNEVEN and np.mean(inner == 1) <= HELD_SINGLE_SHARE
             and np.percentile(inner, 90) <= HELD_MAX):
-        return max(2, int(round(float(np.mean(inner))))), first
+        # a new reading changes most channels at once (noise on each); a slow ramp of one
+        # channel under a code, the others still, changes one
+        changed = np.mean(raw[first[1:]] != raw[first[1:] - 1])
+        if changed >= HELD_CHANGED_SHARE:
+            return max(2, int(round(float(np.mean(inner))))), first
     return 1, first
 
 
@@ -71,7 +77,7 @@ def held_text(k: int, first: np.ndarray, n: int) -> str:
     lo, hi = (int(inner.min()), int(inner.max())) if inner.size else (k, k)
     if lo == hi or np.mean(inner == k) >= HELD_MODAL_SHARE:
         return f"{k} rows"
-    return f"{lo}-{hi} rows ({k} on average)"
+    return f"{lo}-{hi} rows ({float(np.mean(inner)):.1f} on average)"
 
 
 def held_factor(raw: np.ndarray) -> int:
@@ -79,13 +85,16 @@ def held_factor(raw: np.ndarray) -> int:
     return held_runs(raw)[0]
 
 
-def _distinct(rec: Recording) -> tuple[Recording, int, str | None]:
+def _distinct(rec: Recording) -> tuple[Recording, float, str | None]:
     k, first = held_runs(rec.raw)
     if k == 1:
         return rec, 1, None
+    inner = np.diff(np.append(first, rec.n_samples))[1:-1]
+    if inner.size and np.mean(inner == k) < HELD_MODAL_SHARE:
+        k = float(np.mean(inner))            # runs of uneven lengths: the rows per reading on average
     span = float(rec.t[-1] - rec.t[0]) if rec.n_samples > 1 else 0.0
     rate = f", about {(first.size - 1) / span:.4g} Hz" if span > 0 else ""
-    note = (f"{rec.source}: each reading is held for {held_text(k, first, rec.n_samples)} (the logger read the "
+    note = (f"{rec.source}: each reading is held for {held_text(round(k), first, rec.n_samples)} (the logger read the "
             "sensor faster than it "
             f"updates): the {first.size} distinct readings of the {rec.n_samples} rows are used{rate}")
     return rec.select(first), k, note
@@ -122,8 +131,8 @@ def distinct_recordings(recordings: list[Recording], device) -> tuple[list[Recor
                          f"come at {rows_hz:.4g} Hz)")
         else:
             device = dataclasses.replace(device, sample_rate_hz=device.sample_rate_hz / k)
-            notes.append(f"the device's {device.sample_rate_hz * k:g} Hz is taken as {device.sample_rate_hz:g} Hz, "
-                         "the rate of the distinct readings")
+            notes.append(f"the device's {device.sample_rate_hz * k:.6g} Hz is taken as {device.sample_rate_hz:.6g} "
+                         "Hz, the rate of the distinct readings")
     return out, device, notes
 
 

@@ -40,8 +40,10 @@ QUANT_VAR = 1.0 / 12.0    # variance of rounding to integer counts
 
 
 COLOUR_BATCHES = 8         # a pose mean's own noise: the scatter of the means of this many batches of it ...
-COLOUR_MIN_RATIO2 = 1.5    # ... over the white-noise sem^2 (median over >= 3 poses); used above this (white
-                           # noise: chi2_7/7, median 0.91; real hand-held poses 1.4-3.5, a tremor's 7-16)
+COLOUR_MIN_RATIO2 = 1.5    # ... over the white-noise sem^2 (median over the poses); used above this (white
+                           # noise: chi2_7/7, median 0.91; real hand-held poses 1.4-3.5, a tremor's 7-16) ...
+COLOUR_MIN_POSES = 5       # ... where at least this many poses tell (3 poses of white noise: 7.6 % of channels
+                           # widened by chance, by ~1.28x; 5: the median of 5 chi2_7/7 above 1.5 in ~2 %)
 
 
 NYQUIST_RATIO = 1.5        # a channel carries a tone at half the sampling rate when its mean |lag-1 difference|
@@ -56,8 +58,9 @@ class PoseSet:
     f_ref (P,3) reference specific force (NaN = unknown); temp (P,) mean degC (NaN
     = unknown); info: one dict a pose (source, label, first/last sample, t range);
     set_aside: one dict a pose left out (source, label, t range, reason, clipped
-    samples and the channels and levels they sit at); sem_scale (P,N) or None: how far a
-    pose mean's noise exceeds the white-noise sem (:func:`colour_factor`; None = 1).
+    samples and the channels and levels they sit at); colour_r2 (P,N) or None: each pose's
+    batch-means variance over the white-noise sem^2 (:func:`pose_colour`; NaN for a pose too
+    short to tell), pooled over every pose of the set by :meth:`sem`.
     """
 
     means: np.ndarray
@@ -67,7 +70,7 @@ class PoseSet:
     temp: np.ndarray
     info: list[dict] = field(default_factory=list)
     set_aside: list[dict] = field(default_factory=list)
-    sem_scale: np.ndarray | None = None
+    colour_r2: np.ndarray | None = None
 
     @property
     def n_poses(self) -> int:
@@ -81,11 +84,20 @@ class PoseSet:
         var = (dof[:, None] * self.std ** 2).sum(0) / dof.sum()
         return np.sqrt(np.maximum(var, QUANT_VAR))
 
+    def sem_scale(self) -> np.ndarray:
+        """(N,) how far the poses' means wander beyond the white-noise sem, per channel: sqrt
+        of the median over the poses of ``colour_r2`` where at least COLOUR_MIN_POSES poses tell
+        and it exceeds COLOUR_MIN_RATIO2, else 1 (:func:`colour_factor`)."""
+        N = self.means.shape[1]
+        if self.colour_r2 is None:
+            return np.ones(N)
+        return colour_factor(self.colour_r2)
+
     def sem(self) -> np.ndarray:
         """(P,N) standard error of each pose mean: the pooled channel noise over sqrt(n), times
-        ``sem_scale`` (noise coloured within the poses: a hand's slow tremor, 1/f noise)."""
+        :meth:`sem_scale` (noise coloured within the poses: a hand's slow tremor, 1/f noise)."""
         white = self.channel_noise()[None, :] / np.sqrt(np.maximum(self.n, 1))[:, None]
-        return white if self.sem_scale is None else white * self.sem_scale
+        return white * self.sem_scale()[None, :]
 
     @staticmethod
     def concat(sets: Sequence["PoseSet"]) -> "PoseSet":
@@ -97,8 +109,8 @@ class PoseSet:
             temp=np.concatenate([s.temp for s in sets]),
             info=[d for s in sets for d in s.info],
             set_aside=[d for s in sets for d in s.set_aside],
-            sem_scale=(None if all(s.sem_scale is None for s in sets) else np.concatenate(
-                [np.ones_like(s.means) if s.sem_scale is None else s.sem_scale for s in sets])),
+            colour_r2=(None if all(s.colour_r2 is None for s in sets) else np.concatenate(
+                [np.full_like(s.means, np.nan) if s.colour_r2 is None else s.colour_r2 for s in sets])),
         )
 
 
@@ -388,24 +400,19 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
             "t_start": float(rec.t[idx[0]]), "t_stop": float(rec.t[idx[-1]]),
             "n": int(cnt[p]),
         })
-    scale = colour_factor(rec.raw, intervals)
     return PoseSet(means=means, n=cnt, std=std, f_ref=f_ref, temp=temp, info=info, set_aside=aside,
-                   sem_scale=None if np.all(scale == 1.0) else np.repeat(scale[None, :], P, axis=0))
+                   colour_r2=pose_colour(rec.raw, intervals))
 
 
-def colour_factor(raw: np.ndarray, intervals: Sequence[Any]) -> np.ndarray:
-    """(N,) how far the noise of the poses' means exceeds the white-noise sem std/sqrt(n), per
-    channel: sqrt of the median over the poses of var(means of COLOUR_BATCHES batches) x batch
-    length / var(samples), where that is above COLOUR_MIN_RATIO2 (else 1).  Real poses' noise is
-    coloured -- a hand's slow tremor, 1/f noise -- and a pose mean then wanders more than
-    white noise lets it (real hand-held sessions: 1.2-2 x in the median pose, up to 6 x; a
-    Cramer-Rao weighting with the white sem took that for a model error: chi2/dof 8.8 on an
-    LSM303 session).  Fewer than 3 poses of 2 COLOUR_BATCHES samples: 1."""
+def pose_colour(raw: np.ndarray, intervals: Sequence[Any]) -> np.ndarray:
+    """(P,N) each pose's var(means of COLOUR_BATCHES batches) x batch length / var(samples):
+    how far its mean wanders beyond white noise's sem, squared (white noise: chi2_7/7, mean 1;
+    NaN for a pose of fewer than 2 COLOUR_BATCHES samples; 1 for a constant channel)."""
     raw = np.asarray(raw)
     N = raw.shape[1]
     B = COLOUR_BATCHES
-    r2 = []
-    for iv in intervals:
+    out = np.full((len(intervals), N), np.nan)
+    for p, iv in enumerate(intervals):
         idx = np.arange(int(iv[0]), int(iv[1])) if is_pair(iv) else np.asarray(iv, dtype=np.int64)
         L = idx.size // B
         if L < 2:
@@ -413,8 +420,22 @@ def colour_factor(raw: np.ndarray, intervals: Sequence[Any]) -> np.ndarray:
         x = raw[idx[: B * L]].astype(float).reshape(B, L, N)
         var = x.reshape(B * L, N).var(axis=0, ddof=1)
         ok = var > 0
-        r2.append(np.where(ok, x.mean(axis=1).var(axis=0, ddof=1) * L / np.where(ok, var, 1.0), 1.0))
-    if len(r2) < 3:
+        out[p] = np.where(ok, x.mean(axis=1).var(axis=0, ddof=1) * L / np.where(ok, var, 1.0), 1.0)
+    return out
+
+
+def colour_factor(r2: np.ndarray) -> np.ndarray:
+    """(N,) the noise's colour within poses, from :func:`pose_colour`'s (P,N) ratios: sqrt of
+    their median over the poses that tell, where at least COLOUR_MIN_POSES do and it exceeds
+    COLOUR_MIN_RATIO2, else 1.  Real poses' noise is coloured -- a hand's slow tremor, 1/f
+    noise -- and a pose mean then wanders more than white noise lets it (real hand-held
+    sessions: 1.2-2 x in the median pose, up to 6 x; a Cramer-Rao weighting with the white sem
+    took that for a model error: chi2/dof 8.8 on an LSM303 session).  Pooled over the poses of
+    every recording (one file per pose counts alike)."""
+    r2 = np.asarray(r2, float)
+    N = r2.shape[1]
+    ok = np.all(np.isfinite(r2), axis=1)
+    if np.count_nonzero(ok) < COLOUR_MIN_POSES:
         return np.ones(N)
-    med = np.median(np.asarray(r2), axis=0)
+    med = np.median(r2[ok], axis=0)
     return np.where(med > COLOUR_MIN_RATIO2, np.sqrt(med), 1.0)

@@ -724,6 +724,9 @@ def test_a_channel_the_poses_hardly_turn_is_warned_of_with_the_poses_to_add():
     w = poorly_excited(d, F, np.array([114.0, 25.0, 33.0]))
     assert w is not None and "channel 0's f along its axis spans -0.29..+0.29 g, offset +-114 counts" in w, w
     assert "add poses with f along +x and -x" in w and "channel 1" not in w and "channel 2" not in w
+    # the same span with the offset known to 1 mg: nothing to warn of
+    one_mg = 0.001 * d.gravity_mps2 * d.counts_per_mps2
+    assert poorly_excited(d, F, np.array([1.0, 1.0, 1.0]) * one_mg) is None
     b = np.radians(40.0)
     wide = np.vstack([F, g * np.array([[np.sin(b), 0, -np.cos(b)], [-np.sin(b), 0, -np.cos(b)]])])
     assert poorly_excited(d, wide) is None                      # +-0.64 g along x: 1.29 g
@@ -734,12 +737,12 @@ def test_noise_coloured_within_the_poses_widens_their_sem_not_their_chi2():
     (factor 1), noise with a slow component (an AR(1) of 40-sample memory, as a hand's tremor)
     widens it, and the jig-free chi2/dof of such poses, 5-10 x with the white sem, is near 1
     (real sessions: an LSM303's 8.8 -> 4.1, the Xsens hand-held poses' 16.4 -> 7.4)."""
-    from accelcal.static import colour_factor
+    from accelcal.static import colour_factor, pose_colour
     d = default_triad()
     rng = np.random.default_rng(21)
     white = np.round(1000 + 3 * rng.standard_normal((4000, 3))).astype(np.int64)
     ivs = [(i, i + 400) for i in range(0, 4000, 400)]
-    np.testing.assert_array_equal(colour_factor(white, ivs), np.ones(3))
+    np.testing.assert_array_equal(colour_factor(pose_colour(white, ivs)), np.ones(3))
     b, S = draw_truth(d, rng)
     F = d.gravity_mps2 * fib_dirs(16)
     rec = make_recording(d, b, S, F, rng, labels=False, hold=int(4 * d.sample_rate_hz),
@@ -751,10 +754,15 @@ def test_noise_coloured_within_the_poses_widens_their_sem_not_their_chi2():
         e[i] = a * e[i - 1] + z[i]
     rec.raw = np.round(rec.raw + e).astype(np.int64)
     ps = poses_from_recording(rec, d)
-    assert ps.sem_scale is not None and np.all(ps.sem_scale > 2.0), ps.sem_scale
+    assert np.all(ps.sem_scale() > 2.0), ps.sem_scale()
     fit = fit_static(d, ps, "full", jigfree=True)
-    plain = fit_static(d, dataclasses.replace(ps, sem_scale=None), "full", jigfree=True)
+    plain = fit_static(d, dataclasses.replace(ps, colour_r2=None), "full", jigfree=True)
     assert plain.chi2 / plain.dof > 5 and 0.4 < fit.chi2 / fit.dof < 2.5, (plain.chi2 / plain.dof, fit.chi2 / fit.dof)
+    # the same poses one recording each (one file per jig pose): the colour is pooled over them alike
+    one_each = PoseSet.concat([poses_from_recording(rec.select(np.arange(i["first"], i["last"] + 1)), d,
+                                                    required=False) for i in ps.info])
+    assert one_each.n_poses == ps.n_poses
+    np.testing.assert_allclose(one_each.sem_scale(), ps.sem_scale(), rtol=0.05)
 
 
 @pytest.mark.parametrize("device_name,method", [("triad", "full"), ("triad", "gain"), ("six", "full")])

@@ -155,6 +155,7 @@ def test_readings_held_for_uneven_runs_are_held(tmp_path, capfd):
     readings too: a still recording of 63 runs had been calibrated from "58 static poses" and a
     slide cut into 25 "rests".  Runs of one length (3) and chance repeats (geometric: single
     rows the most common; here also with a mean of 8 rows) keep the old verdicts."""
+    import dataclasses
     from cli_run import run
     from accelcal.device import save_device, default_triad
     from accelcal.calibration import Calibration, save_calibration
@@ -165,10 +166,19 @@ def test_readings_held_for_uneven_runs_are_held(tmp_path, capfd):
     raw = np.repeat(vals, lengths, axis=0)
     k, first = held_runs(raw)
     assert k == int(round(float(np.mean(lengths[1:-1])))) and first.size == 60
-    assert held_text(k, first, raw.shape[0]) == f"{lengths[1:-1].min()}-{lengths[1:-1].max()} rows ({k} on average)"
+    assert held_text(k, first, raw.shape[0]) == \
+        f"{lengths[1:-1].min()}-{lengths[1:-1].max()} rows ({np.mean(lengths[1:-1]):.1f} on average)"
     # chance repeats with a mean run of 8 rows (p = 7/8 that all three channels repeat)
     chance = np.cumsum(rng.random((4000, 1)) > 7 / 8, axis=0) * np.array([[1, 1, 1]]) + 1000
     assert held_factor(chance) == 1
+    # a noiseless slow ramp of one channel (0.3 counts a row, the others still): runs of 3-4 rows,
+    # but only one channel changes where a run ends -- no new reading
+    ramp = np.column_stack([np.floor(1000 + 0.3 * np.arange(3000)), np.full(3000, 20), np.full(3000, -7)])
+    assert held_factor(ramp.astype(np.int64)) == 1
+    # the distinct readings' rate is the rows' over the mean run, not over its rounding
+    _, d_u, notes_u = distinct_recordings([recording_from_arrays(np.arange(raw.shape[0]) / 10.0, raw)],
+                                          dataclasses.replace(default_triad(), sample_rate_hz=10.0))
+    assert d_u.sample_rate_hz == pytest.approx(10.0 / np.mean(lengths[1:-1]), rel=1e-9), notes_u
     # a still sensor logged so: the poses and rests count its readings once, and the estimators say it
     d = default_triad()
     save_device(d, tmp_path / "d.json")

@@ -308,6 +308,23 @@ def test_a_sample_delivered_twice_off_the_grid_is_left_out(tmp_path, capfd):
     assert rec.n_samples == 81 and "left out" not in err
 
 
+def test_readings_that_repeat_by_chance_on_a_jittered_grid_stay(tmp_path, capfd):
+    """A host-stamped 100 Hz log (stamps jitter 0-7 ms) of readings in g with two decimals: a
+    sensor at rest repeats its readings by chance, off the grid as often as on it.  Those rows
+    are samples: all 3,000 stay at 100 Hz (30 had been left out as "delivered twice", 99.01 Hz)."""
+    rng = np.random.default_rng(3)
+    n = 3000
+    ts = np.sort(np.arange(n) * 0.01 + rng.uniform(0, 0.007, n))
+    g = np.column_stack([0.004 * rng.normal(size=n), 0.004 * rng.normal(size=n),
+                         1 + 0.004 * rng.normal(size=n)]).round(2)
+    src = _write(tmp_path / "jit.csv", "time,accX,accY,accZ",
+                 [f"{t:.4f},{r[0]:.2f},{r[1]:.2f},{r[2]:.2f}" for t, r in zip(ts, g)])
+    rc, out, err, _ = run(["convert", src, "--units", "g", "--lsb", "0.01", "-o", tmp_path / "o.csv",
+                           "--device-out", tmp_path / "o.json"], capfd)
+    assert rc == 0 and "left out" not in err, err
+    assert out.startswith("table: 3000 rows") and "100 Hz" in out, out
+
+
 @pytest.mark.parametrize("lead", [1, 3])
 def test_leading_zero_readings_before_the_first_value_are_left_out(tmp_path, capfd, lead):
     """A phone's log whose first row(s) read 0.0,0.0,0.0 (the sensor had delivered nothing yet)

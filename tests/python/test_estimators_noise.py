@@ -81,7 +81,7 @@ def test_cli_displacement_with_a_contract_only_device_file(tmp_path):
     assert abs(float(last["p_x"]) - DISTANCE) <= 0.01 * DISTANCE
 
 
-def test_cli_calibration_nominal_is_the_device_file_s_datasheet_values(tmp_path, capfd):
+def test_cli_calibration_nominal_is_the_device_file_s_datasheet_values(tmp_path, capfd, monkeypatch):
     """--calibration nominal: the device file's values, without writing a calibration JSON by
     hand (a new user's first run, before any calibration exists): the same output as the saved
     Calibration.nominal."""
@@ -97,6 +97,11 @@ def test_cli_calibration_nominal_is_the_device_file_s_datasheet_values(tmp_path,
                      "--output", str(tmp_path / out), "--axis", "x", str(tmp_path / "rec.csv")]) == 0
     body = [[ln for ln in (tmp_path / o).read_text().splitlines() if not ln.startswith("#")] for o in ("a.csv", "b.csv")]
     assert body[0] == body[1] and len(body[0]) > 100
+    # a directory of that name beside does not stand in for it
+    (tmp_path / "nominal").mkdir()
+    monkeypatch.chdir(tmp_path)
+    assert main(["displacement", "--device", str(tmp_path / "dev.json"), "--calibration", "nominal",
+                 "--output", str(tmp_path / "c.csv"), "--axis", "x", str(tmp_path / "rec.csv")]) == 0
 
 
 def test_no_rest_names_the_stillest_stretch_and_why_it_is_no_rest():
@@ -113,6 +118,21 @@ def test_no_rest_names_the_stillest_stretch_and_why_it_is_no_rest():
     assert "no rest was detected anywhere" in msg and "the calibration's scale is off" in msg, msg
     norm = float(msg.split("read |f| = ")[1].split(" ")[0])
     assert abs(norm - 1.077 * G) < 0.05, msg
+    with pytest.raises(InputError) as ei:                  # the C core's f, in its fixed point, said in m/s^2
+        E.displacement_from_recording(d, Calibration.nominal(d), high, "fixed")
+    assert "the calibration's scale is off" in str(ei.value), str(ei.value)
+    assert abs(float(str(ei.value).split("read |f| = ")[1].split(" ")[0]) - 1.077 * G) < 0.05
+    # a body that turns slowly throughout: each short stretch is nearly still at |f| = g, but
+    # the detector's running mean never settles (it had been blamed on the calibration's scale)
+    dd = default_device()
+    t = np.arange(1200) / 60.0
+    th = np.radians(-20 + 5.0 * t)
+    f = G * np.column_stack([np.sin(th), np.zeros_like(th), np.cos(th)])
+    raw = dd.zero_counts + (f @ dd.axes.T) * dd.counts_per_mps2 + np.random.default_rng(0).normal(0, 1, (1200, 6))
+    turning = recording_from_arrays(t, np.round(raw).astype(np.int64))
+    with pytest.raises(InputError) as ei:
+        E.displacement_from_recording(dd, Calibration.nominal(dd), turning, "float")
+    assert "creeps or turns slowly" in str(ei.value) and "scale is off" not in str(ei.value), str(ei.value)
     t = np.arange(600) / 100.0
     moving = recording_from_arrays(t, np.round(5000 + 1250 * np.column_stack(
         [np.sin(2 * np.pi * t), np.cos(2 * np.pi * t), np.ones_like(t)])).astype(np.int64))

@@ -10,7 +10,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..static import PoseSet
-from .settings import CANDIDATES, EXCITATION_MIN_SPAN_G, SAME_ORIENTATION_DEG, TILTED, TILTED_AFTER_DEG
+from .settings import (CANDIDATES, EXCITATION_MIN_SPAN_G, POORLY_DETERMINED_MG, SAME_ORIENTATION_DEG, TILTED,
+                       TILTED_AFTER_DEG)
 
 
 def as_means(device, means, what="means") -> np.ndarray:
@@ -226,7 +227,8 @@ def far_from_nominal(device, sensitivity) -> str | None:
 def poorly_excited(device, F, offset_sigma=None) -> str | None:
     """A warning when the poses turn some channel's axis through less than
     EXCITATION_MIN_SPAN_G of f (in g, the largest minus the smallest f . u_i over the poses;
-    +-x, +-y, +-z span 2 g on every axis), else None.  Such a channel's offset and gain trade
+    +-x, +-y, +-z span 2 g on every axis) and, where ``offset_sigma`` is given, its offset's
+    1-sigma exceeds POORLY_DETERMINED_MG, else None.  Such a channel's offset and gain trade
     against each other (a pose set that hardly turns x: x offset +-114 counts, +-28 mg, on a
     real LSM303 session whose f along x stayed within +-0.29 g).
 
@@ -244,7 +246,13 @@ def poorly_excited(device, F, offset_sigma=None) -> str | None:
     g = device.gravity_mps2
     proj = F @ device.axes.T / g                     # (P, N), in g
     span = proj.max(axis=0) - proj.min(axis=0)
-    low = np.flatnonzero(span < EXCITATION_MIN_SPAN_G)
+    low = span < EXCITATION_MIN_SPAN_G
+    if offset_sigma is not None:
+        # and the offset is really uncertain (the seed's 4 poses turn a channel through 0.87 g
+        # with the offset to 0.19 mg: no warning)
+        mg = 1000.0 * np.asarray(offset_sigma, float) / (np.asarray(device.counts_per_mps2, float) * g)
+        low &= ~(mg <= POORLY_DETERMINED_MG)
+    low = np.flatnonzero(low)
     if not low.size:
         return None
     parts = []
@@ -255,9 +263,9 @@ def poorly_excited(device, F, offset_sigma=None) -> str | None:
             sig = f", offset +-{offset_sigma[i]:.3g} counts ({mg:.2g} mg)"
         parts.append(f"channel {i}'s f along its axis spans {proj[:, i].min():+.2f}..{proj[:, i].max():+.2f} g{sig}")
     want = " and ".join(f"{axis_name(device.axes[i], +1)} and {axis_name(device.axes[i], -1)}" for i in low[:3])
-    return (f"the poses hardly turn {low.size} channel(s) ({'; '.join(parts)}; +-x, +-y, +-z span 2 g): the offset "
-            f"and gain of such a channel trade against each other and are poorly determined; add poses with f "
-            f"along {want}")
+    return (f"the poses hardly turn {low.size} channel(s) ({'; '.join(parts)}; +-x, +-y, +-z span 2 g): such a "
+            f"channel's parameters are poorly determined (its offset trades against its gain and the poses' "
+            f"angles); add poses with f along {want}")
 
 
 def axis_name(u, sign: int) -> str:
@@ -266,4 +274,4 @@ def axis_name(u, sign: int) -> str:
     j = int(np.argmax(np.abs(u)))
     if abs(u[j]) > 0.99:
         return f"{'+' if u[j] > 0 else '-'}{'xyz'[j]}"
-    return "(" + ", ".join(f"{v:.2f}" for v in u) + ")"
+    return "(" + ", ".join(f"{v + 0.0:.2f}" for v in np.round(u, 2)) + ")"

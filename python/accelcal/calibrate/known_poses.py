@@ -72,7 +72,7 @@ def fit_known_poses(device, means, f_ref, method: str = "full", sigma=None, *,
         # rounding floor as the noise, so chi2 counts and the covariance gets the Birge rule)
         sig = np.asarray(sigma, float) if sigma is not None else np.full((P, N), math.sqrt(QUANT_VAR))
         ps = bare_poses(m, F) if poses is None else PoseSet(m, poses.n, poses.std, F, poses.temp, poses.info,
-                                                                     sem_scale=poses.sem_scale)
+                                                                     colour_r2=poses.colour_r2)
         return fit_static(device, ps, method, jigfree=False, temperature=False, sigma=sig, min_rcond=min_rcond,
                           jig_accuracy_deg=jig_accuracy_deg)
     sigma_known = sigma is not None

@@ -242,6 +242,6 @@ def fit_temperature(device, poses: PoseSet, method: str = "full", *, f: np.ndarr
     ``f`` (default ``poses.f_ref``; pass a jig-free fit's ``f`` for hand-held data),
     uncertain by ``jig_accuracy_deg`` (see :func:`fit_known_poses`)."""
     ps = poses if f is None else PoseSet(poses.means, poses.n, poses.std, np.asarray(f, float), poses.temp,
-                                         poses.info, sem_scale=poses.sem_scale)
+                                         poses.info, colour_r2=poses.colour_r2)
     return fit_static(device, ps, method, jigfree=False, temperature=True, sigma=sigma,
                       jig_accuracy_deg=jig_accuracy_deg)

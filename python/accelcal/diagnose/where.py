@@ -8,7 +8,7 @@ import numpy as np
 
 from ..effects.fitdata import FitData
 from ..effects.settings import ROTATING_RADPS, TEMP_MIN_SPAN_C
-from ..static import colour_factor
+from ..static import colour_factor, pose_colour
 
 
 def bin_index(label: str, mask: np.ndarray, e: np.ndarray, sigma: np.ndarray, **extra) -> dict:
@@ -145,7 +145,7 @@ def pose_mean_gap(D: FitData, e: np.ndarray) -> dict:
     rms = float(np.sqrt(np.mean(np.concatenate(ms))))
     white = float(np.sqrt(np.mean(np.concatenate(vs))))
     # noise coloured within the poses (a hand's slow tremor) moves their means more than white noise
-    colour = colour_factor(Rr, [np.flatnonzero(D.pose == p) for p in range(P) if cnt[p] > 0])
+    colour = colour_factor(pose_colour(Rr, [np.flatnonzero(D.pose == p) for p in range(P) if cnt[p] > 0]))
     noise = white * float(np.sqrt(np.mean(colour ** 2)))
     return {"pose_mean_rms_counts": rms, "pose_mean_noise_counts": noise, "pose_mean_white_noise_counts": white,
             "pose_mean_ratio": rms / noise if noise > 0 else None, "n_poses": int(np.count_nonzero(cnt))}

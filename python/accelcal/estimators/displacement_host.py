@@ -205,6 +205,10 @@ def no_rest_reason(f, t, rp: RestParams) -> str:
     if dev > rp.dev_max:
         return (f"the stillest {hold} samples ({where}) stray {dev:.3g} m/s^2 from their mean, beyond the rest's "
                 f"{rp.dev_max:.3g}: the body never stops")
+    if abs(norm - rp.g) <= rp.g_tol:
+        return (f"the stillest {hold} samples ({where}) stray only {dev:.3g} m/s^2 from their own mean and read "
+                f"|f| = {norm:.4g} m/s^2, but the rest detector's running mean never settles on a still stretch "
+                "that long: the body creeps or turns slowly throughout")
     return (f"the stillest {hold} samples ({where}) are still (within {dev:.3g} m/s^2) but read |f| = {norm:.4g} "
             f"m/s^2, beyond {rp.g:g} +- {rp.g_tol:g}: the calibration's scale is off (a chip's nominal scale?); "
             "calibrate it (accelcal calibrate) and use that calibration")
@@ -320,7 +324,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                                 "fixed-point core")
         if no_rest:
             raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording: "
-                             f"{no_rest_reason(f, t, rp)}; the stop-to-stop method needs a rest at both ends of "
+                             f"{no_rest_reason(f / 2.0**OUT_FRAC if engine == 'fixed' else f, t, rp)}"
+                             "; the stop-to-stop method needs a rest at both ends of "
                              "each motion")
         v, pp, corrected = retro_correct(t, vq, pq, fl, zq)
         # uncorrected path: add back each end correction zp T^2 / 2 from its sample on
