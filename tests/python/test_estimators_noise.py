@@ -64,8 +64,9 @@ def test_displacement_finds_rest_at_any_noise_without_noise_mps2(signed, rate, s
         assert abs(c["p_x"][-1] - DISTANCE) <= 0.01 * DISTANCE
 
 
-def test_cli_displacement_with_a_contract_only_device_file(tmp_path):
-    """The issue's case: level triad, 100 Hz, 0.02 m/s^2, 2 s rest / 2 s travel / 2 s rest."""
+def contract_files(tmp_path) -> None:
+    """dev.json (the contract's fields only: an ADXL-like 0..10000 triad at 100 Hz), rec.csv (the
+    issue's stop-to-stop case: 2 s rest / 2 s travel / 2 s rest, 0.02 m/s^2) and cal.json (nominal)."""
     d = contract_triad(100.0, signed=False)
     dev = {"name": d.name, "sample_rate_hz": 100.0, "gravity_mps2": G, "raw_min": 0, "raw_max": 10000,
            "channels": [{"position_m": [0, 0, 0], "axis": list(np.eye(3)[i]), "counts_per_mps2": 1250 / G,
@@ -73,6 +74,11 @@ def test_cli_displacement_with_a_contract_only_device_file(tmp_path):
     (tmp_path / "dev.json").write_text(json.dumps(dev))
     write_recording(tmp_path / "rec.csv", stop_to_stop(d, 0.02, 7))
     save_calibration(Calibration.nominal(d), tmp_path / "cal.json")
+
+
+def test_cli_displacement_with_a_contract_only_device_file(tmp_path):
+    """The issue's case: level triad, 100 Hz, 0.02 m/s^2, 2 s rest / 2 s travel / 2 s rest."""
+    contract_files(tmp_path)
     rc = main(["displacement", "--device", str(tmp_path / "dev.json"), "--calibration", str(tmp_path / "cal.json"),
                "--output", str(tmp_path / "out.csv"), "--axis", "x", str(tmp_path / "rec.csv")])
     assert rc == 0
@@ -85,13 +91,7 @@ def test_cli_calibration_nominal_is_the_device_file_s_datasheet_values(tmp_path,
     """--calibration nominal: the device file's values, without writing a calibration JSON by
     hand (a new user's first run, before any calibration exists): the same output as the saved
     Calibration.nominal."""
-    d = contract_triad(100.0, signed=False)
-    dev = {"name": d.name, "sample_rate_hz": 100.0, "gravity_mps2": G, "raw_min": 0, "raw_max": 10000,
-           "channels": [{"position_m": [0, 0, 0], "axis": list(np.eye(3)[i]), "counts_per_mps2": 1250 / G,
-                         "zero_counts": 5000} for i in range(3)]}
-    (tmp_path / "dev.json").write_text(json.dumps(dev))
-    write_recording(tmp_path / "rec.csv", stop_to_stop(d, 0.02, 7))
-    save_calibration(Calibration.nominal(d), tmp_path / "cal.json")
+    contract_files(tmp_path)
     for cal, out in ((str(tmp_path / "cal.json"), "a.csv"), ("nominal", "b.csv")):
         assert main(["displacement", "--device", str(tmp_path / "dev.json"), "--calibration", cal,
                      "--output", str(tmp_path / out), "--axis", "x", str(tmp_path / "rec.csv")]) == 0
