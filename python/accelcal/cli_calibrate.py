@@ -110,7 +110,9 @@ def calibration_summary(cal, n_recordings: int, output) -> str:
     aside = cal.extra.get("set_aside", []) if isinstance(cal.extra, dict) else []
     if aside:
         n_cl = sum(int(d.get("n_clipped", 0)) for d in aside)
-        text += (f" {len(aside)} pose{'s' if len(aside) != 1 else ''} set aside ({n_cl} clipped samples): "
+        why = ", ".join(sorted({d.get("reason", "clipped") for d in aside}))
+        count = f"{n_cl} clipped samples" if n_cl else why
+        text += (f" {len(aside)} pose{'s' if len(aside) != 1 else ''} set aside ({count}): "
                  + "; ".join(f"{d['name']} ({d['levels']})" for d in aside[:3]) + ("; ..." if len(aside) > 3 else "")
                  + ".")
     if fit.get("jig_accuracy_deg"):

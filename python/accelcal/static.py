@@ -17,7 +17,7 @@ import numpy as np
 
 from .clipping import ClipLevels, clip_levels
 from .errors import InputError
-from .noise import estimate_noise, noise_for, window_std
+from .noise import colour_factor, estimate_noise, noise_for, pose_colour, window_std
 from .recording import check_for_device
 from .steps import MOVE_PARTS, MOVE_RANGE, MOVE_STD, block_log_intervals, part_spread, step_splits
 
@@ -39,11 +39,9 @@ EDGE_SIGMA = 4.0           # static interval ends: the nearest samples this x no
 QUANT_VAR = 1.0 / 12.0    # variance of rounding to integer counts
 
 
-COLOUR_BATCHES = 8         # a pose mean's own noise: the scatter of the means of this many batches of it ...
-COLOUR_MIN_RATIO2 = 1.5    # ... over the white-noise sem^2 (median over the poses); used above this (white
-                           # noise: chi2_7/7, median 0.91; real hand-held poses 1.4-3.5, a tremor's 7-16) ...
-COLOUR_MIN_POSES = 5       # ... where at least this many poses tell (3 poses of white noise: 7.6 % of channels
-                           # widened by chance, by ~1.28x; 5: the median of 5 chi2_7/7 above 1.5 in ~2 %)
+REST_F_RANGE = (0.5, 2.0)  # a static interval with no reference reads |f| within this x g (device file's scale) ...
+REST_F_AGREE = 0.1         # ... or within this of the median ratio of >= 3 such intervals (one wrong scale for
+                           # all: a +-8 g log read as +-2 g); else it is no rest (a rocket coasting: 0.03-0.34 g)
 
 
 NYQUIST_RATIO = 1.5        # a channel carries a tone at half the sampling rate when its mean |lag-1 difference|
@@ -340,6 +338,59 @@ def set_aside_clipped(rec, intervals: list, labels: list | None, clipped: np.nda
     return keep, keep_lab, aside
 
 
+def gravity_ratio(raw: np.ndarray, device, intervals: Sequence[Any]) -> np.ndarray:
+    """(P,) |f| / g of each interval's mean reading with the device file's nominal offsets and
+    sensitivities (least squares over the channels)."""
+    raw = np.asarray(raw)
+    S = device.nominal_sensitivity()
+    b = device.nominal_offsets()
+    out = np.full(len(intervals), np.nan)
+    for p, iv in enumerate(intervals):
+        idx = np.arange(int(iv[0]), int(iv[1])) if is_pair(iv) else np.asarray(iv, dtype=np.int64)
+        if idx.size:
+            f = np.linalg.lstsq(S, raw[idx].mean(axis=0) - b, rcond=None)[0]
+            out[p] = float(np.linalg.norm(f)) / device.gravity_mps2
+    return out
+
+
+def at_gravity(ratio: np.ndarray) -> np.ndarray:
+    """Which intervals can be at rest on the Earth by their |f| / g (``ratio``): within
+    REST_F_RANGE, or within REST_F_AGREE of the median of three or more that agree (a wrong
+    full scale moves every interval alike)."""
+    ratio = np.asarray(ratio, float)
+    ok = (ratio >= REST_F_RANGE[0]) & (ratio <= REST_F_RANGE[1])
+    fin = ratio[np.isfinite(ratio)]
+    if fin.size >= 3:
+        med = float(np.median(fin))
+        agree = np.abs(ratio / med - 1.0) <= REST_F_AGREE
+        if np.count_nonzero(agree) >= 3:
+            ok |= agree
+    return ok
+
+
+def set_aside_off_gravity(rec, device, intervals: list, labels: list | None) -> tuple[list, list | None, list[dict]]:
+    """Drop the poses without a reference f whose |f| is far from g (:func:`at_gravity`): a
+    jig-free fit takes |f| = g, and a still stretch in free fall or coasting (a rocket's coast
+    read 0.03-0.34 g) is no rest.  One record each of what was set aside and why."""
+    if not intervals:
+        return intervals, labels, []
+    ratio = gravity_ratio(rec.raw, device, intervals)
+    ok = at_gravity(ratio)
+    keep, keep_lab, aside = [], [] if labels is not None else None, []
+    for p, iv in enumerate(intervals):
+        idx = np.arange(iv[0], iv[1]) if is_pair(iv) else np.asarray(iv)
+        if ok[p] or np.all(np.isfinite(rec.f[idx])):
+            keep.append(iv)
+            if labels is not None:
+                keep_lab.append(labels[p])
+            continue
+        aside.append({"source": rec.source, "label": labels[p] if labels is not None else None,
+                      "t_start": float(rec.t[idx[0]]), "t_stop": float(rec.t[idx[-1]]), "n": int(idx.size),
+                      "reason": "not at rest", "n_clipped": 0, "channels": [],
+                      "levels": f"|f| = {ratio[p]:.3g} g with the device file's scale"})
+    return keep, keep_lab, aside
+
+
 #: what a recording without a static pose lacks (the calibration's error and its note)
 NO_POSE = (f"no static pose found (no 'pose' labels, and no interval of at least {MIN_POSE_S:g} s in which every "
            f"channel is within {STATIC_THRESHOLD:g} x its noise)")
@@ -369,6 +420,8 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
         labels = None
     levels = clip_levels(rec.raw, device, noise, w)
     intervals, labels, aside = set_aside_clipped(rec, intervals, labels, levels.mask(rec.raw), levels)
+    intervals, labels, off = set_aside_off_gravity(rec, device, intervals, labels)
+    aside += off
     empty = PoseSet(np.zeros((0, device.n_channels)), np.zeros(0, dtype=np.int64),
                     np.zeros((0, device.n_channels)), np.zeros((0, 3)), np.zeros(0), [], aside)
     if not intervals and (not required or aside):
@@ -402,40 +455,3 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
         })
     return PoseSet(means=means, n=cnt, std=std, f_ref=f_ref, temp=temp, info=info, set_aside=aside,
                    colour_r2=pose_colour(rec.raw, intervals))
-
-
-def pose_colour(raw: np.ndarray, intervals: Sequence[Any]) -> np.ndarray:
-    """(P,N) each pose's var(means of COLOUR_BATCHES batches) x batch length / var(samples):
-    how far its mean wanders beyond white noise's sem, squared (white noise: chi2_7/7, mean 1;
-    NaN for a pose of fewer than 2 COLOUR_BATCHES samples; 1 for a constant channel)."""
-    raw = np.asarray(raw)
-    N = raw.shape[1]
-    B = COLOUR_BATCHES
-    out = np.full((len(intervals), N), np.nan)
-    for p, iv in enumerate(intervals):
-        idx = np.arange(int(iv[0]), int(iv[1])) if is_pair(iv) else np.asarray(iv, dtype=np.int64)
-        L = idx.size // B
-        if L < 2:
-            continue
-        x = raw[idx[: B * L]].astype(float).reshape(B, L, N)
-        var = x.reshape(B * L, N).var(axis=0, ddof=1)
-        ok = var > 0
-        out[p] = np.where(ok, x.mean(axis=1).var(axis=0, ddof=1) * L / np.where(ok, var, 1.0), 1.0)
-    return out
-
-
-def colour_factor(r2: np.ndarray) -> np.ndarray:
-    """(N,) the noise's colour within poses, from :func:`pose_colour`'s (P,N) ratios: sqrt of
-    their median over the poses that tell, where at least COLOUR_MIN_POSES do and it exceeds
-    COLOUR_MIN_RATIO2, else 1.  Real poses' noise is coloured -- a hand's slow tremor, 1/f
-    noise -- and a pose mean then wanders more than white noise lets it (real hand-held
-    sessions: 1.2-2 x in the median pose, up to 6 x; a Cramer-Rao weighting with the white sem
-    took that for a model error: chi2/dof 8.8 on an LSM303 session).  Pooled over the poses of
-    every recording (one file per pose counts alike)."""
-    r2 = np.asarray(r2, float)
-    N = r2.shape[1]
-    ok = np.all(np.isfinite(r2), axis=1)
-    if np.count_nonzero(ok) < COLOUR_MIN_POSES:
-        return np.ones(N)
-    med = np.median(r2[ok], axis=0)
-    return np.where(med > COLOUR_MIN_RATIO2, np.sqrt(med), 1.0)

@@ -737,7 +737,7 @@ def test_noise_coloured_within_the_poses_widens_their_sem_not_their_chi2():
     (factor 1), noise with a slow component (an AR(1) of 40-sample memory, as a hand's tremor)
     widens it, and the jig-free chi2/dof of such poses, 5-10 x with the white sem, is near 1
     (real sessions: an LSM303's 8.8 -> 4.1, the Xsens hand-held poses' 16.4 -> 7.4)."""
-    from accelcal.static import colour_factor, pose_colour
+    from accelcal.noise import colour_factor, pose_colour
     d = default_triad()
     rng = np.random.default_rng(21)
     white = np.round(1000 + 3 * rng.standard_normal((4000, 3))).astype(np.int64)
@@ -798,3 +798,39 @@ def test_many_poses_solve_by_their_structure_with_the_dense_solution_and_covaria
         fit = fit_static(dev, big, "full", jigfree=True)
         sig = np.sqrt(fit.cov[:, 0, 0])
         assert np.all(np.abs(fit.offsets - b) < 5 * sig) and 0.8 < fit.chi2 / fit.dof < 1.2
+
+
+def test_a_still_stretch_far_from_g_is_no_rest_unless_every_pose_agrees(tmp_path, capfd):
+    """A rocket's coast (RocketPy's CATS log: 16.7 s still at 0.03-0.34 g) had been a static pose
+    for calibrate and the |f| = g reference of a confident `bias_drift` diagnosis.  A still
+    stretch whose |f| is beyond 0.5-2 g with the device file's scale is set aside (named, with
+    its |f|) and is no reference for diagnose; poses that all read 4 g alike (a +-8 g log with a
+    +-2 g device file) stay, for the sensitivity warning to name the scale."""
+    from cli_run import run
+    from accelcal.device import save_device
+    from accelcal import diagnose
+    d = default_triad()
+    save_device(d, tmp_path / "d.json")
+    rng = np.random.default_rng(4)
+    b, S = draw_truth(d, rng)
+    F = np.vstack([d.gravity_mps2 * fib_dirs(12), [[0.0, 0.3, 1.0]]])       # the last: 1.04 m/s^2, coasting
+    rec = make_recording(d, b, S, F, rng, labels=False, hold=int(2 * d.sample_rate_hz),
+                         move=int(0.5 * d.sample_rate_hz))
+    write_recording(tmp_path / "r.csv", rec)
+    rc, out, err, _ = run(["calibrate", "--device", tmp_path / "d.json", tmp_path / "r.csv", "-o",
+                           tmp_path / "c.json"], capfd)
+    assert rc == 0, err
+    assert "from 12 static poses" in out and "1 pose set aside (not at rest)" in out, out
+    import re
+    ratio = float(re.search(r"\|f\| = ([0-9.]+) g with the device file's scale", out).group(1))
+    assert ratio < 0.5                          # the nominal offsets (up to 0.28 g) move it from 0.106
+    coast = make_recording(d, b, S, F[-1:], rng, labels=False, hold=int(3 * d.sample_rate_hz), move=0)
+    cal = calibrate_recordings(d, [rec], "jigfree")
+    with pytest.raises(InputError, match=r"no reference to diagnose against.*reads \|f\| = 0\.[0-4][0-9]* g"):
+        diagnose(d, cal, [coast])
+    ps = poses_from_recording(rec, d)
+    assert ps.n_poses == 12 and ps.set_aside[0]["reason"] == "not at rest"
+    four = make_recording(d, b, S * 4.0, d.gravity_mps2 * fib_dirs(12), rng, labels=False,
+                          hold=int(2 * d.sample_rate_hz), move=int(0.5 * d.sample_rate_hz), clip=False)
+    big = dataclasses.replace(d, raw_min=-10 ** 7, raw_max=10 ** 7)
+    assert poses_from_recording(four, big).n_poses == 12

@@ -54,11 +54,13 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
             for rec, rot in zip(recordings, rotating)]
     for rec, rot, ps in zip(recordings, rotating, sets):
         if several and not rot.any() and ps.n_poses == 0:
-            clipped = f" ({len(ps.set_aside)} set aside: their readings clip)" if ps.set_aside else ""
+            clipped = (f" ({len(ps.set_aside)} set aside: "
+                       f"{', '.join(sorted({setaside_reason(d) for d in ps.set_aside}))})" if ps.set_aside else "")
             notes.append(f"{rec.source}: {NO_POSE}{clipped}: it adds none")
     poses = PoseSet.concat(sets)
     if poses.n_poses == 0:
-        why = (f" ({len(poses.set_aside)} set aside because their readings clip: "
+        why = (f" ({len(poses.set_aside)} set aside because "
+               f"{' or '.join(sorted({setaside_reason(d) for d in poses.set_aside}))}: "
                + "; ".join(f"{set_aside_entry(d)['name']} ({d['levels']})" for d in poses.set_aside[:3]) + ")"
                if poses.set_aside else "")
         raise InputError(recordings[0].source, f"no usable static pose in any recording{why}: the offsets and "
@@ -119,6 +121,11 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     if notes:
         cal.extra["notes"] = notes
     return cal
+
+
+def setaside_reason(d: dict) -> str:
+    """Why a pose was set aside, in words: "their readings clip", "their |f| is far from g"."""
+    return "their |f| is far from g" if d.get("reason") == "not at rest" else "their readings clip"
 
 
 def fit_jigfree(device, poses: PoseSet, model: str, temperature: bool):

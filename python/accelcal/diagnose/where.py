@@ -8,7 +8,7 @@ import numpy as np
 
 from ..effects.fitdata import FitData
 from ..effects.settings import ROTATING_RADPS, TEMP_MIN_SPAN_C
-from ..static import colour_factor, pose_colour
+from ..noise import colour_factor, pose_colour
 
 
 def bin_index(label: str, mask: np.ndarray, e: np.ndarray, sigma: np.ndarray, **extra) -> dict:
