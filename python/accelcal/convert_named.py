@@ -438,5 +438,7 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
     meta = {"table.columns": ", ".join(acc + ([time_column] if time_column else []))}
     return finish(source, "table", raw, np.arange(rows.size), t, None, opts, scale, converts or bool(np.any(raw < 0)),
                   opts.rate_hz, meta,
-                  drop_note(dropped, ignored) + notes + ([table.cut_note] if table.cut_note else []),
+                  ([f"the column names are read from the comment on line {pre.header_line} (a '#' before the "
+                    "header, as Altus Metrum's logs write it)"] if pre.header_from_comment else [])
+                  + drop_note(dropped, ignored) + notes + ([table.cut_note] if table.cut_note else []),
                   locate, None, time_column=time_column)

@@ -23,6 +23,9 @@ import zstandard
 from .csvtable import META_RE
 from .errors import InputError, read_input
 
+#: a cell that is a number (a header made of such cells is a data row)
+CELL_NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[+-]?(?:nan|inf)", re.I)
+
 __all__ = ["GZIP_MAGIC", "COMPRESSIONS", "decompress", "semicolons_to_commas", "Preamble", "read_text_bytes",
            "read_preamble", "is_whitespace_header", "split_whitespace_header", "whitespace_to_commas"]
 
@@ -157,7 +160,10 @@ class Preamble:
     ``header`` is the first line that is neither a comment nor blank (None when there is
     none), ``header_line`` its 1-based line number, ``header_pos`` and ``pos`` the byte
     offsets of its start and of the line after it.  ``metadata`` holds the ``# key:
-    value`` comments, ``metadata_lines`` the line of each key."""
+    value`` comments, ``metadata_lines`` the line of each key.  A comment line just before a
+    first line of numbers that names as many comma-separated columns as that line has cells
+    (Altus Metrum's ``#version,serial,...,accel_x,...``) is the header
+    (``header_from_comment``; ``pos`` then the numbers' line, the first data row)."""
 
     metadata: dict[str, str] = field(default_factory=dict)
     metadata_lines: dict[str, int] = field(default_factory=dict)
@@ -165,12 +171,14 @@ class Preamble:
     header_line: int = 0
     header_pos: int = 0
     pos: int = 0
+    header_from_comment: bool = False
 
 
 def read_preamble(data: bytes) -> Preamble:
     """Comments (metadata) and blank lines, then the header line."""
     out = Preamble()
     pos, line_no = 0, 0
+    last = None                                  # the comment line just before, (text, line, start)
     while pos < len(data):
         end = data.find(b"\n", pos)
         end = len(data) if end < 0 else end
@@ -182,12 +190,31 @@ def read_preamble(data: bytes) -> Preamble:
             if m:
                 out.metadata[m.group(1)] = m.group(2).strip()
                 out.metadata_lines[m.group(1)] = line_no
+                last = None
+            else:
+                last = (text[1:].strip(), line_no, start)
             continue
         if not text.strip():
+            last = None
             continue
+        if last is not None and names_for(last[0], text):
+            out.header, out.header_line, out.header_pos, out.pos = last[0], last[1], last[2], start
+            out.header_from_comment = True
+            break
         out.header, out.header_line, out.header_pos, out.pos = text, line_no, start, pos
         break
     return out
+
+
+def names_for(comment: str, line: str) -> bool:
+    """Whether ``comment`` names the columns of ``line``: as many comma-separated cells (3 or
+    more), every one a name (not a number, not empty), and most cells of ``line`` numbers (a
+    row of a log may hold a call sign or a state's name)."""
+    names = [c.strip() for c in comment.split(",")]
+    cells = [c.strip() for c in line.rstrip("\r").split(",")]
+    return (len(names) >= 3 and len(names) == len(cells) and all(names)
+            and not any(CELL_NUMBER_RE.fullmatch(c) for c in names)
+            and sum(bool(CELL_NUMBER_RE.fullmatch(c)) for c in cells) > len(cells) / 2)
 
 
 def is_whitespace_header(header: str) -> bool:

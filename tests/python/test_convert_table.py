@@ -450,3 +450,22 @@ def test_no_numeric_time_column_needs_a_rate(tmp_path, capfd):
     rec, dev, err = _convert(tmp_path, capfd, src, "--rate", "10")
     np.testing.assert_allclose(rec.t, np.arange(30) / 10.0)
     assert "no time column holds numbers ('Time(hh:mm:ss)' (row 2: '05:00:00'): clock times or dates" in err
+
+
+def test_a_header_written_as_a_comment_is_the_header(tmp_path, capfd):
+    """Altus Metrum's AltOS CSV starts with '#version,serial,...,accel_x,accel_y,accel_z,...'
+    and rows that hold a state's name among the numbers: the comment names the columns (it had
+    been "cannot tell the format").  A comment that names other counts of columns, or a
+    '# key: value' line, stays a comment."""
+    c = _counts(40, seed=21)
+    rows = [f"6,6583,{k / 10:.2f},{'pad' if k < 20 else 'boost'},{_cells(r * LSB_G)}" for k, r in enumerate(c)]
+    src = _write(tmp_path / "altos.csv", "#version,serial,time,state_name,accel_x,accel_y,accel_z", rows)
+    rc, out, err, _ = run(["convert", src, "--units", "g", "--lsb", repr(LSB_G), "-o", tmp_path / "o.csv",
+                           "--device-out", tmp_path / "o.json"], capfd)
+    assert rc == 0, err
+    assert "the column names are read from the comment on line 1" in err and out.startswith("table: 40 rows"), out
+    rec = read_recording(tmp_path / "o.csv")
+    np.testing.assert_array_equal(rec.raw, c)
+    short = _write(tmp_path / "short.csv", "#version,serial", rows)
+    rc, _, err, _ = run(["convert", short, "--units", "g", "--lsb", repr(LSB_G), "-o", tmp_path / "p.csv"], capfd)
+    assert rc == 2 and "comment" not in err
