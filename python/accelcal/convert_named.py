@@ -41,6 +41,9 @@ PLACEHOLDER_COUNTS = 64
 DUPLICATE_MIN_SHARE = 0.5  # rows off the grid that repeat the row before are samples delivered twice only when
 DUPLICATE_RATIO = 5.0      # at least this share of them repeat, and this x the share of the rows on the grid
 TIME_PROBE_ROWS = 100
+#: a sample rate in a comment: "data_rate = 2000.0 Hz", "Sample rate: 100 Hz", "ODR: 400Hz"
+RATE_COMMENT_RE = re.compile(r"(?:data[ _]?rate|sampl(?:e|ing)[ _]?(?:rate|frequency)|odr|rate)\s*[=:]\s*"
+                             r"([0-9]+(?:\.[0-9]*)?)\s*hz\b", re.I)
 
 
 @dataclass
@@ -214,6 +217,17 @@ def is_number(text: str) -> bool:
         return np.isfinite(float(text))
     except ValueError:
         return False
+
+
+def comment_rate(metadata: dict[str, str]) -> tuple[float, str] | None:
+    """The sample rate a logger's ``# key: value`` comments state (PicoQuake's ``# Config:
+    data_rate = 2000.0 Hz, ...``; ``# Sample rate: 100 Hz``; ``# ODR: 400Hz``), Hz, and the key;
+    None when none does."""
+    for key, value in metadata.items():
+        m = RATE_COMMENT_RE.search(f"{key}: {value}")
+        if m and float(m.group(1)) > 0:
+            return float(m.group(1)), key
+    return None
 
 
 def choose_time_column(source: str, names: list[str], acc: list[str], table, rows: np.ndarray, rate_stated: bool,
@@ -407,9 +421,14 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
         time_column = choose_time_column(source, names, acc, table, rows, opts.rate_hz is not None, pre.header_line,
                                          notes)
     if time_column is None and opts.rate_hz is None:
-        raise InputError(source, "the table has no time column (t, time, timestamp, 'Time (s)', time_ms, ...): give "
-                         "the sample rate with --rate HZ (or name its column with --time-column NAME)",
-                         row=pre.header_line)
+        stated = comment_rate(pre.metadata)
+        if stated is None:
+            raise InputError(source, "the table has no time column (t, time, timestamp, 'Time (s)', time_ms, ...): "
+                             "give the sample rate with --rate HZ (or name its column with --time-column NAME)",
+                             row=pre.header_line)
+        opts.rate_hz, key = stated
+        notes.append(f"no time column: the rate is the {opts.rate_hz:g} Hz the file's comment '# {key}' states "
+                     "(--rate HZ states another)")
     if time_column is None and opts.time_unit != "auto":
         raise InputError(source, "--time-unit: the table has no time column (--rate states its rate)")
     stamps = None

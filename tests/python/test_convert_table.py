@@ -469,3 +469,22 @@ def test_a_header_written_as_a_comment_is_the_header(tmp_path, capfd):
     short = _write(tmp_path / "short.csv", "#version,serial", rows)
     rc, _, err, _ = run(["convert", short, "--units", "g", "--lsb", repr(LSB_G), "-o", tmp_path / "p.csv"], capfd)
     assert rc == 2 and "comment" not in err
+
+
+def test_a_rate_stated_in_a_comment_serves_a_table_without_a_time_column(tmp_path, capfd):
+    """PicoQuake writes '# Config: data_rate = 2000.0 Hz, filter = 488 Hz, ...' above a table of
+    a sample counter and readings in g: the rate is the comment's, with a note (it had been "no
+    time column"); --rate states another; without such a comment, the old refusal."""
+    c = _counts(30, seed=5)
+    rows = [f"{k},{_cells(r * LSB_G)}" for k, r in enumerate(c)]
+    src = _write(tmp_path / "pq.csv", "count,a_x,a_y,a_z", rows,
+                 comments=("# PLab PicoQuake Data", "# Config: data_rate = 2000.0 Hz, filter = 488 Hz, acc_range = 4 g"))
+    rc, out, err, _ = run(["convert", src, "--units", "g", "--lsb", repr(LSB_G), "-o", tmp_path / "o.csv"], capfd)
+    assert rc == 0 and "the rate is the 2000 Hz the file's comment '# Config' states" in err, err
+    assert "2000 Hz" in out
+    rc, out, err, _ = run(["convert", src, "--units", "g", "--lsb", repr(LSB_G), "--rate", "1000", "-o",
+                           tmp_path / "p.csv"], capfd)
+    assert rc == 0 and "1000 Hz" in out and "comment" not in err
+    bare = _write(tmp_path / "bare.csv", "count,a_x,a_y,a_z", rows)
+    rc, _, err, _ = run(["convert", bare, "--units", "g", "--lsb", repr(LSB_G), "-o", tmp_path / "q.csv"], capfd)
+    assert rc == 2 and "no time column" in err
