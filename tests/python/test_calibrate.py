@@ -630,6 +630,23 @@ def test_too_few_orientations_are_counted_as_such_and_a_tilted_pose_is_asked_for
     assert np.all(np.abs(gain - np.linalg.norm(S, axis=1)) < 4 * g_sig), (gain - np.linalg.norm(S, axis=1), g_sig)
 
 
+def calibrate_cli(tmp_path, capfd, F, seed):
+    """Poses F (P,3) of a seed-like triad held 2 s each, written to r.csv beside d.json, and
+    ``accelcal calibrate`` run on them: (b, S, rec, rc, stdout, stderr)."""
+    from cli_run import run
+    from accelcal.device import save_device
+    d = default_triad()
+    save_device(d, tmp_path / "d.json")
+    rng = np.random.default_rng(seed)
+    b, S = draw_truth(d, rng)
+    rec = make_recording(d, b, S, F, rng, labels=False, hold=int(2 * d.sample_rate_hz),
+                         move=int(0.5 * d.sample_rate_hz))
+    write_recording(tmp_path / "r.csv", rec)
+    rc, out, err, _ = run(["calibrate", "--device", tmp_path / "d.json", tmp_path / "r.csv", "-o",
+                           tmp_path / "c.json"], capfd)
+    return b, S, rec, rc, out, err
+
+
 def test_jig_free_auto_falls_back_to_what_the_poses_determine_and_the_cli_says_why(tmp_path, capfd):
     """Poses in 5 orientations (+-z, +-y, +x; a real hand-held session, sunsided/sensor-fusion's
     tilt-around-x, had 7 poses in 6 orientations, none along x): neither full (9
@@ -637,17 +654,10 @@ def test_jig_free_auto_falls_back_to_what_the_poses_determine_and_the_cli_says_w
     offset model and warns, naming both reasons and --jigfree-model; --jigfree-model full keeps
     the one-line refusal.  Poses that all face one way determine nothing: full's error."""
     from cli_run import run
-    from accelcal.device import save_device
     d = default_triad()
-    save_device(d, tmp_path / "d.json")
-    rng = np.random.default_rng(3)
-    b, S = draw_truth(d, rng)
     F = d.gravity_mps2 * np.array([[0, 0, 1.0], [0, 1.0, 0], [0, 0, -1.0], [1.0, 0, 0], [0, -1.0, 0], [0, 0, 1.0]])
-    rec = make_recording(d, b, S, F, rng, labels=False, hold=int(2 * d.sample_rate_hz),
-                         move=int(0.5 * d.sample_rate_hz))
-    write_recording(tmp_path / "r.csv", rec)
-    rc, out, err, _ = run(["calibrate", "--device", tmp_path / "d.json", tmp_path / "r.csv", "-o",
-                           tmp_path / "c.json"], capfd)
+    b, S, rec, rc, out, err = calibrate_cli(tmp_path, capfd, F, 3)
+    rng = np.random.default_rng(30)
     assert rc == 0, err
     assert "warning: fitted the jig-free 'offset' model (offsets only, no cross-axis terms), as the poses do " \
            "not determine 'full' or 'gain'." in err, err
@@ -806,19 +816,11 @@ def test_a_still_stretch_far_from_g_is_no_rest_unless_every_pose_agrees(tmp_path
     stretch whose |f| is beyond 0.5-2 g with the device file's scale is set aside (named, with
     its |f|) and is no reference for diagnose; poses that all read 4 g alike (a +-8 g log with a
     +-2 g device file) stay, for the sensitivity warning to name the scale."""
-    from cli_run import run
-    from accelcal.device import save_device
     from accelcal import diagnose
     d = default_triad()
-    save_device(d, tmp_path / "d.json")
-    rng = np.random.default_rng(4)
-    b, S = draw_truth(d, rng)
     F = np.vstack([d.gravity_mps2 * fib_dirs(12), [[0.0, 0.3, 1.0]]])       # the last: 1.04 m/s^2, coasting
-    rec = make_recording(d, b, S, F, rng, labels=False, hold=int(2 * d.sample_rate_hz),
-                         move=int(0.5 * d.sample_rate_hz))
-    write_recording(tmp_path / "r.csv", rec)
-    rc, out, err, _ = run(["calibrate", "--device", tmp_path / "d.json", tmp_path / "r.csv", "-o",
-                           tmp_path / "c.json"], capfd)
+    b, S, rec, rc, out, err = calibrate_cli(tmp_path, capfd, F, 4)
+    rng = np.random.default_rng(40)
     assert rc == 0, err
     assert "from 12 static poses" in out and "1 pose set aside (not at rest)" in out, out
     import re
