@@ -41,6 +41,9 @@ PLACEHOLDER_COUNTS = 64
 DUPLICATE_MIN_SHARE = 0.5  # rows off the grid that repeat the row before are samples delivered twice only when
 DUPLICATE_RATIO = 5.0      # at least this share of them repeat, and this x the share of the rows on the grid
 TIME_PROBE_ROWS = 100
+#: names of a sample counter, not a time
+INDEX_NAME_RE = re.compile(r"(?:count|counter|index|idx|sample|samples|sample[ _]?(?:no|nr|number|index)|n|i|#)",
+                           re.I)
 #: a sample rate in a comment: "data_rate = 2000.0 Hz", "Sample rate: 100 Hz", "ODR: 400Hz"
 RATE_COMMENT_RE = re.compile(r"(?:data[ _]?rate|sampl(?:e|ing)[ _]?(?:rate|frequency)|odr|rate)\s*[=:]\s*"
                              r"([0-9]+(?:\.[0-9]*)?)\s*hz\b", re.I)
@@ -200,6 +203,19 @@ def stated_time_column(source: str, names: list[str], acc: list[str], stated: st
     if found[0] in acc:
         raise InputError(source, f"--time-column {stated!r} is an accelerometer column ({', '.join(acc)})", row=row)
     return found[0]
+
+
+def sample_index(source: str, name: str, stamps: np.ndarray, rate_hz: float | None, row: int) -> None:
+    """Refuse a time column that is a sample counter: a name such as ``count``, ``index``,
+    ``sample`` (INDEX_NAME_RE) over the whole numbers 0, 1, 2, ... or 1, 2, 3, ... (PicoQuake's
+    ``count``, which read in ms gave its 2 kHz log 1 kHz), unless ``--rate`` states the rate
+    (then the column is still taken for time: the caller's)."""
+    if rate_hz is not None or not INDEX_NAME_RE.fullmatch(name.strip()) or stamps.size < 2:
+        return
+    v = np.asarray(stamps, float)
+    if v[0] in (0.0, 1.0) and np.all(np.diff(v) == 1.0):
+        raise InputError(source, f"the time column {name!r} counts the samples ({v[0]:g}, {v[1]:g}, ...), it does "
+                         "not time them: give the sample rate with --rate HZ", row=row, column=name)
 
 
 def first_cell(table, j: int, rows: np.ndarray) -> tuple[int, str] | None:
@@ -440,6 +456,7 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
             raise InputError(source, err[2], row=table.line(err[0]), column=time_column)
         values[time_column] = numbers[time_column]
         stamps = exact_time(values[time_column], lambda: table.strings(jt), rows)   # an epoch in ns: int64
+        sample_index(source, time_column, stamps[rows], opts.rate_hz, pre.header_line)
         rows = unrepeated(rows, stamps, np.column_stack([values[a] for a in acc]), notes)
     rows = placeholder_rows(rows, np.column_stack([values[a] for a in acc]), table, scale,
                             opts.gravity_mps2 or STANDARD_GRAVITY, notes)

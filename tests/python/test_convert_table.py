@@ -488,3 +488,8 @@ def test_a_rate_stated_in_a_comment_serves_a_table_without_a_time_column(tmp_pat
     bare = _write(tmp_path / "bare.csv", "count,a_x,a_y,a_z", rows)
     rc, _, err, _ = run(["convert", bare, "--units", "g", "--lsb", repr(LSB_G), "-o", tmp_path / "q.csv"], capfd)
     assert rc == 2 and "no time column" in err
+    # the counter named as the time column is no time (read in ms it had given the 2 kHz log 1 kHz)
+    rc, _, err, _ = run(["convert", src, "--units", "g", "--lsb", repr(LSB_G), "--time-column", "count", "-o",
+                         tmp_path / "r.csv"], capfd)
+    assert rc == 2 and "the time column 'count' counts the samples (0, 1, ...)" in err, err
+    assert not (tmp_path / "r.csv").exists()
