@@ -180,6 +180,12 @@ def _max_rotation_deg(device, cal, rec, at_rest, dt, noise) -> float:
     return math.degrees(worst)
 
 
+#: a rest test wider than this (m/s^2; 8 sigma of 0.05 m/s^2, the noisiest sensor at rest of
+#: issue 13's range, whose 5 sigma is 0.25) from a noise estimated from the data is warned of (a
+#: rocket's vibration: 0.67)
+REST_DEV_WARN_MPS2 = 0.4
+
+
 def no_rest_reason(f, t, rp: RestParams) -> str:
     """Why no rest was found, for the error: the stillest block of ``rp.hold`` samples (blocks
     at a stride of half a block), how far its f strays from its mean, and, when it is still
@@ -295,6 +301,11 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     t = np.asarray(rec.t, float)
     n = len(t)
     warnings = [f"displacement: {fill_note}"] if fill_note else []
+    if rest is None and rp.dev_max > REST_DEV_WARN_MPS2 and not np.all(np.asarray(device.noise_counts()) > 0):
+        warnings.append(f"displacement: the noise estimated from the recording gives a rest test of |f - mean| <= "
+                        f"{rp.dev_max:.3g} m/s^2 (5 sigma), beyond what a sensor at rest shows (0.01-0.25): no still "
+                        "stretch is that quiet (vibration throughout, a flight), so a slow motion may pass for a rest; "
+                        "state the sensor's noise_mps2 in the device file")
     if engine == "float" and form == "offline":
         r = displace_offline(f, p)
         if r["no_rest"]:
