@@ -113,6 +113,9 @@ MAX_FILL_SHARE = 0.05
 MAX_JITTER_STEPS = 0.25
 #: ... and below this they are not worth a word (nor a new grid)
 JITTER_NOTE_STEPS = 0.05
+#: a sample stamped late by up to this (steps), the next one on time, was delivered late: its place
+#: is on the grid (a phone's log: 0.66 of a step late, the next 0.34 of a step after it)
+MAX_LATE_STEPS = 0.75
 
 
 def on_uniform_grid(rec) -> tuple[Any, np.ndarray, str | None]:
@@ -120,7 +123,8 @@ def on_uniform_grid(rec) -> tuple[Any, np.ndarray, str | None]:
     uniform time grid.
 
     Each sample's place on the grid is counted in median steps from the one before (a step
-    of k median steps, k >= 2, is k - 1 dropped samples); the grid's step is the least-squares
+    of k median steps, k >= 2, is k - 1 dropped samples; a step of 1 + a then one of 1 - a,
+    a up to MAX_LATE_STEPS, is a sample stamped late, one step each); the grid's step is the least-squares
     fit of t on those places.  Every time stamp must lie within MAX_JITTER_STEPS of its place
     (jitter of the stamps, as a host or a coarse clock gives, not of the samples).  Dropped
     samples, up to MAX_FILL_SAMPLES in one gap and MAX_FILL_SHARE of the whole, are filled by
@@ -149,9 +153,20 @@ def on_uniform_grid(rec) -> tuple[Any, np.ndarray, str | None]:
         raise InputError(rec.source, "the recording needs at least 2 samples")
     d = np.diff(t)
     dt = float(np.median(d))
+    r = d / dt
     # whole steps, a step of exactly k + 1/2 taken as k (two stamps each a quarter step off)
-    k = np.maximum(np.ceil(d / dt - 0.5 - 1e-9), 1.0)
-    odd = np.flatnonzero(np.abs(d / dt - k) > 2.5 * MAX_JITTER_STEPS)   # two stamps' jitter, and the median's own error
+    k = np.maximum(np.ceil(r - 0.5 - 1e-9), 1.0)
+    # a sample stamped late (a host that stamps on delivery): a step of 1 + a, then one of 1 - a,
+    # a up to MAX_LATE_STEPS -- one step each, the sample between them late by a
+    pair = np.flatnonzero((r[:-1] > 1.0 + MAX_JITTER_STEPS) & (r[:-1] <= 1.0 + MAX_LATE_STEPS)
+                          & (r[1:] < 1.0 - MAX_JITTER_STEPS) & (np.abs(r[:-1] + r[1:] - 2.0) <= 2 * MAX_JITTER_STEPS))
+    late = np.zeros(t.size, bool)
+    late[pair + 1] = True
+    k[pair] = 1.0
+    k[pair + 1] = 1.0
+    off = np.abs(r - k) > 2.5 * MAX_JITTER_STEPS       # two stamps' jitter, and the median's own error
+    off[pair] = off[pair + 1] = False
+    odd = np.flatnonzero(off)
     if odd.size:
         i = int(odd[0]) + 1
         raise InputError(rec.source, f"sample times are not uniform: the step to t = {t[i]:.6g} s is {d[i - 1]:.6g} s, "
@@ -159,10 +174,12 @@ def on_uniform_grid(rec) -> tuple[Any, np.ndarray, str | None]:
                          "step off a uniform grid are taken as jitter): the integrators need a constant rate",
                          row=rec.line(i), column="t")
     at = np.concatenate([[0], np.cumsum(k).astype(np.int64)])     # each sample's place on the grid
-    slope, icpt = np.polyfit(at.astype(float), t, 1) if t.size > 2 else (dt, float(t[0]))
+    on = ~late
+    slope, icpt = np.polyfit(at[on].astype(float), t[on], 1) if np.count_nonzero(on) > 2 else (dt, float(t[0]))
     resid = t - (icpt + slope * at)
     # the fitted grid is itself a little off the true one: a quarter of a step of room beside the jitter's
-    stray = np.flatnonzero(np.abs(resid) > 1.25 * MAX_JITTER_STEPS * slope)
+    room = np.where(late, MAX_LATE_STEPS + 0.25 * MAX_JITTER_STEPS, 1.25 * MAX_JITTER_STEPS) * slope
+    stray = np.flatnonzero((resid > room) | (resid < -1.25 * MAX_JITTER_STEPS * slope))
     if stray.size:
         i = int(stray[0])
         raise InputError(rec.source, f"sample times are not uniform: t = {t[i]:.6g} s is {resid[i] / slope:+.2f} "
@@ -170,10 +187,14 @@ def on_uniform_grid(rec) -> tuple[Any, np.ndarray, str | None]:
                          "of the time stamps): the integrators need a constant rate", row=rec.line(i), column="t")
     missing = k.astype(np.int64) - 1
     total = int(missing.sum())
-    jitter = float(np.max(np.abs(resid))) / slope
-    if total == 0 and jitter <= JITTER_NOTE_STEPS:
+    jitter = float(np.max(np.abs(resid[on]))) / slope
+    if total == 0 and jitter <= JITTER_NOTE_STEPS and not late.any():
         return rec, np.zeros(t.size, bool), None
     notes = []
+    if late.any():
+        notes.append(f"{int(late.sum())} sample(s) stamped late by up to {float(np.max(resid[late])) / slope:.2f} of a "
+                     "step (each followed by one stamped on time: a host that stamps on delivery) are taken at "
+                     "their place on the grid")
     if jitter > JITTER_NOTE_STEPS:
         notes.append(f"the time stamps stray by up to {jitter:.2f} of a step from a uniform {1.0 / slope:.6g} Hz grid: "
                      "taken as jitter of the stamps, the samples as uniform (t is written on that grid)")
