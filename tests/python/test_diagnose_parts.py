@@ -112,3 +112,24 @@ def test_where_puts_the_gap_on_the_channel_that_has_it(static_data):
     assert ratios[3] == pytest.approx(math.sqrt(20.0 ** 2 + sig3 ** 2) / sig3, rel=0.05)
     assert max(r for i, r in enumerate(ratios) if i != 3) < 1.2   # the others: noise only
     assert [r["label"] for r in w["static_vs_rotating"]] == ["static"]
+
+
+def test_one_pose_jig_free_gives_the_smallest_change_of_the_readings():
+    """One level pose (a flight controller on the ground, PX4's sample log): only the reading
+    along gravity is fixed, and the offset that fits is the smallest change of the readings -- the
+    z channel's 184 counts -- where the fit had put 3.4e4 counts on x (its column nearly emptied
+    by the projection) and the re-linearisation ran off to 6-7 g."""
+    from accelcal.device import default_triad
+    from accelcal.recording import recording_from_arrays
+    from accelcal import diagnose
+    d = default_triad()
+    rng = np.random.default_rng(2)
+    n = int(6.5 * d.sample_rate_hz)
+    b = d.nominal_offsets() + np.array([0.0, 0.0, 184.0])
+    tilt = np.radians(0.7)
+    f = d.gravity_mps2 * np.array([np.sin(tilt), 0.0, np.cos(tilt)])
+    raw = np.round(b + d.nominal_sensitivity() @ f + 3.0 * rng.standard_normal((n, 3))).astype(np.int64)
+    res = diagnose(d, Calibration.nominal(d), [recording_from_arrays(np.arange(n) / d.sample_rate_hz, raw)])
+    assert res["verdict"] == "offset"
+    db = np.asarray(res["model"]["params"]["offset"]["db"])
+    assert abs(db[2] - 184.0) < 10.0 and np.all(np.abs(db[:2]) < 10.0), db

@@ -43,10 +43,11 @@ def block_ss(D: FitData, Rr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return D.bsum(np.sum(sq * D.W, axis=1)), D.bsum(sq.sum(axis=1))
 
 
-def solve_groups(G: np.ndarray, h: np.ndarray, rtol: float = 1e-10):
-    """Batched min-norm solve of G theta = h (G (g,k,k) symmetric PSD), with Jacobi scaling.
+def solve_groups(G: np.ndarray, h: np.ndarray, rtol: float = 1e-10, scale: np.ndarray | None = None):
+    """Batched min-norm solve of G theta = h (G (g,k,k) symmetric PSD), with Jacobi scaling:
+    the norm minimised is that of theta x ``scale`` (g,k), default sqrt(diag G).
     Returns theta (g,k), G^+ (g,k,k), rank (g,)."""
-    d = np.sqrt(np.maximum(np.einsum("gii->gi", G), 0.0))
+    d = np.sqrt(np.maximum(np.einsum("gii->gi", G), 0.0)) if scale is None else np.asarray(scale, float)
     d = np.where(d > 0, d, 1.0)
     Gs = G / d[:, :, None] / d[:, None, :]
     lam, V = np.linalg.eigh(Gs)
@@ -58,18 +59,19 @@ def solve_groups(G: np.ndarray, h: np.ndarray, rtol: float = 1e-10):
     return theta, Ginv, keep.sum(axis=-1)
 
 
-def lin_cv(D: FitData, Gw, hw, Gu, hu, S0w, S0u):
-    """Fold fits and held-out block scores from block statistics (B, g, k, k) / (B, g, k)."""
+def lin_cv(D: FitData, Gw, hw, Gu, hu, S0w, S0u, scale: np.ndarray | None = None):
+    """Fold fits and held-out block scores from block statistics (B, g, k, k) / (B, g, k);
+    ``scale`` (g, k): the parameters' sizes the min-norm solve weighs (:func:`solve_groups`)."""
     K, bf = D.K, D.bfold
     Gt, ht = Gw.sum(axis=0), hw.sum(axis=0)
     theta = np.zeros((K,) + ht.shape)
     for f in range(K):
         m = bf == f
-        theta[f] = solve_groups(Gt - Gw[m].sum(axis=0), ht - hw[m].sum(axis=0))[0]
+        theta[f] = solve_groups(Gt - Gw[m].sum(axis=0), ht - hw[m].sum(axis=0), scale=scale)[0]
     tb = theta[bf]
     Sw = S0w - 2 * np.einsum("bgk,bgk->b", tb, hw) + np.einsum("bgk,bgkl,bgl->b", tb, Gw, tb)
     Su = S0u - 2 * np.einsum("bgk,bgk->b", tb, hu) + np.einsum("bgk,bgkl,bgl->b", tb, Gu, tb)
-    th_all, Ginv, rank = solve_groups(Gt, ht)
+    th_all, Ginv, rank = solve_groups(Gt, ht, scale=scale)
     Sall = float(S0w.sum() - 2 * np.einsum("gk,gk->", th_all, ht) + np.einsum("gk,gkl,gl->", th_all, Gt, th_all))
     return Sw, Su, th_all, Ginv, rank, Sall
 
@@ -138,7 +140,11 @@ def linear_fit(D: FitData, X: np.ndarray, y: np.ndarray, S0w, S0u):
         Xr = jig_rows(D, X)
         yr = D.rows(y)
         Gw, hw, Gu, hu = joint_stats(D, Xr, yr)
-        Sw, Su, th, Ginv, rank, Sall = lin_cv(D, Gw, hw, Gu, hu, S0w, S0u)
+        # the directions the poses' angles absorb leave parameters the data do not fix: of those
+        # that fit, the smallest change of the readings themselves (the unprojected columns' norms;
+        # one pose level along z had put 3.4e4 counts on x, whose column the projection nearly emptied)
+        scale = np.sqrt(np.einsum("tnk,tnk->nk", X, X)).reshape(1, N * k)
+        Sw, Su, th, Ginv, rank, Sall = lin_cv(D, Gw, hw, Gu, hu, S0w, S0u, scale)
         theta = th[0].reshape(N, k)
         full = Ginv[0]
         cov = np.stack([full[i * k:(i + 1) * k, i * k:(i + 1) * k] for i in range(N)])
