@@ -23,6 +23,10 @@ __all__ = ["AXIS_RE", "NAMED_UNITS", "AxisColumn", "axis_column", "table_axes", 
 #: a table's accelerometer axis column: a prefix, the word, the axis, a unit in () or [] or after _
 AXIS_RE = re.compile(r"(?P<pre>.*?)(?:accelerometer|acceleration|accel|acc|(?<![a-z])a)[\s_.-]*(?P<axis>[xyz])"
                      r"(?:\s*[(\[](?P<unit>[^)\]]*)[)\]]|_(?P<tail>g|mps2|ms2|counts|lsb|raw))?", re.I)
+#: a robotics message's accelerometer field: ROS's (field.)linear_acceleration.x, PX4's
+#: accelerometer_m_s2[0] (ulog2csv)
+MESSAGE_AXIS_RE = re.compile(r"(?:(?:field\.)?(?P<ros>linear_acceleration)\.(?P<axis>[xyz])"
+                             r"|(?:accelerometer|accel|acc)(?P<mps2>_m_s2)?\[(?P<index>[012])\])", re.I)
 #: the prefixes of an accelerometer's own axis columns (LORD's scaledAccelX)
 AXIS_PREFIXES = ("", "scaled", "raw")
 #: prefixes of a phone's virtual sensors: not an accelerometer's specific force
@@ -65,6 +69,12 @@ def axis_column(name: str) -> AxisColumn | None:
     """The accelerometer axis ``name`` is (``Acceleration x (m/s^2)``, ``scaledAccelX``,
     ``AccX [g]``, ``acc_x_g``), or None: another column (a prefix other than scaled, raw,
     or one naming linear acceleration or gravity, is not an accelerometer's axis)."""
+    m = MESSAGE_AXIS_RE.fullmatch(name.strip())
+    if m is not None:
+        # a robotics message's field: ROS sensor_msgs/Imu's linear_acceleration is the specific force
+        # (gravity in), PX4's accelerometer_m_s2[i] likewise
+        axis = m.group("axis").lower() if m.group("axis") else "xyz"[int(m.group("index"))]
+        return AxisColumn(name, axis, "mps2" if m.group("mps2") or m.group("ros") else None, False)
     m = AXIS_RE.fullmatch(name.strip())
     if m is None:
         return None
@@ -285,11 +295,14 @@ def choose_time_column(source: str, names: list[str], acc: list[str], table, row
         notes.append(f"no time column holds numbers ({said}: clock times or dates, not time stamps): t is from "
                      "--rate")
         return None
-    chosen = next((n for n in numeric if unit_in_name(n) is not None), numeric[0])
+    # a message's own stamp (ROS header.stamp: the sensor's time) before the log's receipt time (%time)
+    stamp = [n for n in numeric if n.lower().endswith("header.stamp")]
+    chosen = stamp[0] if stamp else next((n for n in numeric if unit_in_name(n) is not None), numeric[0])
     over = [n for n in cands if n != chosen]
     if over:
         why = [f"{holds(n)}, not a number" if n not in numeric else f"{n!r}, numeric" for n in over]
-        notes.append(f"time column {chosen!r} used" + (" (its name states a unit)" if unit_in_name(chosen) else "")
+        notes.append(f"time column {chosen!r} used" + (" (its name states a unit)" if unit_in_name(chosen) else
+                                                       " (the message's own stamp)" if stamp else "")
                      + f"; passed over {'; '.join(why)} (--time-column NAME states it)")
     return chosen
 

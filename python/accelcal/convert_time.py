@@ -29,7 +29,8 @@ FLOAT_EXACT = 2.0 ** 53
 #: a column of whole numbers (a sign, digits, blanks about them), one a line
 INTEGER_CELLS_RE = re.compile(r"(?:[ \t]*[+-]?[0-9]+[ \t]*\n)*[ \t]*[+-]?[0-9]+[ \t]*")
 #: a table's time column: t, time, timestamp, with a unit in () or [] or after _ (``time_ms``)
-TIME_COLUMN_RE = re.compile(r"(?:t|ts|tstamp|time|timestamp|time[ _]stamp)(?:\s*[(\[][^)\]]*[)\]]|_[a-z\u00b5]+)?", re.I)
+TIME_COLUMN_RE = re.compile(r"(?:t|ts|tstamp|time|timestamp|time[ _]stamp)(?:\s*[(\[][^)\]]*[)\]]|_[a-z\u00b5]+)?"
+                            r"|%time|(?:field\.)?header\.stamp", re.I)     # rostopic echo -p: ns
 
 
 def unit_in_name(name: str | None) -> str | None:

@@ -223,7 +223,13 @@ def is_whitespace_header(header: str) -> bool:
 
 
 def split_whitespace_header(header: str) -> list[str]:
-    return re.split(r"[ \t]+", header.strip(" \t"))
+    """The names of a whitespace header: at runs of blanks or tabs; a header of quoted names
+    between tabs (phyphox's tab-separated export: "Time (s)"\t"Acceleration x (m/s^2)") at
+    its tabs, the quotes dropped."""
+    h = header.strip(" \t")
+    if '"' in h and "\t" in h:
+        return [c.strip(" ").strip('"') for c in re.split(r"\t+", h)]
+    return re.split(r"[ \t]+", h)
 
 
 def whitespace_to_commas(data: bytes, pos: int, end: int, names: list[str], first_line: int,

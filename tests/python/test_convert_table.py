@@ -478,7 +478,8 @@ def test_a_rate_stated_in_a_comment_serves_a_table_without_a_time_column(tmp_pat
     c = _counts(30, seed=5)
     rows = [f"{k},{_cells(r * LSB_G)}" for k, r in enumerate(c)]
     src = _write(tmp_path / "pq.csv", "count,a_x,a_y,a_z", rows,
-                 comments=("# PLab PicoQuake Data", "# Config: data_rate = 2000.0 Hz, filter = 488 Hz, acc_range = 4 g"))
+                 comments=("# PLab PicoQuake Data",
+                           "# Config: data_rate = 2000.0 Hz, filter = 488 Hz, acc_range = 4 g"))
     rc, out, err, _ = run(["convert", src, "--units", "g", "--lsb", repr(LSB_G), "-o", tmp_path / "o.csv"], capfd)
     assert rc == 0 and "the rate is the 2000 Hz the file's comment '# Config' states" in err, err
     assert "2000 Hz" in out
@@ -493,3 +494,35 @@ def test_a_rate_stated_in_a_comment_serves_a_table_without_a_time_column(tmp_pat
                          tmp_path / "r.csv"], capfd)
     assert rc == 2 and "the time column 'count' counts the samples (0, 1, ...)" in err, err
     assert not (tmp_path / "r.csv").exists()
+
+
+def test_robotics_and_phone_exports_are_read(tmp_path, capfd):
+    """Three common exports: ROS's `rostopic echo -p` of sensor_msgs/Imu (linear_acceleration
+    is the specific force, gravity in: it had been refused as a phone's virtual sensor; the
+    message's own header.stamp in ns before the bag's %time), PX4's ulog2csv sensor_combined
+    (accelerometer_m_s2[0..2], t in us: "cannot tell the format"), and phyphox's tab-separated
+    export with quoted names ("Time (s)" had been split at its blank)."""
+    c = _counts(50, seed=31)
+    mps2 = LSB_G * G
+    stamp = 1_500_000_000_000_000_000 + 10_000_000 * np.arange(50)
+    ros = [f"{st + 3_000_000 + 1000 * (k % 7)},{k},{st},imu,{_cells(r * mps2)},0.1" for k, (st, r) in
+           enumerate(zip(stamp, c))]
+    src = _write(tmp_path / "imu.csv", "%time,field.header.seq,field.header.stamp,field.header.frame_id,"
+                 "field.linear_acceleration.x,field.linear_acceleration.y,field.linear_acceleration.z,"
+                 "field.angular_velocity.x", ros)
+    rec, dev, err = _convert(tmp_path, capfd, src, "--units", "mps2", "--lsb", repr(mps2))
+    np.testing.assert_array_equal(rec.raw, c)
+    assert dev["sample_rate_hz"] == pytest.approx(100.0, rel=1e-9)
+    assert "time column 'field.header.stamp' used (the message's own stamp)" in err, err
+    px4 = [f"{21312085 + 4000 * k},0.1,0.2,0.3,{_cells(r * mps2)},7" for k, r in enumerate(c)]
+    src = _write(tmp_path / "px4.csv", "timestamp,gyro_rad[0],gyro_rad[1],gyro_rad[2],accelerometer_m_s2[0],"
+                 "accelerometer_m_s2[1],accelerometer_m_s2[2],magnetometer_ga[0]", px4)
+    rec, dev, err = _convert(tmp_path, capfd, src, "--units", "mps2", "--lsb", repr(mps2))
+    np.testing.assert_array_equal(rec.raw, c)
+    assert dev["sample_rate_hz"] == pytest.approx(250.0, rel=1e-9) and "t read in us" in err
+    tab = "\n".join(f"{k / 200:.9E}\t{r[0] * mps2:.9E}\t{r[1] * mps2:.9E}\t{r[2] * mps2:.9E}" for k, r in enumerate(c))
+    (tmp_path / "raw.csv").write_text('"Time (s)"\t"Acceleration x (m/s^2)"\t"Acceleration y (m/s^2)"\t'
+                                      '"Acceleration z (m/s^2)"\n' + tab + "\n")
+    rec, dev, err = _convert(tmp_path, capfd, tmp_path / "raw.csv", "--units", "mps2", "--lsb", repr(mps2), "--round")
+    np.testing.assert_array_equal(rec.raw, c)
+    assert dev["sample_rate_hz"] == pytest.approx(200.0, rel=1e-6)
