@@ -28,7 +28,7 @@ from .effects import describe_effects, params_to_json, parse_effect_spec
 from .errors import AccelcalError, atomic_write
 from .estimators import attitude_from_recording, displacement_from_recording, rate_from_recording, report_plots
 from .header import calibration_header
-from .held import held_runs, held_text
+from .held import held_runs, held_text, readings_rate
 from .motions import describe_motions
 from .recording import read_recording, write_columns_csv, write_recording
 from .recording_checks import seconds
@@ -228,9 +228,9 @@ def held_warnings(rec) -> list[str]:
     k, first = held_runs(rec.raw)
     if k == 1:
         return []
-    span = float(rec.t[-1] - rec.t[0]) if rec.n_samples > 1 else 0.0
-    rates = (f": the readings change at about {(first.size - 1) / span:.4g} Hz, the rows come at "
-             f"{(rec.n_samples - 1) / span:.4g} Hz") if span > 0 else ""
+    hz = readings_rate(rec, first)
+    rows_hz = readings_rate(rec, np.arange(rec.n_samples))         # every row taken as a reading
+    rates = f": the readings change at about {hz:.4g} Hz, the rows come at {rows_hz:.4g} Hz" if hz is not None else ""
     return [f"each reading is held for {held_text(k, first, rec.n_samples)} (the logger read the sensor faster "
             f"than it updates){rates}; the motion between two readings is not seen, and a held reading looks "
             "still: a rest found within one is no rest"]

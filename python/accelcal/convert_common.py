@@ -17,7 +17,7 @@ from .device import Device
 from .errors import InputError
 from .recording import Recording
 from .recording_checks import RATE_TOL
-from .textinput import is_whitespace_header, split_whitespace_header, whitespace_to_commas
+from .textinput import NUMBER_RE, is_whitespace_header, split_whitespace_header, whitespace_to_commas
 from .units import STANDARD_GRAVITY, Scale
 
 __all__ = ["Converted", "Options", "INDEX_COLUMNS", "GYRO_RE", "NUMBER_RE", "header_cells", "read_columns",
@@ -26,7 +26,6 @@ __all__ = ["Converted", "Options", "INDEX_COLUMNS", "GYRO_RE", "NUMBER_RE", "hea
 
 INDEX_COLUMNS = ("n_samples", "samples")
 GYRO_RE = re.compile(r"(gyr|gyro|g)[_ ]?[xyz]|w_?[xyz]", re.I)
-NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 
 
 @dataclass
@@ -226,17 +225,15 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
         t, rel = time_in_seconds(t if t.dtype.kind in "iu" else t.astype(float), opts.time_unit, time_column, source,
                                  notes)
         rate = opts.rate_hz if opts.rate_hz is not None else rate_from_t(rel, notes)
-        off = None if bursty(rel) else stated_rate_off(rel, opts.rate_hz)
-        if bursty(rel):
+        burst = bursty(rel)
+        off = None if burst else stated_rate_off(rel, opts.rate_hz)
+        if burst or off is not None:
             # the samples are the sensor's, evenly spaced; the host's stamps are kept beside them
             extra_columns["t_host"] = [repr(float(v)) for v in t]
             t = t[0] + np.arange(t.size) / rate
             notes.append(f"t is written on the {rate:.6g} Hz grid from the first stamp (the integrators need the "
-                         "sensor's even spacing); the host's stamps are kept as column t_host")
-        elif off is not None:
-            extra_columns["t_host"] = [repr(float(v)) for v in t]
-            t = t[0] + np.arange(t.size) / rate
-            notes.append(f"the time column's steps give {off:.6g} Hz (median step), more than "
+                         "sensor's even spacing); the host's stamps are kept as column t_host" if burst else
+                         f"the time column's steps give {off:.6g} Hz (median step), more than "
                          f"{100 * RATE_TOL:.0f} % from --rate {rate:g} Hz: its clock is not the sensor's; t is "
                          f"written on the {rate:g} Hz grid from the first stamp and the time column's stamps are kept "
                          "as column t_host")

@@ -26,13 +26,13 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError
+from .textinput import NUMBER_RE
 
 __all__ = ["LOG_MIN_READINGS", "is_log", "read_log"]
 
 LOG_MIN_READINGS = 10      # a file is told to be a log from this many reading lines among its first 200
 
 SPLIT_RE = re.compile(r"\s*[,;\t ]\s*")
-NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 LETTER_RE = re.compile(r"[A-Za-z]")
 PUNCT_RE = re.compile(r"[\W_]+")
 

@@ -24,7 +24,8 @@ from .recording import Recording
 from .recording_checks import RATE_TOL, rate_for
 
 __all__ = ["HELD_MODAL_SHARE", "HELD_MAX", "HELD_MIN_RUNS", "HELD_SINGLE_SHARE", "HELD_MIN_RUNS_UNEVEN",
-           "HELD_CHANGED_SHARE", "held_runs", "held_factor", "held_text", "distinct_rows", "distinct_recordings"]
+           "HELD_CHANGED_SHARE", "held_runs", "held_factor", "held_text", "readings_rate", "distinct_rows",
+           "distinct_recordings"]
 
 HELD_MODAL_SHARE = 0.8     # rows are held when at least this share of the runs of identical rows
                            # share one length >= 2 ...
@@ -70,14 +71,33 @@ def held_runs(raw: np.ndarray) -> tuple[int, np.ndarray]:
     return 1, first
 
 
+def inner_runs(first: np.ndarray, n: int) -> np.ndarray:
+    """The lengths of the runs of identical rows starting at ``first`` over ``n`` rows, less the
+    first and the last (the recording's ends may cut them)."""
+    return np.diff(np.append(first, n))[1:-1]
+
+
+def uneven(k: int, inner: np.ndarray) -> bool:
+    """Whether held runs (``inner``: :func:`inner_runs`) are of uneven lengths: fewer than
+    HELD_MODAL_SHARE of them ``k`` rows long."""
+    return bool(inner.size) and float(np.mean(inner == k)) < HELD_MODAL_SHARE
+
+
 def held_text(k: int, first: np.ndarray, n: int) -> str:
     """How long readings are held, for notes: "4 rows", or "4-10 rows (8 on average)" for runs
     of uneven lengths (:func:`held_runs`'s k and first over ``n`` rows)."""
-    inner = np.diff(np.append(first, n))[1:-1]
+    inner = inner_runs(first, n)
     lo, hi = (int(inner.min()), int(inner.max())) if inner.size else (k, k)
-    if lo == hi or np.mean(inner == k) >= HELD_MODAL_SHARE:
+    if lo == hi or not uneven(k, inner):
         return f"{k} rows"
     return f"{lo}-{hi} rows ({float(np.mean(inner)):.1f} on average)"
+
+
+def readings_rate(rec: Recording, first: np.ndarray) -> float | None:
+    """The rate of the distinct readings that start at rows ``first``, Hz: how many follow the
+    first over the recording's span (None for a span of 0)."""
+    span = float(rec.t[-1] - rec.t[0]) if rec.n_samples > 1 else 0.0
+    return (first.size - 1) / span if span > 0 else None
 
 
 def held_factor(raw: np.ndarray) -> int:
@@ -89,13 +109,13 @@ def _distinct(rec: Recording) -> tuple[Recording, float, str | None]:
     k, first = held_runs(rec.raw)
     if k == 1:
         return rec, 1, None
-    inner = np.diff(np.append(first, rec.n_samples))[1:-1]
-    if inner.size and np.mean(inner == k) < HELD_MODAL_SHARE:
+    inner = inner_runs(first, rec.n_samples)
+    text = held_text(k, first, rec.n_samples)
+    if uneven(k, inner):
         k = float(np.mean(inner))            # runs of uneven lengths: the rows per reading on average
-    span = float(rec.t[-1] - rec.t[0]) if rec.n_samples > 1 else 0.0
-    rate = f", about {(first.size - 1) / span:.4g} Hz" if span > 0 else ""
-    note = (f"{rec.source}: each reading is held for {held_text(round(k), first, rec.n_samples)} (the logger read the "
-            "sensor faster than it "
+    hz = readings_rate(rec, first)
+    rate = f", about {hz:.4g} Hz" if hz is not None else ""
+    note = (f"{rec.source}: each reading is held for {text} (the logger read the sensor faster than it "
             f"updates): the {first.size} distinct readings of the {rec.n_samples} rows are used{rate}")
     return rec.select(first), k, note
 

@@ -24,7 +24,7 @@ rounding to counts).
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from typing import Sequence
 
 import numpy as np
 
@@ -243,10 +243,15 @@ def noise_for(device, raw: np.ndarray, window: int) -> tuple[np.ndarray, str]:
     how : str
         Where it came from, for messages and reports.
     """
-    k = np.asarray(device.noise_counts(), float)
-    if np.all(k > 0):
-        return np.sqrt(k ** 2 + 1.0 / 12.0), "device noise_mps2"
+    if states_noise(device):
+        return np.sqrt(np.asarray(device.noise_counts(), float) ** 2 + 1.0 / 12.0), "device noise_mps2"
     return estimate_noise(raw, window, integer=True), "estimated from the data (window std at rest)"
+
+
+def states_noise(device) -> bool:
+    """Whether the device file states ``noise_mps2`` for every channel (else the thresholds
+    take the noise from the data: :func:`noise_for`)."""
+    return bool(np.all(np.asarray(device.noise_counts(), float) > 0))
 
 
 COLOUR_BATCHES = 8         # a pose mean's own noise: the scatter of the means of this many batches of it ...
@@ -256,17 +261,17 @@ COLOUR_MIN_POSES = 5       # ... where at least this many poses tell (3 poses of
                            # widened by chance, by ~1.28x; 5: the median of 5 chi2_7/7 above 1.5 in ~2 %)
 
 
-def pose_colour(raw: np.ndarray, intervals: Sequence[Any]) -> np.ndarray:
+def pose_colour(raw: np.ndarray, poses: Sequence[np.ndarray]) -> np.ndarray:
     """(P,N) each pose's var(means of COLOUR_BATCHES batches) x batch length / var(samples):
     how far its mean wanders beyond white noise's sem, squared (white noise: chi2_7/7, mean 1;
-    NaN for a pose of fewer than 2 COLOUR_BATCHES samples; 1 for a constant channel)."""
+    NaN for a pose of fewer than 2 COLOUR_BATCHES samples; 1 for a constant channel).
+    ``poses``: each pose's sample indices."""
     raw = np.asarray(raw)
     N = raw.shape[1]
     B = COLOUR_BATCHES
-    out = np.full((len(intervals), N), np.nan)
-    for p, iv in enumerate(intervals):
-        idx = (np.arange(int(iv[0]), int(iv[1])) if isinstance(iv, tuple) and len(iv) == 2
-               else np.asarray(iv, dtype=np.int64))
+    out = np.full((len(poses), N), np.nan)
+    for p, idx in enumerate(poses):
+        idx = np.asarray(idx, dtype=np.int64)
         L = idx.size // B
         if L < 2:
             continue

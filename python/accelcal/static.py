@@ -266,8 +266,7 @@ def pose_means(rec, intervals: Sequence[Any], device, *, labels: Sequence[Any] |
     raw = np.asarray(rec.raw)
     n, N = raw.shape
     P = len(intervals)
-    idx_list = [np.arange(int(iv[0]), int(iv[1])) if is_pair(iv) else np.asarray(iv, dtype=np.int64)
-                for iv in intervals]
+    idx_list = [interval_index(iv) for iv in intervals]
     names = [f"pose {labels[p]}" if labels is not None else f"static interval {p}" for p in range(P)]
     cnt = np.array([len(ix) for ix in idx_list], dtype=np.int64)
     if P == 0:
@@ -309,33 +308,50 @@ def pose_means(rec, intervals: Sequence[Any], device, *, labels: Sequence[Any] |
     return mean, cnt, std
 
 
-def is_pair(iv: Any) -> bool:
-    return isinstance(iv, tuple) and len(iv) == 2 and np.isscalar(iv[0])
+def interval_index(iv: Any) -> np.ndarray:
+    """The sample indices of an interval: a (start, stop) pair, or an index array as it is (a
+    labelled pose may be split)."""
+    if isinstance(iv, tuple) and len(iv) == 2 and np.isscalar(iv[0]):
+        return np.arange(int(iv[0]), int(iv[1]))
+    return np.asarray(iv, dtype=np.int64)
+
+
+def split_aside(rec, intervals: list, labels: list | None, aside_of) -> tuple[list, list | None, list[dict]]:
+    """``intervals`` (and their ``labels``) less those ``aside_of(p, idx)`` sets aside: for each,
+    it returns the record's own fields (reason, n_clipped, channels, levels), or None to keep
+    the interval.  One record each of what was set aside, with its source, label and span."""
+    keep, keep_lab, aside = [], [] if labels is not None else None, []
+    for p, iv in enumerate(intervals):
+        idx = interval_index(iv)
+        why = aside_of(p, idx)
+        if why is None:
+            keep.append(iv)
+            if labels is not None:
+                keep_lab.append(labels[p])
+            continue
+        aside.append({"source": rec.source, "label": labels[p] if labels is not None else None,
+                      "t_start": float(rec.t[idx[0]]), "t_stop": float(rec.t[idx[-1]]), "n": int(idx.size), **why})
+    return keep, keep_lab, aside
 
 
 def set_aside_clipped(rec, intervals: list, labels: list | None, clipped: np.ndarray,
                       levels: ClipLevels) -> tuple[list, list | None, list[dict]]:
     """Drop the poses with a clipped reading (their mean would be biased); one record
     each of what was set aside and why."""
-    keep, keep_lab, aside = [], [] if labels is not None else None, []
-    for p, iv in enumerate(intervals):
-        idx = np.arange(iv[0], iv[1]) if is_pair(iv) else iv
+
+    def aside_of(p: int, idx: np.ndarray) -> dict | None:
         cl = clipped[idx]
         if not cl.any():
-            keep.append(iv)
-            if labels is not None:
-                keep_lab.append(labels[p])
-            continue
+            return None
         chans = [int(c) for c in np.flatnonzero(cl.any(axis=0))]
         lv = []
         for c in chans:
             v = rec.raw[idx, c][cl[:, c]]
             lv.append(f"raw_{c} at {int(v.max()) if v.max() >= levels.hi[c] else int(v.min())}")
-        aside.append({"source": rec.source, "label": labels[p] if labels is not None else None,
-                      "t_start": float(rec.t[idx[0]]), "t_stop": float(rec.t[idx[-1]]), "n": int(idx.size),
-                      "reason": "clipped", "n_clipped": int(cl.any(axis=1).sum()), "channels": chans,
-                      "levels": ", ".join(lv)})
-    return keep, keep_lab, aside
+        return {"reason": "clipped", "n_clipped": int(cl.any(axis=1).sum()), "channels": chans,
+                "levels": ", ".join(lv)}
+
+    return split_aside(rec, intervals, labels, aside_of)
 
 
 def gravity_ratio(raw: np.ndarray, device, intervals: Sequence[Any]) -> np.ndarray:
@@ -346,7 +362,7 @@ def gravity_ratio(raw: np.ndarray, device, intervals: Sequence[Any]) -> np.ndarr
     b = device.nominal_offsets()
     out = np.full(len(intervals), np.nan)
     for p, iv in enumerate(intervals):
-        idx = np.arange(int(iv[0]), int(iv[1])) if is_pair(iv) else np.asarray(iv, dtype=np.int64)
+        idx = interval_index(iv)
         if idx.size:
             f = np.linalg.lstsq(S, raw[idx].mean(axis=0) - b, rcond=None)[0]
             out[p] = float(np.linalg.norm(f)) / device.gravity_mps2
@@ -376,19 +392,14 @@ def set_aside_off_gravity(rec, device, intervals: list, labels: list | None) -> 
         return intervals, labels, []
     ratio = gravity_ratio(rec.raw, device, intervals)
     ok = at_gravity(ratio)
-    keep, keep_lab, aside = [], [] if labels is not None else None, []
-    for p, iv in enumerate(intervals):
-        idx = np.arange(iv[0], iv[1]) if is_pair(iv) else np.asarray(iv)
+
+    def aside_of(p: int, idx: np.ndarray) -> dict | None:
         if ok[p] or np.all(np.isfinite(rec.f[idx])):
-            keep.append(iv)
-            if labels is not None:
-                keep_lab.append(labels[p])
-            continue
-        aside.append({"source": rec.source, "label": labels[p] if labels is not None else None,
-                      "t_start": float(rec.t[idx[0]]), "t_stop": float(rec.t[idx[-1]]), "n": int(idx.size),
-                      "reason": "not at rest", "n_clipped": 0, "channels": [],
-                      "levels": f"|f| = {ratio[p]:.3g} g with the device file's scale"})
-    return keep, keep_lab, aside
+            return None
+        return {"reason": "not at rest", "n_clipped": 0, "channels": [],
+                "levels": f"|f| = {ratio[p]:.3g} g with the device file's scale"}
+
+    return split_aside(rec, intervals, labels, aside_of)
 
 
 #: what a recording without a static pose lacks (the calibration's error and its note)
@@ -434,7 +445,7 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
     temp = np.full(P, np.nan)
     info = []
     for p, iv in enumerate(intervals):
-        idx = np.arange(iv[0], iv[1]) if is_pair(iv) else iv
+        idx = interval_index(iv)
         fr = rec.f[idx]
         ok = np.all(np.isfinite(fr), axis=1)
         if ok.any():
@@ -454,4 +465,4 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
             "n": int(cnt[p]),
         })
     return PoseSet(means=means, n=cnt, std=std, f_ref=f_ref, temp=temp, info=info, set_aside=aside,
-                   colour_r2=pose_colour(rec.raw, intervals))
+                   colour_r2=pose_colour(rec.raw, [interval_index(iv) for iv in intervals]))

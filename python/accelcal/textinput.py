@@ -23,11 +23,14 @@ import zstandard
 from .csvtable import META_RE
 from .errors import InputError, read_input
 
-#: a cell that is a number (a header made of such cells is a data row)
-CELL_NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[+-]?(?:nan|inf)", re.I)
+#: a number as a text cell holds it (a header made of such cells is a data row)
+NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+#: ... or nan and inf, which a log's row may hold where a header's name may not
+CELL_NUMBER_RE = re.compile(NUMBER_RE.pattern + r"|[+-]?(?:nan|inf)", re.I)
 
-__all__ = ["GZIP_MAGIC", "COMPRESSIONS", "decompress", "semicolons_to_commas", "Preamble", "read_text_bytes",
-           "read_preamble", "is_whitespace_header", "split_whitespace_header", "whitespace_to_commas"]
+__all__ = ["NUMBER_RE", "CELL_NUMBER_RE", "GZIP_MAGIC", "COMPRESSIONS", "decompress", "semicolons_to_commas",
+           "Preamble", "read_text_bytes", "read_preamble", "is_whitespace_header", "split_whitespace_header",
+           "whitespace_to_commas"]
 
 GZIP_MAGIC = b"\x1f\x8b"
 

@@ -751,7 +751,7 @@ def test_noise_coloured_within_the_poses_widens_their_sem_not_their_chi2():
     d = default_triad()
     rng = np.random.default_rng(21)
     white = np.round(1000 + 3 * rng.standard_normal((4000, 3))).astype(np.int64)
-    ivs = [(i, i + 400) for i in range(0, 4000, 400)]
+    ivs = [np.arange(i, i + 400) for i in range(0, 4000, 400)]
     np.testing.assert_array_equal(colour_factor(pose_colour(white, ivs)), np.ones(3))
     b, S = draw_truth(d, rng)
     F = d.gravity_mps2 * fib_dirs(16)

@@ -13,7 +13,7 @@ from ..errors import InputError
 from ..motions import Trajectory
 from ..noise import noise_for
 from ..sensor import evaluate, true_state
-from ..static import STATIC_WINDOW_S, at_gravity, detect_static, gravity_ratio, window_len
+from ..static import STATIC_WINDOW_S, detect_static, set_aside_off_gravity, window_len
 
 
 def segments(t: np.ndarray, usable: np.ndarray, key: np.ndarray, h: float) -> list[tuple[int, int]]:
@@ -27,22 +27,18 @@ def segments(t: np.ndarray, usable: np.ndarray, key: np.ndarray, h: float) -> li
     return [(int(a), int(b)) for a, b in zip(starts, ends) if usable[a]]
 
 
-def jigfree_poses(rec, device, notes: list[str]) -> list[np.ndarray]:
+def jigfree_poses(rec, device) -> tuple[list[np.ndarray], list[str]]:
     """Static poses of a recording without reference f: its pose labels, else detected; those
-    whose |f| is far from g (:func:`accelcal.static.at_gravity`: a rocket's coast) left out,
-    each named in ``notes``."""
+    whose |f| is far from g (:func:`accelcal.static.set_aside_off_gravity`: a rocket's coast)
+    left out, each named in the list returned beside them."""
     if rec.has_pose():
         poses = [np.flatnonzero(rec.pose == lab) for lab in rec.pose_labels()]
     else:
         poses = [np.arange(a, b) for a, b in detect_static(rec, device)]
-    ratio = gravity_ratio(rec.raw, device, poses)
-    ok = at_gravity(ratio)
-    for p in np.flatnonzero(~ok):
-        idx = poses[p]
-        notes.append(f"{rec.source}: the still stretch at t = {rec.t[idx[0]]:.6g}..{rec.t[idx[-1]]:.6g} s reads "
-                     f"|f| = {ratio[p]:.3g} g with the device file's scale: no rest on the Earth (free fall, "
-                     "coasting, a turntable) unless the scale is wrong; not a reference")
-    return [pp for pp, k in zip(poses, ok) if k]
+    poses, _, aside = set_aside_off_gravity(rec, device, poses, None)
+    return poses, [f"the still stretch at t = {d['t_start']:.6g}..{d['t_stop']:.6g} s reads {d['levels']}: no rest "
+                   "on the Earth (free fall, coasting, a turntable) unless the scale is wrong; not a reference"
+                   for d in aside]
 
 
 CLIPPED_WEIGHT = 1e-6       # relative weight of a clipped channel in a jig-free pose's force
@@ -137,6 +133,7 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
         wl = window_len(device, STATIC_WINDOW_S, n)
         levels = clip_levels(raw_i, device, noise_for(device, raw_i, wl)[0], wl)
         clipped = levels.mask(raw_i)
+        not_rest: list[str] = []
         if mode == "reference":
             traj = Trajectory.from_recording(rec, g)
             if at_origin:      # no rotation terms: w and dw are not needed
@@ -150,7 +147,8 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
             key = pose_lab.copy()
             how = "reference f" + (", w, dw" if rec.has_omega() else "") + (", temp_c" if rec.has_temp() else "")
         else:
-            poses = jigfree_poses(rec, device, notes)
+            poses, not_rest = jigfree_poses(rec, device)
+            notes += [f"{rec.source}: {o}" for o in not_rest]
             off = state.total_offset()
             off = np.broadcast_to(off, (n, N))
             gain = np.ones((n, N)) if state.gain is None else state.gain
@@ -188,10 +186,9 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
             usable = usable & ~at_limit
         if not usable.any():
             if mode == "jigfree":
-                off = [nt.split(": ", 1)[1] for nt in notes if nt.startswith(f"{rec.source}: the still stretch")]
                 raise InputError(rec.source, "no reference to diagnose against: no f_x, f_y, f_z columns and no "
                                  "static interval (at least 1 s at rest) whose |f| = g could serve instead"
-                                 + (f" ({'; '.join(off[:2])})" if off else ""))
+                                 + (f" ({'; '.join(not_rest[:2])})" if not_rest else ""))
             raise InputError(rec.source, "no sample has a complete reference (f_x, f_y, f_z, and w_*, dw_* while "
                              "moving) to predict the readings from", column="f_x")
         if mode == "reference" and usable.sum() < 0.5 * n:

@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from ..errors import AccelcalError, InputError
+from ..noise import states_noise
 from ..recording import check_core_input, check_for_device
 from .common import (CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_noise, force_noise, on_uniform_grid,
                      resolve_array, uniform_dt)
@@ -301,7 +302,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     t = np.asarray(rec.t, float)
     n = len(t)
     warnings = [f"displacement: {fill_note}"] if fill_note else []
-    if rest is None and rp.dev_max > REST_DEV_WARN_MPS2 and not np.all(np.asarray(device.noise_counts()) > 0):
+    if rest is None and rp.dev_max > REST_DEV_WARN_MPS2 and not states_noise(device):
         warnings.append(f"displacement: the noise estimated from the recording gives a rest test of |f - mean| <= "
                         f"{rp.dev_max:.3g} m/s^2 (5 sigma), beyond what a sensor at rest shows (0.01-0.25): no still "
                         "stretch is that quiet (vibration throughout, a flight), so a slow motion may pass for a rest; "
