@@ -4,6 +4,7 @@ gap no effect explains is reported as unexplained, clipped readings are evidence
 The six-pose sessions here are written with numpy from the contract's sensor equation
 alone (a 16-bit triad, raw = zero + k f + noise), not by the package's simulator."""
 import gzip
+import importlib
 import json
 
 import numpy as np
@@ -246,3 +247,22 @@ def test_bands_a_recording_cannot_resolve_are_not_measurable():
     assert bands["0.1-1 Hz"]["measurable"] is False and bands["0.1-1 Hz"]["rms_counts"] is None
     assert bands["1-3 Hz"]["measurable"] is True and bands["1-3 Hz"]["rms_counts"] > 0
     assert "0.1-1 Hz: not measurable" in summary_text(res)
+
+
+def test_separate_by_gives_the_hints_that_speak_to_the_pair():
+    """A hint is given for the pair the data cannot tell apart: a gain's "each axis up and
+    down" tells it from an offset, not from a bend (six face poses already hold each axis up
+    and down); a drift's repeated pose, not an offset's up and down; a misalignment and a tilt
+    of the jig each have a hint that tells them apart, and both are given."""
+    separate_by = importlib.import_module("accelcal.diagnose.compare").separate_by
+    up_down = "both up and down"
+    s = separate_by(EFFECTS, "gain", ["nonlinearity"])
+    assert "45 deg" in s and up_down not in s
+    s = separate_by(EFFECTS, "offset", ["bias_drift"])
+    assert "repeated at the end" in s and up_down not in s
+    s = separate_by(EFFECTS, "misalignment", ["pose_error"])
+    assert "45 deg" in s and "re-placing" in s
+    s = separate_by(EFFECTS, "offset", ["gain"])
+    assert up_down in s
+    for e in EFFECTS.values():
+        assert set(e.tells_from) <= set(EFFECTS), e.name

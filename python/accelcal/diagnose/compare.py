@@ -367,13 +367,23 @@ def separate_by(cands, verdict: str, ambiguous: list[str], reached: tuple[str, .
             # changes of time alone and of a recorded covariate: only the covariate apart from time
             # tells them (a pose repeated later changes with both)
             names = [nm for nm in names if cands[nm].covariate]
-        for nm in names:
+        for nm in pair_hinted(cands, names):
             h = cands[nm].tell_apart
             if h and h not in hints:
                 hints.append(h)
     if any(nm in reached for nm in ambiguous):
         hints.append("from right after the calibration (a drift has then reached nothing yet)")
     return (f"To tell {verdict} from {' or '.join(ambiguous)}, record " + "; or ".join(hints) + ".")
+
+
+def pair_hinted(cands, names: list[str]) -> list[str]:
+    """Of ``names`` (the verdict first), those whose ``tell_apart`` speaks to another of them
+    (``Effect.tells_from`` names it, or is empty); all of them where none does."""
+    def speaks(nm):
+        tf = cands[nm].tells_from
+        return not tf or any(o in tf for o in names if o != nm)
+    kept = [nm for nm in names if cands[nm].tell_apart and speaks(nm)]
+    return kept or names
 
 
 def model_ambiguity(cands, chosen: list[str], duel: Contest, ambiguous: list[str]):

@@ -62,6 +62,7 @@ def _lattice(raw: np.ndarray):
 class Saturation(Candidate, Effect):
     name = "saturation"
     tell_apart = "poses and motions that keep every reading well inside the range (a clip flattens only the readings beyond its level)"
+    tells_from = ("gain", "nonlinearity")
     summary = "readings clip at limits inside [raw_min, raw_max]"
     doc = ("counts_i -> clip(counts_i, lo_i, hi_i) (counts).  By default the limits are the "
            "channel's offset -+ limit_g g in counts; lo/hi give them directly.")

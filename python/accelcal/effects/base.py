@@ -63,6 +63,10 @@ class Effect:
     varies_by_pose: bool = False
     #: the pose or motion that shows this effect distinctly (the diagnosis's ``separate_by``)
     tell_apart: str = ""
+    #: the effects ``tell_apart`` tells this one from (empty: any); for a pair the diagnosis cannot
+    #: separate, only the hints that speak to that pair are given (a gain's "each axis up and
+    #: down" tells it from an offset, not from a bend, which six face poses already hold)
+    tells_from: tuple[str, ...] = ()
     #: effects whose constant change this one's level at the recording also makes, since the
     #: calibration was made at another time (a drift since then reads as an offset): a verdict
     #: among them with this effect also in the model is reported ambiguous with it

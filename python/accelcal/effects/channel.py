@@ -19,6 +19,7 @@ from .settings import MISALIGN_MAX_RAD
 class Offset(LinearCandidate, Effect):
     name = "offset"
     tell_apart = "each axis both up and down (an offset shifts the +g and -g readings the same way, a gain scales them apart)"
+    tells_from = ("gain", "temperature_gain")
     summary = "b_i differs from the calibrated value (a constant shift)"
     doc = "b_i -> b_i + db_i (counts)."
     stage = "state"
@@ -79,6 +80,7 @@ class Gain(LinearCandidate, Effect):
     name = "gain"
     varies_by_pose = True
     tell_apart = "each axis both up and down (a gain error scales the +g and -g readings apart, an offset shifts both)"
+    tells_from = ("offset", "temperature_offset")
     summary = "the magnitude of s_i differs (scale error along the axis)"
     doc = "s_i -> (1 + scale_i) s_i (scale: fraction)."
     stage = "state"
@@ -136,6 +138,7 @@ class Misalignment(LinearCandidate, Effect):
     name = "misalignment"
     varies_by_pose = True
     tell_apart = "poses with gravity between the axes, at 45 deg (a misalignment mixes the other axes' g into a channel)"
+    tells_from = ("pose_error", "nonlinearity", "gain")
     summary = "the direction of s_i differs (cross-axis sensitivity)"
     doc = ("s_i -> Exp(rot_i) s_i: s_i rotated by the small rotation vector rot_i (rad, body axes); "
            "only the part of rot_i perpendicular to s_i matters (2 free values per channel).")

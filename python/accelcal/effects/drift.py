@@ -44,6 +44,7 @@ class BiasDrift(LinearCandidate, Effect):
     name = "bias_drift"
     time_dependent = True
     tell_apart = "a pose repeated at the end of the recording (a drift changes its reading, a fixed error does not)"
+    tells_from = ("offset", "pose_error", "gain", "misalignment", "nonlinearity")
     reaches_level_of = ("offset",)
     summary = "b_i changes with time (ramp or random walk)"
     doc = ("bias_i(t) += rate_i (t - t0) + rw_i W(t) + path_i(t): a ramp (counts/s) plus a random walk of "

@@ -29,6 +29,7 @@ class Nonlinearity(LinearCandidate, Effect):
     name = "nonlinearity"
     varies_by_pose = True
     tell_apart = "poses at 45 deg between the axes (a nonlinearity bends the reading between -g and +g, a tilt of the table does not)"
+    tells_from = ("gain", "misalignment", "pose_error", "saturation", "offset")
     summary = "the reading gains a term in the square of the channel's input"
     doc = ("counts_i += k2_i x_i^2 + k3_i x_i^3, x_i = (counts_i - b_i - bias_i) / |s_i| the channel's input "
            "in m/s^2 (k2: counts per (m/s^2)^2, k3: counts per (m/s^2)^3; k3 = 0 unless given).  "

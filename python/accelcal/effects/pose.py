@@ -17,6 +17,7 @@ class PoseError(Candidate, Effect):
     name = "pose_error"
     varies_by_pose = True
     tell_apart = "a pose repeated after re-placing the sensor (a placement error changes, an error of the sensor does not)"
+    tells_from = ("misalignment", "gain", "offset", "nonlinearity", "bias_drift")
     summary = "the stated reference orientation of static poses is off by a small rotation"
     doc = ("For each static pose label p, f_true = Exp(rot_p) f_stated (rot_p in rad, body axes): "
            "the simulator writes f_stated = Exp(rot_p)^T f_true in the reference f columns of the "

@@ -198,6 +198,7 @@ class TemperatureOffset(TemperatureFit, Effect):
     time_dependent = True
     covariate = "temp_c"
     tell_apart = "the same pose held at two temperatures, and repeated at one temperature later (temperature apart from time)"
+    tells_from = ("bias_drift", "offset", "temperature_gain")
     summary = "b_i changes linearly with temperature"
     doc = ("bias_i(t) += coeff_i (T_s(t) - t_ref) (coeff: counts per degC), T_s the recorded temperature "
            "through a first-order lag tau_s (s; 0: T_s = temp_c).")
@@ -250,6 +251,7 @@ class TemperatureGain(TemperatureFit, Effect):
     time_dependent = True
     covariate = "temp_c"
     tell_apart = "each axis up and down at two temperatures (a gain change scales both readings, an offset change shifts them)"
+    tells_from = ("gain", "temperature_offset", "bias_drift")
     summary = "the magnitude of s_i changes linearly with temperature"
     doc = ("gain_i(t) *= 1 + coeff_i (T_s(t) - t_ref) (coeff: fraction per degC), T_s the recorded "
            "temperature through a first-order lag tau_s (s; 0: T_s = temp_c).")
