@@ -3,7 +3,6 @@ gap no effect explains is reported as unexplained, clipped readings are evidence
 
 The six-pose sessions here are written with numpy from the contract's sensor equation
 alone (a 16-bit triad, raw = zero + k f + noise), not by the package's simulator."""
-import gzip
 import importlib
 import json
 
