@@ -490,6 +490,13 @@ def test_pose_with_a_reading_at_the_adc_limit_is_set_aside_and_counted():
     keep = rec.pose != 2
     ref = calibrate_recordings(dev, [Recording(t=rec.t[keep], raw=rec.raw[keep], f=rec.f[keep], pose=rec.pose[keep])])
     np.testing.assert_allclose(cal.offsets, ref.offsets, rtol=0, atol=1e-9)
+    # with a stated jig accuracy (the references as priors) and with temperature the set-aside
+    # pose is still named in the calibration
+    assert [d["name"] for d in calibrate_recordings(dev, [clipped], jig_accuracy_deg=1.0).extra["set_aside"]] \
+        == ["pose 2"]
+    temp = np.where(rec.pose >= 0, 20.0 + 2.0 * rec.pose, np.nan)
+    warm = Recording(t=rec.t, raw=raw, f=rec.f, pose=rec.pose, temp_c=temp, source="clip.csv")
+    assert [d["name"] for d in calibrate_recordings(dev, [warm]).extra["set_aside"]] == ["pose 2"]
 
 
 def test_every_pose_clipped_is_one_line_naming_them():

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -71,8 +72,7 @@ def fit_known_poses(device, means, f_ref, method: str = "full", sigma=None, *,
         # (with a stated jig accuracy the variance model is absolute even without sigma: the
         # rounding floor as the noise, so chi2 counts and the covariance gets the Birge rule)
         sig = np.asarray(sigma, float) if sigma is not None else np.full((P, N), math.sqrt(QUANT_VAR))
-        ps = bare_poses(m, F) if poses is None else PoseSet(m, poses.n, poses.std, F, poses.temp, poses.info,
-                                                                     colour_r2=poses.colour_r2)
+        ps = bare_poses(m, F) if poses is None else replace(poses, means=m, f_ref=F)
         return fit_static(device, ps, method, jigfree=False, temperature=False, sigma=sig, min_rcond=min_rcond,
                           jig_accuracy_deg=jig_accuracy_deg)
     sigma_known = sigma is not None

@@ -3,6 +3,7 @@ by ``scipy.optimize.least_squares`` on the problem of :mod:`.problem`."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -241,7 +242,6 @@ def fit_temperature(device, poses: PoseSet, method: str = "full", *, f: np.ndarr
     temperature) jointly with the channel parameters, for known pose forces
     ``f`` (default ``poses.f_ref``; pass a jig-free fit's ``f`` for hand-held data),
     uncertain by ``jig_accuracy_deg`` (see :func:`fit_known_poses`)."""
-    ps = poses if f is None else PoseSet(poses.means, poses.n, poses.std, np.asarray(f, float), poses.temp,
-                                         poses.info, colour_r2=poses.colour_r2)
+    ps = poses if f is None else replace(poses, f_ref=np.asarray(f, float))
     return fit_static(device, ps, method, jigfree=False, temperature=True, sigma=sigma,
                       jig_accuracy_deg=jig_accuracy_deg)
