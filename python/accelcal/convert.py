@@ -40,7 +40,7 @@ from .convert_common import (GYRO_RE, INDEX_COLUMNS, NUMBER_RE, Converted, Optio
                              finish, header_cells, read_columns, whole_counts)
 from .convert_log import is_log, read_log
 from .convert_mat import convert_mat, is_mat
-from .convert_named import axis_column, convert_named
+from .convert_named import BARE_AXES, axis_column, convert_named
 from .convert_regions import POSE_DIRECTIONS, read_regions
 from .convert_time import TIME_COLUMN_RE, unit_in_name
 from .errors import InputError
@@ -87,7 +87,7 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
         return "imu_tk"
     if is_log(data):
         return "log"
-    if any(axis_column(c) for c in cells):
+    if any(axis_column(c) for c in cells) or set(BARE_AXES) <= low:
         return "table"
     raise InputError(source, f"cannot tell the format from this line ({pre.header[:60]!r}): expected a "
                      "recording CSV (t, raw_0, ...), imucal's acc_x/acc_y/acc_z, the MPU-6050 log (Fs,... "

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
+from pathlib import Path
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,7 +18,7 @@ from .csvtable import convert_columns, got_text
 from .errors import InputError
 from .units import STANDARD_GRAVITY, UNIT_TEXT, Scale, file_scale, to_counts
 
-__all__ = ["AXIS_RE", "NAMED_UNITS", "AxisColumn", "axis_column", "table_axes", "names_unit", "stated_time_column",
+__all__ = ["AXIS_RE", "BARE_AXES", "PX4_ACCEL_FILE_RE", "NAMED_UNITS", "AxisColumn", "axis_column", "table_axes", "names_unit", "stated_time_column",
            "choose_time_column", "placeholder_rows", "convert_named"]
 
 #: a table's accelerometer axis column: a prefix, the word, the axis, a unit in () or [] or after _
@@ -27,6 +28,11 @@ AXIS_RE = re.compile(r"(?P<pre>.*?)(?:accelerometer|acceleration|accel|acc|(?<![
 #: accelerometer_m_s2[0] (ulog2csv)
 MESSAGE_AXIS_RE = re.compile(r"(?:(?:field\.)?(?P<ros>linear_acceleration)\.(?P<axis>[xyz])"
                              r"|(?:accelerometer|accel|acc)(?P<mps2>_m_s2)?\[(?P<index>[012])\])", re.I)
+#: a file pyulog's ulog2csv wrote for PX4's sensor_accel topic (<log>_sensor_accel_<instance>.csv):
+#: its bare x, y, z columns are the accelerometer's, in m/s^2 (sensor_gyro and sensor_mag have the same)
+PX4_ACCEL_FILE_RE = re.compile(r"(?:^|_)sensor_accel(?:_\d+)?\.csv$", re.I)
+#: the axes' columns named by the axis alone
+BARE_AXES = ("x", "y", "z")
 #: the prefixes of an accelerometer's own axis columns (LORD's scaledAccelX)
 AXIS_PREFIXES = ("", "scaled", "raw")
 #: prefixes of a phone's virtual sensors: not an accelerometer's specific force
@@ -97,6 +103,13 @@ def table_axes(source: str, names: list[str], row: int) -> list[AxisColumn]:
         (linear acceleration, gravity), naming the candidates.
     """
     found = [c for c in (axis_column(n) for n in names) if c is not None]
+    bare = [n for n in names if n.lower() in BARE_AXES]
+    if not found and len(bare) == len(BARE_AXES):
+        if not PX4_ACCEL_FILE_RE.search(Path(source).name):
+            raise InputError(source, "the columns x, y, z do not say they are an accelerometer's (PX4's sensor_accel, "
+                             "sensor_gyro and sensor_mag are exported alike): keep ulog2csv's file name "
+                             "(<log>_sensor_accel_0.csv) or name the columns acc_x, acc_y, acc_z", row=row)
+        found = [AxisColumn(n, n.lower(), "mps2", False) for n in bare]
     real = [c for c in found if not c.virtual]
     if not real and found:
         raise InputError(source, f"the accelerometer columns {', '.join(repr(c.name) for c in found)} are a phone's "
@@ -113,6 +126,13 @@ def table_axes(source: str, names: list[str], row: int) -> list[AxisColumn]:
                              "'Acceleration y (m/s^2)', scaledAccelZ)", row=row)
         axes.append(on[0])
     return axes
+
+
+def px4_export(source: str, axes: list[AxisColumn]) -> bool:
+    """Whether the table is PX4's, as pyulog's ulog2csv writes it: a sensor_accel file, or
+    sensor_combined's accelerometer_m_s2[i] columns (its time stamps are in us)."""
+    return bool(PX4_ACCEL_FILE_RE.search(Path(source).name)) or \
+        all(c.name.lower().startswith("accelerometer_m_s2[") for c in axes)
 
 
 def names_unit(source: str, axes: list[AxisColumn], row: int) -> str | None:
@@ -296,7 +316,8 @@ def choose_time_column(source: str, names: list[str], acc: list[str], table, row
                      "--rate")
         return None
     # a message's own stamp (ROS header.stamp: the sensor's time) before the log's receipt time (%time)
-    stamp = [n for n in numeric if n.lower().endswith("header.stamp")]
+    # (and PX4's timestamp_sample, the sample's time, before its timestamp, the publication's)
+    stamp = [n for n in numeric if n.lower().endswith("header.stamp") or n.lower() == "timestamp_sample"]
     chosen = stamp[0] if stamp else next((n for n in numeric if unit_in_name(n) is not None), numeric[0])
     over = [n for n in cands if n != chosen]
     if over:
@@ -458,6 +479,10 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
         opts.rate_hz, key = stated
         notes.append(f"no time column: the rate is the {opts.rate_hz:g} Hz the file's comment '# {key}' states "
                      "(--rate HZ states another)")
+    if time_column is not None and opts.time_unit == "auto" and px4_export(source, axes) and \
+            time_column.lower() in ("timestamp", "timestamp_sample"):
+        opts.time_unit = "us"
+        notes.append(f"{time_column} read in us, PX4's unit (--time-unit states another)")
     if time_column is None and opts.time_unit != "auto":
         raise InputError(source, "--time-unit: the table has no time column (--rate states its rate)")
     stamps = None

@@ -519,10 +519,32 @@ def test_robotics_and_phone_exports_are_read(tmp_path, capfd):
                  "accelerometer_m_s2[1],accelerometer_m_s2[2],magnetometer_ga[0]", px4)
     rec, dev, err = _convert(tmp_path, capfd, src, "--units", "mps2", "--lsb", repr(mps2))
     np.testing.assert_array_equal(rec.raw, c)
-    assert dev["sample_rate_hz"] == pytest.approx(250.0, rel=1e-9) and "t read in us" in err
+    assert dev["sample_rate_hz"] == pytest.approx(250.0, rel=1e-9) and "timestamp read in us, PX4's unit" in err
     tab = "\n".join(f"{k / 200:.9E}\t{r[0] * mps2:.9E}\t{r[1] * mps2:.9E}\t{r[2] * mps2:.9E}" for k, r in enumerate(c))
     (tmp_path / "raw.csv").write_text('"Time (s)"\t"Acceleration x (m/s^2)"\t"Acceleration y (m/s^2)"\t'
                                       '"Acceleration z (m/s^2)"\n' + tab + "\n")
     rec, dev, err = _convert(tmp_path, capfd, tmp_path / "raw.csv", "--units", "mps2", "--lsb", repr(mps2), "--round")
     np.testing.assert_array_equal(rec.raw, c)
     assert dev["sample_rate_hz"] == pytest.approx(200.0, rel=1e-6)
+
+
+def test_px4_sensor_accel_export_is_read_by_its_file_name(tmp_path, capfd):
+    """PX4's sensor_accel topic, as ulog2csv writes it (<log>_sensor_accel_0.csv), has bare x, y,
+    z columns in m/s^2 and stamps in us (timestamp_sample, the sample's time, beside timestamp,
+    the publication's): it had been "cannot tell the format", and a log of 1 Hz (the logger's
+    interval) was read in ns as 1 kHz.  The same columns in a file whose name says no topic are
+    refused, since PX4's gyro and magnetometer topics are exported alike."""
+    c = _counts(40, seed=37)
+    mps2 = LSB_G * G
+    head = ("timestamp,timestamp_sample,device_id,x,y,z,temperature,error_count,clip_counter[0],clip_counter[1],"
+            "clip_counter[2],samples")
+    for step_us, rate in ((1_000_000, 1.0), (1000, 1000.0)):
+        rows = [f"{1710773351242000 + step_us * k + 90},{1710773351242000 + step_us * k},1310988,{_cells(r * mps2)},"
+                f"41.5,0,0,0,0,1" for k, r in enumerate(c)]
+        src = _write(tmp_path / "flight_sensor_accel_0.csv", head, rows)
+        rec, dev, err = _convert(tmp_path, capfd, src, "--units", "mps2", "--lsb", repr(mps2))
+        np.testing.assert_array_equal(rec.raw, c)
+        assert dev["sample_rate_hz"] == pytest.approx(rate, rel=1e-9), err
+        assert "'timestamp_sample' used" in err and "timestamp_sample read in us, PX4's unit" in err
+    err = _refused(tmp_path, capfd, _write(tmp_path / "gyro.csv", head, rows))
+    assert "gyro.csv: row 1: the columns x, y, z do not say they are an accelerometer's" in err, err
