@@ -40,7 +40,8 @@ from .convert_common import (GYRO_RE, INDEX_COLUMNS, NUMBER_RE, Converted, Optio
                              finish, header_cells, read_columns, whole_counts)
 from .convert_log import is_log, read_log
 from .convert_mat import convert_mat, is_mat
-from .convert_named import BARE_AXES, axis_column, convert_named
+from .convert_axes import BARE_AXES, axis_column
+from .convert_named import convert_named
 from .convert_regions import POSE_DIRECTIONS, read_regions
 from .convert_time import TIME_COLUMN_RE, unit_in_name
 from .errors import InputError
