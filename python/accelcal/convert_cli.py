@@ -92,8 +92,9 @@ def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
                    "t, time, timestamp, 'Time (s)', ..., those holding numbers, not a clock time or a date, the "
                    "first whose name states a unit, else the first; a note names it)")
     s.add_argument("--variable", metavar="NAME", help="mat: the array of readings (3 columns x, y, z, or 4: t, x, y, "
-                   "z) where the MATLAB file holds more than one")
-    s.add_argument("--regions", metavar="JSON", help="pose regions {name: {\"start\": s, \"end\": e}} in "
+                   "z) where the MATLAB file holds more than one; or X,Y,Z (T,X,Y,Z): the names of vectors that hold "
+                   "one channel each")
+    s.add_argument("--regions", metavar="FILE", help="a JSON file of pose regions {name: {\"start\": s, \"end\": e}} in "
                    "sample numbers, end excluded (imucal's session list); names ending in _rot are motions")
     s.add_argument("--blocks", action="store_true", help="log: each run of readings between the logger's text "
                    "lines (a prompt before each pose) is a pose, labelled block_1, block_2, ...")

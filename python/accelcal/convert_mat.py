@@ -5,7 +5,10 @@ arrays come out transposed there).  Told by the file's first bytes (``MATLAB 5.0
 ``MATLAB 7.3 MAT-file``), never by its name."""
 from __future__ import annotations
 
+import io
 import os
+import struct
+import zlib
 from typing import Any
 
 import h5py
@@ -22,6 +25,10 @@ __all__ = ["MAT_MAGIC", "is_mat", "mat_arrays", "pick_array", "convert_mat"]
 MAT_MAGIC = b"MATLAB "
 #: an array of readings has this many columns (x, y, z; or t, x, y, z) and more rows than that
 READING_COLUMNS = (3, 4)
+#: a version-5 MAT-file's element type of a zlib-compressed element (its data: another element)
+MI_COMPRESSED = 15
+#: arrays named in a refusal, at most
+SHAPES_LISTED = 8
 
 
 def is_mat(path: Any) -> bool:
@@ -34,9 +41,44 @@ def is_mat(path: Any) -> bool:
     return head.startswith(MAT_MAGIC) and b"MAT-file" in head[:32]
 
 
-def mat_arrays(path: Any, source: str) -> dict[str, np.ndarray]:
+def unchecked_v5(data: bytes) -> bytes:
+    """A version-5 MAT-file with each compressed element inflated without its zlib checksum
+    (raw deflate): the same file, uncompressed.  MATLAB reads a file whose adler32 checks
+    fail (some acquisition programs write them wrong); zlib, and so scipy, refuses it.
+
+    Raises
+    ------
+    ValueError
+        An element that runs past the end of the file, or data that do not inflate.
+    """
+    order = "<" if data[126:128] == b"IM" else ">"
+    out, pos = [data[:128]], 128
+    while pos + 8 <= len(data):
+        kind, size = struct.unpack(order + "II", data[pos:pos + 8])
+        if kind >> 16:                      # a small element: its data in the tag's 8 bytes
+            out.append(data[pos:pos + 8])
+            pos += 8
+            continue
+        if pos + 8 + size > len(data):
+            raise ValueError(f"an element of {size} bytes at byte {pos} runs past the end of the file")
+        if kind == MI_COMPRESSED:
+            try:
+                out.append(zlib.decompressobj(-zlib.MAX_WBITS).decompress(data[pos + 10:pos + 8 + size]))
+            except zlib.error as e:
+                raise ValueError(f"the compressed element at byte {pos} does not inflate ({e})") from None
+            pos += 8 + size
+        else:
+            end = pos + 8 + size + (-size) % 8
+            out.append(data[pos:end])
+            pos = end
+    return b"".join(out)
+
+
+def mat_arrays(path: Any, source: str, notes: list[str] | None = None) -> dict[str, np.ndarray]:
     """Every real numeric 2-D array of a MAT-file by its name (nested HDF5 groups as
-    ``group/name``), oriented as MATLAB shows it.
+    ``group/name``), oriented as MATLAB shows it.  A version-5 file whose compressed
+    elements fail their zlib checksum is read as MATLAB reads it (:func:`unchecked_v5`),
+    with a note appended to ``notes``.
 
     Raises
     ------
@@ -46,6 +88,12 @@ def mat_arrays(path: Any, source: str) -> dict[str, np.ndarray]:
     with open(os.fspath(path), "rb") as f:
         head = f.read(128)
     out: dict[str, np.ndarray] = {}
+
+    def take_v5(arrays: dict) -> None:
+        for name, v in arrays.items():
+            if not name.startswith("__") and isinstance(v, np.ndarray) and v.ndim == 2 and v.dtype.kind in "iuf":
+                out[name] = v.astype(float)
+
     try:
         if b"MATLAB 7.3" in head[:20]:
             with h5py.File(os.fspath(path), "r") as h5:
@@ -54,10 +102,15 @@ def mat_arrays(path: Any, source: str) -> dict[str, np.ndarray]:
                         out[name] = np.asarray(obj[()], dtype=float).T     # HDF5 holds MATLAB's transpose
                 h5.visititems(take)
         else:
-            for name, v in scipy.io.loadmat(os.fspath(path)).items():
-                if not name.startswith("__") and isinstance(v, np.ndarray) and v.ndim == 2 and v.dtype.kind in "iuf":
-                    out[name] = v.astype(float)
-    except (OSError, ValueError, TypeError, NotImplementedError) as e:
+            try:
+                take_v5(scipy.io.loadmat(os.fspath(path)))
+            except zlib.error as e:
+                with open(os.fspath(path), "rb") as f:
+                    take_v5(scipy.io.loadmat(io.BytesIO(unchecked_v5(f.read()))))
+                if notes is not None:
+                    notes.append(f"the file's compressed data fail their zlib checksum ({e}); read without it, "
+                                 "as MATLAB reads them")
+    except (OSError, ValueError, TypeError, NotImplementedError, zlib.error) as e:
         raise InputError(source, f"cannot read the MATLAB file: {e}") from None
     return out
 
@@ -79,7 +132,12 @@ def pick_array(arrays: dict[str, np.ndarray], variable: str | None, source: str)
             return a.T
         return None
 
-    shapes = ", ".join(f"{k} {v.shape[0]}x{v.shape[1]}" for k, v in arrays.items()) or "none"
+    listed = [f"{k} {v.shape[0]}x{v.shape[1]}" for k, v in arrays.items()]
+    shapes = ", ".join(listed[:SHAPES_LISTED]) + (f" and {len(listed) - SHAPES_LISTED} more" if
+                                                   len(listed) > SHAPES_LISTED else "") or "none"
+    vectors = sum(min(v.shape) == 1 for v in arrays.values())
+    if variable is not None and "," in variable:
+        return variable, vectors_array(arrays, [v.strip() for v in variable.split(",")], source, shapes)
     if variable is not None:
         if variable not in arrays:
             raise InputError(source, f"--variable {variable}: no such numeric 2-D array (the file has: {shapes})")
@@ -92,19 +150,53 @@ def pick_array(arrays: dict[str, np.ndarray], variable: str | None, source: str)
     if len(found) != 1:
         what = "no array" if not found else f"{len(found)} arrays ({', '.join(found)})"
         raise InputError(source, f"{what} of 3 columns (x, y, z) or 4 (t, x, y, z) among the file's numeric arrays "
-                         f"({shapes}): give --variable NAME")
+                         f"({shapes}): give --variable NAME" + (", or --variable X,Y,Z (T,X,Y,Z) for readings held "
+                                                                 "one vector per channel" if vectors >= 3 else ""))
     return next(iter(found.items()))
+
+
+def vectors_array(arrays: dict[str, np.ndarray], names: list[str], source: str, shapes: str) -> np.ndarray:
+    """The readings held one vector per channel (a data-acquisition program's export): the
+    vectors ``names`` (x, y, z, or t, x, y, z) side by side, as an (n, 3 or 4) array.
+
+    Raises
+    ------
+    InputError
+        Not 3 or 4 names, a name not in the file, an array that is no vector, or vectors of
+        different lengths.
+    """
+    if len(names) not in READING_COLUMNS:
+        raise InputError(source, f"--variable {','.join(names)}: {len(names)} names; expected 3 vectors (x, y, z) or "
+                         "4 (t, x, y, z)")
+    cols = []
+    for n in names:
+        if n not in arrays:
+            raise InputError(source, f"--variable: no numeric array {n!r} (the file has: {shapes})")
+        if min(arrays[n].shape) != 1:
+            raise InputError(source, f"--variable: {n} is {arrays[n].shape[0]}x{arrays[n].shape[1]}; expected a vector "
+                             "(one channel)")
+        cols.append(arrays[n].ravel())
+    if len({c.size for c in cols}) != 1:
+        raise InputError(source, "--variable: the vectors differ in length (" +
+                         ", ".join(f"{n} {c.size}" for n, c in zip(names, cols)) + ")")
+    return np.column_stack(cols)
 
 
 def convert_mat(source: str, path: Any, opts: Options, variable: str | None = None) -> Converted:
     """A MAT-file's readings (:func:`pick_array`): three columns x, y, z (``--rate`` gives the
     rate) or four t, x, y, z (t as a time column: ``--time-unit``, or read in ms/us/ns where
     seconds would give under 2 Hz), in counts or in the unit ``opts.scale`` states."""
-    name, a = pick_array(mat_arrays(path, source), variable, source)
+    notes: list[str] = []
+    name, a = pick_array(mat_arrays(path, source, notes), variable, source)
     timed = a.shape[1] == 4
     first = 1 if timed else 0
     readings = a[:, first:]
-    column = [f"{name}(:,{j + first + 1})" for j in range(3)]          # as MATLAB names them (1-based)
+    vectors = name.split(",") if "," in name else None
+
+    def col(j: int) -> str:
+        return vectors[j] if vectors else f"{name}(:,{j + 1})"        # as MATLAB names them (1-based)
+
+    column = [col(j + first) for j in range(3)]
 
     def locate(i: int, j: int) -> tuple[int, str]:
         return i + 1, column[j]
@@ -112,7 +204,7 @@ def convert_mat(source: str, path: Any, opts: Options, variable: str | None = No
     bad = np.argwhere(~np.isfinite(a))
     if bad.size:
         i, j = (int(v) for v in bad[0])
-        raise InputError(source, f"{float(a[i, j])} is not a finite number", row=i + 1, column=f"{name}(:,{j + 1})")
+        raise InputError(source, f"{float(a[i, j])} is not a finite number", row=i + 1, column=col(j))
     t = None
     if timed:
         t = a[:, 0]
@@ -121,14 +213,13 @@ def convert_mat(source: str, path: Any, opts: Options, variable: str | None = No
             i = int(back[0]) + 1
             raise InputError(source, f"t = {float(t[i]):.10g} is not after {float(t[i - 1]):.10g}: the first column "
                              "is taken as time stamps, which must increase (--variable names another array)",
-                             row=i + 1, column=f"{name}(:,1)")
+                             row=i + 1, column=col(0))
     elif opts.rate_hz is None:
         raise InputError(source, f"array {name} has no time column (3 columns): give the sample rate with --rate HZ")
     elif opts.time_unit != "auto":
         raise InputError(source, f"--time-unit: array {name} has no time column (3 columns; --rate states its rate)")
     scale = file_scale(opts.scale, {}, {}, source)
     converts = scale is not None and scale.converts
-    notes: list[str] = []
     raw = to_counts(readings, scale, source, locate, notes=notes) if converts else \
         whole_counts(readings, source, locate)
     return finish(source, "mat", raw, np.arange(raw.shape[0]), t, None, opts, scale, converts or bool(np.any(raw < 0)),

@@ -92,3 +92,59 @@ def test_time_stamps_that_go_back_are_refused_naming_the_row(tmp_path, capfd):
     scipy.io.savemat(src, {"buf": np.column_stack([t, c * LSB_G])})
     rc, _, err, _ = run(["convert", src, "--units", "g", "--full-scale", "8", "-o", tmp_path / "o.csv"], capfd)
     assert rc == 2 and "row 21, column buf(:,1)" in err and "must increase" in err
+
+
+def _bad_checksums(path):
+    """Break the adler32 checksum of every compressed element of a version-5 MAT-file (some
+    acquisition programs write them wrong; MATLAB ignores them, zlib refuses them)."""
+    data = bytearray(path.read_bytes())
+    pos, broken = 128, 0
+    while pos + 8 <= len(data):
+        kind, size = np.frombuffer(bytes(data[pos:pos + 8]), "<u4")
+        if kind == 15:
+            data[pos + 8 + size - 1] ^= 0xFF
+            broken += 1
+        pos += 8 + int(size) + (0 if kind == 15 else (-int(size)) % 8)
+    path.write_bytes(bytes(data))
+    return broken
+
+
+def test_a_file_with_wrong_zlib_checksums_is_read_as_matlab_reads_it(tmp_path, capfd):
+    """A DAQ program's MAT-file whose compressed elements fail their adler32 check: convert
+    had stopped with 'internal error: Error -3 while decompressing data', exit 3.  It reads
+    them as MATLAB does, with a note; data that do not inflate stay one line naming the file."""
+    c, rate = _counts(120, seed=5), 80.0
+    src = tmp_path / "daq.mat"
+    scipy.io.savemat(src, {"acc": np.column_stack([np.arange(120) / rate, c * LSB_G])}, do_compression=True)
+    assert _bad_checksums(src) == 1
+    rec, dev, err = _convert(tmp_path, capfd, src, "--units", "g", "--full-scale", "8")
+    np.testing.assert_array_equal(rec.raw, c)
+    assert "fail their zlib checksum" in err and "as MATLAB reads them" in err
+    data = bytearray(src.read_bytes())
+    data[150:170] = b"\xff" * 20                       # the deflate stream itself damaged
+    src.write_bytes(bytes(data))
+    rc, _, err, _ = run(["convert", src, "--units", "g", "--full-scale", "8", "-o", tmp_path / "x.csv"], capfd)
+    assert rc == 2 and err.startswith("accelcal convert: error: ") and "daq.mat" in err and "cannot read the MATLAB" \
+        in err and len(err.splitlines()) == 1, err
+    assert not (tmp_path / "x.csv").exists()
+
+
+def test_readings_held_one_vector_per_channel_are_put_side_by_side(tmp_path, capfd):
+    """A data-acquisition export of one 1xn vector per channel (time and amplitude of each):
+    --variable T,X,Y,Z names the vectors; without it the refusal says so and lists at most 8
+    of the arrays; vectors of different lengths are refused naming them."""
+    c, rate = _counts(90, seed=6), 80.0
+    arrays = {f"Canal_{k}_g_{part}": (np.arange(90) / rate if part == "Tempo" else c[:, k % 3] * LSB_G)[None, :]
+              for k in range(6) for part in ("Tempo", "Amplitude")}
+    src = tmp_path / "daq.mat"
+    scipy.io.savemat(src, arrays)
+    names = "Canal_0_g_Tempo,Canal_0_g_Amplitude,Canal_1_g_Amplitude,Canal_2_g_Amplitude"
+    rec, dev, _ = _convert(tmp_path, capfd, src, "--variable", names, "--units", "g", "--full-scale", "8")
+    np.testing.assert_array_equal(rec.raw, c)
+    assert dev["sample_rate_hz"] == pytest.approx(rate)
+    rc, _, err, _ = run(["convert", src, "--units", "g", "--full-scale", "8", "-o", tmp_path / "x.csv"], capfd)
+    assert rc == 2 and "--variable X,Y,Z (T,X,Y,Z)" in err and "and 4 more" in err, err
+    scipy.io.savemat(src, {**arrays, "Canal_2_g_Amplitude": arrays["Canal_2_g_Amplitude"][:, :80]})
+    rc, _, err, _ = run(["convert", src, "--variable", names, "--units", "g", "--full-scale", "8",
+                         "-o", tmp_path / "x.csv"], capfd)
+    assert rc == 2 and "the vectors differ in length" in err and "Canal_2_g_Amplitude 80" in err, err
