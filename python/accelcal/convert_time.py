@@ -23,6 +23,14 @@ TIME_WORDS = {"ms": ("ms", "msec", "millis", "millisecond", "milliseconds"),
 MIN_PLAUSIBLE_HZ = 2.0
 #: t's median step and its mean step disagreeing by more than this share: bursty time stamps
 BURST_SHARE = 0.25
+#: ... and a straight line through the bursts' first stamps misses them by at most this share
+#: of its sample period, rms: the host reads in bursts as the sensor fills them
+BURST_FIT_STEPS = 0.5
+#: ... or t's median step is below this share of its mean step
+BURST_TINY_STEP = 0.05
+#: a step longer than this x the median step is a pause or samples lost, not a sample period
+#: (a host's jitter of up to 0.7 of a step makes steps of up to 1.7; a sample lost, ~2)
+GAP_STEPS = 1.8
 #: float64 holds every whole number below this exactly (a time stamp beyond it, an epoch in
 #: ns, is read as an integer: :func:`exact_stamps`)
 FLOAT_EXACT = 2.0 ** 53
@@ -129,9 +137,22 @@ def time_in_seconds(t: np.ndarray, unit: str, column: str | None, source: str,
 
 
 def bursty(t: np.ndarray) -> bool:
-    """Whether t's median step and its mean step (duration over samples) disagree by more
-    than BURST_SHARE: time stamps taken by a host that reads the sensor in bursts."""
-    return t.size >= 3 and not even_steps(t, BURST_SHARE)
+    """Whether the time stamps ``t`` (s) were taken by a host that reads the sensor in bursts:
+    t's median step and its mean step (duration over samples) disagree by more than
+    BURST_SHARE, and the bursts' first stamps keep time with their samples' numbers -- a
+    straight line through them (:func:`burst_rate`) misses them by at most BURST_FIT_STEPS of
+    its sample period, rms.  A recording paused and resumed (a phone app's pause: steady 9.58 ms
+    steps, one of 163 s) has the same disagreement, but its runs' starts do not keep time
+    with their samples; it had been taken for 5 bursts, and its t rewritten at 46 Hz instead
+    of 104 Hz.  A median step below BURST_TINY_STEP x the mean is bursts whatever the fit (a
+    host's stamps microseconds apart, its jitter between bursts beyond the fit's bound)."""
+    if t.size < 3 or even_steps(t, BURST_SHARE):
+        return False
+    median, mean = float(np.median(np.diff(t))), float(t[-1] - t[0]) / (t.size - 1)
+    if median < BURST_TINY_STEP * mean:
+        return True             # the host's stamps microseconds apart, whatever its jitter between bursts
+    rate, _, misfit = burst_rate(t)
+    return misfit is not None and misfit <= BURST_FIT_STEPS / rate
 
 
 def burst_starts(t: np.ndarray) -> np.ndarray:
@@ -142,7 +163,7 @@ def burst_starts(t: np.ndarray) -> np.ndarray:
     return np.concatenate([[0], np.flatnonzero(np.diff(t) > 0.5 * mean) + 1])
 
 
-def burst_rate(t: np.ndarray) -> tuple[float, str]:
+def burst_rate(t: np.ndarray) -> tuple[float, str, float | None]:
     """The sensor's rate, Hz, from time stamps a host took in bursts (``t`` in s, increasing).
 
     A burst's stamp is tied to one of its samples: the first (a host that stamps when a burst
@@ -160,32 +181,49 @@ def burst_rate(t: np.ndarray) -> tuple[float, str]:
         one, (n - 1) / duration.
     which : str
         The burst's sample its stamp was found tied to: "first", "last" ("" without a fit).
+    misfit : float or None
+        The rms distance of the bursts' stamps from the fitted line, s (None without a fit:
+        fewer than three bursts, or a line that does not rise).
     """
     starts = burst_starts(t)
     if starts.size < 3:
         span = (starts[-1], float(t[starts[-1]] - t[0])) if starts.size == 2 else (t.size - 1, float(t[-1] - t[0]))
-        return span[0] / span[1], ""
+        return span[0] / span[1], "", None
     ends = np.append(starts[1:] - 1, t.size - 1)
     fits = []
     for which, anchor, keep in (("first", starts, slice(1, None)), ("last", ends, slice(None, -1))):
         x, y = anchor[keep].astype(float), t[starts[keep]] - t[0]
         slope, icpt = np.polyfit(x, y, 1)
-        fits.append((float(np.sqrt(np.mean((y - (icpt + slope * x)) ** 2))), which, float(slope)))
-    _, which, slope = min(fits, key=lambda f: f[0])      # a tie (bursts of one size): the first's
-    return (1.0 / slope, which) if slope > 0 else ((t.size - 1) / float(t[-1] - t[0]), "")
+        res = y - (icpt + slope * x)
+        rms = float(np.sqrt(np.mean(res ** 2)))
+        fits.append((rms, which, float(slope), rms))
+    _, which, slope, misfit = min(fits, key=lambda f: f[0])      # a tie (bursts of one size): the first's
+    return (1.0 / slope, which, misfit) if slope > 0 else ((t.size - 1) / float(t[-1] - t[0]), "", None)
 
 
 def rate_from_t(t: np.ndarray, notes: list[str]) -> float:
-    """The sample rate t's steps give, Hz (``t`` in s): from the median step, unless the stamps
-    come in bursts (:func:`bursty`), when :func:`burst_rate` gives it, with a note."""
+    """The sample rate t's steps give, Hz (``t`` in s): the steps up to GAP_STEPS x the median
+    step, counted over their time (a clock that steps 10.079 ms with a 7.56 ms correction
+    every few samples runs at 100.00 Hz, where its median step gave 99.21; a pause or a
+    dropout is no sample period), unless the stamps come in bursts (:func:`bursty`), when
+    :func:`burst_rate` gives it, with a note."""
     if t.size < 2:
         notes.append("a single sample: t gives no rate, and the device's 1 Hz is a placeholder (--rate HZ states it)")
         return 1.0
-    median = float(np.median(np.diff(t)))
+    steps = np.diff(t)
+    median = float(np.median(steps))
     mean = float(t[-1] - t[0]) / (t.size - 1)
     if not bursty(t) or mean <= 0:
-        return 1.0 / median if median > 0 else 1.0
-    rate, which = burst_rate(t)
+        if median <= 0:
+            return 1.0
+        regular = steps[(steps > 0) & (steps <= GAP_STEPS * median)]
+        gaps = int(np.sum(steps > GAP_STEPS * median))
+        if gaps:
+            notes.append(f"t has {gaps} step{'s' if gaps > 1 else ''} longer than {GAP_STEPS:g} x its median step "
+                         f"({median:.6g} s; the longest {float(steps.max()):.6g} s): a pause or samples lost; the "
+                         "rate is that of the other steps")
+        return regular.size / float(regular.sum())
+    rate, which, _ = burst_rate(t)
     bursts = burst_starts(t).size
     notes.append(f"t's median step gives {1.0 / median if median > 0 else float('inf'):.6g} Hz but its {t.size} samples "
                  f"come in {bursts} bursts over {float(t[-1] - t[0]):.6g} s: the time stamps are a host's clock, not the "

@@ -225,3 +225,38 @@ def test_a_stated_rate_that_the_time_column_contradicts_puts_t_on_its_grid(tmp_p
     conv = convert_file(src, fmt, rate_hz=60.0, time_unit="ms")
     np.testing.assert_allclose(conv.recording.t, ms / 1e3, rtol=0, atol=1e-9)
     assert "t_host" not in conv.recording.extra and not any("grid" in n for n in conv.notes)
+
+
+def test_a_paused_recording_keeps_its_stamps_and_its_rate(tmp_path, capfd):
+    """A phone app paused and resumed (Sensor Logger: steady 9.58 ms steps, one of 163 s): the
+    median and mean steps disagree as a host's bursts do, but the runs' starts do not keep
+    time with their samples.  It had been taken for bursts and t rewritten at 46 Hz; it keeps
+    its stamps, the rate is the runs' 104.36 Hz, and a note names the pause."""
+    rate = 1.0 / 0.0095825
+    t = np.concatenate([np.arange(9000), 9000 + 163.0 * rate + np.arange(6000)]) / rate
+    t += np.random.default_rng(4).uniform(-2e-4, 2e-4, t.size)        # the host's jitter
+    src = tmp_path / "paused.csv"
+    _write(src, [f"{int(round(v * 1e9)) + 1_700_000_000_000_000_000}" for v in t], _counts(t.size, seed=8),
+           header="time,accX,accY,accZ")
+    rc, out, err, _ = run(["convert", src, "--units", "counts", "-o", tmp_path / "r.csv", "--device-out",
+                           tmp_path / "d.json"], capfd)
+    assert rc == 0, err
+    rec = read_recording(tmp_path / "r.csv")
+    np.testing.assert_allclose(rec.t - rec.t[0], t - t[0], atol=1e-6)
+    assert json.loads((tmp_path / "d.json").read_text())["sample_rate_hz"] == pytest.approx(rate, rel=1e-4)
+    assert "bursts" not in err and "1 step longer than 1.8 x its median step" in err and "t_host" not in err, err
+
+
+def test_a_clock_with_periodic_corrections_gives_its_mean_rate(tmp_path, capfd):
+    """An x-IMU3's stamps step 10.079 ms with a shorter step every 32nd (its clock corrected):
+    100.00 Hz over the file, where the median step gave 99.21 Hz."""
+    n = 3200
+    steps = np.where(np.arange(1, n) % 32 == 0, 0.0075528, 0.0100794)
+    steps *= (n - 1) * 0.01 / steps.sum()                          # 100 Hz over the file
+    t = np.concatenate([[0.0], np.cumsum(steps)])
+    src = tmp_path / "ximu3.csv"
+    _write(src, [f"{v:.7f}" for v in t], _counts(n, seed=9), header="Time (s),accX,accY,accZ")
+    rc, out, err, _ = run(["convert", src, "--units", "counts", "-o", tmp_path / "r.csv", "--device-out",
+                           tmp_path / "d.json"], capfd)
+    assert rc == 0, err
+    assert json.loads((tmp_path / "d.json").read_text())["sample_rate_hz"] == pytest.approx(100.0, rel=1e-5)
