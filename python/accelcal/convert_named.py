@@ -37,11 +37,13 @@ RATE_COMMENT_RE = re.compile(r"(?:data[ _]?rate|sampl(?:e|ing)[ _]?(?:rate|frequ
 
 
 def table_scale(source: str, pre, option: Scale | None, unit: str | None, units_stated: bool,
-                gravity: float, axes: list[AxisColumn]) -> Scale | None:
+                gravity: float, axes: list[AxisColumn], notes: list[str]) -> Scale | None:
     """The Scale of a table's readings: the unit its axis names state weighed against the
     options and the ``# units:``/``# lsb:`` comments by :func:`units.file_scale` (the names'
     unit taken as the file's ``units``); ``--full-scale`` without ``--units``
-    (``units_stated`` False) is read in the names' unit.
+    (``units_stated`` False) is read in the names' unit.  ``--units`` stated with another unit
+    than the names' overrides them, with a note appended to ``notes`` (a logger's header that
+    says ``aX (g)`` over readings it printed in m/s^2).
 
     Raises
     ------
@@ -50,9 +52,13 @@ def table_scale(source: str, pre, option: Scale | None, unit: str | None, units_
         with no LSB stated anywhere.
     """
     meta, lines = dict(pre.metadata), dict(pre.metadata_lines)
+    cols = ", ".join(c.name for c in axes)
+    if unit is not None and units_stated and option is not None and option.units != unit:
+        notes.append(f"--units {option.units} overrides the unit the header's columns state, {UNIT_TEXT[unit]} "
+                     f"({cols})")
+        unit = None
     if unit is None:
         return file_scale(option, meta, lines, source)
-    cols = ", ".join(c.name for c in axes)
     said = meta.get("units")
     if said is not None and said != unit:
         raise InputError(source, f"the comment '# units: {said}' contradicts the unit the header's columns state, "
@@ -337,14 +343,14 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
     names = [c.strip() for c in header_cells(pre.header)]
     axes = table_axes(source, names, pre.header_line)
     acc = [c.name for c in axes]
+    notes: list[str] = []
     scale = table_scale(source, pre, opts.scale, names_unit(source, axes, pre.header_line), units_stated,
-                        opts.gravity_mps2 or STANDARD_GRAVITY, axes)
+                        opts.gravity_mps2 or STANDARD_GRAVITY, axes, notes)
     if opts.time_column is not None:
         time_column = stated_time_column(source, names, acc, opts.time_column, pre.header_line)
     want = {a: "ref" for a in acc}
     names, values, table = read_columns(source, data, pre, want)
     js = [names.index(a) for a in acc]
-    notes: list[str] = []
     rows = present_rows(source, np.column_stack([values[a] for a in acc]), table, axes, js, notes)
     if rows.size == 0:
         raise InputError(source, f"no row has readings in {', '.join(acc)}", row=pre.header_line)

@@ -396,7 +396,7 @@ def set_aside_off_gravity(rec, device, intervals: list, labels: list | None) -> 
     def aside_of(p: int, idx: np.ndarray) -> dict | None:
         if ok[p] or np.all(np.isfinite(rec.f[idx])):
             return None
-        return {"reason": "not at rest", "n_clipped": 0, "channels": [],
+        return {"reason": "not at rest", "n_clipped": 0, "channels": [], "ratio": float(ratio[p]),
                 "levels": f"|f| = {ratio[p]:.3g} g with the device file's scale"}
 
     return split_aside(rec, intervals, labels, aside_of)
@@ -466,3 +466,15 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
         })
     return PoseSet(means=means, n=cnt, std=std, f_ref=f_ref, temp=temp, info=info, set_aside=aside,
                    colour_r2=pose_colour(rec.raw, [interval_index(iv) for iv in intervals]))
+
+
+def one_wrong_scale(aside: list[dict]) -> float | None:
+    """The |f| / g at which three or more poses set aside as "not at rest" (each recording
+    judged alone: one pose per file) agree within REST_F_AGREE of their median, or None: one
+    wrong scale for them all (readings in m/s^2 read as g are 9.81 x), not free fall."""
+    ratios = np.array([d["ratio"] for d in aside if d.get("reason") == "not at rest" and "ratio" in d], float)
+    ratios = ratios[np.isfinite(ratios)]
+    if ratios.size < 3:
+        return None
+    med = float(np.median(ratios))
+    return med if np.count_nonzero(np.abs(ratios / med - 1.0) <= REST_F_AGREE) >= 3 else None

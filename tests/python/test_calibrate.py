@@ -843,3 +843,18 @@ def test_a_still_stretch_far_from_g_is_no_rest_unless_every_pose_agrees(tmp_path
                           hold=int(2 * d.sample_rate_hz), move=int(0.5 * d.sample_rate_hz), clip=False)
     big = dataclasses.replace(d, raw_min=-10 ** 7, raw_max=10 ** 7)
     assert poses_from_recording(four, big).n_poses == 12
+
+
+def test_poses_one_per_file_that_agree_far_from_g_name_the_scale():
+    """Six faces, one per file, read 9.81 g each (a header said g over readings in m/s^2): each
+    file alone has one pose far from g, so every pose is set aside; the refusal says they agree,
+    so the scale is off, rather than leaving a user to read "not at rest" six times."""
+    rng = np.random.default_rng(44)
+    d = default_triad()
+    big = dataclasses.replace(d, raw_min=-10 ** 7, raw_max=10 ** 7)
+    b, S = draw_truth(big, rng)
+    recs = [make_recording(big, b, S * 9.80665, G * AXES6[k:k + 1], rng, labels=False,
+                           hold=int(3 * d.sample_rate_hz), move=0, clip=False) for k in range(6)]
+    with pytest.raises(InputError, match=r"6 set aside because their \|f\| is far from g.*they agree at \|f\| = "
+                                         r"9\.[6-9][0-9]* g: the readings' scale is off by that factor"):
+        calibrate_recordings(big, recs, "jigfree")

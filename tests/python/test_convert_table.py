@@ -156,11 +156,19 @@ def _phyphox_g(tmp_path, header="Time (s),Acceleration x (g),Acceleration y (g),
                   ["# phone export"])
 
 
-@pytest.mark.parametrize("args", [["--units", "mps2", "--full-scale", "2"], ["--units", "counts"],
-                                  ["--units", "counts", "--full-scale", "2"]])
-def test_a_unit_that_contradicts_the_names_is_refused(tmp_path, capfd, args):
-    err = _refused(tmp_path, capfd, _phyphox_g(tmp_path), *args)
-    assert "row 2" in err and "the unit the header's columns state, g" in err and "contradicts" in err
+def test_units_stated_by_the_options_override_the_names(tmp_path, capfd):
+    """A logger whose header says ``aX (g)`` over readings it printed in m/s^2 (an MPU-6050
+    sketch's raw * 9.81 / 16384): --units mps2 had been refused as contradicting the header, so
+    the only way was to edit the file.  The options' unit is taken, with a note; g readings
+    taken as counts stay refused (not whole counts)."""
+    c = _counts(30, seed=7)
+    src = _write(tmp_path / "p.csv", "Time (s),aX (g),aY (g),aZ (g)",
+                 [f"{k / 100:.2f},{_cells(r * LSB_G * G)}" for k, r in enumerate(c)])
+    rec, dev, err = _convert(tmp_path, capfd, src, "--units", "mps2", "--full-scale", "2")
+    np.testing.assert_array_equal(rec.raw, c)
+    assert "--units mps2 overrides the unit the header's columns state, g (aX (g), aY (g), aZ (g))" in err, err
+    err = _refused(tmp_path, capfd, _phyphox_g(tmp_path), "--units", "counts")
+    assert "whole" in err, err
 
 
 def test_a_comment_that_contradicts_the_names_is_refused(tmp_path, capfd):

@@ -7,7 +7,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..held import distinct_recordings
-from ..static import NO_POSE, PoseSet, poses_from_recording
+from ..static import NO_POSE, PoseSet, one_wrong_scale, poses_from_recording
 from .checks import jig_accuracy_rad, pose_label
 from .known_poses import fit_known_poses
 from .lever_arms import calibrate_positions
@@ -63,8 +63,12 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
                f"{' or '.join(sorted({setaside_reason(d) for d in poses.set_aside}))}: "
                + "; ".join(f"{set_aside_entry(d)['name']} ({d['levels']})" for d in poses.set_aside[:3]) + ")"
                if poses.set_aside else "")
-        raise InputError(recordings[0].source, f"no usable static pose in any recording{why}: the offsets and "
-                         "sensitivities need static poses (lever arms alone cannot be estimated without them)")
+        scale = one_wrong_scale(poses.set_aside)
+        hint = (f"; {'they' if len(poses.set_aside) > 1 else 'it'} agree at |f| = {scale:.3g} g: the readings' scale "
+                "is off by that factor, not a free fall (readings in m/s^2 read as g give 9.81 g): check --units, "
+                "--full-scale or --lsb of the conversion, or the device file" if scale is not None else "")
+        raise InputError(recordings[0].source, f"no usable static pose in any recording{why}{hint}: the offsets "
+                         "and sensitivities need static poses (lever arms alone cannot be estimated without them)")
     has_f = np.all(np.isfinite(poses.f_ref), axis=1)
     if method is None:
         if has_f.all():
