@@ -69,7 +69,8 @@ def table_scale(source: str, pre, option: Scale | None, unit: str | None, units_
     if unit != "counts" and not sized and (option is None or option.units == unit):
         raise InputError(source, f"the readings are in {UNIT_TEXT[unit]} (the header's {cols}) and no LSB is "
                          "stated: give --full-scale G (or --units {0} --lsb VALUE, or a '# lsb:' comment) to "
-                         "make them counts".format(unit), row=pre.header_line)
+                         "make them counts, and --round where they are a calibrated logger's floats on no LSB's "
+                         "grid".format(unit), row=pre.header_line)
     meta["units"], lines["units"] = unit, pre.header_line
     return file_scale(option, meta, lines, source,
                       unit_source=f"the unit the header's columns state, {UNIT_TEXT[unit]} ({cols}),")

@@ -180,7 +180,7 @@ def test_a_comment_that_contradicts_the_names_is_refused(tmp_path, capfd):
 
 def test_physical_units_without_an_lsb_are_refused(tmp_path, capfd):
     err = _refused(tmp_path, capfd, _phyphox_g(tmp_path))
-    assert "row 2" in err and "in g" in err and "no LSB" in err and "--full-scale" in err
+    assert "row 2" in err and "in g" in err and "no LSB" in err and "--full-scale" in err and "--round" in err
 
 
 def test_a_partly_empty_row_is_refused_naming_its_file_row(tmp_path, capfd):
