@@ -45,6 +45,51 @@ QUANT_MIN_FRAC = 0.99      # a lattice must hold this share of the readings (a f
 QUANT_MAX_STEP = 256       # largest lattice step searched for (beyond the exact gcd)
 
 
+def fractional_grid(v: np.ndarray) -> float | None:
+    """The step, in counts, of a grid that is no whole number of counts on which integer
+    readings sit (a logger that printed m/s^2 to two decimals: 0.01 m/s^2 = 16.7 counts of
+    an MPU-6050 at +-2 g, each reading rounded to the nearest count), or None.
+
+    The distinct readings' neighbouring differences are floor(q) or ceil(q) apart where most
+    grid points are used; within each run of readings no more than 3 grid points apart (a
+    pose's cluster) the points are numbered from the differences, and q is one least-squares
+    step for all runs with an intercept each (the grid need not line up across clusters a g
+    apart); it must hold QUANT_MIN_FRAC of the readings within rounding (half a count).  None for readings that use
+    neighbouring counts, for a whole-number step (:func:`code_lattice` finds those), or for
+    fewer than 6 distinct values.
+    """
+    u, cnt = np.unique(np.asarray(v).astype(np.int64), return_counts=True)
+    if u.size < 6:
+        return None
+    du = np.diff(u)
+    d0 = float(np.median(du))
+    if d0 < 2.0 or np.mean(du == 1) > 0.3:
+        return None
+    small = du[du <= d0 + 1]                 # neighbouring grid points (a gap of unused ones left out)
+    if small.size < 5 or np.ptp(small) > 1:
+        return None
+    # runs of readings whose neighbours are at most 3 grid points apart (a pose's cluster); within
+    # each, the grid points' numbers from the differences, and one step for all by least squares
+    # with an intercept per run (clusters a g apart do not tie the grid across them)
+    q0 = float(small.mean())
+    run = np.concatenate([[0], np.cumsum(du > 3.5 * q0)])
+    k = np.concatenate([[0.0], np.cumsum(np.where(du > 3.5 * q0, 0.0, np.round(du / q0)))])
+    w = cnt.astype(float)
+    kc, xc = k.copy(), u.astype(float)
+    for r in np.unique(run):
+        m = run == r
+        kc[m] -= np.average(k[m], weights=w[m])
+        xc[m] -= np.average(xc[m], weights=w[m])
+    den = float(np.sum(w * kc * kc))
+    if den <= 0:
+        return None
+    q = float(np.sum(w * kc * xc)) / den
+    if abs(q - round(q)) < 0.05:
+        return None
+    on = np.abs(xc - q * kc) <= 0.5 + 0.05
+    return q if float(w[on].sum()) / float(w.sum()) >= QUANT_MIN_FRAC else None
+
+
 def code_lattice(v: np.ndarray) -> tuple[int, float, float, int]:
     """The lattice of integer readings.
 

@@ -265,3 +265,61 @@ def test_separate_by_gives_the_hints_that_speak_to_the_pair():
     assert up_down in s
     for e in EFFECTS.values():
         assert set(e.tells_from) <= set(EFFECTS), e.name
+
+
+def test_a_drift_over_several_recordings_quotes_the_time_they_cover():
+    """Recordings are laid end to end with a gap between them that is no time the sensor was
+    read: the drift's summary quotes the time the recordings cover (twelve 1 s poses had read
+    "over 160 s of data")."""
+    d = triad()
+    rec = six_poses(1, drift_mps2=0.05)
+    half = rec.pose < 3
+    parts = [recording_from_arrays(rec.t[m], rec.raw[m], f=rec.f[m], pose=rec.pose[m]) for m in (half, ~half)]
+    covered = sum(float(np.ptp(p.t)) + 1.0 / RATE for p in parts)
+    res = diagnose(d, Calibration.nominal(d), parts)
+    drift = next(e for e in res["effects"] if e["name"] == "bias_drift")
+    said = float(drift["summary"].split("over ")[1].split(" s of data")[0])
+    assert said == pytest.approx(covered, rel=0.01) and "s of data in 2 recordings" in drift["summary"]
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_poses_in_one_orientation_give_the_smallest_offset_and_say_so(seed):
+    """A board put down seven times on a desk (z up, each within 1.4 deg), read jig-free against
+    a nominal calibration whose z offset is 0.06 m/s^2 off: only |f| along z is seen.  The
+    verdict's offset is that z offset, not -1.6 m/s^2 on y (the poses' small tilts had kept
+    combinations that change 1e-6..6e-5 of their readings' change), and a note says the poses
+    hold one orientation (it was given only under 6 poses).  (Tilts within 1.4 deg: the poses are
+    one orientation within SAME_ORIENTATION_DEG.)"""
+    rng = np.random.default_rng(seed)
+    t_all, raw_all, pose_all = [], [], []
+    for p in range(7):
+        f = Rotation.from_rotvec(np.radians(1.0) * rng.uniform(-1, 1, 3) * [1, 1, 0]).apply([0.0, 0.0, G])
+        t = p * 6.0 + np.arange(400) / RATE
+        y = f[None, :] + [0.0, 0.0, 0.06] + rng.normal(0, 0.01, (400, 3))
+        t_all.append(t)
+        raw_all.append(np.round(y * K).astype(np.int64))
+        pose_all.append(np.full(400, p))
+    rec = recording_from_arrays(np.concatenate(t_all), np.vstack(raw_all), pose=np.concatenate(pose_all))
+    d = triad()
+    res = diagnose(d, Calibration.nominal(d), [rec])
+    # along z alone an offset and a gain (or a bend) change the readings alike
+    assert res["verdict"] in ("offset", "gain") and res["ambiguous_with"]
+    offset = next(e for e in res["effects"] if e["name"] == "offset")
+    db = np.asarray(offset["params"]["db"]) / K                  # m/s^2
+    assert db[2] == pytest.approx(0.06, abs=0.01) and np.all(np.abs(db[:2]) < 0.01), db
+    assert any(n.startswith("only 1 distinct orientation(s) among 7 static pose(s)") for n in res["notes"])
+
+
+def test_readings_on_a_grid_of_no_whole_count_are_named_as_such():
+    """A logger that printed m/s^2 to two decimals (0.01 m/s^2 = 16.7 counts at +-2 g), each
+    reading then rounded to a count: its codes fall unevenly mod 2..4, which had been noted as
+    "missing or doubled codes ... a rescaled or differentially nonlinear ADC".  The note names
+    the grid instead, within 0.1 %."""
+    d = triad()
+    rec = six_poses(4, noise=0.03)
+    rec.raw = np.round(np.round(rec.raw / K, 2) * K).astype(np.int64)
+    res = diagnose(d, Calibration.nominal(d), [rec])
+    said = [n for n in res["notes"] if "sit on a grid of" in n]
+    assert len(said) == 3 and not any("lowest bits are unevenly used" in n for n in res["notes"]), res["notes"]
+    grid = float(said[0].split("grid of ")[1].split(" counts")[0])
+    assert grid == pytest.approx(0.01 * K, rel=1e-3)

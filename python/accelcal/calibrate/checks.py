@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..static import PoseSet
-from .settings import (CANDIDATES, EXCITATION_MIN_SPAN_G, POORLY_DETERMINED_MG, SAME_ORIENTATION_DEG, TILTED,
+from .settings import (CANDIDATES, EXCITATION_MIN_SPAN_G, POORLY_DETERMINED_MG, TILTED,
                        TILTED_AFTER_DEG)
 
 
@@ -167,18 +167,6 @@ def missing_direction(device, F: np.ndarray) -> str:
     if -score > math.cos(math.radians(TILTED_AFTER_DEG)):
         name = farthest(TILTED)[1]
     return name
-
-
-def distinct_orientations(F: np.ndarray, same_deg: float = SAME_ORIENTATION_DEG) -> int:
-    """How many of the poses' directions ``F`` (P, 3) differ by more than ``same_deg``: a pose
-    held twice gives the jig-free fit the same equation twice."""
-    fh = F / np.linalg.norm(F, axis=1, keepdims=True)
-    kept: list[np.ndarray] = []
-    c = math.cos(math.radians(same_deg))
-    for u in fh:
-        if all(float(np.dot(u, v)) < c for v in kept):
-            kept.append(u)
-    return len(kept)
 
 
 def initial_forces(device, m: np.ndarray) -> np.ndarray:

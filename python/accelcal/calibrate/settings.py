@@ -59,5 +59,3 @@ TILTED_AFTER_DEG = 20.0
 EXCITATION_MIN_SPAN_G = 1.0
 #: ... when its offset's 1-sigma is above this (mg of g; 2 mg tilts a level reading by 0.11 deg)
 POORLY_DETERMINED_MG = 2.0
-#: poses closer than this (deg) are one orientation for the count a jig-free fit needs
-SAME_ORIENTATION_DEG = 3.0

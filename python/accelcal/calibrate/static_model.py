@@ -10,12 +10,13 @@ from scipy.optimize import least_squares
 
 from ..errors import InputError
 from ..static import PoseSet, QUANT_VAR
-from .checks import (as_means, bare_poses, birge_ratio, check_identifiable, distinct_orientations, initial_forces,
+from .checks import (as_means, bare_poses, birge_ratio, check_identifiable, initial_forces,
                      jig_accuracy_rad, min_poses, missing_direction, pose_label)
 from .problem import (StaticProblem, channel_cov, constrained_inverse, gauge_constraint, gauge_rotation,
                       structured_inverse)
 from .results import StaticFit, to_calibration
-from .settings import JIG_ACCURACY_DEG, METHODS, MIN_RCOND, MIN_RCOND_JAC, SAME_ORIENTATION_DEG
+from ..motions.poses import SAME_ORIENTATION_DEG, distinct_orientations
+from .settings import JIG_ACCURACY_DEG, METHODS, MIN_RCOND, MIN_RCOND_JAC
 
 
 def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, temperature: bool = False,

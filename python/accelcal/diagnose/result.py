@@ -12,7 +12,8 @@ from ..effects.fitting import Cand
 from ..effects.settings import BLOCK_S
 from ..errors import AccelcalError
 from ..held import distinct_recordings
-from ..noise import code_lattice
+from ..motions.poses import distinct_orientations
+from ..noise import code_lattice, fractional_grid
 from .floor import setup_rows
 from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare
@@ -317,8 +318,10 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     if ambiguous:
         notes.append(f"{verdict} and {', '.join(ambiguous)} explain the same part of the gap: the data cannot tell "
                      "them apart (separate_by says what would)")
-    if D.mode == "jigfree" and len(D.pose_labels) < 6:
-        notes.append(f"only {len(D.pose_labels)} static pose(s) found: effects that are constant within a pose "
+    turns = pose_orientations(D)
+    if D.mode == "jigfree" and turns < 6:
+        notes.append(f"only {turns} distinct orientation(s) among {len(D.pose_labels)} static pose(s): effects "
+                     "that are constant within a pose "
                      "(offset, gain, misalignment, nonlinearity) can hardly be told apart, and their parameters are "
                      "not all determined (the poses fix a few combinations of them): the sizes given are those of the "
                      "smallest change that fits, not measurements")
@@ -326,7 +329,13 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     for i in range(D.N):
         q, ph, fr, nd = code_lattice(D.raw[:, i])
         ent = {"channel": i, "step": int(q), "share_on_lattice": fr, "distinct_values": int(nd)}
-        if q == 1 and D.n >= 500:
+        grid = fractional_grid(D.raw[:, i]) if q == 1 else None
+        if grid is not None:
+            ent["grid_counts"] = grid
+            notes.append(f"raw_{i}: the readings sit on a grid of {grid:.4g} counts, no whole number: the logger "
+                         "wrote them rounded in another unit (a decimal place of m/s^2 or g) and each became the "
+                         "nearest count; this grid is their resolution (not missing or doubled codes of an ADC)")
+        elif q == 1 and D.n >= 500:
             # uneven use of the low bits (missing or doubled codes): the most used residue class mod m
             v = D.raw[:, i].astype(np.int64)
             best = None
@@ -412,3 +421,13 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         "noise_floor": D.sigma, "sources": [ri["source"] for ri in D.rec_info], "static": D.static,
     }
     return result
+
+
+def pose_orientations(D) -> int:
+    """How many distinct orientations (:func:`~accelcal.motions.poses.distinct_orientations`)
+    the static poses of ``D`` hold: seven poses held in one orientation (a board on a desk,
+    picked up and put down) fix no more than one; the diagnosis's sizes of constant effects
+    are then the smallest change that fits, not measurements."""
+    F = [D.f[D.pose == p].mean(axis=0) for p in range(len(D.pose_labels)) if np.any(D.pose == p)]
+    F = [f for f in F if np.linalg.norm(f) > 0]
+    return distinct_orientations(np.asarray(F)) if F else 0

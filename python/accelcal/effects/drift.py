@@ -241,8 +241,13 @@ class BiasDrift(LinearCandidate, Effect):
                     f"{path[i, j]:+.4g} +- {s['path'][i, j]:.2g} counts ({path[i, j] / ks[i]:+.4g} m/s^2) "
                     f"on channel {i}")
         i = strongest(p["rate"])
-        span = float(np.ptp(D.tg)) if D.n else 0.0
+        # the time the data cover: each recording's own span (the recordings are laid end to end
+        # with a gap that is no time the sensor was read: twelve 1 s poses had read "160 s of data")
+        recs = np.unique(D.rec) if D.n else np.zeros(0)
+        span = float(sum(np.ptp(D.t[D.rec == r]) + D.h for r in recs))
+        where = f" in {recs.size} recordings" if recs.size > 1 else ""
         # the unit the data can support: a rate found over less than an hour is not quoted per hour
         per, unit = (3600.0, "hour") if span >= 3600.0 else (60.0, "minute") if span >= 60.0 else (1.0, "s")
         return (f"offset ramp up to {p['rate'][i]:+.4g} +- {s['rate'][i]:.2g} counts/s "
-                f"({per * p['rate'][i] / ks[i]:+.3g} m/s^2 per {unit}, over {span:.3g} s of data) on channel {i}")
+                f"({per * p['rate'][i] / ks[i]:+.3g} m/s^2 per {unit}, over {span:.3g} s of data{where}) on "
+                f"channel {i}")

@@ -10,7 +10,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .fitdata import FitData, is_moving
-from .settings import SEARCH_GROW, SEARCH_MAX_S, SKEW_GRID
+from .settings import SEARCH_GROW, SEARCH_MAX_S, SEEN_MIN, SKEW_GRID
 
 
 @dataclass
@@ -59,19 +59,20 @@ def solve_groups(G: np.ndarray, h: np.ndarray, rtol: float = 1e-10, scale: np.nd
     return theta, Ginv, keep.sum(axis=-1)
 
 
-def lin_cv(D: FitData, Gw, hw, Gu, hu, S0w, S0u, scale: np.ndarray | None = None):
+def lin_cv(D: FitData, Gw, hw, Gu, hu, S0w, S0u, scale: np.ndarray | None = None, rtol: float = 1e-10):
     """Fold fits and held-out block scores from block statistics (B, g, k, k) / (B, g, k);
-    ``scale`` (g, k): the parameters' sizes the min-norm solve weighs (:func:`solve_groups`)."""
+    ``scale`` (g, k): the parameters' sizes the min-norm solve weighs, ``rtol`` its cut
+    (:func:`solve_groups`)."""
     K, bf = D.K, D.bfold
     Gt, ht = Gw.sum(axis=0), hw.sum(axis=0)
     theta = np.zeros((K,) + ht.shape)
     for f in range(K):
         m = bf == f
-        theta[f] = solve_groups(Gt - Gw[m].sum(axis=0), ht - hw[m].sum(axis=0), scale=scale)[0]
+        theta[f] = solve_groups(Gt - Gw[m].sum(axis=0), ht - hw[m].sum(axis=0), rtol=rtol, scale=scale)[0]
     tb = theta[bf]
     Sw = S0w - 2 * np.einsum("bgk,bgk->b", tb, hw) + np.einsum("bgk,bgkl,bgl->b", tb, Gw, tb)
     Su = S0u - 2 * np.einsum("bgk,bgk->b", tb, hu) + np.einsum("bgk,bgkl,bgl->b", tb, Gu, tb)
-    th_all, Ginv, rank = solve_groups(Gt, ht, scale=scale)
+    th_all, Ginv, rank = solve_groups(Gt, ht, rtol=rtol, scale=scale)
     Sall = float(S0w.sum() - 2 * np.einsum("gk,gk->", th_all, ht) + np.einsum("gk,gkl,gl->", th_all, Gt, th_all))
     return Sw, Su, th_all, Ginv, rank, Sall
 
@@ -143,8 +144,11 @@ def linear_fit(D: FitData, X: np.ndarray, y: np.ndarray, S0w, S0u):
         # the directions the poses' angles absorb leave parameters the data do not fix: of those
         # that fit, the smallest change of the readings themselves (the unprojected columns' norms;
         # one pose level along z had put 3.4e4 counts on x, whose column the projection nearly emptied)
+        # (a combination of which the projection leaves less than SEEN_MIN of the readings' change
+        # is not fixed either: a board held in one orientation had put -1.6 m/s^2 of offset on y
+        # and +5857 % of gain on x, on directions that kept 1e-6..6e-5 of their change)
         scale = np.sqrt(np.einsum("tnk,tnk->nk", X, X)).reshape(1, N * k)
-        Sw, Su, th, Ginv, rank, Sall = lin_cv(D, Gw, hw, Gu, hu, S0w, S0u, scale)
+        Sw, Su, th, Ginv, rank, Sall = lin_cv(D, Gw, hw, Gu, hu, S0w, S0u, scale, rtol=SEEN_MIN)
         theta = th[0].reshape(N, k)
         full = Ginv[0]
         cov = np.stack([full[i * k:(i + 1) * k, i * k:(i + 1) * k] for i in range(N)])

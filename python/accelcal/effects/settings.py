@@ -35,3 +35,7 @@ REPEAT_MIN_S = 2.0         # ... when their mid-times are at least this far apar
 REPEAT_SAME_DEG = 1.0      # a repeat whose readings are compared as those of one orientation: within this
                            # angle (an effect of the orientation, a 3 % cube, changes by < 0.2 % of g there)
 AXIS_POSE_DEG = 10.0       # a stated pose within this angle of a channel's axis is a face pose (poses_on_axes)
+#: jig-free fits: a combination of parameters of which the poses' projection leaves less than
+#: this share of its change of the readings (energy) is not determined by the data; the min-norm
+#: solve gives it nothing (the smallest change of the readings that fits)
+SEEN_MIN = 1e-3

@@ -10,6 +10,10 @@ from ..errors import AccelcalError
 from .trajectory import EZ, MAX_SAMPLES, Segments
 
 
+#: poses closer than this (deg) are one orientation (for the count a jig-free fit needs)
+SAME_ORIENTATION_DEG = 3.0
+
+
 def faces() -> np.ndarray:
     return np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
 
@@ -84,3 +88,15 @@ def static_times(P: int, spp: int, rate: float, dwell: float | None) -> tuple[np
                             "simulation makes; simulate them in parts")
     t = (np.arange(P)[:, None] * period + np.arange(spp)[None, :] / rate).ravel()
     return t, period
+
+
+def distinct_orientations(F: np.ndarray, same_deg: float = SAME_ORIENTATION_DEG) -> int:
+    """How many of the poses' directions ``F`` (P, 3) differ by more than ``same_deg``: a pose
+    held twice gives the jig-free fit the same equation twice."""
+    fh = F / np.linalg.norm(F, axis=1, keepdims=True)
+    kept: list[np.ndarray] = []
+    c = math.cos(math.radians(same_deg))
+    for u in fh:
+        if all(float(np.dot(u, v)) < c for v in kept):
+            kept.append(u)
+    return len(kept)
