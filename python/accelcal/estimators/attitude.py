@@ -20,7 +20,8 @@ from ..native import FORMATS, check, cptr, ffi, lib
 from ..quantize import round_half_up
 from ..recording import check_core_input, check_for_device
 from .common import (CLIP, CLIP_LO, OMEGA_FRAC, OUT_FRAC, Columns, channel_noise, clip_i16, dt_fixed, force_noise,
-                     on_uniform_grid, uniform_dt)
+                     uniform_dt)
+from .timegrid import on_uniform_grid
 from ..triad import triad_forces
 
 __all__ = ["ATT_GATED", "ATT_W2_NEG", "ATT_UNSETTLED", "ATT_NO_GRAVITY", "ATT_SAT", "ATT_SIGN_NEG",

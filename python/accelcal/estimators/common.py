@@ -13,11 +13,11 @@ from ..errors import AccelcalError, InputError
 from ..native import FORMATS
 from ..quantize import quantize_calibration, round_half_up
 from ..noise import noise_for
-from ..recording import Recording, check_core_input
+from ..recording import check_core_input
 from ..static import STATIC_WINDOW_S, window_len
 
 __all__ = ["Columns", "OUT_FRAC", "OMEGA_FRAC", "CLIP", "CLIP_LO", "dt_fixed", "clip_i16", "q_out",
-           "uniform_dt", "on_uniform_grid", "alpha_noise", "channel_noise", "force_noise", "resolve_array"]
+           "uniform_dt", "alpha_noise", "channel_noise", "force_noise", "resolve_array"]
 
 OUT_FRAC = FORMATS.out_frac        # AC_OUT_FRAC: f (m/s^2), alpha (rad/s^2)
 OMEGA_FRAC = FORMATS.omega_frac    # AC_OMEGA_FRAC: omega (rad/s)
@@ -102,123 +102,6 @@ def uniform_dt(rec) -> float:
         raise InputError(rec.source, f"sample times are not uniform (step {d[i]:.6g} s against {dt:.6g} s): "
                          "the integrators need a constant rate", row=rec.line(i + 1), column="t")
     return dt
-
-
-#: dropped samples are filled (linear interpolation) up to this many in one gap ...
-MAX_FILL_SAMPLES = 10
-#: ... and this share of the recording; longer or more gaps are refused
-MAX_FILL_SHARE = 0.05
-#: time stamps may stray this far (in steps) from a uniform grid: jitter of the stamps, not the samples
-#: (within a quarter step each, every step rounds to its whole number of steps)
-MAX_JITTER_STEPS = 0.25
-#: ... and below this they are not worth a word (nor a new grid)
-JITTER_NOTE_STEPS = 0.05
-#: a sample stamped late by up to this (steps), the next one on time, was delivered late: its place
-#: is on the grid (a phone's log: 0.66 of a step late, the next 0.34 of a step after it)
-MAX_LATE_STEPS = 0.75
-
-
-def on_uniform_grid(rec) -> tuple[Any, np.ndarray, str | None]:
-    """A recording whose time stamps jitter or whose logger dropped samples, on its
-    uniform time grid.
-
-    Each sample's place on the grid is counted in median steps from the one before (a step
-    of k median steps, k >= 2, is k - 1 dropped samples; a step of 1 + a then one of 1 - a,
-    a up to MAX_LATE_STEPS, is a sample stamped late, one step each); the grid's step is the least-squares
-    fit of t on those places.  Every time stamp must lie within MAX_JITTER_STEPS of its place
-    (jitter of the stamps, as a host or a coarse clock gives, not of the samples).  Dropped
-    samples, up to MAX_FILL_SAMPLES in one gap and MAX_FILL_SHARE of the whole, are filled by
-    linear interpolation of the counts (rounded to whole counts), so that the integrators run
-    at their constant rate.
-
-    Returns
-    -------
-    rec : Recording
-        The recording itself when its stamps are uniform to JITTER_NOTE_STEPS and nothing
-        was dropped, else a new one (t and raw only, t on the grid: the time base the
-        integrators use).
-    filled : ndarray of bool, shape (n,)
-        True on the interpolated samples.
-    note : str or None
-        What was done, for the user.
-
-    Raises
-    ------
-    InputError
-        Time stamps that stray further from the grid (naming the first), or gaps beyond the
-        limits (naming the row after the longest).
-    """
-    t = np.asarray(rec.t, float)
-    if t.size < 2:
-        raise InputError(rec.source, "the recording needs at least 2 samples")
-    d = np.diff(t)
-    dt = float(np.median(d))
-    r = d / dt
-    # whole steps, a step of exactly k + 1/2 taken as k (two stamps each a quarter step off)
-    k = np.maximum(np.ceil(r - 0.5 - 1e-9), 1.0)
-    # a sample stamped late (a host that stamps on delivery): a step of 1 + a, then one of 1 - a,
-    # a up to MAX_LATE_STEPS -- one step each, the sample between them late by a
-    pair = np.flatnonzero((r[:-1] > 1.0 + MAX_JITTER_STEPS) & (r[:-1] <= 1.0 + MAX_LATE_STEPS)
-                          & (r[1:] < 1.0 - MAX_JITTER_STEPS) & (np.abs(r[:-1] + r[1:] - 2.0) <= 2 * MAX_JITTER_STEPS))
-    late = np.zeros(t.size, bool)
-    late[pair + 1] = True
-    k[pair] = 1.0
-    k[pair + 1] = 1.0
-    off = np.abs(r - k) > 2.5 * MAX_JITTER_STEPS       # two stamps' jitter, and the median's own error
-    off[pair] = off[pair + 1] = False
-    odd = np.flatnonzero(off)
-    if odd.size:
-        i = int(odd[0]) + 1
-        raise InputError(rec.source, f"sample times are not uniform: the step to t = {t[i]:.6g} s is {d[i - 1]:.6g} s, "
-                         f"{d[i - 1] / dt:.3g} of the median step {dt:.6g} s (time stamps up to {MAX_JITTER_STEPS:g} of a "
-                         "step off a uniform grid are taken as jitter): the integrators need a constant rate",
-                         row=rec.line(i), column="t")
-    at = np.concatenate([[0], np.cumsum(k).astype(np.int64)])     # each sample's place on the grid
-    on = ~late
-    slope, icpt = np.polyfit(at[on].astype(float), t[on], 1) if np.count_nonzero(on) > 2 else (dt, float(t[0]))
-    resid = t - (icpt + slope * at)
-    # the fitted grid is itself a little off the true one: a quarter of a step of room beside the jitter's
-    room = np.where(late, MAX_LATE_STEPS + 0.25 * MAX_JITTER_STEPS, 1.25 * MAX_JITTER_STEPS) * slope
-    stray = np.flatnonzero((resid > room) | (resid < -1.25 * MAX_JITTER_STEPS * slope))
-    if stray.size:
-        i = int(stray[0])
-        raise InputError(rec.source, f"sample times are not uniform: t = {t[i]:.6g} s is {resid[i] / slope:+.2f} "
-                         f"steps off a uniform grid of {slope:.6g} s (at most {MAX_JITTER_STEPS:g} is taken as jitter "
-                         "of the time stamps): the integrators need a constant rate", row=rec.line(i), column="t")
-    missing = k.astype(np.int64) - 1
-    total = int(missing.sum())
-    jitter = float(np.max(np.abs(resid[on]))) / slope
-    if total == 0 and jitter <= JITTER_NOTE_STEPS and not late.any():
-        return rec, np.zeros(t.size, bool), None
-    notes = []
-    if late.any():
-        notes.append(f"{int(late.sum())} sample(s) stamped late by up to {float(np.max(resid[late])) / slope:.2f} of a "
-                     "step (each followed by one stamped on time: a host that stamps on delivery) are taken at "
-                     "their place on the grid")
-    if jitter > JITTER_NOTE_STEPS:
-        notes.append(f"the time stamps stray by up to {jitter:.2f} of a step from a uniform {1.0 / slope:.6g} Hz grid: "
-                     "taken as jitter of the stamps, the samples as uniform (t is written on that grid)")
-    if total:
-        i = int(np.argmax(missing))
-        if missing[i] > MAX_FILL_SAMPLES or total > MAX_FILL_SHARE * (t.size + total):
-            raise InputError(rec.source, f"sample times are not uniform: {total} sample(s) missing in "
-                             f"{int(np.count_nonzero(missing))} gap(s), "
-                             f"the longest {int(missing[i])} ({d[i]:.6g} s against {dt:.6g} s): the integrators "
-                             f"need a constant rate, and at most {MAX_FILL_SAMPLES} in one gap and "
-                             f"{100 * MAX_FILL_SHARE:g} % of the recording are filled by interpolation",
-                             row=rec.line(i + 1), column="t")
-        notes.append(f"{total} dropped sample(s) in {int(np.count_nonzero(missing))} gap(s) (the longest "
-                     f"{int(missing[i])}, after t = {t[i]:.6g} s) filled by linear interpolation of the counts; "
-                     "column filled = 1 there")
-    grid = icpt + slope * np.arange(at[-1] + 1)
-    kept = np.zeros(grid.size, bool)
-    kept[at] = True
-    raw = np.asarray(rec.raw, float)
-    full = np.rint(np.column_stack([np.interp(grid, grid[at], raw[:, j]) for j in range(raw.shape[1])]))
-    full = full.astype(np.int64)
-    full[kept] = np.asarray(rec.raw, np.int64)
-    out = Recording(t=grid, raw=full, metadata=dict(rec.metadata), source=rec.source)
-    return out, ~kept, "; ".join(notes)
 
 
 def channel_noise(device, rec) -> np.ndarray:

@@ -11,8 +11,9 @@ import numpy as np
 from ..errors import AccelcalError, InputError
 from ..noise import states_noise
 from ..recording import check_core_input, check_for_device
-from .common import (CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_noise, force_noise, on_uniform_grid,
+from .common import (CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_noise, force_noise,
                      resolve_array, uniform_dt)
+from .timegrid import on_uniform_grid
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
@@ -281,7 +282,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     axis (the seed's case: nothing removed).  Errors: no rest at all (nothing can be anchored).
     Flagged (warnings, column corrected = 0): a recording that does not start at rest (the part
     before the first rest is not estimated), a motion that does not end at rest (uncorrected).
-    Samples a logger dropped are filled first (:func:`~.common.on_uniform_grid`: warning and
+    Samples a logger dropped are filled first (:func:`~.timegrid.on_uniform_grid`: warning and
     column ``filled``)."""
     if engine not in ("float", "fixed"):
         raise ValueError(f"unknown engine {engine!r}")

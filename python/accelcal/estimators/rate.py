@@ -16,7 +16,8 @@ from ..native import check, cptr, ffi, lib
 from ..quantize import round_half_up
 from ..recording import check_core_input, check_for_device
 from .common import (OMEGA_FRAC, Columns, alpha_noise, channel_noise, dt_fixed, force_noise, resolve_array,
-                     on_uniform_grid, uniform_dt)
+                     uniform_dt)
+from .timegrid import on_uniform_grid
 from .rest import REST_AT_REST, RestParams, default_rest_params, rest_cfg_fixed, rest_detect
 
 __all__ = ["LEAK_FRAC", "rate_rest_float", "rate_rest_fixed", "rate_from_recording"]

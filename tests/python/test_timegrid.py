@@ -1,0 +1,100 @@
+"""The estimators' time grid (estimators.timegrid.on_uniform_grid) on the stamp patterns of real
+logs, written here synthetically: runs of samples stamped late, a host clock that drifts against
+the sensor's, a rate that changes part-way, a sample delivered twice."""
+import numpy as np
+import pytest
+
+from accelcal import estimators as E
+from accelcal.calibration import Calibration
+from accelcal.device import default_triad
+from accelcal.errors import InputError
+from accelcal.estimators.timegrid import on_uniform_grid
+from accelcal.recording import recording_from_arrays
+from accelcal.simulate import run_simulation
+
+
+def _walk(n, seed=0):
+    """n samples of three channels that change from sample to sample (no two rows alike)."""
+    rng = np.random.default_rng(seed)
+    return np.cumsum(rng.integers(20, 200, (n, 3)), axis=0)
+
+
+@pytest.mark.parametrize("engine", ["float", "fixed"])
+def test_a_run_of_samples_stamped_late_keeps_its_places(engine):
+    """Oxford-step-counter's Samsung S6 log has two samples in a row stamped 0.65 and 0.66 of a step
+    late, the next on time: the grid took one late sample, not a run, and refused it.  Runs of two
+    and three are taken at their places, with a note, and the path is the whole recording's."""
+    d = default_triad()
+    rec = run_simulation(d, "linear_actuator", seed=2).recording
+    cal = Calibration.nominal(d)
+    dt = float(np.median(np.diff(rec.t)))
+    t = rec.t.copy()
+    t[[60, 61, 200, 201, 202, 350, 351]] += np.array([0.65, 0.66, 0.6, 0.7, 0.62, 0.74, 0.55]) * dt
+    whole = E.displacement_from_recording(d, cal, rec, engine)
+    c = E.displacement_from_recording(d, cal, recording_from_arrays(t, rec.raw), engine)
+    assert len(c["t"]) == rec.n_samples and "filled" not in c
+    note = [w for w in c.warnings if "stamped late" in w]
+    assert note and "7 sample(s) stamped late by up to 0.74" in note[0] and "the longest 3 in a row" in note[0]
+    np.testing.assert_allclose(c["t"], whole["t"], rtol=0, atol=1e-9)
+    for ax in ("p_x", "p_y", "p_z"):
+        assert c[ax][-1] == pytest.approx(whole[ax][-1], abs=1e-9)
+
+
+def test_stamps_that_drift_against_the_sensor_clock_are_put_on_one_grid():
+    """A flight controller's log (PX4 sensor_combined) drifts -0.38..+0.2 of a step from any straight
+    grid over 68 s, and a phone's (Sensor Logger, 100 Hz) -0.23..+0.22 over 300 s: the straight-line
+    fit refused them at their first row (-0.39, -0.46 steps).  Stamps whose local mean drifts up to
+    0.4 of a step, with jitter of 0.1 about it and a dropped sample now and then, are taken, with a
+    note; a drift of a whole step (the rate itself changes) is still refused."""
+    n, dt = 6000, 0.004
+    places = np.delete(np.arange(n + 6), [700, 1900, 2500, 3300, 4800, 5500])
+    rng = np.random.default_rng(5)
+    drift = 0.4 * np.sin(2 * np.pi * places / 5000.0)
+    t = 100.0 + dt * (places + drift + rng.uniform(-0.1, 0.1, n))
+    raw = _walk(n)
+    out, filled, note = on_uniform_grid(recording_from_arrays(t, raw))
+    assert out.n_samples == n + 6 and int(filled.sum()) == 6
+    np.testing.assert_array_equal(out.raw[~filled], raw)
+    assert np.flatnonzero(filled).tolist() == [700, 1900, 2500, 3300, 4800, 5500]
+    assert "drifts by up to 0.4" in note, note
+    assert abs(float(np.median(np.diff(out.t))) - dt) < 1e-4 * dt
+    t2 = 100.0 + dt * (places + 1.2 * np.sin(2 * np.pi * places / 5000.0))
+    with pytest.raises(InputError, match="not uniform") as ei:
+        on_uniform_grid(recording_from_arrays(t2, raw))
+    assert "steps off the uniform grid of the rows before it" in str(ei.value)
+
+
+def test_a_rate_that_changes_part_way_is_named_where_it_changes():
+    """A phone's log refused at row 6 (-0.46 steps off the one straight line through the whole
+    recording) for what happened later in the file: a rate that changes part-way is named where the
+    stamps leave the grid of the rows before, not at the first row."""
+    n, dt = 6000, 0.01
+    i = np.arange(n)
+    t = dt * (i + 0.002 * np.maximum(i - 4000, 0))       # 0.2 % slower from row 4001
+    with pytest.raises(InputError, match="not uniform") as ei:
+        on_uniform_grid(recording_from_arrays(t, _walk(n)))
+    assert 4000 <= ei.value.row <= 4500, str(ei.value)       # where its drift passes the limit
+    assert "steps off the uniform grid of the rows before it" in str(ei.value)
+
+
+def test_a_sample_delivered_twice_with_no_place_of_its_own_is_named():
+    """Oxford-step-counter's S6 log, rows 8678-8681: the same readings three times (on time, on time,
+    0.68 of a step later), then a new sample 0.33 of a step later -- four samples for three places.
+    The refusal names the copy's row and says it repeats the row before (the old one named the next
+    row, 0.33 of a step after it, as if it were the odd one); the copy is not left out: the test
+    above (a copy 0.3 of a step after its row) and the README keep a duplicated sample refused."""
+    n, dt = 2000, 0.01
+    raw = _walk(n)
+    t = dt * np.arange(n)
+    k = 1000
+    raw[k] = raw[k - 1]                                    # on time, the readings of the row before
+    t2 = np.insert(t, k + 1, t[k] + 0.68 * dt)             # the copy, 0.68 of a step after it
+    raw2 = np.insert(raw, k + 1, raw[k], axis=0)
+    t2[k + 2] = t2[k + 1] + 0.33 * dt
+    with pytest.raises(InputError, match="delivered twice") as ei:
+        on_uniform_grid(recording_from_arrays(t2, raw2))
+    assert ei.value.row == k + 2                            # sample k + 1: the copy
+    assert f"row {k + 2} repeats the readings of the row before exactly (rows {k}-{k + 2} alike)" in str(ei.value)
+    # without the copy it is taken as it is
+    out, filled, _ = on_uniform_grid(recording_from_arrays(np.delete(t2, k + 1), np.delete(raw2, k + 1, axis=0)))
+    assert out.n_samples == n and not filled.any()
