@@ -55,9 +55,10 @@
  *   |zp - zp'| <= E_v(n) / T + |zp'| 2^-17 / T + 2^-17  (T rounded to Q.16 s, zp to Q.16).
  * E.g. a 4 s motion at 100 Hz, 3-axis: |v - v'| <= 4.2e-5 m/s, |p - p'| <= 2.8e-4 m
  * (290 LSB of Q.20); 1-D: 1.2e-5 m/s, 2.1e-4 m.  The twin itself follows the float
- * reference except for the quantisation of g and R (ac_tilt_frame: within 1.2 LSB of
- * Q.14 in the tests; a tilt error is a constant bias while the body does not rotate,
- * which the correction removes).  (python: estimators.displace_error_bound)
+ * reference except for the quantisation of g and R (ac_tilt_frame: each entry within 2 LSB
+ * of Q.14, the two that are products of two entries within 4.5, from the roundings; 1.2 LSB
+ * typical in the tests, 2.06 the largest product found; a tilt error is a constant bias
+ * while the body does not rotate, which the correction removes).  (python: estimators.displace_error_bound)
  * Streams longer than 65535 samples per motion are not corrected (AC_DISP_LONG).
  */
 #ifndef AC_DISPLACE_H
