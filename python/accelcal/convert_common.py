@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from .convert_regions import label_poses
-from .convert_time import FLOAT_EXACT, bursty, exact_stamps, rate_from_t, time_in_seconds
+from .convert_time import FLOAT_EXACT, burst_fit, exact_stamps, rate_from_t, time_in_seconds
 from .csvtable import convert_columns, cut_short_end, make_table, split_header
 from .device import Device
 from .errors import InputError
@@ -224,8 +224,9 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
         t = np.asarray(t)           # int64 from exact_time: an epoch in ns
         t, rel = time_in_seconds(t if t.dtype.kind in "iu" else t.astype(float), opts.time_unit, time_column, source,
                                  notes)
-        rate = opts.rate_hz if opts.rate_hz is not None else rate_from_t(rel, notes)
-        burst = bursty(rel)
+        fit = burst_fit(rel)
+        burst = fit is not None
+        rate = opts.rate_hz if opts.rate_hz is not None else rate_from_t(rel, notes, fit)
         off = None if burst else stated_rate_off(rel, opts.rate_hz)
         if burst or off is not None:
             # the samples are the sensor's, evenly spaced; the host's stamps are kept beside them

@@ -11,7 +11,7 @@ from .errors import InputError
 from .recording_checks import even_steps
 
 __all__ = ["TIME_FACTORS", "TIME_COLUMN_RE", "MIN_PLAUSIBLE_HZ", "BURST_SHARE", "FLOAT_EXACT", "unit_in_name",
-           "exact_stamps", "time_in_seconds", "bursty", "burst_starts", "burst_rate", "rate_from_t"]
+           "exact_stamps", "time_in_seconds", "burst_fit", "burst_starts", "burst_rate", "rate_from_t"]
 
 #: the unit of a time column: its factor to seconds
 TIME_FACTORS = {"s": 1.0, "ms": 1e3, "us": 1e6, "ns": 1e9}
@@ -136,23 +136,24 @@ def time_in_seconds(t: np.ndarray, unit: str, column: str | None, source: str,
     return divided(1.0)
 
 
-def bursty(t: np.ndarray) -> bool:
-    """Whether the time stamps ``t`` (s) were taken by a host that reads the sensor in bursts:
-    t's median step and its mean step (duration over samples) disagree by more than
-    BURST_SHARE, and the bursts' first stamps keep time with their samples' numbers -- a
-    straight line through them (:func:`burst_rate`) misses them by at most BURST_FIT_STEPS of
-    its sample period, rms.  A recording paused and resumed (a phone app's pause: steady 9.58 ms
-    steps, one of 163 s) has the same disagreement, but its runs' starts do not keep time
-    with their samples; it had been taken for 5 bursts, and its t rewritten at 46 Hz instead
-    of 104 Hz.  A median step below BURST_TINY_STEP x the mean is bursts whatever the fit (a
-    host's stamps microseconds apart, its jitter between bursts beyond the fit's bound)."""
+def burst_fit(t: np.ndarray) -> tuple[float, str] | None:
+    """The sensor's rate and the burst's sample each stamp is tied to (:func:`burst_rate`)
+    where the time stamps ``t`` (s) were taken by a host that reads the sensor in bursts, else
+    None.  Bursts: t's median step and its mean step (duration over samples) disagree by more
+    than BURST_SHARE, and the bursts' first stamps keep time with their samples' numbers -- a
+    straight line through them misses them by at most BURST_FIT_STEPS of its sample period,
+    rms.  A recording paused and resumed (a phone app's pause: steady 9.58 ms steps, one of
+    163 s) has the same disagreement, but its runs' starts do not keep time with their
+    samples; it had been taken for 5 bursts, and its t rewritten at 46 Hz instead of 104 Hz.
+    A median step below BURST_TINY_STEP x the mean is bursts whatever the fit (a host's stamps
+    microseconds apart, its jitter between bursts beyond the fit's bound)."""
     if t.size < 3 or even_steps(t, BURST_SHARE):
-        return False
+        return None
     median, mean = float(np.median(np.diff(t))), float(t[-1] - t[0]) / (t.size - 1)
-    if median < BURST_TINY_STEP * mean:
-        return True             # the host's stamps microseconds apart, whatever its jitter between bursts
-    rate, _, misfit = burst_rate(t)
-    return misfit is not None and misfit <= BURST_FIT_STEPS / rate
+    rate, which, misfit = burst_rate(t)
+    if median < BURST_TINY_STEP * mean or (misfit is not None and misfit <= BURST_FIT_STEPS / rate):
+        return rate, which
+    return None
 
 
 def burst_starts(t: np.ndarray) -> np.ndarray:
@@ -194,26 +195,24 @@ def burst_rate(t: np.ndarray) -> tuple[float, str, float | None]:
     for which, anchor, keep in (("first", starts, slice(1, None)), ("last", ends, slice(None, -1))):
         x, y = anchor[keep].astype(float), t[starts[keep]] - t[0]
         slope, icpt = np.polyfit(x, y, 1)
-        res = y - (icpt + slope * x)
-        rms = float(np.sqrt(np.mean(res ** 2)))
-        fits.append((rms, which, float(slope), rms))
-    _, which, slope, misfit = min(fits, key=lambda f: f[0])      # a tie (bursts of one size): the first's
+        fits.append((float(np.sqrt(np.mean((y - (icpt + slope * x)) ** 2))), which, float(slope)))
+    misfit, which, slope = min(fits, key=lambda f: f[0])      # a tie (bursts of one size): the first's
     return (1.0 / slope, which, misfit) if slope > 0 else ((t.size - 1) / float(t[-1] - t[0]), "", None)
 
 
-def rate_from_t(t: np.ndarray, notes: list[str]) -> float:
+def rate_from_t(t: np.ndarray, notes: list[str], fit: tuple[float, str] | None) -> float:
     """The sample rate t's steps give, Hz (``t`` in s): the steps up to GAP_STEPS x the median
     step, counted over their time (a clock that steps 10.079 ms with a 7.56 ms correction
     every few samples runs at 100.00 Hz, where its median step gave 99.21; a pause or a
-    dropout is no sample period), unless the stamps come in bursts (:func:`bursty`), when
-    :func:`burst_rate` gives it, with a note."""
+    dropout is no sample period), unless the stamps come in bursts (``fit``, t's
+    :func:`burst_fit`), when the bursts' rate is given, with a note."""
     if t.size < 2:
         notes.append("a single sample: t gives no rate, and the device's 1 Hz is a placeholder (--rate HZ states it)")
         return 1.0
     steps = np.diff(t)
     median = float(np.median(steps))
     mean = float(t[-1] - t[0]) / (t.size - 1)
-    if not bursty(t) or mean <= 0:
+    if fit is None or mean <= 0:
         if median <= 0:
             return 1.0
         regular = steps[(steps > 0) & (steps <= GAP_STEPS * median)]
@@ -223,7 +222,7 @@ def rate_from_t(t: np.ndarray, notes: list[str]) -> float:
                          f"({median:.6g} s; the longest {float(steps.max()):.6g} s): a pause or samples lost; the "
                          "rate is that of the other steps")
         return regular.size / float(regular.sum())
-    rate, which, _ = burst_rate(t)
+    rate, which = fit
     bursts = burst_starts(t).size
     notes.append(f"t's median step gives {1.0 / median if median > 0 else float('inf'):.6g} Hz but its {t.size} samples "
                  f"come in {bursts} bursts over {float(t[-1] - t[0]):.6g} s: the time stamps are a host's clock, not the "
