@@ -375,13 +375,23 @@ def at_gravity(ratio: np.ndarray) -> np.ndarray:
     full scale moves every interval alike)."""
     ratio = np.asarray(ratio, float)
     ok = (ratio >= REST_F_RANGE[0]) & (ratio <= REST_F_RANGE[1])
-    fin = ratio[np.isfinite(ratio)]
-    if fin.size >= 3:
-        med = float(np.median(fin))
-        agree = np.abs(ratio / med - 1.0) <= REST_F_AGREE
-        if np.count_nonzero(agree) >= 3:
-            ok |= agree
+    agreed = scale_agreement(ratio)
+    if agreed is not None:
+        ok |= agreed[1]
     return ok
+
+
+def scale_agreement(ratio: np.ndarray) -> tuple[float, np.ndarray] | None:
+    """The median of the finite |f| / g ``ratio`` and which of them agree with it within
+    REST_F_AGREE, where three or more do (one wrong scale moves every interval alike), else
+    None."""
+    ratio = np.asarray(ratio, float)
+    fin = ratio[np.isfinite(ratio)]
+    if fin.size < 3:
+        return None
+    med = float(np.median(fin))
+    agree = np.abs(ratio / med - 1.0) <= REST_F_AGREE
+    return (med, agree) if np.count_nonzero(agree) >= 3 else None
 
 
 def set_aside_off_gravity(rec, device, intervals: list, labels: list | None) -> tuple[list, list | None, list[dict]]:
@@ -472,9 +482,5 @@ def one_wrong_scale(aside: list[dict]) -> float | None:
     """The |f| / g at which three or more poses set aside as "not at rest" (each recording
     judged alone: one pose per file) agree within REST_F_AGREE of their median, or None: one
     wrong scale for them all (readings in m/s^2 read as g are 9.81 x), not free fall."""
-    ratios = np.array([d["ratio"] for d in aside if d.get("reason") == "not at rest" and "ratio" in d], float)
-    ratios = ratios[np.isfinite(ratios)]
-    if ratios.size < 3:
-        return None
-    med = float(np.median(ratios))
-    return med if np.count_nonzero(np.abs(ratios / med - 1.0) <= REST_F_AGREE) >= 3 else None
+    agreed = scale_agreement([d["ratio"] for d in aside if d.get("reason") == "not at rest" and "ratio" in d])
+    return None if agreed is None else agreed[0]
