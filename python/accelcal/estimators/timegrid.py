@@ -11,7 +11,8 @@ from ..errors import InputError
 from ..recording import Recording
 
 __all__ = ["MAX_FILL_SAMPLES", "MAX_FILL_SHARE", "MAX_JITTER_STEPS", "JITTER_NOTE_STEPS", "MAX_LATE_STEPS",
-           "MAX_WANDER_STEPS", "WANDER_BLOCK", "COHERENT_SHARE", "COHERENT_BLOCK", "block_phases", "stamp_trend", "grid_places", "on_uniform_grid"]
+           "MAX_WANDER_STEPS", "WANDER_BLOCK", "COHERENT_SHARE", "COHERENT_BLOCK", "block_phases", "stamp_trend",
+           "grid_places", "on_uniform_grid"]
 
 #: dropped samples are filled (linear interpolation) up to this many in one gap ...
 MAX_FILL_SAMPLES = 10
@@ -189,6 +190,13 @@ def incoherent(rec, t: np.ndarray, late: np.ndarray, dt: float) -> InputError | 
                       row=rec.line(i), column="t")
 
 
+def wander(off: np.ndarray, on: np.ndarray, edges: np.ndarray) -> float:
+    """How far (steps) the stamps ``off`` a grid drift from it: the largest |median| over the
+    blocks ``edges`` of the stamps on time (``on``); blocks without one left out."""
+    return max((abs(float(np.median(off[a:b][on[a:b]]))) for a, b in zip(edges[:-1], edges[1:]) if on[a:b].any()),
+               default=0.0)
+
+
 def wander_error(rec, t: np.ndarray, q: np.ndarray, on: np.ndarray, edges: np.ndarray) -> InputError:
     """The refusal of stamps whose local mean leaves one uniform grid by more than MAX_WANDER_STEPS,
     named where it leaves the grid of the rows before it (the line through the blocks before the
@@ -200,7 +208,7 @@ def wander_error(rec, t: np.ndarray, q: np.ndarray, on: np.ndarray, edges: np.nd
         sel = on & (blk <= b)
         s2, c2 = np.polyfit(q[sel].astype(float), t[sel], 1)
         off = (t - c2 - s2 * q) / s2
-        if max(abs(float(np.median(off[sel & (blk == m)]))) for m in range(b + 1)) > MAX_WANDER_STEPS:
+        if wander(off, sel, edges[:b + 2]) > MAX_WANDER_STEPS:
             break
         s, c = s2, c2
     else:
@@ -263,10 +271,8 @@ def on_uniform_grid(rec) -> tuple[Any, np.ndarray, str | None]:
     slope, icpt = (float(v) for v in np.polyfit(q[on].astype(float), t[on], 1)) if np.count_nonzero(on) > 2 \
         else (dt, float(t[0]))
     off = (t - icpt - slope * q) / slope
-    blocks = [on[a:b] for a, b in zip(edges[:-1], edges[1:])]
-    med = [float(np.median(off[a:b][m])) for (a, b), m in zip(zip(edges[:-1], edges[1:]), blocks) if m.any()]
-    wander = max(abs(v) for v in med)
-    if wander > MAX_WANDER_STEPS:
+    drift = wander(off, on, edges)
+    if drift > MAX_WANDER_STEPS:
         raise wander_error(rec, t, q, on, edges)
     missing = np.diff(q) - 1
     total = int(missing.sum())
@@ -284,10 +290,10 @@ def on_uniform_grid(rec) -> tuple[Any, np.ndarray, str | None]:
         notes.append(f"{int(early.sum())} sample(s) stamped early by up to {-float(np.min(late)):.2f} of a step "
                      "(beyond the jitter, within half a step) are taken at their nearest place on the grid")
     if jitter > JITTER_NOTE_STEPS:
-        drift = (f" (their local mean drifts by up to {wander:.2f} of a step from it: a host's clock against the "
-                 "sensor's)" if wander > MAX_JITTER_STEPS / 2 else "")
+        drifts = (f" (their local mean drifts by up to {drift:.2f} of a step from it: a host's clock against the "
+                  "sensor's)" if drift > MAX_JITTER_STEPS / 2 else "")
         notes.append(f"the time stamps stray by up to {jitter:.2f} of a step from a uniform {1.0 / slope:.6g} Hz "
-                     f"grid{drift}: taken as jitter of the stamps, the samples as uniform (t is written on that grid)")
+                     f"grid{drifts}: taken as jitter of the stamps, the samples as uniform (t is written on that grid)")
     if total:
         i = int(np.argmax(missing))
         if missing[i] > MAX_FILL_SAMPLES or total > MAX_FILL_SHARE * (t.size + total):
