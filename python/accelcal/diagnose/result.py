@@ -52,9 +52,10 @@ def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, 
     too); with a reference the terms are fitted together (:func:`joint_fit`, TERMS_PASSES
     passes).  Returns the contest and the verdict, swapped to the strongest calibration term
     when they leave nothing significant to it, or, with a time-dependent candidate among
-    them, when they shrink the held-out gap as far as it does (within OCCAM_SHRINK): then
-    they are the first step and what the verdict adds beyond them is the next step's to
-    claim."""
+    them or a verdict with a freedom of its own per pose (``Effect.free_per_pose``: a tilt of
+    each pose takes the other channels' offsets and a misalignment at once), when they shrink
+    the held-out gap as far as it does (within OCCAM_SHRINK): then they are the first step and
+    what the verdict adds beyond them is the next step's to claim."""
     terms = sorted((c for c in results.values() if c.name != best.name and c.significant and c.gain > 0
                     and c.name in remaining and cands[c.name].absorbs), key=rank_key)
     if not terms:
@@ -113,7 +114,8 @@ def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, 
     together = ' and '.join(c.name for c in joined)
     for after, terms_after in points:
         terms_shrink = 1.0 - terms_after / best.before if best.before > 0 else 0.0
-        if not after.significant or (timed and terms_shrink >= best.shrink - OCCAM_SHRINK):
+        if not after.significant or ((timed or cands[best.name].free_per_pose)
+                                     and terms_shrink >= best.shrink - OCCAM_SHRINK):
             break
     else:
         return duel, best

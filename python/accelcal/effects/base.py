@@ -71,6 +71,12 @@ class Effect:
     #: calibration was made at another time (a drift since then reads as an offset): a verdict
     #: among them with this effect also in the model is reported ambiguous with it
     reaches_level_of: tuple[str, ...] = ()
+    #: True when the effect has parameters of its own for each static pose (a tilt of each pose):
+    #: on few poses that freedom takes parts of the sensor's constant errors (offsets on the other
+    #: channels, a misalignment), so where the calibration's terms together shrink the gap as far
+    #: (within the diagnosis's OCCAM_SHRINK) with fewer parameters, they are the first step and what
+    #: this effect adds beyond them is tested after them (:meth:`mimics_calibration` must say so)
+    free_per_pose: bool = False
 
     def takes_pose_levels(self, fit) -> bool:
         """Whether a time-dependent fit ``fit`` (a Cand) has the freedom to take a level of its
