@@ -215,10 +215,14 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
     notes = _reader_notes(rec, kind)            # the reader's, before t's unit adds its own
     _time_note(rec, dev, kind)
     cols = fn(dev, cal, rec, engine, **options)
-    write_columns_csv(output, cols, cols.meta)
+    warnings = held_warnings(rec) + cols.warnings
+    # the notes and warnings in the output's comments too, one line each
+    meta = {**cols.meta, **{f"note_{k}": n for k, n in enumerate(rec.notes, 1)},
+            **{f"warning_{k}": w for k, w in enumerate(warnings, 1)}}
+    write_columns_csv(output, cols, meta)
     if report is not None:
         report_plots(report, cols, rec, kind)
-    return notes + [f"accelcal {kind}: warning: {w}" for w in held_warnings(rec) + cols.warnings]
+    return notes + [f"accelcal {kind}: warning: {w}" for w in warnings]
 
 
 def held_warnings(rec) -> list[str]:

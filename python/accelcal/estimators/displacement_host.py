@@ -20,7 +20,8 @@ from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OP
 from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params, rest_dated_back
 from ..triad import triad_forces
 
-__all__ = ["retro_correct", "displace_offline", "displacement_from_recording"]
+__all__ = ["ZP_TURN_MPS2", "retro_correct", "displace_offline", "zp_limit", "turned_motions",
+           "displacement_from_recording"]
 
 
 def _motion_runs(at_rest, start: int = 0) -> list[tuple[int, int]]:
@@ -257,6 +258,92 @@ def still_but_turned(f, t, at_rest, rp: RestParams) -> tuple[float, float, float
     return None if first is None else (worst, first[0], first[1])
 
 
+#: a motion's zero point held beyond what the rests show, past which the motion is warned of
+#: (m/s^2): g sin 2.9 deg, a tilt of 2.9 deg held through the whole motion and undone by its end.
+#: For a body that only translates, every calibration error is constant and enters the rest's
+#: mean f, which is removed (offset, gain, misalignment alike); a gain error acts on the motion's
+#: mean acceleration, zero from stop to stop; what is left is the zero point's drift over a
+#: motion (0.05 m/s^2 at most, the room the rest's reference test leaves): ten times that is a
+#: turn, not an error of the sensor
+ZP_TURN_MPS2 = 0.5
+#: motions named one line each up to this many (then one line for the rest)
+ZP_TURN_LINES = 5
+
+
+def zp_limit(n: int, f_sigma: float, rp: RestParams) -> float:
+    """The largest |zp| (m/s^2) a motion of ``n`` samples gets without turning:
+    ZP_TURN_MPS2, plus 5 sigma of zp's own noise (zp = v(T) / T sums n samples of f whose noise is
+    ``f_sigma``, m/s^2: sigma / sqrt(n)), plus the detector's lag (up to ``rp.hold`` samples at
+    each end within ``rp.dev_max`` of the rest's level, not integrated: a velocity of up to
+    2 dev_max hold dt, over T = n dt)."""
+    n = max(int(n), 1)
+    return ZP_TURN_MPS2 + 5.0 * float(f_sigma) / math.sqrt(n) + 2.0 * rp.dev_max * rp.hold / n
+
+
+def turned_motions(f, t, at, motions, f_sigma: float, rp: RestParams, axis: int | None, g: float) -> list[str]:
+    """The warnings of corrected motions whose zero point is more than a calibration or tilt
+    error gives (:func:`zp_limit`): an accelerometer alone cannot tell a turn from an
+    acceleration, and a body that turned and turned back during a motion leaves a large zp
+    (the mean gravity that leaked in), which the correction spreads over the path.
+
+    Parameters
+    ----------
+    f : ndarray (n, 3)
+        Specific force in body axes, m/s^2.
+    t : ndarray (n,)
+        Time, s.
+    at : ndarray (n,) bool
+        At rest (each rest from where it began).
+    motions : list of (int, int, array_like)
+        Each corrected motion: its anchor (the rest sample before it), its end sample, and zp
+        (m/s^2, the integrator's frame: the first rest's, or 1-D along ``axis``).
+    f_sigma : float
+        The noise of f, m/s^2.
+    rp : RestParams
+    axis : int or None
+        1-D along that body axis (nothing removed: the rest's level is part of zp), or None.
+    g : float
+        Gravity, m/s^2 (for the tilt the zp equals).
+
+    Returns
+    -------
+    list of str
+        One line per motion (the first ZP_TURN_LINES, then one line for the others).
+
+    Notes
+    -----
+    What the rest before the motion shows is not held against it: its mean f less the first
+    rest's (3-axis: by the triangle inequality, |zp| less the norm of that difference), or its
+    mean f along ``axis`` (1-D: a tilted rail's g sin tilt, a calibration's offset).
+    """
+    at = np.asarray(at, bool)
+    if not at.any():
+        return []
+    first = int(np.argmax(at))
+    first_end = first + int(np.argmin(at[first:])) if not at[first:].all() else at.size
+    m0 = f[first:first_end].mean(axis=0)
+    out = []
+    for a, e, zp in motions:
+        s = a
+        while s > 0 and at[s - 1]:
+            s -= 1
+        level = f[s:a + 1].mean(axis=0) if at[a] else m0
+        z = np.asarray(zp, float)
+        held = (abs(z[axis] - level[axis]) if axis is not None else
+                float(np.linalg.norm(z)) - float(np.linalg.norm(level - m0)))
+        lim = zp_limit(e - a, f_sigma, rp)
+        if held > lim:
+            mag = float(np.linalg.norm(z))
+            out.append(f"displacement: the motion at t = {t[a]:.3f}-{t[e]:.3f} s was corrected by a zero point of "
+                       f"|zp| = {mag:.3g} m/s^2, as much as a tilt of {math.degrees(math.asin(min(1.0, mag / g))):.1f} "
+                       f"deg held through the whole motion, beyond what a calibration or tilt error gives ({lim:.2g} "
+                       "m/s^2 here): the body likely turned during the motion, which an accelerometer-only estimate "
+                       "cannot follow (gravity leaks into the path); its path and the positions after it are not valid")
+    if len(out) > ZP_TURN_LINES:
+        out = out[:ZP_TURN_LINES] + [f"displacement: {len(out) - ZP_TURN_LINES} more motion(s) like these"]
+    return out
+
+
 def _axis_arg(axis) -> int | None:
     if axis is None or axis in ("3d", "xyz", "all"):
         return None
@@ -297,8 +384,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     dt = uniform_dt(rec)
     f, note = _body_forces(device, cal, rec, engine)
     noise = channel_noise(device, rec)
-    rp = rest or default_rest_params(device, 1.0 / dt, f_sigma=force_noise(
-        device, cal, noise, None if device.is_array() else device.triads()[0]))
+    f_sigma = force_noise(device, cal, noise, None if device.is_array() else device.triads()[0])
+    rp = rest or default_rest_params(device, 1.0 / dt, f_sigma=f_sigma)
     p = DisplaceParams(dt=dt, axis=ax, rest=rp)
     t = np.asarray(rec.t, float)
     n = len(t)
@@ -319,7 +406,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         v, pp, p_raw = r["v"], r["p"], r["p_raw"]
         at, quiet, corrected = r["rest"], r["quiet"], r["corrected"]
         is_open = r["open"]
-        zps = [s[2] for s in r["segments"] if s[2] is not None]
+        closed = [s for s in r["segments"] if s[2] is not None]
     else:
         if engine == "float":
             r = displace_stream(f, p)
@@ -351,7 +438,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         p_raw = np.array(pq, float) + np.cumsum(D, axis=0)
         at, quiet = (fl & DISP_REST) != 0, (r["rest"] & REST_QUIET) != 0
         is_open = fin_open
-        zps = [zq[e] for s, e in _segments_from_flags(fl) if e >= 0 and not fl[e] & DISP_LONG]
+        closed = [(s - 1, e, zq[e]) for s, e in _segments_from_flags(fl) if e >= 0 and not fl[e] & DISP_LONG]
         if (fl & DISP_LONG).any():
             warnings.append("displacement: a motion longer than 65535 samples was not corrected")
     f_host = f if engine == "float" else np.asarray(f, float) / 2.0**OUT_FRAC
@@ -373,6 +460,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
             warnings.append(f"displacement: the body turned by up to {rot:.1f} deg during a motion (from the "
                             "resolved alpha): gravity removal assumes no rotation between rests (a rail), so "
                             "the result is doubtful")
+    warnings += turned_motions(f_host, t, at, closed, f_sigma, rp, ax, float(device.gravity_mps2))
+    zps = [z for _, _, z in closed]
     turned = still_but_turned(f_host, t, at, rp)
     if turned is not None:
         ang, a0, a1 = turned

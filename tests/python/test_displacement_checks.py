@@ -1,0 +1,114 @@
+"""Stop-to-stop displacement on what real recordings do to it: a body that turns during a
+motion (its zero point beyond any calibration or tilt error), a rest detector fooled by a
+steady trend under vibration, the rows between a motion and a rest, rests dated back, and
+samples a logger wrote twice.  Every recording is built here."""
+import math
+
+import numpy as np
+import pytest
+from scipy.special import j0
+
+from accelcal import estimators as E
+from accelcal.calibration import Calibration
+from accelcal.device import default_triad, save_device
+from accelcal.recording import recording_from_arrays, write_recording
+from accelcal.simulate import run_simulation
+from cli_run import run
+from estimator_devices import G
+
+RATE = 100.0
+
+
+def _counts(d, body, sigma, seed):
+    """Counts of the triad ``d`` reading the specific force ``body`` (n, 3), m/s^2, with white
+    noise of ``sigma`` m/s^2."""
+    rng = np.random.default_rng(seed)
+    raw = np.round(d.zero_counts + (body + sigma * rng.standard_normal(body.shape)) * d.counts_per_mps2)
+    return raw.astype(np.int64)
+
+
+def _rocking(d, amp_deg, rest_s=2.0, move_s=10.0, hz=1.0, dist=0.0, seed=0):
+    """A triad at rest, then ``move_s`` s rocking about body y by amp_deg sin(2 pi hz t) (whole
+    periods: it ends as it began) while it travels ``dist`` m along x (min-jerk), then at rest:
+    counts from f = R^T (a + g z)."""
+    t = np.arange(int((2 * rest_s + move_s) * RATE)) / RATE
+    u = np.clip((t - rest_s) / move_s, 0.0, 1.0)
+    inside = (t >= rest_s) & (t <= rest_s + move_s)
+    acc = dist * (60 * u - 180 * u**2 + 120 * u**3) / move_s**2 * inside
+    th = np.radians(amp_deg) * np.sin(2 * np.pi * hz * (t - rest_s)) * inside
+    c, s = np.cos(th), np.sin(th)
+    body = np.column_stack([c * acc - s * G, np.zeros_like(t), s * acc + c * G])
+    return recording_from_arrays(t, _counts(d, body, 0.005, seed))
+
+
+def _turn_warnings(c):
+    return [w for w in c.warnings if "likely turned during the motion" in w]
+
+
+@pytest.mark.parametrize("engine, form", [("float", "offline"), ("float", "stream"), ("fixed", "stream")])
+def test_a_body_rocking_during_a_motion_is_warned_of(engine, form):
+    """A triad rocked by +-45 deg for 10 s between two rests (a hand oscillating an x-IMU: 93 m
+    for decimetres, exit 0 and no word): no accelerometer alone tells the tilt from an
+    acceleration, and the gravity that leaks in is g (1 - J0(45 deg)) = 1.45 m/s^2 on average --
+    the motion's zero point, far beyond a calibration error.  The warning names the motion,
+    |zp| and the tilt it equals; the same travel without rocking has none."""
+    d = default_triad()
+    cal = Calibration.nominal(d)
+    c = E.displacement_from_recording(d, cal, _rocking(d, 45.0, dist=0.3), engine, form=form)
+    w = _turn_warnings(c)
+    assert len(w) == 1, c.warnings
+    t0, t1 = (float(x) for x in w[0].split("motion at t = ")[1].split(" s")[0].split("-"))
+    rp = E.default_rest_params(d)
+    # from the rest before the rocking to the closing rest's declaration, at most hold samples
+    # into that rest (dated back to where it began) -- pad more offline, after its first quiet sample
+    rest = c["rest"].astype(bool)
+    i0, i1 = np.searchsorted(c["t"], [t0, t1])
+    began = i1 - int(np.argmin(rest[i1::-1]))
+    assert t0 <= 2.0 and rest[:i0 + 1].all() and not rest[i0 + 1:began].any()
+    assert c["t"][began] >= 12.0 and i1 - began + 1 <= rp.hold + 2
+    # the velocity the leak leaves at the end, g (1 - J0(A)) over the 10 s, spread over the
+    # integrated t1 - t0 (zp written to 3 digits: 0.5 %; the travel's part is 1e-3 of it)
+    zp = float(w[0].split("|zp| = ")[1].split(" m/s^2")[0])
+    leak = G * (1.0 - j0(math.radians(45.0))) * 10.0
+    assert zp == pytest.approx(leak / (t1 - t0), rel=0.01)
+    tilt = float(w[0].split("a tilt of ")[1].split(" deg")[0])
+    assert abs(tilt - math.degrees(math.asin(zp / G))) <= 0.05 + 1e-9
+    # (a travel of 2 s: over 10 s its middle, near constant speed, would be as quiet as a rest)
+    c = E.displacement_from_recording(d, cal, _rocking(d, 0.0, move_s=2.0, dist=0.3), engine, form=form)
+    assert not _turn_warnings(c), c.warnings
+    assert abs(c["p_x"][-1] - 0.3) <= 0.01 * 0.3
+
+
+def test_the_zero_point_a_rest_shows_is_no_turn():
+    """1-D along a rail tilted by 10 deg (nothing removed): zp = g sin 10 deg = 1.7 m/s^2, but
+    the rest before the motion reads it too -- a tilt held, not a turn: no warning, and the
+    correction gives the distance."""
+    d = default_triad()
+    sim = run_simulation(d, "linear_actuator", seed=3, distance_m=0.5, travel_s=2.0, rest_s=2.0, tilt_deg=10.0)
+    c = E.displacement_from_recording(d, Calibration.nominal(d), sim.recording, "float", axis="x")
+    zp = abs(float(c.meta["zero_point_mps2"].strip("()").split(",")[0]))
+    assert zp > 3 * E.ZP_TURN_MPS2
+    assert not _turn_warnings(c), c.warnings
+
+
+def test_the_zero_point_limit_is_the_turn_plus_the_noise_and_the_detector_s_lag():
+    """zp_limit: ZP_TURN_MPS2 (a 2.9 deg tilt) for a long motion; 5 sigma / sqrt(n) of zp's own
+    noise and the lag term 2 dev_max hold / n on top (a one-sample 'motion' between two rests
+    is never a turn)."""
+    rp = E.RestParams(dev_max=0.9, hold=64)
+    assert math.degrees(math.asin(E.ZP_TURN_MPS2 / G)) == pytest.approx(2.92, abs=0.01)
+    assert E.zp_limit(4400, 0.18, rp) == pytest.approx(0.5 + 5 * 0.18 / math.sqrt(4400) + 2 * 0.9 * 64 / 4400)
+    assert E.zp_limit(1, 0.18, rp) > 100
+
+
+def test_the_cli_writes_the_warning_to_stderr_and_the_output_s_comments(tmp_path, capfd):
+    d = default_triad()
+    save_device(d, tmp_path / "dev.json")
+    write_recording(tmp_path / "rec.csv", _rocking(d, 45.0))
+    out = tmp_path / "out.csv"
+    rc, _, err, _ = run(["displacement", "--device", tmp_path / "dev.json", "--calibration", "nominal",
+                         tmp_path / "rec.csv", "-o", out], capfd)
+    assert rc == 0
+    assert sum("likely turned during the motion" in ln for ln in err.splitlines()) == 1
+    head = [ln for ln in out.read_text().splitlines() if ln.startswith("#")]
+    assert sum(ln.startswith("# warning_") and "likely turned during the motion" in ln for ln in head) == 1
