@@ -10,7 +10,7 @@ from scipy.special import j0
 
 from accelcal import estimators as E
 from accelcal.calibration import Calibration
-from accelcal.device import default_triad, save_device
+from accelcal.device import Device, default_triad, save_device
 from accelcal.recording import recording_from_arrays, write_recording
 from accelcal.simulate import run_simulation
 from cli_run import run
@@ -112,3 +112,62 @@ def test_the_cli_writes_the_warning_to_stderr_and_the_output_s_comments(tmp_path
     assert sum("likely turned during the motion" in ln for ln in err.splitlines()) == 1
     head = [ln for ln in out.read_text().splitlines() if ln.startswith("#")]
     assert sum(ln.startswith("# warning_") and "likely turned during the motion" in ln for ln in head) == 1
+
+
+def _flight_triad():
+    """A signed 16-bit triad at +-16 g (2048 counts per g), 100 Hz, no noise stated: the
+    thresholds take it from the data, as for a flight log."""
+    return Device(name="flight", sample_rate_hz=RATE, gravity_mps2=G, raw_min=-32768, raw_max=32767,
+                  positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, 2048 / G),
+                  zero_counts=np.zeros(3))
+
+
+def _flight(d, ramp_mps3, sigma=0.134, seed=5):
+    """3 s on the pad (at rest), 2 s of boost (f_z from g up to 2 g), then f_z falls steadily at
+    ``ramp_mps3`` (m/s^2 a second) from 2 g to 0, through g (a slow change of thrust); 0: f_z back
+    at g for 8 s (a true rest in flight).  All under white vibration of ``sigma`` m/s^2 per axis.
+    Returns the recording and the first sample after the boost."""
+    pad, boost = int(3 * RATE), int(2 * RATE)
+    rise = G + G * (1 - np.cos(np.pi * np.arange(boost) / boost)) / 2
+    after = 2 * G - ramp_mps3 * np.arange(int(2 * G / ramp_mps3 * RATE)) / RATE if ramp_mps3 else \
+        np.full(int(8 * RATE), G)
+    fz = np.concatenate([np.full(pad, G), rise, after])
+    body = np.column_stack([np.zeros_like(fz), np.zeros_like(fz), fz])
+    return recording_from_arrays(np.arange(fz.size) / RATE, _counts(d, body, sigma, seed)), pad + boost
+
+
+@pytest.mark.parametrize("engine, form", [("float", "offline"), ("float", "stream"), ("fixed", "stream")])
+def test_a_steady_change_through_g_under_vibration_is_no_rest(engine, form):
+    """Under vibration (0.134 m/s^2 rms: the rest test's dev_max 5 sigma = 0.67 m/s^2) the running
+    mean follows a slow steady change of f: a rocket log's thrust falling through |f| = g mid-flight
+    was declared a rest (-370 km).  Fitted over blocks of 1 s, that change (0.5 m/s^2 a second) is
+    beyond 5 sigma of what the noise gives (0.23 m/s^2); the pad's rest, under the same vibration, is
+    still a rest.  The streaming forms (the firmware's, which cannot look back) are warned of."""
+    d = _flight_triad()
+    rec, lift = _flight(d, 0.5)
+    c = E.displacement_from_recording(d, Calibration.nominal(d), rec, engine, form=form)
+    rest = c["rest"].astype(bool)
+    assert rest[:int(2.5 * RATE)].all()                          # the pad
+    assert form != "offline" or not rest[lift:].any()
+    trend = [w for w in c.warnings if "f changes steadily" in w]
+    assert len(trend) == 1, c.warnings
+    if form == "offline":
+        assert "not taken as rests" in trend[0]
+    else:
+        assert "taken as rests by the streaming detector" in trend[0]
+    # the same flight held at g (no change): a rest, and no word of a trend
+    rec, lift = _flight(d, 0.0)
+    c = E.displacement_from_recording(d, Calibration.nominal(d), rec, engine, form=form)
+    rest = c["rest"].astype(bool)
+    assert rest[:int(2.5 * RATE)].all() and rest[lift + int(2 * RATE):].mean() > 0.9
+    assert not any("f changes steadily" in w for w in c.warnings), c.warnings
+
+
+def test_the_trend_bound_is_5_sigma_of_the_fitted_change_of_white_noise():
+    """trend_bound(n, sigma) / 5 is the rms change over n samples of the line fitted to white noise
+    (2000 windows: the rms is known to 1/sqrt(2 x 2000) = 1.6 %; 5 of those allowed)."""
+    rng = np.random.default_rng(7)
+    n, sigma = 100, 0.3
+    x = rng.standard_normal((n, 2000)) * sigma
+    change = np.polyfit(np.arange(n, dtype=float), x, 1)[0] * (n - 1)
+    assert np.sqrt(np.mean(change**2)) == pytest.approx(E.trend_bound(n, sigma) / 5, rel=5 * 0.016)

@@ -38,7 +38,7 @@ from .plots import report_plots
 from .rate import rate_from_recording, rate_rest_fixed, rate_rest_float
 from .rest import (REST_AT_REST, REST_CLIP, REST_ENTER, REST_LEAVE, REST_QUIET, RestParams, RestState,
                    RestThresholds, default_rest_params, rest_cfg_fixed, rest_dated_back, rest_detect, rest_fixed,
-                   rest_params_as_stored)
+                   rest_params_as_stored, rest_without_trend, trend_bound)
 from ..triad import (TriadTable, quantize_triad, triad_apply_fixed, triad_apply_float, triad_exact, triad_forces,
                     triad_matrix)
 

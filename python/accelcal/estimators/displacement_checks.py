@@ -1,16 +1,17 @@
 """The displacement's checks of a recording, for its warnings and errors: why no rest was
 found (:func:`no_rest_reason`), a still stretch that is no rest because the body turned
 (:func:`still_but_turned`), and corrected motions whose zero point only a turn explains
-(:func:`turned_motions`)."""
+(:func:`turned_motions`), rests that hold a trend (:func:`trend_warnings`)."""
 from __future__ import annotations
 
 import math
 
 import numpy as np
 
-from .rest import RestParams
+from .rest import TREND_BLOCK_HOLDS, RestParams, trend_bound
 
-__all__ = ["REST_DEV_WARN_MPS2", "ZP_TURN_MPS2", "no_rest_reason", "still_but_turned", "zp_limit", "turned_motions"]
+__all__ = ["REST_DEV_WARN_MPS2", "ZP_TURN_MPS2", "no_rest_reason", "still_but_turned", "zp_limit", "turned_motions",
+           "trend_warnings"]
 
 
 #: a rest test wider than this (m/s^2; 8 sigma of 0.05 m/s^2, the noisiest sensor at rest of
@@ -172,3 +173,22 @@ def turned_motions(f, t, at, motions, f_sigma: float, rp: RestParams, axis: int 
     if len(out) > ZP_TURN_LINES:
         out = out[:ZP_TURN_LINES] + [f"displacement: {len(out) - ZP_TURN_LINES} more motion(s) like these"]
     return out
+
+
+def trend_warnings(t, trends, rp: RestParams, sigma: float, streamed: bool) -> list[str]:
+    """The warning (one line, or none) of the stretches the detector declared at rest in which f
+    changes steadily (``trends`` of :func:`.rest.rest_without_trend`: (first, end, change in
+    m/s^2)); ``streamed``: the streaming forms, which took them as rests (the firmware's detector
+    cannot look back), else the offline form, which left them out.  ``t`` in s, ``sigma`` the
+    noise of f in m/s^2."""
+    if not trends:
+        return []
+    b, e, ch = max(trends, key=lambda x: x[2])
+    n = e - b
+    what = ("were taken as rests by the streaming detector (it cannot look back): the motions about them "
+            "are cut there and doubtful; the offline form (--form offline) leaves them out" if streamed else
+            "are not taken as rests")
+    return [f"displacement: f changes steadily where the rest detector found a rest ({len(trends)} block(s) of up "
+            f"to {TREND_BLOCK_HOLDS * rp.hold} samples; the largest change {ch:.3g} m/s^2 over t = {t[b]:.3f}-"
+            f"{t[e - 1]:.3f} s, beyond the {trend_bound(n, sigma):.2g} m/s^2 that noise of {sigma:.2g} m/s^2 gives "
+            f"(5 sigma)): a slow motion, not a rest; they {what}"]

@@ -18,8 +18,9 @@ from .timegrid import on_uniform_grid
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
-from .displacement_checks import REST_DEV_WARN_MPS2, no_rest_reason, still_but_turned, turned_motions
-from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params, rest_dated_back
+from .displacement_checks import (REST_DEV_WARN_MPS2, no_rest_reason, still_but_turned, trend_warnings,
+                                  turned_motions)
+from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params, rest_dated_back, rest_without_trend
 from ..triad import triad_forces
 
 __all__ = ["retro_correct", "displace_offline", "displacement_from_recording"]
@@ -236,7 +237,11 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                         "stretch is that quiet (vibration throughout, a flight), so a slow motion may pass for a rest; "
                         "state the sensor's noise_mps2 in the device file")
     if engine == "float" and form == "offline":
-        r = displace_offline(f, p)
+        flags = displace_stream(f, p)["rest"]
+        kept, trends = rest_without_trend((flags & REST_AT_REST) != 0, f, rp, f_sigma)
+        gone = ((flags & REST_AT_REST) != 0) & ~kept
+        r = displace_offline(f, p, np.where(gone, flags & ~(REST_AT_REST | REST_QUIET), flags))
+        warnings += trend_warnings(t, trends, rp, f_sigma, False)
         if r["no_rest"]:
             raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording "
                              f"(rest = |f - mean| <= {rp.dev_max:.3g} m/s^2 for {rp.hold} samples"
@@ -277,6 +282,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                 D[e] = 0.5 * np.asarray(zq[e], float) * T * T
         p_raw = np.array(pq, float) + np.cumsum(D, axis=0)
         at, quiet = (fl & DISP_REST) != 0, (r["rest"] & REST_QUIET) != 0
+        f_rest = f if engine == "float" else np.asarray(f, float) / 2.0**OUT_FRAC
+        warnings += trend_warnings(t, rest_without_trend(at, f_rest, rp, f_sigma)[1], rp, f_sigma, True)
         is_open = fin_open
         closed = [(s - 1, e, zq[e]) for s, e in _segments_from_flags(fl) if e >= 0 and not fl[e] & DISP_LONG]
         if (fl & DISP_LONG).any():
