@@ -171,3 +171,50 @@ def test_the_trend_bound_is_5_sigma_of_the_fitted_change_of_white_noise():
     x = rng.standard_normal((n, 2000)) * sigma
     change = np.polyfit(np.arange(n, dtype=float), x, 1)[0] * (n - 1)
     assert np.sqrt(np.mean(change**2)) == pytest.approx(E.trend_bound(n, sigma) / 5, rel=5 * 0.016)
+
+
+def _runs(mask):
+    e = np.diff(np.concatenate([[0], np.asarray(mask, np.int8), [0]]))
+    return list(zip(np.flatnonzero(e == 1).tolist(), np.flatnonzero(e == -1).tolist()))
+
+
+@pytest.mark.parametrize("engine, form", [("float", "offline"), ("float", "stream"), ("fixed", "stream")])
+def test_a_sample_is_part_of_a_motion_or_of_a_rest(engine, form):
+    """The integration of a motion runs to its closing rest's declaration, hold - 1 samples after
+    the rest began (offline, pad samples past its first quiet sample, and from an anchor pad
+    samples inside the opening rest): those rows had both rest = 1 and corrected = 1, with a v
+    that was not 0.  Each row is now one or the other: at rest v = 0 and p holds (the motion's
+    end point), the corrected span ends where the rest began; the distance is unchanged (the
+    correction ends at the declaration as before)."""
+    d = default_triad()
+    rec = _rocking(d, 0.0, move_s=2.0, dist=0.3)
+    c = E.displacement_from_recording(d, Calibration.nominal(d), rec, engine, form=form)
+    rest, corr = c["rest"].astype(bool), c["corrected"].astype(bool)
+    assert not (rest & corr).any() and (rest | corr).all()
+    v = np.column_stack([c["v_x"], c["v_y"], c["v_z"]])
+    assert np.all(v[rest] == 0.0)
+    for s, e in _runs(rest):
+        assert np.ptp(c["p_x"][s:e]) == 0.0 and np.ptp(c["p_raw_x"][s:e]) == 0.0
+    (s1, e1), (s2, e2) = _runs(rest)
+    assert _runs(corr) == [(e1, s2)]
+    assert abs(c["p_x"][-1] - 0.3) <= 0.01 * 0.3
+
+
+@pytest.mark.parametrize("engine, form", [("float", "offline"), ("float", "stream"), ("fixed", "stream")])
+def test_a_later_rest_is_dated_back_to_its_quiet_run(engine, form):
+    """A rest after a motion is reported from the first sample of the quiet run that declared it
+    (hold - 1 samples before the declaration), as the first rest is: the detector's own quiet
+    decisions on the same f say where."""
+    d = default_triad()
+    rec = _rocking(d, 0.0, move_s=2.0, dist=0.3)
+    c = E.displacement_from_recording(d, Calibration.nominal(d), rec, engine, form=form)
+    rp = E.default_rest_params(d)
+    f = E.triad_apply_float(d.zero_counts, d.nominal_sensitivity(), rec.raw)
+    flags = E.rest_detect(f, rp)[0]
+    at = (flags & E.REST_AT_REST) != 0
+    starts = np.flatnonzero(at[1:] & ~at[:-1]) + 1
+    declared = int(starts[rec.t[starts] > 3.0][0])                     # the closing rest's declaration
+    began = declared - rp.hold + 1
+    assert ((flags[began:declared + 1] & E.REST_QUIET) != 0).all() and not flags[began - 1] & E.REST_QUIET
+    s2 = _runs(c["rest"].astype(bool))[1][0]
+    assert s2 == began

@@ -154,6 +154,31 @@ def displace_offline(f, p: DisplaceParams, rest_flags=None) -> dict:
     return res
 
 
+def at_rest_not_moving(at, corrected, v, p, p_raw) -> None:
+    """A sample is either part of a motion or of a rest: where a motion's integration runs over
+    rest samples (the closing rest's first samples, up to its declaration hold samples after it
+    began, and offline the pad; offline the anchor and pad before the motion too) those are
+    reported at rest, in place: corrected 0, v = 0, and p, p_raw held at the motion's end point
+    (a closing rest: its value at the declaration, where the correction ends) or at its start (an
+    opening rest).  The motion's corrected span ends where its rest began.
+
+    Parameters
+    ----------
+    at, corrected : ndarray (n,) bool
+        At rest (dated back); corrected (changed in place).
+    v, p, p_raw : ndarray (n, 3)
+        m/s, m, m (changed in place).
+    """
+    both = np.asarray(at, bool) & corrected
+    moving = corrected & ~both
+    for a, b in _motion_runs(~both):
+        k = b - 1 if a > 0 and moving[a - 1] else a          # after a motion: its end; else its start
+        p[a:b] = p[k]
+        p_raw[a:b] = p_raw[k]
+        v[a:b] = 0.0
+        corrected[a:b] = False
+
+
 def _body_forces(device, cal, rec, engine):
     """f at the origin (6-DOF array, no rotation assumed) or at the first triad: (n,3) float
     m/s^2 (float) or int32 Q.10 (fixed), and a note for the metadata."""
@@ -292,6 +317,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     declared = int(np.argmax(at)) if np.any(at) else n
     # each rest from where it began, not from the detector's declaration hold samples later
     at = rest_dated_back(at, quiet, f_host, rp)
+    at_rest_not_moving(at, corrected, v, pp, p_raw)
     first_at = int(np.argmax(at)) if np.any(at) else n
     if first_at > 0:
         warnings.append(f"displacement: the recording does not start at rest: nothing is estimated before the "
