@@ -211,7 +211,9 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
     dev = _load_device(device_path)
     cal = _load_cal(calibration_path, dev)
     scale = None if units_args is None else scale_from_args(units_args, dev, reader=True)
-    rec = read_recording(recording_path, dev.n_channels, scale=scale)
+    # displacement leaves out a sample a logger wrote twice (with a note): its integrators need
+    # each sample once, and the copy is plainly one
+    rec = read_recording(recording_path, dev.n_channels, scale=scale, repeats=kind == "displacement")
     notes = _reader_notes(rec, kind)            # the reader's, before t's unit adds its own
     _time_note(rec, dev, kind)
     cols = fn(dev, cal, rec, engine, **options)

@@ -218,3 +218,57 @@ def test_a_later_rest_is_dated_back_to_its_quiet_run(engine, form):
     assert ((flags[began:declared + 1] & E.REST_QUIET) != 0).all() and not flags[began - 1] & E.REST_QUIET
     s2 = _runs(c["rest"].astype(bool))[1][0]
     assert s2 == began
+
+
+def _with_rows(rec, path, copies, changed=()):
+    """``rec`` written to ``path`` with the rows ``copies`` written twice, and the rows ``changed``
+    written twice with the same time stamp and other readings (one count more on raw_0)."""
+    lines = path.parent / "tmp.csv"
+    write_recording(lines, rec)
+    text = lines.read_text().splitlines()
+    head = next(i for i, ln in enumerate(text) if not ln.startswith("#")) + 1
+    out = []
+    for i, ln in enumerate(text):
+        out.append(ln)
+        k = i - head
+        if k in copies:
+            out.append(ln)
+        if k in changed:
+            cells = ln.split(",")
+            cells[1] = str(int(cells[1]) + 1)
+            out.append(",".join(cells))
+    path.write_text("\n".join(out) + "\n")
+    return head
+
+
+def test_a_sample_written_twice_is_left_out_with_a_note(tmp_path, capfd):
+    """A logger that writes a sample twice (time stamp and readings alike: 1.2 % of x-io's logs)
+    was refused ('t must be strictly increasing'); the copies are left out, with a note naming
+    how many and the first, on stderr and in the output's comments, and the result is the one
+    of the recording without them.  The same stamp with other readings is still refused, naming
+    its row, and nothing is written."""
+    d = default_triad()
+    save_device(d, tmp_path / "dev.json")
+    rec = _rocking(d, 0.0, move_s=2.0, dist=0.3)
+    write_recording(tmp_path / "clean.csv", rec)
+    head = _with_rows(rec, tmp_path / "twice.csv", copies=(50, 51, 300))
+    outs = {}
+    for name in ("clean", "twice"):
+        out = tmp_path / f"{name}.out.csv"
+        rc, _, err, _ = run(["displacement", "--device", tmp_path / "dev.json", "--calibration", "nominal",
+                             tmp_path / f"{name}.csv", "-o", out], capfd)
+        assert rc == 0, err
+        outs[name] = out.read_text().splitlines()
+    first = head + 1 + 50 + 1                                     # the line of the first copy
+    note = f"3 row(s) repeat the row before exactly, time stamp and readings (a sample written twice), " \
+           f"the first at row {first}: left out"
+    assert sum(note in ln for ln in err.splitlines()) == 1, err
+    assert any(ln.startswith("# note_") and note in ln for ln in outs["twice"])
+    body = {k: [ln for ln in v if not ln.startswith("#")] for k, v in outs.items()}
+    assert body["twice"] == body["clean"]
+    head = _with_rows(rec, tmp_path / "other.csv", copies=(50,), changed=(300,))
+    rc, _, err, _ = run(["displacement", "--device", tmp_path / "dev.json", "--calibration", "nominal",
+                         tmp_path / "other.csv", "-o", tmp_path / "other.out.csv"], capfd)
+    assert rc == 2 and err.count("\n") == 1
+    assert f"row {head + 1 + 300 + 2}, column t: t must be strictly increasing" in err, err
+    assert not (tmp_path / "other.out.csv").exists()
