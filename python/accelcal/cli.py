@@ -211,14 +211,20 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
     dev = _load_device(device_path)
     cal = _load_cal(calibration_path, dev)
     scale = None if units_args is None else scale_from_args(units_args, dev, reader=True)
-    rec = read_recording(recording_path, dev.n_channels, scale=scale)
+    # displacement leaves out a sample a logger wrote twice (with a note): its integrators need
+    # each sample once, and the copy is plainly one
+    rec = read_recording(recording_path, dev.n_channels, scale=scale, repeats=kind == "displacement")
     notes = _reader_notes(rec, kind)            # the reader's, before t's unit adds its own
     _time_note(rec, dev, kind)
     cols = fn(dev, cal, rec, engine, **options)
-    write_columns_csv(output, cols, cols.meta)
+    warnings = held_warnings(rec) + cols.warnings
+    # the notes and warnings in the output's comments too, one line each
+    meta = {**cols.meta, **{f"note_{k}": n for k, n in enumerate(rec.notes, 1)},
+            **{f"warning_{k}": w for k, w in enumerate(warnings, 1)}}
+    write_columns_csv(output, cols, meta)
     if report is not None:
         report_plots(report, cols, rec, kind)
-    return notes + [f"accelcal {kind}: warning: {w}" for w in held_warnings(rec) + cols.warnings]
+    return notes + [f"accelcal {kind}: warning: {w}" for w in warnings]
 
 
 def held_warnings(rec) -> list[str]:

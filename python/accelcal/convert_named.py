@@ -15,6 +15,7 @@ from .convert_common import (Converted, Options, drop_note, exact_time, finish, 
 from .convert_time import TIME_COLUMN_RE, unit_in_name
 from .csvtable import convert_columns, got_text
 from .errors import InputError
+from .recording_checks import repeated_rows
 from .units import STANDARD_GRAVITY, UNIT_TEXT, Scale, file_scale, to_counts
 
 __all__ = ["stated_time_column", "choose_time_column", "placeholder_rows", "convert_named"]
@@ -263,7 +264,7 @@ def unrepeated(rows: np.ndarray, stamps: np.ndarray, readings: np.ndarray, notes
     t, m = stamps[rows], readings[rows]
     repeat = np.all((m[1:] == m[:-1]) | (np.isnan(m[1:]) & np.isnan(m[:-1])), axis=1)
     steps = np.diff(t).astype(np.float64)           # exact for int64 stamps
-    same = repeat & (steps == 0)
+    same = repeated_rows([t, *m.T])[1:]            # time stamp and readings: the one home of that rule
     ahead = steps[steps > 0]
     step = float(np.median(ahead)) if ahead.size else 0.0
     off = (steps > 0) & (steps < 0.5 * step)

@@ -23,7 +23,7 @@ from .csvformat import INT, REPR, TEXT, csv_cell, csv_rows
 from .csvtable import (FLOAT_RE, META_KEY_RE, RAW_RE, REFERENCE_NAMES, VECTOR_COLUMNS, ByteTable, ListTable,
                        classify_columns, convert_columns, cut_short_end, fast_columns, make_table, quote_cell, split_header)
 from .errors import InputError, atomic_write
-from .recording_checks import check_core_input, check_for_device
+from .recording_checks import check_core_input, check_for_device, repeated_rows, repeats_note
 from .textinput import is_whitespace_header, read_preamble, read_text_bytes, split_whitespace_header, whitespace_to_commas
 from .units import Scale, converted_metadata, file_scale, to_counts
 
@@ -247,7 +247,7 @@ def recording_from_arrays(
 
 
 def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | None = None,
-                   columns: list[str] | None = None) -> Recording:
+                   columns: list[str] | None = None, repeats: bool = False) -> Recording:
     """Read a recording (see the data contract and its extensions).
 
     Parameters
@@ -266,6 +266,9 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
         a contradiction is an InputError naming the comment's line).
     columns : list of str, optional
         The column names of a file without a header row (its first non-comment line is data).
+    repeats : bool
+        Leave out the rows that repeat the row before exactly, time stamp and readings
+        (:func:`.recording_checks.repeated_rows`), with a note; else they are refused (t increases).
 
     Raises
     ------
@@ -337,7 +340,8 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
         return table
 
     t = values["t"]
-    dt_bad = np.flatnonzero(~(np.diff(t) > 0))
+    same = repeated_rows(values.values()) if repeats else np.zeros(n, bool)
+    dt_bad = np.flatnonzero(~(np.diff(t) > 0) & ~same[1:])
     if dt_bad.size:
         i = int(dt_bad[0]) + 1
         jt = cols["t"][0]
@@ -395,6 +399,9 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
         source=source,
         lines=first if not isinstance(table, ListTable) else table.lines,
     )
+    if same.any():
+        rec = rec.select(~same)
+        read_notes.append(repeats_note(int(same.sum()), located().line(int(np.argmax(same)))))
     rec.notes.extend(read_notes)
     return rec
 

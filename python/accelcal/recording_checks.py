@@ -1,6 +1,6 @@
 """Checks of a recording against what a consumer needs: a device's channels and range
 (:func:`check_for_device`), its time stamps in seconds (:func:`seconds`), the C core's input
-types (:func:`check_core_input`)."""
+types (:func:`check_core_input`), rows a logger wrote twice (:func:`repeated_rows`)."""
 from __future__ import annotations
 
 import dataclasses
@@ -11,7 +11,7 @@ import numpy as np
 from .errors import InputError
 
 __all__ = ["check_for_device", "check_core_input", "seconds", "even_steps", "rate_for", "TIME_UNITS", "TIME_UNIT_TOL",
-           "RATE_TOL"]
+           "RATE_TOL", "repeated_rows", "repeats_note"]
 
 #: time stamps in these units are read as such (a logger's millis() or micros()) ...
 TIME_UNITS = ((1e3, "milliseconds"), (1e6, "microseconds"), (1e9, "nanoseconds"))
@@ -131,3 +131,29 @@ def check_core_input(rec: Any, signed: bool = False) -> None:
         kind = "int16" if signed else "uint16"
         raise InputError(rec.source, f"raw reading {int(rec.raw[r, c])} does not fit the C core's {kind} input "
                          f"({lo}..{hi})", row=rec.line(r), column=f"raw_{c}")
+
+
+def repeated_rows(columns) -> np.ndarray:
+    """The rows that repeat the row before exactly, time stamp and every reading (a logger that
+    writes a sample twice): (n,) bool, True on each copy (NaN taken as equal to NaN).
+
+    Parameters
+    ----------
+    columns : iterable of ndarray (n,)
+        The columns read (t among them), in any unit.
+    """
+    same = None
+    for c in columns:
+        c = np.asarray(c)
+        eq = c[1:] == c[:-1]
+        if c.dtype.kind == "f":
+            eq |= np.isnan(c[1:]) & np.isnan(c[:-1])
+        same = eq if same is None else same & eq
+    return np.concatenate([[False], same]) if same is not None else np.zeros(0, bool)
+
+
+def repeats_note(count: int, first_line: int) -> str:
+    """The note of ``count`` rows left out as exact copies of the row before, the first on
+    line ``first_line`` of the file."""
+    return (f"{count} row(s) repeat the row before exactly, time stamp and readings (a sample written twice), "
+            f"the first at row {first_line}: left out")

@@ -1,6 +1,7 @@
 """The displacement's host forms: the offline estimator (:func:`displace_offline`), the
 seed's correction applied to the streamed path between rests (:func:`retro_correct`), and
-the recording form behind ``accelcal displacement`` (:func:`displacement_from_recording`).
+the recording form behind ``accelcal displacement`` (:func:`displacement_from_recording`;
+its checks for the warnings in :mod:`.displacement_checks`).
 """
 from __future__ import annotations
 
@@ -17,7 +18,9 @@ from .timegrid import on_uniform_grid
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
-from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params, rest_dated_back
+from .displacement_checks import (REST_DEV_WARN_MPS2, no_rest_reason, still_but_turned, trend_warnings,
+                                  turned_motions)
+from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params, rest_dated_back, rest_without_trend
 from ..triad import triad_forces
 
 __all__ = ["retro_correct", "displace_offline", "displacement_from_recording"]
@@ -151,6 +154,31 @@ def displace_offline(f, p: DisplaceParams, rest_flags=None) -> dict:
     return res
 
 
+def at_rest_not_moving(at, corrected, v, p, p_raw) -> None:
+    """A sample is either part of a motion or of a rest: where a motion's integration runs over
+    rest samples (the closing rest's first samples, up to its declaration hold samples after it
+    began, and offline the pad; offline the anchor and pad before the motion too) those are
+    reported at rest, in place: corrected 0, v = 0, and p, p_raw held at the motion's end point
+    (a closing rest: its value at the declaration, where the correction ends) or at its start (an
+    opening rest).  The motion's corrected span ends where its rest began.
+
+    Parameters
+    ----------
+    at, corrected : ndarray (n,) bool
+        At rest (dated back); corrected (changed in place).
+    v, p, p_raw : ndarray (n, 3)
+        m/s, m, m (changed in place).
+    """
+    both = np.asarray(at, bool) & corrected
+    moving = corrected & ~both
+    for a, b in _motion_runs(~both):
+        k = b - 1 if a > 0 and moving[a - 1] else a          # after a motion: its end; else its start
+        p[a:b] = p[k]
+        p_raw[a:b] = p_raw[k]
+        v[a:b] = 0.0
+        corrected[a:b] = False
+
+
 def _body_forces(device, cal, rec, engine):
     """f at the origin (6-DOF array, no rotation assumed) or at the first triad: (n,3) float
     m/s^2 (float) or int32 Q.10 (fixed), and a note for the metadata."""
@@ -180,81 +208,6 @@ def _max_rotation_deg(device, cal, rec, at_rest, dt, noise) -> float:
         sig = sig_a * dt * dt * np.sqrt(k**3 / 3.0)
         worst = max(worst, float(np.max(np.where(ang > 5.0 * sig, ang, 0.0))))
     return math.degrees(worst)
-
-
-#: a rest test wider than this (m/s^2; 8 sigma of 0.05 m/s^2, the noisiest sensor at rest of
-#: issue 13's range, whose 5 sigma is 0.25) from a noise estimated from the data is warned of (a
-#: rocket's vibration: 0.67)
-REST_DEV_WARN_MPS2 = 0.4
-
-
-def no_rest_reason(f, t, rp: RestParams) -> str:
-    """Why no rest was found, for the error: the stillest block of ``rp.hold`` samples (blocks
-    at a stride of half a block), how far its f strays from its mean, and, when it is still
-    enough, the |f| that kept it from being a rest (a calibration whose scale is off: an
-    uncalibrated chip 7.7 % high read with its nominal scale).  ``f`` in m/s^2, (n, 3)."""
-    f = np.asarray(f, float)
-    hold = max(int(rp.hold), 2)
-    if f.shape[0] < hold:
-        return f"the recording has {f.shape[0]} samples, fewer than a rest's {hold}"
-    starts = np.arange(0, f.shape[0] - hold + 1, max(1, hold // 2))
-    best = (math.inf, 0, 0.0)
-    for chunk in np.array_split(starts, max(1, starts.size // 4096)):
-        w = f[chunk[:, None] + np.arange(hold)[None, :]]             # (c, hold, 3)
-        m = w.mean(axis=1)
-        dev = np.max(np.abs(w - m[:, None, :]), axis=(1, 2))
-        j = int(np.argmin(dev))
-        if dev[j] < best[0]:
-            best = (float(dev[j]), int(chunk[j]), float(np.linalg.norm(m[j])))
-    dev, i, norm = best
-    if rp.g is None:
-        return f"the stillest {hold} samples stray {dev:.3g} m/s^2 from their mean"
-    where = f"t = {t[i]:.6g}..{t[i + hold - 1]:.6g} s"
-    if dev > rp.dev_max:
-        return (f"the stillest {hold} samples ({where}) stray {dev:.3g} m/s^2 from their mean, beyond the rest's "
-                f"{rp.dev_max:.3g}: the body never stops")
-    if abs(norm - rp.g) <= rp.g_tol:
-        return (f"the stillest {hold} samples ({where}) stray only {dev:.3g} m/s^2 from their own mean and read "
-                f"|f| = {norm:.4g} m/s^2, but the rest detector's running mean never settles on a still stretch "
-                "that long: the body creeps or turns slowly throughout")
-    return (f"the stillest {hold} samples ({where}) are still (within {dev:.3g} m/s^2) but read |f| = {norm:.4g} "
-            f"m/s^2, beyond {rp.g:g} +- {rp.g_tol:g}: the calibration's scale is off (a chip's nominal scale?); "
-            "calibrate it (accelcal calibrate) and use that calibration")
-
-
-def still_but_turned(f, t, at_rest, rp: RestParams) -> tuple[float, float, float] | None:
-    """A stretch where the body is still but not at rest: blocks of ``rp.hold`` samples whose
-    f stays within ``rp.dev_max`` of its mean with |f| within ``rp.g_tol`` of g, away from the
-    rest's direction by more than ``rp.ref_max``.  For a body that only translates (a rail)
-    every still stretch is a rest; such a stretch is a turn, which no accelerometer alone
-    tells from an acceleration.  Returns (its largest angle from the first rest's f, deg;
-    the first such stretch's start and end, s) or None.  ``f`` in m/s^2, (n, 3)."""
-    f = np.asarray(f, float)
-    at_rest = np.asarray(at_rest, bool)
-    if not at_rest.any():
-        return None
-    ref = f[at_rest][: max(rp.hold, 1)].mean(axis=0)
-    hold = max(int(rp.hold), 2)
-    worst, first = 0.0, None
-    for i in range(0, f.shape[0] - hold + 1, hold):
-        blk = f[i:i + hold]
-        if at_rest[i:i + hold].any():
-            continue
-        m = blk.mean(axis=0)
-        if float(np.max(np.abs(blk - m))) > rp.dev_max:
-            continue
-        if rp.g is not None and abs(float(np.linalg.norm(m)) - rp.g) > rp.g_tol:
-            continue
-        if float(np.linalg.norm(m - ref)) <= rp.ref_max:
-            continue
-        cosang = float(np.dot(m, ref) / (np.linalg.norm(m) * np.linalg.norm(ref)))
-        ang = math.degrees(math.acos(min(1.0, max(-1.0, cosang))))
-        worst = max(worst, ang)
-        if first is None:
-            first = (float(t[i]), float(t[i + hold - 1]))
-        elif first[1] >= float(t[i]) - 1.5 * (float(t[i + hold - 1]) - float(t[i])):
-            first = (first[0], float(t[i + hold - 1]))
-    return None if first is None else (worst, first[0], first[1])
 
 
 def _axis_arg(axis) -> int | None:
@@ -297,8 +250,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     dt = uniform_dt(rec)
     f, note = _body_forces(device, cal, rec, engine)
     noise = channel_noise(device, rec)
-    rp = rest or default_rest_params(device, 1.0 / dt, f_sigma=force_noise(
-        device, cal, noise, None if device.is_array() else device.triads()[0]))
+    f_sigma = force_noise(device, cal, noise, None if device.is_array() else device.triads()[0])
+    rp = rest or default_rest_params(device, 1.0 / dt, f_sigma=f_sigma)
     p = DisplaceParams(dt=dt, axis=ax, rest=rp)
     t = np.asarray(rec.t, float)
     n = len(t)
@@ -309,7 +262,11 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                         "stretch is that quiet (vibration throughout, a flight), so a slow motion may pass for a rest; "
                         "state the sensor's noise_mps2 in the device file")
     if engine == "float" and form == "offline":
-        r = displace_offline(f, p)
+        flags = displace_stream(f, p)["rest"]
+        kept, trends = rest_without_trend((flags & REST_AT_REST) != 0, f, rp, f_sigma)
+        gone = ((flags & REST_AT_REST) != 0) & ~kept
+        r = displace_offline(f, p, np.where(gone, flags & ~(REST_AT_REST | REST_QUIET), flags))
+        warnings += trend_warnings(t, trends, rp, f_sigma, False)
         if r["no_rest"]:
             raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording "
                              f"(rest = |f - mean| <= {rp.dev_max:.3g} m/s^2 for {rp.hold} samples"
@@ -319,7 +276,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         v, pp, p_raw = r["v"], r["p"], r["p_raw"]
         at, quiet, corrected = r["rest"], r["quiet"], r["corrected"]
         is_open = r["open"]
-        zps = [s[2] for s in r["segments"] if s[2] is not None]
+        closed = [s for s in r["segments"] if s[2] is not None]
     else:
         if engine == "float":
             r = displace_stream(f, p)
@@ -350,14 +307,17 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                 D[e] = 0.5 * np.asarray(zq[e], float) * T * T
         p_raw = np.array(pq, float) + np.cumsum(D, axis=0)
         at, quiet = (fl & DISP_REST) != 0, (r["rest"] & REST_QUIET) != 0
+        f_rest = f if engine == "float" else np.asarray(f, float) / 2.0**OUT_FRAC
+        warnings += trend_warnings(t, rest_without_trend(at, f_rest, rp, f_sigma)[1], rp, f_sigma, True)
         is_open = fin_open
-        zps = [zq[e] for s, e in _segments_from_flags(fl) if e >= 0 and not fl[e] & DISP_LONG]
+        closed = [(s - 1, e, zq[e]) for s, e in _segments_from_flags(fl) if e >= 0 and not fl[e] & DISP_LONG]
         if (fl & DISP_LONG).any():
             warnings.append("displacement: a motion longer than 65535 samples was not corrected")
     f_host = f if engine == "float" else np.asarray(f, float) / 2.0**OUT_FRAC
     declared = int(np.argmax(at)) if np.any(at) else n
     # each rest from where it began, not from the detector's declaration hold samples later
     at = rest_dated_back(at, quiet, f_host, rp)
+    at_rest_not_moving(at, corrected, v, pp, p_raw)
     first_at = int(np.argmax(at)) if np.any(at) else n
     if first_at > 0:
         warnings.append(f"displacement: the recording does not start at rest: nothing is estimated before the "
@@ -373,6 +333,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
             warnings.append(f"displacement: the body turned by up to {rot:.1f} deg during a motion (from the "
                             "resolved alpha): gravity removal assumes no rotation between rests (a rail), so "
                             "the result is doubtful")
+    warnings += turned_motions(f_host, t, at, closed, f_sigma, rp, ax, float(device.gravity_mps2))
+    zps = [z for _, _, z in closed]
     turned = still_but_turned(f_host, t, at, rp)
     if turned is not None:
         ang, a0, a1 = turned

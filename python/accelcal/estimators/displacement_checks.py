@@ -1,0 +1,194 @@
+"""The displacement's checks of a recording, for its warnings and errors: why no rest was
+found (:func:`no_rest_reason`), a still stretch that is no rest because the body turned
+(:func:`still_but_turned`), and corrected motions whose zero point only a turn explains
+(:func:`turned_motions`), rests that hold a trend (:func:`trend_warnings`)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .rest import TREND_BLOCK_HOLDS, RestParams, trend_bound
+
+__all__ = ["REST_DEV_WARN_MPS2", "ZP_TURN_MPS2", "no_rest_reason", "still_but_turned", "zp_limit", "turned_motions",
+           "trend_warnings"]
+
+
+#: a rest test wider than this (m/s^2; 8 sigma of 0.05 m/s^2, the noisiest sensor at rest of
+#: issue 13's range, whose 5 sigma is 0.25) from a noise estimated from the data is warned of (a
+#: rocket's vibration: 0.67)
+REST_DEV_WARN_MPS2 = 0.4
+
+
+def no_rest_reason(f, t, rp: RestParams) -> str:
+    """Why no rest was found, for the error: the stillest block of ``rp.hold`` samples (blocks
+    at a stride of half a block), how far its f strays from its mean, and, when it is still
+    enough, the |f| that kept it from being a rest (a calibration whose scale is off: an
+    uncalibrated chip 7.7 % high read with its nominal scale).  ``f`` in m/s^2, (n, 3)."""
+    f = np.asarray(f, float)
+    hold = max(int(rp.hold), 2)
+    if f.shape[0] < hold:
+        return f"the recording has {f.shape[0]} samples, fewer than a rest's {hold}"
+    starts = np.arange(0, f.shape[0] - hold + 1, max(1, hold // 2))
+    best = (math.inf, 0, 0.0)
+    for chunk in np.array_split(starts, max(1, starts.size // 4096)):
+        w = f[chunk[:, None] + np.arange(hold)[None, :]]             # (c, hold, 3)
+        m = w.mean(axis=1)
+        dev = np.max(np.abs(w - m[:, None, :]), axis=(1, 2))
+        j = int(np.argmin(dev))
+        if dev[j] < best[0]:
+            best = (float(dev[j]), int(chunk[j]), float(np.linalg.norm(m[j])))
+    dev, i, norm = best
+    if rp.g is None:
+        return f"the stillest {hold} samples stray {dev:.3g} m/s^2 from their mean"
+    where = f"t = {t[i]:.6g}..{t[i + hold - 1]:.6g} s"
+    if dev > rp.dev_max:
+        return (f"the stillest {hold} samples ({where}) stray {dev:.3g} m/s^2 from their mean, beyond the rest's "
+                f"{rp.dev_max:.3g}: the body never stops")
+    if abs(norm - rp.g) <= rp.g_tol:
+        return (f"the stillest {hold} samples ({where}) stray only {dev:.3g} m/s^2 from their own mean and read "
+                f"|f| = {norm:.4g} m/s^2, but the rest detector's running mean never settles on a still stretch "
+                "that long: the body creeps or turns slowly throughout")
+    return (f"the stillest {hold} samples ({where}) are still (within {dev:.3g} m/s^2) but read |f| = {norm:.4g} "
+            f"m/s^2, beyond {rp.g:g} +- {rp.g_tol:g}: the calibration's scale is off (a chip's nominal scale?); "
+            "calibrate it (accelcal calibrate) and use that calibration")
+
+
+def still_but_turned(f, t, at_rest, rp: RestParams) -> tuple[float, float, float] | None:
+    """A stretch where the body is still but not at rest: blocks of ``rp.hold`` samples whose
+    f stays within ``rp.dev_max`` of its mean with |f| within ``rp.g_tol`` of g, away from the
+    rest's direction by more than ``rp.ref_max``.  For a body that only translates (a rail)
+    every still stretch is a rest; such a stretch is a turn, which no accelerometer alone
+    tells from an acceleration.  Returns (its largest angle from the first rest's f, deg;
+    the first such stretch's start and end, s) or None.  ``f`` in m/s^2, (n, 3)."""
+    f = np.asarray(f, float)
+    at_rest = np.asarray(at_rest, bool)
+    if not at_rest.any():
+        return None
+    ref = f[at_rest][: max(rp.hold, 1)].mean(axis=0)
+    hold = max(int(rp.hold), 2)
+    worst, first = 0.0, None
+    for i in range(0, f.shape[0] - hold + 1, hold):
+        blk = f[i:i + hold]
+        if at_rest[i:i + hold].any():
+            continue
+        m = blk.mean(axis=0)
+        if float(np.max(np.abs(blk - m))) > rp.dev_max:
+            continue
+        if rp.g is not None and abs(float(np.linalg.norm(m)) - rp.g) > rp.g_tol:
+            continue
+        if float(np.linalg.norm(m - ref)) <= rp.ref_max:
+            continue
+        cosang = float(np.dot(m, ref) / (np.linalg.norm(m) * np.linalg.norm(ref)))
+        ang = math.degrees(math.acos(min(1.0, max(-1.0, cosang))))
+        worst = max(worst, ang)
+        if first is None:
+            first = (float(t[i]), float(t[i + hold - 1]))
+        elif first[1] >= float(t[i]) - 1.5 * (float(t[i + hold - 1]) - float(t[i])):
+            first = (first[0], float(t[i + hold - 1]))
+    return None if first is None else (worst, first[0], first[1])
+
+
+#: a motion's zero point held beyond what the rests show, past which the motion is warned of
+#: (m/s^2): g sin 2.9 deg, a tilt of 2.9 deg held through the whole motion and undone by its end.
+#: For a body that only translates, every calibration error is constant and enters the rest's
+#: mean f, which is removed (offset, gain, misalignment alike); a gain error acts on the motion's
+#: mean acceleration, zero from stop to stop; what is left is the zero point's drift over a
+#: motion (0.05 m/s^2 at most, the room the rest's reference test leaves): ten times that is a
+#: turn, not an error of the sensor
+ZP_TURN_MPS2 = 0.5
+#: motions named one line each up to this many (then one line for the rest)
+ZP_TURN_LINES = 5
+
+
+def zp_limit(n: int, f_sigma: float, rp: RestParams) -> float:
+    """The largest |zp| (m/s^2) a motion of ``n`` samples gets without turning:
+    ZP_TURN_MPS2, plus 5 sigma of zp's own noise (zp = v(T) / T sums n samples of f whose noise is
+    ``f_sigma``, m/s^2: sigma / sqrt(n)), plus the detector's lag (up to ``rp.hold`` samples at
+    each end within ``rp.dev_max`` of the rest's level, not integrated: a velocity of up to
+    2 dev_max hold dt, over T = n dt)."""
+    n = max(int(n), 1)
+    return ZP_TURN_MPS2 + 5.0 * float(f_sigma) / math.sqrt(n) + 2.0 * rp.dev_max * rp.hold / n
+
+
+def turned_motions(f, t, at, motions, f_sigma: float, rp: RestParams, axis: int | None, g: float) -> list[str]:
+    """The warnings of corrected motions whose zero point is more than a calibration or tilt
+    error gives (:func:`zp_limit`): an accelerometer alone cannot tell a turn from an
+    acceleration, and a body that turned and turned back during a motion leaves a large zp
+    (the mean gravity that leaked in), which the correction spreads over the path.
+
+    Parameters
+    ----------
+    f : ndarray (n, 3)
+        Specific force in body axes, m/s^2.
+    t : ndarray (n,)
+        Time, s.
+    at : ndarray (n,) bool
+        At rest (each rest from where it began).
+    motions : list of (int, int, array_like)
+        Each corrected motion: its anchor (the rest sample before it), its end sample, and zp
+        (m/s^2, the integrator's frame: the first rest's, or 1-D along ``axis``).
+    f_sigma : float
+        The noise of f, m/s^2.
+    rp : RestParams
+    axis : int or None
+        1-D along that body axis (nothing removed: the rest's level is part of zp), or None.
+    g : float
+        Gravity, m/s^2 (for the tilt the zp equals).
+
+    Returns
+    -------
+    list of str
+        One line per motion (the first ZP_TURN_LINES, then one line for the others).
+
+    Notes
+    -----
+    What the rest before the motion shows is not held against it: its mean f less the first
+    rest's (3-axis: by the triangle inequality, |zp| less the norm of that difference), or its
+    mean f along ``axis`` (1-D: a tilted rail's g sin tilt, a calibration's offset).
+    """
+    at = np.asarray(at, bool)
+    if not at.any():
+        return []
+    first = int(np.argmax(at))
+    first_end = first + int(np.argmin(at[first:])) if not at[first:].all() else at.size
+    m0 = f[first:first_end].mean(axis=0)
+    out = []
+    for a, e, zp in motions:
+        s = a
+        while s > 0 and at[s - 1]:
+            s -= 1
+        level = f[s:a + 1].mean(axis=0) if at[a] else m0
+        z = np.asarray(zp, float)
+        held = (abs(z[axis] - level[axis]) if axis is not None else
+                float(np.linalg.norm(z)) - float(np.linalg.norm(level - m0)))
+        lim = zp_limit(e - a, f_sigma, rp)
+        if held > lim:
+            mag = float(np.linalg.norm(z))
+            out.append(f"displacement: the motion at t = {t[a]:.3f}-{t[e]:.3f} s was corrected by a zero point of "
+                       f"|zp| = {mag:.3g} m/s^2, as much as a tilt of {math.degrees(math.asin(min(1.0, mag / g))):.1f} "
+                       f"deg held through the whole motion, beyond what a calibration or tilt error gives ({lim:.2g} "
+                       "m/s^2 here): the body likely turned during the motion, which an accelerometer-only estimate "
+                       "cannot follow (gravity leaks into the path); its path and the positions after it are not valid")
+    if len(out) > ZP_TURN_LINES:
+        out = out[:ZP_TURN_LINES] + [f"displacement: {len(out) - ZP_TURN_LINES} more motion(s) like these"]
+    return out
+
+
+def trend_warnings(t, trends, rp: RestParams, sigma: float, streamed: bool) -> list[str]:
+    """The warning (one line, or none) of the stretches the detector declared at rest in which f
+    changes steadily (``trends`` of :func:`.rest.rest_without_trend`: (first, end, change in
+    m/s^2)); ``streamed``: the streaming forms, which took them as rests (the firmware's detector
+    cannot look back), else the offline form, which left them out.  ``t`` in s, ``sigma`` the
+    noise of f in m/s^2."""
+    if not trends:
+        return []
+    b, e, ch = max(trends, key=lambda x: x[2])
+    n = e - b
+    what = ("were taken as rests by the streaming detector (it cannot look back): the motions about them "
+            "are cut there and doubtful; the offline form (--form offline) leaves them out" if streamed else
+            "are not taken as rests")
+    return [f"displacement: f changes steadily where the rest detector found a rest ({len(trends)} block(s) of up "
+            f"to {TREND_BLOCK_HOLDS * rp.hold} samples; the largest change {ch:.3g} m/s^2 over t = {t[b]:.3f}-"
+            f"{t[e - 1]:.3f} s, beyond the {trend_bound(n, sigma):.2g} m/s^2 that noise of {sigma:.2g} m/s^2 gives "
+            f"(5 sigma)): a slow motion, not a rest; they {what}"]

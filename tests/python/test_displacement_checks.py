@@ -1,0 +1,274 @@
+"""Stop-to-stop displacement on what real recordings do to it: a body that turns during a
+motion (its zero point beyond any calibration or tilt error), a rest detector fooled by a
+steady trend under vibration, the rows between a motion and a rest, rests dated back, and
+samples a logger wrote twice.  Every recording is built here."""
+import math
+
+import numpy as np
+import pytest
+from scipy.special import j0
+
+from accelcal import estimators as E
+from accelcal.calibration import Calibration
+from accelcal.device import Device, default_triad, save_device
+from accelcal.recording import recording_from_arrays, write_recording
+from accelcal.simulate import run_simulation
+from cli_run import run
+from estimator_devices import G
+
+RATE = 100.0
+
+
+def _counts(d, body, sigma, seed):
+    """Counts of the triad ``d`` reading the specific force ``body`` (n, 3), m/s^2, with white
+    noise of ``sigma`` m/s^2."""
+    rng = np.random.default_rng(seed)
+    raw = np.round(d.zero_counts + (body + sigma * rng.standard_normal(body.shape)) * d.counts_per_mps2)
+    return raw.astype(np.int64)
+
+
+def _rocking(d, amp_deg, rest_s=2.0, move_s=10.0, hz=1.0, dist=0.0, seed=0):
+    """A triad at rest, then ``move_s`` s rocking about body y by amp_deg sin(2 pi hz t) (whole
+    periods: it ends as it began) while it travels ``dist`` m along x (min-jerk), then at rest:
+    counts from f = R^T (a + g z)."""
+    t = np.arange(int((2 * rest_s + move_s) * RATE)) / RATE
+    u = np.clip((t - rest_s) / move_s, 0.0, 1.0)
+    inside = (t >= rest_s) & (t <= rest_s + move_s)
+    acc = dist * (60 * u - 180 * u**2 + 120 * u**3) / move_s**2 * inside
+    th = np.radians(amp_deg) * np.sin(2 * np.pi * hz * (t - rest_s)) * inside
+    c, s = np.cos(th), np.sin(th)
+    body = np.column_stack([c * acc - s * G, np.zeros_like(t), s * acc + c * G])
+    return recording_from_arrays(t, _counts(d, body, 0.005, seed))
+
+
+def _turn_warnings(c):
+    return [w for w in c.warnings if "likely turned during the motion" in w]
+
+
+@pytest.mark.parametrize("engine, form", [("float", "offline"), ("float", "stream"), ("fixed", "stream")])
+def test_a_body_rocking_during_a_motion_is_warned_of(engine, form):
+    """A triad rocked by +-45 deg for 10 s between two rests (a hand oscillating an x-IMU: 93 m
+    for decimetres, exit 0 and no word): no accelerometer alone tells the tilt from an
+    acceleration, and the gravity that leaks in is g (1 - J0(45 deg)) = 1.45 m/s^2 on average --
+    the motion's zero point, far beyond a calibration error.  The warning names the motion,
+    |zp| and the tilt it equals; the same travel without rocking has none."""
+    d = default_triad()
+    cal = Calibration.nominal(d)
+    c = E.displacement_from_recording(d, cal, _rocking(d, 45.0, dist=0.3), engine, form=form)
+    w = _turn_warnings(c)
+    assert len(w) == 1, c.warnings
+    t0, t1 = (float(x) for x in w[0].split("motion at t = ")[1].split(" s")[0].split("-"))
+    rp = E.default_rest_params(d)
+    # from the rest before the rocking to the closing rest's declaration, at most hold samples
+    # into that rest (dated back to where it began) -- pad more offline, after its first quiet sample
+    rest = c["rest"].astype(bool)
+    i0, i1 = np.searchsorted(c["t"], [t0, t1])
+    began = i1 - int(np.argmin(rest[i1::-1]))
+    assert t0 <= 2.0 and rest[:i0 + 1].all() and not rest[i0 + 1:began].any()
+    assert c["t"][began] >= 12.0 and i1 - began + 1 <= rp.hold + 2
+    # the velocity the leak leaves at the end, g (1 - J0(A)) over the 10 s, spread over the
+    # integrated t1 - t0 (zp written to 3 digits: 0.5 %; the travel's part is 1e-3 of it)
+    zp = float(w[0].split("|zp| = ")[1].split(" m/s^2")[0])
+    leak = G * (1.0 - j0(math.radians(45.0))) * 10.0
+    assert zp == pytest.approx(leak / (t1 - t0), rel=0.01)
+    tilt = float(w[0].split("a tilt of ")[1].split(" deg")[0])
+    assert abs(tilt - math.degrees(math.asin(zp / G))) <= 0.05 + 1e-9
+    # (a travel of 2 s: over 10 s its middle, near constant speed, would be as quiet as a rest)
+    c = E.displacement_from_recording(d, cal, _rocking(d, 0.0, move_s=2.0, dist=0.3), engine, form=form)
+    assert not _turn_warnings(c), c.warnings
+    assert abs(c["p_x"][-1] - 0.3) <= 0.01 * 0.3
+
+
+def test_the_zero_point_a_rest_shows_is_no_turn():
+    """1-D along a rail tilted by 10 deg (nothing removed): zp = g sin 10 deg = 1.7 m/s^2, but
+    the rest before the motion reads it too -- a tilt held, not a turn: no warning, and the
+    correction gives the distance."""
+    d = default_triad()
+    sim = run_simulation(d, "linear_actuator", seed=3, distance_m=0.5, travel_s=2.0, rest_s=2.0, tilt_deg=10.0)
+    c = E.displacement_from_recording(d, Calibration.nominal(d), sim.recording, "float", axis="x")
+    zp = abs(float(c.meta["zero_point_mps2"].strip("()").split(",")[0]))
+    assert zp > 3 * E.ZP_TURN_MPS2
+    assert not _turn_warnings(c), c.warnings
+
+
+def test_the_zero_point_limit_is_the_turn_plus_the_noise_and_the_detector_s_lag():
+    """zp_limit: ZP_TURN_MPS2 (a 2.9 deg tilt) for a long motion; 5 sigma / sqrt(n) of zp's own
+    noise and the lag term 2 dev_max hold / n on top (a one-sample 'motion' between two rests
+    is never a turn)."""
+    rp = E.RestParams(dev_max=0.9, hold=64)
+    assert math.degrees(math.asin(E.ZP_TURN_MPS2 / G)) == pytest.approx(2.92, abs=0.01)
+    assert E.zp_limit(4400, 0.18, rp) == pytest.approx(0.5 + 5 * 0.18 / math.sqrt(4400) + 2 * 0.9 * 64 / 4400)
+    assert E.zp_limit(1, 0.18, rp) > 100
+
+
+def test_the_cli_writes_the_warning_to_stderr_and_the_output_s_comments(tmp_path, capfd):
+    d = default_triad()
+    save_device(d, tmp_path / "dev.json")
+    write_recording(tmp_path / "rec.csv", _rocking(d, 45.0))
+    out = tmp_path / "out.csv"
+    rc, _, err, _ = run(["displacement", "--device", tmp_path / "dev.json", "--calibration", "nominal",
+                         tmp_path / "rec.csv", "-o", out], capfd)
+    assert rc == 0
+    assert sum("likely turned during the motion" in ln for ln in err.splitlines()) == 1
+    head = [ln for ln in out.read_text().splitlines() if ln.startswith("#")]
+    assert sum(ln.startswith("# warning_") and "likely turned during the motion" in ln for ln in head) == 1
+
+
+def _flight_triad():
+    """A signed 16-bit triad at +-16 g (2048 counts per g), 100 Hz, no noise stated: the
+    thresholds take it from the data, as for a flight log."""
+    return Device(name="flight", sample_rate_hz=RATE, gravity_mps2=G, raw_min=-32768, raw_max=32767,
+                  positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, 2048 / G),
+                  zero_counts=np.zeros(3))
+
+
+def _flight(d, ramp_mps3, sigma=0.134, seed=5):
+    """3 s on the pad (at rest), 2 s of boost (f_z from g up to 2 g), then f_z falls steadily at
+    ``ramp_mps3`` (m/s^2 a second) from 2 g to 0, through g (a slow change of thrust); 0: f_z back
+    at g for 8 s (a true rest in flight).  All under white vibration of ``sigma`` m/s^2 per axis.
+    Returns the recording and the first sample after the boost."""
+    pad, boost = int(3 * RATE), int(2 * RATE)
+    rise = G + G * (1 - np.cos(np.pi * np.arange(boost) / boost)) / 2
+    after = 2 * G - ramp_mps3 * np.arange(int(2 * G / ramp_mps3 * RATE)) / RATE if ramp_mps3 else \
+        np.full(int(8 * RATE), G)
+    fz = np.concatenate([np.full(pad, G), rise, after])
+    body = np.column_stack([np.zeros_like(fz), np.zeros_like(fz), fz])
+    return recording_from_arrays(np.arange(fz.size) / RATE, _counts(d, body, sigma, seed)), pad + boost
+
+
+@pytest.mark.parametrize("engine, form", [("float", "offline"), ("float", "stream"), ("fixed", "stream")])
+def test_a_steady_change_through_g_under_vibration_is_no_rest(engine, form):
+    """Under vibration (0.134 m/s^2 rms: the rest test's dev_max 5 sigma = 0.67 m/s^2) the running
+    mean follows a slow steady change of f: a rocket log's thrust falling through |f| = g mid-flight
+    was declared a rest (-370 km).  Fitted over blocks of 1 s, that change (0.5 m/s^2 a second) is
+    beyond 5 sigma of what the noise gives (0.23 m/s^2); the pad's rest, under the same vibration, is
+    still a rest.  The streaming forms (the firmware's, which cannot look back) are warned of."""
+    d = _flight_triad()
+    rec, lift = _flight(d, 0.5)
+    c = E.displacement_from_recording(d, Calibration.nominal(d), rec, engine, form=form)
+    rest = c["rest"].astype(bool)
+    assert rest[:int(2.5 * RATE)].all()                          # the pad
+    assert form != "offline" or not rest[lift:].any()
+    trend = [w for w in c.warnings if "f changes steadily" in w]
+    assert len(trend) == 1, c.warnings
+    if form == "offline":
+        assert "not taken as rests" in trend[0]
+    else:
+        assert "taken as rests by the streaming detector" in trend[0]
+    # the same flight held at g (no change): a rest, and no word of a trend
+    rec, lift = _flight(d, 0.0)
+    c = E.displacement_from_recording(d, Calibration.nominal(d), rec, engine, form=form)
+    rest = c["rest"].astype(bool)
+    assert rest[:int(2.5 * RATE)].all() and rest[lift + int(2 * RATE):].mean() > 0.9
+    assert not any("f changes steadily" in w for w in c.warnings), c.warnings
+
+
+def test_the_trend_bound_is_5_sigma_of_the_fitted_change_of_white_noise():
+    """trend_bound(n, sigma) / 5 is the rms change over n samples of the line fitted to white noise
+    (2000 windows: the rms is known to 1/sqrt(2 x 2000) = 1.6 %; 5 of those allowed)."""
+    rng = np.random.default_rng(7)
+    n, sigma = 100, 0.3
+    x = rng.standard_normal((n, 2000)) * sigma
+    change = np.polyfit(np.arange(n, dtype=float), x, 1)[0] * (n - 1)
+    assert np.sqrt(np.mean(change**2)) == pytest.approx(E.trend_bound(n, sigma) / 5, rel=5 * 0.016)
+
+
+def _runs(mask):
+    e = np.diff(np.concatenate([[0], np.asarray(mask, np.int8), [0]]))
+    return list(zip(np.flatnonzero(e == 1).tolist(), np.flatnonzero(e == -1).tolist()))
+
+
+@pytest.mark.parametrize("engine, form", [("float", "offline"), ("float", "stream"), ("fixed", "stream")])
+def test_a_sample_is_part_of_a_motion_or_of_a_rest(engine, form):
+    """The integration of a motion runs to its closing rest's declaration, hold - 1 samples after
+    the rest began (offline, pad samples past its first quiet sample, and from an anchor pad
+    samples inside the opening rest): those rows had both rest = 1 and corrected = 1, with a v
+    that was not 0.  Each row is now one or the other: at rest v = 0 and p holds (the motion's
+    end point), the corrected span ends where the rest began; the distance is unchanged (the
+    correction ends at the declaration as before)."""
+    d = default_triad()
+    rec = _rocking(d, 0.0, move_s=2.0, dist=0.3)
+    c = E.displacement_from_recording(d, Calibration.nominal(d), rec, engine, form=form)
+    rest, corr = c["rest"].astype(bool), c["corrected"].astype(bool)
+    assert not (rest & corr).any() and (rest | corr).all()
+    v = np.column_stack([c["v_x"], c["v_y"], c["v_z"]])
+    assert np.all(v[rest] == 0.0)
+    for s, e in _runs(rest):
+        assert np.ptp(c["p_x"][s:e]) == 0.0 and np.ptp(c["p_raw_x"][s:e]) == 0.0
+    (s1, e1), (s2, e2) = _runs(rest)
+    assert _runs(corr) == [(e1, s2)]
+    assert abs(c["p_x"][-1] - 0.3) <= 0.01 * 0.3
+
+
+@pytest.mark.parametrize("engine, form", [("float", "offline"), ("float", "stream"), ("fixed", "stream")])
+def test_a_later_rest_is_dated_back_to_its_quiet_run(engine, form):
+    """A rest after a motion is reported from the first sample of the quiet run that declared it
+    (hold - 1 samples before the declaration), as the first rest is: the detector's own quiet
+    decisions on the same f say where."""
+    d = default_triad()
+    rec = _rocking(d, 0.0, move_s=2.0, dist=0.3)
+    c = E.displacement_from_recording(d, Calibration.nominal(d), rec, engine, form=form)
+    rp = E.default_rest_params(d)
+    f = E.triad_apply_float(d.zero_counts, d.nominal_sensitivity(), rec.raw)
+    flags = E.rest_detect(f, rp)[0]
+    at = (flags & E.REST_AT_REST) != 0
+    starts = np.flatnonzero(at[1:] & ~at[:-1]) + 1
+    declared = int(starts[rec.t[starts] > 3.0][0])                     # the closing rest's declaration
+    began = declared - rp.hold + 1
+    assert ((flags[began:declared + 1] & E.REST_QUIET) != 0).all() and not flags[began - 1] & E.REST_QUIET
+    s2 = _runs(c["rest"].astype(bool))[1][0]
+    assert s2 == began
+
+
+def _with_rows(rec, path, copies, changed=()):
+    """``rec`` written to ``path`` with the rows ``copies`` written twice, and the rows ``changed``
+    written twice with the same time stamp and other readings (one count more on raw_0)."""
+    lines = path.parent / "tmp.csv"
+    write_recording(lines, rec)
+    text = lines.read_text().splitlines()
+    head = next(i for i, ln in enumerate(text) if not ln.startswith("#")) + 1
+    out = []
+    for i, ln in enumerate(text):
+        out.append(ln)
+        k = i - head
+        if k in copies:
+            out.append(ln)
+        if k in changed:
+            cells = ln.split(",")
+            cells[1] = str(int(cells[1]) + 1)
+            out.append(",".join(cells))
+    path.write_text("\n".join(out) + "\n")
+    return head
+
+
+def test_a_sample_written_twice_is_left_out_with_a_note(tmp_path, capfd):
+    """A logger that writes a sample twice (time stamp and readings alike: 1.2 % of x-io's logs)
+    was refused ('t must be strictly increasing'); the copies are left out, with a note naming
+    how many and the first, on stderr and in the output's comments, and the result is the one
+    of the recording without them.  The same stamp with other readings is still refused, naming
+    its row, and nothing is written."""
+    d = default_triad()
+    save_device(d, tmp_path / "dev.json")
+    rec = _rocking(d, 0.0, move_s=2.0, dist=0.3)
+    write_recording(tmp_path / "clean.csv", rec)
+    head = _with_rows(rec, tmp_path / "twice.csv", copies=(50, 51, 300))
+    outs = {}
+    for name in ("clean", "twice"):
+        out = tmp_path / f"{name}.out.csv"
+        rc, _, err, _ = run(["displacement", "--device", tmp_path / "dev.json", "--calibration", "nominal",
+                             tmp_path / f"{name}.csv", "-o", out], capfd)
+        assert rc == 0, err
+        outs[name] = out.read_text().splitlines()
+    first = head + 1 + 50 + 1                                     # the line of the first copy
+    note = f"3 row(s) repeat the row before exactly, time stamp and readings (a sample written twice), " \
+           f"the first at row {first}: left out"
+    assert sum(note in ln for ln in err.splitlines()) == 1, err
+    assert any(ln.startswith("# note_") and note in ln for ln in outs["twice"])
+    body = {k: [ln for ln in v if not ln.startswith("#")] for k, v in outs.items()}
+    assert body["twice"] == body["clean"]
+    head = _with_rows(rec, tmp_path / "other.csv", copies=(50,), changed=(300,))
+    rc, _, err, _ = run(["displacement", "--device", tmp_path / "dev.json", "--calibration", "nominal",
+                         tmp_path / "other.csv", "-o", tmp_path / "other.out.csv"], capfd)
+    assert rc == 2 and err.count("\n") == 1
+    assert f"row {head + 1 + 300 + 2}, column t: t must be strictly increasing" in err, err
+    assert not (tmp_path / "other.out.csv").exists()
