@@ -263,16 +263,22 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                         "state the sensor's noise_mps2 in the device file")
     if engine == "float" and form == "offline":
         flags = displace_stream(f, p)["rest"]
-        kept, trends = rest_without_trend((flags & REST_AT_REST) != 0, f, rp, f_sigma)
-        gone = ((flags & REST_AT_REST) != 0) & ~kept
+        declared = (flags & REST_AT_REST) != 0
+        # each rest tested for a trend from where it began (the detector declares it hold samples
+        # later: a rocket's 0.36 s "rest" mid-flight held 12 declared samples and 36 in all)
+        kept, trends = rest_without_trend(rest_dated_back(declared, (flags & REST_QUIET) != 0, f, rp), f, rp,
+                                          f_sigma)
+        gone = declared & ~kept
         r = displace_offline(f, p, np.where(gone, flags & ~(REST_AT_REST | REST_QUIET), flags))
         warnings += trend_warnings(t, trends, rp, f_sigma, False)
         if r["no_rest"]:
             raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording "
                              f"(rest = |f - mean| <= {rp.dev_max:.3g} m/s^2 for {rp.hold} samples"
                              + (f" with |f| within {rp.g_tol:g} of {rp.g:g} m/s^2" if rp.g is not None else "")
-                             + f"): {no_rest_reason(f, t, rp)}; the stop-to-stop method needs a rest at both ends of "
-                             "each motion")
+                             + "): " + ("; ".join(w.removeprefix("displacement: ") for w in
+                                                  trend_warnings(t, trends, rp, f_sigma, False))
+                                        or no_rest_reason(f, t, rp))
+                             + "; the stop-to-stop method needs a rest at both ends of each motion")
         v, pp, p_raw = r["v"], r["p"], r["p_raw"]
         at, quiet, corrected = r["rest"], r["quiet"], r["corrected"]
         is_open = r["open"]
@@ -308,7 +314,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         p_raw = np.array(pq, float) + np.cumsum(D, axis=0)
         at, quiet = (fl & DISP_REST) != 0, (r["rest"] & REST_QUIET) != 0
         f_rest = f if engine == "float" else np.asarray(f, float) / 2.0**OUT_FRAC
-        warnings += trend_warnings(t, rest_without_trend(at, f_rest, rp, f_sigma)[1], rp, f_sigma, True)
+        warnings += trend_warnings(t, rest_without_trend(rest_dated_back(at, quiet, f_rest, rp), f_rest, rp,
+                                                         f_sigma)[1], rp, f_sigma, True)
         is_open = fin_open
         closed = [(s - 1, e, zq[e]) for s, e in _segments_from_flags(fl) if e >= 0 and not fl[e] & DISP_LONG]
         if (fl & DISP_LONG).any():
