@@ -8,12 +8,13 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..effects import EFFECT_NAMES
+from ..effects.fitdata import recording_parts
 from ..effects.fitting import Cand
 from ..effects.settings import BLOCK_S
 from ..errors import AccelcalError
 from ..held import distinct_recordings
 from ..motions.poses import distinct_orientations
-from ..noise import code_lattice, fractional_grid
+from ..noise import code_lattice, fractional_grid, uneven_low_bits
 from .floor import setup_rows
 from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare
@@ -328,6 +329,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
                      "not all determined (the poses fix a few combinations of them): the sizes given are those of the "
                      "smallest change that fits, not measurements")
     lattice = []
+    parts = recording_parts(D)
     for i in range(D.N):
         q, ph, fr, nd = code_lattice(D.raw[:, i])
         ent = {"channel": i, "step": int(q), "share_on_lattice": fr, "distinct_values": int(nd)}
@@ -337,19 +339,16 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
             notes.append(f"raw_{i}: the readings sit on a grid of {grid:.4g} counts, no whole number: the logger "
                          "wrote them rounded in another unit (a decimal place of m/s^2 or g) and each became the "
                          "nearest count; this grid is their resolution (not missing or doubled codes of an ADC)")
-        elif q == 1 and D.n >= 500:
-            # uneven use of the low bits (missing or doubled codes): the most used residue class mod m
-            v = D.raw[:, i].astype(np.int64)
-            best = None
-            for m in (2, 3, 4):
-                share = float(np.max(np.bincount(v % m, minlength=m))) / D.n
-                if best is None or share - 1.0 / m > best[1] - 1.0 / best[0]:
-                    best = (m, share)
-            ent["low_bits"] = {"modulus": best[0], "share_of_top_residue": best[1], "uniform_share": 1.0 / best[0]}
-            if best[1] - 1.0 / best[0] > 0.1:
-                notes.append(f"raw_{i}: {100 * best[1]:.0f} % of the readings fall in one residue class mod {best[0]} "
-                             f"({100 / best[0]:.0f} % for evenly used codes): the lowest bits are unevenly used "
-                             "(missing or doubled codes: a rescaled or differentially nonlinear ADC); not a lattice")
+        elif q == 1:
+            low = uneven_low_bits(D.raw[:, i], parts)
+            if low is not None:
+                ent["low_bits"] = {k: v for k, v in low.items() if k != "uneven"}
+            if low is not None and low["uneven"]:
+                notes.append(f"raw_{i}: {100 * low['share_of_top_residue']:.0f} % of the readings fall in one residue "
+                             f"class mod {low['modulus']} ({100 / low['modulus']:.0f} % for evenly used codes), the "
+                             f"same class in {100 * low['parts_agreeing']:.0f} % of {low['parts']} parts of the "
+                             "recording: the lowest bits are unevenly used (missing or doubled codes: a rescaled or "
+                             "differentially nonlinear ADC)")
         lattice.append(ent)
     gap_extra = pose_mean_gap(D, e)
     if relin is not None:

@@ -218,3 +218,17 @@ def poses_on_axes(D) -> bool:
         if not nf > 0 or np.max(np.abs(axes @ (f / nf))) < math.cos(math.radians(AXIS_POSE_DEG)):
             return False
     return True
+
+
+def recording_parts(D) -> list[tuple[int, int]]:
+    """Index ranges [a, b) of the data's parts that are independent places of the signal:
+    each static segment whole (its blocks dwell on the same codes), each moving segment in its
+    cross-validation blocks."""
+    ends = np.append(D.bstart[1:], D.n)
+    out = []
+    for s_i, (a, b) in enumerate(zip(D.seg_lo.tolist(), D.seg_hi.tolist())):
+        if D.static[a]:
+            out.append((a, b))
+        else:
+            out += [(int(x), int(y)) for x, y in zip(D.bstart[D.bseg == s_i], ends[D.bseg == s_i])]
+    return out
