@@ -99,6 +99,11 @@ def _triad_groups(positions: np.ndarray, axes: np.ndarray) -> list[tuple[int, in
     return groups
 
 
+#: a real chip's sensitivity is within this factor of its nominal, either way (datasheets: a few %,
+#: +-10 % for the loosest, an ADXL345's 230-282 LSB/g): beyond it the device file's scale is off
+NOMINAL_FACTOR = 1.25
+
+
 @dataclass(frozen=True, eq=False)
 class Device:
     """Nominal description of N single-axis channels (SI units, body frame).

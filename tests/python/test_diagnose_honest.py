@@ -346,3 +346,17 @@ def test_readings_on_a_grid_of_no_whole_count_are_named_as_such():
     assert len(said) == 3 and not any("lowest bits are unevenly used" in n for n in res["notes"]), res["notes"]
     grid = float(said[0].split("grid of ")[1].split(" counts")[0])
     assert grid == pytest.approx(0.01 * K, rel=1e-3)
+
+
+@pytest.mark.parametrize("factor, said", [(1.42, True), (1.10, False)])
+def test_a_gain_beyond_any_chip_is_said_to_be_a_wrong_scale(factor, said):
+    """A device file whose scale is 30 % low (convert's guess on a wrist watch whose z never
+    pointed up) read as a +42 % gain of every channel, with no word that no chip is that far
+    off; a 10 % gain is a chip's and gets none."""
+    d = triad()
+    res = diagnose(d, Calibration.nominal(d), [six_poses(1, sensor=factor * np.eye(3))])
+    assert res["verdict"] == "gain"
+    note = [n for n in res["notes"] if "beyond what a real chip differs from its nominal" in n]
+    assert bool(note) == said, res["notes"]
+    if said:
+        assert "channel(s) 0, 1, 2" in note[0] and "+42 %" in note[0]

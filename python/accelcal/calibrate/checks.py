@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from ..device import NOMINAL_FACTOR
 from ..errors import InputError
 from ..static import PoseSet
 from .settings import (CANDIDATES, EXCITATION_MIN_SPAN_G, POORLY_DETERMINED_MG, TILTED,
@@ -192,8 +193,6 @@ def static_force(offsets, sensitivity, means, sigma=None) -> np.ndarray:
     return out
 
 
-#: a channel's fitted sensitivity beyond this factor of the device file's nominal (either way)
-NOMINAL_FACTOR = 1.25
 
 
 def far_from_nominal(device, sensitivity) -> str | None:

@@ -11,6 +11,7 @@ from ..effects import EFFECT_NAMES
 from ..effects.fitdata import recording_parts
 from ..effects.fitting import Cand
 from ..effects.settings import BLOCK_S
+from ..device import NOMINAL_FACTOR
 from ..errors import AccelcalError
 from ..held import distinct_recordings
 from ..motions.poses import distinct_orientations
@@ -321,6 +322,15 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     if ambiguous:
         notes.append(f"{verdict} and {', '.join(ambiguous)} explain the same part of the gap: the data cannot tell "
                      "them apart (separate_by says what would)")
+    if "gain" in model_params:
+        ratio = 1.0 + np.asarray(model_params["gain"]["scale"], float)
+        far = np.flatnonzero((ratio > NOMINAL_FACTOR) | (ratio < 1.0 / NOMINAL_FACTOR))
+        if far.size:
+            notes.append(f"gain {', '.join(f'{100 * (ratio[i] - 1):+.0f} %' for i in far)} on channel(s) "
+                         f"{', '.join(map(str, far))}: beyond what a real chip differs from its nominal "
+                         f"({NOMINAL_FACTOR:g} x either way), so no error of the sensor: the calibration's or the "
+                         "device file's scale is off (convert's --full-scale, --lsb), or the poses do not measure "
+                         "that gain")
     turns = pose_orientations(D)
     if D.mode == "jigfree" and turns < 6:
         notes.append(f"only {turns} distinct orientation(s) among {len(D.pose_labels)} static pose(s): effects "
