@@ -205,7 +205,7 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
                  regions: Any = None, stated_f: bool = False, gravity_mps2: float | None = None,
                  bits: int = 16, blocks: bool = False, time_unit: str = "auto",
                  units_stated: bool = True, variable: str | None = None,
-                 time_column: str | None = None) -> Converted:
+                 time_column: str | None = None, repeated_stamps: str = "refuse") -> Converted:
     """Read another tool's file as a contract recording of a triad.
 
     Parameters
@@ -252,6 +252,11 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         names TIME_COLUMN_RE matches, those whose cells are numbers (a clock time or a date
         is no time stamp), the first whose name states a unit, else the first; a note names
         the one used and those passed over.
+    repeated_stamps : {"refuse", "drop"}
+        A table's rows whose time stamp repeats the row before's with other readings (a watch
+        that stamps two samples with one stamp: 93 of a Garmin export's 10,000 rows): refused,
+        the message counting them, or left out with a note (``drop``).  Rows that repeat the
+        stamp and the readings are left out either way.
 
     Returns
     -------
@@ -281,10 +286,13 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         fmt = detect_format(source, data)
     if fmt not in FORMATS:
         raise ValueError(f"unknown format {fmt!r}")
+    if repeated_stamps != "refuse" and fmt != "table":
+        raise InputError(source, f"--repeated-stamps applies to a table's time column (--format table): this file is "
+                         f"told as {fmt}")
     if time_column is not None and fmt != "table":
         raise InputError(source, f"--time-column names a table's time column (--format table): this file is told as "
                          f"{fmt}")
-    opts = Options(scale, rate_hz, None, None, stated_f, gravity_mps2, bits, time_unit, time_column)
+    opts = Options(scale, rate_hz, None, None, stated_f, gravity_mps2, bits, time_unit, time_column, repeated_stamps)
     if regions is not None:
         opts.regions, opts.regions_source = read_regions(regions), str(regions)
     if blocks and fmt != "log":

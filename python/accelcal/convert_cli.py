@@ -60,7 +60,8 @@ def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int
     conv = convert_file(a.input, a.format, scale=scale, rate_hz=positive(a.rate, "--rate"), regions=a.regions,
                         stated_f=a.stated_f, gravity_mps2=positive(a.gravity, "--gravity"), bits=bits,
                         blocks=a.blocks, time_unit=a.time_unit, units_stated=a.units is not None,
-                        variable=a.variable, time_column=a.time_column)
+                        variable=a.variable, time_column=a.time_column,
+                        repeated_stamps=a.repeated_stamps)
     write_recording(a.output, conv.recording)
     if a.device_out is not None:
         save_device(conv.device, a.device_out)
@@ -91,6 +92,10 @@ def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
     s.add_argument("--time-column", metavar="NAME", help="table: the time column (default: of the columns named "
                    "t, time, timestamp, 'Time (s)', ..., those holding numbers, not a clock time or a date, the "
                    "first whose name states a unit, else the first; a note names it)")
+    s.add_argument("--repeated-stamps", choices=("refuse", "drop"), default="refuse",
+                   help="table: rows whose time stamp repeats the row before's with other readings (a watch that "
+                   "stamps two samples with one stamp) are refused (default; the message counts them) or, with drop, "
+                   "left out with a note")
     s.add_argument("--variable", metavar="NAME", help="mat: the array of readings (3 columns x, y, z, or 4: t, x, y, "
                    "z) where the MATLAB file holds more than one; or X,Y,Z (T,X,Y,Z): the names of vectors that hold "
                    "one channel each")

@@ -87,6 +87,7 @@ class Options:
     bits: int = 16
     time_unit: str = "auto"
     time_column: str | None = None
+    repeated_stamps: str = "refuse"
 
 
 def header_cells(header: str) -> list[str]:

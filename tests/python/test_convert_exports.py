@@ -1,0 +1,151 @@
+"""``accelcal convert`` of the shapes watch, phone and logger exports come in (a tester's
+public recordings: a Garmin watch's and a machine survey's ISO-8601 stamps, an Axivity
+AX6's formatted stamps, an Empatica E4's two-row preamble, headerless whitespace text).
+
+Each file is written here in the recording's shape from known counts and times, so the
+expected recording is those counts and times; bad files give one line naming the file and
+row, exit 2, and no output.
+"""
+from __future__ import annotations
+
+import datetime as dt
+import json
+
+import numpy as np
+import pytest
+
+from accelcal.recording import read_recording
+from cli_run import run
+
+G = 9.80665
+
+
+def _counts(n, seed=0, mean=(-36.0, 620.0, -824.0), sd=4.0):
+    rng = np.random.default_rng(seed)
+    return np.round(np.asarray(mean) + sd * rng.standard_normal((n, 3))).astype(int)
+
+
+def _write(path, lines):
+    path.write_text("".join(line + "\n" for line in lines))
+    return path
+
+
+def _convert(tmp_path, capfd, src, *args):
+    out, dev = tmp_path / "o.csv", tmp_path / "d.json"
+    rc, said, err, _ = run(["convert", src, *args, "-o", out, "--device-out", dev], capfd)
+    assert rc == 0, err
+    assert len(said.splitlines()) == 1
+    return read_recording(out), json.loads(dev.read_text()), err, said
+
+
+def _refused(tmp_path, capfd, src, *args, name="refused"):
+    out = tmp_path / name
+    out.mkdir()
+    rc, _, err, _ = run(["convert", src, *args, "-o", out / "o.csv"], capfd)
+    assert rc == 2 and len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert not list(out.iterdir())
+    assert src.name in err
+    return err
+
+
+def _stamp(when, form):
+    """``when`` (an aware datetime) written as an ISO-8601 date-time of the form ``form``."""
+    if form == "T+zone":
+        return when.isoformat(timespec="milliseconds")
+    if form == "space, no zone":
+        return when.replace(tzinfo=None).isoformat(sep=" ", timespec="milliseconds")
+    if form == "no fraction":
+        return when.replace(tzinfo=None).isoformat(timespec="seconds")
+    if form == "Z, us":
+        return when.astimezone(dt.timezone.utc).replace(tzinfo=None).isoformat(timespec="microseconds") + "Z"
+    raise ValueError(form)
+
+
+# ---- ISO-8601 date-time stamps --------------------------------------------------------
+
+@pytest.mark.parametrize("form,rate", [("T+zone", 25.0), ("space, no zone", 100.0), ("no fraction", 1.0),
+                                       ("Z, us", 9.342)])
+def test_iso_datetime_stamps_are_time_stamps(tmp_path, capfd, form, rate):
+    """A Garmin watch's ``2019-10-16T12:09:01.702+02:00``, an AX6's ``2019-12-23
+    21:04:06.690``, a survey logger's ``2021-05-07T10:29:56.172``: full date-times are time
+    stamps (they had been refused as 'a clock time or a date'), read to the ns, the zone
+    taken off; the stamp machinery gives the rate and reports the pause (50 steps here)."""
+    n = 400
+    zone = dt.timezone(dt.timedelta(hours=2))
+    start = dt.datetime(2019, 10, 16, 12, 9, 1, 702000, tzinfo=zone)
+    step_us = round(1e6 / rate)
+    if form == "no fraction":
+        start = start.replace(microsecond=0)
+    if form == "T+zone" or form == "space, no zone":
+        step_us = round(step_us / 1000) * 1000            # the stamps keep ms
+    offs_us = np.arange(n) * step_us + np.where(np.arange(n) >= 250, 50 * step_us, 0)
+    whens = [start + dt.timedelta(microseconds=int(u)) for u in offs_us]
+    c = _counts(n)
+    src = _write(tmp_path / "acc.csv", ["timestamp,accX,accY,accZ"] +
+                 [f"{_stamp(w, form)},{a},{b},{d}" for w, (a, b, d) in zip(whens, c)])
+    rec, dev, err, said = _convert(tmp_path, capfd, src)
+    np.testing.assert_array_equal(rec.raw, c)
+    np.testing.assert_allclose(rec.t - rec.t[0], offs_us / 1e6, rtol=0, atol=1e-6)
+    epoch = whens[0].timestamp()
+    if form in ("space, no zone", "no fraction"):
+        epoch = whens[0].replace(tzinfo=dt.timezone.utc).timestamp()       # the clock's time, taken for UTC
+        assert "state no zone" in err
+    else:
+        assert "UTC" in err and "state no zone" not in err
+    assert rec.t[0] == pytest.approx(epoch, abs=1e-6)
+    assert dev["sample_rate_hz"] == pytest.approx(1e6 / step_us, rel=1e-6)     # the device keeps 6 decimals
+    assert "t has 1 step longer than 1.8 x its median step" in err and "clock time or a date" not in err
+
+
+def test_a_zone_change_is_converted_to_utc_and_a_missing_zone_refused(tmp_path, capfd):
+    """A clock put forward within a file (+01:00 to +02:00): every stamp in UTC, the steps
+    even, a note naming the row.  A date-time without a zone among ones with a zone cannot
+    be put on the same clock: refused naming its row.  A --time-unit is refused (date-times
+    carry theirs); a clock time without a date stays refused as before."""
+    n = 60
+    utc = [dt.datetime(2020, 3, 29, 0, 59, 58, tzinfo=dt.timezone.utc) + dt.timedelta(milliseconds=50 * k)
+           for k in range(n)]
+    zoned = [w.astimezone(dt.timezone(dt.timedelta(hours=1 if k < 40 else 2))) for k, w in enumerate(utc)]
+    c = _counts(n, seed=2)
+    lines = [f"{w.isoformat(timespec='milliseconds')},{a},{b},{d}" for w, (a, b, d) in zip(zoned, c)]
+    src = _write(tmp_path / "dst.csv", ["time,accX,accY,accZ"] + lines)
+    rec, dev, err, _ = _convert(tmp_path, capfd, src)
+    np.testing.assert_allclose(np.diff(rec.t), 0.05, atol=1e-6)
+    assert rec.t[0] == pytest.approx(utc[0].timestamp(), abs=1e-6)
+    assert "zone changes at row 42 (UTC+1 h to UTC+2 h" in err
+    lines[10] = lines[10].replace("+01:00", "")
+    bad = _write(tmp_path / "mixed.csv", ["time,accX,accY,accZ"] + lines)
+    err = _refused(tmp_path, capfd, bad)
+    assert "row 12, column time" in err and "states no zone where the first row's" in err
+    err = _refused(tmp_path, capfd, src, "--time-unit", "ms", name="unit")
+    assert "holds date-times, which carry their unit" in err
+    clock = _write(tmp_path / "clock.csv", ["time,accX,accY,accZ"] + [f"12:09:{k:02d},1,2,3" for k in range(10)])
+    err = _refused(tmp_path, capfd, clock, name="clock")
+    assert "'12:09:00') is a clock time or a date, not time stamps" in err
+
+
+def test_repeated_stamps_are_counted_and_can_be_left_out(tmp_path, capfd):
+    """A Garmin export stamps two samples with one stamp now and then (93 of 10,000 rows:
+    steps 80, 40, 40, 0 ms): refused at the first, the message counting them and naming
+    --repeated-stamps drop, which leaves them out with a note (the rate stays 25 Hz)."""
+    n = 200
+    ms = 40 * np.arange(n)
+    for k in (50, 120, 170):                 # a slot skipped, and two steps on one stamp given twice
+        ms[k:k + 2] += 40
+        ms[k + 2] = ms[k + 1]
+    c = _counts(n, seed=3)
+    start = dt.datetime(2019, 10, 16, 12, 9, 1, 702000, tzinfo=dt.timezone(dt.timedelta(hours=2)))
+    stamps = [(start + dt.timedelta(milliseconds=int(v))).isoformat(timespec="milliseconds") for v in ms]
+    src = _write(tmp_path / "acc.csv", ["timestamp;accX;accY;accZ"] +
+                 [f"{s};{a};{b};{d}" for s, (a, b, d) in zip(stamps, c)])
+    err = _refused(tmp_path, capfd, src)
+    assert "row 54, column timestamp" in err and "time stamps must increase; 3 row(s) repeat the stamp" in err
+    assert "--repeated-stamps drop leaves them out" in err
+    rec, dev, err, _ = _convert(tmp_path, capfd, src, "--repeated-stamps", "drop")
+    keep = np.delete(np.arange(n), [52, 122, 172])
+    np.testing.assert_array_equal(rec.raw, c[keep])
+    assert dev["sample_rate_hz"] == pytest.approx(25.0, rel=1e-9)
+    assert "3 row(s) repeat the time stamp of the row before with other readings" in err
+    err = _refused(tmp_path, capfd, _write(tmp_path / "r.csv", ["t,raw_0,raw_1,raw_2", "0,1,2,3", "1,1,2,3"]),
+                   "--repeated-stamps", "drop", name="csv")
+    assert "--repeated-stamps applies to a table's time column" in err
