@@ -149,3 +149,51 @@ def test_repeated_stamps_are_counted_and_can_be_left_out(tmp_path, capfd):
     err = _refused(tmp_path, capfd, _write(tmp_path / "r.csv", ["t,raw_0,raw_1,raw_2", "0,1,2,3", "1,1,2,3"]),
                    "--repeated-stamps", "drop", name="csv")
     assert "--repeated-stamps applies to a table's time column" in err
+
+
+# ---- the nominal scale a device file gets from the readings ----------------------------
+
+def _watch(n_rest_s=4.0, rate=25.0, per_g=1000.0, seed=4):
+    """A wrist watch's counts (1 mg each): still poses whose z never points up, joined by 1 s
+    turns, each pose's direction of f known."""
+    rng = np.random.default_rng(seed)
+    dirs = np.array([[0, 0, -1], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -0.7071, -0.7071], [0.7071, 0, -0.7071],
+                     [0, 0.8, 0.2], [-0.6, 0.6, -0.529]])
+    dirs /= np.linalg.norm(dirs, axis=1)[:, None]
+    parts = []
+    for a, b in zip(dirs, np.vstack([dirs[1:], dirs[:1]])):
+        parts.append(np.repeat(a[None], int(n_rest_s * rate), axis=0))
+        s = np.linspace(0, 1, int(rate))[:, None]
+        turn = (1 - s) * a + s * b + 0.1 * np.sin(np.pi * s) * rng.standard_normal(3)
+        parts.append(turn / np.linalg.norm(turn, axis=1)[:, None] * (1 + 0.1 * np.sin(2 * np.pi * s)))
+    f = np.vstack(parts)
+    return np.round(per_g * f + 3.0 * rng.standard_normal(f.shape)).astype(int)
+
+
+def test_the_nominal_scale_is_taken_from_the_still_stretches(tmp_path, capfd):
+    """A watch on a wrist: its z never points up, so half the 1-99 % spread (which assumes every
+    axis turned through +-1 g) said 74 counts per m/s^2 for a Garmin's 105.8.  The still
+    stretches read |f| = g whatever the orientation: their median |reading| over g is the
+    scale (1000 counts per g here), with a note saying so."""
+    c = _watch()
+    src = _write(tmp_path / "watch.csv", ["accX,accY,accZ"] + [f"{a},{b},{d}" for a, b, d in c])
+    rec, dev, err, _ = _convert(tmp_path, capfd, src, "--rate", "25")
+    k = dev["channels"][0]["counts_per_mps2"]
+    assert k == pytest.approx(1000.0 / G, rel=0.005), err
+    lo, hi = np.percentile(c, [1, 99], axis=0)
+    assert np.mean(hi - lo) / 2 / G < 0.85 * k              # what the spread had given
+    assert "is the median |reading| of 8 still stretches over g (|f| = g at rest" in err
+
+
+def test_without_a_still_stretch_the_spread_gives_the_scale(tmp_path, capfd):
+    """A recording that never holds still (a device tumbling the whole time): the spread gives
+    the scale, and the note says it assumes each axis turned through +-1 g."""
+    n, rate = 1500, 50.0
+    t = np.arange(n) / rate
+    f = np.column_stack([np.cos(2.1 * t) * np.cos(0.7 * t), np.sin(2.1 * t) * np.cos(0.7 * t), np.sin(0.7 * t)])
+    c = np.round(500.0 * f + 2.0 * np.random.default_rng(5).standard_normal(f.shape)).astype(int)
+    src = _write(tmp_path / "tumble.csv", ["accX,accY,accZ"] + [f"{a},{b},{d}" for a, b, d in c])
+    rec, dev, err, _ = _convert(tmp_path, capfd, src, "--rate", "50")
+    lo, hi = np.percentile(c, [1, 99], axis=0)
+    assert dev["channels"][0]["counts_per_mps2"] == pytest.approx(round(np.mean(hi - lo) / 2 / G, 1))
+    assert "taken from the readings' spread, 1st to 99th percentile, as if every axis turned through +-1 g" in err
