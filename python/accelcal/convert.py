@@ -43,11 +43,11 @@ from .convert_mat import convert_mat, is_mat
 from .convert_axes import BARE_AXES, axis_column
 from .convert_named import convert_named
 from .convert_regions import POSE_DIRECTIONS, read_regions
-from .convert_time import TIME_COLUMN_RE, unit_in_name
+from .convert_time import TIME_COLUMN_RE, is_datetime, unit_in_name
 from .errors import InputError
 from .held import held_runs, held_text
 from .recording import read_recording
-from .textinput import is_whitespace_header, read_preamble, read_text_bytes
+from .textinput import CELL_NUMBER_RE, is_whitespace_header, read_preamble, read_text_bytes
 from .units import Scale, file_scale, to_counts
 from .xsens import load_xsens
 
@@ -62,12 +62,15 @@ ACC = {"imucal": ("acc_x", "acc_y", "acc_z"), "mpu6050": ("ax", "ay", "az")}
 
 def detect_format(path: Any, data: bytes | None = None) -> str:
     """The format of a file (its text ``data`` when already read), from its first line that
-    is not a comment.
+    is not a comment.  Without a header: four whitespace-separated numbers a row are imu_tk's
+    text, three a line (whitespace or commas) a log.
 
     Raises
     ------
     InputError
-        Unreadable, empty, or none of the formats (naming the line).
+        Unreadable, empty, or none of the formats, quoting the line as the file holds it;
+        rows of numbers (the first maybe a date-time) without a header say so, how many a
+        row, and the header line to add.
     """
     source, data = read_text_bytes(path) if data is None else (str(path), data)
     pre = read_preamble(data)
@@ -84,17 +87,47 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
         return "imucal"
     if set(ACC["mpu6050"]) <= low or cells[0].strip().lower() == "fs":
         return "mpu6050"
-    if is_whitespace_header(pre.header) and all(NUMBER_RE.fullmatch(c) for c in cells):
+    spaced = is_whitespace_header(pre.header)
+    if spaced and len(cells) == 4 and all(NUMBER_RE.fullmatch(c) for c in cells):
         return "imu_tk"
     if is_log(data):
         return "log"
     if any(axis_column(c) for c in cells) or set(BARE_AXES) <= low:
         return "table"
-    raise InputError(source, f"cannot tell the format from this line ({pre.header[:60]!r}): expected a "
+    line = file_line(path, pre.header_line, pre.header)
+    if len(cells) > 1 and all(CELL_NUMBER_RE.fullmatch(c.strip()) or is_datetime(c) for c in cells):
+        dated = " (the first a date-time)" if is_datetime(cells[0]) else ""
+        hints = ("imu_tk's text needs 4 (t ax ay az); " if spaced else "") + \
+            ("for three readings a line give --format log --rate HZ; " if spaced or len(cells) == 3 else "")
+        raise InputError(source, f"{len(cells)} {'whitespace-separated ' if spaced else ''}numbers a row{dated} and no "
+                         f"header ({line[:60]!r}): {hints}for other layouts add a header line naming the columns "
+                         f"({header_example(cells, spaced)}; a time column t, time or timestamp, else --rate HZ)", row=pre.header_line)
+    raise InputError(source, f"cannot tell the format from this line ({line[:60]!r}): expected a "
                      "recording CSV (t, raw_0, ...), imucal's acc_x/acc_y/acc_z, the MPU-6050 log (Fs,... "
                      "then ax,ay,az,...), imu_tk's 't ax ay az' text, a monitor's log (lines of three "
                      "numbers among text) or a table with accelerometer columns (accX, 'Acceleration y "
                      "(m/s^2)', ...); give --format", row=pre.header_line)
+
+
+def file_line(path: Any, line: int, fallback: str) -> str:
+    """Line ``line`` of the file as it holds it (a semicolon-separated export's own ``;``,
+    which :func:`textinput.semicolons_to_commas` made commas), for quoting; ``fallback``
+    where the file cannot be read again."""
+    try:
+        text = read_text_bytes(path, semicolons=False)[1].split(b"\n")
+    except (InputError, OSError, TypeError):
+        return fallback
+    return text[line - 1].decode("utf-8") if 0 < line <= len(text) else fallback
+
+
+def header_example(cells: list[str], spaced: bool) -> str:
+    """A header line naming a row of ``cells`` (numbers, the first maybe a date-time) as
+    accelcal reads them: ``t,ax,ay,az,gx,gy,gz`` and ``extra`` beyond (blanks between the
+    names of whitespace text)."""
+    names = (["t"] if is_datetime(cells[0]) or len(cells) in (4, 7) else []) + ["ax", "ay", "az"]
+    names += ["gx", "gy", "gz"][:max(0, len(cells) - len(names))]
+    names += [f"extra{k + 1}" for k in range(len(cells) - len(names))]
+    return (" " if spaced else ",").join(names[:len(cells)])
 
 
 # ---- the formats -----------------------------------------------------------------------
@@ -180,7 +213,8 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
     raw = to_counts(values, scale, source, locate, notes=shifted) if scale is not None and scale.converts else \
         whole_counts(values, source, locate)
     if opts.rate_hz is None:
-        raise InputError(source, "log files have no time column: give the sample rate with --rate HZ")
+        raise InputError(source, "log files (lines of three numbers, no header) have no time column: give the "
+                         "sample rate with --rate HZ")
     if blocks and opts.regions is not None:
         raise InputError(source, "--blocks and --regions both label the poses: give one")
     notes = [f"{info['text_lines']} line(s) of text (the first: {info['first_text']!r}) split the readings into "
@@ -282,7 +316,8 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     if variable is not None:
         raise InputError(str(path), "--variable names an array of a MATLAB file")
     source, data = read_text_bytes(path)
-    if fmt == "auto":
+    told = fmt == "auto"
+    if told:
         fmt = detect_format(source, data)
     if fmt not in FORMATS:
         raise ValueError(f"unknown format {fmt!r}")
@@ -303,7 +338,10 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         raise InputError(source, f"--time-unit: {fmt} files have no time column (--rate states their rate)")
     if fmt in ("imu_tk", "csv"):
         if rate_hz is not None and fmt == "imu_tk":
-            raise InputError(source, "--rate: imu_tk files have a time column and their own rate")
+            raise InputError(source, "--rate: the file was read as imu_tk's text (4 numbers a row and no header: t ax "
+                             "ay az), whose time column gives the rate; for another layout add a header line naming "
+                             "the columns (ax ay az ...)" if told else
+                             "--rate: imu_tk files have a time column and their own rate")
         if fmt == "imu_tk" and scale is not None and scale.converts:
             raise InputError(source, "imu_tk's readings are counts: --units mps2|g and --lsb do not apply")
         if fmt == "imu_tk":

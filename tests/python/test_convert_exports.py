@@ -197,3 +197,45 @@ def test_without_a_still_stretch_the_spread_gives_the_scale(tmp_path, capfd):
     lo, hi = np.percentile(c, [1, 99], axis=0)
     assert dev["channels"][0]["counts_per_mps2"] == pytest.approx(round(np.mean(hi - lo) / 2 / G, 1))
     assert "taken from the readings' spread, 1st to 99th percentile, as if every axis turned through +-1 g" in err
+
+
+# ---- files without a header -------------------------------------------------------------
+
+def test_headerless_whitespace_rows_say_what_was_seen_and_what_to_do(tmp_path, capfd):
+    """An MPU-6050's tab-separated 'ax ay az gx gy gz' without a header had been taken for
+    imu_tk's text ('expected 4 cells as in the header', with no header); three numbers a line
+    (Magneto's input) are a log like their comma-separated kin; four are imu_tk's, and --rate
+    then says the file was read so rather than blaming imu_tk files the user never named."""
+    c = _counts(40, mean=(608, -372, 15556))
+    six = _write(tmp_path / "sample_data.txt", [f"{a}\t{b}\t{d}\t-374\t166\t-77" for a, b, d in c])
+    err = _refused(tmp_path, capfd, six)
+    first = "\\t".join(str(v) for v in c[0])
+    assert f"sample_data.txt: row 1: 6 whitespace-separated numbers a row and no header ('{first}\\t-374" in err
+    assert ("imu_tk's text needs 4 (t ax ay az); for three readings a line give --format log --rate HZ; for other "
+            "layouts add a header line naming the columns (ax ay az gx gy gz;") in err
+    assert "as in the header" not in err
+    three = _write(tmp_path / "acceldata.txt", [f"{a}\t{b}\t{d}" for a, b, d in c])
+    rec, dev, err, said = _convert(tmp_path, capfd, three, "--rate", "10")
+    np.testing.assert_array_equal(rec.raw, c)
+    assert said.startswith("log: 40 rows")
+    err = _refused(tmp_path, capfd, three, name="norate")
+    assert "(lines of three numbers, no header) have no time column: give the sample rate with --rate HZ" in err
+    four = _write(tmp_path / "xsens.txt", [f"{k / 100:.2f} {a} {b} {d}" for k, (a, b, d) in enumerate(c)])
+    err = _refused(tmp_path, capfd, four, "--rate", "100", name="four")
+    assert "--rate: the file was read as imu_tk's text (4 numbers a row and no header: t ax ay az)" in err
+
+
+def test_headerless_csv_rows_are_quoted_as_the_file_holds_them(tmp_path, capfd):
+    """A Garmin export has no header and ';' between its cells: the message had quoted the line
+    with ',' (the file's text after its rewrite as CSV).  It quotes the file's own line, says
+    that there is no header and which one to add."""
+    c = _counts(30)
+    src = _write(tmp_path / "acc.csv", [f"2019-10-16T12:09:{1 + k // 25:02d}.{40 * (k % 25):03d}+02:00;{a};{b};{d}"
+                                        for k, (a, b, d) in enumerate(c)])
+    err = _refused(tmp_path, capfd, src)
+    assert ("acc.csv: row 1: 4 numbers a row (the first a date-time) and no header "
+            f"('2019-10-16T12:09:01.000+02:00;{';'.join(str(v) for v in c[0])}'): for other layouts add a header "
+            "line naming the columns (t,ax,ay,az; a time column t, time or timestamp, else --rate HZ)") in err, err
+    ax3 = _write(tmp_path / "ax3.csv", [f"{1551178506 + k / 100:.4f},0.328125,0.984375,0.203125" for k in range(30)])
+    err = _refused(tmp_path, capfd, ax3, name="ax3")
+    assert "row 1: 4 numbers a row and no header ('1551178506.0000,0.328125," in err
