@@ -23,6 +23,9 @@ Formats (``detect_format`` tells them from the first line that is not a comment)
   readings' unit; an optional time column (``t``, ``Time (s)``, ``timestamp_us``), else
   ``--rate``.  Rows whose three readings are all empty (another packet's) are skipped.
   Told last, after the formats above.
+- ``e4``: an Empatica E4's ``ACC.csv``: row 1 the session's start (unix s) and row 2 the
+  sample rate, each repeated in the three columns, then ``x,y,z`` in counts of 1/64 g
+  (:mod:`accelcal.convert_e4`).
 
 Gyroscope columns are dropped (one note).  Pose regions named ``x_p, x_a, y_p, y_a, z_p,
 z_a`` (imucal's: that axis pointing up, or down) can state the reference specific force
@@ -38,6 +41,7 @@ import numpy as np
 
 from .convert_common import (GYRO_RE, INDEX_COLUMNS, NUMBER_RE, Converted, Options, drop_note, exact_time, find_column,
                              finish, header_cells, read_columns, whole_counts)
+from .convert_e4 import convert_e4, is_e4
 from .convert_log import is_log, read_log
 from .convert_mat import convert_mat, is_mat
 from .convert_axes import BARE_AXES, axis_column
@@ -54,7 +58,7 @@ from .xsens import load_xsens
 __all__ = ["FORMATS", "POSE_DIRECTIONS", "Converted", "detect_format", "convert_file", "read_regions", "axis_column",
            "unit_in_name"]
 
-FORMATS = ("auto", "imu_tk", "imucal", "mpu6050", "csv", "log", "table", "mat")
+FORMATS = ("auto", "imu_tk", "imucal", "mpu6050", "csv", "log", "table", "mat", "e4")
 ACC = {"imucal": ("acc_x", "acc_y", "acc_z"), "mpu6050": ("ax", "ay", "az")}
 
 
@@ -90,6 +94,8 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
     spaced = is_whitespace_header(pre.header)
     if spaced and len(cells) == 4 and all(NUMBER_RE.fullmatch(c) for c in cells):
         return "imu_tk"
+    if is_e4(data):
+        return "e4"
     if is_log(data):
         return "log"
     if any(axis_column(c) for c in cells) or set(BARE_AXES) <= low:
@@ -203,6 +209,10 @@ def mpu6050_preamble(source: str, data: bytes, pre) -> tuple[Any, dict[str, str]
 
 def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Converted:
     """A serial monitor's capture (:mod:`accelcal.convert_log`)."""
+    if is_e4(data):
+        raise InputError(source, "rows 1-2 are one value repeated, a start time and a rate, as an Empatica E4's "
+                         "export begins: read it with --format e4 (or auto), or remove the two rows and give --rate HZ",
+                         row=1)
     values, lines, block, info = read_log(source, data)
 
     def locate(i: int, j: int) -> tuple[int, str]:
@@ -336,6 +346,11 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         return convert_log(source, data, opts, blocks)
     if time_unit != "auto" and fmt not in ("imu_tk", "csv", "table"):
         raise InputError(source, f"--time-unit: {fmt} files have no time column (--rate states their rate)")
+    if fmt == "e4":
+        if not is_e4(data):
+            raise InputError(source, "--format e4: rows 1-2 are not an Empatica E4's start time and sample rate "
+                             "(each one value repeated in three columns, the first a unix time)", row=1)
+        return convert_e4(source, data, opts)
     if fmt in ("imu_tk", "csv"):
         if rate_hz is not None and fmt == "imu_tk":
             raise InputError(source, "--rate: the file was read as imu_tk's text (4 numbers a row and no header: t ax "

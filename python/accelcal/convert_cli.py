@@ -32,7 +32,8 @@ unit (with --full-scale or --lsb for the LSB); an optional time column t, time, 
 acceleration and gravity columns are refused).  Any of them may be compressed (gzip, bzip2, xz,
 zstd, a zip of one file).  mat: a MATLAB file (version 5 or 7.3, told by its header) holding an
 array of 3 columns x, y, z (--rate) or 4 columns t, x, y, z; --variable names it where there are
-several.  Gyroscope columns are dropped with a note."""
+several.  e4: an Empatica E4's ACC.csv (row 1 the start as unix time, row 2 the rate, each repeated
+in three columns; then x,y,z in counts of 1/64 g).  Gyroscope columns are dropped with a note."""
 
 
 def positive(text: Any, option: str) -> float | None:

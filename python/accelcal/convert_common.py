@@ -245,8 +245,10 @@ def in_sample_order(index: np.ndarray, source: str, column: str | None, line) ->
 def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndarray | None, part: list[str] | None,
            opts: Options, scale: Scale | None, signed: bool, rate: float | None, metadata: dict[str, str],
            notes: list[str], locate, index_column: str | None, device: Device | None = None,
-           kept: tuple[np.ndarray, np.ndarray] | None = None, time_column: str | None = None) -> Converted:
-    """Range check, sample order, time, poses, metadata and the nominal device, shared by the formats."""
+           kept: tuple[np.ndarray, np.ndarray] | None = None, time_column: str | None = None,
+           t0: float = 0.0) -> Converted:
+    """Range check, sample order, time, poses, metadata and the nominal device, shared by the formats
+    (without time stamps ``t``, t is ``t0`` (s) + the sample index over ``rate``)."""
     check_range(raw, opts.bits, signed, source, locate)
     extra_columns: dict[str, list[str]] = {}
     order = in_sample_order(index, source, index_column, lambda i: locate(i, 0)[0]) if t is None else None
@@ -254,7 +256,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
         raw, index = raw[order], index[order]
         part = None if part is None else [part[i] for i in order.tolist()]
     if t is None:
-        t = index / rate
+        t = t0 + index / rate
     else:
         t = np.asarray(t)           # int64 from exact_time: an epoch in ns
         t, rel = time_in_seconds(t if t.dtype.kind in "iu" else t.astype(float), opts.time_unit, time_column, source,

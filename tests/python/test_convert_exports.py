@@ -239,3 +239,32 @@ def test_headerless_csv_rows_are_quoted_as_the_file_holds_them(tmp_path, capfd):
     ax3 = _write(tmp_path / "ax3.csv", [f"{1551178506 + k / 100:.4f},0.328125,0.984375,0.203125" for k in range(30)])
     err = _refused(tmp_path, capfd, ax3, name="ax3")
     assert "row 1: 4 numbers a row and no header ('1551178506.0000,0.328125," in err
+
+
+# ---- an Empatica E4's export ----------------------------------------------------------
+
+def test_an_empatica_e4_export_is_read_with_its_start_and_rate(tmp_path, capfd):
+    """An E4's ACC.csv: row 1 the start as unix time and row 2 the rate, each repeated in the
+    three columns, then x,y,z in signed 8-bit counts of 1/64 g.  Row 1 had been read as a
+    reading ('1560279825 counts is outside signed 8-bit ... (state --bits N)').  Now: t from
+    the start at row 2's rate, the device 64 counts per g in 8 bits; --format log names the
+    layout; a row 2 that is no rate is one line saying what to do."""
+    c = _counts(300, seed=6, mean=(-61, 25, 6), sd=2.0)
+    pre = ["1560279825.000000, 1560279825.000000, 1560279825.000000", "32.000000, 32.000000, 32.000000"]
+    src = _write(tmp_path / "ACC.csv", pre + [f"{a},{b},{d}" for a, b, d in c])
+    rec, dev, err, said = _convert(tmp_path, capfd, src)
+    assert said.startswith("e4: 300 rows, 3 channels, 32 Hz")
+    np.testing.assert_array_equal(rec.raw, c)
+    np.testing.assert_allclose(rec.t, 1560279825.0 + np.arange(300) / 32.0, rtol=0, atol=1e-6)
+    assert dev["sample_rate_hz"] == 32.0 and (dev["raw_min"], dev["raw_max"]) == (-128, 127)
+    assert dev["channels"][0]["counts_per_mps2"] == pytest.approx(64.0 / G)
+    assert "rows 1-2 are an Empatica E4's session start (1560279825.000000 unix s) and sample rate (32 Hz)" in err
+    rec, dev, err, said = _convert(tmp_path, capfd, src, "--rate", "32", "--full-scale", "2", "--bits", "8")
+    np.testing.assert_array_equal(rec.raw, c)
+    err = _refused(tmp_path, capfd, src, "--format", "log", "--rate", "32", "--bits", "8")
+    assert "row 1: rows 1-2 are one value repeated, a start time and a rate, as an Empatica E4's export" in err
+    assert "--bits" not in err
+    bad = _write(tmp_path / "bad.csv", [pre[0], "0.000000, 0.000000, 0.000000"] + [f"{a},{b},{d}" for a, b, d in c])
+    err = _refused(tmp_path, capfd, bad, name="bad")
+    assert "row 2: rows 1-2 look like an Empatica E4's start time (1560279825, unix s) and sample rate, but row 2's " \
+           "'0.000000' is no rate in Hz: remove the two rows and give --rate HZ" in err
