@@ -268,3 +268,13 @@ def test_an_empatica_e4_export_is_read_with_its_start_and_rate(tmp_path, capfd):
     err = _refused(tmp_path, capfd, bad, name="bad")
     assert "row 2: rows 1-2 look like an Empatica E4's start time (1560279825, unix s) and sample rate, but row 2's " \
            "'0.000000' is no rate in Hz: remove the two rows and give --rate HZ" in err
+
+
+def test_bare_x_y_z_columns_are_refused_in_words_that_fit_any_logger(tmp_path, capfd):
+    """A machine survey's 'timestamp,x,y,z' (not PX4's): the refusal had explained only PX4's
+    ulog2csv; it says what the names lack and how to name them, PX4's file name last."""
+    src = _write(tmp_path / "survey.csv", ["timestamp,x,y,z"] + [f"2021-05-07T10:29:{k:02d}.172,0.05,-0.05,-0.98"
+                                                                for k in range(20)])
+    err = _refused(tmp_path, capfd, src)
+    assert ("the columns x, y, z do not say they are an accelerometer's (a gyroscope's or a magnetometer's are "
+            "written alike): if they are, name them acc_x, acc_y, acc_z (a PX4") in err
