@@ -23,6 +23,9 @@ Formats (``detect_format`` tells them from the first line that is not a comment)
   readings' unit; an optional time column (``t``, ``Time (s)``, ``timestamp_us``), else
   ``--rate``.  Rows whose three readings are all empty (another packet's) are skipped.
   Told last, after the formats above.
+- ``e4``: an Empatica E4's ``ACC.csv``: row 1 the session's start (unix s) and row 2 the
+  sample rate, each repeated in the three columns, then ``x,y,z`` in counts of 1/64 g
+  (:mod:`accelcal.convert_e4`).
 
 Gyroscope columns are dropped (one note).  Pose regions named ``x_p, x_a, y_p, y_a, z_p,
 z_a`` (imucal's: that axis pointing up, or down) can state the reference specific force
@@ -38,23 +41,24 @@ import numpy as np
 
 from .convert_common import (GYRO_RE, INDEX_COLUMNS, NUMBER_RE, Converted, Options, drop_note, exact_time, find_column,
                              finish, header_cells, read_columns, whole_counts)
+from .convert_e4 import convert_e4, is_e4
 from .convert_log import is_log, read_log
 from .convert_mat import convert_mat, is_mat
 from .convert_axes import BARE_AXES, axis_column
 from .convert_named import convert_named
 from .convert_regions import POSE_DIRECTIONS, read_regions
-from .convert_time import TIME_COLUMN_RE, unit_in_name
+from .convert_time import TIME_COLUMN_RE, is_datetime, unit_in_name
 from .errors import InputError
 from .held import held_runs, held_text
 from .recording import read_recording
-from .textinput import is_whitespace_header, read_preamble, read_text_bytes
+from .textinput import CELL_NUMBER_RE, is_whitespace_header, read_preamble, read_text_bytes
 from .units import Scale, file_scale, to_counts
 from .xsens import load_xsens
 
 __all__ = ["FORMATS", "POSE_DIRECTIONS", "Converted", "detect_format", "convert_file", "read_regions", "axis_column",
            "unit_in_name"]
 
-FORMATS = ("auto", "imu_tk", "imucal", "mpu6050", "csv", "log", "table", "mat")
+FORMATS = ("auto", "imu_tk", "imucal", "mpu6050", "csv", "log", "table", "mat", "e4")
 ACC = {"imucal": ("acc_x", "acc_y", "acc_z"), "mpu6050": ("ax", "ay", "az")}
 
 
@@ -62,12 +66,15 @@ ACC = {"imucal": ("acc_x", "acc_y", "acc_z"), "mpu6050": ("ax", "ay", "az")}
 
 def detect_format(path: Any, data: bytes | None = None) -> str:
     """The format of a file (its text ``data`` when already read), from its first line that
-    is not a comment.
+    is not a comment.  Without a header: four whitespace-separated numbers a row are imu_tk's
+    text, three a line (whitespace or commas) a log.
 
     Raises
     ------
     InputError
-        Unreadable, empty, or none of the formats (naming the line).
+        Unreadable, empty, or none of the formats, quoting the line as the file holds it;
+        rows of numbers (the first maybe a date-time) without a header say so, how many a
+        row, and the header line to add.
     """
     source, data = read_text_bytes(path) if data is None else (str(path), data)
     pre = read_preamble(data)
@@ -84,17 +91,49 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
         return "imucal"
     if set(ACC["mpu6050"]) <= low or cells[0].strip().lower() == "fs":
         return "mpu6050"
-    if is_whitespace_header(pre.header) and all(NUMBER_RE.fullmatch(c) for c in cells):
+    spaced = is_whitespace_header(pre.header)
+    if spaced and len(cells) == 4 and all(NUMBER_RE.fullmatch(c) for c in cells):
         return "imu_tk"
+    if is_e4(data):
+        return "e4"
     if is_log(data):
         return "log"
     if any(axis_column(c) for c in cells) or set(BARE_AXES) <= low:
         return "table"
-    raise InputError(source, f"cannot tell the format from this line ({pre.header[:60]!r}): expected a "
+    line = file_line(path, pre.header_line, pre.header)
+    if len(cells) > 1 and all(CELL_NUMBER_RE.fullmatch(c.strip()) or is_datetime(c) for c in cells):
+        dated = " (the first a date-time)" if is_datetime(cells[0]) else ""
+        hints = ("imu_tk's text needs 4 (t ax ay az); " if spaced else "") + \
+            ("for three readings a line give --format log --rate HZ; " if spaced or len(cells) == 3 else "")
+        raise InputError(source, f"{len(cells)} {'whitespace-separated ' if spaced else ''}numbers a row{dated} and no "
+                         f"header ({line[:60]!r}): {hints}for other layouts add a header line naming the columns "
+                         f"({header_example(cells, spaced)}; a time column t, time or timestamp, else --rate HZ)", row=pre.header_line)
+    raise InputError(source, f"cannot tell the format from this line ({line[:60]!r}): expected a "
                      "recording CSV (t, raw_0, ...), imucal's acc_x/acc_y/acc_z, the MPU-6050 log (Fs,... "
                      "then ax,ay,az,...), imu_tk's 't ax ay az' text, a monitor's log (lines of three "
                      "numbers among text) or a table with accelerometer columns (accX, 'Acceleration y "
                      "(m/s^2)', ...); give --format", row=pre.header_line)
+
+
+def file_line(path: Any, line: int, fallback: str) -> str:
+    """Line ``line`` of the file as it holds it (a semicolon-separated export's own ``;``,
+    which :func:`textinput.semicolons_to_commas` made commas), for quoting; ``fallback``
+    where the file cannot be read again."""
+    try:
+        text = read_text_bytes(path, semicolons=False)[1].split(b"\n")
+    except (InputError, OSError, TypeError):
+        return fallback
+    return text[line - 1].decode("utf-8") if 0 < line <= len(text) else fallback
+
+
+def header_example(cells: list[str], spaced: bool) -> str:
+    """A header line naming a row of ``cells`` (numbers, the first maybe a date-time) as
+    accelcal reads them: ``t,ax,ay,az,gx,gy,gz`` and ``extra`` beyond (blanks between the
+    names of whitespace text)."""
+    names = (["t"] if is_datetime(cells[0]) or len(cells) in (4, 7) else []) + ["ax", "ay", "az"]
+    names += ["gx", "gy", "gz"][:max(0, len(cells) - len(names))]
+    names += [f"extra{k + 1}" for k in range(len(cells) - len(names))]
+    return (" " if spaced else ",").join(names[:len(cells)])
 
 
 # ---- the formats -----------------------------------------------------------------------
@@ -170,6 +209,10 @@ def mpu6050_preamble(source: str, data: bytes, pre) -> tuple[Any, dict[str, str]
 
 def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Converted:
     """A serial monitor's capture (:mod:`accelcal.convert_log`)."""
+    if is_e4(data):
+        raise InputError(source, "rows 1-2 are one value repeated, a start time and a rate, as an Empatica E4's "
+                         "export begins: read it with --format e4 (or auto), or remove the two rows and give --rate HZ",
+                         row=1)
     values, lines, block, info = read_log(source, data)
 
     def locate(i: int, j: int) -> tuple[int, str]:
@@ -180,7 +223,8 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
     raw = to_counts(values, scale, source, locate, notes=shifted) if scale is not None and scale.converts else \
         whole_counts(values, source, locate)
     if opts.rate_hz is None:
-        raise InputError(source, "log files have no time column: give the sample rate with --rate HZ")
+        raise InputError(source, "log files (lines of three numbers, no header) have no time column: give the "
+                         "sample rate with --rate HZ")
     if blocks and opts.regions is not None:
         raise InputError(source, "--blocks and --regions both label the poses: give one")
     notes = [f"{info['text_lines']} line(s) of text (the first: {info['first_text']!r}) split the readings into "
@@ -205,7 +249,7 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
                  regions: Any = None, stated_f: bool = False, gravity_mps2: float | None = None,
                  bits: int = 16, blocks: bool = False, time_unit: str = "auto",
                  units_stated: bool = True, variable: str | None = None,
-                 time_column: str | None = None) -> Converted:
+                 time_column: str | None = None, repeated_stamps: str = "refuse") -> Converted:
     """Read another tool's file as a contract recording of a triad.
 
     Parameters
@@ -252,6 +296,11 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         names TIME_COLUMN_RE matches, those whose cells are numbers (a clock time or a date
         is no time stamp), the first whose name states a unit, else the first; a note names
         the one used and those passed over.
+    repeated_stamps : {"refuse", "drop"}
+        A table's rows whose time stamp repeats the row before's with other readings (a watch
+        that stamps two samples with one stamp: 93 of a Garmin export's 10,000 rows): refused,
+        the message counting them, or left out with a note (``drop``).  Rows that repeat the
+        stamp and the readings are left out either way.
 
     Returns
     -------
@@ -277,14 +326,18 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     if variable is not None:
         raise InputError(str(path), "--variable names an array of a MATLAB file")
     source, data = read_text_bytes(path)
-    if fmt == "auto":
+    told = fmt == "auto"
+    if told:
         fmt = detect_format(source, data)
     if fmt not in FORMATS:
         raise ValueError(f"unknown format {fmt!r}")
+    if repeated_stamps != "refuse" and fmt != "table":
+        raise InputError(source, f"--repeated-stamps applies to a table's time column (--format table): this file is "
+                         f"told as {fmt}")
     if time_column is not None and fmt != "table":
         raise InputError(source, f"--time-column names a table's time column (--format table): this file is told as "
                          f"{fmt}")
-    opts = Options(scale, rate_hz, None, None, stated_f, gravity_mps2, bits, time_unit, time_column)
+    opts = Options(scale, rate_hz, None, None, stated_f, gravity_mps2, bits, time_unit, time_column, repeated_stamps)
     if regions is not None:
         opts.regions, opts.regions_source = read_regions(regions), str(regions)
     if blocks and fmt != "log":
@@ -293,9 +346,17 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         return convert_log(source, data, opts, blocks)
     if time_unit != "auto" and fmt not in ("imu_tk", "csv", "table"):
         raise InputError(source, f"--time-unit: {fmt} files have no time column (--rate states their rate)")
+    if fmt == "e4":
+        if not is_e4(data):
+            raise InputError(source, "--format e4: rows 1-2 are not an Empatica E4's start time and sample rate "
+                             "(each one value repeated in three columns, the first a unix time)", row=1)
+        return convert_e4(source, data, opts)
     if fmt in ("imu_tk", "csv"):
         if rate_hz is not None and fmt == "imu_tk":
-            raise InputError(source, "--rate: imu_tk files have a time column and their own rate")
+            raise InputError(source, "--rate: the file was read as imu_tk's text (4 numbers a row and no header: t ax "
+                             "ay az), whose time column gives the rate; for another layout add a header line naming "
+                             "the columns (ax ay az ...)" if told else
+                             "--rate: imu_tk files have a time column and their own rate")
         if fmt == "imu_tk" and scale is not None and scale.converts:
             raise InputError(source, "imu_tk's readings are counts: --units mps2|g and --lsb do not apply")
         if fmt == "imu_tk":

@@ -81,9 +81,10 @@ def table_axes(source: str, names: list[str], row: int) -> list[AxisColumn]:
     bare = [n for n in names if n.lower() in BARE_AXES]
     if not found and len(bare) == len(BARE_AXES):
         if not PX4_ACCEL_FILE_RE.search(Path(source).name):
-            raise InputError(source, "the columns x, y, z do not say they are an accelerometer's (PX4's sensor_accel, "
-                             "sensor_gyro and sensor_mag are exported alike): keep ulog2csv's file name "
-                             "(<log>_sensor_accel_0.csv) or name the columns acc_x, acc_y, acc_z", row=row)
+            raise InputError(source, "the columns x, y, z do not say they are an accelerometer's (a gyroscope's or a "
+                             "magnetometer's are written alike): if they are, name them acc_x, acc_y, acc_z (a PX4 "
+                             "sensor_accel topic exported by ulog2csv: keep its file name <log>_sensor_accel_0.csv)",
+                             row=row)
         found = [AxisColumn(n, n.lower(), "mps2", False) for n in bare]
     real = [c for c in found if not c.virtual]
     if not real and found:

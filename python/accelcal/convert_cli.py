@@ -32,7 +32,8 @@ unit (with --full-scale or --lsb for the LSB); an optional time column t, time, 
 acceleration and gravity columns are refused).  Any of them may be compressed (gzip, bzip2, xz,
 zstd, a zip of one file).  mat: a MATLAB file (version 5 or 7.3, told by its header) holding an
 array of 3 columns x, y, z (--rate) or 4 columns t, x, y, z; --variable names it where there are
-several.  Gyroscope columns are dropped with a note."""
+several.  e4: an Empatica E4's ACC.csv (row 1 the start as unix time, row 2 the rate, each repeated
+in three columns; then x,y,z in counts of 1/64 g).  Gyroscope columns are dropped with a note."""
 
 
 def positive(text: Any, option: str) -> float | None:
@@ -60,7 +61,8 @@ def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int
     conv = convert_file(a.input, a.format, scale=scale, rate_hz=positive(a.rate, "--rate"), regions=a.regions,
                         stated_f=a.stated_f, gravity_mps2=positive(a.gravity, "--gravity"), bits=bits,
                         blocks=a.blocks, time_unit=a.time_unit, units_stated=a.units is not None,
-                        variable=a.variable, time_column=a.time_column)
+                        variable=a.variable, time_column=a.time_column,
+                        repeated_stamps=a.repeated_stamps)
     write_recording(a.output, conv.recording)
     if a.device_out is not None:
         save_device(conv.device, a.device_out)
@@ -91,6 +93,10 @@ def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
     s.add_argument("--time-column", metavar="NAME", help="table: the time column (default: of the columns named "
                    "t, time, timestamp, 'Time (s)', ..., those holding numbers, not a clock time or a date, the "
                    "first whose name states a unit, else the first; a note names it)")
+    s.add_argument("--repeated-stamps", choices=("refuse", "drop"), default="refuse",
+                   help="table: rows whose time stamp repeats the row before's with other readings (a watch that "
+                   "stamps two samples with one stamp) are refused (default; the message counts them) or, with drop, "
+                   "left out with a note")
     s.add_argument("--variable", metavar="NAME", help="mat: the array of readings (3 columns x, y, z, or 4: t, x, y, "
                    "z) where the MATLAB file holds more than one; or X,Y,Z (T,X,Y,Z): the names of vectors that hold "
                    "one channel each")

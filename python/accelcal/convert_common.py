@@ -17,11 +17,12 @@ from .device import Device
 from .errors import InputError
 from .recording import Recording
 from .recording_checks import RATE_TOL
+from .static import detect_static, scale_agreement
 from .textinput import NUMBER_RE, is_whitespace_header, split_whitespace_header, whitespace_to_commas
 from .units import STANDARD_GRAVITY, Scale
 
 __all__ = ["Converted", "Options", "INDEX_COLUMNS", "GYRO_RE", "NUMBER_RE", "header_cells", "read_columns",
-           "find_column", "exact_time", "adc_range", "nominal_triad", "check_range", "in_sample_order", "finish",
+           "find_column", "exact_time", "adc_range", "nominal_triad", "rest_scale", "check_range", "in_sample_order", "finish",
            "stated_rate_off", "drop_note", "whole_counts"]
 
 INDEX_COLUMNS = ("n_samples", "samples")
@@ -87,6 +88,7 @@ class Options:
     bits: int = 16
     time_unit: str = "auto"
     time_column: str | None = None
+    repeated_stamps: str = "refuse"
 
 
 def header_cells(header: str) -> list[str]:
@@ -164,24 +166,57 @@ def adc_range(bits: int, signed: bool) -> tuple[int, int]:
 
 
 def nominal_triad(name: str, rate: float, gravity: float, raw: np.ndarray, bits: int, signed: bool,
-                  scale: Scale | None, notes: list[str]) -> Device:
-    """A triad at the origin along x, y, z: counts per m/s^2 from the LSB when stated, else half
-    the spread of each axis between its 1st and 99th percentiles, over g (as load_xsens)."""
+                  scale: Scale | None, notes: list[str], rec: Recording | None = None) -> Device:
+    """A triad at the origin along x, y, z: counts per m/s^2 from the LSB when stated, else from
+    the readings: the median |reading vector| over the still stretches of ``rec``
+    (:func:`rest_scale`: |f| = g at rest, whatever the orientation), and where there is none
+    half the spread of each axis between its 1st and 99th percentiles, over g (as load_xsens;
+    that assumes every axis turned through +-1 g: a wrist watch whose z never points up read
+    74 counts per m/s^2 for 105.8).  A note says which."""
     k = scale.counts_per_mps2(gravity) if scale is not None else None
+    zero = np.full(3, 0.0 if signed else 2.0 ** (bits - 1))
+    lo, hi = adc_range(bits, signed)
+
+    def triad(k: float) -> Device:
+        return Device(name=name, sample_rate_hz=round(rate, 6), gravity_mps2=gravity, raw_min=lo, raw_max=hi,
+                      positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, k),
+                      zero_counts=zero, noise_mps2=0.0)
+
     if k is None:
-        lo, hi = np.percentile(raw, [1.0, 99.0], axis=0)
-        k = round(float(np.mean((hi - lo) / 2.0)) / gravity, 1)
-        if k > 0:
+        spread_lo, spread_hi = np.percentile(raw, [1.0, 99.0], axis=0)
+        k = round(float(np.mean((spread_hi - spread_lo) / 2.0)) / gravity, 1)
+        at_rest = rest_scale(rec, triad(k), zero, gravity) if rec is not None and k > 0 else None
+        if at_rest is not None:
+            k = at_rest[0]
+            notes.append(f"the device's nominal scale, {k:g} counts per m/s^2, is the median |reading| of "
+                         f"{at_rest[1]} still stretch{'es' if at_rest[1] > 1 else ''} over g (|f| = g at rest; "
+                         "state --full-scale G for the chip's)")
+        elif k > 0:
             notes.append(f"the device's nominal scale, {k:g} counts per m/s^2, is taken from the readings' "
-                         "spread (state --full-scale G for the chip's)")
+                         "spread, 1st to 99th percentile, as if every axis turned through +-1 g (no still stretch "
+                         "found; state --full-scale G for the chip's)")
         else:
             k = 2.0 ** (bits - 1) / (2.0 * gravity)
             notes.append(f"the readings span no range: the device's nominal scale is a guess ({k:g} counts per "
                          "m/s^2, +-2 g); state --full-scale G")
-    lo, hi = adc_range(bits, signed)
-    return Device(name=name, sample_rate_hz=round(rate, 6), gravity_mps2=gravity, raw_min=lo, raw_max=hi,
-                  positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, k),
-                  zero_counts=np.full(3, 0.0 if signed else 2.0 ** (bits - 1)), noise_mps2=0.0)
+    return triad(k)
+
+
+def rest_scale(rec: Recording, device: Device, zero: np.ndarray, gravity: float) -> tuple[float, int] | None:
+    """Counts per m/s^2 from the recording's still stretches (:func:`static.detect_static`,
+    the noise estimated from the readings): the median over them of |mean reading - zero|
+    over ``gravity`` (|f| = g at rest, the three channels together), of those that agree
+    within REST_F_AGREE where three or more do (:func:`static.scale_agreement`: a stretch in
+    free fall is no rest), to 4 significant digits; and how many stretches gave it.  None
+    where there is no still stretch (or they read no force)."""
+    intervals = detect_static(rec, device)
+    norms = np.array([np.linalg.norm(rec.raw[a:b].mean(axis=0) - zero) for a, b in intervals])
+    if norms.size == 0 or not np.any(norms > 0):
+        return None
+    agreed = scale_agreement(norms)
+    if agreed is not None:
+        norms = norms[agreed[1]]
+    return float(f"{float(np.median(norms)) / gravity:.4g}"), int(norms.size)
 
 
 def check_range(raw: np.ndarray, bits: int, signed: bool, source: str, locate) -> None:
@@ -210,8 +245,10 @@ def in_sample_order(index: np.ndarray, source: str, column: str | None, line) ->
 def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndarray | None, part: list[str] | None,
            opts: Options, scale: Scale | None, signed: bool, rate: float | None, metadata: dict[str, str],
            notes: list[str], locate, index_column: str | None, device: Device | None = None,
-           kept: tuple[np.ndarray, np.ndarray] | None = None, time_column: str | None = None) -> Converted:
-    """Range check, sample order, time, poses, metadata and the nominal device, shared by the formats."""
+           kept: tuple[np.ndarray, np.ndarray] | None = None, time_column: str | None = None,
+           t0: float = 0.0) -> Converted:
+    """Range check, sample order, time, poses, metadata and the nominal device, shared by the formats
+    (without time stamps ``t``, t is ``t0`` (s) + the sample index over ``rate``)."""
     check_range(raw, opts.bits, signed, source, locate)
     extra_columns: dict[str, list[str]] = {}
     order = in_sample_order(index, source, index_column, lambda i: locate(i, 0)[0]) if t is None else None
@@ -219,7 +256,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
         raw, index = raw[order], index[order]
         part = None if part is None else [part[i] for i in order.tolist()]
     if t is None:
-        t = index / rate
+        t = t0 + index / rate
     else:
         t = np.asarray(t)           # int64 from exact_time: an epoch in ns
         t, rel = time_in_seconds(t if t.dtype.kind in "iu" else t.astype(float), opts.time_unit, time_column, source,
@@ -253,7 +290,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
     rec = Recording(t=t, raw=raw, f=f, pose=pose, metadata=metadata, extra=extra_columns, source=source)
     device_notes: list[str] = []
     if device is None:
-        device = nominal_triad(f"{fmt}-triad", rate, gravity, raw, opts.bits, signed, scale, device_notes)
+        device = nominal_triad(f"{fmt}-triad", rate, gravity, raw, opts.bits, signed, scale, device_notes, rec)
     return Converted(rec, device, fmt, names, notes, scale, order is not None, device_notes)
 
 

@@ -12,7 +12,7 @@ import numpy as np
 from .convert_axes import AxisColumn, names_unit, px4_export, table_axes
 from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
                              whole_counts)
-from .convert_time import TIME_COLUMN_RE, unit_in_name
+from .convert_time import TIME_COLUMN_RE, datetime_stamps, is_datetime, unit_in_name
 from .csvtable import convert_columns, got_text
 from .errors import InputError
 from .recording_checks import repeated_rows
@@ -168,8 +168,9 @@ def comment_rate(metadata: dict[str, str]) -> tuple[float, str] | None:
 def choose_time_column(source: str, names: list[str], acc: list[str], table, rows: np.ndarray, rate_stated: bool,
                        header_row: int, notes: list[str]) -> str | None:
     """The table's time column among the names TIME_COLUMN_RE matches (``Time (s)``,
-    ``timestamp_us``, ``Time(hh:mm:ss)``): those whose cells are numbers (a clock time
-    ``05:34:44`` or a date is no time stamp), and of those the first whose name states a
+    ``timestamp_us``, ``Time(hh:mm:ss)``): those whose cells are numbers or full ISO-8601
+    date-times (:func:`convert_time.is_datetime`; a clock time ``05:34:44`` or a date alone
+    is no time stamp), and of those the first whose name states a
     unit (``Timestamp(Ms)``), else the first.  A note names the column used and those passed
     over when there was a choice.  None when there is no candidate, or (``rate_stated``: the
     rate is given) when none is numeric, with a note.
@@ -188,7 +189,7 @@ def choose_time_column(source: str, names: list[str], acc: list[str], table, row
     if not cands:
         return None
     seen = {n: first_cell(table, names.index(n), rows) for n in cands}
-    numeric = [n for n in cands if seen[n] is None or is_number(seen[n][1])]
+    numeric = [n for n in cands if seen[n] is None or is_number(seen[n][1]) or is_datetime(seen[n][1])]
 
     def holds(n: str) -> str:
         i, text = seen[n]
@@ -217,13 +218,47 @@ def choose_time_column(source: str, names: list[str], acc: list[str], table, row
     return chosen
 
 
+def dated_stamps(source: str, table, rows: np.ndarray, column: str, j: int, opts: Options,
+                 notes: list[str]) -> np.ndarray:
+    """The time column ``column`` (index ``j``) of ISO-8601 date-times as int64 ns since the
+    epoch (:func:`convert_time.datetime_stamps`; 0 in the rows not read), and ``opts.time_unit``
+    set to ns.
+
+    Raises
+    ------
+    InputError
+        ``--time-unit`` stated (a date-time carries its unit), or a bad date-time.
+    """
+    if opts.time_unit != "auto":
+        raise InputError(source, f"--time-unit {opts.time_unit}: the time column {column!r} holds date-times, which "
+                         "carry their unit", column=column)
+    stamps = np.zeros(table.n, dtype=np.int64)
+    stamps[rows] = datetime_stamps([table.cell(i, j) for i in rows.tolist()], source,
+                                   [table.line(i) for i in rows.tolist()], column, notes)
+    opts.time_unit = "ns"
+    return stamps
+
+
+def repeated_stamps(stamps: np.ndarray, rows: np.ndarray, notes: list[str]) -> np.ndarray:
+    """``rows`` less those whose time stamp repeats the row before's (``--repeated-stamps
+    drop``: the readings differ -- :func:`unrepeated` has left out the rows that repeat both),
+    with a note counting them."""
+    same = np.flatnonzero(np.diff(stamps[rows]) == 0) + 1
+    if same.size:
+        notes.append(f"{same.size} row(s) repeat the time stamp of the row before with other readings (a logger that "
+                     "stamps two samples with one stamp): left out (--repeated-stamps drop)")
+    return np.delete(rows, same)
+
+
 def table_time(source: str, stamps: np.ndarray, table, rows: np.ndarray, column: str, j: int) -> np.ndarray:
     """The time stamps of the rows read (``rows``), as written: finite and increasing.
 
     Raises
     ------
     InputError
-        An empty or unknown stamp, or one not after the stamp before, naming its line.
+        An empty or unknown stamp, or one not after the stamp before, naming its line; a
+        repeated one counts the rows that repeat the stamp before and names the option that
+        leaves them out.
     """
     t = stamps[rows]
     bad = np.flatnonzero(~np.isfinite(t))
@@ -234,8 +269,12 @@ def table_time(source: str, stamps: np.ndarray, table, rows: np.ndarray, column:
     back = np.flatnonzero(np.diff(t) <= 0)
     if back.size:
         h, i = int(rows[back[0]]), int(rows[back[0] + 1])
+        same = int(np.sum(np.diff(t) == 0))
+        what = ("" if t[back[0] + 1] != t[back[0]] else
+                f"; {same} row(s) repeat the stamp of the row before with other readings (a logger that stamps two "
+                "samples with one stamp): --repeated-stamps drop leaves them out")
         raise InputError(source, f"time stamp {table.cell(i, j).strip()!r} is not after {table.cell(h, j).strip()!r} "
-                         f"(row {table.line(h)}): time stamps must increase", row=table.line(i), column=column)
+                         f"(row {table.line(h)}): time stamps must increase{what}", row=table.line(i), column=column)
     return t
 
 
@@ -378,13 +417,18 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
     if time_column is not None:
         jt = names.index(time_column)
         want[time_column] = "ref"
-        numbers, err = convert_columns(table, {time_column: (jt, "ref")})
-        if err is not None:
-            raise InputError(source, err[2], row=table.line(err[0]), column=time_column)
-        values[time_column] = numbers[time_column]
-        stamps = exact_time(values[time_column], lambda: table.strings(jt), rows)   # an epoch in ns: int64
+        probe = first_cell(table, jt, rows)
+        if probe is not None and is_datetime(probe[1]):
+            stamps = dated_stamps(source, table, rows, time_column, jt, opts, notes)
+        else:
+            numbers, err = convert_columns(table, {time_column: (jt, "ref")})
+            if err is not None:
+                raise InputError(source, err[2], row=table.line(err[0]), column=time_column)
+            stamps = exact_time(numbers[time_column], lambda: table.strings(jt), rows)   # an epoch in ns: int64
         sample_index(source, time_column, stamps[rows], opts.rate_hz, pre.header_line)
         rows = unrepeated(rows, stamps, np.column_stack([values[a] for a in acc]), notes)
+        if opts.repeated_stamps == "drop":
+            rows = repeated_stamps(stamps, rows, notes)
     rows = placeholder_rows(rows, np.column_stack([values[a] for a in acc]), table, scale,
                             opts.gravity_mps2 or STANDARD_GRAVITY, notes)
     matrix = np.column_stack([values[a][rows] for a in acc])

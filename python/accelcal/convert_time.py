@@ -3,6 +3,7 @@ micros(), an epoch in nanoseconds) and the sample rate their steps give (a host 
 the samples in bursts).  Used by :mod:`accelcal.convert` for every format with a time column."""
 from __future__ import annotations
 
+import datetime
 import re
 
 import numpy as np
@@ -11,7 +12,8 @@ from .errors import InputError
 from .recording_checks import even_steps
 
 __all__ = ["TIME_FACTORS", "TIME_COLUMN_RE", "MIN_PLAUSIBLE_HZ", "BURST_SHARE", "FLOAT_EXACT", "unit_in_name",
-           "exact_stamps", "time_in_seconds", "burst_fit", "burst_starts", "burst_rate", "rate_from_t"]
+           "exact_stamps", "DATETIME_RE", "is_datetime", "datetime_stamps", "time_in_seconds", "burst_fit",
+           "burst_starts", "burst_rate", "rate_from_t"]
 
 #: the unit of a time column: its factor to seconds
 TIME_FACTORS = {"s": 1.0, "ms": 1e3, "us": 1e6, "ns": 1e9}
@@ -39,6 +41,110 @@ INTEGER_CELLS_RE = re.compile(r"(?:[ \t]*[+-]?[0-9]+[ \t]*\n)*[ \t]*[+-]?[0-9]+[
 #: a table's time column: t, time, timestamp, with a unit in () or [] or after _ (``time_ms``)
 TIME_COLUMN_RE = re.compile(r"(?:t|ts|tstamp|time|timestamp|time[ _]stamp)(?:\s*[(\[][^)\]]*[)\]]|_[a-z\u00b5]+)?"
                             r"|%time|(?:field\.)?header\.stamp", re.I)     # rostopic echo -p: ns
+
+
+#: an ISO-8601 date and time of day: ``2019-10-16T12:09:01.702+02:00``, ``2019-12-23 21:04:06.690``,
+#: ``2021-05-07T10:29:56``, ``...Z``; seconds optional, a fraction of any length, a zone or none
+DATETIME_RE = re.compile(r"(?P<y>\d{4})-(?P<mo>\d{2})-(?P<d>\d{2})[T ](?P<h>\d{2}):(?P<mi>\d{2})"
+                         r"(?::(?P<s>\d{2})(?:[.,](?P<frac>\d+))?)?"
+                         r"(?P<zone>Z|[+-]\d{2}(?::?\d{2})?)?", re.I)
+#: the Unix epoch as a proleptic Gregorian ordinal (days)
+EPOCH_DAY = datetime.date(1970, 1, 1).toordinal()
+
+
+def is_datetime(text: str) -> bool:
+    """Whether a time column's cell is a full ISO-8601 date-time (a date and a time of day,
+    :data:`DATETIME_RE`); a time of day alone or a date alone is not."""
+    return DATETIME_RE.fullmatch(text.strip()) is not None
+
+
+def datetime_ns(m: re.Match) -> tuple[int, int | None]:
+    """A matched date-time as whole nanoseconds since 1970-01-01 of its own clock (the zone not
+    applied; digits of the fraction beyond the ns dropped), and its zone's offset east of UTC
+    in ns (None when it states no zone).  Raises ValueError for a day or time that does not
+    exist (2019-02-30, 25:00)."""
+    g = m.groupdict()
+    day = datetime.date(int(g["y"]), int(g["mo"]), int(g["d"])).toordinal() - EPOCH_DAY
+    h, mi, s = int(g["h"]), int(g["mi"]), int(g["s"] or 0)
+    if h > 23 or mi > 59 or s > 60:             # 60: a leap second
+        raise ValueError("no such time of day")
+    ns = ((day * 24 + h) * 60 + mi) * 60 + s
+    ns = ns * 1_000_000_000 + int(((g["frac"] or "") + "000000000")[:9])
+    zone = g["zone"]
+    if zone is None:
+        return ns, None
+    if zone.upper() == "Z":
+        return ns, 0
+    digits = zone[1:].replace(":", "")
+    offset = (int(digits[:2]) * 60 + int(digits[2:4] or 0)) * 60_000_000_000
+    return ns, offset if zone[0] == "+" else -offset
+
+
+def datetime_stamps(cells: list[str], source: str, lines: list[int], column: str,
+                    notes: list[str]) -> np.ndarray:
+    """A time column of ISO-8601 date-times (:func:`is_datetime`) as int64 nanoseconds since
+    1970-01-01 UTC, exact to the ns (float64 seconds since the epoch keep ~0.2 us).
+
+    Date-times with a zone (``+02:00``, ``Z``) are converted to UTC, also where the zone
+    changes within the file (a clock put forward: a note names the row); date-times without
+    one are read as the clock wrote them (taken for UTC, with a note).
+
+    Parameters
+    ----------
+    cells : list of str
+        The column's cells of the rows read, in order.
+    source : str
+        The file, for the error.
+    lines : list of int
+        Each cell's line in the file, for the error and the note.
+    column : str
+        The column's name, for the error.
+    notes : list of str
+        Appended to.
+
+    Returns
+    -------
+    ndarray (n,) int64
+        ns since 1970-01-01 00:00 UTC (of the clock's own zone where none is stated).
+
+    Raises
+    ------
+    InputError
+        A cell that is no date-time, a day or time that does not exist, or a date-time
+        without a zone among ones with a zone (or the reverse), naming its row.
+    """
+    out = np.empty(len(cells), dtype=np.int64)
+    first_zone: int | None = None
+    changed: tuple[int, int, int] | None = None
+    for i, cell in enumerate(cells):
+        m = DATETIME_RE.fullmatch(cell.strip())
+        try:
+            if m is None:
+                raise ValueError
+            ns, zone = datetime_ns(m)
+        except ValueError:
+            raise InputError(source, f"expected a date-time as in the column's first row ({cells[0].strip()!r}), "
+                             f"got {cell.strip()!r}", row=lines[i], column=column) from None
+        if i == 0:
+            first_zone = zone
+        elif (zone is None) != (first_zone is None):
+            said = ("states no zone", "does") if zone is None else ("states a zone", "does not")
+            raise InputError(source, f"date-time {cell.strip()!r} {said[0]} where the first row's "
+                             f"({cells[0].strip()!r}) {said[1]}: "
+                             "the two cannot be put on one clock", row=lines[i], column=column)
+        elif zone != first_zone and changed is None:
+            changed = (i, first_zone, zone)
+        out[i] = ns - (zone or 0)
+    said = f"{column!r} holds ISO-8601 date-times: t is seconds since 1970-01-01 "
+    if first_zone is None:
+        notes.append(said + "on their clock (they state no zone; taken for UTC)")
+    elif changed is None:
+        notes.append(said + f"UTC (their zone, UTC{first_zone / 3.6e12:+g} h, taken off)")
+    else:
+        i, was, now = changed
+        notes.append(said + f"UTC; their zone changes at row {lines[i]} (UTC{was / 3.6e12:+g} h to "
+                     f"UTC{now / 3.6e12:+g} h, a clock put forward or back), each taken off")
+    return out
 
 
 def unit_in_name(name: str | None) -> str | None:

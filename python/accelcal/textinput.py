@@ -101,7 +101,7 @@ BLANKS = re.compile(rb"[ \t]+")
 EDGE_BLANKS = re.compile(rb"^[ \t]+|[ \t]+$", re.M)
 
 
-def read_text_bytes(path: Any) -> tuple[str, bytes]:
+def read_text_bytes(path: Any, semicolons: bool = True) -> tuple[str, bytes]:
     """The bytes of a text file, decompressed when its first bytes show a compression
     (:data:`COMPRESSIONS`: gzip, bzip2, xz, zstd, a zip archive of one file).
 
@@ -110,6 +110,9 @@ def read_text_bytes(path: Any) -> tuple[str, bytes]:
     path : str or os.PathLike
         The file.  ``.gz``, ``.bz2``, ``.xz``, ``.zst`` or ``.zip`` in the name is neither
         needed nor looked at.
+    semicolons : bool
+        Rewrite a semicolon-separated export as CSV (:func:`semicolons_to_commas`; False:
+        the text as the file holds it, for quoting its lines).
 
     Returns
     -------
@@ -138,7 +141,7 @@ def read_text_bytes(path: Any) -> tuple[str, bytes]:
         data = data[3:]
     if b"\r" in data:
         data = data.replace(b"\r\n", b"\n")
-    return source, semicolons_to_commas(data)
+    return source, semicolons_to_commas(data) if semicolons else data
 
 
 def semicolons_to_commas(data: bytes) -> bytes:

@@ -1,0 +1,280 @@
+"""``accelcal convert`` of the shapes watch, phone and logger exports come in (a tester's
+public recordings: a Garmin watch's and a machine survey's ISO-8601 stamps, an Axivity
+AX6's formatted stamps, an Empatica E4's two-row preamble, headerless whitespace text).
+
+Each file is written here in the recording's shape from known counts and times, so the
+expected recording is those counts and times; bad files give one line naming the file and
+row, exit 2, and no output.
+"""
+from __future__ import annotations
+
+import datetime as dt
+import json
+
+import numpy as np
+import pytest
+
+from accelcal.recording import read_recording
+from cli_run import run
+
+G = 9.80665
+
+
+def _counts(n, seed=0, mean=(-36.0, 620.0, -824.0), sd=4.0):
+    rng = np.random.default_rng(seed)
+    return np.round(np.asarray(mean) + sd * rng.standard_normal((n, 3))).astype(int)
+
+
+def _write(path, lines):
+    path.write_text("".join(line + "\n" for line in lines))
+    return path
+
+
+def _convert(tmp_path, capfd, src, *args):
+    out, dev = tmp_path / "o.csv", tmp_path / "d.json"
+    rc, said, err, _ = run(["convert", src, *args, "-o", out, "--device-out", dev], capfd)
+    assert rc == 0, err
+    assert len(said.splitlines()) == 1
+    return read_recording(out), json.loads(dev.read_text()), err, said
+
+
+def _refused(tmp_path, capfd, src, *args, name="refused"):
+    out = tmp_path / name
+    out.mkdir()
+    rc, _, err, _ = run(["convert", src, *args, "-o", out / "o.csv"], capfd)
+    assert rc == 2 and len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert not list(out.iterdir())
+    assert src.name in err
+    return err
+
+
+def _stamp(when, form):
+    """``when`` (an aware datetime) written as an ISO-8601 date-time of the form ``form``."""
+    if form == "T+zone":
+        return when.isoformat(timespec="milliseconds")
+    if form == "space, no zone":
+        return when.replace(tzinfo=None).isoformat(sep=" ", timespec="milliseconds")
+    if form == "no fraction":
+        return when.replace(tzinfo=None).isoformat(timespec="seconds")
+    if form == "Z, us":
+        return when.astimezone(dt.timezone.utc).replace(tzinfo=None).isoformat(timespec="microseconds") + "Z"
+    raise ValueError(form)
+
+
+# ---- ISO-8601 date-time stamps --------------------------------------------------------
+
+@pytest.mark.parametrize("form,rate", [("T+zone", 25.0), ("space, no zone", 100.0), ("no fraction", 1.0),
+                                       ("Z, us", 9.342)])
+def test_iso_datetime_stamps_are_time_stamps(tmp_path, capfd, form, rate):
+    """A Garmin watch's ``2019-10-16T12:09:01.702+02:00``, an AX6's ``2019-12-23
+    21:04:06.690``, a survey logger's ``2021-05-07T10:29:56.172``: full date-times are time
+    stamps (they had been refused as 'a clock time or a date'), read to the ns, the zone
+    taken off; the stamp machinery gives the rate and reports the pause (50 steps here)."""
+    n = 400
+    zone = dt.timezone(dt.timedelta(hours=2))
+    start = dt.datetime(2019, 10, 16, 12, 9, 1, 702000, tzinfo=zone)
+    step_us = round(1e6 / rate)
+    if form == "no fraction":
+        start = start.replace(microsecond=0)
+    if form == "T+zone" or form == "space, no zone":
+        step_us = round(step_us / 1000) * 1000            # the stamps keep ms
+    offs_us = np.arange(n) * step_us + np.where(np.arange(n) >= 250, 50 * step_us, 0)
+    whens = [start + dt.timedelta(microseconds=int(u)) for u in offs_us]
+    c = _counts(n)
+    src = _write(tmp_path / "acc.csv", ["timestamp,accX,accY,accZ"] +
+                 [f"{_stamp(w, form)},{a},{b},{d}" for w, (a, b, d) in zip(whens, c)])
+    rec, dev, err, said = _convert(tmp_path, capfd, src)
+    np.testing.assert_array_equal(rec.raw, c)
+    np.testing.assert_allclose(rec.t - rec.t[0], offs_us / 1e6, rtol=0, atol=1e-6)
+    epoch = whens[0].timestamp()
+    if form in ("space, no zone", "no fraction"):
+        epoch = whens[0].replace(tzinfo=dt.timezone.utc).timestamp()       # the clock's time, taken for UTC
+        assert "state no zone" in err
+    else:
+        assert "UTC" in err and "state no zone" not in err
+    assert rec.t[0] == pytest.approx(epoch, abs=1e-6)
+    assert dev["sample_rate_hz"] == pytest.approx(1e6 / step_us, rel=1e-6)     # the device keeps 6 decimals
+    assert "t has 1 step longer than 1.8 x its median step" in err and "clock time or a date" not in err
+
+
+def test_a_zone_change_is_converted_to_utc_and_a_missing_zone_refused(tmp_path, capfd):
+    """A clock put forward within a file (+01:00 to +02:00): every stamp in UTC, the steps
+    even, a note naming the row.  A date-time without a zone among ones with a zone cannot
+    be put on the same clock: refused naming its row.  A --time-unit is refused (date-times
+    carry theirs); a clock time without a date stays refused as before."""
+    n = 60
+    utc = [dt.datetime(2020, 3, 29, 0, 59, 58, tzinfo=dt.timezone.utc) + dt.timedelta(milliseconds=50 * k)
+           for k in range(n)]
+    zoned = [w.astimezone(dt.timezone(dt.timedelta(hours=1 if k < 40 else 2))) for k, w in enumerate(utc)]
+    c = _counts(n, seed=2)
+    lines = [f"{w.isoformat(timespec='milliseconds')},{a},{b},{d}" for w, (a, b, d) in zip(zoned, c)]
+    src = _write(tmp_path / "dst.csv", ["time,accX,accY,accZ"] + lines)
+    rec, dev, err, _ = _convert(tmp_path, capfd, src)
+    np.testing.assert_allclose(np.diff(rec.t), 0.05, atol=1e-6)
+    assert rec.t[0] == pytest.approx(utc[0].timestamp(), abs=1e-6)
+    assert "zone changes at row 42 (UTC+1 h to UTC+2 h" in err
+    lines[10] = lines[10].replace("+01:00", "")
+    bad = _write(tmp_path / "mixed.csv", ["time,accX,accY,accZ"] + lines)
+    err = _refused(tmp_path, capfd, bad)
+    assert "row 12, column time" in err and "states no zone where the first row's" in err
+    err = _refused(tmp_path, capfd, src, "--time-unit", "ms", name="unit")
+    assert "holds date-times, which carry their unit" in err
+    clock = _write(tmp_path / "clock.csv", ["time,accX,accY,accZ"] + [f"12:09:{k:02d},1,2,3" for k in range(10)])
+    err = _refused(tmp_path, capfd, clock, name="clock")
+    assert "'12:09:00') is a clock time or a date, not time stamps" in err
+
+
+def test_repeated_stamps_are_counted_and_can_be_left_out(tmp_path, capfd):
+    """A Garmin export stamps two samples with one stamp now and then (93 of 10,000 rows:
+    steps 80, 40, 40, 0 ms): refused at the first, the message counting them and naming
+    --repeated-stamps drop, which leaves them out with a note (the rate stays 25 Hz)."""
+    n = 200
+    ms = 40 * np.arange(n)
+    for k in (50, 120, 170):                 # a slot skipped, and two steps on one stamp given twice
+        ms[k:k + 2] += 40
+        ms[k + 2] = ms[k + 1]
+    c = _counts(n, seed=3)
+    start = dt.datetime(2019, 10, 16, 12, 9, 1, 702000, tzinfo=dt.timezone(dt.timedelta(hours=2)))
+    stamps = [(start + dt.timedelta(milliseconds=int(v))).isoformat(timespec="milliseconds") for v in ms]
+    src = _write(tmp_path / "acc.csv", ["timestamp;accX;accY;accZ"] +
+                 [f"{s};{a};{b};{d}" for s, (a, b, d) in zip(stamps, c)])
+    err = _refused(tmp_path, capfd, src)
+    assert "row 54, column timestamp" in err and "time stamps must increase; 3 row(s) repeat the stamp" in err
+    assert "--repeated-stamps drop leaves them out" in err
+    rec, dev, err, _ = _convert(tmp_path, capfd, src, "--repeated-stamps", "drop")
+    keep = np.delete(np.arange(n), [52, 122, 172])
+    np.testing.assert_array_equal(rec.raw, c[keep])
+    assert dev["sample_rate_hz"] == pytest.approx(25.0, rel=1e-9)
+    assert "3 row(s) repeat the time stamp of the row before with other readings" in err
+    err = _refused(tmp_path, capfd, _write(tmp_path / "r.csv", ["t,raw_0,raw_1,raw_2", "0,1,2,3", "1,1,2,3"]),
+                   "--repeated-stamps", "drop", name="csv")
+    assert "--repeated-stamps applies to a table's time column" in err
+
+
+# ---- the nominal scale a device file gets from the readings ----------------------------
+
+def _watch(n_rest_s=4.0, rate=25.0, per_g=1000.0, seed=4):
+    """A wrist watch's counts (1 mg each): still poses whose z never points up, joined by 1 s
+    turns, each pose's direction of f known."""
+    rng = np.random.default_rng(seed)
+    dirs = np.array([[0, 0, -1], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -0.7071, -0.7071], [0.7071, 0, -0.7071],
+                     [0, 0.8, 0.2], [-0.6, 0.6, -0.529]])
+    dirs /= np.linalg.norm(dirs, axis=1)[:, None]
+    parts = []
+    for a, b in zip(dirs, np.vstack([dirs[1:], dirs[:1]])):
+        parts.append(np.repeat(a[None], int(n_rest_s * rate), axis=0))
+        s = np.linspace(0, 1, int(rate))[:, None]
+        turn = (1 - s) * a + s * b + 0.1 * np.sin(np.pi * s) * rng.standard_normal(3)
+        parts.append(turn / np.linalg.norm(turn, axis=1)[:, None] * (1 + 0.1 * np.sin(2 * np.pi * s)))
+    f = np.vstack(parts)
+    return np.round(per_g * f + 3.0 * rng.standard_normal(f.shape)).astype(int)
+
+
+def test_the_nominal_scale_is_taken_from_the_still_stretches(tmp_path, capfd):
+    """A watch on a wrist: its z never points up, so half the 1-99 % spread (which assumes every
+    axis turned through +-1 g) said 74 counts per m/s^2 for a Garmin's 105.8.  The still
+    stretches read |f| = g whatever the orientation: their median |reading| over g is the
+    scale (1000 counts per g here), with a note saying so."""
+    c = _watch()
+    src = _write(tmp_path / "watch.csv", ["accX,accY,accZ"] + [f"{a},{b},{d}" for a, b, d in c])
+    rec, dev, err, _ = _convert(tmp_path, capfd, src, "--rate", "25")
+    k = dev["channels"][0]["counts_per_mps2"]
+    assert k == pytest.approx(1000.0 / G, rel=0.005), err
+    lo, hi = np.percentile(c, [1, 99], axis=0)
+    assert np.mean(hi - lo) / 2 / G < 0.85 * k              # what the spread had given
+    assert "is the median |reading| of 8 still stretches over g (|f| = g at rest" in err
+
+
+def test_without_a_still_stretch_the_spread_gives_the_scale(tmp_path, capfd):
+    """A recording that never holds still (a device tumbling the whole time): the spread gives
+    the scale, and the note says it assumes each axis turned through +-1 g."""
+    n, rate = 1500, 50.0
+    t = np.arange(n) / rate
+    f = np.column_stack([np.cos(2.1 * t) * np.cos(0.7 * t), np.sin(2.1 * t) * np.cos(0.7 * t), np.sin(0.7 * t)])
+    c = np.round(500.0 * f + 2.0 * np.random.default_rng(5).standard_normal(f.shape)).astype(int)
+    src = _write(tmp_path / "tumble.csv", ["accX,accY,accZ"] + [f"{a},{b},{d}" for a, b, d in c])
+    rec, dev, err, _ = _convert(tmp_path, capfd, src, "--rate", "50")
+    lo, hi = np.percentile(c, [1, 99], axis=0)
+    assert dev["channels"][0]["counts_per_mps2"] == pytest.approx(round(np.mean(hi - lo) / 2 / G, 1))
+    assert "taken from the readings' spread, 1st to 99th percentile, as if every axis turned through +-1 g" in err
+
+
+# ---- files without a header -------------------------------------------------------------
+
+def test_headerless_whitespace_rows_say_what_was_seen_and_what_to_do(tmp_path, capfd):
+    """An MPU-6050's tab-separated 'ax ay az gx gy gz' without a header had been taken for
+    imu_tk's text ('expected 4 cells as in the header', with no header); three numbers a line
+    (Magneto's input) are a log like their comma-separated kin; four are imu_tk's, and --rate
+    then says the file was read so rather than blaming imu_tk files the user never named."""
+    c = _counts(40, mean=(608, -372, 15556))
+    six = _write(tmp_path / "sample_data.txt", [f"{a}\t{b}\t{d}\t-374\t166\t-77" for a, b, d in c])
+    err = _refused(tmp_path, capfd, six)
+    first = "\\t".join(str(v) for v in c[0])
+    assert f"sample_data.txt: row 1: 6 whitespace-separated numbers a row and no header ('{first}\\t-374" in err
+    assert ("imu_tk's text needs 4 (t ax ay az); for three readings a line give --format log --rate HZ; for other "
+            "layouts add a header line naming the columns (ax ay az gx gy gz;") in err
+    assert "as in the header" not in err
+    three = _write(tmp_path / "acceldata.txt", [f"{a}\t{b}\t{d}" for a, b, d in c])
+    rec, dev, err, said = _convert(tmp_path, capfd, three, "--rate", "10")
+    np.testing.assert_array_equal(rec.raw, c)
+    assert said.startswith("log: 40 rows")
+    err = _refused(tmp_path, capfd, three, name="norate")
+    assert "(lines of three numbers, no header) have no time column: give the sample rate with --rate HZ" in err
+    four = _write(tmp_path / "xsens.txt", [f"{k / 100:.2f} {a} {b} {d}" for k, (a, b, d) in enumerate(c)])
+    err = _refused(tmp_path, capfd, four, "--rate", "100", name="four")
+    assert "--rate: the file was read as imu_tk's text (4 numbers a row and no header: t ax ay az)" in err
+
+
+def test_headerless_csv_rows_are_quoted_as_the_file_holds_them(tmp_path, capfd):
+    """A Garmin export has no header and ';' between its cells: the message had quoted the line
+    with ',' (the file's text after its rewrite as CSV).  It quotes the file's own line, says
+    that there is no header and which one to add."""
+    c = _counts(30)
+    src = _write(tmp_path / "acc.csv", [f"2019-10-16T12:09:{1 + k // 25:02d}.{40 * (k % 25):03d}+02:00;{a};{b};{d}"
+                                        for k, (a, b, d) in enumerate(c)])
+    err = _refused(tmp_path, capfd, src)
+    assert ("acc.csv: row 1: 4 numbers a row (the first a date-time) and no header "
+            f"('2019-10-16T12:09:01.000+02:00;{';'.join(str(v) for v in c[0])}'): for other layouts add a header "
+            "line naming the columns (t,ax,ay,az; a time column t, time or timestamp, else --rate HZ)") in err, err
+    ax3 = _write(tmp_path / "ax3.csv", [f"{1551178506 + k / 100:.4f},0.328125,0.984375,0.203125" for k in range(30)])
+    err = _refused(tmp_path, capfd, ax3, name="ax3")
+    assert "row 1: 4 numbers a row and no header ('1551178506.0000,0.328125," in err
+
+
+# ---- an Empatica E4's export ----------------------------------------------------------
+
+def test_an_empatica_e4_export_is_read_with_its_start_and_rate(tmp_path, capfd):
+    """An E4's ACC.csv: row 1 the start as unix time and row 2 the rate, each repeated in the
+    three columns, then x,y,z in signed 8-bit counts of 1/64 g.  Row 1 had been read as a
+    reading ('1560279825 counts is outside signed 8-bit ... (state --bits N)').  Now: t from
+    the start at row 2's rate, the device 64 counts per g in 8 bits; --format log names the
+    layout; a row 2 that is no rate is one line saying what to do."""
+    c = _counts(300, seed=6, mean=(-61, 25, 6), sd=2.0)
+    pre = ["1560279825.000000, 1560279825.000000, 1560279825.000000", "32.000000, 32.000000, 32.000000"]
+    src = _write(tmp_path / "ACC.csv", pre + [f"{a},{b},{d}" for a, b, d in c])
+    rec, dev, err, said = _convert(tmp_path, capfd, src)
+    assert said.startswith("e4: 300 rows, 3 channels, 32 Hz")
+    np.testing.assert_array_equal(rec.raw, c)
+    np.testing.assert_allclose(rec.t, 1560279825.0 + np.arange(300) / 32.0, rtol=0, atol=1e-6)
+    assert dev["sample_rate_hz"] == 32.0 and (dev["raw_min"], dev["raw_max"]) == (-128, 127)
+    assert dev["channels"][0]["counts_per_mps2"] == pytest.approx(64.0 / G)
+    assert "rows 1-2 are an Empatica E4's session start (1560279825.000000 unix s) and sample rate (32 Hz)" in err
+    rec, dev, err, said = _convert(tmp_path, capfd, src, "--rate", "32", "--full-scale", "2", "--bits", "8")
+    np.testing.assert_array_equal(rec.raw, c)
+    err = _refused(tmp_path, capfd, src, "--format", "log", "--rate", "32", "--bits", "8")
+    assert "row 1: rows 1-2 are one value repeated, a start time and a rate, as an Empatica E4's export" in err
+    assert "--bits" not in err
+    bad = _write(tmp_path / "bad.csv", [pre[0], "0.000000, 0.000000, 0.000000"] + [f"{a},{b},{d}" for a, b, d in c])
+    err = _refused(tmp_path, capfd, bad, name="bad")
+    assert "row 2: rows 1-2 look like an Empatica E4's start time (1560279825, unix s) and sample rate, but row 2's " \
+           "'0.000000' is no rate in Hz: remove the two rows and give --rate HZ" in err
+
+
+def test_bare_x_y_z_columns_are_refused_in_words_that_fit_any_logger(tmp_path, capfd):
+    """A machine survey's 'timestamp,x,y,z' (not PX4's): the refusal had explained only PX4's
+    ulog2csv; it says what the names lack and how to name them, PX4's file name last."""
+    src = _write(tmp_path / "survey.csv", ["timestamp,x,y,z"] + [f"2021-05-07T10:29:{k:02d}.172,0.05,-0.05,-0.98"
+                                                                for k in range(20)])
+    err = _refused(tmp_path, capfd, src)
+    assert ("the columns x, y, z do not say they are an accelerometer's (a gyroscope's or a magnetometer's are "
+            "written alike): if they are, name them acc_x, acc_y, acc_z (a PX4") in err
