@@ -27,6 +27,7 @@ import numpy as np
 
 from .calibrate import calibrate_recordings
 from .calibration import Calibration, load_calibration, save_calibration
+from .cli_calibrate import record_warnings
 from .device import Device, default_device, load_device, save_device
 from .diagnose import diagnose as _diagnose_impl
 from .errors import AccelcalError, atomic_write
@@ -174,7 +175,8 @@ def calibrate(device: Any, recordings: Any, method: str | None = None, *,
     -------
     Calibration
         Offsets (counts), sensitivity vectors (counts per m/s^2), uncertainties and the
-        fit's statistics in ``extra["fit"]`` (chi2, dof).
+        fit's statistics in ``extra["fit"]`` (chi2, dof); what ``accelcal calibrate`` would
+        warn of, one line each, in ``extra["warnings"]`` (absent when nothing).
 
     Examples
     --------
@@ -186,8 +188,10 @@ def calibrate(device: Any, recordings: Any, method: str | None = None, *,
     'full'
     """
     dev = as_device(device)
-    return calibrate_recordings(dev, _as_recordings(recordings, dev), method=method,
-                                jig_accuracy_deg=jig_accuracy_deg, jigfree_model=jigfree_model)
+    cal = calibrate_recordings(dev, _as_recordings(recordings, dev), method=method,
+                               jig_accuracy_deg=jig_accuracy_deg, jigfree_model=jigfree_model)
+    record_warnings(dev, cal)
+    return cal
 
 
 @dataclass

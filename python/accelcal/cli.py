@@ -18,7 +18,7 @@ from tqdm import tqdm
 from . import __version__
 from .calibrate import JIG_ACCURACY_DEG, JIGFREE_MODELS, calibrate_recordings
 from .calibration import load_calibration, save_calibration
-from .cli_calibrate import calibrate_warnings, calibration_summary, jig_accuracy_arg
+from .cli_calibrate import calibration_summary, jig_accuracy_arg, record_warnings
 from .cli_paths import check_not_an_input, check_output, check_output_dir
 from .convert_cli import add_convert_parser
 from .demo import run_demo
@@ -155,7 +155,7 @@ def cmd_calibrate(a):
     dev = _load_device(a.device)
     recs = _read(a.recordings, dev, "calibrate", a)
     cal = calibrate_recordings(dev, recs, method=a.method, jig_accuracy_deg=jig, jigfree_model=a.jigfree_model)
-    warnings = calibrate_warnings(dev, cal)
+    warnings = record_warnings(dev, cal)
     save_calibration(cal, a.output)
     for n in cal.extra.get("notes", []) if isinstance(cal.extra, dict) else []:
         print(f"accelcal calibrate: note: {n}", file=sys.stderr)

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .calibrate.checks import far_from_nominal, poorly_excited
+from .calibrate.checks import far_from_nominal, gain_sigma, poorly_determined
+from .calibrate.settings import SCATTER_CHI2
 from .errors import AccelcalError
 
 
@@ -22,8 +23,9 @@ def jig_accuracy_arg(text) -> float:
 
 def calibrate_warnings(dev, cal) -> list[str]:
     """The warnings a calibration calls for, one line each: a jig-free model reduced from
-    ``full``, poses scattered beyond their noise (with what causes it), a sensitivity far
-    from the device file's.
+    ``full``, poses scattered beyond their noise (with what causes it), channels whose offset
+    or gain is poorly determined (:func:`accelcal.calibrate.checks.poorly_determined`), a
+    sensitivity far from the device file's.
 
     Parameters
     ----------
@@ -52,12 +54,12 @@ def calibrate_warnings(dev, cal) -> list[str]:
         warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}), as a jig "
                         f"error of about {hint:.2g} deg would; if the jig is that inaccurate, state it with "
                         "--jig-accuracy (else the offsets absorb it)")
-    elif red is not None and red > 4 and cross_axis:
+    elif red is not None and red > SCATTER_CHI2 and cross_axis:
         known = "" if cal.method == "jigfree" else ", stated f off the poses' real one"
         warnings.append(f"the poses scatter about the fit beyond their noise (chi2/dof {red:.3g}; the uncertainties are "
                         f"scaled up by it): poses that move while held (a hand's tremor, a slow turn){known} or an "
                         "effect the model lacks; 'accelcal diagnose' with this calibration tests the effects it knows")
-    elif red is not None and red > 4 and not cross_axis:
+    elif red is not None and red > SCATTER_CHI2 and not cross_axis:
         use = ("poses in other orientations would determine them (above)" if fb else
                f"use {'--jigfree-model full' if cal.method == 'jigfree' else '--method full'} if the poses "
                "determine it")
@@ -66,12 +68,34 @@ def calibrate_warnings(dev, cal) -> list[str]:
                         f"has, and the poses may move while held; {use}")
     poses = cal.extra.get("poses", []) if isinstance(cal.extra, dict) else []
     if poses:
-        low = poorly_excited(dev, [p["f_mps2"] for p in poses], cal.offset_sigma)
+        gs = None if cal.sensitivity_sigma is None else gain_sigma(cal.sensitivity, cal.sensitivity_sigma)
+        low = poorly_determined(dev, [p["f_mps2"] for p in poses], cal.offset_sigma, gs,
+                                [p.get("n_samples", 0) for p in poses], chi2_dof=red)
         if low:
             warnings.append(low)
     far = far_from_nominal(dev, cal.sensitivity)
     if far:
         warnings.append(far)
+    return warnings
+
+
+def record_warnings(dev, cal) -> list[str]:
+    """:func:`calibrate_warnings`, also recorded in the calibration's ``extra["warnings"]`` (the
+    JSON's top-level ``warnings``, which ``accelcal header`` carries as a comment) when there are any.
+
+    Parameters
+    ----------
+    dev : Device
+    cal : Calibration
+        Changed in place.
+
+    Returns
+    -------
+    list of str
+    """
+    warnings = calibrate_warnings(dev, cal)
+    if warnings:
+        cal.extra["warnings"] = list(warnings)
     return warnings
 
 

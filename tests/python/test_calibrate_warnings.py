@@ -1,0 +1,156 @@
+"""What ``calibrate`` warns of beyond the fit itself: channels whose offset or gain the poses
+determine poorly (whatever the span), the warnings recorded in the calibration JSON and
+carried by ``header``, and the real recordings that deserve no such warning.
+
+Simulated data come from the generator of test_calibrate (model.predict_counts + Gaussian
+noise + rounding).
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+
+from accelcal.calibrate import calibrate_recordings
+from accelcal.calibrate.checks import gain_sigma
+from accelcal.calibrate.settings import EXCITATION_MIN_SPAN_G, POORLY_DETERMINED_MG
+from accelcal.cli_calibrate import calibrate_warnings
+from accelcal.device import default_triad, save_device
+from accelcal.recording import write_recording
+
+from cli_run import run
+from test_calibrate import draw_truth, make_recording
+
+
+def wrist_triad():
+    """An 8-bit +-2 g triad at 32 Hz (64 counts per g, 1 count = 15.6 mg) with a worn
+    wristband's noise (0.15 m/s^2: a hand's tremor on top of the sensor's), as an Empatica E4."""
+    d = default_triad()
+    g = d.gravity_mps2
+    return dataclasses.replace(d, name="wrist-8bit", sample_rate_hz=32.0, raw_min=-128, raw_max=127,
+                               counts_per_mps2=np.full(3, 64.0 / g), zero_counts=np.zeros(3), noise_mps2=0.15)
+
+
+def wrist_poses(P, rng):
+    """P directions a wrist takes: never near +x, f along z within -0.4..+0.65 g (the first two
+    at its ends: every axis turned through 1 g or more)."""
+    out = [np.array([-0.5, math.sqrt(1 - 0.25 - z * z), z]) for z in (-0.4, 0.64)]
+    while len(out) < P:
+        v = rng.normal(size=3)
+        v /= np.linalg.norm(v)
+        if v[0] < 0.2 and -0.4 < v[2] < 0.65:
+            out.append(v)
+    return np.array(out)
+
+
+def wrist_calibration(hold_s, seed=1, P=12):
+    d = wrist_triad()
+    rng = np.random.default_rng(seed)
+    b, S = draw_truth(d, rng, offset=0.02)
+    F = d.gravity_mps2 * wrist_poses(P, rng)
+    rec = make_recording(d, b, S, F, rng, labels=False, hold=int(hold_s * d.sample_rate_hz),
+                         move=int(0.5 * d.sample_rate_hz))
+    return d, b, rec, calibrate_recordings(d, [rec], "jigfree")
+
+
+def mg_of(d, cal):
+    """(offset 1-sigma in mg, gain 1-sigma in mg at 1 g) per channel."""
+    off = 1000.0 * cal.offset_sigma / (d.counts_per_mps2 * d.gravity_mps2)
+    return off, 1000.0 * gain_sigma(cal.sensitivity, cal.sensitivity_sigma)
+
+
+def test_a_poorly_determined_channel_is_warned_of_whatever_the_span():
+    """An Empatica E4 (8-bit, 26 wrist poses) was calibrated with offsets +-19 and +-24 mg and
+    gains +-2 % and nothing said: every axis had turned through 1 g or more, so the "hardly
+    turns" check (span < 1 g and sigma > 2 mg) stayed silent.  Twelve such poses of 1.5 s give
+    sigmas of several mg: the channels beyond POORLY_DETERMINED_MG are named with their sigma
+    and the causes (the axis never turned to +x, the coarse LSB, short poses); the same poses
+    held 20 x as long shrink every sigma by sqrt(20) (white noise over the codes' dither) to
+    below it, and nothing is said."""
+    d, b, rec, cal = wrist_calibration(1.5)
+    F = np.array([p["f_mps2"] for p in cal.extra["poses"]]) @ d.axes.T / d.gravity_mps2
+    assert np.all(np.ptp(F, axis=0) >= EXCITATION_MIN_SPAN_G), np.ptp(F, axis=0)   # the old check is silent
+    # the sigmas are honest: the truth within 4 of them
+    assert np.all(np.abs(cal.offsets - b) < 4 * cal.offset_sigma), ((cal.offsets - b), cal.offset_sigma)
+    off, gain = mg_of(d, cal)
+    bad = np.flatnonzero((off > POORLY_DETERMINED_MG) | (gain > POORLY_DETERMINED_MG))
+    assert bad.size, (off, gain)
+    w = [x for x in calibrate_warnings(d, cal) if "poorly determined" in x]
+    assert len(w) == 1, calibrate_warnings(d, cal)
+    w = w[0]
+    assert f"poorly determined on {bad.size} channel(s)" in w, w
+    for i in range(3):
+        assert (f"channel {i}'s f along its axis" in w) == (i in bad), (i, off, gain, w)
+    i = int(bad[0])
+    sig = cal.offset_sigma[i]
+    assert f"offset +-{sig:.3g} counts ({off[i]:.2g} mg)" in w, w
+    assert "no pose within 20 deg of +x" in w and "a coarse LSB (1 count = 15.6 mg" in w, w
+    assert "few or short poses (12 poses" in w and "add poses with f along +x" in w, w
+    _, _, _, long = wrist_calibration(30.0)
+    off_l, gain_l = mg_of(d, long)
+    ratio = off / off_l
+    assert np.all(np.abs(ratio / math.sqrt(20.0) - 1.0) < 0.25), ratio
+    assert np.all(off_l < POORLY_DETERMINED_MG) and np.all(gain_l < POORLY_DETERMINED_MG), (off_l, gain_l)
+    assert not [x for x in calibrate_warnings(d, long) if "poorly determined" in x]
+
+
+def test_the_calibration_records_its_warnings_and_the_header_carries_them(tmp_path, capfd):
+    """``header`` had written such a calibration into firmware without a word: the calibration
+    JSON now holds what ``calibrate`` warned of (``warnings``, one line each) and the header's
+    opening comment carries it (a ``*/`` in a warning cannot close the comment); a calibration
+    without warnings has neither.  A ``warnings`` that is no list of texts is one line naming
+    the field."""
+    d, _, rec, _ = wrist_calibration(1.5)
+    save_device(d, tmp_path / "d.json")
+    write_recording(tmp_path / "r.csv", rec)
+    rc, out, err, caught = run(["calibrate", "--device", tmp_path / "d.json", tmp_path / "r.csv", "-o",
+                                tmp_path / "c.json"], capfd)
+    assert rc == 0 and not caught, (err, caught)
+    lines = [ln for ln in err.splitlines() if "poorly determined" in ln]
+    assert len(lines) == 1 and lines[0].startswith("accelcal calibrate: warning: "), err
+    doc = json.loads((tmp_path / "c.json").read_text())
+    assert doc["warnings"] == [ln[len("accelcal calibrate: warning: "):] for ln in err.splitlines()
+                               if ln.startswith("accelcal calibrate: warning: ")]
+    doc["warnings"].append("a warning that says */ in it")
+    (tmp_path / "c.json").write_text(json.dumps(doc))
+    rc, _, err, _ = run(["header", "--device", tmp_path / "d.json", "--calibration", tmp_path / "c.json", "-o",
+                         tmp_path / "c.h"], capfd)
+    assert rc == 0, err
+    text = (tmp_path / "c.h").read_text()
+    comment = text[:text.index("*/")]
+    assert "WARNING (accelcal calibrate): the calibration is poorly determined" in comment, comment
+    lines = comment.splitlines()
+    first = next(k for k, ln in enumerate(lines) if "WARNING" in ln)
+    block = lines[first:lines.index(" *", first)]
+    assert max(len(ln) for ln in block) <= 100 and sum("WARNING" in ln for ln in block) == 2, block
+    assert "a warning that says * / in it" in " ".join(block), block
+    # a good calibration: no warnings key, no WARNING in its header
+    _, _, rec, _ = wrist_calibration(30.0)
+    write_recording(tmp_path / "r2.csv", rec)
+    rc, _, err, _ = run(["calibrate", "--device", tmp_path / "d.json", tmp_path / "r2.csv", "-o",
+                         tmp_path / "c2.json"], capfd)
+    assert rc == 0 and "warning" not in err, err
+    assert "warnings" not in json.loads((tmp_path / "c2.json").read_text())
+    run(["header", "--device", tmp_path / "d.json", "--calibration", tmp_path / "c2.json", "-o", tmp_path / "c2.h"],
+        capfd)
+    assert "WARNING" not in (tmp_path / "c2.h").read_text()
+    doc["warnings"] = "not a list"
+    (tmp_path / "c.json").write_text(json.dumps(doc))
+    rc, _, err, _ = run(["header", "--device", tmp_path / "d.json", "--calibration", tmp_path / "c.json", "-o",
+                         tmp_path / "c3.h"], capfd)
+    assert rc == 2 and "warnings" in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "c3.h").exists()
+
+
+def test_the_real_recordings_are_not_poorly_determined(real_model):
+    """The suite's real calibrations are not warned of: their offsets' 1-sigma is 0.03..0.06 mg
+    (Xsens, 40 hand-held poses), 0.6..1.3 mg (imucal's six faces, known poses, inflated by a
+    chi2/dof of 1.5e3), 0.3..2.9 mg (MPU-6050, 11 poses, 2 dof), gains 0.003..0.44 %: all below
+    POORLY_DETERMINED_MG, whose margin over the MPU-6050's x offset (2.9 mg) this checks."""
+    for name in ("xsens", "imucal", "mpu6050"):
+        dev, _, _, cal = real_model(name)
+        off, gain = mg_of(dev, cal)
+        assert np.all(off < POORLY_DETERMINED_MG) and np.all(gain < POORLY_DETERMINED_MG), (name, off, gain)
+        assert not [w for w in calibrate_warnings(dev, cal) if "poorly determined" in w], name
