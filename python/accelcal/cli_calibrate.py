@@ -45,7 +45,7 @@ def calibrate_warnings(dev, cal) -> list[str]:
         why = " ".join(f"'{m}': {r.rstrip('.')}." for m, r in fb["reasons"].items())
         warnings.append(f"fitted the jig-free '{fb['to']}' model ({what}, no cross-axis terms), as the poses do not "
                         f"determine {' or '.join(repr(m) for m in fb['reasons'])}. {why} (--jigfree-model chooses "
-                        "the model)")
+                        "the model)" + (f"; {fb['detector']}" if fb.get("detector") else ""))
     chi2, dof = fit.get("chi2"), fit.get("dof")
     red = chi2 / dof if chi2 is not None and dof else None
     cross_axis = fit.get("model", cal.method) == "full"
@@ -69,8 +69,12 @@ def calibrate_warnings(dev, cal) -> list[str]:
     poses = cal.extra.get("poses", []) if isinstance(cal.extra, dict) else []
     if poses:
         gs = None if cal.sensitivity_sigma is None else gain_sigma(cal.sensitivity, cal.sensitivity_sigma)
+        # first to last sample, and one sample's step more: the time n samples take
+        held = [(p["t_stop_s"] - p["t_start_s"]) * p["n_samples"] / max(p["n_samples"] - 1, 1)
+                for p in poses if "t_start_s" in p and "n_samples" in p]
         low = poorly_determined(dev, [p["f_mps2"] for p in poses], cal.offset_sigma, gs,
-                                [p.get("n_samples", 0) for p in poses], chi2_dof=red)
+                                [p.get("n_samples", 0) for p in poses], chi2_dof=red,
+                                held_s=held if len(held) == len(poses) else None)
         if low:
             warnings.append(low)
     far = far_from_nominal(dev, cal.sensitivity)

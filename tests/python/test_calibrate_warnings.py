@@ -1,6 +1,7 @@
 """What ``calibrate`` warns of beyond the fit itself: channels whose offset or gain the poses
 determine poorly (whatever the span), the warnings recorded in the calibration JSON and
-carried by ``header``, and the real recordings that deserve no such warning.
+carried by ``header``, the real recordings that deserve no such warning; and a file of pose
+means (one row a pose), which needs a ``pose`` column and must leak no library warning.
 
 Simulated data come from the generator of test_calibrate (model.predict_counts + Gaussian
 noise + rounding).
@@ -10,15 +11,18 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import warnings
 
 import numpy as np
 
+from accelcal import model
 from accelcal.calibrate import calibrate_recordings
 from accelcal.calibrate.checks import gain_sigma
 from accelcal.calibrate.settings import EXCITATION_MIN_SPAN_G, POORLY_DETERMINED_MG
 from accelcal.cli_calibrate import calibrate_warnings
 from accelcal.device import default_triad, save_device
-from accelcal.recording import write_recording
+from accelcal.recording import recording_from_arrays, write_recording
+from accelcal.steps import MOVE_PARTS, MOVE_RANGE, part_spread
 
 from cli_run import run
 from test_calibrate import draw_truth, make_recording
@@ -154,3 +158,67 @@ def test_the_real_recordings_are_not_poorly_determined(real_model):
         off, gain = mg_of(dev, cal)
         assert np.all(off < POORLY_DETERMINED_MG) and np.all(gain < POORLY_DETERMINED_MG), (name, off, gain)
         assert not [w for w in calibrate_warnings(dev, cal) if "poorly determined" in w], name
+
+
+def pose_mean_rows(d, b, S, F, rng, sem_counts):
+    """A file of pose means (Magneto's input): one row per orientation F (P,3), each the mean of
+    a pose with ``sem_counts`` of noise, rounded to counts; t one second apart (--rate 1)."""
+    m = np.round(model.predict_counts(b, S, d.positions, F) + sem_counts * rng.normal(size=(len(F), 3)))
+    return np.arange(len(F), dtype=float), m.astype(np.int64)
+
+
+def test_a_file_of_pose_means_is_told_to_label_its_rows_and_leaks_no_library_warning(tmp_path, capfd):
+    """Magneto's input (178 hand-held orientations, one mean a row, no time) made ``calibrate``
+    print two numpy RuntimeWarnings (the std of one-sample parts of a 3-row "static block") and
+    then "needs at least 9 static poses ..., got 2; add poses".  Now: no library warning, and
+    the error says that the detector needs several samples a pose and that such rows need a
+    'pose' column -- for rows in the order a hand turns the sensor (neighbours alike: a few
+    found) and in no order (none found).  With the column every row is a pose and the fit holds
+    the truth within 4 sigma."""
+    d = dataclasses.replace(default_triad(), noise_mps2=0.0)      # no noise stated: estimated from the rows
+    save_device(d, tmp_path / "d.json")
+    rng = np.random.default_rng(5)
+    b, S = draw_truth(d, rng)
+    u = np.linspace(0, 1, 120)
+    turn = np.stack([np.cos(9 * np.pi * u) * np.sin(np.pi * u), np.sin(9 * np.pi * u) * np.sin(np.pi * u),
+                     np.cos(np.pi * u)], 1)                       # a slow spiral from +z to -z
+    for name, F in (("ordered", turn), ("shuffled", rng.permutation(turn))):
+        t, m = pose_mean_rows(d, b, S, d.gravity_mps2 * F, rng, 2.0)
+        write_recording(tmp_path / f"{name}.csv", recording_from_arrays(t, m))
+        rc, _, err, caught = run(["calibrate", "--device", tmp_path / "d.json", tmp_path / f"{name}.csv", "-o",
+                                  tmp_path / f"{name}.json"], capfd)
+        assert not caught and "RuntimeWarning" not in err, (name, err, caught)
+        assert "the static detector takes a pose from a still stretch of several samples" in err, err
+        assert "of 120 rows: if each row is already one pose's mean" in err and "'pose' column" in err, err
+        if name == "ordered":       # neighbours alike: a few 3-row "poses", too few for any model
+            assert rc == 2 and len(err.strip().splitlines()) == 1 and "got 2" in err, err
+            assert not (tmp_path / f"{name}.json").exists()
+        else:                       # a few mixed rows pass for poses: the offset model, warned of twice
+            hint = [ln for ln in err.splitlines() if "'pose' column" in ln]
+            assert rc == 0 and len(hint) == 1 and "fitted the jig-free 'offset' model" in hint[0], err
+            assert "poorly determined" in err, err
+    write_recording(tmp_path / "labelled.csv", recording_from_arrays(t, m, pose=np.arange(len(t))))
+    rc, out, err, caught = run(["calibrate", "--device", tmp_path / "d.json", tmp_path / "labelled.csv", "-o",
+                                tmp_path / "c.json"], capfd)
+    assert rc == 0 and not caught and "from 120 static poses" in out, (err, caught)
+    cal = json.loads((tmp_path / "c.json").read_text())
+    got = np.array([c["offset_counts"] for c in cal["channels"]])
+    sig = np.array([c["offset_sigma_counts"] for c in cal["channels"]])
+    assert np.all(np.abs(got - b) < 4 * sig), (got - b, sig)
+
+
+def test_the_mean_test_of_too_few_readings_is_no_library_warning():
+    """part_spread cut three readings (a 3-row "static block" of a file of pose means) into
+    eight parts and took the std of one-sample parts: numpy's "Degrees of freedom <= 0"
+    reached the user.  Fewer than two samples a part cannot tell that they hold still: inf
+    (the mean test fails, as the NaN had), and no warning; 16 readings are tested as before."""
+    x = np.array([[0.0, 1.0], [2.0, 1.0], [1.0, 3.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        spread, sig = part_spread(x, np.array([1.0, 1.0]))
+        assert np.all(np.isinf(spread)) and np.all(sig == 1.0)
+        still = np.random.default_rng(0).normal(size=(2 * MOVE_PARTS, 2))
+        spread, _ = part_spread(still, np.array([1.0, 1.0]))
+        assert np.all(np.isfinite(spread))
+    # white noise of unit std: eight 2-sample means (std 0.71) span well within MOVE_RANGE
+    assert np.all(spread < MOVE_RANGE), spread

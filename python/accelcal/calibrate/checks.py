@@ -222,7 +222,7 @@ def gain_sigma(sensitivity, sensitivity_sigma) -> np.ndarray:
 
 
 def poorly_determined(device, F, offset_sigma=None, gain_sig=None, n_samples=None,
-                      chi2_dof=None) -> str | None:
+                      chi2_dof=None, held_s=None) -> str | None:
     """A warning naming the channels whose fitted offset or gain is poorly determined, with
     the likely causes and what to add, else None.
 
@@ -252,6 +252,8 @@ def poorly_determined(device, F, offset_sigma=None, gain_sig=None, n_samples=Non
         Samples a pose, to quote.
     chi2_dof : float, optional
         The fit's chi2/dof, to name as a cause above SCATTER_CHI2.
+    held_s : array_like (P,), optional
+        How long each pose was held, s, to quote (else n_samples at the device's rate).
 
     Returns
     -------
@@ -300,8 +302,9 @@ def poorly_determined(device, F, offset_sigma=None, gain_sig=None, n_samples=Non
         causes.append(f"a coarse LSB (1 count = {np.max(lsb):.3g} mg: a pose's mean rests on a few codes)")
     if n_samples is not None and len(n_samples):
         n_med = float(np.median(n_samples))
+        t_med = n_med / device.sample_rate_hz if held_s is None else float(np.median(held_s))
         causes.append(f"few or short poses ({F.shape[0]} poses, a median {n_med:.0f} samples, "
-                      f"{n_med / device.sample_rate_hz:.3g} s, each)")
+                      f"{t_med:.3g} s, each)")
     scatter = chi2_dof is not None and chi2_dof > SCATTER_CHI2
     if scatter:
         causes.insert(0, f"the poses' scatter about the fit (chi2/dof {chi2_dof:.3g} scales the sigmas up "

@@ -7,7 +7,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..held import distinct_recordings
-from ..static import NO_POSE, PoseSet, one_wrong_scale, poses_from_recording
+from ..static import (MIN_POSE_S, NO_POSE, STATIC_THRESHOLD, STATIC_WINDOW_S, PoseSet, one_wrong_scale,
+                      poses_from_recording, window_len)
 from .checks import jig_accuracy_rad, pose_label
 from .known_poses import fit_known_poses
 from .lever_arms import calibrate_positions
@@ -50,8 +51,13 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     rotating = [rotating_samples(rec) for rec in recordings]
     # with several recordings, one without a static pose (a motion, a sweep) adds none and is named
     several = len(recordings) > 1
-    sets = [poses_from_recording(rec, device, required=not (rot.any() or several))
-            for rec, rot in zip(recordings, rotating)]
+    try:
+        sets = [poses_from_recording(rec, device, required=not (rot.any() or several))
+                for rec, rot in zip(recordings, rotating)]
+    except InputError as e:
+        if not e.detail.startswith(NO_POSE):
+            raise
+        raise InputError(e.source, e.detail + detector_hint(device, recordings, None), field=e.field) from None
     for rec, rot, ps in zip(recordings, rotating, sets):
         if several and not rot.any() and ps.n_poses == 0:
             clipped = (f" ({len(ps.set_aside)} set aside: "
@@ -105,7 +111,8 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
         if e.source != "<poses>":
             raise
         names = sorted({str(d.get("source")) for d in poses.info})
-        raise InputError(", ".join(names), e.detail, field=e.field) from None
+        raise InputError(", ".join(names), e.detail + detector_hint(device, recordings, poses),
+                         field=e.field) from None
 
     pos_fit = None
     rot = [(rec, m) for rec, m in zip(recordings, rotating) if m.any()]
@@ -121,10 +128,48 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
                                       source=rot[0][0].source)
     cal = to_calibration(device, fit, "jigfree" if jigfree else method, pos_fit)
     if fallback is not None:
+        hint = detector_hint(device, recordings, poses)
+        if hint:
+            fallback["detector"] = hint[2:]
         cal.extra["fit"]["fallback"] = fallback
     if notes:
         cal.extra["notes"] = notes
     return cal
+
+
+def detector_hint(device, recordings, poses: PoseSet | None) -> str:
+    """What the static detector needs, to append to a "too few poses" or "no static pose"
+    error where the poses were detected (no recording has ``pose`` labels; else ""): a still
+    stretch of several samples a pose, how many it found and the rows they hold, and, where
+    they hold less than half of the rows, that a file whose rows are each one pose's mean
+    (Magneto's input: 178 hand-held orientations, one row each, had been told "got 2; add
+    poses") needs a ``pose`` column, one label a row.
+
+    Parameters
+    ----------
+    device : Device
+    recordings : list of Recording
+    poses : PoseSet or None
+        The poses found (None: none).
+
+    Returns
+    -------
+    str
+        "; the static detector ..." or "".
+    """
+    if any(rec.has_pose() for rec in recordings):
+        return ""
+    rows = sum(rec.n_samples for rec in recordings)
+    held = 0 if poses is None else int(np.sum(poses.n))
+    found = 0 if poses is None else poses.n_poses
+    w = max(window_len(device, STATIC_WINDOW_S, rec.n_samples) for rec in recordings)
+    text = (f"; the static detector takes a pose from a still stretch of several samples (at least {w} here, "
+            f"and {MIN_POSE_S:g} s where a motion touches it, with every channel within {STATIC_THRESHOLD:g} x "
+            f"its noise) and found {found}, holding {held} of {rows} rows")
+    if held < rows / 2:
+        text += (": if each row is already one pose's mean (a file of pose means, as Magneto's input), give "
+                 "every row its own label in a 'pose' column (0, 1, 2, ...), which takes each row as a pose")
+    return text
 
 
 def setaside_reason(d: dict) -> str:
@@ -141,7 +186,8 @@ def fit_jigfree(device, poses: PoseSet, model: str, temperature: bool):
     fit : StaticFit
     fallback : dict or None
         ``{"from": "full", "to": model, "reasons": {model tried: why it was not determined}}``
-        when ``auto`` fell back; None otherwise.
+        when ``auto`` fell back (:func:`calibrate_recordings` adds ``"detector"``, the
+        :func:`detector_hint`, where the poses were detected); None otherwise.
 
     Raises
     ------
