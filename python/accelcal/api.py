@@ -154,7 +154,7 @@ def _as_recordings(recordings: Any, device: Device) -> list[Recording]:
 
 
 def calibrate(device: Any, recordings: Any, method: str | None = None, *,
-              jig_accuracy_deg: float = 0.0, jigfree_model: str = "auto") -> Calibration:
+              jig_accuracy_deg: float = 0.0, jigfree_model: str = "auto", drop_outliers: bool = False) -> Calibration:
     """Estimate a calibration from static poses (as ``accelcal calibrate``).
 
     Parameters
@@ -170,6 +170,9 @@ def calibrate(device: Any, recordings: Any, method: str | None = None, *,
         Jig-free: the channel model; ``auto`` is ``full``, or, where the poses do not
         determine it, the first of ``gain`` and ``offset`` they do (the reason in
         ``extra["fit"]["fallback"]``).
+    drop_outliers : bool
+        Leave out the poses far off the fit (named in ``extra["outliers"]`` either way, with
+        the fit's change without them).
 
     Returns
     -------
@@ -189,7 +192,8 @@ def calibrate(device: Any, recordings: Any, method: str | None = None, *,
     """
     dev = as_device(device)
     cal = calibrate_recordings(dev, _as_recordings(recordings, dev), method=method,
-                               jig_accuracy_deg=jig_accuracy_deg, jigfree_model=jigfree_model)
+                               jig_accuracy_deg=jig_accuracy_deg, jigfree_model=jigfree_model,
+                               drop_outliers=drop_outliers)
     record_warnings(dev, cal)
     return cal
 
