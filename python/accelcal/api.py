@@ -27,6 +27,7 @@ import numpy as np
 
 from .calibrate import calibrate_recordings
 from .calibration import Calibration, load_calibration, save_calibration
+from .cli_calibrate import record_warnings
 from .device import Device, default_device, load_device, save_device
 from .diagnose import diagnose as _diagnose_impl
 from .errors import AccelcalError, atomic_write
@@ -153,7 +154,7 @@ def _as_recordings(recordings: Any, device: Device) -> list[Recording]:
 
 
 def calibrate(device: Any, recordings: Any, method: str | None = None, *,
-              jig_accuracy_deg: float = 0.0, jigfree_model: str = "auto") -> Calibration:
+              jig_accuracy_deg: float = 0.0, jigfree_model: str = "auto", drop_outliers: bool = False) -> Calibration:
     """Estimate a calibration from static poses (as ``accelcal calibrate``).
 
     Parameters
@@ -169,12 +170,16 @@ def calibrate(device: Any, recordings: Any, method: str | None = None, *,
         Jig-free: the channel model; ``auto`` is ``full``, or, where the poses do not
         determine it, the first of ``gain`` and ``offset`` they do (the reason in
         ``extra["fit"]["fallback"]``).
+    drop_outliers : bool
+        Leave out the poses far off the fit (named in ``extra["outliers"]`` either way, with
+        the fit's change without them).
 
     Returns
     -------
     Calibration
         Offsets (counts), sensitivity vectors (counts per m/s^2), uncertainties and the
-        fit's statistics in ``extra["fit"]`` (chi2, dof).
+        fit's statistics in ``extra["fit"]`` (chi2, dof); what ``accelcal calibrate`` would
+        warn of, one line each, in ``extra["warnings"]`` (absent when nothing).
 
     Examples
     --------
@@ -186,8 +191,11 @@ def calibrate(device: Any, recordings: Any, method: str | None = None, *,
     'full'
     """
     dev = as_device(device)
-    return calibrate_recordings(dev, _as_recordings(recordings, dev), method=method,
-                                jig_accuracy_deg=jig_accuracy_deg, jigfree_model=jigfree_model)
+    cal = calibrate_recordings(dev, _as_recordings(recordings, dev), method=method,
+                               jig_accuracy_deg=jig_accuracy_deg, jigfree_model=jigfree_model,
+                               drop_outliers=drop_outliers)
+    record_warnings(dev, cal)
+    return cal
 
 
 @dataclass

@@ -35,9 +35,10 @@ _OPTIONAL_CHANNEL_FIELDS = (
 )
 _NONNEGATIVE = {"offset_sigma", "sensitivity_sigma", "position_sigma"}
 _KNOWN_TOP = {"device", "method", "channels", "temperature_ref_c", "residual_rms_counts", "poses_used"}
-#: every top-level key a calibration file's reader knows ("fit" and "poses" are kept in ``extra``);
-#: an unknown key close to one of these is refused as a misspelling (jsonfields.KEY_CUTOFF)
-KNOWN_KEYS = tuple(sorted(_KNOWN_TOP | {"fit", "poses"}))
+#: every top-level key a calibration file's reader knows ("fit", "poses" and "warnings" are kept in
+#: ``extra``; "warnings": what ``accelcal calibrate`` warned of, one line each, which ``header`` carries as a
+#: comment); an unknown key close to one of these is refused as a misspelling (jsonfields.KEY_CUTOFF)
+KNOWN_KEYS = tuple(sorted(_KNOWN_TOP | {"fit", "poses", "warnings"}))
 
 
 def _opt_array(value: Any, shape: tuple[int, ...], name: str) -> np.ndarray | None:
@@ -255,6 +256,8 @@ def calibration_from_dict(d: Any, source: str = "<dict>", device: Device | None 
                 opt[attr] = np.full((n, 3) if width == 3 else (n,), np.nan)
             opt[attr][i] = value if width == 3 else value[0]
 
+    if "warnings" in d and not (isinstance(d["warnings"], list) and all(isinstance(x, str) for x in d["warnings"])):
+        raise v.fail("warnings", f"expected a list of one-line texts, got {show_json(d['warnings'])}")
     temp_ref = None
     if "temperature_ref_c" in d:
         temp_ref = v.number(d["temperature_ref_c"], "temperature_ref_c")

@@ -18,7 +18,7 @@ from tqdm import tqdm
 from . import __version__
 from .calibrate import JIG_ACCURACY_DEG, JIGFREE_MODELS, calibrate_recordings
 from .calibration import load_calibration, save_calibration
-from .cli_calibrate import calibrate_warnings, calibration_summary, jig_accuracy_arg
+from .cli_calibrate import calibration_summary, jig_accuracy_arg, record_warnings
 from .cli_paths import check_not_an_input, check_output, check_output_dir
 from .convert_cli import add_convert_parser
 from .demo import run_demo
@@ -154,8 +154,9 @@ def cmd_calibrate(a):
     jig = jig_accuracy_arg(a.jig_accuracy)
     dev = _load_device(a.device)
     recs = _read(a.recordings, dev, "calibrate", a)
-    cal = calibrate_recordings(dev, recs, method=a.method, jig_accuracy_deg=jig, jigfree_model=a.jigfree_model)
-    warnings = calibrate_warnings(dev, cal)
+    cal = calibrate_recordings(dev, recs, method=a.method, jig_accuracy_deg=jig, jigfree_model=a.jigfree_model,
+                               drop_outliers=a.drop_outliers)
+    warnings = record_warnings(dev, cal)
     save_calibration(cal, a.output)
     for n in cal.extra.get("notes", []) if isinstance(cal.extra, dict) else []:
         print(f"accelcal calibrate: note: {n}", file=sys.stderr)
@@ -361,6 +362,10 @@ def build_parser() -> argparse.ArgumentParser:
                    "(3).  auto (the default): full, or where the poses do not determine it (too few "
                    "orientations, a degenerate spread, no convergence) the first of gain and offset they do, "
                    "with a warning that says why")
+    s.add_argument("--drop-outliers", action="store_true",
+                   help="leave out the poses far off the fit (residual over the noise beyond the poses' median + 8 "
+                   "robust sd: a knock, a pose not held, a wrong row), which are otherwise kept and named in a "
+                   "warning with how much the fit changes without them")
     s.add_argument("-o", "--output", required=True, metavar="CAL.json", help="the calibration JSON to write")
     add_units_options(s)
     s.set_defaults(func=cmd_calibrate)

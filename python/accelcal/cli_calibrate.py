@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .calibrate.checks import far_from_nominal, poorly_excited
+from .calibrate.checks import far_from_nominal, gain_sigma, poorly_determined
+from .calibrate.settings import SCATTER_CHI2
 from .errors import AccelcalError
 
 
@@ -22,8 +23,9 @@ def jig_accuracy_arg(text) -> float:
 
 def calibrate_warnings(dev, cal) -> list[str]:
     """The warnings a calibration calls for, one line each: a jig-free model reduced from
-    ``full``, poses scattered beyond their noise (with what causes it), a sensitivity far
-    from the device file's.
+    ``full``, poses scattered beyond their noise (with what causes it), channels whose offset
+    or gain is poorly determined (:func:`accelcal.calibrate.checks.poorly_determined`), a
+    sensitivity far from the device file's.
 
     Parameters
     ----------
@@ -43,21 +45,38 @@ def calibrate_warnings(dev, cal) -> list[str]:
         why = " ".join(f"'{m}': {r.rstrip('.')}." for m, r in fb["reasons"].items())
         warnings.append(f"fitted the jig-free '{fb['to']}' model ({what}, no cross-axis terms), as the poses do not "
                         f"determine {' or '.join(repr(m) for m in fb['reasons'])}. {why} (--jigfree-model chooses "
-                        "the model)")
+                        "the model)" + (f"; {fb['detector']}" if fb.get("detector") else ""))
     chi2, dof = fit.get("chi2"), fit.get("dof")
     red = chi2 / dof if chi2 is not None and dof else None
     cross_axis = fit.get("model", cal.method) == "full"
+    outl = cal.extra.get("outliers") if isinstance(cal.extra, dict) else None
+    far = outlier_warning(dev, outl) if outl else None
+    red_wo = (outl.get("without") or {}).get("chi2_dof") if outl and not outl.get("dropped") else None
+    if red is not None and red > SCATTER_CHI2 and red_wo is not None and red_wo <= SCATTER_CHI2:
+        # the scatter is theirs: no hand's tremor to blame
+        warnings.append(f"the poses scatter about the fit beyond their noise (chi2/dof {red:.3g}; the uncertainties "
+                        f"are scaled up by it) because of the {len(outl['poses'])} pose(s) far off the fit named "
+                        f"below: {red_wo:.3g} without them")
+        red = None
     hint = fit.get("jig_accuracy_consistent_with_scatter_deg")
     if hint is not None and cross_axis:
         warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}), as a jig "
                         f"error of about {hint:.2g} deg would; if the jig is that inaccurate, state it with "
                         "--jig-accuracy (else the offsets absorb it)")
-    elif red is not None and red > 4 and cross_axis:
+    elif red is not None and red > SCATTER_CHI2 and cross_axis:
         known = "" if cal.method == "jigfree" else ", stated f off the poses' real one"
-        warnings.append(f"the poses scatter about the fit beyond their noise (chi2/dof {red:.3g}; the uncertainties are "
-                        f"scaled up by it): poses that move while held (a hand's tremor, a slow turn){known} or an "
-                        "effect the model lacks; 'accelcal diagnose' with this calibration tests the effects it knows")
-    elif red is not None and red > 4 and not cross_axis:
+        also = (f", {red_wo:.3g} without the {len(outl['poses'])} pose(s) far off the fit named below"
+                if red_wo is not None else "")
+        poses = cal.extra.get("poses", []) if isinstance(cal.extra, dict) else []
+        if poses and all(p.get("n_samples") == 1 for p in poses):
+            why = ("each pose is one row (a file of pose means), whose noise is unknown and taken as the rounding's "
+                   "(1/sqrt(12) count): the scatter is measured against that, not against the poses' own noise")
+        else:
+            why = (f"poses that move while held (a hand's tremor, a slow turn){known} or an effect the model lacks; "
+                   "'accelcal diagnose' with this calibration tests the effects it knows")
+        warnings.append(f"the poses scatter about the fit beyond their noise (chi2/dof {red:.3g}{also}; the uncertainties "
+                        f"are scaled up by it): {why}")
+    elif red is not None and red > SCATTER_CHI2 and not cross_axis:
         use = ("poses in other orientations would determine them (above)" if fb else
                f"use {'--jigfree-model full' if cal.method == 'jigfree' else '--method full'} if the poses "
                "determine it")
@@ -66,12 +85,72 @@ def calibrate_warnings(dev, cal) -> list[str]:
                         f"has, and the poses may move while held; {use}")
     poses = cal.extra.get("poses", []) if isinstance(cal.extra, dict) else []
     if poses:
-        low = poorly_excited(dev, [p["f_mps2"] for p in poses], cal.offset_sigma)
+        gs = None if cal.sensitivity_sigma is None else gain_sigma(cal.sensitivity, cal.sensitivity_sigma)
+        # first to last sample, and one sample's step more: the time n samples take
+        held = [(p["t_stop_s"] - p["t_start_s"]) * p["n_samples"] / max(p["n_samples"] - 1, 1)
+                for p in poses if "t_start_s" in p and "n_samples" in p]
+        low = poorly_determined(dev, [p["f_mps2"] for p in poses], cal.offset_sigma, gs,
+                                [p.get("n_samples", 0) for p in poses], chi2_dof=red,
+                                held_s=held if len(held) == len(poses) else None)
         if low:
             warnings.append(low)
-    far = far_from_nominal(dev, cal.sensitivity)
     if far:
         warnings.append(far)
+    scale = far_from_nominal(dev, cal.sensitivity)
+    if scale:
+        warnings.append(scale)
+    return warnings
+
+
+def outlier_warning(dev, outl: dict) -> str:
+    """One line on the poses far off the fit (the calibration's ``extra["outliers"]``): each with
+    its |f| error, the others' worst, and how the offsets (counts and mg) and gains move and the
+    chi2/dof without them (or that they were left out, and how the fit moved)."""
+    g = dev.gravity_mps2
+    def name(p):
+        if str(p["name"]).startswith("static@"):
+            return str(p["name"])
+        return f"pose {p['name']}" + (f" (t = {p['t_start_s']:.6g} s)" if "t_start_s" in p else "")
+
+    named = "; ".join(f"{name(p)}: |f| {p['norm_error_mps2']:+.3g} m/s^2, {p['residual_over_noise']:.3g} x its noise"
+                      for p in outl["poses"])
+    n = len(outl["poses"])
+    rest = outl.get("others_worst_norm_error_mps2")
+    text = (f"{n} pose(s) sit far off the fit ({outl['rule']}): {named}"
+            + (f"; the others' worst |f| error is {rest:+.3g} m/s^2" if rest is not None else ""))
+    wo = outl.get("without")
+    if wo is None:
+        return text + ("; without them the poses determine no fit: check them (a knock, a pose not held, a wrong "
+                       "row); they are kept")
+    off = np.asarray(wo["offset_change_counts"])
+    mg = 1000.0 * off / (np.asarray(dev.counts_per_mps2, float) * g)
+    moves = (f"the offsets move by {', '.join(f'{v:+.3g}' for v in off)} counts ({', '.join(f'{v:+.2g}' for v in mg)} "
+             f"mg), the gains by {', '.join(f'{100 * v:+.2g}' for v in wo['gain_change'])} %")
+    chi = (f", chi2/dof {outl['chi2_dof']:.3g} -> {wo['chi2_dof']:.3g}"
+           if outl.get("chi2_dof") is not None and wo.get("chi2_dof") is not None else "")
+    if outl.get("dropped"):
+        return text + f"; left out (--drop-outliers): without them {moves}{chi}"
+    return (text + f"; without them {moves}{chi}: check those poses (a knock, a pose not held, a wrong row); "
+            "they are kept (--drop-outliers leaves them out)")
+
+
+def record_warnings(dev, cal) -> list[str]:
+    """:func:`calibrate_warnings`, also recorded in the calibration's ``extra["warnings"]`` (the
+    JSON's top-level ``warnings``, which ``accelcal header`` carries as a comment) when there are any.
+
+    Parameters
+    ----------
+    dev : Device
+    cal : Calibration
+        Changed in place.
+
+    Returns
+    -------
+    list of str
+    """
+    warnings = calibrate_warnings(dev, cal)
+    if warnings:
+        cal.extra["warnings"] = list(warnings)
     return warnings
 
 

@@ -8,6 +8,7 @@ tables) on host gcc, h8300-hms-gcc and avr-gcc.
 from __future__ import annotations
 
 import re
+import textwrap
 
 import numpy as np
 
@@ -29,6 +30,18 @@ def _row(values, width: int = 0) -> str:
     return "{" + ", ".join(vals) + "}"
 
 
+def warning_lines(warnings) -> list[str]:
+    """The header comment's lines for a calibration's warnings (its JSON's ``warnings``: what
+    ``accelcal calibrate`` warned of), each wrapped at 100 columns under "WARNING", so that a
+    poorly determined calibration is not burnt into firmware without a word; [] for none."""
+    lines = []
+    for w in warnings or ():
+        text = str(w).replace("*/", "* /")
+        lines += textwrap.wrap(f"WARNING (accelcal calibrate): {text}", width=100, initial_indent=" * ",
+                               subsequent_indent=" *   ", break_on_hyphens=False, break_long_words=False)
+    return lines + [" *"] if lines else []
+
+
 def _opening(guard: str, *formats: tuple[str, int]) -> list[str]:
     """The lines that close a header's comment and open its body: the include guard, the
     core's header, and a check that refuses to build against a core with other fractional
@@ -39,8 +52,9 @@ def _opening(guard: str, *formats: tuple[str, int]) -> list[str]:
 
 
 def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method: str = "",
-                  temp_ref_c: float | None = None, offset_tc=None, gain_tc=None) -> str:
-    """The header text for tables t (see quantize.quantize)."""
+                  temp_ref_c: float | None = None, offset_tc=None, gain_tc=None, warnings=()) -> str:
+    """The header text for tables t (see quantize.quantize); ``warnings`` (the calibration's,
+    one line each) go into its opening comment."""
     f = FORMATS
     p = _c_ident(prefix)
     guard = f"{p}_{_c_ident(t.device or 'DEVICE')}_H"
@@ -50,6 +64,7 @@ def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method:
         f" * Device: {t.device}   channels: {n}" + (f"   calibration method: {calibration_method}"
                                                    if calibration_method else ""),
         " *",
+        *warning_lines(warnings),
         " * Use: in exactly one .c file",
         f" *     #define {p}_IMPLEMENTATION",
         f" *     #include \"this header\"",
@@ -119,10 +134,12 @@ def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method:
     return "\n".join(lines)
 
 
-def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", calibration_method: str = "") -> str:
+def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", calibration_method: str = "",
+                        warnings=()) -> str:
     """The header text for one 3-axis sensor's table (see estimators.triad.quantize_triad):
     f only, f = S^-1 (raw - b), by ``ac_triad_apply`` (uint16 readings) or ``ac_trim_s16``
-    + ``ac_triad_resolve`` (int16 readings)."""
+    + ``ac_triad_resolve`` (int16 readings); ``warnings`` (the calibration's) go into its
+    opening comment."""
     f = FORMATS
     p = _c_ident(prefix)
     guard = f"{p}_{_c_ident(device or 'DEVICE')}_H"
@@ -132,6 +149,7 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
         f" * Device: {device}   a 3-axis sensor" + (f"   calibration method: {calibration_method}"
                                                     if calibration_method else ""),
         " *",
+        *warning_lines(warnings),
         " * Use: in exactly one .c file",
         f" *     #define {p}_IMPLEMENTATION",
         " *     #include \"this header\"",
@@ -186,10 +204,12 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
 def calibration_header(device, cal, *, prefix: str = "AC_CAL") -> str:
     """The firmware header for a device and its calibration: the 6-DOF resolver's tables for
     an array (N >= 6), the triad table for a 3-axis sensor; uint16 or int16 (raw_min < 0)
-    readings."""
+    readings.  The calibration's warnings (``extra["warnings"]``) go into the opening comment."""
+    warnings = cal.extra.get("warnings", []) if isinstance(getattr(cal, "extra", None), dict) else []
     if device.is_triad():
         t = quantize_triad(cal.offsets, cal.sensitivity, signed=device.raw_min < 0)
-        return render_triad_header(t, device=device.name, prefix=prefix, calibration_method=cal.method)
+        return render_triad_header(t, device=device.name, prefix=prefix, calibration_method=cal.method,
+                                   warnings=warnings)
     return render_header(quantize_calibration(device, cal), prefix=prefix, calibration_method=cal.method,
                          temp_ref_c=getattr(cal, "temp_ref_c", None), offset_tc=getattr(cal, "offset_tc", None),
-                         gain_tc=getattr(cal, "gain_tc", None))
+                         gain_tc=getattr(cal, "gain_tc", None), warnings=warnings)

@@ -103,8 +103,13 @@ def part_spread(x: np.ndarray, ref_sig: np.ndarray) -> tuple[np.ndarray, np.ndar
     """How far the means of MOVE_PARTS consecutive parts of the readings ``x`` (n, N) stray:
     (their range per channel over ``part_sig``, ``part_sig``), with ``part_sig`` the larger of
     ``ref_sig`` and the parts' median std (strong tremor swings the parts' means; a move or
-    a ramp moves them by many times what each part varies within)."""
-    parts = np.array_split(np.asarray(x, float), MOVE_PARTS)
+    a ramp moves them by many times what each part varies within).  Readings too few to give
+    every part two samples (fewer than 2 MOVE_PARTS: a part's std would be 0/0) cannot tell
+    that they hold still: their range is inf (the mean test fails) and ``part_sig`` is ``ref_sig``."""
+    x = np.asarray(x, float)
+    if x.shape[0] < 2 * MOVE_PARTS:
+        return np.full(x.shape[1], np.inf), np.asarray(ref_sig, float) * np.ones(x.shape[1])
+    parts = np.array_split(x, MOVE_PARTS)
     pm = np.array([q.mean(axis=0) for q in parts])
     part_sig = np.maximum(ref_sig, np.median([q.std(axis=0, ddof=1) for q in parts], axis=0))
     return (pm.max(axis=0) - pm.min(axis=0)) / part_sig, part_sig

@@ -730,23 +730,23 @@ def test_a_channel_the_poses_hardly_turn_is_warned_of_with_the_poses_to_add():
     +-0.29 g was calibrated jig-free with an x offset of -195 +- 114 counts and nothing said;
     the warning names the channel, the span, the offset's sigma and the poses to add.  Six
     faces, or poses that turn the axis through 1.3 g, give none."""
-    from accelcal.calibrate.checks import poorly_excited
+    from accelcal.calibrate.checks import poorly_determined
     d = default_triad()
     g = d.gravity_mps2
     faces = g * np.vstack([np.eye(3), -np.eye(3)])
-    assert poorly_excited(d, faces) is None
+    assert poorly_determined(d, faces) is None
     a = np.radians(np.linspace(-17, 17, 7))
     F = g * np.vstack([np.stack([np.sin(a), np.zeros_like(a), -np.cos(a)], 1),
                        np.stack([np.sin(a), -np.cos(a), np.zeros_like(a)], 1)])
-    w = poorly_excited(d, F, np.array([114.0, 25.0, 33.0]))
+    w = poorly_determined(d, F, np.array([114.0, 25.0, 33.0]))
     assert w is not None and "channel 0's f along its axis spans -0.29..+0.29 g, offset +-114 counts" in w, w
     assert "add poses with f along +x and -x" in w and "channel 1" not in w and "channel 2" not in w
     # the same span with the offset known to 1 mg: nothing to warn of
     one_mg = 0.001 * d.gravity_mps2 * d.counts_per_mps2
-    assert poorly_excited(d, F, np.array([1.0, 1.0, 1.0]) * one_mg) is None
+    assert poorly_determined(d, F, np.array([1.0, 1.0, 1.0]) * one_mg) is None
     b = np.radians(40.0)
     wide = np.vstack([F, g * np.array([[np.sin(b), 0, -np.cos(b)], [-np.sin(b), 0, -np.cos(b)]])])
-    assert poorly_excited(d, wide) is None                      # +-0.64 g along x: 1.29 g
+    assert poorly_determined(d, wide) is None                      # +-0.64 g along x: 1.29 g
 
 
 def test_noise_coloured_within_the_poses_widens_their_sem_not_their_chi2():

@@ -93,7 +93,8 @@ Modules: ``settings`` (constants), ``results`` (StaticFit, PositionFit), ``check
 (shared checks of pose sets), ``problem`` (the static model as a least-squares
 problem), ``static_model`` (the nonlinear fit by scipy.optimize.least_squares),
 ``known_poses`` (linear known-pose fits and the jig-accuracy joint fit),
-``lever_arms``, ``recordings`` (recordings in, a Calibration out).
+``lever_arms``, ``outliers`` (poses far off a fit, named with the fit without them),
+``recordings`` (recordings in, a Calibration out).
 """
 from ..noise import estimate_noise
 from ..static import PoseSet, detect_static, pose_means, poses_from_recording

@@ -11,7 +11,7 @@ import numpy as np
 from ..device import NOMINAL_FACTOR
 from ..errors import InputError
 from ..static import PoseSet
-from .settings import (CANDIDATES, EXCITATION_MIN_SPAN_G, POORLY_DETERMINED_MG, TILTED,
+from .settings import (CANDIDATES, EXCITATION_MIN_SPAN_G, POORLY_DETERMINED_MG, SCATTER_CHI2, TILTED,
                        TILTED_AFTER_DEG)
 
 
@@ -211,13 +211,32 @@ def far_from_nominal(device, sensitivity) -> str | None:
             "chip is within a few %; check the device file and the recording's scale (--full-scale, --lsb)")
 
 
-def poorly_excited(device, F, offset_sigma=None) -> str | None:
-    """A warning when the poses turn some channel's axis through less than
-    EXCITATION_MIN_SPAN_G of f (in g, the largest minus the smallest f . u_i over the poses;
-    +-x, +-y, +-z span 2 g on every axis) and, where ``offset_sigma`` is given, its offset's
-    1-sigma exceeds POORLY_DETERMINED_MG, else None.  Such a channel's offset and gain trade
-    against each other (a pose set that hardly turns x: x offset +-114 counts, +-28 mg, on a
-    real LSM303 session whose f along x stayed within +-0.29 g).
+def gain_sigma(sensitivity, sensitivity_sigma) -> np.ndarray:
+    """(N,) relative 1-sigma of each channel's gain |s_i| (a fraction), from the 1-sigma of
+    the components of s_i (counts per m/s^2; their correlations are not kept, and the
+    component along s_i dominates)."""
+    s = np.asarray(sensitivity, float)
+    n = np.linalg.norm(s, axis=1)
+    return np.sqrt(np.sum((np.asarray(sensitivity_sigma, float) * s / n[:, None]) ** 2, axis=1)) / n
+
+
+def poorly_determined(device, F, offset_sigma=None, gain_sig=None, n_samples=None,
+                      chi2_dof=None, held_s=None) -> str | None:
+    """A warning naming the channels whose fitted offset or gain is poorly determined, with
+    the likely causes and what to add, else None.
+
+    A channel is named when its offset's 1-sigma, or its gain's relative 1-sigma times 1 g,
+    exceeds POORLY_DETERMINED_MG (mg; settings: why 5 mg), whatever the poses' span (an
+    Empatica E4's 26 wrist poses: offsets +-19 and +-24 mg, gains +-2 %, every axis turned
+    through 1 g or more).  Without sigmas, a channel the poses turn through less than
+    EXCITATION_MIN_SPAN_G of f is named (its offset trades against its gain).  The causes
+    given: poses that hardly turn the axis (f along it spans less than EXCITATION_MIN_SPAN_G,
+    or no pose within TILTED_AFTER_DEG of +u_i or -u_i: a real LSM303 session kept f along x
+    within +-0.29 g, x offset +-114 counts, 28 mg), a coarse LSB (one count beyond
+    POORLY_DETERMINED_MG: a pose's mean rests on a few codes), the poses' number and
+    length (the sigmas fall as 1/sqrt of both where the noise dithers the codes), and their
+    scatter about the fit beyond SCATTER_CHI2 (the sigmas are then scaled up by
+    sqrt(chi2/dof): the scatter's, which longer poses do not shrink).
 
     Parameters
     ----------
@@ -225,34 +244,83 @@ def poorly_excited(device, F, offset_sigma=None) -> str | None:
     F : array_like (P, 3)
         The poses' specific force, m/s^2 (references or jig-free estimates).
     offset_sigma : array_like (N,), optional
-        The fitted offsets' 1-sigma, counts, to quote.
+        The fitted offsets' 1-sigma, counts.
+    gain_sig : array_like (N,), optional
+        The fitted gains' relative 1-sigma (a fraction; :func:`gain_sigma`).
+    n_samples : array_like (P,), optional
+        Samples a pose, to quote.
+    chi2_dof : float, optional
+        The fit's chi2/dof, to name as a cause above SCATTER_CHI2.
+    held_s : array_like (P,), optional
+        How long each pose was held, s, to quote (else n_samples at the device's rate).
+
+    Returns
+    -------
+    str or None
     """
     F = np.asarray(F, float)
     if F.ndim != 2 or F.shape[0] == 0:
         return None
     g = device.gravity_mps2
+    k = np.asarray(device.counts_per_mps2, float)
+    N = device.n_channels
     proj = F @ device.axes.T / g                     # (P, N), in g
     span = proj.max(axis=0) - proj.min(axis=0)
     low = span < EXCITATION_MIN_SPAN_G
-    if offset_sigma is not None:
-        # and the offset is really uncertain (the seed's 4 poses turn a channel through 0.87 g
-        # with the offset to 0.19 mg: no warning)
-        mg = 1000.0 * np.asarray(offset_sigma, float) / (np.asarray(device.counts_per_mps2, float) * g)
-        low &= ~(mg <= POORLY_DETERMINED_MG)
-    low = np.flatnonzero(low)
-    if not low.size:
+    off_mg = np.full(N, np.nan) if offset_sigma is None else 1000.0 * np.asarray(offset_sigma, float) / (k * g)
+    gain_pc = np.full(N, np.nan) if gain_sig is None else 100.0 * np.asarray(gain_sig, float)
+    if offset_sigma is not None or gain_sig is not None:
+        # 1 % of gain is 10 mg in a reading of 1 g
+        bad = (off_mg > POORLY_DETERMINED_MG) | (10.0 * gain_pc > POORLY_DETERMINED_MG)
+    else:
+        bad = low
+    bad = np.flatnonzero(bad)
+    if not bad.size:
         return None
-    parts = []
-    for i in low:
-        sig = ""
-        if offset_sigma is not None and np.isfinite(offset_sigma[i]):
-            mg = 1000.0 * offset_sigma[i] / (device.counts_per_mps2[i] * g)
-            sig = f", offset +-{offset_sigma[i]:.3g} counts ({mg:.2g} mg)"
-        parts.append(f"channel {i}'s f along its axis spans {proj[:, i].min():+.2f}..{proj[:, i].max():+.2f} g{sig}")
-    want = " and ".join(f"{axis_name(device.axes[i], +1)} and {axis_name(device.axes[i], -1)}" for i in low[:3])
-    return (f"the poses hardly turn {low.size} channel(s) ({'; '.join(parts)}; +-x, +-y, +-z span 2 g): such a "
-            f"channel's parameters are poorly determined (its offset trades against its gain and the poses' "
-            f"angles); add poses with f along {want}")
+    fh = F / np.linalg.norm(F, axis=1, keepdims=True)
+    near = math.cos(math.radians(TILTED_AFTER_DEG))
+    parts, turn, add = [], [], []
+    for i in bad:
+        part = f"channel {i}'s f along its axis spans {proj[:, i].min():+.2f}..{proj[:, i].max():+.2f} g"
+        if np.isfinite(off_mg[i]):
+            part += f", offset +-{offset_sigma[i]:.3g} counts ({off_mg[i]:.2g} mg)"
+        if np.isfinite(gain_pc[i]) and gain_pc[i] > 0:
+            part += f", gain +-{gain_pc[i]:.2g} %"
+        parts.append(part)
+        missing = [axis_name(device.axes[i], sgn) for sgn in (+1, -1)
+                   if not np.max(fh @ (sgn * device.axes[i])) >= near]
+        if low[i] or missing:
+            turn.append(f"channel {i}: " + (f"no pose within {TILTED_AFTER_DEG:g} deg of {' or '.join(missing)}"
+                                            if missing else f"f spans {span[i]:.2f} g"))
+            add += [d for d in missing if d not in add]
+    causes = []
+    if turn:
+        causes.append(f"poses that hardly turn an axis ({'; '.join(turn)})")
+    lsb = 1000.0 / (k[bad] * g)
+    if np.any(lsb > POORLY_DETERMINED_MG):
+        causes.append(f"a coarse LSB (1 count = {np.max(lsb):.3g} mg: a pose's mean rests on a few codes)")
+    if n_samples is not None and len(n_samples):
+        n_med = float(np.median(n_samples))
+        t_med = n_med / device.sample_rate_hz if held_s is None else float(np.median(held_s))
+        causes.append(f"few or short poses ({F.shape[0]} poses, a median {n_med:.0f} samples, "
+                      f"{t_med:.3g} s, each)")
+    scatter = chi2_dof is not None and chi2_dof > SCATTER_CHI2
+    if scatter:
+        causes.insert(0, f"the poses' scatter about the fit (chi2/dof {chi2_dof:.3g} scales the sigmas up "
+                         f"{math.sqrt(chi2_dof):.3g} x: its cause above)")
+    dirs = " and ".join(add) if len(add) < 3 else ", ".join(add[:-1]) + " and " + add[-1]
+    want = "add poses" + (f" with f along {dirs}" if add else " in more orientations")
+    if not scatter and (n_samples is not None or np.any(lsb > POORLY_DETERMINED_MG)):
+        want += " and hold each longer (the sigmas fall as 1/sqrt of the poses and of their samples)"
+    if offset_sigma is None and gain_sig is None:
+        head = f"the poses hardly turn {bad.size} channel(s)"
+    else:
+        head = (f"the calibration is poorly determined on {bad.size} channel(s): an offset 1-sigma beyond "
+                f"{POORLY_DETERMINED_MG:g} mg or a gain 1-sigma beyond {POORLY_DETERMINED_MG / 10:g} % "
+                f"({POORLY_DETERMINED_MG:g} mg at 1 g), where a calibration should beat the chip's untrimmed "
+                "tolerance (tens of mg, a few %) tenfold")
+    return (f"{head} ({'; '.join(parts)}; +-x, +-y, +-z span 2 g); likely causes: "
+            f"{'; '.join(causes) if causes else 'the poses'}; {want}")
 
 
 def axis_name(u, sign: int) -> str:

@@ -7,17 +7,20 @@ import numpy as np
 
 from ..errors import InputError
 from ..held import distinct_recordings
-from ..static import NO_POSE, PoseSet, one_wrong_scale, poses_from_recording
+from ..static import (MIN_POSE_S, NO_POSE, STATIC_THRESHOLD, STATIC_WINDOW_S, PoseSet, one_wrong_scale,
+                      poses_from_recording, window_len)
 from .checks import jig_accuracy_rad, pose_label
 from .known_poses import fit_known_poses
+from .outliers import outlier_poses, outlier_report, subset
 from .lever_arms import calibrate_positions
-from .results import set_aside_entry, to_calibration
+from .results import pose_names, set_aside_entry, to_calibration
 from .settings import JIG_ACCURACY_DEG, JIGFREE_MODELS, METHODS, ROTATION_MIN_RADPS, TEMP_MIN_SPAN_C
 from .static_model import fit_static
 
 
 def calibrate_recordings(device, recordings: Sequence[Any], method: str | None = None, *,
-                         jig_accuracy_deg: float = JIG_ACCURACY_DEG, jigfree_model: str = "auto"):
+                         jig_accuracy_deg: float = JIG_ACCURACY_DEG, jigfree_model: str = "auto",
+                         drop_outliers: bool = False):
     """Calibrate ``device`` from recordings and return a Calibration.
 
     Static poses: a recording's ``pose`` labels when present, else automatic static
@@ -35,7 +38,9 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     reference f, w and dw.  Readings held for several rows by a logger faster than the
     sensor are counted once (:func:`accelcal.held.distinct_recordings`; the calibration's
     ``extra["notes"]`` says so).  Of several recordings, one without a static pose adds none
-    and is named in those notes; with no pose in any, InputError.
+    and is named in those notes; with no pose in any, InputError.  Poses far off the fit
+    (:mod:`accelcal.calibrate.outliers`) are named in ``extra["outliers"]`` with the fit's
+    change without them; ``drop_outliers`` leaves them out (set aside, "far off the fit").
     """
     jig_accuracy_rad(jig_accuracy_deg)
     if jigfree_model not in JIGFREE_MODELS:
@@ -50,8 +55,13 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     rotating = [rotating_samples(rec) for rec in recordings]
     # with several recordings, one without a static pose (a motion, a sweep) adds none and is named
     several = len(recordings) > 1
-    sets = [poses_from_recording(rec, device, required=not (rot.any() or several))
-            for rec, rot in zip(recordings, rotating)]
+    try:
+        sets = [poses_from_recording(rec, device, required=not (rot.any() or several))
+                for rec, rot in zip(recordings, rotating)]
+    except InputError as e:
+        if not e.detail.startswith(NO_POSE):
+            raise
+        raise InputError(e.source, e.detail + detector_hint(device, recordings, None), field=e.field) from None
     for rec, rot, ps in zip(recordings, rotating, sets):
         if several and not rot.any() and ps.n_poses == 0:
             clipped = (f" ({len(ps.set_aside)} set aside: "
@@ -91,21 +101,25 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
                          column="f_x")
     temps = poses.temp
     temperature = bool(np.all(np.isfinite(temps)) and np.ptp(temps) >= TEMP_MIN_SPAN_C)
-    try:
-        fallback = None
+
+    def solve(ps):
         if jigfree:
-            fit, fallback = fit_jigfree(device, poses, jigfree_model, temperature)
-        elif temperature:
-            fit = fit_static(device, poses, method, jigfree=False, temperature=True,
-                             jig_accuracy_deg=jig_accuracy_deg)
-        else:
-            fit = fit_known_poses(device, poses.means, poses.f_ref, method, poses.sem(), poses=poses,
-                                  jig_accuracy_deg=jig_accuracy_deg)
+            return fit_jigfree(device, ps, jigfree_model, temperature)
+        if temperature:
+            return fit_static(device, ps, method, jigfree=False, temperature=True,
+                              jig_accuracy_deg=jig_accuracy_deg), None
+        return fit_known_poses(device, ps.means, ps.f_ref, method, ps.sem(), poses=ps,
+                               jig_accuracy_deg=jig_accuracy_deg), None
+
+    try:
+        fit, fallback = solve(poses)
     except InputError as e:
         if e.source != "<poses>":
             raise
         names = sorted({str(d.get("source")) for d in poses.info})
-        raise InputError(", ".join(names), e.detail, field=e.field) from None
+        raise InputError(", ".join(names), e.detail + detector_hint(device, recordings, poses),
+                         field=e.field) from None
+    fit, fallback, outliers = without_outliers(device, fit, fallback, solve, drop_outliers)
 
     pos_fit = None
     rot = [(rec, m) for rec, m in zip(recordings, rotating) if m.any()]
@@ -121,10 +135,78 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
                                       source=rot[0][0].source)
     cal = to_calibration(device, fit, "jigfree" if jigfree else method, pos_fit)
     if fallback is not None:
+        hint = detector_hint(device, recordings, poses)
+        if hint:
+            fallback["detector"] = hint[2:]
         cal.extra["fit"]["fallback"] = fallback
+    if outliers is not None:
+        cal.extra["outliers"] = outliers
     if notes:
         cal.extra["notes"] = notes
     return cal
+
+
+def without_outliers(device, fit, fallback, solve, drop: bool):
+    """The poses far off ``fit`` (:func:`accelcal.calibrate.outliers.outlier_poses`) and the fit
+    without them (``solve(PoseSet) -> (fit, fallback)``): (fit, fallback, report or None).  With
+    ``drop`` the fit without them is returned, the poses set aside as "far off the fit"; else
+    ``fit`` as it is.  The report is the calibration's ``extra["outliers"]``."""
+    out = outlier_poses(fit)
+    if not out.size:
+        return fit, fallback, None
+    poses = fit.poses
+    keep = np.setdiff1d(np.arange(poses.n_poses), out)
+    try:
+        other, other_fb = solve(subset(poses, keep))
+    except InputError as e:
+        if e.source != "<poses>":
+            raise
+        other = other_fb = None
+    rep = outlier_report(device, fit, out, pose_names(poses.info), other)
+    if not (drop and other is not None):
+        return fit, fallback, rep
+    rep["dropped"] = True
+    for p, d in zip(out, rep["poses"]):
+        info = poses.info[p]
+        other.poses.set_aside.append({**info, "reason": "far off the fit", "n_clipped": 0, "channels": [],
+                                      "levels": f"|f| {d['norm_error_mps2']:+.3g} m/s^2 off, "
+                                                f"{d['residual_over_noise']:.3g} x its noise"})
+    return other, other_fb, rep
+
+
+def detector_hint(device, recordings, poses: PoseSet | None) -> str:
+    """What the static detector needs, to append to a "too few poses" or "no static pose"
+    error where the poses were detected (no recording has ``pose`` labels; else ""): a still
+    stretch of several samples a pose, how many it found and the rows they hold, and, where
+    they hold less than half of the rows, that a file whose rows are each one pose's mean
+    (Magneto's input: 178 hand-held orientations, one row each, had been told "got 2; add
+    poses") needs a ``pose`` column, one label a row.
+
+    Parameters
+    ----------
+    device : Device
+    recordings : list of Recording
+    poses : PoseSet or None
+        The poses found (None: none).
+
+    Returns
+    -------
+    str
+        "; the static detector ..." or "".
+    """
+    if any(rec.has_pose() for rec in recordings):
+        return ""
+    rows = sum(rec.n_samples for rec in recordings)
+    held = 0 if poses is None else int(np.sum(poses.n))
+    found = 0 if poses is None else poses.n_poses
+    w = max(window_len(device, STATIC_WINDOW_S, rec.n_samples) for rec in recordings)
+    text = (f"; the static detector takes a pose from a still stretch of several samples (at least {w} here, "
+            f"and {MIN_POSE_S:g} s where a motion touches it, with every channel within {STATIC_THRESHOLD:g} x "
+            f"its noise) and found {found}, holding {held} of {rows} rows")
+    if held < rows / 2:
+        text += (": if each row is already one pose's mean (a file of pose means, as Magneto's input), give "
+                 "every row its own label in a 'pose' column (0, 1, 2, ...), which takes each row as a pose")
+    return text
 
 
 def setaside_reason(d: dict) -> str:
@@ -141,7 +223,8 @@ def fit_jigfree(device, poses: PoseSet, model: str, temperature: bool):
     fit : StaticFit
     fallback : dict or None
         ``{"from": "full", "to": model, "reasons": {model tried: why it was not determined}}``
-        when ``auto`` fell back; None otherwise.
+        when ``auto`` fell back (:func:`calibrate_recordings` adds ``"detector"``, the
+        :func:`detector_hint`, where the poses were detected); None otherwise.
 
     Raises
     ------

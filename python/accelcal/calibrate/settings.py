@@ -40,6 +40,11 @@ JIG_HINT_CHI2 = 4.0        # known poses with jig accuracy 0: above this chi2/do
                            # that would explain the scatter (chi2/dof = 1); the CLI prints it as a warning
 
 
+SCATTER_CHI2 = 4.0         # above this chi2/dof the poses scatter beyond their noise (warned of): the
+                           # sigmas, scaled up by sqrt(chi2/dof), are then the scatter's, which longer
+                           # poses do not shrink
+
+
 CANDIDATES = (
     ("-z", (0.0, 0.0, -1.0)), ("+z", (0.0, 0.0, 1.0)),
     ("+x", (1.0, 0.0, 0.0)), ("-x", (-1.0, 0.0, 0.0)),
@@ -55,7 +60,16 @@ TILTED = tuple((f"{a}{b} (45 deg between {a} and {b})",
           for z, sz in (("+z", 1.0), ("-z", -1.0)))
 #: a pose to add is a tilted one when every axis direction has a pose within this (deg)
 TILTED_AFTER_DEG = 20.0
-#: a channel whose axis the poses turn through less f than this (in g; +-x, +-y, +-z: 2 g) is warned of
+#: a channel whose axis the poses turn through less f than this (in g; +-x, +-y, +-z: 2 g) hardly turns
+#: (named as the cause where its parameters are poorly determined; without their sigmas, warned of alone)
 EXCITATION_MIN_SPAN_G = 1.0
-#: ... when its offset's 1-sigma is above this (mg of g; 2 mg tilts a level reading by 0.11 deg)
-POORLY_DETERMINED_MG = 2.0
+#: a fitted parameter is poorly determined (warned of, whatever the poses' span) when its 1-sigma, as the
+#: error it makes in a reading of 1 g, is above this (mg): the offset's sigma itself, the gain's relative
+#: sigma times 1 g (5 mg: 0.5 % of gain).  A calibration is burnt into firmware to replace the chip's
+#: untrimmed tolerances, a zero-g offset of +-40..80 mg and a sensitivity of +-1..3 % for consumer MEMS
+#: (MPU-6050: +-50 mg x/y, +-80 mg z, +-3 %); a tenth of +-50 mg is 5 mg, a level reading's tilt of
+#: 0.29 deg (1 mg = 0.057 deg), 25 mm of drift after 1 s of integration.  Beyond it the fit tells the
+#: chip's own offset and gain little better than its datasheet does (the real recordings the tests
+#: calibrate: offsets within 0.03..2.9 mg, gains 0.003..0.44 %; an Empatica E4's 26 wrist poses: 8..24 mg,
+#: 0.7..2 %)
+POORLY_DETERMINED_MG = 5.0
