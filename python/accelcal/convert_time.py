@@ -9,7 +9,7 @@ import re
 import numpy as np
 
 from .errors import InputError
-from .recording_checks import even_steps
+from .recording_checks import GAP_STEPS, even_steps, regular_step
 
 __all__ = ["TIME_FACTORS", "TIME_COLUMN_RE", "MIN_PLAUSIBLE_HZ", "BURST_SHARE", "FLOAT_EXACT", "unit_in_name",
            "exact_stamps", "DATETIME_RE", "is_datetime", "datetime_stamps", "time_in_seconds", "burst_fit",
@@ -30,9 +30,6 @@ BURST_SHARE = 0.25
 BURST_FIT_STEPS = 0.5
 #: ... or t's median step is below this share of its mean step
 BURST_TINY_STEP = 0.05
-#: a step longer than this x the median step is a pause or samples lost, not a sample period
-#: (a host's jitter of up to 0.7 of a step makes steps of up to 1.7; a sample lost, ~2)
-GAP_STEPS = 1.8
 #: float64 holds every whole number below this exactly (a time stamp beyond it, an epoch in
 #: ns, is read as an integer: :func:`exact_stamps`)
 FLOAT_EXACT = 2.0 ** 53
@@ -315,19 +312,16 @@ def rate_from_t(t: np.ndarray, notes: list[str], fit: tuple[float, str] | None) 
     if t.size < 2:
         notes.append("a single sample: t gives no rate, and the device's 1 Hz is a placeholder (--rate HZ states it)")
         return 1.0
-    steps = np.diff(t)
-    median = float(np.median(steps))
+    step, gaps, median = regular_step(t)
     mean = float(t[-1] - t[0]) / (t.size - 1)
     if fit is None or mean <= 0:
         if median <= 0:
             return 1.0
-        regular = steps[(steps > 0) & (steps <= GAP_STEPS * median)]
-        gaps = int(np.sum(steps > GAP_STEPS * median))
         if gaps:
             notes.append(f"t has {gaps} step{'s' if gaps > 1 else ''} longer than {GAP_STEPS:g} x its median step "
-                         f"({median:.6g} s; the longest {float(steps.max()):.6g} s): a pause or samples lost; the "
+                         f"({median:.6g} s; the longest {float(np.diff(t).max()):.6g} s): a pause or samples lost; the "
                          "rate is that of the other steps")
-        return regular.size / float(regular.sum())
+        return 1.0 / step
     rate, which = fit
     bursts = burst_starts(t).size
     notes.append(f"t's median step gives {1.0 / median if median > 0 else float('inf'):.6g} Hz but its {t.size} samples "

@@ -10,7 +10,7 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["check_for_device", "check_core_input", "seconds", "even_steps", "rate_for", "TIME_UNITS", "TIME_UNIT_TOL",
+__all__ = ["GAP_STEPS", "regular_step", "check_for_device", "check_core_input", "seconds", "even_steps", "rate_for", "TIME_UNITS", "TIME_UNIT_TOL",
            "RATE_TOL", "repeated_rows", "repeats_note"]
 
 #: time stamps in these units are read as such (a logger's millis() or micros()) ...
@@ -42,6 +42,34 @@ def seconds(rec: Any, device) -> str | None:
             rec.notes.append(note)
             return note
     return None
+
+
+#: a step longer than this x the median step is a pause or samples lost, not a sample period
+#: (a host's jitter of up to 0.7 of a step makes steps of up to 1.7; a sample lost, ~2)
+GAP_STEPS = 1.8
+
+
+def regular_step(t: np.ndarray) -> tuple[float, int, float]:
+    """The sample period t's steps give (s): the steps up to GAP_STEPS x the median step, over
+    their time -- not the median step, which a clock that catches up now and then with a short
+    step does not keep (a host stamping a 100 Hz sensor 10.24 ms apart, with a 5 ms step every
+    ~20 samples: median 10.24 ms, period 10.00 ms; an x-IMU3 whose clock steps 10.079 ms with a
+    correction now and then runs at 100.004 Hz).
+
+    Returns
+    -------
+    step : float
+        s (the median step where no step is positive).
+    gaps : int
+        Steps longer than GAP_STEPS x the median (pauses, samples lost).
+    median : float
+        The median step, s.
+    """
+    steps = np.diff(np.asarray(t, float))
+    median = float(np.median(steps)) if steps.size else 0.0
+    regular = steps[(steps > 0) & (steps <= GAP_STEPS * median)]
+    gaps = int(np.sum(steps > GAP_STEPS * median)) if median > 0 else 0
+    return (float(regular.sum()) / regular.size if regular.size else median), gaps, median
 
 
 def even_steps(t: np.ndarray, share: float) -> bool:

@@ -98,3 +98,27 @@ def test_a_sample_delivered_twice_with_no_place_of_its_own_is_named():
     # without the copy it is taken as it is
     out, filled, _ = on_uniform_grid(recording_from_arrays(np.delete(t2, k + 1), np.delete(raw2, k + 1, axis=0)))
     assert out.n_samples == n and not filled.any()
+
+
+@pytest.mark.parametrize("seed", [2, 3])
+def test_a_host_clock_that_catches_up_with_a_short_step_keeps_the_sensor_s_rate(seed):
+    """A host that stamps a 100 Hz sensor 10.24 ms apart and catches up with a 5.2 ms step every
+    ~20 samples (ChanghyeonKim93's tumble sessions): the median step is 2.4 % long, and a grid on
+    it refused the recording at a row where two samples fell within half a step.  On the regular
+    steps' period (10.00 ms) every stamp is within about 0.26 of a step of its place: taken whole,
+    the grid at 100 Hz."""
+    n = 4200
+    rng = np.random.default_rng(seed)
+    lag = np.empty(n)
+    a = 0.0
+    for k in range(n):                      # the host's lag (s): 0.24 +- 0.2 ms more a sample, 4.88 ms
+        a += 0.00024 + rng.normal(0, 2e-4)  # less at a catch-up (every ~10-30 samples, as the real)
+        if a > 0.0025:
+            a -= 0.00488
+        lag[k] = a
+    t = 1.5e9 + 0.01 * np.arange(n) + lag
+    raw = _walk(n)
+    out, filled, note = on_uniform_grid(recording_from_arrays(t, raw))
+    assert out.n_samples == n and not filled.any()
+    np.testing.assert_array_equal(out.raw, raw)
+    assert float(np.median(np.diff(out.t))) == pytest.approx(0.01, rel=1e-4)
