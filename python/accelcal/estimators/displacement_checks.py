@@ -1,5 +1,6 @@
 """The displacement's checks of a recording, for its warnings and errors: why no rest was
-found (:func:`no_rest_reason`), a still stretch that is no rest because the body turned
+found (:func:`no_rest_reason`), a still stretch that is no rest because its |f| strays from g
+(:func:`still_off_g`: the calibration's scale) or because the body turned
 (:func:`still_but_turned`), and corrected motions whose zero point only a turn explains
 (:func:`turned_motions`), rests that hold a trend (:func:`trend_warnings`)."""
 from __future__ import annotations
@@ -8,9 +9,10 @@ import math
 
 import numpy as np
 
+from .common import time_span
 from .rest import TREND_BLOCK_HOLDS, RestParams, trend_bound
 
-__all__ = ["REST_DEV_WARN_MPS2", "ZP_TURN_MPS2", "no_rest_reason", "still_but_turned", "zp_limit", "turned_motions",
+__all__ = ["REST_DEV_WARN_MPS2", "ZP_TURN_MPS2", "no_rest_reason", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned", "zp_limit", "turned_motions",
            "trend_warnings"]
 
 
@@ -20,11 +22,36 @@ __all__ = ["REST_DEV_WARN_MPS2", "ZP_TURN_MPS2", "no_rest_reason", "still_but_tu
 REST_DEV_WARN_MPS2 = 0.4
 
 
+def _band_share(blk, rp: RestParams) -> float:
+    """The share of the samples ``blk`` (m, 3), m/s^2, whose |f| falls outside the rest test's band
+    g +- g_tol (0 when the |f| test is off): one such sample breaks the quiet run a rest needs."""
+    if rp.g is None:
+        return 0.0
+    lo, hi = rp.g2_bounds()
+    g2 = np.sum(np.asarray(blk, float) ** 2, axis=1)
+    return float(np.mean((g2 < lo) | (g2 > hi)))
+
+
+def still_off_g_text(t, off, rp: RestParams, rec=None) -> str:
+    """The words for :func:`still_off_g`'s stretch ``off`` (``t`` in s; ``rec`` names its rows)."""
+    a, b, norm, share = off
+    return f"the body is still at {time_span(t, a, b, rec)} but that is no rest: it {off_g_text(norm, share, rp)}"
+
+
+def off_g_text(norm: float, share: float, rp: RestParams) -> str:
+    """Why a still stretch is no rest when its |f| strays from g: its mean |f| (``norm``, m/s^2),
+    the ``share`` of its samples outside the rest test's band g +- g_tol, and the cause."""
+    return (f"read |f| = {norm:.4g} m/s^2, {100 * share:.0f} % of the samples outside the rest test's "
+            f"{rp.g:g} +- {rp.g_tol:g} m/s^2: the calibration's scale is off (a chip's nominal scale?); "
+            "calibrate it first (accelcal calibrate) and use that calibration")
+
+
 def no_rest_reason(f, t, rp: RestParams) -> str:
     """Why no rest was found, for the error: the stillest block of ``rp.hold`` samples (blocks
     at a stride of half a block), how far its f strays from its mean, and, when it is still
-    enough, the |f| that kept it from being a rest (a calibration whose scale is off: an
-    uncalibrated chip 7.7 % high read with its nominal scale).  ``f`` in m/s^2, (n, 3)."""
+    enough but some of its samples' |f| fall outside the rest test's band, that |f| (a
+    calibration whose scale is off: an uncalibrated chip 7.7 % high read with its nominal scale;
+    a chip 5 % low whose mean |f| sits at the band's edge).  ``f`` in m/s^2, (n, 3); ``t`` in s."""
     f = np.asarray(f, float)
     hold = max(int(rp.hold), 2)
     if f.shape[0] < hold:
@@ -41,26 +68,84 @@ def no_rest_reason(f, t, rp: RestParams) -> str:
     dev, i, norm = best
     if rp.g is None:
         return f"the stillest {hold} samples stray {dev:.3g} m/s^2 from their mean"
-    where = f"t = {t[i]:.6g}..{t[i + hold - 1]:.6g} s"
+    where = time_span(t, i, i + hold - 1)
     if dev > rp.dev_max:
         return (f"the stillest {hold} samples ({where}) stray {dev:.3g} m/s^2 from their mean, beyond the rest's "
                 f"{rp.dev_max:.3g}: the body never stops")
-    if abs(norm - rp.g) <= rp.g_tol:
+    share = _band_share(f[i:i + hold], rp)
+    if share == 0.0:
         return (f"the stillest {hold} samples ({where}) stray only {dev:.3g} m/s^2 from their own mean and read "
                 f"|f| = {norm:.4g} m/s^2, but the rest detector's running mean never settles on a still stretch "
                 "that long: the body creeps or turns slowly throughout")
-    return (f"the stillest {hold} samples ({where}) are still (within {dev:.3g} m/s^2) but read |f| = {norm:.4g} "
-            f"m/s^2, beyond {rp.g:g} +- {rp.g_tol:g}: the calibration's scale is off (a chip's nominal scale?); "
-            "calibrate it (accelcal calibrate) and use that calibration")
+    return f"the stillest {hold} samples ({where}) are still (within {dev:.3g} m/s^2) but {off_g_text(norm, share, rp)}"
 
 
-def still_but_turned(f, t, at_rest, rp: RestParams) -> tuple[float, float, float] | None:
+def _still_blocks(f, at_rest, rp: RestParams):
+    """Each block of ``rp.hold`` samples (at a stride of a block) not at rest whose f stays within
+    ``rp.dev_max`` of its mean: (its first sample, its mean f in m/s^2, :func:`_band_share`)."""
+    hold = max(int(rp.hold), 2)
+    for i in range(0, f.shape[0] - hold + 1, hold):
+        blk = f[i:i + hold]
+        if at_rest[i:i + hold].any():
+            continue
+        m = blk.mean(axis=0)
+        if float(np.max(np.abs(blk - m))) <= rp.dev_max:
+            yield i, m, _band_share(blk, rp)
+
+
+def _grow(first, i: int, hold: int):
+    """The first stretch (first and last sample) grown by the block at sample ``i`` when it
+    begins within 1.5 blocks of its end (else kept)."""
+    if first is None:
+        return i, i + hold - 1
+    return (first[0], i + hold - 1) if first[1] >= i - 1.5 * (hold - 1) else first
+
+
+def still_off_g(f, at_rest, rp: RestParams) -> tuple[int, int, float, float] | None:
+    """The first stretch where the body is still (blocks of ``rp.hold`` samples within
+    ``rp.dev_max`` of their mean) and not at rest because some of its samples' |f| fall outside
+    the rest test's band g +- g_tol: a calibration whose scale is off (a chip's gain error read
+    with its nominal scale), not a turn or a motion.
+
+    Parameters
+    ----------
+    f : array_like (n, 3)
+        Specific force, m/s^2.
+    at_rest : array_like (n,) bool
+    rp : RestParams
+
+    Returns
+    -------
+    (int, int, float, float) or None
+        The stretch's first and last sample, its mean |f| (m/s^2) and the share of its samples
+        outside the band; None when there is none (or the |f| test is off).
+    """
+    f = np.asarray(f, float)
+    at_rest = np.asarray(at_rest, bool)
+    if rp.g is None:
+        return None
+    hold = max(int(rp.hold), 2)
+    first, norms, shares = None, [], []
+    for i, m, share in _still_blocks(f, at_rest, rp):
+        if share == 0.0:
+            continue
+        grown = _grow(first, i, hold)
+        if first is not None and grown == first:
+            break
+        first = grown
+        norms.append(float(np.linalg.norm(m)))
+        shares.append(share)
+    return None if first is None else (first[0], first[1], float(np.mean(norms)), float(np.mean(shares)))
+
+
+def still_but_turned(f, at_rest, rp: RestParams) -> tuple[float, int, int] | None:
     """A stretch where the body is still but not at rest: blocks of ``rp.hold`` samples whose
-    f stays within ``rp.dev_max`` of its mean with |f| within ``rp.g_tol`` of g, away from the
+    f stays within ``rp.dev_max`` of its mean with every sample's |f| within ``rp.g_tol`` of g
+    (a block with samples outside is :func:`still_off_g`'s: the scale, not a turn), away from the
     rest's direction by more than ``rp.ref_max``.  For a body that only translates (a rail)
     every still stretch is a rest; such a stretch is a turn, which no accelerometer alone
     tells from an acceleration.  Returns (its largest angle from the first rest's f, deg;
-    the first such stretch's start and end, s) or None.  ``f`` in m/s^2, (n, 3)."""
+    the first such stretch's first and last sample) or None.  ``f`` in m/s^2, (n, 3)."""
     f = np.asarray(f, float)
     at_rest = np.asarray(at_rest, bool)
     if not at_rest.any():
@@ -68,24 +153,13 @@ def still_but_turned(f, t, at_rest, rp: RestParams) -> tuple[float, float, float
     ref = f[at_rest][: max(rp.hold, 1)].mean(axis=0)
     hold = max(int(rp.hold), 2)
     worst, first = 0.0, None
-    for i in range(0, f.shape[0] - hold + 1, hold):
-        blk = f[i:i + hold]
-        if at_rest[i:i + hold].any():
-            continue
-        m = blk.mean(axis=0)
-        if float(np.max(np.abs(blk - m))) > rp.dev_max:
-            continue
-        if rp.g is not None and abs(float(np.linalg.norm(m)) - rp.g) > rp.g_tol:
-            continue
-        if float(np.linalg.norm(m - ref)) <= rp.ref_max:
+    for i, m, share in _still_blocks(f, at_rest, rp):
+        if share > 0.0 or float(np.linalg.norm(m - ref)) <= rp.ref_max:
             continue
         cosang = float(np.dot(m, ref) / (np.linalg.norm(m) * np.linalg.norm(ref)))
         ang = math.degrees(math.acos(min(1.0, max(-1.0, cosang))))
         worst = max(worst, ang)
-        if first is None:
-            first = (float(t[i]), float(t[i + hold - 1]))
-        elif first[1] >= float(t[i]) - 1.5 * (float(t[i + hold - 1]) - float(t[i])):
-            first = (first[0], float(t[i + hold - 1]))
+        first = _grow(first, i, hold)
     return None if first is None else (worst, first[0], first[1])
 
 

@@ -13,13 +13,13 @@ from ..errors import AccelcalError, InputError
 from ..noise import states_noise
 from ..recording import check_core_input, check_for_device
 from .common import (CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_noise, force_noise,
-                     resolve_array, uniform_dt)
+                     resolve_array, time_span, uniform_dt)
 from .timegrid import on_uniform_grid
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
-from .displacement_checks import (REST_DEV_WARN_MPS2, no_rest_reason, still_but_turned, trend_warnings,
-                                  turned_motions)
+from .displacement_checks import (REST_DEV_WARN_MPS2, no_rest_reason, still_but_turned, still_off_g,
+                                  still_off_g_text, trend_warnings, turned_motions)
 from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params, rest_dated_back, rest_without_trend
 from ..triad import triad_forces
 
@@ -272,11 +272,13 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         r = displace_offline(f, p, np.where(gone, flags & ~(REST_AT_REST | REST_QUIET), flags))
         warnings += trend_warnings(t, trends, rp, f_sigma, False)
         if r["no_rest"]:
+            off = still_off_g(f, np.zeros(n, bool), rp) if trends else None
             raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording "
                              f"(rest = |f - mean| <= {rp.dev_max:.3g} m/s^2 for {rp.hold} samples"
                              + (f" with |f| within {rp.g_tol:g} of {rp.g:g} m/s^2" if rp.g is not None else "")
-                             + "): " + ("; ".join(w.removeprefix("displacement: ") for w in
-                                                  trend_warnings(t, trends, rp, f_sigma, False))
+                             + "): " + ("; ".join([w.removeprefix("displacement: ") for w in
+                                                   trend_warnings(t, trends, rp, f_sigma, False)]
+                                                  + ([still_off_g_text(t, off, rp, rec)] if off else []))
                                         or no_rest_reason(f, t, rp))
                              + "; the stop-to-stop method needs a rest at both ends of each motion")
         v, pp, p_raw = r["v"], r["p"], r["p_raw"]
@@ -326,10 +328,17 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     at = rest_dated_back(at, quiet, f_host, rp)
     at_rest_not_moving(at, corrected, v, pp, p_raw)
     first_at = int(np.argmax(at)) if np.any(at) else n
+    # a still stretch kept from being a rest by its |f| (the scale), said once: where the recording
+    # does not start at rest when it lies before the first rest, else on its own
+    off = still_off_g(f_host, at, rp)
+    off_words = [] if off is None else [still_off_g_text(t, off, rp, rec)]
     if first_at > 0:
+        before = off_words if off is not None and off[0] < first_at else []
         warnings.append(f"displacement: the recording does not start at rest: nothing is estimated before the "
                         f"first rest (from t = {t[min(first_at, n - 1)]:.3f} s, declared at "
-                        f"t = {t[min(declared, n - 1)]:.3f} s; rows before are 0)")
+                        f"t = {t[min(declared, n - 1)]:.3f} s; rows before are 0)" + "".join("; " + w for w in before))
+        off_words = [w for w in off_words if w not in before]
+    warnings += ["displacement: " + w for w in off_words]
     if is_open:
         warnings.append("displacement: the last motion does not end at rest: it is NOT corrected "
                         "(column corrected = 0 there) and its drift grows with time squared")
@@ -342,10 +351,10 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                             "the result is doubtful")
     warnings += turned_motions(f_host, t, at, closed, f_sigma, rp, ax, float(device.gravity_mps2))
     zps = [z for _, _, z in closed]
-    turned = still_but_turned(f_host, t, at, rp)
+    turned = still_but_turned(f_host, at, rp)
     if turned is not None:
         ang, a0, a1 = turned
-        warnings.append(f"displacement: the body is still at t = {a0:.3f}-{a1:.3f} s (the first such stretch) but "
+        warnings.append(f"displacement: the body is still at {time_span(t, a0, a1, rec)} (the first such stretch) but "
                         f"turned from the first rest (by up to {ang:.1f} deg over the recording): an accelerometer "
                         "alone cannot "
                         "tell a turn from an acceleration, so gravity leaks into the path from there on (up to "
