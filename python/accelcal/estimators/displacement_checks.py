@@ -12,14 +12,48 @@ import numpy as np
 from .common import time_span
 from .rest import TREND_BLOCK_HOLDS, RestParams, trend_bound
 
-__all__ = ["REST_DEV_WARN_MPS2", "ZP_TURN_MPS2", "no_rest_reason", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned", "zp_limit", "turned_motions",
-           "trend_warnings"]
+__all__ = ["REST_DEV_WARN_MPS2", "REST_NOISE_MAX_MPS2", "rest_noise_max", "wide_rest_warning", "ZP_TURN_MPS2",
+           "no_rest_reason", "scale_off", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned",
+           "zp_limit", "turned_motions", "trend_warnings"]
 
 
-#: a rest test wider than this (m/s^2; 8 sigma of 0.05 m/s^2, the noisiest sensor at rest of
-#: issue 13's range, whose 5 sigma is 0.25) from a noise estimated from the data is warned of (a
-#: rocket's vibration: 0.67)
-REST_DEV_WARN_MPS2 = 0.4
+#: the noisiest sensor at rest of issue 13's range, m/s^2 per axis (its 5 sigma: 0.25)
+REST_NOISE_MAX_MPS2 = 0.05
+#: a rest test (5 sigma of a noise estimated from the data) wider than this many sigma of the
+#: noisiest sensor at rest is warned of (a rocket's vibration: 0.67 m/s^2)
+REST_WARN_SIGMAS = 8.0
+
+
+def rest_noise_max(q_f: float = 0.0) -> float:
+    """The largest noise (m/s^2 per axis) :func:`accelcal.noise.estimate_noise` gives for a sensor
+    at rest whose own noise is at most REST_NOISE_MAX_MPS2, read on codes a step ``q_f`` apart
+    (m/s^2 per axis: the code step through the calibration).
+
+    A still channel's rounding error never exceeds half a step, so its window std s is at most
+    sigma + q/2 (a reading that flips between two codes: q/2 with no noise at all); the estimate
+    adds the rounding noise q^2/12: sqrt((sigma + q/2)^2 + q^2/12).  With q = 0 this is sigma.
+    An 8-bit Empatica E4 at +-2 g (q = 0.153 m/s^2) at rest reads up to 0.13 m/s^2."""
+    q = float(q_f)
+    return math.hypot(REST_NOISE_MAX_MPS2 + 0.5 * q, q / math.sqrt(12.0))
+
+
+#: the widest rest test not warned of with fine codes (m/s^2): 8 sigma of 0.05 m/s^2
+REST_DEV_WARN_MPS2 = REST_WARN_SIGMAS * rest_noise_max()
+
+
+def wide_rest_warning(dev_max: float, q_f: float) -> list[str]:
+    """The warning (one line, or none) of a rest test whose width ``dev_max`` (m/s^2, 5 sigma of
+    the noise estimated from the data) is more than REST_WARN_SIGMAS sigma of what a sensor at rest
+    gives on codes ``q_f`` apart (:func:`rest_noise_max`): vibration throughout.  A test wide only
+    because the codes are coarse (an 8-bit sensor dwelling on 2-4 codes) is the sensor at rest."""
+    top = rest_noise_max(q_f)
+    if dev_max <= REST_WARN_SIGMAS * top:
+        return []
+    coarse = (f"; {5 * top:.2g} with this sensor's code step of {q_f:.3g} m/s^2" if 5 * top > 0.26 else "")
+    return [f"displacement: the noise estimated from the recording gives a rest test of |f - mean| <= {dev_max:.3g} "
+            f"m/s^2 (5 sigma), beyond what a sensor at rest shows (0.01-0.25 m/s^2{coarse}): no still stretch is "
+            "that quiet (vibration throughout, a flight), so a slow motion may pass for a rest; state the sensor's "
+            "noise_mps2 in the device file"]
 
 
 def _band_share(blk, rp: RestParams) -> float:
@@ -30,6 +64,15 @@ def _band_share(blk, rp: RestParams) -> float:
     lo, hi = rp.g2_bounds()
     g2 = np.sum(np.asarray(blk, float) ** 2, axis=1)
     return float(np.mean((g2 < lo) | (g2 > hi)))
+
+
+def scale_off(norm: float, share: float, rp: RestParams) -> bool:
+    """Whether a still stretch whose mean |f| is ``norm`` (m/s^2) and whose samples fall outside
+    the rest test's band in the ``share`` given is kept from being a rest by the scale: its mean
+    sits within half the test's width (dev_max / 2, 2.5 sigma) of the band's edge or beyond it.
+    Nearer g, the samples that leave the band are the noise's (a test nearly as wide as the band:
+    an 8-bit sensor's 0.47 m/s^2 against 0.5), not the scale's."""
+    return rp.g is not None and share > 0.0 and abs(norm - rp.g) >= rp.g_tol - 0.5 * rp.dev_max
 
 
 def still_off_g_text(t, off, rp: RestParams, rec=None) -> str:
@@ -73,7 +116,7 @@ def no_rest_reason(f, t, rp: RestParams) -> str:
         return (f"the stillest {hold} samples ({where}) stray {dev:.3g} m/s^2 from their mean, beyond the rest's "
                 f"{rp.dev_max:.3g}: the body never stops")
     share = _band_share(f[i:i + hold], rp)
-    if share == 0.0:
+    if not scale_off(norm, share, rp):
         return (f"the stillest {hold} samples ({where}) stray only {dev:.3g} m/s^2 from their own mean and read "
                 f"|f| = {norm:.4g} m/s^2, but the rest detector's running mean never settles on a still stretch "
                 "that long: the body creeps or turns slowly throughout")
@@ -82,7 +125,8 @@ def no_rest_reason(f, t, rp: RestParams) -> str:
 
 def _still_blocks(f, at_rest, rp: RestParams):
     """Each block of ``rp.hold`` samples (at a stride of a block) not at rest whose f stays within
-    ``rp.dev_max`` of its mean: (its first sample, its mean f in m/s^2, :func:`_band_share`)."""
+    ``rp.dev_max`` of its mean: (its first sample, its mean f in m/s^2, the share of its samples
+    outside the |f| band when that is the scale's doing (:func:`scale_off`), else 0)."""
     hold = max(int(rp.hold), 2)
     for i in range(0, f.shape[0] - hold + 1, hold):
         blk = f[i:i + hold]
@@ -90,7 +134,8 @@ def _still_blocks(f, at_rest, rp: RestParams):
             continue
         m = blk.mean(axis=0)
         if float(np.max(np.abs(blk - m))) <= rp.dev_max:
-            yield i, m, _band_share(blk, rp)
+            share = _band_share(blk, rp)
+            yield i, m, share if scale_off(float(np.linalg.norm(m)), share, rp) else 0.0
 
 
 def _grow(first, i: int, hold: int):
@@ -104,8 +149,11 @@ def _grow(first, i: int, hold: int):
 def still_off_g(f, at_rest, rp: RestParams) -> tuple[int, int, float, float] | None:
     """The first stretch where the body is still (blocks of ``rp.hold`` samples within
     ``rp.dev_max`` of their mean) and not at rest because some of its samples' |f| fall outside
-    the rest test's band g +- g_tol: a calibration whose scale is off (a chip's gain error read
-    with its nominal scale), not a turn or a motion.
+    the rest test's band g +- g_tol with a mean |f| off g (:func:`scale_off`), for TREND_BLOCK_HOLDS
+    blocks or more (1 s at the default hold: a hand that pauses while it accelerates holds that
+    acceleration for a moment, a chip read with the wrong scale for as long as it is still): a
+    calibration whose scale is off (a chip's gain error read with its nominal scale), not a turn
+    or a motion.
 
     Parameters
     ----------
@@ -125,23 +173,28 @@ def still_off_g(f, at_rest, rp: RestParams) -> tuple[int, int, float, float] | N
     if rp.g is None:
         return None
     hold = max(int(rp.hold), 2)
-    first, norms, shares = None, [], []
+    runs = []                   # each stretch: [first sample, last sample, the blocks' |mean f|, shares]
     for i, m, share in _still_blocks(f, at_rest, rp):
         if share == 0.0:
             continue
-        grown = _grow(first, i, hold)
-        if first is not None and grown == first:
+        if runs and _grow(tuple(runs[-1][:2]), i, hold) != tuple(runs[-1][:2]):
+            runs[-1][1] = i + hold - 1
+        elif runs and len(runs[-1][2]) >= TREND_BLOCK_HOLDS:
             break
-        first = grown
-        norms.append(float(np.linalg.norm(m)))
-        shares.append(share)
-    return None if first is None else (first[0], first[1], float(np.mean(norms)), float(np.mean(shares)))
+        else:
+            runs.append([i, i + hold - 1, [], []])
+        runs[-1][2].append(float(np.linalg.norm(m)))
+        runs[-1][3].append(share)
+    for a, b, norms, shares in runs:
+        if len(norms) >= TREND_BLOCK_HOLDS:
+            return a, b, float(np.mean(norms)), float(np.mean(shares))
+    return None
 
 
 def still_but_turned(f, at_rest, rp: RestParams) -> tuple[float, int, int] | None:
     """A stretch where the body is still but not at rest: blocks of ``rp.hold`` samples whose
-    f stays within ``rp.dev_max`` of its mean with every sample's |f| within ``rp.g_tol`` of g
-    (a block with samples outside is :func:`still_off_g`'s: the scale, not a turn), away from the
+    f stays within ``rp.dev_max`` of its mean with |f| within ``rp.g_tol`` of g (not one kept
+    from a rest by the scale, :func:`still_off_g`'s: no turn is told there), away from the
     rest's direction by more than ``rp.ref_max``.  For a body that only translates (a rail)
     every still stretch is a rest; such a stretch is a turn, which no accelerometer alone
     tells from an acceleration.  Returns (its largest angle from the first rest's f, deg;
@@ -155,6 +208,8 @@ def still_but_turned(f, at_rest, rp: RestParams) -> tuple[float, int, int] | Non
     worst, first = 0.0, None
     for i, m, share in _still_blocks(f, at_rest, rp):
         if share > 0.0 or float(np.linalg.norm(m - ref)) <= rp.ref_max:
+            continue
+        if rp.g is not None and abs(float(np.linalg.norm(m)) - rp.g) > rp.g_tol:
             continue
         cosang = float(np.dot(m, ref) / (np.linalg.norm(m) * np.linalg.norm(ref)))
         ang = math.degrees(math.acos(min(1.0, max(-1.0, cosang))))

@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from ..errors import AccelcalError, InputError
-from ..noise import states_noise
+from ..noise import code_step, states_noise
 from ..recording import check_core_input, check_for_device
 from .common import (CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_noise, force_noise,
                      resolve_array, time_span, uniform_dt)
@@ -19,7 +19,7 @@ from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OP
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
 from .displacement_checks import (REST_DEV_WARN_MPS2, no_rest_reason, still_but_turned, still_off_g,
-                                  still_off_g_text, trend_warnings, turned_motions)
+                                  still_off_g_text, trend_warnings, turned_motions, wide_rest_warning)
 from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params, rest_dated_back, rest_without_trend
 from ..triad import triad_forces
 
@@ -250,17 +250,17 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     dt = uniform_dt(rec)
     f, note = _body_forces(device, cal, rec, engine)
     noise = channel_noise(device, rec)
-    f_sigma = force_noise(device, cal, noise, None if device.is_array() else device.triads()[0])
+    channels = None if device.is_array() else device.triads()[0]
+    f_sigma = force_noise(device, cal, noise, channels)
     rp = rest or default_rest_params(device, 1.0 / dt, f_sigma=f_sigma)
     p = DisplaceParams(dt=dt, axis=ax, rest=rp)
     t = np.asarray(rec.t, float)
     n = len(t)
     warnings = [f"displacement: {fill_note}"] if fill_note else []
     if rest is None and rp.dev_max > REST_DEV_WARN_MPS2 and not states_noise(device):
-        warnings.append(f"displacement: the noise estimated from the recording gives a rest test of |f - mean| <= "
-                        f"{rp.dev_max:.3g} m/s^2 (5 sigma), beyond what a sensor at rest shows (0.01-0.25): no still "
-                        "stretch is that quiet (vibration throughout, a flight), so a slow motion may pass for a rest; "
-                        "state the sensor's noise_mps2 in the device file")
+        # the code step through the calibration: coarse codes widen the test of a sensor at rest
+        q_f = force_noise(device, cal, [code_step(c) for c in np.asarray(rec.raw).T], channels)
+        warnings += wide_rest_warning(rp.dev_max, q_f)
     if engine == "float" and form == "offline":
         flags = displace_stream(f, p)["rest"]
         declared = (flags & REST_AT_REST) != 0
