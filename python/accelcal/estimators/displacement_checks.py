@@ -240,7 +240,8 @@ def zp_limit(n: int, f_sigma: float, rp: RestParams) -> float:
     return ZP_TURN_MPS2 + 5.0 * float(f_sigma) / math.sqrt(n) + 2.0 * rp.dev_max * rp.hold / n
 
 
-def turned_motions(f, t, at, motions, f_sigma: float, rp: RestParams, axis: int | None, g: float) -> list[str]:
+def turned_motions(f, t, at, motions, f_sigma: float, rp: RestParams, axis: int | None, g: float,
+                   rec=None) -> list[str]:
     """The warnings of corrected motions whose zero point is more than a calibration or tilt
     error gives (:func:`zp_limit`): an accelerometer alone cannot tell a turn from an
     acceleration, and a body that turned and turned back during a motion leaves a large zp
@@ -264,6 +265,8 @@ def turned_motions(f, t, at, motions, f_sigma: float, rp: RestParams, axis: int 
         1-D along that body axis (nothing removed: the rest's level is part of zp), or None.
     g : float
         Gravity, m/s^2 (for the tilt the zp equals).
+    rec : Recording, optional
+        Whose rows the lines name (:func:`.common.time_span`).
 
     Returns
     -------
@@ -294,7 +297,7 @@ def turned_motions(f, t, at, motions, f_sigma: float, rp: RestParams, axis: int 
         lim = zp_limit(e - a, f_sigma, rp)
         if held > lim:
             mag = float(np.linalg.norm(z))
-            out.append(f"displacement: the motion at t = {t[a]:.3f}-{t[e]:.3f} s was corrected by a zero point of "
+            out.append(f"displacement: the motion at {time_span(t, a, e, rec)} was corrected by a zero point of "
                        f"|zp| = {mag:.3g} m/s^2, as much as a tilt of {math.degrees(math.asin(min(1.0, mag / g))):.1f} "
                        f"deg held through the whole motion, beyond what a calibration or tilt error gives ({lim:.2g} "
                        "m/s^2 here): the body likely turned during the motion, which an accelerometer-only estimate "
@@ -304,12 +307,12 @@ def turned_motions(f, t, at, motions, f_sigma: float, rp: RestParams, axis: int 
     return out
 
 
-def trend_warnings(t, trends, rp: RestParams, sigma: float, streamed: bool) -> list[str]:
+def trend_warnings(t, trends, rp: RestParams, sigma: float, streamed: bool, rec=None) -> list[str]:
     """The warning (one line, or none) of the stretches the detector declared at rest in which f
     changes steadily (``trends`` of :func:`.rest.rest_without_trend`: (first, end, change in
     m/s^2)); ``streamed``: the streaming forms, which took them as rests (the firmware's detector
     cannot look back), else the offline form, which left them out.  ``t`` in s, ``sigma`` the
-    noise of f in m/s^2."""
+    noise of f in m/s^2; ``rec`` names the rows (:func:`.common.time_span`)."""
     if not trends:
         return []
     b, e, ch = max(trends, key=lambda x: x[2])
@@ -318,6 +321,6 @@ def trend_warnings(t, trends, rp: RestParams, sigma: float, streamed: bool) -> l
             "are cut there and doubtful; the offline form (--form offline) leaves them out" if streamed else
             "are not taken as rests")
     return [f"displacement: f changes steadily where the rest detector found a rest ({len(trends)} block(s) of up "
-            f"to {TREND_BLOCK_HOLDS * rp.hold} samples; the largest change {ch:.3g} m/s^2 over t = {t[b]:.3f}-"
-            f"{t[e - 1]:.3f} s, beyond the {trend_bound(n, sigma):.2g} m/s^2 that noise of {sigma:.2g} m/s^2 gives "
-            f"(5 sigma)): a slow motion, not a rest; they {what}"]
+            f"to {TREND_BLOCK_HOLDS * rp.hold} samples; the largest change {ch:.3g} m/s^2 over "
+            f"{time_span(t, b, e - 1, rec)}, beyond the {trend_bound(n, sigma):.2g} m/s^2 that noise of {sigma:.2g} "
+            f"m/s^2 gives (5 sigma)): a slow motion, not a rest; they {what}"]

@@ -270,14 +270,14 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                                           f_sigma)
         gone = declared & ~kept
         r = displace_offline(f, p, np.where(gone, flags & ~(REST_AT_REST | REST_QUIET), flags))
-        warnings += trend_warnings(t, trends, rp, f_sigma, False)
+        warnings += trend_warnings(t, trends, rp, f_sigma, False, rec)
         if r["no_rest"]:
             off = still_off_g(f, np.zeros(n, bool), rp) if trends else None
             raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording "
                              f"(rest = |f - mean| <= {rp.dev_max:.3g} m/s^2 for {rp.hold} samples"
                              + (f" with |f| within {rp.g_tol:g} of {rp.g:g} m/s^2" if rp.g is not None else "")
                              + "): " + ("; ".join([w.removeprefix("displacement: ") for w in
-                                                   trend_warnings(t, trends, rp, f_sigma, False)]
+                                                   trend_warnings(t, trends, rp, f_sigma, False, rec)]
                                                   + ([still_off_g_text(t, off, rp, rec)] if off else []))
                                         or no_rest_reason(f, t, rp))
                              + "; the stop-to-stop method needs a rest at both ends of each motion")
@@ -317,7 +317,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         at, quiet = (fl & DISP_REST) != 0, (r["rest"] & REST_QUIET) != 0
         f_rest = f if engine == "float" else np.asarray(f, float) / 2.0**OUT_FRAC
         warnings += trend_warnings(t, rest_without_trend(rest_dated_back(at, quiet, f_rest, rp), f_rest, rp,
-                                                         f_sigma)[1], rp, f_sigma, True)
+                                                         f_sigma)[1], rp, f_sigma, True, rec)
         is_open = fin_open
         closed = [(s - 1, e, zq[e]) for s, e in _segments_from_flags(fl) if e >= 0 and not fl[e] & DISP_LONG]
         if (fl & DISP_LONG).any():
@@ -335,8 +335,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     if first_at > 0:
         before = off_words if off is not None and off[0] < first_at else []
         warnings.append(f"displacement: the recording does not start at rest: nothing is estimated before the "
-                        f"first rest (from t = {t[min(first_at, n - 1)]:.3f} s, declared at "
-                        f"t = {t[min(declared, n - 1)]:.3f} s; rows before are 0)" + "".join("; " + w for w in before))
+                        f"first rest (from {time_span(t, min(first_at, n - 1), rec=rec)}, declared at "
+                        f"{time_span(t, min(declared, n - 1))}; rows before are 0)" + "".join("; " + w for w in before))
         off_words = [w for w in off_words if w not in before]
     warnings += ["displacement: " + w for w in off_words]
     if is_open:
@@ -349,7 +349,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
             warnings.append(f"displacement: the body turned by up to {rot:.1f} deg during a motion (from the "
                             "resolved alpha): gravity removal assumes no rotation between rests (a rail), so "
                             "the result is doubtful")
-    warnings += turned_motions(f_host, t, at, closed, f_sigma, rp, ax, float(device.gravity_mps2))
+    warnings += turned_motions(f_host, t, at, closed, f_sigma, rp, ax, float(device.gravity_mps2), rec)
     zps = [z for _, _, z in closed]
     turned = still_but_turned(f_host, at, rp)
     if turned is not None:
