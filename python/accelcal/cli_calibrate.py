@@ -110,7 +110,7 @@ def outlier_warning(dev, outl: dict) -> str:
     def name(p):
         if str(p["name"]).startswith("static@"):
             return str(p["name"])
-        return f"pose {p['name']}" + (f" (t = {p['t_start_s']:.6g} s)" if "t_start_s" in p else "")
+        return f"pose {p['name']}" + (f" (t = {p['t_start_s']:.3f} s)" if "t_start_s" in p else "")
 
     named = "; ".join(f"{name(p)}: |f| {p['norm_error_mps2']:+.3g} m/s^2, {p['residual_over_noise']:.3g} x its noise"
                       for p in outl["poses"])

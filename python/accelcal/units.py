@@ -16,6 +16,7 @@ count size) the file is refused naming the comment's line -- neither silently wi
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from decimal import Decimal
 from typing import Any, Callable
@@ -26,7 +27,7 @@ from .errors import AccelcalError, InputError
 
 __all__ = ["UNITS", "REL_TOL", "Scale", "scale_from_options", "scale_from_metadata", "to_counts",
            "METADATA_KEYS", "STANDARD_GRAVITY", "OPTION_NAMES",
-           "converted_metadata", "file_scale", "COUNTS_STATED", "parse_bits"]
+           "converted_metadata", "file_scale", "COUNTS_STATED", "parse_bits", "split_lsb", "LSB_SUFFIXES"]
 
 UNITS = ("counts", "mps2", "g")
 REL_TOL = 1e-6
@@ -103,6 +104,20 @@ def _positive(text: Any, what: str, fail: Callable[[str], Exception]) -> float:
     return v
 
 
+#: the units one count may be stated in with a suffix to its LSB ("1mg"), and their size in g
+#: (mps2: 1 / g, filled in where g is known)
+LSB_SUFFIXES = ("mg", "g", "mps2")
+
+
+def split_lsb(text: Any) -> tuple[str, str | None]:
+    """An LSB's number and its unit suffix (one of LSB_SUFFIXES, else None): "1mg" -> ("1", "mg"),
+    "0.0048 mps2" -> ("0.0048", "mps2"), "0.001" -> ("0.001", None)."""
+    m = re.fullmatch(r"\s*([0-9.eE+-]+?)\s*(mg|g|mps2)?\s*", str(text), flags=re.IGNORECASE)
+    if m is None:
+        return str(text), None
+    return m.group(1), None if m.group(2) is None else m.group(2).lower()
+
+
 def parse_bits(text: Any, fail: Callable[[str], Exception], what: str) -> int:
     """An ADC's bits (2..32) from ``text``; else ``fail`` (an exception class taking the
     message) naming ``what`` (the option or comment)."""
@@ -124,8 +139,11 @@ def scale_from_options(units: str | None = None, lsb: Any = None, full_scale_g: 
     units : {"counts", "mps2", "g"}, optional
         Unit of the readings in the file.  Default: ``counts`` unless an ``lsb`` is given
         (then it must be stated).
-    lsb : float, optional
-        One count in ``units``.
+    lsb : float or str, optional
+        One count in ``units``, or with a unit suffix (LSB_SUFFIXES: "1mg", "0.001g",
+        "0.0048mps2"): needed with ``units`` "counts" (integer readings already in counts whose
+        count's size is known: it sets the nominal scale and converts nothing), converted to
+        ``units`` otherwise.
     full_scale_g : float, optional
         The range's full scale in g (``16`` for +-16 g): one count is
         ``2 * full_scale_g / 2**bits`` g.  Exclusive with ``lsb``.
@@ -159,10 +177,20 @@ def scale_from_options(units: str | None = None, lsb: Any = None, full_scale_g: 
         raise fail(f"{opt('lsb')} and {opt('full_scale_g')} both given: state the count's size once")
     g = STANDARD_GRAVITY if gravity_mps2 is None else _positive(gravity_mps2, opt("gravity_mps2"), fail)
     if lsb is not None:
-        if units in (None, "counts"):
-            raise fail(f"{opt('lsb')} {lsb}: state the unit of the readings it divides with "
-                       f"{opt('units')} mps2|g (for readings already in counts use {opt('full_scale_g')})")
-        v = _positive(lsb, opt("lsb"), fail)
+        num, unit = split_lsb(lsb)
+        if units is None:
+            raise fail(f"{opt('lsb')} {lsb}: state the unit of the readings it divides with {opt('units')} mps2|g; "
+                       f"for integer readings already in counts, {opt('units')} counts with one count's size and "
+                       f"its unit ({opt('lsb')} {num}g, or in mg or mps2) or {opt('full_scale_g')}")
+        v = _positive(num, opt("lsb"), fail)
+        if units == "counts" and unit is None:
+            raise fail(f"{opt('lsb')} {lsb} with {opt('units')} counts: give one count's size with its unit "
+                       f"({opt('lsb')} {num}g, or in mg or mps2); the readings stay the integers they are")
+        if unit is not None and unit != units:
+            in_g = v * (1e-3 if unit == "mg" else 1.0 if unit == "g" else 1.0 / g)
+            if units == "counts":
+                return Scale("counts", None, in_g, opt("lsb"))
+            v = in_g if units == "g" else in_g * g
         return Scale(units, v, v if units == "g" else v / g, opt("lsb"))
     fs = _positive(full_scale_g, opt("full_scale_g"), fail)
     lsb_g = 2.0 * fs / 2.0 ** parse_bits(bits, fail, opt("bits"))

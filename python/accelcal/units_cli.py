@@ -22,7 +22,9 @@ UNITS_HELP = ("the unit of the recording's readings: counts (default), mps2 (m/s
               "else the first that is not is named by row and column.  The file's '# units:'/'# lsb:' "
               "comments state the same; given both, they must agree (a contradiction is refused, naming the "
               "comment)")
-LSB_HELP = "one count, in --units (m/s^2 or g per count), e.g. 0.0047900390625 for 9.81/2048"
+LSB_HELP = ("one count, in --units (m/s^2 or g per count), e.g. 0.0047900390625 for 9.81/2048; or with its unit "
+            "(mg, g, mps2): '--units counts --lsb 1mg' states integer readings already in counts of 1 mg each "
+            "(the nominal scale; nothing is converted, and readings that are not integers are refused)")
 FULL_SCALE_HELP = ("the range's full scale in g (16 for +-16 g): one count is 2*G/2**bits g (--bits); with "
                    "counts it {counts}")
 READER_BITS_HELP = ("the ADC's bits for --full-scale's LSB (default: from the device's raw range when "
@@ -106,9 +108,10 @@ def scale_from_args(a: argparse.Namespace, device: Any = None, *, reader: bool =
     gravity = a.gravity if a.gravity is not None or device is None else device.gravity_mps2
     scale = scale_from_options(a.units, a.lsb, a.full_scale, bits, gravity)
     if getattr(a, "round", False):
-        if scale is None or not scale.lsb_g:
+        if scale is None or not scale.lsb_g or not scale.converts:
             raise AccelcalError("--round: it rounds readings in m/s^2 or g to their LSB; state the LSB with --lsb "
-                                "VALUE (and --units) or --full-scale G")
+                                "VALUE (and --units mps2|g) or --full-scale G (readings in counts are integers: "
+                                "nothing to round)")
         scale = dataclasses.replace(scale, rounds=True)
     if scale is None and a.units == "counts":
         return COUNTS_STATED

@@ -171,8 +171,8 @@ def test_a_file_of_pose_means_is_told_to_label_its_rows_and_leaks_no_library_war
     """Magneto's input (178 hand-held orientations, one mean a row, no time) made ``calibrate``
     print two numpy RuntimeWarnings (the std of one-sample parts of a 3-row "static block") and
     then "needs at least 9 static poses ..., got 2; add poses".  Now: no library warning, and
-    the error says that the detector needs several samples a pose and that such rows need a
-    'pose' column -- for rows in the order a hand turns the sensor (neighbours alike: a few
+    the error says first that such rows need a 'pose' column and that the detector needs several
+    samples a pose, with no advice to add poses -- for rows in the order a hand turns the sensor (neighbours alike: a few
     found) and in no order (none found).  With the column every row is a pose and the fit holds
     the truth within 4 sigma."""
     d = dataclasses.replace(default_triad(), noise_mps2=0.0)      # no noise stated: estimated from the rows
@@ -189,10 +189,14 @@ def test_a_file_of_pose_means_is_told_to_label_its_rows_and_leaks_no_library_war
                                   tmp_path / f"{name}.json"], capfd)
         assert not caught and "RuntimeWarning" not in err, (name, err, caught)
         assert "the static detector takes a pose from a still stretch of several samples" in err, err
-        assert "of 120 rows: if each row is already one pose's mean" in err and "'pose' column" in err, err
+        assert "of 120 rows" in err and "if each row is already one pose's mean" in err and "'pose' column" in err
         if name == "ordered":       # neighbours alike: a few 3-row "poses", too few for any model
             assert rc == 2 and len(err.strip().splitlines()) == 1 and "got 2" in err, err
             assert not (tmp_path / f"{name}.json").exists()
+            # the real hint first, and no advice to add poses to a file that holds 120 (it had come first)
+            msg = err.split("field poses: ")[1]
+            assert msg.startswith("if each row is already one pose's mean") and "add poses" not in msg, err
+            assert msg.index("of 120 rows") < msg.index("got 2"), err
         else:                       # a few mixed rows pass for poses: the offset model, warned of twice
             hint = [ln for ln in err.splitlines() if "'pose' column" in ln]
             assert rc == 0 and len(hint) == 1 and "fitted the jig-free 'offset' model" in hint[0], err

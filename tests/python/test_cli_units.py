@@ -8,11 +8,13 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
 import os
 import re
 import tempfile
 from pathlib import Path
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -272,3 +274,49 @@ def test_python_read_recording_takes_the_same_units(good):
         ac.read_recording(good / "api_g.csv", 6, units="mps2", lsb=9.81 / 2048)
     with pytest.raises(AccelcalError, match="not a whole number"):
         ac.read_recording(good / "api_g.csv", 6, units="g", lsb=1 / 12000)
+
+
+def _mg_counts(path, n=250, seed=1):
+    """Integer readings of a watch in counts of 1 mg (a Garmin export: 1037 counts at rest): five
+    still poses of 50 rows, f along +-x, +z, -y, -z, with 3 counts of noise; returns them."""
+    rng = np.random.default_rng(seed)
+    dirs = np.array([[1, 0, 0], [-1, 0, 0], [0, 0, 1], [0, -1, 0], [0, 0, -1]])
+    raw = np.round(np.repeat(dirs * 1000, n // 5, axis=0) + 3 * rng.standard_normal((n, 3))).astype(int)
+    path.write_text("ax,ay,az\n" + "".join("%d,%d,%d\n" % tuple(r) for r in raw))
+    return raw
+
+
+def test_counts_of_a_stated_size_are_taken_as_they_are(tmp_path, capfd):
+    """'1 count = 1 mg' for integer readings could not be said: --lsb 0.001 with counts was refused
+    ('use --full-scale', which had to be bent: --full-scale 32.768 --bits 16).  --units counts with
+    the count's size and its unit (--lsb 1mg, 0.001g, 0.00980665mps2) keeps the readings as they are
+    and sets the nominal scale, 1 / (0.001 g) = 101.97 counts per m/s^2; the size without its unit is
+    refused with counts (it cannot be told from an LSB of readings in g), and so are readings that
+    are not integers (floats in g are never rounded into counts by it) and --round."""
+    raw = _mg_counts(tmp_path / "w.csv")
+    for k, lsb in enumerate(("1mg", "0.001g", f"{0.001 * G!r}mps2", "1 MG")):
+        out, dev = tmp_path / f"o{k}.csv", tmp_path / f"o{k}.json"
+        rc, _, err, caught = run(["convert", tmp_path / "w.csv", "--rate", "25", "--units", "counts", "--lsb", lsb,
+                                  "-o", out, "--device-out", dev], capfd)
+        assert rc == 0 and not caught, (lsb, err)
+        body = [ln for ln in out.read_text().splitlines() if not ln.startswith("#")][1:]
+        assert np.array_equal(np.array([[int(v) for v in ln.split(",")[1:]] for ln in body]), raw), lsb
+        cpm = json.loads(dev.read_text())["channels"][0]["counts_per_mps2"]
+        assert cpm == pytest.approx(1.0 / (0.001 * G), rel=1e-12), (lsb, cpm)
+    floats = tmp_path / "f.csv"
+    floats.write_text("ax,ay,az\n" + "".join("%.3f,%.3f,%.3f\n" % tuple(r / 1000) for r in raw))
+    for src, options, frag in ((tmp_path / "w.csv", ["--lsb", "0.001"], "--lsb 0.001 with --units counts: give one "
+                                "count's size with its unit (--lsb 0.001g, or in mg or mps2)"),
+                               (floats, ["--lsb", "1mg"], "row 2, column ax: expected an integer"),
+                               (tmp_path / "w.csv", ["--lsb", "1mg", "--round"], "readings in counts are integers")):
+        out = tmp_path / "bad.csv"
+        rc, _, err, caught = run(["convert", src, "--rate", "25", "--units", "counts", *options, "-o", out,
+                                  "--device-out", tmp_path / "bad.json"], capfd)
+        assert rc == 2 and len(err.strip().splitlines()) == 1 and frag in err, (options, err)
+        assert not out.exists() and not (tmp_path / "bad.json").exists()
+    # the same size in the readings' own unit converts floats in g as before
+    rc, _, err, _ = run(["convert", floats, "--rate", "25", "--units", "g", "--lsb", "1mg", "-o", tmp_path / "g.csv"],
+                        capfd)
+    assert rc == 0, err
+    body = [ln for ln in (tmp_path / "g.csv").read_text().splitlines() if not ln.startswith("#")][1:]
+    assert np.array_equal(np.array([[int(v) for v in ln.split(",")[1:]] for ln in body]), raw)

@@ -122,3 +122,34 @@ def test_a_host_clock_that_catches_up_with_a_short_step_keeps_the_sensor_s_rate(
     assert out.n_samples == n and not filled.any()
     np.testing.assert_array_equal(out.raw, raw)
     assert float(np.median(np.diff(out.t))) == pytest.approx(0.01, rel=1e-4)
+EPOCH_S = 1620380000.0     # unix time of a real phone log's first stamp (2021-05-07)
+
+
+def test_a_place_in_epoch_stamps_is_named_in_seconds_from_the_start_and_by_row(tmp_path):
+    """A survey logger's stamps in unix time: 'the step to t = 1.62038e+09 s' named no place (6
+    digits of 1.6e9 s are 1000 s).  Times are said from the first sample, to the ms: the sample
+    0.3 of a step after sample 299 (t = 2.993 s at 100 Hz) is named at 2.993 s from the start,
+    and its row.  The same in a dropped-sample note, and in the displacement's warnings."""
+    d = default_triad()
+    rec = run_simulation(d, "linear_actuator", seed=2).recording
+    cal = Calibration.nominal(d)
+    dt = float(np.median(np.diff(rec.t)))
+    t2 = np.insert(rec.t, 300, rec.t[299] + 0.3 * dt) + EPOCH_S
+    raw2 = np.insert(rec.raw, 300, rec.raw[299] + 1, axis=0)
+    with pytest.raises(InputError) as ei:
+        E.displacement_from_recording(d, cal, recording_from_arrays(t2, raw2))
+    msg = str(ei.value)
+    want = f"the step to t = {rec.t[299] + 0.3 * dt - rec.t[0]:.3f} s from the start is"
+    assert want in msg and "e+09" not in msg and ei.value.row == 301, msg
+    # a dropped sample: where, from the start
+    keep = np.ones(rec.n_samples, bool)
+    keep[400] = False
+    _, filled, note = on_uniform_grid(recording_from_arrays(rec.t[keep] + EPOCH_S, rec.raw[keep]))
+    assert filled.sum() == 1 and f"after t = {rec.t[399] - rec.t[0]:.3f} s from the start" in note, note
+    # a recording cut in mid-motion (the actuator moves from 2.0 s): its first rest, from the start
+    c = E.displacement_from_recording(d, cal, recording_from_arrays(rec.t[220:] + EPOCH_S, rec.raw[220:]))
+    start = [w for w in c.warnings if "does not start at rest" in w]
+    assert len(start) == 1 and "e+09" not in start[0], c.warnings
+    first = float(start[0].split("from t = ")[1].split(" s from the start")[0])
+    rest = c["rest"].astype(bool)
+    assert first == pytest.approx(c["t"][np.argmax(rest)] - c["t"][0], abs=5e-4), start[0]

@@ -14,7 +14,7 @@ from .known_poses import fit_known_poses
 from .outliers import outlier_poses, outlier_report, subset
 from .lever_arms import calibrate_positions
 from .results import pose_names, set_aside_entry, to_calibration
-from .settings import JIG_ACCURACY_DEG, JIGFREE_MODELS, METHODS, ROTATION_MIN_RADPS, TEMP_MIN_SPAN_C
+from .settings import ADD_POSES, JIG_ACCURACY_DEG, JIGFREE_MODELS, METHODS, ROTATION_MIN_RADPS, TEMP_MIN_SPAN_C
 from .static_model import fit_static
 
 
@@ -61,7 +61,7 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     except InputError as e:
         if not e.detail.startswith(NO_POSE):
             raise
-        raise InputError(e.source, e.detail + detector_hint(device, recordings, None), field=e.field) from None
+        raise InputError(e.source, with_detector_hint(e.detail, device, recordings, None), field=e.field) from None
     for rec, rot, ps in zip(recordings, rotating, sets):
         if several and not rot.any() and ps.n_poses == 0:
             clipped = (f" ({len(ps.set_aside)} set aside: "
@@ -117,7 +117,7 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
         if e.source != "<poses>":
             raise
         names = sorted({str(d.get("source")) for d in poses.info})
-        raise InputError(", ".join(names), e.detail + detector_hint(device, recordings, poses),
+        raise InputError(", ".join(names), with_detector_hint(e.detail, device, recordings, poses),
                          field=e.field) from None
     fit, fallback, outliers = without_outliers(device, fit, fallback, solve, drop_outliers)
 
@@ -174,13 +174,18 @@ def without_outliers(device, fit, fallback, solve, drop: bool):
     return other, other_fb, rep
 
 
-def detector_hint(device, recordings, poses: PoseSet | None) -> str:
-    """What the static detector needs, to append to a "too few poses" or "no static pose"
-    error where the poses were detected (no recording has ``pose`` labels; else ""): a still
-    stretch of several samples a pose, how many it found and the rows they hold, and, where
-    they hold less than half of the rows, that a file whose rows are each one pose's mean
-    (Magneto's input: 178 hand-held orientations, one row each, had been told "got 2; add
-    poses") needs a ``pose`` column, one label a row.
+#: what a file whose rows are each one pose's mean needs (the static detector takes a pose from
+#: several samples)
+POSE_MEANS_HINT = ("if each row is already one pose's mean (a file of pose means, as Magneto's input), give every "
+                   "row its own label in a 'pose' column (0, 1, 2, ...), which takes each row as a pose")
+
+
+def detector_found(device, recordings, poses: PoseSet | None) -> tuple[str, bool] | None:
+    """What the static detector needs and found, where the poses were detected (no recording
+    has ``pose`` labels; else None): a still stretch of several samples a pose, how many it
+    found and the rows they hold; and whether they hold less than half of the rows (a file whose
+    rows are each one pose's mean: Magneto's input, 178 hand-held orientations, one row each,
+    had been told "got 2; add poses").
 
     Parameters
     ----------
@@ -191,22 +196,38 @@ def detector_hint(device, recordings, poses: PoseSet | None) -> str:
 
     Returns
     -------
-    str
-        "; the static detector ..." or "".
+    (str, bool) or None
+        "the static detector ..." and whether :data:`POSE_MEANS_HINT` applies.
     """
     if any(rec.has_pose() for rec in recordings):
-        return ""
+        return None
     rows = sum(rec.n_samples for rec in recordings)
     held = 0 if poses is None else int(np.sum(poses.n))
     found = 0 if poses is None else poses.n_poses
     w = max(window_len(device, STATIC_WINDOW_S, rec.n_samples) for rec in recordings)
-    text = (f"; the static detector takes a pose from a still stretch of several samples (at least {w} here, "
+    return (f"the static detector takes a pose from a still stretch of several samples (at least {w} here, "
             f"and {MIN_POSE_S:g} s where a motion touches it, with every channel within {STATIC_THRESHOLD:g} x "
-            f"its noise) and found {found}, holding {held} of {rows} rows")
-    if held < rows / 2:
-        text += (": if each row is already one pose's mean (a file of pose means, as Magneto's input), give "
-                 "every row its own label in a 'pose' column (0, 1, 2, ...), which takes each row as a pose")
-    return text
+            f"its noise) and found {found}, holding {held} of {rows} rows"), held < rows / 2
+
+
+def detector_hint(device, recordings, poses: PoseSet | None) -> str:
+    """:func:`detector_found` as a clause to append ("; the static detector ..."; with
+    :data:`POSE_MEANS_HINT` after it where that applies), or ""."""
+    found = detector_found(device, recordings, poses)
+    if found is None:
+        return ""
+    return "; " + found[0] + (": " + POSE_MEANS_HINT if found[1] else "")
+
+
+def with_detector_hint(detail: str, device, recordings, poses: PoseSet | None) -> str:
+    """A "too few poses" or "no static pose" error's ``detail`` with :func:`detector_hint`; where
+    the error advises adding poses (ADD_POSES) and the poses found hold less than half of the
+    rows (a file of pose means), the hint first and that advice left out: such a file needs a
+    'pose' column, not more poses."""
+    found = detector_found(device, recordings, poses)
+    if found is None or not found[1] or ADD_POSES not in detail:
+        return detail + detector_hint(device, recordings, poses)
+    return f"{POSE_MEANS_HINT}: {found[0]}; {detail.split(ADD_POSES)[0]}"
 
 
 def setaside_reason(d: dict) -> str:

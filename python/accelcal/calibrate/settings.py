@@ -73,3 +73,7 @@ EXCITATION_MIN_SPAN_G = 1.0
 #: calibrate: offsets within 0.03..2.9 mg, gains 0.003..0.44 %; an Empatica E4's 26 wrist poses: 8..24 mg,
 #: 0.7..2 %)
 POORLY_DETERMINED_MG = 5.0
+
+#: where a "too few poses" error's advice to add poses begins: calibrate_recordings leaves it out
+#: where the shortage is the static detector's (a file of pose means, one row a pose)
+ADD_POSES = "; add poses"

@@ -16,7 +16,7 @@ from .problem import (StaticProblem, channel_cov, constrained_inverse, gauge_con
                       structured_inverse)
 from .results import StaticFit, to_calibration
 from ..motions.poses import SAME_ORIENTATION_DEG, distinct_orientations
-from .settings import JIG_ACCURACY_DEG, METHODS, MIN_RCOND, MIN_RCOND_JAC
+from .settings import ADD_POSES, JIG_ACCURACY_DEG, METHODS, MIN_RCOND, MIN_RCOND_JAC
 
 
 def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, temperature: bool = False,
@@ -59,7 +59,7 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
                     "count once)" if distinct < P else "")
             aside = (f" ({len(poses.set_aside)} more set aside: their readings clip)" if poses.set_aside else "")
             raise InputError("<poses>", f"jig-free '{method}' calibration of {N} channels needs at least {need} static "
-                             f"poses in different orientations, got {distinct}{same}{aside}; add poses (e.g. f "
+                             f"poses in different orientations, got {distinct}{same}{aside}{ADD_POSES} (e.g. f "
                              f"along {missing_direction(device, F0)})", field="poses")
     if not jigfree:
         F = np.asarray(poses.f_ref, float)
@@ -79,7 +79,7 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
         if spread < 5.0:
             raise InputError("<poses>", f"the {P} static poses all have about the same orientation (within "
                              f"{spread:.1f} deg of each other); jig-free calibration needs poses spread over the "
-                             f"sphere (e.g. add f along {missing_direction(device, F)})", field="poses")
+                             f"sphere{ADD_POSES} (e.g. f along {missing_direction(device, F)})", field="poses")
     gauge = jigfree and method == "full"
     b0 = device.nominal_offsets()
     s0 = device.nominal_sensitivity()
@@ -93,8 +93,8 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
 
     def undetermined() -> InputError:
         return InputError("<poses>", f"the {P} poses do not determine every parameter of the "
-                          f"{'jig-free ' if jigfree else ''}'{method}'{' + temperature' if temperature else ''} model; "
-                          f"add poses in other orientations (e.g. f along {missing_direction(device, F)})"
+                          f"{'jig-free ' if jigfree else ''}'{method}'{' + temperature' if temperature else ''} model"
+                          f"{ADD_POSES} in other orientations (e.g. f along {missing_direction(device, F)})"
                           + ("" if not temperature else " and at other temperatures"), field="poses")
 
     def not_converged(message: str) -> InputError:

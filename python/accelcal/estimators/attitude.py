@@ -20,7 +20,7 @@ from ..native import FORMATS, check, cptr, ffi, lib
 from ..quantize import round_half_up
 from ..recording import check_core_input, check_for_device
 from .common import (CLIP, CLIP_LO, OMEGA_FRAC, OUT_FRAC, Columns, channel_noise, clip_i16, dt_fixed, force_noise,
-                     uniform_dt)
+                     time_span, uniform_dt)
 from .timegrid import on_uniform_grid
 from ..triad import triad_forces
 
@@ -359,9 +359,9 @@ def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: fl
     off = np.abs(gmag - g0) > 0.2 * g0
     if unsettled.any():
         k = int(np.count_nonzero(unsettled))
+        until = time_span(rec.t, min(k, rec.n_samples - 1), rec=rec)
         warnings.append(f"attitude: the sign of w_y is not yet established for the first {k} samples "
-                        f"(until t = {rec.t[min(k, rec.n_samples - 1)]:.3f} s: no pass through low rate yet); "
-                        "column unsettled = 1")
+                        f"(until {until}: no pass through low rate yet); column unsettled = 1")
     if off.any():
         warnings.append(f"attitude: on {int(np.count_nonzero(off))} samples the two triads see |g| more than 20 % "
                         "off gravity (pivot moving, wrong r1/r2, or clipping): theta there is doubtful; "

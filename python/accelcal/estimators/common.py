@@ -17,7 +17,7 @@ from ..recording import check_core_input
 from ..static import STATIC_WINDOW_S, window_len
 
 __all__ = ["Columns", "OUT_FRAC", "OMEGA_FRAC", "CLIP", "CLIP_LO", "dt_fixed", "clip_i16", "q_out",
-           "uniform_dt", "alpha_noise", "channel_noise", "force_noise", "resolve_array"]
+           "time_span", "uniform_dt", "alpha_noise", "channel_noise", "force_noise", "resolve_array"]
 
 OUT_FRAC = FORMATS.out_frac        # AC_OUT_FRAC: f (m/s^2), alpha (rad/s^2)
 OMEGA_FRAC = FORMATS.omega_frac    # AC_OMEGA_FRAC: omega (rad/s)
@@ -80,6 +80,34 @@ def clip_i16(x) -> np.ndarray:
 def q_out(x) -> np.ndarray:
     """m/s^2 (or rad/s^2) -> int32 Q.AC_OUT_FRAC, rounded half up, saturating (feeds the fixed engine)."""
     return np.clip(round_half_up(np.asarray(x, float) * 2.0**OUT_FRAC), -2**31, 2**31 - 1).astype(np.int32)
+
+
+def time_span(t, a: int, b: int | None = None, rec=None) -> str:
+    """How a message names the time of sample ``a`` (or of samples ``a``..``b``) so that a user
+    can find it: 't = 12.345 s' (ms), counted from the first sample when the stamps do not start
+    at 0 ('t = 12.345 s from the start': epoch stamps, 1.62038e+09 s to 6 digits, name no place),
+    and its row(s) in the file when ``rec`` was read from one.
+
+    Parameters
+    ----------
+    t : array_like (n,)
+        Time, s.
+    a, b : int
+        Sample indices (b: the span's last, inclusive).
+    rec : Recording, optional
+        Whose ``line`` names the rows (only when it has the file's lines).
+
+    Returns
+    -------
+    str
+    """
+    t = np.asarray(t, float)
+    t0 = float(t[0]) if t.size else 0.0
+    when = f"{t[a] - t0:.3f}" + ("" if b is None else f"-{t[b] - t0:.3f}")
+    out = f"t = {when} s" + (" from the start" if t0 != 0.0 else "")
+    if rec is not None and getattr(rec, "lines", None) is not None:
+        out += f" (row {rec.line(a)})" if b is None else f" (rows {rec.line(a)}-{rec.line(b)})"
+    return out
 
 
 def uniform_dt(rec) -> float:

@@ -1,5 +1,6 @@
 """The displacement's checks of a recording, for its warnings and errors: why no rest was
-found (:func:`no_rest_reason`), a still stretch that is no rest because the body turned
+found (:func:`no_rest_reason`), a still stretch that is no rest because its |f| strays from g
+(:func:`still_off_g`: the calibration's scale) or because the body turned
 (:func:`still_but_turned`), and corrected motions whose zero point only a turn explains
 (:func:`turned_motions`), rests that hold a trend (:func:`trend_warnings`)."""
 from __future__ import annotations
@@ -8,23 +9,92 @@ import math
 
 import numpy as np
 
+from .common import time_span
 from .rest import TREND_BLOCK_HOLDS, RestParams, trend_bound
 
-__all__ = ["REST_DEV_WARN_MPS2", "ZP_TURN_MPS2", "no_rest_reason", "still_but_turned", "zp_limit", "turned_motions",
-           "trend_warnings"]
+__all__ = ["REST_DEV_WARN_MPS2", "REST_NOISE_MAX_MPS2", "rest_noise_max", "wide_rest_warning", "ZP_TURN_MPS2",
+           "no_rest_reason", "scale_off", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned",
+           "zp_limit", "turned_motions", "trend_warnings"]
 
 
-#: a rest test wider than this (m/s^2; 8 sigma of 0.05 m/s^2, the noisiest sensor at rest of
-#: issue 13's range, whose 5 sigma is 0.25) from a noise estimated from the data is warned of (a
-#: rocket's vibration: 0.67)
-REST_DEV_WARN_MPS2 = 0.4
+#: the noisiest sensor at rest of issue 13's range, m/s^2 per axis (its 5 sigma: 0.25)
+REST_NOISE_MAX_MPS2 = 0.05
+#: a rest test (5 sigma of a noise estimated from the data) wider than this many sigma of the
+#: noisiest sensor at rest is warned of (a rocket's vibration: 0.67 m/s^2)
+REST_WARN_SIGMAS = 8.0
+
+
+def rest_noise_max(q_f: float = 0.0) -> float:
+    """The largest noise (m/s^2 per axis) :func:`accelcal.noise.estimate_noise` gives for a sensor
+    at rest whose own noise is at most REST_NOISE_MAX_MPS2, read on codes a step ``q_f`` apart
+    (m/s^2 per axis: the code step through the calibration).
+
+    A still channel's rounding error never exceeds half a step, so its window std s is at most
+    sigma + q/2 (a reading that flips between two codes: q/2 with no noise at all); the estimate
+    adds the rounding noise q^2/12: sqrt((sigma + q/2)^2 + q^2/12).  With q = 0 this is sigma.
+    An 8-bit Empatica E4 at +-2 g (q = 0.153 m/s^2) at rest reads up to 0.13 m/s^2."""
+    q = float(q_f)
+    return math.hypot(REST_NOISE_MAX_MPS2 + 0.5 * q, q / math.sqrt(12.0))
+
+
+#: the widest rest test not warned of with fine codes (m/s^2): 8 sigma of 0.05 m/s^2
+REST_DEV_WARN_MPS2 = REST_WARN_SIGMAS * rest_noise_max()
+
+
+def wide_rest_warning(dev_max: float, q_f: float) -> list[str]:
+    """The warning (one line, or none) of a rest test whose width ``dev_max`` (m/s^2, 5 sigma of
+    the noise estimated from the data) is more than REST_WARN_SIGMAS sigma of what a sensor at rest
+    gives on codes ``q_f`` apart (:func:`rest_noise_max`): vibration throughout.  A test wide only
+    because the codes are coarse (an 8-bit sensor dwelling on 2-4 codes) is the sensor at rest."""
+    top = rest_noise_max(q_f)
+    if dev_max <= REST_WARN_SIGMAS * top:
+        return []
+    coarse = (f"; {5 * top:.2g} with this sensor's code step of {q_f:.3g} m/s^2" if 5 * top > 0.26 else "")
+    return [f"displacement: the noise estimated from the recording gives a rest test of |f - mean| <= {dev_max:.3g} "
+            f"m/s^2 (5 sigma), beyond what a sensor at rest shows (0.01-0.25 m/s^2{coarse}): no still stretch is "
+            "that quiet (vibration throughout, a flight), so a slow motion may pass for a rest; state the sensor's "
+            "noise_mps2 in the device file"]
+
+
+def _band_share(blk, rp: RestParams) -> float:
+    """The share of the samples ``blk`` (m, 3), m/s^2, whose |f| falls outside the rest test's band
+    g +- g_tol (0 when the |f| test is off): one such sample breaks the quiet run a rest needs."""
+    if rp.g is None:
+        return 0.0
+    lo, hi = rp.g2_bounds()
+    g2 = np.sum(np.asarray(blk, float) ** 2, axis=1)
+    return float(np.mean((g2 < lo) | (g2 > hi)))
+
+
+def scale_off(norm: float, share: float, rp: RestParams) -> bool:
+    """Whether a still stretch whose mean |f| is ``norm`` (m/s^2) and whose samples fall outside
+    the rest test's band in the ``share`` given is kept from being a rest by the scale: its mean
+    sits within half the test's width (dev_max / 2, 2.5 sigma) of the band's edge or beyond it.
+    Nearer g, the samples that leave the band are the noise's (a test nearly as wide as the band:
+    an 8-bit sensor's 0.47 m/s^2 against 0.5), not the scale's."""
+    return rp.g is not None and share > 0.0 and abs(norm - rp.g) >= rp.g_tol - 0.5 * rp.dev_max
+
+
+def still_off_g_text(t, off, rp: RestParams, rec=None) -> str:
+    """The words for :func:`still_off_g`'s stretch ``off`` (``t`` in s; ``rec`` names its rows)."""
+    a, b, norm, share = off
+    return f"the body is still at {time_span(t, a, b, rec)} but that is no rest: it {off_g_text(norm, share, rp)}"
+
+
+def off_g_text(norm: float, share: float, rp: RestParams) -> str:
+    """Why a still stretch is no rest when its |f| strays from g: its mean |f| (``norm``, m/s^2),
+    the ``share`` of its samples outside the rest test's band g +- g_tol, and the cause."""
+    return (f"read |f| = {norm:.4g} m/s^2, {100 * share:.0f} % of the samples outside the rest test's "
+            f"{rp.g:g} +- {rp.g_tol:g} m/s^2: the calibration's scale is off (a chip's nominal scale?); "
+            "calibrate it first (accelcal calibrate) and use that calibration")
 
 
 def no_rest_reason(f, t, rp: RestParams) -> str:
     """Why no rest was found, for the error: the stillest block of ``rp.hold`` samples (blocks
     at a stride of half a block), how far its f strays from its mean, and, when it is still
-    enough, the |f| that kept it from being a rest (a calibration whose scale is off: an
-    uncalibrated chip 7.7 % high read with its nominal scale).  ``f`` in m/s^2, (n, 3)."""
+    enough but some of its samples' |f| fall outside the rest test's band, that |f| (a
+    calibration whose scale is off: an uncalibrated chip 7.7 % high read with its nominal scale;
+    a chip 5 % low whose mean |f| sits at the band's edge).  ``f`` in m/s^2, (n, 3); ``t`` in s."""
     f = np.asarray(f, float)
     hold = max(int(rp.hold), 2)
     if f.shape[0] < hold:
@@ -41,26 +111,94 @@ def no_rest_reason(f, t, rp: RestParams) -> str:
     dev, i, norm = best
     if rp.g is None:
         return f"the stillest {hold} samples stray {dev:.3g} m/s^2 from their mean"
-    where = f"t = {t[i]:.6g}..{t[i + hold - 1]:.6g} s"
+    where = time_span(t, i, i + hold - 1)
     if dev > rp.dev_max:
         return (f"the stillest {hold} samples ({where}) stray {dev:.3g} m/s^2 from their mean, beyond the rest's "
                 f"{rp.dev_max:.3g}: the body never stops")
-    if abs(norm - rp.g) <= rp.g_tol:
+    share = _band_share(f[i:i + hold], rp)
+    if not scale_off(norm, share, rp):
         return (f"the stillest {hold} samples ({where}) stray only {dev:.3g} m/s^2 from their own mean and read "
                 f"|f| = {norm:.4g} m/s^2, but the rest detector's running mean never settles on a still stretch "
                 "that long: the body creeps or turns slowly throughout")
-    return (f"the stillest {hold} samples ({where}) are still (within {dev:.3g} m/s^2) but read |f| = {norm:.4g} "
-            f"m/s^2, beyond {rp.g:g} +- {rp.g_tol:g}: the calibration's scale is off (a chip's nominal scale?); "
-            "calibrate it (accelcal calibrate) and use that calibration")
+    return f"the stillest {hold} samples ({where}) are still (within {dev:.3g} m/s^2) but {off_g_text(norm, share, rp)}"
 
 
-def still_but_turned(f, t, at_rest, rp: RestParams) -> tuple[float, float, float] | None:
+def _still_blocks(f, at_rest, rp: RestParams):
+    """Each block of ``rp.hold`` samples (at a stride of a block) not at rest whose f stays within
+    ``rp.dev_max`` of its mean: (its first sample, its mean f in m/s^2, the share of its samples
+    outside the |f| band when that is the scale's doing (:func:`scale_off`), else 0)."""
+    hold = max(int(rp.hold), 2)
+    for i in range(0, f.shape[0] - hold + 1, hold):
+        blk = f[i:i + hold]
+        if at_rest[i:i + hold].any():
+            continue
+        m = blk.mean(axis=0)
+        if float(np.max(np.abs(blk - m))) <= rp.dev_max:
+            share = _band_share(blk, rp)
+            yield i, m, share if scale_off(float(np.linalg.norm(m)), share, rp) else 0.0
+
+
+def _grow(first, i: int, hold: int):
+    """The first stretch (first and last sample) grown by the block at sample ``i`` when it
+    begins within 1.5 blocks of its end (else kept)."""
+    if first is None:
+        return i, i + hold - 1
+    return (first[0], i + hold - 1) if first[1] >= i - 1.5 * (hold - 1) else first
+
+
+def still_off_g(f, at_rest, rp: RestParams) -> tuple[int, int, float, float] | None:
+    """The first stretch where the body is still (blocks of ``rp.hold`` samples within
+    ``rp.dev_max`` of their mean) and not at rest because some of its samples' |f| fall outside
+    the rest test's band g +- g_tol with a mean |f| off g (:func:`scale_off`), for TREND_BLOCK_HOLDS
+    blocks or more (1 s at the default hold: a hand that pauses while it accelerates holds that
+    acceleration for a moment, a chip read with the wrong scale for as long as it is still): a
+    calibration whose scale is off (a chip's gain error read with its nominal scale), not a turn
+    or a motion.
+
+    Parameters
+    ----------
+    f : array_like (n, 3)
+        Specific force, m/s^2.
+    at_rest : array_like (n,) bool
+    rp : RestParams
+
+    Returns
+    -------
+    (int, int, float, float) or None
+        The stretch's first and last sample, its mean |f| (m/s^2) and the share of its samples
+        outside the band; None when there is none (or the |f| test is off).
+    """
+    f = np.asarray(f, float)
+    at_rest = np.asarray(at_rest, bool)
+    if rp.g is None:
+        return None
+    hold = max(int(rp.hold), 2)
+    runs = []                   # each stretch: [first sample, last sample, the blocks' |mean f|, shares]
+    for i, m, share in _still_blocks(f, at_rest, rp):
+        if share == 0.0:
+            continue
+        if runs and _grow(tuple(runs[-1][:2]), i, hold) != tuple(runs[-1][:2]):
+            runs[-1][1] = i + hold - 1
+        elif runs and len(runs[-1][2]) >= TREND_BLOCK_HOLDS:
+            break
+        else:
+            runs.append([i, i + hold - 1, [], []])
+        runs[-1][2].append(float(np.linalg.norm(m)))
+        runs[-1][3].append(share)
+    for a, b, norms, shares in runs:
+        if len(norms) >= TREND_BLOCK_HOLDS:
+            return a, b, float(np.mean(norms)), float(np.mean(shares))
+    return None
+
+
+def still_but_turned(f, at_rest, rp: RestParams) -> tuple[float, int, int] | None:
     """A stretch where the body is still but not at rest: blocks of ``rp.hold`` samples whose
-    f stays within ``rp.dev_max`` of its mean with |f| within ``rp.g_tol`` of g, away from the
+    f stays within ``rp.dev_max`` of its mean with |f| within ``rp.g_tol`` of g (not one kept
+    from a rest by the scale, :func:`still_off_g`'s: no turn is told there), away from the
     rest's direction by more than ``rp.ref_max``.  For a body that only translates (a rail)
     every still stretch is a rest; such a stretch is a turn, which no accelerometer alone
     tells from an acceleration.  Returns (its largest angle from the first rest's f, deg;
-    the first such stretch's start and end, s) or None.  ``f`` in m/s^2, (n, 3)."""
+    the first such stretch's first and last sample) or None.  ``f`` in m/s^2, (n, 3)."""
     f = np.asarray(f, float)
     at_rest = np.asarray(at_rest, bool)
     if not at_rest.any():
@@ -68,24 +206,15 @@ def still_but_turned(f, t, at_rest, rp: RestParams) -> tuple[float, float, float
     ref = f[at_rest][: max(rp.hold, 1)].mean(axis=0)
     hold = max(int(rp.hold), 2)
     worst, first = 0.0, None
-    for i in range(0, f.shape[0] - hold + 1, hold):
-        blk = f[i:i + hold]
-        if at_rest[i:i + hold].any():
-            continue
-        m = blk.mean(axis=0)
-        if float(np.max(np.abs(blk - m))) > rp.dev_max:
+    for i, m, share in _still_blocks(f, at_rest, rp):
+        if share > 0.0 or float(np.linalg.norm(m - ref)) <= rp.ref_max:
             continue
         if rp.g is not None and abs(float(np.linalg.norm(m)) - rp.g) > rp.g_tol:
-            continue
-        if float(np.linalg.norm(m - ref)) <= rp.ref_max:
             continue
         cosang = float(np.dot(m, ref) / (np.linalg.norm(m) * np.linalg.norm(ref)))
         ang = math.degrees(math.acos(min(1.0, max(-1.0, cosang))))
         worst = max(worst, ang)
-        if first is None:
-            first = (float(t[i]), float(t[i + hold - 1]))
-        elif first[1] >= float(t[i]) - 1.5 * (float(t[i + hold - 1]) - float(t[i])):
-            first = (first[0], float(t[i + hold - 1]))
+        first = _grow(first, i, hold)
     return None if first is None else (worst, first[0], first[1])
 
 
@@ -111,7 +240,8 @@ def zp_limit(n: int, f_sigma: float, rp: RestParams) -> float:
     return ZP_TURN_MPS2 + 5.0 * float(f_sigma) / math.sqrt(n) + 2.0 * rp.dev_max * rp.hold / n
 
 
-def turned_motions(f, t, at, motions, f_sigma: float, rp: RestParams, axis: int | None, g: float) -> list[str]:
+def turned_motions(f, t, at, motions, f_sigma: float, rp: RestParams, axis: int | None, g: float,
+                   rec=None) -> list[str]:
     """The warnings of corrected motions whose zero point is more than a calibration or tilt
     error gives (:func:`zp_limit`): an accelerometer alone cannot tell a turn from an
     acceleration, and a body that turned and turned back during a motion leaves a large zp
@@ -135,6 +265,8 @@ def turned_motions(f, t, at, motions, f_sigma: float, rp: RestParams, axis: int 
         1-D along that body axis (nothing removed: the rest's level is part of zp), or None.
     g : float
         Gravity, m/s^2 (for the tilt the zp equals).
+    rec : Recording, optional
+        Whose rows the lines name (:func:`.common.time_span`).
 
     Returns
     -------
@@ -165,7 +297,7 @@ def turned_motions(f, t, at, motions, f_sigma: float, rp: RestParams, axis: int 
         lim = zp_limit(e - a, f_sigma, rp)
         if held > lim:
             mag = float(np.linalg.norm(z))
-            out.append(f"displacement: the motion at t = {t[a]:.3f}-{t[e]:.3f} s was corrected by a zero point of "
+            out.append(f"displacement: the motion at {time_span(t, a, e, rec)} was corrected by a zero point of "
                        f"|zp| = {mag:.3g} m/s^2, as much as a tilt of {math.degrees(math.asin(min(1.0, mag / g))):.1f} "
                        f"deg held through the whole motion, beyond what a calibration or tilt error gives ({lim:.2g} "
                        "m/s^2 here): the body likely turned during the motion, which an accelerometer-only estimate "
@@ -175,12 +307,12 @@ def turned_motions(f, t, at, motions, f_sigma: float, rp: RestParams, axis: int 
     return out
 
 
-def trend_warnings(t, trends, rp: RestParams, sigma: float, streamed: bool) -> list[str]:
+def trend_warnings(t, trends, rp: RestParams, sigma: float, streamed: bool, rec=None) -> list[str]:
     """The warning (one line, or none) of the stretches the detector declared at rest in which f
     changes steadily (``trends`` of :func:`.rest.rest_without_trend`: (first, end, change in
     m/s^2)); ``streamed``: the streaming forms, which took them as rests (the firmware's detector
     cannot look back), else the offline form, which left them out.  ``t`` in s, ``sigma`` the
-    noise of f in m/s^2."""
+    noise of f in m/s^2; ``rec`` names the rows (:func:`.common.time_span`)."""
     if not trends:
         return []
     b, e, ch = max(trends, key=lambda x: x[2])
@@ -189,6 +321,6 @@ def trend_warnings(t, trends, rp: RestParams, sigma: float, streamed: bool) -> l
             "are cut there and doubtful; the offline form (--form offline) leaves them out" if streamed else
             "are not taken as rests")
     return [f"displacement: f changes steadily where the rest detector found a rest ({len(trends)} block(s) of up "
-            f"to {TREND_BLOCK_HOLDS * rp.hold} samples; the largest change {ch:.3g} m/s^2 over t = {t[b]:.3f}-"
-            f"{t[e - 1]:.3f} s, beyond the {trend_bound(n, sigma):.2g} m/s^2 that noise of {sigma:.2g} m/s^2 gives "
-            f"(5 sigma)): a slow motion, not a rest; they {what}"]
+            f"to {TREND_BLOCK_HOLDS * rp.hold} samples; the largest change {ch:.3g} m/s^2 over "
+            f"{time_span(t, b, e - 1, rec)}, beyond the {trend_bound(n, sigma):.2g} m/s^2 that noise of {sigma:.2g} "
+            f"m/s^2 gives (5 sigma)): a slow motion, not a rest; they {what}"]

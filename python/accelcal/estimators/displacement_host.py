@@ -10,16 +10,16 @@ import math
 import numpy as np
 
 from ..errors import AccelcalError, InputError
-from ..noise import states_noise
+from ..noise import code_step, states_noise
 from ..recording import check_core_input, check_for_device
 from .common import (CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_noise, force_noise,
-                     resolve_array, uniform_dt)
+                     resolve_array, time_span, uniform_dt)
 from .timegrid import on_uniform_grid
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
-from .displacement_checks import (REST_DEV_WARN_MPS2, no_rest_reason, still_but_turned, trend_warnings,
-                                  turned_motions)
+from .displacement_checks import (REST_DEV_WARN_MPS2, no_rest_reason, still_but_turned, still_off_g,
+                                  still_off_g_text, trend_warnings, turned_motions, wide_rest_warning)
 from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params, rest_dated_back, rest_without_trend
 from ..triad import triad_forces
 
@@ -250,17 +250,17 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     dt = uniform_dt(rec)
     f, note = _body_forces(device, cal, rec, engine)
     noise = channel_noise(device, rec)
-    f_sigma = force_noise(device, cal, noise, None if device.is_array() else device.triads()[0])
+    channels = None if device.is_array() else device.triads()[0]
+    f_sigma = force_noise(device, cal, noise, channels)
     rp = rest or default_rest_params(device, 1.0 / dt, f_sigma=f_sigma)
     p = DisplaceParams(dt=dt, axis=ax, rest=rp)
     t = np.asarray(rec.t, float)
     n = len(t)
     warnings = [f"displacement: {fill_note}"] if fill_note else []
     if rest is None and rp.dev_max > REST_DEV_WARN_MPS2 and not states_noise(device):
-        warnings.append(f"displacement: the noise estimated from the recording gives a rest test of |f - mean| <= "
-                        f"{rp.dev_max:.3g} m/s^2 (5 sigma), beyond what a sensor at rest shows (0.01-0.25): no still "
-                        "stretch is that quiet (vibration throughout, a flight), so a slow motion may pass for a rest; "
-                        "state the sensor's noise_mps2 in the device file")
+        # the code step through the calibration: coarse codes widen the test of a sensor at rest
+        q_f = force_noise(device, cal, [code_step(c) for c in np.asarray(rec.raw).T], channels)
+        warnings += wide_rest_warning(rp.dev_max, q_f)
     if engine == "float" and form == "offline":
         flags = displace_stream(f, p)["rest"]
         declared = (flags & REST_AT_REST) != 0
@@ -270,13 +270,15 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                                           f_sigma)
         gone = declared & ~kept
         r = displace_offline(f, p, np.where(gone, flags & ~(REST_AT_REST | REST_QUIET), flags))
-        warnings += trend_warnings(t, trends, rp, f_sigma, False)
+        warnings += trend_warnings(t, trends, rp, f_sigma, False, rec)
         if r["no_rest"]:
+            off = still_off_g(f, np.zeros(n, bool), rp) if trends else None
             raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording "
                              f"(rest = |f - mean| <= {rp.dev_max:.3g} m/s^2 for {rp.hold} samples"
                              + (f" with |f| within {rp.g_tol:g} of {rp.g:g} m/s^2" if rp.g is not None else "")
-                             + "): " + ("; ".join(w.removeprefix("displacement: ") for w in
-                                                  trend_warnings(t, trends, rp, f_sigma, False))
+                             + "): " + ("; ".join([w.removeprefix("displacement: ") for w in
+                                                   trend_warnings(t, trends, rp, f_sigma, False, rec)]
+                                                  + ([still_off_g_text(t, off, rp, rec)] if off else []))
                                         or no_rest_reason(f, t, rp))
                              + "; the stop-to-stop method needs a rest at both ends of each motion")
         v, pp, p_raw = r["v"], r["p"], r["p_raw"]
@@ -315,7 +317,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         at, quiet = (fl & DISP_REST) != 0, (r["rest"] & REST_QUIET) != 0
         f_rest = f if engine == "float" else np.asarray(f, float) / 2.0**OUT_FRAC
         warnings += trend_warnings(t, rest_without_trend(rest_dated_back(at, quiet, f_rest, rp), f_rest, rp,
-                                                         f_sigma)[1], rp, f_sigma, True)
+                                                         f_sigma)[1], rp, f_sigma, True, rec)
         is_open = fin_open
         closed = [(s - 1, e, zq[e]) for s, e in _segments_from_flags(fl) if e >= 0 and not fl[e] & DISP_LONG]
         if (fl & DISP_LONG).any():
@@ -326,10 +328,17 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     at = rest_dated_back(at, quiet, f_host, rp)
     at_rest_not_moving(at, corrected, v, pp, p_raw)
     first_at = int(np.argmax(at)) if np.any(at) else n
+    # a still stretch kept from being a rest by its |f| (the scale), said once: where the recording
+    # does not start at rest when it lies before the first rest, else on its own
+    off = still_off_g(f_host, at, rp)
+    off_words = [] if off is None else [still_off_g_text(t, off, rp, rec)]
     if first_at > 0:
+        before = off_words if off is not None and off[0] < first_at else []
         warnings.append(f"displacement: the recording does not start at rest: nothing is estimated before the "
-                        f"first rest (from t = {t[min(first_at, n - 1)]:.3f} s, declared at "
-                        f"t = {t[min(declared, n - 1)]:.3f} s; rows before are 0)")
+                        f"first rest (from {time_span(t, min(first_at, n - 1), rec=rec)}, declared at "
+                        f"{time_span(t, min(declared, n - 1))}; rows before are 0)" + "".join("; " + w for w in before))
+        off_words = [w for w in off_words if w not in before]
+    warnings += ["displacement: " + w for w in off_words]
     if is_open:
         warnings.append("displacement: the last motion does not end at rest: it is NOT corrected "
                         "(column corrected = 0 there) and its drift grows with time squared")
@@ -340,12 +349,12 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
             warnings.append(f"displacement: the body turned by up to {rot:.1f} deg during a motion (from the "
                             "resolved alpha): gravity removal assumes no rotation between rests (a rail), so "
                             "the result is doubtful")
-    warnings += turned_motions(f_host, t, at, closed, f_sigma, rp, ax, float(device.gravity_mps2))
+    warnings += turned_motions(f_host, t, at, closed, f_sigma, rp, ax, float(device.gravity_mps2), rec)
     zps = [z for _, _, z in closed]
-    turned = still_but_turned(f_host, t, at, rp)
+    turned = still_but_turned(f_host, at, rp)
     if turned is not None:
         ang, a0, a1 = turned
-        warnings.append(f"displacement: the body is still at t = {a0:.3f}-{a1:.3f} s (the first such stretch) but "
+        warnings.append(f"displacement: the body is still at {time_span(t, a0, a1, rec)} (the first such stretch) but "
                         f"turned from the first rest (by up to {ang:.1f} deg over the recording): an accelerometer "
                         "alone cannot "
                         "tell a turn from an acceleration, so gravity leaks into the path from there on (up to "

@@ -10,6 +10,7 @@ import numpy as np
 from ..errors import InputError
 from ..recording import Recording
 from ..recording_checks import regular_step
+from .common import time_span
 
 __all__ = ["MAX_FILL_SAMPLES", "MAX_FILL_SHARE", "MAX_JITTER_STEPS", "JITTER_NOTE_STEPS", "MAX_LATE_STEPS",
            "MAX_WANDER_STEPS", "WANDER_BLOCK", "COHERENT_SHARE", "COHERENT_BLOCK", "block_phases", "stamp_trend",
@@ -161,7 +162,7 @@ def crowded(rec, t: np.ndarray, late: np.ndarray, pushed: np.ndarray, dt: float)
     b = int(bad[bad < e][-1])
     raw = np.asarray(rec.raw)
     same = [m for m in range(b + 1, e + 1) if np.array_equal(raw[m], raw[m - 1])]
-    head = (f"sample times are not uniform: the step to t = {t[e]:.6g} s is {t[e] - t[e - 1]:.6g} s, "
+    head = (f"sample times are not uniform: the step to {time_span(t, e)} is {t[e] - t[e - 1]:.6g} s, "
             f"{(t[e] - t[e - 1]) / dt:.2f} of the median step {dt:.6g} s: rows {rec.line(b)}-{rec.line(e)} are "
             f"{e - b + 1} samples within {(t[e] - t[b]) / dt:.2f} steps, one more than the uniform grid has places "
             "for" + (f" (every place before them back to row {rec.line(j)} taken)" if j < b else ""))
@@ -199,8 +200,8 @@ def incoherent(rec, t: np.ndarray, late: np.ndarray, dt: float) -> InputError | 
     i = a + int(np.flatnonzero(off[a:b + 1])[0])
     return InputError(rec.source, f"sample times are not uniform: rows {rec.line(a)}-{rec.line(b)} keep no uniform "
                       f"grid: {int(c[b + 1] - c[a])} of their {COHERENT_BLOCK} stamps lie more than {ON_TIME:g} of a step "
-                      f"off it (t = {t[i]:.6g} s is {late[i]:+.2f} steps off a uniform grid of about {dt:.6g} s; their "
-                      f"steps {(t[b] - t[a]) / (b - a):.6g} s on average): the rate changes, and up to "
+                      f"off it ({time_span(t, i)} is {late[i]:+.2f} steps off a uniform grid of about {dt:.6g} s; "
+                      f"their steps {(t[b] - t[a]) / (b - a):.6g} s on average): the rate changes, and up to "
                       f"{MAX_JITTER_STEPS:g} of a step off is taken as jitter of the stamps, a sample up to "
                       f"{MAX_LATE_STEPS:g} late now and then as delivered late: the integrators need a constant rate",
                       row=rec.line(i), column="t")
@@ -234,7 +235,7 @@ def wander_error(rec, t: np.ndarray, q: np.ndarray, on: np.ndarray, edges: np.nd
     j = int(beyond[0]) if beyond.size else int(edges[b])
     lo, hi = int(edges[b]), int(edges[min(b + 1, nb)]) - 1
     local = (t[hi] - t[lo]) / max(int(q[hi] - q[lo]), 1)
-    return InputError(rec.source, f"sample times are not uniform: t = {t[j]:.6g} s is {off[j]:+.2f} steps off the "
+    return InputError(rec.source, f"sample times are not uniform: {time_span(t, j)} is {off[j]:+.2f} steps off the "
                       f"uniform grid of the rows before it ({s:.6g} s a step), the steps about it {local:.6g} s on "
                       f"average: the stamps' local mean may drift up to {MAX_WANDER_STEPS:g} of a step from one "
                       "uniform grid (a host's clock against the sensor's), the sample rate may not change: the "
@@ -320,8 +321,8 @@ def on_uniform_grid(rec) -> tuple[Any, np.ndarray, str | None]:
                              f"{100 * MAX_FILL_SHARE:g} % of the recording are filled by interpolation",
                              row=rec.line(i + 1), column="t")
         notes.append(f"{total} dropped sample(s) in {int(np.count_nonzero(missing))} gap(s) (the longest "
-                     f"{int(missing[i])}, after t = {t[i]:.6g} s) filled by linear interpolation of the counts; "
-                     "column filled = 1 there")
+                     f"{int(missing[i])}, after {time_span(t, i, rec=rec)}) filled by linear interpolation of the "
+                     "counts; column filled = 1 there")
     grid = icpt + slope * np.arange(q[-1] + 1)
     kept = np.zeros(grid.size, bool)
     kept[q] = True
