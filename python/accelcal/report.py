@@ -244,6 +244,27 @@ def _param_lines(e: dict, limit: int = 16) -> list[str]:
     return out
 
 
+def unexplained_lines(res: dict) -> list[str]:
+    """The summary's lines for the JSON's ``unexplained`` (none when it is null): how much the
+    model leaves beyond the noise, and where."""
+    u = res.get("unexplained")
+    if not u:
+        return []
+    w = u.get("where") or {}
+    model = " + ".join(res.get("model", {}).get("effects", [])) or "the calibrated model alone"
+    where = [f"in {w['band']}" if w.get("band") else "",
+             f"{w['regime']}" if w.get("regime") else "",
+             f"channels {', '.join(map(str, w['channels']))}" if w.get("channels") else "",
+             f"most in {', '.join(w['poses'][:3])}" if w.get("poses") else ""]
+    line = u.get("lines") or {}
+    return ["", "## Unexplained", "",
+            f"After {model}, **{u['heldout_rms_left']:.3g} counts** held out ({100 * u['fraction']:.1f} % of the gap) "
+            f"are left beyond the noise floor of {u['noise_counts']:.3g} counts: "
+            + "; ".join(x for x in where if x) + "."
+            + (f" A line at {line['peak_hz']:.4g} Hz holds {line['rms_counts']:.3g} counts rms (channels "
+               f"{', '.join(map(str, line.get('channels', [])))})." if line.get("peak_hz") else "")]
+
+
 def summary_text(res: dict, images: list[str] = ()) -> str:
     """The written summary (Markdown) of a diagnosis result."""
     g = res["gap"]
@@ -265,7 +286,8 @@ def summary_text(res: dict, images: list[str] = ()) -> str:
     L += ["", "## Which effect, how far", ""]
     chosen = [e for e in res.get("effects", []) if e.get("selected")]
     if not chosen:
-        L.append("**none**: no candidate explains a significant part of the gap beyond noise.")
+        L.append(f"**{res.get('verdict')}**: no candidate explains a significant part of the gap beyond noise"
+                 + ("; what is left is under Unexplained." if res.get("unexplained") else "."))
     else:
         m = res["model"]
         L.append(f"Verdict **{res['verdict']}**. Held-out RMS {m['heldout_rms_before']:.4g} -> "
@@ -281,6 +303,7 @@ def summary_text(res: dict, images: list[str] = ()) -> str:
             L += _param_lines(e)
             for n in e.get("notes", []):
                 L.append(f"  - note: {n}")
+    L += unexplained_lines(res)
     L += ["", "All candidates (alone on the calibrated model unless a step is given):", "",
           "| rank | effect | significant | shrink | held-out RMS before | after | params | penalised chi2 gain "
           "| t | z |",

@@ -8,11 +8,13 @@ import pytest
 from accelcal.calibration import Calibration
 from accelcal.device import Device, default_device
 from accelcal.diagnose import diagnose
+from accelcal.diagnose.text import separate_by
 from accelcal.diagnose.floor import noise_floor, setup_rows
 from accelcal.diagnose.prepare import prepare
 from accelcal.diagnose.scoring import score
 from accelcal.diagnose.settings import PENALTY_PER_PARAM, T_MIN, Z_MIN
 from accelcal.diagnose.where import where_breakdown
+from accelcal.effects import EFFECTS
 from accelcal.effects.fitting import Cand
 from accelcal.recording import recording_from_arrays
 from accelcal.simulate import simulate
@@ -182,3 +184,10 @@ def test_an_adc_with_narrow_odd_codes_is_named(seed):
     res = diagnose(dev, Calibration.nominal(dev), [rec])
     said = [n for n in res["notes"] if "residue class mod 2" in n and "unevenly used" in n]
     assert len(said) == 3, res["notes"]
+
+
+def test_separate_by_asks_for_each_pose_or_motion_once():
+    """An offset's and a gain's hints both ask for each axis up and down, each with its own why:
+    a real robot-arm session's separate_by said it twice in one sentence."""
+    text = separate_by(dict(EFFECTS), "offset", ["gain"])
+    assert text.count("each axis both up and down") == 1, text

@@ -166,6 +166,22 @@ def within_pose_support(D, y, best: Cand, rival: Cand, repeats=(),
     return num / den, 1.0 / math.sqrt(den)
 
 
+def ruled_out(D, y, fit: Cand, rival: Cand, repeats=()) -> bool:
+    """Whether the data within the poses (and at the repeated orientations ``repeats``) rule out
+    the change a time-dependent ``fit`` claims there: its slope on them is below WITHIN_MIN by
+    more than WITHIN_Z standard errors (:func:`within_pose_support`), with an orientation held
+    again among the data (without one, a change made in the unrecorded turns between poses is
+    not ruled out).  A drift that is not borne out is ambiguous with the verdict only where the
+    data cannot rule it out (poses each held once); a tumble session that holds -x three times and -z twice met a
+    drift's claim with -0.00 +- 0.00, and had been told to repeat a pose at the end."""
+    if not len(repeats):
+        # the slopes within the poses alone do not rule out a change made while the sensor was
+        # turned between them (a step in the unrecorded turns): only an orientation held again does
+        return False
+    a, sa = within_pose_support(D, y, fit, rival, repeats)
+    return a + WITHIN_Z * sa < WITHIN_MIN
+
+
 def claims_time(D, y, best: Cand, rival: Cand, share: float = WITHIN_MIN, repeats=(),
                 rival_at_repeats: bool = False) -> tuple[bool, str]:
     """A time-dependent fit ``best`` is claimed over a pose-dependent ``rival`` when the
@@ -229,7 +245,10 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
             ok, how = claims_time(D, y, c, best, repeats=reps)
             out.tests[c.name]["within_poses"] = how
             if not ok:
-                out.ambiguous.append(c.name)
+                if ruled_out(D, y, c, best, reps):
+                    out.tests[c.name]["ruled_out"] = True
+                else:
+                    out.ambiguous.append(c.name)
                 continue
             if c_after.significant and not b_after.significant and swap is None and as_far(c, best):
                 swap = (c.name, f"{c.name} explains all that {best.name} does and more, and {how}")
@@ -360,45 +379,14 @@ def holds(D, cands, big: Cand, small: Cand, pcur) -> bool:
     return left <= HOLDS_LEFT * total
 
 
-def separate_by(cands, verdict: str, ambiguous: list[str], reached: tuple[str, ...] = ()) -> str:
-    """One sentence: the poses or motions that would tell ``verdict`` from ``ambiguous``;
-    ``reached``: those of them ambiguous only as the level they reached since the calibration
-    (``Effect.reaches_level_of``), which a recording that begins right after it tells."""
-    if not ambiguous:
-        return ""
-    hints = []
-    if any(nm not in reached for nm in ambiguous):
-        names = [verdict] + [nm for nm in ambiguous if nm not in reached]
-        if all(cands[nm].time_dependent for nm in names) and any(cands[nm].covariate for nm in names):
-            # changes of time alone and of a recorded covariate: only the covariate apart from time
-            # tells them (a pose repeated later changes with both)
-            names = [nm for nm in names if cands[nm].covariate]
-        for nm in pair_hinted(cands, names):
-            h = cands[nm].tell_apart
-            if h and h not in hints:
-                hints.append(h)
-    if any(nm in reached for nm in ambiguous):
-        hints.append("from right after the calibration (a drift has then reached nothing yet)")
-    return (f"To tell {verdict} from {' or '.join(ambiguous)}, record " + "; or ".join(hints) + ".")
-
-
-def pair_hinted(cands, names: list[str]) -> list[str]:
-    """Of ``names`` (the verdict first), those whose ``tell_apart`` speaks to another of them
-    (``Effect.tells_from`` names it, or is empty); all of them where none does."""
-    def speaks(nm):
-        tf = cands[nm].tells_from
-        return not tf or any(o in tf for o in names if o != nm)
-    kept = [nm for nm in names if cands[nm].tell_apart and speaks(nm)]
-    return kept or names
-
-
 def model_ambiguity(cands, chosen: list[str], duel: Contest, ambiguous: list[str]):
     """What the whole stepwise model says about the verdict ``chosen[0]`` beyond its contest
     ``duel``: returns (names to add to ``ambiguous_with``, those of them ambiguous only as the
     level reached since the calibration, notes).
 
     * an effect in the model too, or one that the first contest found acting beside the
-      verdict (significant after it in the nested test, where the verdict ranked first), whose
+      verdict (significant after it in the nested test, where the verdict ranked first, and the
+      change it claims with time not ruled out by the data: :func:`ruled_out`), whose
       level when the recording began makes the verdict's constant change
       (``Effect.reaches_level_of``: a drift since the calibration reads as an offset): the
       data do not say which the constant part is;
@@ -410,7 +398,8 @@ def model_ambiguity(cands, chosen: list[str], duel: Contest, ambiguous: list[str
     # (the nested tests are the verdict's own only where it ranked first; after a swap they are the
     # first-ranked's: a bend's rival drift, which an offset plus a gain would then list)
     beside = [] if duel.swapped_from else \
-        [r for r, t in duel.tests.items() if t.get("rival_after_verdict", {}).get("significant")]
+        [r for r, t in duel.tests.items() if t.get("rival_after_verdict", {}).get("significant")
+         and not t.get("ruled_out")]
     for nm in later + beside:
         if verdict in cands[nm].reaches_level_of and nm not in ambiguous and nm not in add:
             add.append(nm)

@@ -19,7 +19,7 @@ from ..noise import code_lattice, fractional_grid, uneven_low_bits
 from .floor import setup_rows
 from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare
-from .compare import (OCCAM_SHRINK, Contest, Given, claims_time, conditional, contest, model_ambiguity, separate_by,
+from .compare import (OCCAM_SHRINK, Contest, Given, claims_time, conditional, contest, model_ambiguity,
                       time_beside_pose, time_unmodelled)
 from .parsimony import simpler_model
 from .relinearise import heldout_path, joint_fit, relinearise
@@ -27,7 +27,7 @@ from .leftover import leftover, with_settling
 from .scoring import rank_key, run_candidates
 from .settling import settling_ringing
 from .settings import FORMAT, MAX_STEPS, MIN_SHRINK, PENALTY_PER_PARAM, POSE_MEAN_NOTE_RATIO, T_MIN, TERMS_PASSES, Z_MIN
-from .text import entry, to_json
+from .text import entry, separate_by, to_json
 from .where import pose_mean_gap, where_breakdown
 from ..effects import EFFECTS
 

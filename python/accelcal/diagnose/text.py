@@ -1,4 +1,5 @@
-"""The result's JSON entries and the one-line prose of each effect."""
+"""The result's JSON entries, the one-line prose of each effect, and the sentence that says what
+would tell the verdict from its rivals (``separate_by``)."""
 from __future__ import annotations
 
 import math
@@ -66,3 +67,37 @@ def describe(name: str, p: dict, s: dict, D: FitData) -> str:
         return EFFECTS[name].describe(p, s, D)
     except (KeyError, ValueError, IndexError):
         return name
+
+
+def separate_by(cands, verdict: str, ambiguous: list[str], reached: tuple[str, ...] = ()) -> str:
+    """One sentence: the poses or motions that would tell ``verdict`` from ``ambiguous``;
+    ``reached``: those of them ambiguous only as the level they reached since the calibration
+    (``Effect.reaches_level_of``), which a recording that begins right after it tells."""
+    if not ambiguous:
+        return ""
+    hints = []
+    if any(nm not in reached for nm in ambiguous):
+        names = [verdict] + [nm for nm in ambiguous if nm not in reached]
+        if all(cands[nm].time_dependent for nm in names) and any(cands[nm].covariate for nm in names):
+            # changes of time alone and of a recorded covariate: only the covariate apart from time
+            # tells them (a pose repeated later changes with both)
+            names = [nm for nm in names if cands[nm].covariate]
+        for nm in pair_hinted(cands, names):
+            h = cands[nm].tell_apart
+            # one hint per pose or motion (an offset's and a gain's both ask for each axis up and
+            # down, each with its own why: said once)
+            if h and h.split(" (")[0] not in [x.split(" (")[0] for x in hints]:
+                hints.append(h)
+    if any(nm in reached for nm in ambiguous):
+        hints.append("from right after the calibration (a drift has then reached nothing yet)")
+    return (f"To tell {verdict} from {' or '.join(ambiguous)}, record " + "; or ".join(hints) + ".")
+
+
+def pair_hinted(cands, names: list[str]) -> list[str]:
+    """Of ``names`` (the verdict first), those whose ``tell_apart`` speaks to another of them
+    (``Effect.tells_from`` names it, or is empty); all of them where none does."""
+    def speaks(nm):
+        tf = cands[nm].tells_from
+        return not tf or any(o in tf for o in names if o != nm)
+    kept = [nm for nm in names if cands[nm].tell_apart and speaks(nm)]
+    return kept or names

@@ -111,7 +111,9 @@ def where_breakdown(D: FitData, e: np.ndarray) -> dict:
             m = np.zeros(D.n, bool)
             m[idx[(tt >= lo) & (tt < hi)]] = True
             if m.any():
-                tb.append(bin_index(f"rec {int(k)}: {lo:.4g}-{hi:.4g} s", m, e, sig, recording=int(k),
+                # said from the recording's start (t since a boot or an epoch: 6.727e+05-6.727e+05 s)
+                tb.append(bin_index(f"rec {int(k)}: {lo - tt.min():.3f}-{min(hi, tt.max()) - tt.min():.3f} s from "
+                                    "its start", m, e, sig, recording=int(k),
                                t0=float(lo), t1=float(hi)))
     out["time_bins"] = tb
     if len(D.pose_labels):
