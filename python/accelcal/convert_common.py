@@ -89,6 +89,7 @@ class Options:
     time_unit: str = "auto"
     time_column: str | None = None
     repeated_stamps: str = "refuse"
+    columns: str | None = None
 
 
 def header_cells(header: str) -> list[str]:

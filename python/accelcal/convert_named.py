@@ -9,13 +9,14 @@ import re
 
 import numpy as np
 
-from .convert_axes import AxisColumn, names_unit, px4_export, table_axes
+from .convert_axes import AxisColumn, find_named, names_unit, px4_export, stated_axes, table_axes
 from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
                              whole_counts)
 from .convert_time import TIME_COLUMN_RE, datetime_stamps, is_datetime, unit_in_name
 from .csvtable import convert_columns, got_text
 from .errors import InputError
 from .recording_checks import repeated_rows
+from .textinput import preamble_notes
 from .units import STANDARD_GRAVITY, UNIT_TEXT, Scale, file_scale, to_counts
 
 __all__ = ["stated_time_column", "choose_time_column", "placeholder_rows", "convert_named"]
@@ -105,23 +106,17 @@ def present_rows(source: str, matrix: np.ndarray, table, axes: list[AxisColumn],
 
 
 def stated_time_column(source: str, names: list[str], acc: list[str], stated: str, row: int) -> str:
-    """The column ``--time-column`` names: the header's name equal to ``stated`` (blanks about
-    it dropped), else the only one equal to it ignoring case.
+    """The column ``--time-column`` names (:func:`convert_axes.find_named`).
 
     Raises
     ------
     InputError
         No such column (listing the header's columns), or one of the accelerometer's.
     """
-    want = stated.strip()
-    found = [n for n in names if n == want] or [n for n in names if n.lower() == want.lower()]
-    if len(found) != 1:
-        raise InputError(source, f"--time-column {stated!r}: "
-                         f"{'no such column' if not found else 'more than one column of that name'}; the columns are "
-                         f"{', '.join(repr(n) for n in names if n)}", row=row)
-    if found[0] in acc:
+    found = find_named(source, names, stated, "--time-column", row)
+    if found in acc:
         raise InputError(source, f"--time-column {stated!r} is an accelerometer column ({', '.join(acc)})", row=row)
-    return found[0]
+    return found
 
 
 def sample_index(source: str, name: str, stamps: np.ndarray, rate_hz: float | None, row: int) -> None:
@@ -382,9 +377,10 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
     unit (:func:`table_scale`), an optional time column (else ``--rate``); rows without
     readings skipped (:func:`present_rows`)."""
     names = [c.strip() for c in header_cells(pre.header)]
-    axes = table_axes(source, names, pre.header_line)
-    acc = [c.name for c in axes]
     notes: list[str] = []
+    axes = stated_axes(source, names, opts.columns, pre.header_line) if opts.columns is not None else \
+        table_axes(source, names, pre.header_line, notes)
+    acc = [c.name for c in axes]
     scale = table_scale(source, pre, opts.scale, names_unit(source, axes, pre.header_line), units_stated,
                         opts.gravity_mps2 or STANDARD_GRAVITY, axes, notes)
     if opts.time_column is not None:
@@ -445,7 +441,5 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
     meta = {"table.columns": ", ".join(acc + ([time_column] if time_column else []))}
     return finish(source, "table", raw, np.arange(rows.size), t, None, opts, scale, converts or bool(np.any(raw < 0)),
                   opts.rate_hz, meta,
-                  ([f"the column names are read from the comment on line {pre.header_line} (a '#' before the "
-                    "header, as Altus Metrum's logs write it)"] if pre.header_from_comment else [])
-                  + drop_note(dropped, ignored) + notes + ([table.cut_note] if table.cut_note else []),
+                  preamble_notes(pre) + drop_note(dropped, ignored) + notes + ([table.cut_note] if table.cut_note else []),
                   locate, None, time_column=time_column)
