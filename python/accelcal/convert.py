@@ -30,7 +30,11 @@ Formats (``detect_format`` tells them from the first line that is not a comment)
   sample rate, each repeated in the three columns, then ``x,y,z`` in counts of 1/64 g
   (:mod:`accelcal.convert_e4`).
 
-Gyroscope columns are dropped (one note).  Pose regions named ``x_p, x_a, y_p, y_a, z_p,
+On every path a logger's leading ``0, 0, 0`` placeholder is left out, and so is a row whose
+readings are all missing (a sample lost; a table's other packet), each with a note
+(:mod:`accelcal.convert_rows`); a lost sample's place is kept (its time, from the stamps or
+the rate), a gap the estimators fill on their time grid.  Gyroscope columns are dropped (one
+note).  Pose regions named ``x_p, x_a, y_p, y_a, z_p,
 z_a`` (imucal's: that axis pointing up, or down) can state the reference specific force
 (``stated_f``): +-g along that axis, making a known-pose (``full``) calibration possible.
 Regions whose name ends in ``_rot`` are motions, not poses.
@@ -50,6 +54,7 @@ from .convert_mat import convert_mat, is_mat
 from .convert_axes import BARE_AXES, axis_column, axis_triples, columns_hint
 from .convert_named import convert_named
 from .convert_regions import POSE_DIRECTIONS, read_regions
+from .convert_rows import LOST_SAMPLES, lost_rows
 from .convert_time import TIME_COLUMN_RE, is_datetime, unit_in_name
 from .errors import InputError
 from .held import held_runs, held_text
@@ -221,6 +226,10 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
                          "export begins: read it with --format e4 (or auto), or remove the two rows and give --rate HZ",
                          row=1)
     values, lines, block, info = read_log(source, data)
+    lost: list[str] = []
+    keep = lost_rows(source, values, lambda i: lines[i], lambda j: f"field {j + 1}",
+                     lambda i, j: repr(float(values[i, j])), lost, LOST_SAMPLES)
+    values, lines, block = values[keep], [lines[i] for i in keep.tolist()], [block[i] for i in keep.tolist()]
 
     def locate(i: int, j: int) -> tuple[int, str]:
         return lines[i], f"field {j + 1}"
@@ -237,7 +246,7 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
     notes = [f"{info['text_lines']} line(s) of text (the first: {info['first_text']!r}) split the readings into "
              f"{info['blocks']} block(s)" + ("; each block is a pose" if blocks else
                                             "; --blocks labels each as a pose")] if info["text_lines"] else []
-    notes += shifted + ([info["cut"]] if info["cut"] else [])
+    notes += lost + shifted + ([info["cut"]] if info["cut"] else [])
     k, first = held_runs(raw)
     n = raw.shape[0]
     share = (n - first.size) / (n - 1) if n > 1 else 0.0      # rows that repeat the row before
@@ -248,7 +257,7 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
                      f"come at about {opts.rate_hz / k:.4g} Hz, and successive rows are not independent samples")
     meta = {"log.text_lines": str(info["text_lines"]), "log.blocks": str(info["blocks"]),
             "log.held_share": f"{share:.4f}"}
-    return finish(source, "log", raw, np.arange(raw.shape[0]), None, block if blocks else None, opts, scale,
+    return finish(source, "log", raw, keep, None, block if blocks else None, opts, scale,
                   bool(np.any(raw < 0)), opts.rate_hz, meta, notes, locate, None)
 
 

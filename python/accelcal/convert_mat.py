@@ -18,6 +18,7 @@ import numpy as np
 import scipy.io
 
 from .convert_common import Converted, Options, finish, whole_counts
+from .convert_rows import LOST_SAMPLES, lost_rows
 from .errors import InputError
 from .units import file_scale, to_counts
 
@@ -230,7 +231,9 @@ def vectors_array(arrays: dict[str, np.ndarray], names: list[str], source: str, 
 def convert_mat(source: str, path: Any, opts: Options, variable: str | None = None) -> Converted:
     """A MAT-file's readings (:func:`pick_array`): three columns x, y, z (``--rate`` gives the
     rate) or four t, x, y, z (t as a time column: ``--time-unit``, or read in ms/us/ns where
-    seconds would give under 2 Hz), in counts or in the unit ``opts.scale`` states."""
+    seconds would give under 2 Hz), in counts or in the unit ``opts.scale`` states.  A row whose
+    readings are all NaN is a sample the logger lost: left out with a note, the rows after
+    keeping their places (:func:`convert_rows.lost_rows`); one with some NaN is refused."""
     notes: list[str] = []
     name, a = pick_array(mat_arrays(path, source, notes), variable, source)
     timed = a.shape[1] == 4
@@ -243,13 +246,17 @@ def convert_mat(source: str, path: Any, opts: Options, variable: str | None = No
 
     column = [col(j + first) for j in range(3)]
 
-    def locate(i: int, j: int) -> tuple[int, str]:
-        return i + 1, column[j]
-
-    bad = np.argwhere(~np.isfinite(a))
+    keep = lost_rows(source, readings, lambda i: i + 1, lambda j: column[j],
+                     lambda i, j: repr(float(readings[i, j])), notes, LOST_SAMPLES)
+    bad = np.argwhere(~np.isfinite(a[keep]))
     if bad.size:
-        i, j = (int(v) for v in bad[0])
+        i, j = int(keep[bad[0][0]]), int(bad[0][1])
         raise InputError(source, f"{float(a[i, j])} is not a finite number", row=i + 1, column=col(j))
+    a, readings = a[keep], readings[keep]
+
+    def locate(i: int, j: int) -> tuple[int, str]:
+        return int(keep[i]) + 1, column[j]
+
     t = None
     if timed:
         t = a[:, 0]
@@ -258,7 +265,7 @@ def convert_mat(source: str, path: Any, opts: Options, variable: str | None = No
             i = int(back[0]) + 1
             raise InputError(source, f"t = {float(t[i]):.10g} is not after {float(t[i - 1]):.10g}: the first column "
                              "is taken as time stamps, which must increase (--variable names another array)",
-                             row=i + 1, column=col(0))
+                             row=int(keep[i]) + 1, column=col(0))
     elif opts.rate_hz is None:
         raise InputError(source, f"array {name} has no time column (3 columns): give the sample rate with --rate HZ")
     elif opts.time_unit != "auto":
@@ -267,5 +274,5 @@ def convert_mat(source: str, path: Any, opts: Options, variable: str | None = No
     converts = scale is not None and scale.converts
     raw = to_counts(readings, scale, source, locate, notes=notes) if converts else \
         whole_counts(readings, source, locate)
-    return finish(source, "mat", raw, np.arange(raw.shape[0]), t, None, opts, scale, converts or bool(np.any(raw < 0)),
+    return finish(source, "mat", raw, keep, t, None, opts, scale, converts or bool(np.any(raw < 0)),
                   opts.rate_hz, {"mat.variable": name}, notes, locate, None)

@@ -101,7 +101,8 @@ def test_lord_rows_without_readings_are_skipped(tmp_path, capfd):
     src = lord_file(tmp_path / "log.csv", c)
     rec, dev, err = _convert(tmp_path, capfd, src, "--units", "g", "--full-scale", "2")
     assert np.array_equal(rec.raw, c)
-    assert "skipped 300 row(s) whose readings (scaledAccelX, scaledAccelY, scaledAccelZ) are all empty" in err
+    assert "300 row(s) whose readings (scaledAccelX, scaledAccelY, scaledAccelZ) are all missing (empty or nan), " \
+        "the first row 3: left out (other packets' rows, or samples lost)" in err
     assert "t read in ns" in err and "ignored columns invalid_fields, estLinearAccelX" in err
     # the epoch in ns read as integers (as float64 each stamp kept 256 ns: the rate 1e-4 off)
     assert dev["sample_rate_hz"] == pytest.approx(500.0, rel=1e-9)
