@@ -91,6 +91,8 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
         raise InputError(source, "the file is empty (nothing but comments and blank lines)")
     cells = header_cells(pre.header)
     low = {c.strip().lower() for c in cells}
+    if pre.header_from_comment and is_log(data):
+        return "log"              # a comment naming a log's three columns ('# x y z') before its readings
     if "t" in cells and "raw_0" in cells:
         return "csv"
     if any(TIME_COLUMN_RE.fullmatch(c.strip()) for c in cells) and any(axis_column(c) for c in cells):

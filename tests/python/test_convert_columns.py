@@ -126,3 +126,14 @@ def test_a_comment_naming_whitespace_columns_is_the_header(tmp_path, capfd):
     np.testing.assert_array_equal(rec.raw, c)
     assert "the column names are read from the comment on line 1" in err
     np.testing.assert_allclose(rec.t - rec.t[0], np.arange(150) / 100.0, atol=2e-6)
+
+
+def test_a_comment_naming_a_logs_three_columns_keeps_it_a_log(tmp_path, capfd):
+    """'# x y z' over lines of three numbers: still a monitor's log (--rate), not a table whose
+    bare x, y, z are refused."""
+    c = _counts(60, seed=5)
+    src = _write(tmp_path / "capture.txt", ["# x y z"] + [f"{r[0]} {r[1]} {r[2]}" for r in c])
+    out = tmp_path / "o.csv"
+    rc, said, err, _ = run(["convert", src, "--rate", "50", "-o", out], capfd)
+    assert rc == 0 and said.startswith("log: "), err
+    np.testing.assert_array_equal(read_recording(out).raw, c)
