@@ -111,7 +111,9 @@ def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
     s.add_argument("--stated-f", action="store_true", help="poses named x_p, x_a, y_p, y_a, z_p, z_a (that "
                    "axis up, p, or down, a) get the reference f = +-g along it, for a known-pose calibration")
     s.add_argument("--device-out", metavar="D.json", help="also write a nominal device JSON for the "
-                   "recording (a triad at the origin; scale from the LSB, else from the readings)")
+                   "recording (a triad at the origin; scale from the LSB, else from the readings; no noise_mps2: "
+                   "every command estimates the noise from the recording, and a noise_mps2 > 0 added by hand "
+                   "overrides that)")
     s.add_argument("-o", "--output", required=True, metavar="OUT.csv",
                    help="the recording CSV to write (atomically: no partial file on error)")
     s.set_defaults(func=lambda a: cmd_convert(a, check_output))
