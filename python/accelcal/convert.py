@@ -188,7 +188,8 @@ def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metada
     dropped = [c for c in names if c and c not in used and GYRO_RE.fullmatch(c)]
     ignored = [c for c in names if c and c not in used and c not in dropped]
     return finish(source, fmt, raw, index, None, values.get(part_column), opts, scale, True, rate, metadata,
-                  preamble_notes(pre) + drop_note(dropped, ignored) + shifted + ([table.cut_note] if table.cut_note else []), locate,
+                  preamble_notes(pre) + drop_note(dropped, ignored) + shifted +
+                  ([table.cut_note] if table.cut_note else []), locate,
                   index_column)
 
 

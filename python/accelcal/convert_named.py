@@ -374,5 +374,6 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
     meta = {"table.columns": ", ".join(acc + ([time_column] if time_column else []))}
     return finish(source, "table", raw, np.arange(rows.size), t, None, opts, scale, converts or bool(np.any(raw < 0)),
                   opts.rate_hz, meta,
-                  preamble_notes(pre) + drop_note(dropped, ignored) + notes + ([table.cut_note] if table.cut_note else []),
+                  preamble_notes(pre) + drop_note(dropped, ignored) + notes +
+                  ([table.cut_note] if table.cut_note else []),
                   locate, None, time_column=time_column)
