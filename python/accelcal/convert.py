@@ -20,14 +20,21 @@ Formats (``detect_format`` tells them from the first line that is not a comment)
   LORD/MicroStrain log, a logger's ``time_ms,accX,accY,accZ``): one column per axis named
   acc/accel/accelerometer/acceleration (optionally scaled/raw) and x, y or z, with an
   optional unit (``Accelerometer X (g)``, ``AccX [g]``, ``acc_x_mps2``) that states the
-  readings' unit; an optional time column (``t``, ``Time (s)``, ``timestamp_us``), else
+  readings' unit; the axis letter alone with a unit of acceleration (``x (g)``), or bare
+  ``x, y, z`` beside nothing but a time column; ``--columns X,Y,Z`` names the three
+  otherwise; an optional time column (``t``, ``Time (s)``, ``timestamp_us``), else
   ``--rate``.  Rows whose three readings are all empty (another packet's) are skipped.
-  Told last, after the formats above.
+  Told last, after the formats above.  A line of free text before the header (a title) is
+  passed over with a note (:func:`textinput.table_preamble`).
 - ``e4``: an Empatica E4's ``ACC.csv``: row 1 the session's start (unix s) and row 2 the
   sample rate, each repeated in the three columns, then ``x,y,z`` in counts of 1/64 g
   (:mod:`accelcal.convert_e4`).
 
-Gyroscope columns are dropped (one note).  Pose regions named ``x_p, x_a, y_p, y_a, z_p,
+On every path a logger's leading ``0, 0, 0`` placeholder is left out, and so is a row whose
+readings are all missing (a sample lost; a table's other packet), each with a note
+(:mod:`accelcal.convert_rows`); a lost sample's place is kept (its time, from the stamps or
+the rate), a gap the estimators fill on their time grid.  Gyroscope columns are dropped (one
+note).  Pose regions named ``x_p, x_a, y_p, y_a, z_p,
 z_a`` (imucal's: that axis pointing up, or down) can state the reference specific force
 (``stated_f``): +-g along that axis, making a known-pose (``full``) calibration possible.
 Regions whose name ends in ``_rot`` are motions, not poses.
@@ -44,14 +51,16 @@ from .convert_common import (GYRO_RE, INDEX_COLUMNS, NUMBER_RE, Converted, Optio
 from .convert_e4 import convert_e4, is_e4
 from .convert_log import is_log, read_log
 from .convert_mat import convert_mat, is_mat
-from .convert_axes import BARE_AXES, axis_column
+from .convert_axes import BARE_AXES, axis_column, axis_triples, columns_hint
 from .convert_named import convert_named
 from .convert_regions import POSE_DIRECTIONS, read_regions
+from .convert_rows import LOST_SAMPLES, lost_rows
 from .convert_time import TIME_COLUMN_RE, is_datetime, unit_in_name
 from .errors import InputError
 from .held import held_runs, held_text
 from .recording import read_recording
-from .textinput import CELL_NUMBER_RE, is_whitespace_header, read_preamble, read_text_bytes
+from .textinput import (CELL_NUMBER_RE, is_whitespace_header, preamble_notes, read_preamble, read_text_bytes,
+                        table_preamble)
 from .units import Scale, file_scale, to_counts
 from .xsens import load_xsens
 
@@ -77,11 +86,13 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
         row, and the header line to add.
     """
     source, data = read_text_bytes(path) if data is None else (str(path), data)
-    pre = read_preamble(data)
+    pre = table_preamble(data)
     if pre.header is None:
         raise InputError(source, "the file is empty (nothing but comments and blank lines)")
     cells = header_cells(pre.header)
     low = {c.strip().lower() for c in cells}
+    if pre.header_from_comment and is_log(data):
+        return "log"              # a comment naming a log's three columns ('# x y z') before its readings
     if "t" in cells and "raw_0" in cells:
         return "csv"
     if any(TIME_COLUMN_RE.fullmatch(c.strip()) for c in cells) and any(axis_column(c) for c in cells):
@@ -92,8 +103,8 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
     if set(ACC["mpu6050"]) <= low or cells[0].strip().lower() == "fs":
         return "mpu6050"
     spaced = is_whitespace_header(pre.header)
-    if spaced and len(cells) == 4 and all(NUMBER_RE.fullmatch(c) for c in cells):
-        return "imu_tk"
+    if spaced and len(cells) == 4 and (all(NUMBER_RE.fullmatch(c) for c in cells) or pre.header_from_comment):
+        return "imu_tk"           # (under a comment that names its four columns)
     if is_e4(data):
         return "e4"
     if is_log(data):
@@ -108,11 +119,14 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
         raise InputError(source, f"{len(cells)} {'whitespace-separated ' if spaced else ''}numbers a row{dated} and no "
                          f"header ({line[:60]!r}): {hints}for other layouts add a header line naming the columns "
                          f"({header_example(cells, spaced)}; a time column t, time or timestamp, else --rate HZ)", row=pre.header_line)
+    if axis_triples(cells):
+        raise InputError(source, f"no column of this header ({line[:60]!r}) says it is an accelerometer's: if three "
+                         f"of them are, name them with {columns_hint(cells)}", row=pre.header_line)
     raise InputError(source, f"cannot tell the format from this line ({line[:60]!r}): expected a "
                      "recording CSV (t, raw_0, ...), imucal's acc_x/acc_y/acc_z, the MPU-6050 log (Fs,... "
                      "then ax,ay,az,...), imu_tk's 't ax ay az' text, a monitor's log (lines of three "
                      "numbers among text) or a table with accelerometer columns (accX, 'Acceleration y "
-                     "(m/s^2)', ...); give --format", row=pre.header_line)
+                     "(m/s^2)', 'x (g)', ...; --columns X,Y,Z names them); give --format", row=pre.header_line)
 
 
 def file_line(path: Any, line: int, fallback: str) -> str:
@@ -174,7 +188,8 @@ def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metada
     dropped = [c for c in names if c and c not in used and GYRO_RE.fullmatch(c)]
     ignored = [c for c in names if c and c not in used and c not in dropped]
     return finish(source, fmt, raw, index, None, values.get(part_column), opts, scale, True, rate, metadata,
-                  drop_note(dropped, ignored) + shifted + ([table.cut_note] if table.cut_note else []), locate,
+                  preamble_notes(pre) + drop_note(dropped, ignored) + shifted +
+                  ([table.cut_note] if table.cut_note else []), locate,
                   index_column)
 
 
@@ -214,6 +229,10 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
                          "export begins: read it with --format e4 (or auto), or remove the two rows and give --rate HZ",
                          row=1)
     values, lines, block, info = read_log(source, data)
+    lost: list[str] = []
+    keep = lost_rows(source, values, lambda i: lines[i], lambda j: f"field {j + 1}",
+                     lambda i, j: repr(float(values[i, j])), lost, LOST_SAMPLES)
+    values, lines, block = values[keep], [lines[i] for i in keep.tolist()], [block[i] for i in keep.tolist()]
 
     def locate(i: int, j: int) -> tuple[int, str]:
         return lines[i], f"field {j + 1}"
@@ -230,7 +249,7 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
     notes = [f"{info['text_lines']} line(s) of text (the first: {info['first_text']!r}) split the readings into "
              f"{info['blocks']} block(s)" + ("; each block is a pose" if blocks else
                                             "; --blocks labels each as a pose")] if info["text_lines"] else []
-    notes += shifted + ([info["cut"]] if info["cut"] else [])
+    notes += lost + shifted + ([info["cut"]] if info["cut"] else [])
     k, first = held_runs(raw)
     n = raw.shape[0]
     share = (n - first.size) / (n - 1) if n > 1 else 0.0      # rows that repeat the row before
@@ -241,7 +260,7 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
                      f"come at about {opts.rate_hz / k:.4g} Hz, and successive rows are not independent samples")
     meta = {"log.text_lines": str(info["text_lines"]), "log.blocks": str(info["blocks"]),
             "log.held_share": f"{share:.4f}"}
-    return finish(source, "log", raw, np.arange(raw.shape[0]), None, block if blocks else None, opts, scale,
+    return finish(source, "log", raw, keep, None, block if blocks else None, opts, scale,
                   bool(np.any(raw < 0)), opts.rate_hz, meta, notes, locate, None)
 
 
@@ -249,7 +268,8 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
                  regions: Any = None, stated_f: bool = False, gravity_mps2: float | None = None,
                  bits: int = 16, blocks: bool = False, time_unit: str = "auto",
                  units_stated: bool = True, variable: str | None = None,
-                 time_column: str | None = None, repeated_stamps: str = "refuse") -> Converted:
+                 time_column: str | None = None, repeated_stamps: str = "refuse",
+                 columns: str | None = None) -> Converted:
     """Read another tool's file as a contract recording of a triad.
 
     Parameters
@@ -312,9 +332,10 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         One line naming the file and the row and column (or JSON field) at fault.
     """
     if fmt in ("auto", "mat") and is_mat(path):
-        if time_column is not None:
-            raise InputError(str(path), "--time-column names a table's time column: a MATLAB file's is its first "
-                             "of 4 columns")
+        if time_column is not None or columns is not None:
+            raise InputError(str(path), "--time-column and --columns name a table's columns: a MATLAB file's array is "
+                             "named by --variable NAME (its time column the first of 4), or --variable X,Y,Z (T,X,Y,Z) "
+                             "for one vector per channel")
         if regions is not None or stated_f or blocks:
             raise InputError(str(path), "a MATLAB file's poses are not labelled: --regions, --stated-f and --blocks "
                              "do not apply")
@@ -328,16 +349,18 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     source, data = read_text_bytes(path)
     told = fmt == "auto"
     if told:
-        fmt = detect_format(source, data)
+        fmt = "table" if columns is not None else detect_format(source, data)
     if fmt not in FORMATS:
         raise ValueError(f"unknown format {fmt!r}")
     if repeated_stamps != "refuse" and fmt != "table":
         raise InputError(source, f"--repeated-stamps applies to a table's time column (--format table): this file is "
                          f"told as {fmt}")
-    if time_column is not None and fmt != "table":
-        raise InputError(source, f"--time-column names a table's time column (--format table): this file is told as "
-                         f"{fmt}")
-    opts = Options(scale, rate_hz, None, None, stated_f, gravity_mps2, bits, time_unit, time_column, repeated_stamps)
+    for option, given, what in (("--time-column", time_column, "time column"),
+                                ("--columns", columns, "accelerometer columns")):
+        if given is not None and fmt != "table":
+            raise InputError(source, f"{option} names a table's {what} (--format table): this file is told as {fmt}")
+    opts = Options(scale, rate_hz, None, None, stated_f, gravity_mps2, bits, time_unit, time_column, repeated_stamps,
+                   columns)
     if regions is not None:
         opts.regions, opts.regions_source = read_regions(regions), str(regions)
     if blocks and fmt != "log":
@@ -375,7 +398,7 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         return finish(source, fmt, rec.raw, np.arange(rec.n_samples), t, None, opts, scale, signed, None,
                       dict(rec.metadata), list(rec.notes), lambda i, j: (rec.line(i), f"raw_{j}"), None, device, kept,
                       time_column="t" if fmt == "csv" else None)
-    pre = read_preamble(data)
+    pre = table_preamble(data)
     if pre.header is None:
         raise InputError(source, "the file is empty (nothing but comments and blank lines)")
     if fmt == "table":

@@ -1,21 +1,33 @@
 """The accelerometer's axis columns of a table with named columns (``accelcal convert``'s
 ``table`` format): ``accX``, ``'Acceleration y (m/s^2)'``, ``scaledAccelZ``, ROS's
 ``linear_acceleration.x``, PX4's ``accelerometer_m_s2[0]`` and its sensor_accel topic's bare
-``x, y, z``, and the unit their names state."""
+``x, y, z``, bare axes with a unit of acceleration (``x (g)``), bare ``x, y, z`` beside a time
+column and nothing else, the three columns ``--columns`` names, and the unit their names
+state."""
 from __future__ import annotations
 
 import re
 from dataclasses import dataclass
 from pathlib import Path
 
+from .convert_time import TIME_COLUMN_RE
 from .errors import InputError
 
 __all__ = ["AXIS_RE", "BARE_AXES", "PX4_ACCEL_FILE_RE", "NAMED_UNITS", "AxisColumn", "axis_column", "table_axes",
-           "px4_export", "names_unit"]
+           "px4_export", "names_unit", "find_named", "stated_axes", "axis_triples"]
 
+#: a unit after a column's name, in () or []
+UNIT_PART = r"\s*[(\[](?P<unit>[^)\]]*)[)\]]"
 #: a table's accelerometer axis column: a prefix, the word, the axis, a unit in () or [] or after _
 AXIS_RE = re.compile(r"(?P<pre>.*?)(?:accelerometer|acceleration|accel|acc|(?<![a-z])a)[\s_.-]*(?P<axis>[xyz])"
-                     r"(?:\s*[(\[](?P<unit>[^)\]]*)[)\]]|_(?P<tail>g|mps2|ms2|counts|lsb|raw))?", re.I)
+                     r"(?:" + UNIT_PART + r"|_(?P<tail>g|mps2|ms2|counts|lsb|raw))?", re.I)
+#: an axis named by its letter alone with a unit: ``x (g)``, ``Z [m/s^2]`` (an accelerometer's where the unit
+#: is one of acceleration, ACCELERATION_UNITS)
+BARE_UNIT_RE = re.compile(r"(?P<axis>[xyz])" + UNIT_PART, re.I)
+#: a unit in a column's name, at its end
+NAME_UNIT_RE = re.compile(r".*?" + UNIT_PART)
+#: a file name that says its bare x, y, z are another sensor's (PX4's sensor_gyro, sensor_mag topics)
+OTHER_SENSOR_FILE_RE = re.compile(r"gyr|mag|compass|angular|rotation", re.I)
 #: a robotics message's accelerometer field: ROS's (field.)linear_acceleration.x, PX4's
 #: accelerometer_m_s2[0] (ulog2csv)
 MESSAGE_AXIS_RE = re.compile(r"(?:(?:field\.)?(?P<ros>linear_acceleration)\.(?P<axis>[xyz])"
@@ -32,6 +44,9 @@ VIRTUAL_WORDS = ("linear", "gravity")
 #: a unit in an axis column's name (lower case, blanks dropped) -> units.UNITS
 NAMED_UNITS = {"g": "g", "m/s^2": "mps2", "m/s\u00b2": "mps2", "m/s/s": "mps2", "mps2": "mps2", "m/s2": "mps2",
                "ms2": "mps2", "counts": "counts", "count": "counts", "lsb": "counts", "raw": "counts"}
+#: the units of NAMED_UNITS that only an accelerometer's readings have (a gyroscope's or a magnetometer's
+#: counts are counts too)
+ACCELERATION_UNITS = ("g", "mps2")
 
 
 @dataclass
@@ -56,6 +71,11 @@ def axis_column(name: str) -> AxisColumn | None:
         # (gravity in), PX4's accelerometer_m_s2[i] likewise
         axis = m.group("axis").lower() if m.group("axis") else "xyz"[int(m.group("index"))]
         return AxisColumn(name, axis, "mps2" if m.group("mps2") or m.group("ros") else None, False)
+    m = BARE_UNIT_RE.fullmatch(name.strip())
+    if m is not None:
+        unit = re.sub(r"\s+", "", m.group("unit")).lower()
+        named = NAMED_UNITS.get(unit)
+        return AxisColumn(name, m.group("axis").lower(), unit, False) if named in ACCELERATION_UNITS else None
     m = AXIS_RE.fullmatch(name.strip())
     if m is None:
         return None
@@ -68,24 +88,35 @@ def axis_column(name: str) -> AxisColumn | None:
     return AxisColumn(name, m.group("axis").lower(), unit, virtual)
 
 
-def table_axes(source: str, names: list[str], row: int) -> list[AxisColumn]:
-    """The x, y, z columns of a table's header (``row``: its line).
+def table_axes(source: str, names: list[str], row: int, notes: list[str] | None = None) -> list[AxisColumn]:
+    """The x, y, z columns of a table's header (``row``: its line).  Bare ``x, y, z`` are the
+    accelerometer's in PX4's sensor_accel export (m/s^2), and beside nothing but time columns
+    in a file whose name names no other sensor (a note appended to ``notes`` says so).
 
     Raises
     ------
     InputError
         No column for an axis, more than one, or only a phone's virtual sensor
-        (linear acceleration, gravity), naming the candidates.
+        (linear acceleration, gravity), naming the candidates and listing the header's
+        columns (``--columns`` names the three).
     """
     found = [c for c in (axis_column(n) for n in names) if c is not None]
     bare = [n for n in names if n.lower() in BARE_AXES]
     if not found and len(bare) == len(BARE_AXES):
-        if not PX4_ACCEL_FILE_RE.search(Path(source).name):
+        others = [n for n in names if n and n not in bare]
+        file = Path(source).name
+        if PX4_ACCEL_FILE_RE.search(file):
+            found = [AxisColumn(n, n.lower(), "mps2", False) for n in bare]
+        elif others and all(TIME_COLUMN_RE.fullmatch(n) for n in others) and not OTHER_SENSOR_FILE_RE.search(file):
+            found = [AxisColumn(n, n.lower(), None, False) for n in bare]
+            if notes is not None:
+                notes.append(f"the columns {', '.join(bare)} beside {', '.join(others)} and no other sensor's are "
+                             "taken as the accelerometer's (--columns names others)")
+        else:
             raise InputError(source, "the columns x, y, z do not say they are an accelerometer's (a gyroscope's or a "
-                             "magnetometer's are written alike): if they are, name them acc_x, acc_y, acc_z (a PX4 "
-                             "sensor_accel topic exported by ulog2csv: keep its file name <log>_sensor_accel_0.csv)",
-                             row=row)
-        found = [AxisColumn(n, n.lower(), "mps2", False) for n in bare]
+                             f"magnetometer's are written alike; the header's columns: {listed(names)}): if they are, "
+                             f"give --columns {','.join(bare)} (a PX4 sensor_accel topic exported by ulog2csv: keep "
+                             "its file name <log>_sensor_accel_0.csv)", row=row)
     real = [c for c in found if not c.virtual]
     if not real and found:
         raise InputError(source, f"the accelerometer columns {', '.join(repr(c.name) for c in found)} are a phone's "
@@ -97,11 +128,83 @@ def table_axes(source: str, names: list[str], row: int) -> list[AxisColumn]:
         if len(on) != 1:
             what = (f"{len(on)} columns for axis {axis} ({', '.join(repr(c.name) for c in on)}): expected one"
                     if on else f"no column for axis {axis}")
-            raise InputError(source, f"{what} among the accelerometer columns "
-                             f"{', '.join(repr(c.name) for c in real) or '(none)'} (names such as accX, "
-                             "'Acceleration y (m/s^2)', scaledAccelZ)", row=row)
+            among = (f"among the accelerometer columns {', '.join(repr(c.name) for c in real)}" if real else
+                     "among the header's columns")
+            raise InputError(source, f"{what} {among} (the header's columns: {listed(names)}; names such as accX, "
+                             f"'Acceleration y (m/s^2)', 'x (g)', or name the three with {columns_hint(names)})",
+                             row=row)
         axes.append(on[0])
     return axes
+
+
+def listed(names: list[str], most: int = 20) -> str:
+    """The header's column names for a message (at most ``most``)."""
+    shown = [repr(n) for n in names[:most]]
+    return ", ".join(shown) + (f" and {len(names) - most} more" if len(names) > most else "") or "(none)"
+
+
+def axis_triples(names: list[str]) -> list[list[str]]:
+    """The names that come in threes differing only in their last letter x, y, z (``tx, ty, tz``;
+    ``gyro_x (dps)``, ...), in the header's order: what ``--columns`` may name."""
+    groups: dict[str, dict[str, str]] = {}
+    for n in names:
+        m = re.fullmatch(r"(.*)([xyz])((?:\s*[(\[][^)\]]*[)\]])?[^a-z]*)", n, re.I)
+        if m is not None:
+            groups.setdefault((m.group(1) + "#" + m.group(3)).lower(), {}).setdefault(m.group(2).lower(), n)
+    return [[g[a] for a in "xyz"] for g in groups.values() if len(g) == 3]
+
+
+def columns_hint(names: list[str]) -> str:
+    """``--columns X,Y,Z``, with the header's x/y/z triples (:func:`axis_triples`) as examples."""
+    triples = axis_triples(names)
+    if not triples:
+        return "--columns X,Y,Z"
+    return f"--columns {','.join(triples[0])}" + (
+        f" (the header's triples: {'; '.join(','.join(t) for t in triples)})" if len(triples) > 1 else "")
+
+
+def find_named(source: str, names: list[str], stated: str, option: str, row: int) -> str:
+    """The header's column an option names: the name equal to ``stated`` (blanks about it
+    dropped), else the only one equal to it ignoring case.
+
+    Raises
+    ------
+    InputError
+        No such column, or several, naming ``option`` and listing the header's columns.
+    """
+    want = stated.strip()
+    found = [n for n in names if n == want] or [n for n in names if n.lower() == want.lower()]
+    if len(found) != 1:
+        raise InputError(source, f"{option} {stated!r}: "
+                         f"{'no such column' if not found else 'more than one column of that name'}; the columns are "
+                         f"{listed([n for n in names if n])}", row=row)
+    return found[0]
+
+
+def stated_axes(source: str, names: list[str], stated: str, row: int) -> list[AxisColumn]:
+    """The accelerometer's x, y, z columns ``--columns X,Y,Z`` names (:func:`find_named`), each
+    with the unit its name states (``x (g)``: in () or [] at its end; an accelerometer name's
+    ``acc_x_g``), else none.
+
+    Raises
+    ------
+    InputError
+        Not three names, a name not in the header, or one named twice.
+    """
+    wanted = [w for w in stated.split(",")]
+    if len(wanted) != 3 or not all(w.strip() for w in wanted):
+        raise InputError(source, f"--columns {stated!r}: expected the accelerometer's three columns X,Y,Z, "
+                         f"comma-separated; the header's columns: {listed([n for n in names if n])}", row=row)
+    cols = [find_named(source, names, w, "--columns", row) for w in wanted]
+    if len(set(cols)) != 3:
+        raise InputError(source, f"--columns {stated!r}: a column named twice", row=row)
+    out = []
+    for axis, n in zip("xyz", cols):
+        known = axis_column(n)
+        m = NAME_UNIT_RE.fullmatch(n.strip())
+        unit = known.unit if known is not None else (re.sub(r"\s+", "", m.group("unit")).lower() if m else None)
+        out.append(AxisColumn(n, axis, unit, False))
+    return out
 
 
 def px4_export(source: str, axes: list[AxisColumn]) -> bool:

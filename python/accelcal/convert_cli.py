@@ -62,7 +62,7 @@ def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int
                         stated_f=a.stated_f, gravity_mps2=positive(a.gravity, "--gravity"), bits=bits,
                         blocks=a.blocks, time_unit=a.time_unit, units_stated=a.units is not None,
                         variable=a.variable, time_column=a.time_column,
-                        repeated_stamps=a.repeated_stamps)
+                        repeated_stamps=a.repeated_stamps, columns=a.columns)
     write_recording(a.output, conv.recording)
     if a.device_out is not None:
         save_device(conv.device, a.device_out)
@@ -93,6 +93,10 @@ def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
     s.add_argument("--time-column", metavar="NAME", help="table: the time column (default: of the columns named "
                    "t, time, timestamp, 'Time (s)', ..., those holding numbers, not a clock time or a date, the "
                    "first whose name states a unit, else the first; a note names it)")
+    s.add_argument("--columns", metavar="X,Y,Z", help="table: the accelerometer's three columns, comma-separated, as "
+                   "the header names them (default: the names say: accX, 'Acceleration y (m/s^2)', 'x (g)', ...); a "
+                   "unit in () or [] at a name's end states the readings' unit; a file not told otherwise is then "
+                   "read as a table")
     s.add_argument("--repeated-stamps", choices=("refuse", "drop"), default="refuse",
                    help="table: rows whose time stamp repeats the row before's with other readings (a watch that "
                    "stamps two samples with one stamp) are refused (default; the message counts them) or, with drop, "
@@ -107,7 +111,9 @@ def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
     s.add_argument("--stated-f", action="store_true", help="poses named x_p, x_a, y_p, y_a, z_p, z_a (that "
                    "axis up, p, or down, a) get the reference f = +-g along it, for a known-pose calibration")
     s.add_argument("--device-out", metavar="D.json", help="also write a nominal device JSON for the "
-                   "recording (a triad at the origin; scale from the LSB, else from the readings)")
+                   "recording (a triad at the origin; scale from the LSB, else from the readings; no noise_mps2: "
+                   "every command estimates the noise from the recording, and a noise_mps2 > 0 added by hand "
+                   "overrides that)")
     s.add_argument("-o", "--output", required=True, metavar="OUT.csv",
                    help="the recording CSV to write (atomically: no partial file on error)")
     s.set_defaults(func=lambda a: cmd_convert(a, check_output))

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from .convert_regions import label_poses
+from .convert_rows import placeholder_lead
 from .convert_time import FLOAT_EXACT, burst_fit, exact_stamps, rate_from_t, time_in_seconds
 from .csvtable import convert_columns, cut_short_end, make_table, split_header
 from .device import Device
@@ -89,6 +90,7 @@ class Options:
     time_unit: str = "auto"
     time_column: str | None = None
     repeated_stamps: str = "refuse"
+    columns: str | None = None
 
 
 def header_cells(header: str) -> list[str]:
@@ -247,9 +249,22 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
            notes: list[str], locate, index_column: str | None, device: Device | None = None,
            kept: tuple[np.ndarray, np.ndarray] | None = None, time_column: str | None = None,
            t0: float = 0.0) -> Converted:
-    """Range check, sample order, time, poses, metadata and the nominal device, shared by the formats
-    (without time stamps ``t``, t is ``t0`` (s) + the sample index over ``rate``)."""
+    """Range check, a leading placeholder left out (:func:`convert_rows.placeholder_lead`), sample
+    order, time, poses, metadata and the nominal device, shared by the formats (without time
+    stamps ``t``, t is ``t0`` (s) + the sample index over ``rate``: a row left out before keeps
+    its place)."""
     check_range(raw, opts.bits, signed, source, locate)
+    gravity = opts.gravity_mps2 or (device.gravity_mps2 if device is not None else STANDARD_GRAVITY)
+    lead = placeholder_lead(raw, scale, gravity, lambda i: locate(i, 0)[0], notes)
+    if lead:
+        raw, index = raw[lead:], index[lead:]
+        t = None if t is None else t[lead:]
+        part = None if part is None else part[lead:]
+        kept = None if kept is None else (kept[0][lead:], kept[1][lead:])
+        shown = locate
+
+        def locate(i: int, j: int) -> tuple[int, str]:
+            return shown(i + lead, j)
     extra_columns: dict[str, list[str]] = {}
     order = in_sample_order(index, source, index_column, lambda i: locate(i, 0)[0]) if t is None else None
     if order is not None:
@@ -275,7 +290,6 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
                          f"{100 * RATE_TOL:.0f} % from --rate {rate:g} Hz: its clock is not the sensor's; t is "
                          f"written on the {rate:g} Hz grid from the first stamp and the time column's stamps are kept "
                          "as column t_host")
-    gravity = opts.gravity_mps2 or (device.gravity_mps2 if device is not None else STANDARD_GRAVITY)
     if kept is not None:  # a contract recording without --regions keeps its labels and references
         (pose, f), names = kept, [str(k) for k in np.unique(kept[0][kept[0] >= 0])]
     else:

@@ -10,6 +10,7 @@ import numpy as np
 
 from .convert_common import Converted, Options, finish, whole_counts
 from .convert_log import read_log
+from .convert_rows import LOST_SAMPLES, lost_rows
 from .errors import InputError
 from .units import Scale, to_counts
 
@@ -86,11 +87,15 @@ def convert_e4(source: str, data: bytes, opts: Options) -> Converted:
     if opts.bits == 16:
         opts.bits = E4_BITS
 
+    keep = lost_rows(source, values, lambda i: lines[i], lambda j: "xyz"[j], lambda i, j: repr(float(values[i, j])),
+                     notes, LOST_SAMPLES)
+    values, lines = values[keep], [lines[i] for i in keep.tolist()]
+
     def locate(i: int, j: int) -> tuple[int, str]:
         return lines[i], "xyz"[j]
 
     raw = to_counts(values, scale, source, locate, notes=notes) if scale.converts else \
         whole_counts(values, source, locate)
     meta = {"e4.start_unix_s": f"{start:.6f}", "e4.rate_hz": f"{file_rate:g}"}
-    return finish(source, "e4", raw, np.arange(raw.shape[0]), None, None, opts, scale, True, rate, meta,
+    return finish(source, "e4", raw, keep, None, None, opts, scale, True, rate, meta,
                   notes + ([info["cut"]] if info["cut"] else []), locate, None, t0=start)

@@ -6,8 +6,10 @@ column; lines of three numbers, the readings (comma, semicolon, tab or space sep
 among them the sketch's and the monitor's text -- a banner, ``>>> Type key when ready...``
 before each pose -- which splits the readings into blocks.
 
-* A line of exactly three numbers is a reading; a line with a letter in it, or of
-  punctuation alone (``------``), is text; blank lines are skipped.  Any other line (two
+* A line of exactly three numbers is a reading (``nan`` a reading missing: a line of three is a
+  sample lost, left out by the converter with a note, the lines after keeping their places:
+  :func:`accelcal.convert_rows.lost_rows`); a line with a letter in it, or of punctuation alone
+  (``------``), is text; blank lines are skipped.  Any other line (two
   numbers, four, a number cut off) is refused, naming its row.
 * ``blocks=True`` labels each block of readings between text lines as a pose
   (``block_1``, ``block_2``, ... in the file's order): a logger that records each pose
@@ -35,12 +37,14 @@ LOG_MIN_READINGS = 10      # a file is told to be a log from this many reading l
 SPLIT_RE = re.compile(r"\s*[,;\t ]\s*")
 LETTER_RE = re.compile(r"[A-Za-z]")
 PUNCT_RE = re.compile(r"[\W_]+")
+#: a reading missing
+NAN_CELLS = ("nan", "+nan", "-nan")
 
 
 def _kind(text: str) -> tuple[str, list[str]]:
     """('reading', cells), ('text', []) or ('bad', cells) of one line (stripped, not blank)."""
     cells = [c for c in SPLIT_RE.split(text) if c != ""]
-    if len(cells) == 3 and all(NUMBER_RE.fullmatch(c) for c in cells):
+    if len(cells) == 3 and all(NUMBER_RE.fullmatch(c) or c.lower() in NAN_CELLS for c in cells):
         return "reading", cells
     if LETTER_RE.search(text) or PUNCT_RE.fullmatch(text):
         return "text", []

@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import io
 import os
+import re
 import struct
+import warnings
 import zlib
 from typing import Any
 
@@ -16,6 +18,7 @@ import numpy as np
 import scipy.io
 
 from .convert_common import Converted, Options, finish, whole_counts
+from .convert_rows import LOST_SAMPLES, lost_rows
 from .errors import InputError
 from .units import file_scale, to_counts
 
@@ -78,7 +81,9 @@ def mat_arrays(path: Any, source: str, notes: list[str] | None = None) -> dict[s
     """Every real numeric 2-D array of a MAT-file by its name (nested HDF5 groups as
     ``group/name``), oriented as MATLAB shows it.  A version-5 file whose compressed
     elements fail their zlib checksum is read as MATLAB reads it (:func:`unchecked_v5`),
-    with a note appended to ``notes``.
+    with a note appended to ``notes``.  The readers' warnings (scipy's MatReadWarning: a
+    variable name repeated in the file) are caught and each said once as a note
+    (:func:`reader_notes`), never printed.
 
     Raises
     ------
@@ -94,6 +99,37 @@ def mat_arrays(path: Any, source: str, notes: list[str] | None = None) -> dict[s
             if not name.startswith("__") and isinstance(v, np.ndarray) and v.ndim == 2 and v.dtype.kind in "iuf":
                 out[name] = v.astype(float)
 
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        read_arrays(path, source, head, take_v5, out, notes)
+    if notes is not None:
+        notes.extend(reader_notes(caught, out))
+    return out
+
+
+def reader_notes(caught: list[warnings.WarningMessage], arrays: dict[str, np.ndarray]) -> list[str]:
+    """A note for each distinct warning the MATLAB readers gave (its first line; scipy's
+    second line advises splitting the file, which accelcal need not): a name repeated in the
+    file only where it is one of the numeric ``arrays`` (the readings may be either; scipy
+    names MATLAB's unnamed objects 'None', which is nothing accelcal reads)."""
+    seen: list[str] = []
+    for w in caught:
+        first = str(w.message).strip().splitlines()[0] if str(w.message).strip() else w.category.__name__
+        if first not in seen:
+            seen.append(first)
+    out = []
+    for first in seen:
+        dup = re.fullmatch(r'Duplicate variable name "(.*)" in stream.*', first)
+        if dup is None:
+            out.append(f"the MATLAB reader warns: {first}")
+        elif dup.group(1) in arrays:
+            out.append(f"the file holds more than one variable named {dup.group(1)!r}: the last of them is read")
+    return out
+
+
+def read_arrays(path: Any, source: str, head: bytes, take_v5, out: dict[str, np.ndarray],
+                notes: list[str] | None) -> None:
+    """Read the file's arrays into ``out`` (:func:`mat_arrays`, which catches the warnings)."""
     try:
         if b"MATLAB 7.3" in head[:20]:
             with h5py.File(os.fspath(path), "r") as h5:
@@ -112,12 +148,12 @@ def mat_arrays(path: Any, source: str, notes: list[str] | None = None) -> dict[s
                                  "as MATLAB reads them")
     except (OSError, ValueError, TypeError, NotImplementedError, zlib.error) as e:
         raise InputError(source, f"cannot read the MATLAB file: {e}") from None
-    return out
 
 
 def pick_array(arrays: dict[str, np.ndarray], variable: str | None, source: str) -> tuple[str, np.ndarray]:
     """The array of readings, as (name, an (n, 3 or 4) array): the one named ``variable``, or
-    the only array with 3 or 4 columns (or rows: taken transposed) and more samples than that.
+    the only array with 3 or 4 columns (or rows: taken transposed) and more samples than that,
+    4 only where the first increases (:func:`increases`: time stamps).
 
     Raises
     ------
@@ -146,13 +182,23 @@ def pick_array(arrays: dict[str, np.ndarray], variable: str | None, source: str)
             raise InputError(source, f"--variable {variable}: {arrays[variable].shape[0]}x{arrays[variable].shape[1]}; "
                              "expected 3 columns (x, y, z) or 4 (t, x, y, z) of samples")
         return variable, a
-    found = {k: a for k, v in arrays.items() if (a := oriented(v)) is not None}
+    # a first column that is no time (not increasing: ABB's 4xN quaternion) makes no t, x, y, z candidate
+    found = {k: a for k, v in arrays.items()
+             if (a := oriented(v)) is not None and (a.shape[1] == 3 or increases(a[:, 0]))}
     if len(found) != 1:
         what = "no array" if not found else f"{len(found)} arrays ({', '.join(found)})"
         raise InputError(source, f"{what} of 3 columns (x, y, z) or 4 (t, x, y, z) among the file's numeric arrays "
                          f"({shapes}): give --variable NAME" + (", or --variable X,Y,Z (T,X,Y,Z) for readings held "
                                                                  "one vector per channel" if vectors >= 3 else ""))
     return next(iter(found.items()))
+
+
+def increases(t: np.ndarray) -> bool:
+    """Whether ``t``'s finite values never decrease and end above where they start: time stamps
+    (a repeated one is refused later, naming its row; a lost sample's NaN aside), not a
+    quaternion's w, which turns back."""
+    v = t[np.isfinite(t)]
+    return v.size > 1 and bool(np.all(np.diff(v) >= 0)) and v[-1] > v[0]
 
 
 def vectors_array(arrays: dict[str, np.ndarray], names: list[str], source: str, shapes: str) -> np.ndarray:
@@ -185,7 +231,9 @@ def vectors_array(arrays: dict[str, np.ndarray], names: list[str], source: str, 
 def convert_mat(source: str, path: Any, opts: Options, variable: str | None = None) -> Converted:
     """A MAT-file's readings (:func:`pick_array`): three columns x, y, z (``--rate`` gives the
     rate) or four t, x, y, z (t as a time column: ``--time-unit``, or read in ms/us/ns where
-    seconds would give under 2 Hz), in counts or in the unit ``opts.scale`` states."""
+    seconds would give under 2 Hz), in counts or in the unit ``opts.scale`` states.  A row whose
+    readings are all NaN is a sample the logger lost: left out with a note, the rows after
+    keeping their places (:func:`convert_rows.lost_rows`); one with some NaN is refused."""
     notes: list[str] = []
     name, a = pick_array(mat_arrays(path, source, notes), variable, source)
     timed = a.shape[1] == 4
@@ -198,13 +246,17 @@ def convert_mat(source: str, path: Any, opts: Options, variable: str | None = No
 
     column = [col(j + first) for j in range(3)]
 
-    def locate(i: int, j: int) -> tuple[int, str]:
-        return i + 1, column[j]
-
-    bad = np.argwhere(~np.isfinite(a))
+    keep = lost_rows(source, readings, lambda i: i + 1, lambda j: column[j],
+                     lambda i, j: repr(float(readings[i, j])), notes, LOST_SAMPLES)
+    bad = np.argwhere(~np.isfinite(a[keep]))
     if bad.size:
-        i, j = (int(v) for v in bad[0])
+        i, j = int(keep[bad[0][0]]), int(bad[0][1])
         raise InputError(source, f"{float(a[i, j])} is not a finite number", row=i + 1, column=col(j))
+    a, readings = a[keep], readings[keep]
+
+    def locate(i: int, j: int) -> tuple[int, str]:
+        return int(keep[i]) + 1, column[j]
+
     t = None
     if timed:
         t = a[:, 0]
@@ -213,7 +265,7 @@ def convert_mat(source: str, path: Any, opts: Options, variable: str | None = No
             i = int(back[0]) + 1
             raise InputError(source, f"t = {float(t[i]):.10g} is not after {float(t[i - 1]):.10g}: the first column "
                              "is taken as time stamps, which must increase (--variable names another array)",
-                             row=i + 1, column=col(0))
+                             row=int(keep[i]) + 1, column=col(0))
     elif opts.rate_hz is None:
         raise InputError(source, f"array {name} has no time column (3 columns): give the sample rate with --rate HZ")
     elif opts.time_unit != "auto":
@@ -222,5 +274,5 @@ def convert_mat(source: str, path: Any, opts: Options, variable: str | None = No
     converts = scale is not None and scale.converts
     raw = to_counts(readings, scale, source, locate, notes=notes) if converts else \
         whole_counts(readings, source, locate)
-    return finish(source, "mat", raw, np.arange(raw.shape[0]), t, None, opts, scale, converts or bool(np.any(raw < 0)),
+    return finish(source, "mat", raw, keep, t, None, opts, scale, converts or bool(np.any(raw < 0)),
                   opts.rate_hz, {"mat.variable": name}, notes, locate, None)

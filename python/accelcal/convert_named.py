@@ -9,22 +9,18 @@ import re
 
 import numpy as np
 
-from .convert_axes import AxisColumn, names_unit, px4_export, table_axes
+from .convert_axes import AxisColumn, find_named, names_unit, px4_export, stated_axes, table_axes
 from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
                              whole_counts)
 from .convert_time import TIME_COLUMN_RE, datetime_stamps, is_datetime, unit_in_name
 from .csvtable import convert_columns, got_text
 from .errors import InputError
+from .convert_rows import lost_rows
 from .recording_checks import repeated_rows
+from .textinput import preamble_notes
 from .units import STANDARD_GRAVITY, UNIT_TEXT, Scale, file_scale, to_counts
 
-__all__ = ["stated_time_column", "choose_time_column", "placeholder_rows", "convert_named"]
-
-#: leading rows of readings all exactly 0 are a placeholder when the next row's |reading| is at
-#: least this share of g (and the median |reading| after them twice that)
-PLACEHOLDER_G = 0.25
-#: ... or, where g in counts is unknown, of the median |reading|, which must be this many counts
-PLACEHOLDER_COUNTS = 64
+__all__ = ["stated_time_column", "choose_time_column", "convert_named"]
 #: rows whose first non-empty time cell tells a numeric time column from a clock time or a date
 DUPLICATE_MIN_SHARE = 0.5  # rows off the grid that repeat the row before are samples delivered twice only when
 DUPLICATE_RATIO = 5.0      # at least this share of them repeat, and this x the share of the rows on the grid
@@ -81,47 +77,31 @@ def present_rows(source: str, matrix: np.ndarray, table, axes: list[AxisColumn],
                  notes: list[str]) -> np.ndarray:
     """The indices of the rows with readings (``matrix``: the three axis columns, NaN where
     empty; ``js``: their indices in the table); rows whose three readings are all empty (a
-    LORD log's other packets) are skipped with a note.
+    LORD log's other packets, or samples lost) are skipped with a note
+    (:func:`convert_rows.lost_rows`): a time column keeps the rows after at their stamps;
+    without one the rows close up, as another packet's rows have no place of the sensor's.
 
     Raises
     ------
     InputError
         A row with one or two of its readings empty, naming its line and the column.
     """
-    empty = np.isnan(matrix)
-    gone = empty.all(axis=1)
-    partly = np.flatnonzero(empty.any(axis=1) & ~gone)
-    if partly.size:
-        i = int(partly[0])
-        j = int(np.flatnonzero(empty[i])[0])
-        others = [axes[k].name for k in range(3) if not empty[i, k]]
-        raise InputError(source, f"expected a reading, got {got_text(table.cell(i, js[j]))} where "
-                         f"{' and '.join(others)} {'has' if len(others) == 1 else 'have'} one (a row's three readings "
-                         "are all given, or all empty for another packet)", row=table.line(i), column=axes[j].name)
-    if gone.any():
-        notes.append(f"skipped {int(gone.sum())} row(s) whose readings ({', '.join(c.name for c in axes)}) are all "
-                     "empty (other packets)")
-    return np.flatnonzero(~gone)
+    return lost_rows(source, matrix, table.line, lambda j: axes[j].name,
+                     lambda i, j: got_text(table.cell(i, js[j])), notes, "other packets' rows, or samples lost")
 
 
 def stated_time_column(source: str, names: list[str], acc: list[str], stated: str, row: int) -> str:
-    """The column ``--time-column`` names: the header's name equal to ``stated`` (blanks about
-    it dropped), else the only one equal to it ignoring case.
+    """The column ``--time-column`` names (:func:`convert_axes.find_named`).
 
     Raises
     ------
     InputError
         No such column (listing the header's columns), or one of the accelerometer's.
     """
-    want = stated.strip()
-    found = [n for n in names if n == want] or [n for n in names if n.lower() == want.lower()]
-    if len(found) != 1:
-        raise InputError(source, f"--time-column {stated!r}: "
-                         f"{'no such column' if not found else 'more than one column of that name'}; the columns are "
-                         f"{', '.join(repr(n) for n in names if n)}", row=row)
-    if found[0] in acc:
+    found = find_named(source, names, stated, "--time-column", row)
+    if found in acc:
         raise InputError(source, f"--time-column {stated!r} is an accelerometer column ({', '.join(acc)})", row=row)
-    return found[0]
+    return found
 
 
 def sample_index(source: str, name: str, stamps: np.ndarray, rate_hz: float | None, row: int) -> None:
@@ -327,64 +307,15 @@ def unrepeated(rows: np.ndarray, stamps: np.ndarray, readings: np.ndarray, notes
     return rows[np.concatenate([[True], ~(same | again)])]
 
 
-def placeholder_rows(rows: np.ndarray, readings: np.ndarray, table, scale: Scale | None, gravity: float,
-                     notes: list[str]) -> np.ndarray:
-    """``rows`` less the leading rows whose three readings are all exactly 0 where the rows after
-    are far from 0 (a phone's log that writes 0, 0, 0 before the sensor's first value), with
-    a note; else ``rows``.
-
-    Far from 0: the next row's |reading| at least PLACEHOLDER_G of g and the median |reading|
-    after the zeros at least twice that, g in the readings' unit (g, m/s^2, or counts with a
-    stated LSB); in counts of no stated LSB, the next row's |reading| at least PLACEHOLDER_G
-    of that median, and the median at least PLACEHOLDER_COUNTS.  An accelerometer reads
-    0, 0, 0 only in free fall.
-
-    Parameters
-    ----------
-    rows : ndarray of int
-        The rows with readings, in order.
-    readings : ndarray (n, 3)
-        The three axis columns as written, in the file's unit.
-    table
-        The table (its lines, for the note).
-    scale : units.Scale or None
-        The readings' unit and LSB.
-    gravity : float
-        g, m/s^2 (for readings in m/s^2, or counts of an LSB stated in g).
-    notes : list of str
-        Appended to.
-    """
-    m = readings[rows]
-    zero = np.all(m == 0, axis=1)
-    if not zero[0] or zero.all():
-        return rows
-    lead = int(np.argmin(zero))
-    norms = np.linalg.norm(m[lead:], axis=1)
-    median = float(np.median(norms))
-    units = scale.units if scale is not None else "counts"
-    g = {"g": 1.0, "mps2": gravity}.get(units)
-    if g is None and scale is not None and scale.counts_per_mps2(gravity):
-        g = scale.counts_per_mps2(gravity) * gravity
-    least = PLACEHOLDER_G * (g if g is not None else median)
-    if norms[0] < least or median < 2 * least or (g is None and median < PLACEHOLDER_COUNTS):
-        return rows
-    where = (f"rows {table.line(int(rows[0]))}-{table.line(int(rows[lead - 1]))}" if lead > 1 else
-             f"row {table.line(int(rows[0]))}")
-    size = f"{norms[0]:.4g} {UNIT_TEXT[units]}" + (f" ({norms[0] / g:.3g} g)" if g is not None and units != "g" else "")
-    notes.append(f"the first {lead} row(s) ({where}) read exactly 0, 0, 0 where the next row's |reading| is {size} "
-                 f"and the median {median:.4g} {UNIT_TEXT[units]}: a placeholder before the sensor's first value, "
-                 "left out")
-    return rows[lead:]
-
-
 def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bool) -> Converted:
     """A table with named columns: the three accelerometer axes (:func:`table_axes`), their
     unit (:func:`table_scale`), an optional time column (else ``--rate``); rows without
     readings skipped (:func:`present_rows`)."""
     names = [c.strip() for c in header_cells(pre.header)]
-    axes = table_axes(source, names, pre.header_line)
-    acc = [c.name for c in axes]
     notes: list[str] = []
+    axes = stated_axes(source, names, opts.columns, pre.header_line) if opts.columns is not None else \
+        table_axes(source, names, pre.header_line, notes)
+    acc = [c.name for c in axes]
     scale = table_scale(source, pre, opts.scale, names_unit(source, axes, pre.header_line), units_stated,
                         opts.gravity_mps2 or STANDARD_GRAVITY, axes, notes)
     if opts.time_column is not None:
@@ -429,8 +360,6 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
         rows = unrepeated(rows, stamps, np.column_stack([values[a] for a in acc]), notes)
         if opts.repeated_stamps == "drop":
             rows = repeated_stamps(stamps, rows, notes)
-    rows = placeholder_rows(rows, np.column_stack([values[a] for a in acc]), table, scale,
-                            opts.gravity_mps2 or STANDARD_GRAVITY, notes)
     matrix = np.column_stack([values[a][rows] for a in acc])
 
     def locate(i: int, j: int) -> tuple[int, str]:
@@ -445,7 +374,6 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
     meta = {"table.columns": ", ".join(acc + ([time_column] if time_column else []))}
     return finish(source, "table", raw, np.arange(rows.size), t, None, opts, scale, converts or bool(np.any(raw < 0)),
                   opts.rate_hz, meta,
-                  ([f"the column names are read from the comment on line {pre.header_line} (a '#' before the "
-                    "header, as Altus Metrum's logs write it)"] if pre.header_from_comment else [])
-                  + drop_note(dropped, ignored) + notes + ([table.cut_note] if table.cut_note else []),
+                  preamble_notes(pre) + drop_note(dropped, ignored) + notes +
+                  ([table.cut_note] if table.cut_note else []),
                   locate, None, time_column=time_column)

@@ -120,7 +120,7 @@ class Device:
     axes: np.ndarray  # (N, 3) unit
     counts_per_mps2: np.ndarray  # (N,)
     zero_counts: np.ndarray  # (N,)
-    noise_mps2: float = 0.0  # rms noise of one channel, m/s^2 (project extension)
+    noise_mps2: float = 0.0  # rms noise of one channel, m/s^2 (project extension); 0: unknown, estimated from the data
 
     def __post_init__(self) -> None:
         pos = np.asarray(self.positions, dtype=float)
@@ -196,14 +196,18 @@ class Device:
         return _triad_groups(self.positions, self.axes)
 
     def to_dict(self) -> dict:
-        """JSON-ready dict per the data contract (plus ``noise_mps2``)."""
+        """JSON-ready dict per the data contract, plus ``noise_mps2`` where the device states
+        one (> 0).  0 means unknown -- every noise-dependent threshold is then estimated from
+        the recording (:func:`noise.noise_for`) -- and is left out, as a written 0.0 read as
+        "zero noise" (the reader takes an absent key and 0 alike)."""
+        stated = {"noise_mps2": self.noise_mps2} if self.noise_mps2 > 0 else {}
         return {
             "name": self.name,
             "sample_rate_hz": self.sample_rate_hz,
             "gravity_mps2": self.gravity_mps2,
             "raw_min": self.raw_min,
             "raw_max": self.raw_max,
-            "noise_mps2": self.noise_mps2,
+            **stated,
             "channels": [
                 {
                     "position_m": [float(x) for x in self.positions[i]],

@@ -29,7 +29,8 @@ NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 CELL_NUMBER_RE = re.compile(NUMBER_RE.pattern + r"|[+-]?(?:nan|inf)", re.I)
 
 __all__ = ["NUMBER_RE", "CELL_NUMBER_RE", "GZIP_MAGIC", "COMPRESSIONS", "decompress", "semicolons_to_commas",
-           "Preamble", "read_text_bytes", "read_preamble", "is_whitespace_header", "split_whitespace_header",
+           "Preamble", "read_text_bytes", "read_preamble", "table_preamble", "preamble_notes", "is_whitespace_header",
+           "split_whitespace_header",
            "whitespace_to_commas"]
 
 GZIP_MAGIC = b"\x1f\x8b"
@@ -167,9 +168,11 @@ class Preamble:
     none), ``header_line`` its 1-based line number, ``header_pos`` and ``pos`` the byte
     offsets of its start and of the line after it.  ``metadata`` holds the ``# key:
     value`` comments, ``metadata_lines`` the line of each key.  A comment line just before a
-    first line of numbers that names as many comma-separated columns as that line has cells
-    (Altus Metrum's ``#version,serial,...,accel_x,...``) is the header
-    (``header_from_comment``; ``pos`` then the numbers' line, the first data row)."""
+    first line of numbers that names as many columns as that line has cells, comma-separated
+    (Altus Metrum's ``#version,serial,...,accel_x,...``) or whitespace-separated (``# time tx ty
+    tz ...`` over rows of 14 numbers), is the header (``header_from_comment``; ``pos`` then
+    the numbers' line, the first data row).  ``title``: (line, text) of a line of free text
+    before the header that :func:`table_preamble` passed over, else None."""
 
     metadata: dict[str, str] = field(default_factory=dict)
     metadata_lines: dict[str, int] = field(default_factory=dict)
@@ -178,6 +181,7 @@ class Preamble:
     header_pos: int = 0
     pos: int = 0
     header_from_comment: bool = False
+    title: tuple[int, str] | None = None
 
 
 def read_preamble(data: bytes) -> Preamble:
@@ -212,15 +216,90 @@ def read_preamble(data: bytes) -> Preamble:
     return out
 
 
+def line_cells(line: str) -> list[str]:
+    """A line's cells for telling names from numbers: split at commas where it has any, else at
+    runs of blanks or tabs."""
+    text = line.rstrip("\r").strip(" \t")
+    return [c.strip() for c in text.split(",")] if "," in text else re.split(r"[ \t]+", text)
+
+
+def numbers_share(cells: list[str]) -> float:
+    """The share of ``cells`` that are numbers (CELL_NUMBER_RE)."""
+    return sum(bool(CELL_NUMBER_RE.fullmatch(c)) for c in cells) / len(cells) if cells else 0.0
+
+
+def is_names(cells: list[str]) -> bool:
+    """Whether every cell is a name: not empty, not a number."""
+    return all(cells) and not any(CELL_NUMBER_RE.fullmatch(c) for c in cells)
+
+
 def names_for(comment: str, line: str) -> bool:
-    """Whether ``comment`` names the columns of ``line``: as many comma-separated cells (3 or
-    more), every one a name (not a number, not empty), and most cells of ``line`` numbers (a
-    row of a log may hold a call sign or a state's name)."""
-    names = [c.strip() for c in comment.split(",")]
-    cells = [c.strip() for c in line.rstrip("\r").split(",")]
-    return (len(names) >= 3 and len(names) == len(cells) and all(names)
-            and not any(CELL_NUMBER_RE.fullmatch(c) for c in names)
-            and sum(bool(CELL_NUMBER_RE.fullmatch(c)) for c in cells) > len(cells) / 2)
+    """Whether ``comment`` names the columns of ``line``: as many cells (3 or more; comma-separated
+    where both have commas, else whitespace-separated), every one a name (not a number, not
+    empty), and most cells of ``line`` numbers (a row of a log may hold a call sign or a
+    state's name)."""
+    if ("," in comment) != ("," in line):
+        return False
+    names, cells = line_cells(comment), line_cells(line)
+    return len(names) >= 3 and len(names) == len(cells) and is_names(names) and numbers_share(cells) > 0.5
+
+
+def next_line(data: bytes, pos: int) -> tuple[str | None, int, int, int]:
+    """The first line at or after byte ``pos`` that is neither blank nor a comment: (its text,
+    the lines passed to reach it, its first byte, the byte after its line end); (None, ...) at
+    the end."""
+    passed = 0
+    while pos < len(data):
+        end = data.find(b"\n", pos)
+        end = len(data) if end < 0 else end
+        text = data[pos:end].decode("utf-8")
+        passed += 1
+        start, pos = pos, end + 1
+        if text.strip() and not text.startswith("#"):
+            return text, passed, start, pos
+    return None, passed, pos, pos
+
+
+#: free-text lines before a header passed over, at most
+MAX_TITLE_LINES = 3
+
+
+def table_preamble(data: bytes) -> Preamble:
+    """:func:`read_preamble`, passing over lines of free text before the header -- a title such
+    as ``Acceleration Data Collected on Level Surface. Z up.`` -- that are neither a header nor
+    data: a line with letters, most of its cells not numbers, followed by a header (two or
+    more names, another count of cells than the line's) and then a row most of whose cells
+    are numbers.  ``title`` keeps the first such line (:func:`preamble_notes` says so)."""
+    pre = read_preamble(data)
+    for _ in range(MAX_TITLE_LINES):
+        if pre.header is None or pre.header_from_comment:
+            return pre
+        h1 = line_cells(pre.header)
+        if not re.search(r"[A-Za-z]", pre.header) or numbers_share(h1) >= 0.5:
+            return pre
+        h2, passed2, start2, after2 = next_line(data, pre.pos)
+        if h2 is None:
+            return pre
+        h3 = next_line(data, after2)[0]
+        cells2 = line_cells(h2)
+        if (h3 is None or len(cells2) < 2 or len(cells2) == len(h1) or not is_names(cells2)
+                or numbers_share(line_cells(h3)) <= 0.5):
+            return pre
+        pre.title = pre.title or (pre.header_line, pre.header)
+        pre.header, pre.header_line, pre.header_pos, pre.pos = h2, pre.header_line + passed2, start2, after2
+    return pre
+
+
+def preamble_notes(pre: Preamble) -> list[str]:
+    """Notes on how the header was found: a title passed over, a comment taken as the header."""
+    notes = []
+    if pre.title is not None:
+        notes.append(f"line {pre.title[0]} ({pre.title[1][:60]!r}) is neither a header nor data (a title before "
+                     f"the header on line {pre.header_line}): left out")
+    if pre.header_from_comment:
+        notes.append(f"the column names are read from the comment on line {pre.header_line} (a '#' before the first "
+                     "row, naming as many columns as it has)")
+    return notes
 
 
 def is_whitespace_header(header: str) -> bool:

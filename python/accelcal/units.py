@@ -387,7 +387,8 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
         raise InputError(source, f"{float(values[i, j])!r} {unit} is {float(x[i, j]):.9g} counts of "
                          f"{scale.lsb:.12g} {unit} (the LSB stated by {scale.how}), not a whole number: "
                          "wrong LSB or units, or the values were rounded when written (a calibrated logger's "
-                         "floats on no grid: --round rounds them to the LSB that --lsb states)", row=row,
+                         f"floats on no grid: --round rounds them to the LSB that {scale.how or 'is stated'} "
+                         "states)", row=row,
                          column=column)
     return n.astype(np.int64)
 

@@ -271,10 +271,15 @@ def test_an_empatica_e4_export_is_read_with_its_start_and_rate(tmp_path, capfd):
 
 
 def test_bare_x_y_z_columns_are_refused_in_words_that_fit_any_logger(tmp_path, capfd):
-    """A machine survey's 'timestamp,x,y,z' (not PX4's): the refusal had explained only PX4's
-    ulog2csv; it says what the names lack and how to name them, PX4's file name last."""
-    src = _write(tmp_path / "survey.csv", ["timestamp,x,y,z"] + [f"2021-05-07T10:29:{k:02d}.172,0.05,-0.05,-0.98"
-                                                                for k in range(20)])
+    """Bare 'x,y,z' beside other columns than time (a temperature, a device id: PX4's gyro and
+    magnetometer topics are written alike), or in a file named for another sensor: the refusal
+    says what the names lack, lists the header and names the option that states them, PX4's
+    file name last.  (Beside a time column alone they are read: test_convert_columns.)"""
+    rows = [f"2021-05-07T10:29:{k:02d}.172,0.05,-0.05,-0.98,21.5" for k in range(20)]
+    src = _write(tmp_path / "survey.csv", ["timestamp,x,y,z,temperature"] + rows)
     err = _refused(tmp_path, capfd, src)
     assert ("the columns x, y, z do not say they are an accelerometer's (a gyroscope's or a magnetometer's are "
-            "written alike): if they are, name them acc_x, acc_y, acc_z (a PX4") in err
+            "written alike; the header's columns: 'timestamp', 'x', 'y', 'z', 'temperature'): if they are, give "
+            "--columns x,y,z (a PX4") in err
+    gyro = _write(tmp_path / "log_sensor_gyro_0.csv", ["timestamp,x,y,z"] + [r.rsplit(",", 1)[0] for r in rows])
+    assert "do not say they are an accelerometer's" in _refused(tmp_path, capfd, gyro, name="gyro")

@@ -148,3 +148,30 @@ def test_readings_held_one_vector_per_channel_are_put_side_by_side(tmp_path, cap
     rc, _, err, _ = run(["convert", src, "--variable", names, "--units", "g", "--full-scale", "8",
                          "-o", tmp_path / "x.csv"], capfd)
     assert rc == 2 and "the vectors differ in length" in err and "Canal_2_g_Amplitude 80" in err, err
+
+
+def _elements(path):
+    """A version-5 MAT-file's data elements (everything after its 128-byte header)."""
+    return path.read_bytes()[128:]
+
+
+def test_the_readers_warnings_become_one_note(tmp_path, capfd):
+    """A robot lab's files repeat a variable name (scipy's MatReadWarning, 3 lines with a
+    site-packages path, had reached stderr on every conversion): caught, and said as one note
+    where the name is one of the arrays read.  An ABB robot's 4xN quaternion, whose first row
+    is no time, is no t, x, y, z candidate: the 3xN readings are the only array."""
+    c = _counts(200, seed=7)
+    quat = np.vstack([np.cos(np.linspace(0, 1, 200)), np.zeros((2, 200)), np.sin(np.linspace(0, 1, 200))])
+    quat[0, 100:] = quat[0, :100]                    # w: not increasing
+    one, two = tmp_path / "one.mat", tmp_path / "two.mat"
+    scipy.io.savemat(one, {"SENSacc": (c * LSB_G).T, "ABBquaternion": quat})
+    scipy.io.savemat(two, {"SENSacc": (c * LSB_G).T})
+    src = tmp_path / "MPU6050RM3100.mat"
+    src.write_bytes(one.read_bytes() + _elements(two))       # SENSacc twice
+    out, dev = tmp_path / "o.csv", tmp_path / "d.json"
+    rc, said, err, caught = run(["convert", src, "--units", "g", "--lsb", repr(LSB_G), "--rate", "100", "-o", out,
+                                 "--device-out", dev], capfd)
+    assert rc == 0 and not caught and "Warning" not in err, err
+    assert "note: the file holds more than one variable named 'SENSacc': the last of them is read" in err
+    np.testing.assert_array_equal(read_recording(out).raw, c)
+    assert json.loads(dev.read_text())["sample_rate_hz"] == 100.0

@@ -101,7 +101,8 @@ def test_lord_rows_without_readings_are_skipped(tmp_path, capfd):
     src = lord_file(tmp_path / "log.csv", c)
     rec, dev, err = _convert(tmp_path, capfd, src, "--units", "g", "--full-scale", "2")
     assert np.array_equal(rec.raw, c)
-    assert "skipped 300 row(s) whose readings (scaledAccelX, scaledAccelY, scaledAccelZ) are all empty" in err
+    assert "300 row(s) whose readings (scaledAccelX, scaledAccelY, scaledAccelZ) are all missing (empty or nan), " \
+        "the first row 3: left out (other packets' rows, or samples lost)" in err
     assert "t read in ns" in err and "ignored columns invalid_fields, estLinearAccelX" in err
     # the epoch in ns read as integers (as float64 each stamp kept 256 ns: the rate 1e-4 off)
     assert dev["sample_rate_hz"] == pytest.approx(500.0, rel=1e-9)
@@ -271,6 +272,12 @@ def test_calibrated_floats_on_no_grid_are_rounded_when_asked(tmp_path, capfd):
     src = _write(tmp_path / "ngimu.csv", "Time (s),Accelerometer X (g),Accelerometer Y (g),Accelerometer Z (g)", rows)
     err = _refused(tmp_path, capfd, src, "--units", "g", "--lsb", "1e-6", "--bits", "26")
     assert "not a whole number" in err and "--round rounds them to the LSB that --lsb states" in err
+    err = _refused_again(tmp_path, capfd, "fs", src, "--units", "g", "--full-scale", "4")
+    assert "--round rounds them to the LSB that --full-scale states" in err and "--lsb" not in err
+    commented = _write(tmp_path / "c.csv", "Time (s),Accelerometer X (g),Accelerometer Y (g),Accelerometer Z (g)",
+                       rows, comments=("# lsb: 1e-6",))
+    err = _refused_again(tmp_path, capfd, "comment", commented, "--bits", "26")
+    assert "--round rounds them to the LSB that '# lsb:' (row 1) states" in err
     rec, dev, err = _convert(tmp_path, capfd, src, "--units", "g", "--lsb", "1e-6", "--bits", "26", "--round")
     printed = np.array([[float(f"{v:.7g}") for v in r] for r in g])
     np.testing.assert_array_equal(rec.raw, np.round(printed / 1e-6).astype(int))

@@ -209,6 +209,21 @@ def test_noise_optional(tmp_path, good):
     assert load_device(write_json(tmp_path, good)).noise_mps2 == 0.0
 
 
+def test_an_unknown_noise_is_not_written_as_zero(tmp_path, good):
+    """A device whose noise is unknown (0: estimated from each recording) is written without
+    noise_mps2 -- convert --device-out had written "noise_mps2": 0.0, which reads as zero noise
+    though the README calls the field an override -- and a file that holds 0.0 (written so
+    before) reads the same; a stated noise is kept."""
+    good["noise_mps2"] = 0.0
+    old = load_device(write_json(tmp_path, good))
+    assert old.noise_mps2 == 0.0 and "noise_mps2" not in old.to_dict()
+    save_device(old, tmp_path / "again.json")
+    assert "noise_mps2" not in json.loads((tmp_path / "again.json").read_text())
+    assert load_device(tmp_path / "again.json") == old
+    good["noise_mps2"] = 0.02
+    assert load_device(write_json(tmp_path, good)).to_dict()["noise_mps2"] == 0.02
+
+
 # ---------------------------------------------------------------- bad files
 
 

@@ -1,0 +1,111 @@
+"""Rows of another tool's file that are no samples, one rule on every path of ``accelcal
+convert``: a logger's leading ``0, 0, 0`` placeholder (a robot lab's MATLAB files start so),
+and rows whose readings are all missing (NaN: a sample the logger lost; one in 1,984 had made
+a file unusable).  The rows after a lost sample keep their places in time, so the estimators
+fill the gap on their grid.  Files are written here from known counts."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import scipy.io
+
+from accelcal.recording import read_recording
+from cli_run import run
+
+LSB_G = 1e-4
+
+
+def _counts(n, seed=0):
+    rng = np.random.default_rng(seed)
+    return np.round([30.0, -40.0, 9950.0] + 25.0 * rng.standard_normal((n, 3))).astype(int)
+
+
+def _convert(tmp_path, capfd, src, *args):
+    out, dev = tmp_path / "o.csv", tmp_path / "d.json"
+    rc, said, err, caught = run(["convert", src, *args, "-o", out, "--device-out", dev], capfd)
+    assert rc == 0 and not caught, err
+    return read_recording(out), json.loads(dev.read_text()), err
+
+
+def _refused(tmp_path, capfd, src, *args):
+    out = tmp_path / "refused"
+    out.mkdir()
+    rc, _, err, _ = run(["convert", src, *args, "-o", out / "o.csv"], capfd)
+    assert rc == 2 and len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert not list(out.iterdir())
+    return err
+
+
+def _mat(tmp_path, a):
+    src = tmp_path / "MPU6050RM3100.mat"
+    scipy.io.savemat(src, {"SENSacc": np.asarray(a).T})       # 3xN, as the robot lab's files hold them
+    return src
+
+
+GIVE = ("--units", "g", "--lsb", repr(LSB_G), "--rate", "100")
+
+
+def test_a_leading_placeholder_is_left_out_on_every_path(tmp_path, capfd):
+    """The table path left out a leading 0,0,0 row; a MATLAB file's and a log's had been kept
+    without a word (|f| = 0 there: displacement then missed the initial rest).  The sample
+    after keeps its time (1/rate)."""
+    c = _counts(200)
+    a = np.vstack([[0.0, 0.0, 0.0], c * LSB_G])
+    rec, dev, err = _convert(tmp_path, capfd, _mat(tmp_path, a), *GIVE)
+    np.testing.assert_array_equal(rec.raw, c)
+    assert rec.t[0] == pytest.approx(0.01)
+    assert "the first 1 row(s) (row 1) read exactly 0, 0, 0 where the next row's |reading| is" in err
+    assert "a placeholder before the sensor's first value, left out" in err
+    log = tmp_path / "capture.txt"
+    log.write_text("MPU6050 ready\n0,0,0\n" + "".join(f"{r[0]},{r[1]},{r[2]}\n" for r in c))
+    rec, _, err = _convert(tmp_path, capfd, log, "--format", "log", "--rate", "100", "--full-scale", "4")
+    np.testing.assert_array_equal(rec.raw, c)
+    assert "the first 1 row(s) (row 2) read exactly 0, 0, 0" in err
+
+
+def test_a_lost_sample_is_left_out_and_keeps_its_place(tmp_path, capfd):
+    """A NaN row of a MATLAB array had been 'row 369, column SENSacc(:,1): nan is not a finite
+    number'.  It is a sample lost: left out with a note naming the row, the rows after at their
+    own times (a gap of one sample, not every later sample a period early).  A row with only
+    some readings NaN stays refused, naming its row and column."""
+    c = _counts(400, seed=1)
+    a = (c * LSB_G).astype(float)
+    a[368] = np.nan
+    a[369] = np.nan
+    rec, dev, err = _convert(tmp_path, capfd, _mat(tmp_path, a), *GIVE)
+    keep = np.r_[0:368, 370:400]
+    np.testing.assert_array_equal(rec.raw, c[keep])
+    np.testing.assert_allclose(rec.t, keep / 100.0)
+    assert dev["sample_rate_hz"] == 100.0
+    assert "2 row(s) whose readings (SENSacc(:,1), SENSacc(:,2), SENSacc(:,3)) are all missing (empty or nan), the " \
+           "first row 369: left out (samples the logger lost: the rows after keep their places in time" in err
+    a[368, 1:] = c[368, 1:] * LSB_G
+    err = _refused(tmp_path, capfd, _mat(tmp_path, a), *GIVE)
+    assert "row 369, column SENSacc(:,1): expected a reading, got nan where SENSacc(:,2) and SENSacc(:,3) have one" \
+        in err
+
+
+def test_a_lost_sample_of_a_timed_array_and_of_a_log(tmp_path, capfd):
+    """t, x, y, z with a row all NaN (its time too): the stamps around it keep the gap; a log's
+    'nan,nan,nan' line (it had been taken for text and split the readings into blocks) is a
+    sample lost the same way."""
+    c = _counts(150, seed=2)
+    t = np.arange(150) / 50.0
+    a = np.column_stack([t, c * LSB_G])
+    a[70] = np.nan
+    src = tmp_path / "timed.mat"
+    scipy.io.savemat(src, {"buf": a})
+    rec, dev, err = _convert(tmp_path, capfd, src, "--units", "g", "--lsb", repr(LSB_G))
+    np.testing.assert_array_equal(rec.raw, np.delete(c, 70, axis=0))
+    np.testing.assert_allclose(rec.t, np.delete(t, 70))
+    assert dev["sample_rate_hz"] == pytest.approx(50.0) and "the first row 71" in err
+    lines = [f"{r[0]},{r[1]},{r[2]}" for r in c]
+    lines[40] = "nan,nan,nan"
+    log = tmp_path / "capture.txt"
+    log.write_text("MPU6050 ready\n" + "".join(line + "\n" for line in lines))
+    rec, _, err = _convert(tmp_path, capfd, log, "--format", "log", "--rate", "50", "--full-scale", "4")
+    np.testing.assert_array_equal(rec.raw, np.delete(c, 40, axis=0))
+    np.testing.assert_allclose(rec.t, np.delete(np.arange(150), 40) / 50.0)
+    assert "the first row 42: left out" in err and "split the readings into 1 block(s)" in err
