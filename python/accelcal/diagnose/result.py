@@ -19,7 +19,7 @@ from ..noise import code_lattice, fractional_grid, uneven_low_bits
 from .floor import setup_rows
 from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare
-from .compare import (OCCAM_SHRINK, Contest, Given, claims_time, conditional, contest, model_ambiguity,
+from .compare import (OCCAM_SHRINK, Contest, Given, claims_time, conditional, contest, model_ambiguity, separable,
                       time_beside_pose, time_unmodelled)
 from .parsimony import simpler_model
 from .relinearise import heldout_path, joint_fit, relinearise
@@ -132,10 +132,18 @@ def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, 
     # nothing significant left to the verdict after the terms: on these poses the data cannot tell
     # the two descriptions apart (a cube on poses near the axes is a gain)
     amb = [best.name] if not after.significant else []
-    # the step goes to the strongest term, unless a candidate proven on its own evidence (a lattice
-    # of coarse steps, a pile of clipped readings) ranks above it: the MPU-6050 with 512-count steps,
-    # whose lattice ranked between the bend and the offset
+    # the step goes to the strongest term -- or to a term with fewer parameters that shrinks the gap
+    # as far (within OCCAM_SHRINK), the others the data cannot tell from it named with it (a real
+    # x-IMU in one orientation, |f| 2.7 % short: a tilt of one axis by 35.6 deg had outranked an
+    # offset and a gain by 0.00007 of shrink) -- unless a candidate proven on its own evidence (a
+    # lattice of coarse steps, a pile of clipped readings) ranks above it: the MPU-6050 with
+    # 512-count steps, whose lattice ranked between the bend and the offset
     nxt = terms[0]
+    simpler = [c for c in terms if c.k < nxt.k and c.shrink >= nxt.shrink - OCCAM_SHRINK]
+    if simpler:
+        nxt = min(simpler, key=lambda c: (c.k, EFFECT_NAMES.index(c.name)))
+        amb += [c.name for c in terms if c is not nxt and c.shrink >= nxt.shrink - OCCAM_SHRINK
+                and not separable(nxt, c) and c.name not in amb]
     proven = min((c for c in results.values() if c.proof and c.significant and c.gain > 0 and c.name != best.name
                   and c.name in remaining), key=rank_key, default=None)
     if proven is not None and rank_key(proven) < rank_key(nxt):
@@ -144,14 +152,19 @@ def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, 
     return Contest(best=nxt, ambiguous=amb, swapped_from=best.name, why=why, tests=tests), nxt
 
 
-def same_change(best: Cand, cands: list[Cand], rtol: float = 1e-6) -> list[Cand]:
-    """The candidates (other than ``best``) whose in-sample change of every reading is
-    ``best``'s within ``rtol`` of its size: the data cannot tell them apart at all."""
-    size = float(np.linalg.norm(best.delta))
+def same_change(D, best: Cand, cands: list[Cand], rtol: float = 1e-6) -> list[Cand]:
+    """The candidates (other than ``best``) whose in-sample change of every reading, as the data
+    see it (``D.rows``: jig-free, the directions the poses' angles cannot absorb), is ``best``'s
+    within ``rtol`` of its size: the data cannot tell them apart at all.  (Jig-free on one
+    orientation an offset, a gain, a bend and a tilt of the axes all move |f| alike; compared
+    before the projection their changes differ where the data do not look, and a real x-IMU's
+    2.7 % short |f| had come out as a 35.6 deg tilt of one axis, with no rival named.)"""
+    rb = D.rows(best.delta)
+    size = float(np.linalg.norm(rb))
     if size == 0.0:
         return []
     return [c for c in cands if c is not best and c.delta.shape == best.delta.shape
-            and float(np.linalg.norm(c.delta - best.delta)) <= rtol * size]
+            and float(np.linalg.norm(D.rows(c.delta) - rb)) <= rtol * size]
 
 
 def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, seed: int = 0,
@@ -216,7 +229,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         # candidates that change every reading exactly as the best one does (on a single pose, an
         # offset, a gain, a tilt and a bend all move its one |f| alike): the first in the registry's
         # order (the simplest) is the verdict, the others are listed with it
-        alike = [best] + same_change(best, sig)
+        alike = [best] + same_change(Dk, best, sig)
         best = min(alike, key=lambda c: EFFECT_NAMES.index(c.name))
         step_duel = contest(Dk, cands, best, first if not chosen else results, y, pcur)
         best = step_duel.best
