@@ -50,7 +50,7 @@ from typing import Any
 import numpy as np
 
 from .convert_common import (GYRO_RE, INDEX_COLUMNS, NUMBER_RE, Converted, Options, drop_note, exact_time, find_column,
-                             finish, header_cells, read_columns, whole_counts)
+                             finish, header_cells, notes_on_refusal, read_columns, whole_counts)
 from .convert_e4 import convert_e4, is_e4
 from .convert_headerless import HEADERLESS_NAMES, stamp_rule, timed_rows
 from .convert_log import is_log, read_log
@@ -411,7 +411,8 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     if fmt == "table":
         return convert_named(source, data, timed_rows(data, pre) or pre, opts, units_stated)
     meta: dict[str, str] = {}
-    if fmt == "mpu6050":
-        pre, meta, fs = mpu6050_preamble(source, data, pre)
-        opts.rate_hz = rate_hz if rate_hz is not None else fs
-    return convert_table(source, data, pre, fmt, opts, meta)
+    with notes_on_refusal(lambda: preamble_notes(pre)):     # a title passed over, before a refusal
+        if fmt == "mpu6050":
+            pre, meta, fs = mpu6050_preamble(source, data, pre)
+            opts.rate_hz = rate_hz if rate_hz is not None else fs
+        return convert_table(source, data, pre, fmt, opts, meta)

@@ -11,7 +11,7 @@ import numpy as np
 
 from .convert_axes import AxisColumn, find_named, names_unit, px4_export, stated_axes, table_axes
 from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
-                             whole_counts)
+                             notes_on_refusal, whole_counts)
 from .convert_time import TIME_COLUMN_RE, datetime_stamps, is_datetime, unit_in_name
 from .csvtable import convert_columns, got_text
 from .errors import InputError
@@ -310,9 +310,16 @@ def unrepeated(rows: np.ndarray, stamps: np.ndarray, readings: np.ndarray, notes
 def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bool) -> Converted:
     """A table with named columns: the three accelerometer axes (:func:`table_axes`), their
     unit (:func:`table_scale`), an optional time column (else ``--rate``); rows without
-    readings skipped (:func:`present_rows`)."""
-    names = [c.strip() for c in header_cells(pre.header)]
+    readings skipped (:func:`present_rows`).  A refusal carries the notes made before it
+    (:func:`convert_common.notes_on_refusal`)."""
     notes: list[str] = []
+    with notes_on_refusal(lambda: preamble_notes(pre) + notes):
+        return named_table(source, data, pre, opts, units_stated, notes)
+
+
+def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool, notes: list[str]) -> Converted:
+    """:func:`convert_named`, appending its notes to ``notes`` as it goes."""
+    names = [c.strip() for c in header_cells(pre.header)]
     axes = stated_axes(source, names, opts.columns, pre.header_line) if opts.columns is not None else \
         table_axes(source, names, pre.header_line, notes)
     acc = [c.name for c in axes]
