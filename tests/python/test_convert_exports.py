@@ -126,26 +126,30 @@ def test_a_zone_change_is_converted_to_utc_and_a_missing_zone_refused(tmp_path, 
 
 def test_repeated_stamps_are_counted_and_can_be_left_out(tmp_path, capfd):
     """A Garmin export stamps two samples with one stamp now and then (93 of 10,000 rows:
-    steps 80, 40, 40, 0 ms): refused at the first, the message counting them and naming
-    --repeated-stamps drop, which leaves them out with a note (the rate stays 25 Hz)."""
+    steps 80, 40, 40, 0 ms): refused at the first, the message counting them, saying how many
+    follow a step of two (stamps a place late that catch up, not two samples at one instant) and
+    naming --repeated-stamps drop, which leaves them out with a note (the rate stays 25 Hz)."""
     n = 200
     ms = 40 * np.arange(n)
     for k in (50, 120, 170):                 # a slot skipped, and two steps on one stamp given twice
         ms[k:k + 2] += 40
         ms[k + 2] = ms[k + 1]
+    ms[91] = ms[90]                          # and one repeat after steps of one only
     c = _counts(n, seed=3)
     start = dt.datetime(2019, 10, 16, 12, 9, 1, 702000, tzinfo=dt.timezone(dt.timedelta(hours=2)))
     stamps = [(start + dt.timedelta(milliseconds=int(v))).isoformat(timespec="milliseconds") for v in ms]
     src = _write(tmp_path / "acc.csv", ["timestamp;accX;accY;accZ"] +
                  [f"{s};{a};{b};{d}" for s, (a, b, d) in zip(stamps, c)])
     err = _refused(tmp_path, capfd, src)
-    assert "row 54, column timestamp" in err and "time stamps must increase; 3 row(s) repeat the stamp" in err
-    assert "--repeated-stamps drop leaves them out" in err
+    assert "row 54, column timestamp" in err and "time stamps must increase; 4 row(s) repeat the stamp" in err
+    assert ("(a logger that stamps two samples with one stamp), 3 of them after a step of two (with steps of one "
+            "between): stamps that slipped a place late and caught up, the samples on their grid: --repeated-stamps "
+            "drop leaves them out (a sample each)") in err, err
     rec, dev, err, _ = _convert(tmp_path, capfd, src, "--repeated-stamps", "drop")
-    keep = np.delete(np.arange(n), [52, 122, 172])
+    keep = np.delete(np.arange(n), [52, 91, 122, 172])
     np.testing.assert_array_equal(rec.raw, c[keep])
     assert dev["sample_rate_hz"] == pytest.approx(25.0, rel=1e-9)
-    assert "3 row(s) repeat the time stamp of the row before with other readings" in err
+    assert "4 row(s) repeat the time stamp of the row before with other readings" in err
     err = _refused(tmp_path, capfd, _write(tmp_path / "r.csv", ["t,raw_0,raw_1,raw_2", "0,1,2,3", "1,1,2,3"]),
                    "--repeated-stamps", "drop", name="csv")
     assert "--repeated-stamps applies to a table's time column" in err
