@@ -243,7 +243,8 @@ def test_headerless_csv_rows_are_quoted_as_the_file_holds_them(tmp_path, capfd):
         in err, err
     back = _write(tmp_path / "back.csv", [f"{1551178506 + k / 100 - (k == 20):.4f},0.5,0.25,-1" for k in range(30)])
     assert "row 1: 4 numbers a row and no header ('1551178506.0000,0.5," in _refused(tmp_path, capfd, back, name="b")
-    ax6 = _write(tmp_path / "ax6.csv", [f"2019-12-23 21:04:06.{10 * k:03d},0.5,0.25,-1,0.2,-0.5,15.7" for k in range(30)])
+    ax6 = _write(tmp_path / "ax6.csv", [f"2019-12-23 21:04:06.{10 * k:03d},0.5,0.25,-1,0.2,-0.5,15.7"
+                                        for k in range(30)])
     err = _refused(tmp_path, capfd, ax6, name="ax6")
     assert ("7 numbers a row (the first a date-time) and no header ('2019-12-23 21:04:06.000,0.5,0.25,-1,0.2,-0.5,"
             "15.7'): a time and 6 numbers: which three are the accelerometer's no header says; for other layouts add "
@@ -256,7 +257,8 @@ def test_headerless_rows_with_a_time_stamp_first_are_read_as_t_x_y_z(tmp_path, c
     cells whose first is a date-time, or numbers above 2^24 that never decrease, are t,x,y,z,
     with a note, and then read as the same rows under that header are: units, the zone."""
     c = _counts(60)
-    rows = [f"2019-10-16T12:09:{1 + k // 25:02d}.{40 * (k % 25):03d}+02:00;{a};{b};{d}" for k, (a, b, d) in enumerate(c)]
+    rows = [f"2019-10-16T12:09:{1 + k // 25:02d}.{40 * (k % 25):03d}+02:00;{a};{b};{d}"
+            for k, (a, b, d) in enumerate(c)]
     src = _write(tmp_path / "acc.csv", rows)
     rec, dev, err, said = _convert(tmp_path, capfd, src)
     assert said.startswith("table: 60 rows, 3 channels, 25 Hz")
@@ -271,7 +273,8 @@ def test_headerless_rows_with_a_time_stamp_first_are_read_as_t_x_y_z(tmp_path, c
     ax3 = _write(tmp_path / "ax3.csv", ["# an AX3 export"] + [f"{1551178506 + k / 100:.4f},{a:.6f},{b:.6f},{d:.6f}"
                                                              for k, (a, b, d) in enumerate(g)])
     err = _refused(tmp_path, capfd, ax3)
-    assert f"ax3.csv: row 2, column x: reading {g[0, 0]:g} is not a whole count (readings in m/s^2 or g: state --units" in err
+    assert f"ax3.csv: row 2, column x: reading {g[0, 0]:g} is not a whole count (readings in m/s^2 or g: state " \
+           "--units" in err
     rec, dev, err, said = _convert(tmp_path, capfd, ax3, "--units", "g", "--lsb", "0.015625")
     np.testing.assert_array_equal(rec.raw, c)
     assert said.startswith("table: 60 rows, 3 channels (g / 0.015625 g per count), 100 Hz")
