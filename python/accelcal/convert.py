@@ -25,7 +25,10 @@ Formats (``detect_format`` tells them from the first line that is not a comment)
   otherwise; an optional time column (``t``, ``Time (s)``, ``timestamp_us``), else
   ``--rate``.  Rows whose three readings are all empty (another packet's) are skipped.
   Told last, after the formats above.  A line of free text before the header (a title) is
-  passed over with a note (:func:`textinput.table_preamble`).
+  passed over with a note (:func:`textinput.table_preamble`).  Rows without a header of four
+  cells whose first is a time stamp (an ISO-8601 date-time, or numbers above 2^24 that never
+  decrease: a Garmin watch's, an Axivity AX3's export) are read as ``t,x,y,z``, with a note
+  (:mod:`accelcal.convert_headerless`).
 - ``e4``: an Empatica E4's ``ACC.csv``: row 1 the session's start (unix s) and row 2 the
   sample rate, each repeated in the three columns, then ``x,y,z`` in counts of 1/64 g
   (:mod:`accelcal.convert_e4`).
@@ -47,8 +50,9 @@ from typing import Any
 import numpy as np
 
 from .convert_common import (GYRO_RE, INDEX_COLUMNS, NUMBER_RE, Converted, Options, drop_note, exact_time, find_column,
-                             finish, header_cells, read_columns, whole_counts)
+                             finish, header_cells, notes_on_refusal, read_columns, whole_counts)
 from .convert_e4 import convert_e4, is_e4
+from .convert_headerless import HEADERLESS_NAMES, stamp_rule, timed_rows
 from .convert_log import is_log, read_log
 from .convert_mat import convert_mat, is_mat
 from .convert_axes import BARE_AXES, axis_column, axis_triples, columns_hint
@@ -76,7 +80,8 @@ ACC = {"imucal": ("acc_x", "acc_y", "acc_z"), "mpu6050": ("ax", "ay", "az")}
 def detect_format(path: Any, data: bytes | None = None) -> str:
     """The format of a file (its text ``data`` when already read), from its first line that
     is not a comment.  Without a header: four whitespace-separated numbers a row are imu_tk's
-    text, three a line (whitespace or commas) a log.
+    text, three a line (whitespace or commas) a log, four whose first is a time stamp a table
+    of ``t,x,y,z`` (:func:`convert_headerless.timed_rows`).
 
     Raises
     ------
@@ -109,13 +114,15 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
         return "e4"
     if is_log(data):
         return "log"
-    if any(axis_column(c) for c in cells) or set(BARE_AXES) <= low:
-        return "table"
+    if any(axis_column(c) for c in cells) or set(BARE_AXES) <= low or timed_rows(data, pre) is not None:
+        return "table"            # (rows without a header whose first cell is a time stamp: t,x,y,z)
     line = file_line(path, pre.header_line, pre.header)
     if len(cells) > 1 and all(CELL_NUMBER_RE.fullmatch(c.strip()) or is_datetime(c) for c in cells):
         dated = " (the first a date-time)" if is_datetime(cells[0]) else ""
         hints = ("imu_tk's text needs 4 (t ax ay az); " if spaced else "") + \
-            ("for three readings a line give --format log --rate HZ; " if spaced or len(cells) == 3 else "")
+            ("for three readings a line give --format log --rate HZ; " if spaced or len(cells) == 3 else "") + \
+            (f"{stamp_rule(len(cells))}; " if len(cells) == len(HEADERLESS_NAMES) and not spaced or
+             len(cells) > len(HEADERLESS_NAMES) and is_datetime(cells[0]) else "")
         raise InputError(source, f"{len(cells)} {'whitespace-separated ' if spaced else ''}numbers a row{dated} and no "
                          f"header ({line[:60]!r}): {hints}for other layouts add a header line naming the columns "
                          f"({header_example(cells, spaced)}; a time column t, time or timestamp, else --rate HZ)", row=pre.header_line)
@@ -319,8 +326,10 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     repeated_stamps : {"refuse", "drop"}
         A table's rows whose time stamp repeats the row before's with other readings (a watch
         that stamps two samples with one stamp: 93 of a Garmin export's 10,000 rows): refused,
-        the message counting them, or left out with a note (``drop``).  Rows that repeat the
-        stamp and the readings are left out either way.
+        the message counting them and those after a step of two median steps
+        (:func:`convert_named.slipped_stamps`: the stamps slipped a place late and caught up;
+        the samples keep their grid, and ``drop`` loses one each), or left out with a note
+        (``drop``).  Rows that repeat the stamp and the readings are left out either way.
 
     Returns
     -------
@@ -402,9 +411,10 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     if pre.header is None:
         raise InputError(source, "the file is empty (nothing but comments and blank lines)")
     if fmt == "table":
-        return convert_named(source, data, pre, opts, units_stated)
+        return convert_named(source, data, timed_rows(data, pre) or pre, opts, units_stated)
     meta: dict[str, str] = {}
-    if fmt == "mpu6050":
-        pre, meta, fs = mpu6050_preamble(source, data, pre)
-        opts.rate_hz = rate_hz if rate_hz is not None else fs
-    return convert_table(source, data, pre, fmt, opts, meta)
+    with notes_on_refusal(lambda: preamble_notes(pre)):     # a title passed over, before a refusal
+        if fmt == "mpu6050":
+            pre, meta, fs = mpu6050_preamble(source, data, pre)
+            opts.rate_hz = rate_hz if rate_hz is not None else fs
+        return convert_table(source, data, pre, fmt, opts, meta)

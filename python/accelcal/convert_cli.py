@@ -49,6 +49,12 @@ def positive(text: Any, option: str) -> float | None:
     return v
 
 
+def print_notes(notes: Any) -> None:
+    """Each note a line on stderr."""
+    for note in notes:
+        print(f"accelcal convert: note: {note}", file=sys.stderr)
+
+
 def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int:
     """Convert, write the recording (and the device), print the notes and a one-line summary."""
     check_output(a.output)
@@ -58,16 +64,19 @@ def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int
             raise AccelcalError(f"--device-out {a.device_out}: the same file as -o")
     bits = parse_bits(a.bits, AccelcalError, "--bits")
     scale = scale_from_args(a)
-    conv = convert_file(a.input, a.format, scale=scale, rate_hz=positive(a.rate, "--rate"), regions=a.regions,
-                        stated_f=a.stated_f, gravity_mps2=positive(a.gravity, "--gravity"), bits=bits,
-                        blocks=a.blocks, time_unit=a.time_unit, units_stated=a.units is not None,
-                        variable=a.variable, time_column=a.time_column,
-                        repeated_stamps=a.repeated_stamps, columns=a.columns)
+    try:
+        conv = convert_file(a.input, a.format, scale=scale, rate_hz=positive(a.rate, "--rate"), regions=a.regions,
+                            stated_f=a.stated_f, gravity_mps2=positive(a.gravity, "--gravity"), bits=bits,
+                            blocks=a.blocks, time_unit=a.time_unit, units_stated=a.units is not None,
+                            variable=a.variable, time_column=a.time_column,
+                            repeated_stamps=a.repeated_stamps, columns=a.columns)
+    except AccelcalError as e:          # the notes made before a refusal, ahead of its error line
+        print_notes(e.notes)
+        raise
     write_recording(a.output, conv.recording)
     if a.device_out is not None:
         save_device(conv.device, a.device_out)
-    for note in conv.notes + (conv.device_notes if a.device_out is not None else []):
-        print(f"accelcal convert: note: {note}", file=sys.stderr)
+    print_notes(conv.notes + (conv.device_notes if a.device_out is not None else []))
     print(conv.summary(a.output) + (f"; device {a.device_out}" if a.device_out else ""))
     return 0
 

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import csv
 import re
+from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
@@ -15,7 +16,7 @@ from .convert_rows import placeholder_lead
 from .convert_time import FLOAT_EXACT, burst_fit, exact_stamps, rate_from_t, time_in_seconds
 from .csvtable import convert_columns, cut_short_end, make_table, split_header
 from .device import Device
-from .errors import InputError
+from .errors import AccelcalError, InputError
 from .recording import Recording
 from .recording_checks import RATE_TOL
 from .static import detect_static, scale_agreement
@@ -24,7 +25,7 @@ from .units import STANDARD_GRAVITY, Scale
 
 __all__ = ["Converted", "Options", "INDEX_COLUMNS", "GYRO_RE", "NUMBER_RE", "header_cells", "read_columns",
            "find_column", "exact_time", "adc_range", "nominal_triad", "rest_scale", "check_range", "in_sample_order", "finish",
-           "stated_rate_off", "drop_note", "whole_counts"]
+           "notes_on_refusal", "stated_rate_off", "drop_note", "whole_counts"]
 
 INDEX_COLUMNS = ("n_samples", "samples")
 GYRO_RE = re.compile(r"(gyr|gyro|g)[_ ]?[xyz]|w_?[xyz]", re.I)
@@ -252,60 +253,74 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
     """Range check, a leading placeholder left out (:func:`convert_rows.placeholder_lead`), sample
     order, time, poses, metadata and the nominal device, shared by the formats (without time
     stamps ``t``, t is ``t0`` (s) + the sample index over ``rate``: a row left out before keeps
-    its place)."""
-    check_range(raw, opts.bits, signed, source, locate)
-    gravity = opts.gravity_mps2 or (device.gravity_mps2 if device is not None else STANDARD_GRAVITY)
-    lead = placeholder_lead(raw, scale, gravity, lambda i: locate(i, 0)[0], notes)
-    if lead:
-        raw, index = raw[lead:], index[lead:]
-        t = None if t is None else t[lead:]
-        part = None if part is None else part[lead:]
-        kept = None if kept is None else (kept[0][lead:], kept[1][lead:])
-        shown = locate
+    its place).  A refusal carries ``notes``, those made before it (:func:`notes_on_refusal`)."""
+    with notes_on_refusal(lambda: notes):    # a refusal after notes were made: they go with it
+        check_range(raw, opts.bits, signed, source, locate)
+        gravity = opts.gravity_mps2 or (device.gravity_mps2 if device is not None else STANDARD_GRAVITY)
+        lead = placeholder_lead(raw, scale, gravity, lambda i: locate(i, 0)[0], notes)
+        if lead:
+            raw, index = raw[lead:], index[lead:]
+            t = None if t is None else t[lead:]
+            part = None if part is None else part[lead:]
+            kept = None if kept is None else (kept[0][lead:], kept[1][lead:])
+            shown = locate
 
-        def locate(i: int, j: int) -> tuple[int, str]:
-            return shown(i + lead, j)
-    extra_columns: dict[str, list[str]] = {}
-    order = in_sample_order(index, source, index_column, lambda i: locate(i, 0)[0]) if t is None else None
-    if order is not None:
-        raw, index = raw[order], index[order]
-        part = None if part is None else [part[i] for i in order.tolist()]
-    if t is None:
-        t = t0 + index / rate
-    else:
-        t = np.asarray(t)           # int64 from exact_time: an epoch in ns
-        t, rel = time_in_seconds(t if t.dtype.kind in "iu" else t.astype(float), opts.time_unit, time_column, source,
-                                 notes)
-        fit = burst_fit(rel)
-        burst = fit is not None
-        rate = opts.rate_hz if opts.rate_hz is not None else rate_from_t(rel, notes, fit)
-        off = None if burst else stated_rate_off(rel, opts.rate_hz)
-        if burst or off is not None:
-            # the samples are the sensor's, evenly spaced; the host's stamps are kept beside them
-            extra_columns["t_host"] = [repr(float(v)) for v in t]
-            t = t[0] + np.arange(t.size) / rate
-            notes.append(f"t is written on the {rate:.6g} Hz grid from the first stamp (the integrators need the "
-                         "sensor's even spacing); the host's stamps are kept as column t_host" if burst else
-                         f"the time column's steps give {off:.6g} Hz (median step), more than "
-                         f"{100 * RATE_TOL:.0f} % from --rate {rate:g} Hz: its clock is not the sensor's; t is "
-                         f"written on the {rate:g} Hz grid from the first stamp and the time column's stamps are kept "
-                         "as column t_host")
-    if kept is not None:  # a contract recording without --regions keeps its labels and references
-        (pose, f), names = kept, [str(k) for k in np.unique(kept[0][kept[0] >= 0])]
-    else:
-        pose, f, names = label_poses(index, part, opts.regions, opts.stated_f, gravity, source, opts.regions_source)
-    metadata = {"source_file": " ".join(source.splitlines()), "source_format": fmt, **metadata}
-    if scale is not None and (scale.converts or scale.lsb_g):
-        metadata["source_scale"] = scale.describe()
-    if opts.regions_source:
-        metadata["source_regions"] = " ".join(opts.regions_source.splitlines())
-    if names and kept is None:
-        metadata["pose_names"] = " ".join(f"{k}={nm}" for k, nm in enumerate(names))
-    rec = Recording(t=t, raw=raw, f=f, pose=pose, metadata=metadata, extra=extra_columns, source=source)
-    device_notes: list[str] = []
-    if device is None:
-        device = nominal_triad(f"{fmt}-triad", rate, gravity, raw, opts.bits, signed, scale, device_notes, rec)
-    return Converted(rec, device, fmt, names, notes, scale, order is not None, device_notes)
+            def locate(i: int, j: int) -> tuple[int, str]:
+                return shown(i + lead, j)
+        extra_columns: dict[str, list[str]] = {}
+        order = in_sample_order(index, source, index_column, lambda i: locate(i, 0)[0]) if t is None else None
+        if order is not None:
+            raw, index = raw[order], index[order]
+            part = None if part is None else [part[i] for i in order.tolist()]
+        if t is None:
+            t = t0 + index / rate
+        else:
+            t = np.asarray(t)           # int64 from exact_time: an epoch in ns
+            t, rel = time_in_seconds(t if t.dtype.kind in "iu" else t.astype(float), opts.time_unit, time_column,
+                                     source, notes)
+            fit = burst_fit(rel)
+            burst = fit is not None
+            rate = opts.rate_hz if opts.rate_hz is not None else rate_from_t(rel, notes, fit)
+            off = None if burst else stated_rate_off(rel, opts.rate_hz)
+            if burst or off is not None:
+                # the samples are the sensor's, evenly spaced; the host's stamps are kept beside them
+                extra_columns["t_host"] = [repr(float(v)) for v in t]
+                t = t[0] + np.arange(t.size) / rate
+                notes.append(f"t is written on the {rate:.6g} Hz grid from the first stamp (the integrators need the "
+                             "sensor's even spacing); the host's stamps are kept as column t_host" if burst else
+                             f"the time column's steps give {off:.6g} Hz (median step), more than "
+                             f"{100 * RATE_TOL:.0f} % from --rate {rate:g} Hz: its clock is not the sensor's; t is "
+                             f"written on the {rate:g} Hz grid from the first stamp and the time column's stamps are "
+                             "kept as column t_host")
+        if kept is not None:  # a contract recording without --regions keeps its labels and references
+            (pose, f), names = kept, [str(k) for k in np.unique(kept[0][kept[0] >= 0])]
+        else:
+            pose, f, names = label_poses(index, part, opts.regions, opts.stated_f, gravity, source, opts.regions_source)
+        metadata = {"source_file": " ".join(source.splitlines()), "source_format": fmt, **metadata}
+        if scale is not None and (scale.converts or scale.lsb_g):
+            metadata["source_scale"] = scale.describe()
+        if opts.regions_source:
+            metadata["source_regions"] = " ".join(opts.regions_source.splitlines())
+        if names and kept is None:
+            metadata["pose_names"] = " ".join(f"{k}={nm}" for k, nm in enumerate(names))
+        rec = Recording(t=t, raw=raw, f=f, pose=pose, metadata=metadata, extra=extra_columns, source=source)
+        device_notes: list[str] = []
+        if device is None:
+            device = nominal_triad(f"{fmt}-triad", rate, gravity, raw, opts.bits, signed, scale, device_notes, rec)
+        return Converted(rec, device, fmt, names, notes, scale, order is not None, device_notes)
+
+
+@contextmanager
+def notes_on_refusal(notes: Callable[[], list[str]]) -> Iterator[None]:
+    """A context in which a refusal (an :class:`~accelcal.errors.AccelcalError`) is given the
+    notes made before it, ``notes()`` (called then), unless it already holds some (an inner
+    context's, which made more): ``accelcal convert`` prints them ahead of the error line."""
+    try:
+        yield
+    except AccelcalError as e:
+        if not e.notes:
+            e.notes = tuple(notes())
+        raise
 
 
 def stated_rate_off(rel: np.ndarray, stated: float | None) -> float | None:

@@ -11,7 +11,7 @@ import numpy as np
 
 from .convert_axes import AxisColumn, find_named, names_unit, px4_export, stated_axes, table_axes
 from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
-                             whole_counts)
+                             notes_on_refusal, whole_counts)
 from .convert_time import TIME_COLUMN_RE, datetime_stamps, is_datetime, unit_in_name
 from .csvtable import convert_columns, got_text
 from .errors import InputError
@@ -20,7 +20,7 @@ from .recording_checks import repeated_rows
 from .textinput import preamble_notes
 from .units import STANDARD_GRAVITY, UNIT_TEXT, Scale, file_scale, to_counts
 
-__all__ = ["stated_time_column", "choose_time_column", "convert_named"]
+__all__ = ["stated_time_column", "choose_time_column", "slipped_stamps", "convert_named"]
 #: rows whose first non-empty time cell tells a numeric time column from a clock time or a date
 DUPLICATE_MIN_SHARE = 0.5  # rows off the grid that repeat the row before are samples delivered twice only when
 DUPLICATE_RATIO = 5.0      # at least this share of them repeat, and this x the share of the rows on the grid
@@ -250,12 +250,38 @@ def table_time(source: str, stamps: np.ndarray, table, rows: np.ndarray, column:
     if back.size:
         h, i = int(rows[back[0]]), int(rows[back[0] + 1])
         same = int(np.sum(np.diff(t) == 0))
+        slipped = slipped_stamps(t)
         what = ("" if t[back[0] + 1] != t[back[0]] else
                 f"; {same} row(s) repeat the stamp of the row before with other readings (a logger that stamps two "
-                "samples with one stamp): --repeated-stamps drop leaves them out")
+                "samples with one stamp)" + (f", {slipped} of them after a step of two (with steps of one between): "
+                                             "stamps that slipped a place late and caught up, the samples on their "
+                                             "grid" if slipped else "") +
+                ": --repeated-stamps drop leaves them out (a sample each)")
         raise InputError(source, f"time stamp {table.cell(i, j).strip()!r} is not after {table.cell(h, j).strip()!r} "
                          f"(row {table.line(h)}): time stamps must increase{what}", row=table.line(i), column=column)
     return t
+
+
+def slipped_stamps(t: np.ndarray) -> int:
+    """How many of the stamps ``t`` (as written, any unit) that repeat the one before come after a
+    step of two median steps (1.5-2.5), with steps of one (0.5-1.5) between: the stamps from that
+    step to the repeat are a place late, and the repeat catches up (a Garmin watch's export: 90 of
+    its 92 repeats, 3-27 rows after such a step); the samples keep their even spacing."""
+    steps = np.diff(t).astype(np.float64)
+    ahead = steps[steps > 0]
+    if not ahead.size:
+        return 0
+    k = steps / float(np.median(ahead))
+    count, pending = 0, False
+    for v in k.tolist():
+        if v == 0:
+            count += pending
+            pending = False
+        elif 1.5 <= v <= 2.5:
+            pending = True
+        elif not 0.5 <= v < 1.5:
+            pending = False
+    return count
 
 
 def unrepeated(rows: np.ndarray, stamps: np.ndarray, readings: np.ndarray, notes: list[str]) -> np.ndarray:
@@ -310,9 +336,16 @@ def unrepeated(rows: np.ndarray, stamps: np.ndarray, readings: np.ndarray, notes
 def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bool) -> Converted:
     """A table with named columns: the three accelerometer axes (:func:`table_axes`), their
     unit (:func:`table_scale`), an optional time column (else ``--rate``); rows without
-    readings skipped (:func:`present_rows`)."""
-    names = [c.strip() for c in header_cells(pre.header)]
+    readings skipped (:func:`present_rows`).  A refusal carries the notes made before it
+    (:func:`convert_common.notes_on_refusal`)."""
     notes: list[str] = []
+    with notes_on_refusal(lambda: preamble_notes(pre) + notes):
+        return named_table(source, data, pre, opts, units_stated, notes)
+
+
+def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool, notes: list[str]) -> Converted:
+    """:func:`convert_named`, appending its notes to ``notes`` as it goes."""
+    names = [c.strip() for c in header_cells(pre.header)]
     axes = stated_axes(source, names, opts.columns, pre.header_line) if opts.columns is not None else \
         table_axes(source, names, pre.header_line, notes)
     acc = [c.name for c in axes]

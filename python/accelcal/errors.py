@@ -27,7 +27,14 @@ __all__ = [
 
 
 class AccelcalError(Exception):
-    """Base of all accelcal errors; ``str(e)`` is the full one-line message."""
+    """Base of all accelcal errors; ``str(e)`` is the full one-line message.
+
+    ``notes``: what was noted on the input before it was refused (``accelcal convert``'s
+    notes: a title line passed over, the unit its time column was read in), for the user
+    ahead of the message; empty unless set.
+    """
+
+    notes: tuple[str, ...] = ()
 
 
 def _one_line(text: str) -> str:

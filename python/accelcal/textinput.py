@@ -172,7 +172,9 @@ class Preamble:
     (Altus Metrum's ``#version,serial,...,accel_x,...``) or whitespace-separated (``# time tx ty
     tz ...`` over rows of 14 numbers), is the header (``header_from_comment``; ``pos`` then
     the numbers' line, the first data row).  ``title``: (line, text) of a line of free text
-    before the header that :func:`table_preamble` passed over, else None."""
+    before the header that :func:`table_preamble` passed over, else None.  ``made``: for rows
+    without a header, what the header given them (``header``) was made from
+    (:func:`accelcal.convert_headerless.timed_rows`), else None."""
 
     metadata: dict[str, str] = field(default_factory=dict)
     metadata_lines: dict[str, int] = field(default_factory=dict)
@@ -182,6 +184,7 @@ class Preamble:
     pos: int = 0
     header_from_comment: bool = False
     title: tuple[int, str] | None = None
+    made: str | None = None
 
 
 def read_preamble(data: bytes) -> Preamble:
@@ -291,8 +294,9 @@ def table_preamble(data: bytes) -> Preamble:
 
 
 def preamble_notes(pre: Preamble) -> list[str]:
-    """Notes on how the header was found: a title passed over, a comment taken as the header."""
-    notes = []
+    """Notes on how the header was found: a title passed over, a comment taken as the header, a
+    header made for rows without one."""
+    notes = [pre.made] if pre.made is not None else []
     if pre.title is not None:
         notes.append(f"line {pre.title[0]} ({pre.title[1][:60]!r}) is neither a header nor data (a title before "
                      f"the header on line {pre.header_line}): left out")

@@ -14,3 +14,10 @@ def run(argv, capfd):
         rc = main([str(a) for a in argv])
     out, err = capfd.readouterr()
     return rc, out, err, [str(w.message) for w in caught]
+
+
+def one_refusal(err):
+    """Whether stderr is one refusal: its error line last, after nothing but note lines (the notes
+    made before it)."""
+    lines = err.splitlines()
+    return bool(lines) and ": error: " in lines[-1] and all(": note: " in line for line in lines[:-1])

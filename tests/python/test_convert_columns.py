@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from accelcal.recording import read_recording
-from cli_run import run
+from cli_run import one_refusal, run
 
 LSB_G = 1.0 / 4096                      # +-8 g at 16 bits
 G = 9.80665
@@ -42,7 +42,7 @@ def _refused(tmp_path, capfd, src, *args, name="refused"):
     out = tmp_path / name
     out.mkdir()
     rc, _, err, _ = run(["convert", src, *args, "-o", out / "o.csv"], capfd)
-    assert rc == 2 and len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert rc == 2 and one_refusal(err) and "Traceback" not in err, err
     assert not list(out.iterdir())
     return err
 
@@ -91,6 +91,33 @@ def test_a_title_line_before_the_header_is_left_out(tmp_path, capfd):
     lines[10] = lines[10] + ",0.5"
     err = _refused(tmp_path, capfd, _write(tmp_path / "bad.csv", lines), "--full-scale", "8")
     assert "bad.csv: row 11: expected 4 cells as in the header, got 5" in err
+
+
+def test_a_refusal_prints_the_notes_made_before_it(tmp_path, capfd):
+    """A refused conversion had printed its error line alone: the notes made before it (a title
+    line left out, the zone taken off date-times) never reached the user, though they say how
+    the file was read.  They come first, as note lines, then the one error line; exit 2 and no
+    output, as before."""
+    c = _counts(30, seed=2)
+    title = "Acceleration Data Collected on Level Surface. Z up."
+    lines = [title, "time,x (g),y (g),z (g)"] + _rows(c)
+    lines[10] = lines[10] + ",0.5"
+    err = _refused(tmp_path, capfd, _write(tmp_path / "bad.csv", lines), "--full-scale", "8").splitlines()
+    assert len(err) == 2 and err[0] == (f"accelcal convert: note: line 1 ({title!r}) is neither a header nor data (a "
+                                        "title before the header on line 2): left out"), err
+    assert err[1].startswith("accelcal convert: error: ") and err[1].endswith("row 11: expected 4 cells as in the "
+                                                                              "header, got 5")
+    imucal = _write(tmp_path / "imucal.csv", [title, "acc_x,acc_y,acc_z"] + [",".join(map(str, r)) for r in c])
+    err = _refused(tmp_path, capfd, imucal, name="imucal").splitlines()
+    assert len(err) == 2 and "is neither a header nor data" in err[0], err
+    assert "imucal files have no time column: give the sample rate with --rate HZ" in err[1]
+    stamps = [f"2019-10-16T12:09:01.{40 * min(k, 20):03d}+02:00" for k in range(30)]   # rows 22-31 repeat row 21's
+    dated = _write(tmp_path / "dated.csv", ["timestamp,accX,accY,accZ"] + [f"{s},{a},{b},{d}"
+                                                                            for s, (a, b, d) in zip(stamps, c)])
+    err = _refused(tmp_path, capfd, dated, name="dated").splitlines()
+    assert "'timestamp' holds ISO-8601 date-times: t is seconds since 1970-01-01 UTC (their zone, UTC+2 h, taken " \
+           "off)" in err[0], err
+    assert "row 23, column timestamp: time stamp" in err[-1] and "9 row(s) repeat the stamp" in err[-1]
 
 
 def test_columns_names_the_accelerometer(tmp_path, capfd):

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from accelcal.recording import read_recording
-from cli_run import run
+from cli_run import one_refusal, run
 
 G = 9.80665
 
@@ -42,7 +42,7 @@ def _refused(tmp_path, capfd, src, *args, name="refused"):
     out = tmp_path / name
     out.mkdir()
     rc, _, err, _ = run(["convert", src, *args, "-o", out / "o.csv"], capfd)
-    assert rc == 2 and len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert rc == 2 and one_refusal(err) and "Traceback" not in err, err
     assert not list(out.iterdir())
     assert src.name in err
     return err
@@ -126,26 +126,30 @@ def test_a_zone_change_is_converted_to_utc_and_a_missing_zone_refused(tmp_path, 
 
 def test_repeated_stamps_are_counted_and_can_be_left_out(tmp_path, capfd):
     """A Garmin export stamps two samples with one stamp now and then (93 of 10,000 rows:
-    steps 80, 40, 40, 0 ms): refused at the first, the message counting them and naming
-    --repeated-stamps drop, which leaves them out with a note (the rate stays 25 Hz)."""
+    steps 80, 40, 40, 0 ms): refused at the first, the message counting them, saying how many
+    follow a step of two (stamps a place late that catch up, not two samples at one instant) and
+    naming --repeated-stamps drop, which leaves them out with a note (the rate stays 25 Hz)."""
     n = 200
     ms = 40 * np.arange(n)
     for k in (50, 120, 170):                 # a slot skipped, and two steps on one stamp given twice
         ms[k:k + 2] += 40
         ms[k + 2] = ms[k + 1]
+    ms[91] = ms[90]                          # and one repeat after steps of one only
     c = _counts(n, seed=3)
     start = dt.datetime(2019, 10, 16, 12, 9, 1, 702000, tzinfo=dt.timezone(dt.timedelta(hours=2)))
     stamps = [(start + dt.timedelta(milliseconds=int(v))).isoformat(timespec="milliseconds") for v in ms]
     src = _write(tmp_path / "acc.csv", ["timestamp;accX;accY;accZ"] +
                  [f"{s};{a};{b};{d}" for s, (a, b, d) in zip(stamps, c)])
     err = _refused(tmp_path, capfd, src)
-    assert "row 54, column timestamp" in err and "time stamps must increase; 3 row(s) repeat the stamp" in err
-    assert "--repeated-stamps drop leaves them out" in err
+    assert "row 54, column timestamp" in err and "time stamps must increase; 4 row(s) repeat the stamp" in err
+    assert ("(a logger that stamps two samples with one stamp), 3 of them after a step of two (with steps of one "
+            "between): stamps that slipped a place late and caught up, the samples on their grid: --repeated-stamps "
+            "drop leaves them out (a sample each)") in err, err
     rec, dev, err, _ = _convert(tmp_path, capfd, src, "--repeated-stamps", "drop")
-    keep = np.delete(np.arange(n), [52, 122, 172])
+    keep = np.delete(np.arange(n), [52, 91, 122, 172])
     np.testing.assert_array_equal(rec.raw, c[keep])
     assert dev["sample_rate_hz"] == pytest.approx(25.0, rel=1e-9)
-    assert "3 row(s) repeat the time stamp of the row before with other readings" in err
+    assert "4 row(s) repeat the time stamp of the row before with other readings" in err
     err = _refused(tmp_path, capfd, _write(tmp_path / "r.csv", ["t,raw_0,raw_1,raw_2", "0,1,2,3", "1,1,2,3"]),
                    "--repeated-stamps", "drop", name="csv")
     assert "--repeated-stamps applies to a table's time column" in err
@@ -226,19 +230,59 @@ def test_headerless_whitespace_rows_say_what_was_seen_and_what_to_do(tmp_path, c
 
 
 def test_headerless_csv_rows_are_quoted_as_the_file_holds_them(tmp_path, capfd):
-    """A Garmin export has no header and ';' between its cells: the message had quoted the line
-    with ',' (the file's text after its rewrite as CSV).  It quotes the file's own line, says
-    that there is no header and which one to add."""
+    """A headerless export with ';' between its cells whose first column is no time stamp (a
+    logger's millis() since boot): the message had quoted the line with ',' (the file's text
+    after its rewrite as CSV).  It quotes the file's own line, says that there is no header,
+    which one to add and when a first column is read as time without one."""
     c = _counts(30)
-    src = _write(tmp_path / "acc.csv", [f"2019-10-16T12:09:{1 + k // 25:02d}.{40 * (k % 25):03d}+02:00;{a};{b};{d}"
-                                        for k, (a, b, d) in enumerate(c)])
+    src = _write(tmp_path / "acc.csv", [f"{1200 + 40 * k};{a};{b};{d}" for k, (a, b, d) in enumerate(c)])
     err = _refused(tmp_path, capfd, src)
-    assert ("acc.csv: row 1: 4 numbers a row (the first a date-time) and no header "
-            f"('2019-10-16T12:09:01.000+02:00;{';'.join(str(v) for v in c[0])}'): for other layouts add a header "
-            "line naming the columns (t,ax,ay,az; a time column t, time or timestamp, else --rate HZ)") in err, err
-    ax3 = _write(tmp_path / "ax3.csv", [f"{1551178506 + k / 100:.4f},0.328125,0.984375,0.203125" for k in range(30)])
-    err = _refused(tmp_path, capfd, ax3, name="ax3")
-    assert "row 1: 4 numbers a row and no header ('1551178506.0000,0.328125," in err
+    assert (f"acc.csv: row 1: 4 numbers a row and no header ('1200;{';'.join(str(v) for v in c[0])}'): a first "
+            "column is read as time without a header only when it holds ISO-8601 date-times, or numbers above 2^24 "
+            "(16777216) that never decrease; for other layouts add a header line naming the columns (t,ax,ay,az;") \
+        in err, err
+    back = _write(tmp_path / "back.csv", [f"{1551178506 + k / 100 - (k == 20):.4f},0.5,0.25,-1" for k in range(30)])
+    assert "row 1: 4 numbers a row and no header ('1551178506.0000,0.5," in _refused(tmp_path, capfd, back, name="b")
+    ax6 = _write(tmp_path / "ax6.csv", [f"2019-12-23 21:04:06.{10 * k:03d},0.5,0.25,-1,0.2,-0.5,15.7"
+                                        for k in range(30)])
+    err = _refused(tmp_path, capfd, ax6, name="ax6")
+    assert ("7 numbers a row (the first a date-time) and no header ('2019-12-23 21:04:06.000,0.5,0.25,-1,0.2,-0.5,"
+            "15.7'): a time and 6 numbers: which three are the accelerometer's no header says; for other layouts add "
+            "a header line naming the columns (t,ax,ay,az,gx,gy,gz;") in err, err
+
+
+def test_headerless_rows_with_a_time_stamp_first_are_read_as_t_x_y_z(tmp_path, capfd):
+    """A Garmin watch's export (no header, ';', ISO-8601 stamps, counts) and an Axivity AX3's
+    (no header, unix s, readings in g) had been refused with the header line to add.  Four
+    cells whose first is a date-time, or numbers above 2^24 that never decrease, are t,x,y,z,
+    with a note, and then read as the same rows under that header are: units, the zone."""
+    c = _counts(60)
+    rows = [f"2019-10-16T12:09:{1 + k // 25:02d}.{40 * (k % 25):03d}+02:00;{a};{b};{d}"
+            for k, (a, b, d) in enumerate(c)]
+    src = _write(tmp_path / "acc.csv", rows)
+    rec, dev, err, said = _convert(tmp_path, capfd, src)
+    assert said.startswith("table: 60 rows, 3 channels, 25 Hz")
+    np.testing.assert_array_equal(rec.raw, c)
+    np.testing.assert_allclose(rec.t - rec.t[0], np.arange(60) * 0.04, atol=1e-6)   # epoch s: ~0.2 us
+    assert rec.t[0] == pytest.approx(1571220541.0, abs=1e-6)          # 12:09:01+02:00 in UTC
+    assert ("no header: the 4 cells of each row are read as t,x,y,z (the first column holds ISO-8601 date-times: "
+            "time stamps); a header line naming the columns states another layout") in err
+    headed, _, _, _ = _convert(tmp_path, capfd, _write(tmp_path / "h.csv", ["t;x;y;z"] + rows))
+    np.testing.assert_array_equal(headed.t, rec.t)
+    g = c / 64.0
+    ax3 = _write(tmp_path / "ax3.csv", ["# an AX3 export"] + [f"{1551178506 + k / 100:.4f},{a:.6f},{b:.6f},{d:.6f}"
+                                                             for k, (a, b, d) in enumerate(g)])
+    err = _refused(tmp_path, capfd, ax3)
+    assert f"ax3.csv: row 2, column x: reading {g[0, 0]:g} is not a whole count (readings in m/s^2 or g: state " \
+           "--units" in err
+    rec, dev, err, said = _convert(tmp_path, capfd, ax3, "--units", "g", "--lsb", "0.015625")
+    np.testing.assert_array_equal(rec.raw, c)
+    assert said.startswith("table: 60 rows, 3 channels (g / 0.015625 g per count), 100 Hz")
+    assert "(the first column holds numbers above 2^24 that never decrease, from 1551178506.0000: time stamps)" in err
+    spaced = _write(tmp_path / "sp.txt", [r.replace(";", " ") for r in rows])
+    rec, _, err, _ = _convert(tmp_path, capfd, spaced)
+    np.testing.assert_array_equal(rec.raw, c)
+    assert "read as t x y z" in err
 
 
 # ---- an Empatica E4's export ----------------------------------------------------------

@@ -12,7 +12,7 @@ import pytest
 import scipy.io
 
 from accelcal.recording import read_recording
-from cli_run import run
+from cli_run import one_refusal, run
 
 LSB_G = 1e-4
 
@@ -33,7 +33,7 @@ def _refused(tmp_path, capfd, src, *args):
     out = tmp_path / "refused"
     out.mkdir()
     rc, _, err, _ = run(["convert", src, *args, "-o", out / "o.csv"], capfd)
-    assert rc == 2 and len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert rc == 2 and one_refusal(err) and "Traceback" not in err, err
     assert not list(out.iterdir())
     return err
 

@@ -1,0 +1,95 @@
+"""Rows without a header whose first cell is a time stamp: a Garmin watch's export
+(``2019-10-16T12:09:01.702+02:00;-36;620;-824``), Axivity's AX3 test files (``unix_t,x,y,z``).
+Four cells a row whose first is a time stamp are read as ``t,x,y,z`` by the table path
+(:mod:`accelcal.convert_named`: units, ``--round``, repeated stamps alike), with a note.
+
+A first cell is a time stamp when the first row's is an ISO-8601 date-time
+(:func:`convert_time.is_datetime`: no reading is written so), or when every row's is a
+number above STAMP_MIN and they never decrease and rise over the file (a unix time in s,
+ms, us or ns).  Any other first column may be a reading, and stays refused with the
+header line to add; so do rows of another count of cells (seven, a time and six readings:
+which three are the accelerometer's, and in which order, no header says).
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from .convert_time import is_datetime
+from .textinput import CELL_NUMBER_RE, NUMBER_RE, Preamble, line_cells
+
+__all__ = ["STAMP_MIN", "HEADERLESS_NAMES", "timed_rows", "stamp_rule"]
+
+#: numbers in a first column above this (2^24: beyond every reading of a 24-bit ADC, signed or not,
+#: and any reading in g or m/s^2) that never decrease are time stamps (a unix time is above it since
+#: July 1970 in seconds)
+STAMP_MIN = 2.0 ** 24
+#: the columns of the rows read without a header
+HEADERLESS_NAMES = ("t", "x", "y", "z")
+
+
+def stamp_rule(cells: int) -> str:
+    """The rule in words, for the refusal of rows of ``cells`` cells that it does not take."""
+    if cells != len(HEADERLESS_NAMES):
+        return f"a time and {cells - 1} numbers: which three are the accelerometer's no header says"
+    return (f"a first column is read as time without a header only when it holds ISO-8601 date-times, or "
+            f"numbers above 2^24 ({STAMP_MIN:.0f}) that never decrease")
+
+
+def first_cells(data: bytes, pos: int, spaced: bool) -> list[bytes]:
+    """The first cell of every line from byte ``pos`` on that is neither blank nor a comment."""
+    out = []
+    for line in data[pos:].split(b"\n"):
+        if not line.strip() or line.startswith(b"#"):
+            continue
+        out.append(line.split(None, 1)[0] if spaced else line.split(b",", 1)[0].strip())
+    return out
+
+
+def rising_stamps(cells: list[bytes]) -> bool:
+    """Whether ``cells`` are numbers above STAMP_MIN that never decrease and rise from first to
+    last."""
+    try:
+        v = np.array([float(c) for c in cells])
+    except ValueError:
+        return False
+    return v.size > 1 and bool(np.all(v > STAMP_MIN) and np.all(np.diff(v) >= 0) and v[-1] > v[0])
+
+
+def timed_rows(data: bytes, pre: Preamble) -> Preamble | None:
+    """The preamble of rows without a header read as ``t,x,y,z`` (HEADERLESS_NAMES), or None.
+
+    Parameters
+    ----------
+    data : bytes
+        The file's text (:func:`textinput.read_text_bytes`: ``;`` already made ``,``).
+    pre : Preamble
+        The file's preamble (:func:`textinput.table_preamble`), whose header line is the first
+        row.
+
+    Returns
+    -------
+    Preamble or None
+        A copy whose ``header`` is made (the file's separator between the names), whose data
+        rows start at the first row (``pos``; ``header_line`` the line before it) and whose
+        ``made`` is the note saying so; None where the first line is not four cells, the last
+        three numbers, the first a time stamp (the module's rule), or where the file has a
+        header (a comment naming the columns, a title before it).
+    """
+    if pre.header is None or pre.header_from_comment or pre.title is not None:
+        return None
+    cells = line_cells(pre.header)
+    if len(cells) != len(HEADERLESS_NAMES) or not all(CELL_NUMBER_RE.fullmatch(c) for c in cells[1:]):
+        return None
+    spaced = "," not in pre.header
+    if is_datetime(cells[0]):
+        what = "ISO-8601 date-times"
+    elif NUMBER_RE.fullmatch(cells[0]) and rising_stamps(first_cells(data, pre.header_pos, spaced)):
+        what = f"numbers above 2^24 that never decrease, from {cells[0]}"
+    else:
+        return None
+    names = (" " if spaced else ",").join(HEADERLESS_NAMES)
+    note = (f"no header: the {len(cells)} cells of each row are read as {names} (the first column holds {what}: time "
+            "stamps); a header line naming the columns states another layout")
+    return dataclasses.replace(pre, header=names, header_line=pre.header_line - 1, pos=pre.header_pos, made=note)
