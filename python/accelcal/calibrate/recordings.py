@@ -207,7 +207,33 @@ def detector_found(device, recordings, poses: PoseSet | None) -> tuple[str, bool
     w = max(window_len(device, STATIC_WINDOW_S, rec.n_samples) for rec in recordings)
     return (f"the static detector takes a pose from a still stretch of several samples (at least {w} here, "
             f"and {MIN_POSE_S:g} s where a motion touches it, with every channel within {STATIC_THRESHOLD:g} x "
-            f"its noise) and found {found}, holding {held} of {rows} rows"), held < rows / 2
+            f"its noise) and found {found}, holding {held} of {rows} rows"), \
+        held < rows / 2 and rows_turn_deg(device, recordings) >= POSE_ROW_TURN_DEG
+
+
+#: consecutive rows whose readings point this far apart (median, deg) are separate orientations,
+#: each a pose of its own (a file of pose means), not a motion sampled row by row
+POSE_ROW_TURN_DEG = 5.0
+
+
+def rows_turn_deg(device, recordings) -> float:
+    """The median angle (deg) between consecutive rows' reading vectors (counts less the device's
+    zero, per m/s^2 on each channel's nominal axis), over the recordings; 0 for a device that is
+    not one triad.  Magneto's 178 hand-held pose means, one a row, turn by tens of degrees from
+    row to row; a 200 Hz flight by a fraction of one (it had been told to label its rows as pose
+    means)."""
+    if device.n_channels != 3:
+        return 0.0
+    angles = []
+    for rec in recordings:
+        v = (np.asarray(rec.raw, float) - device.zero_counts) / device.counts_per_mps2
+        v = v @ np.asarray(device.axes, float)
+        n = np.linalg.norm(v, axis=1)
+        ok = (n[1:] > 0) & (n[:-1] > 0)
+        c = np.sum(v[1:] * v[:-1], axis=1)[ok] / (n[1:] * n[:-1])[ok]
+        angles.append(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+    a = np.concatenate(angles) if angles else np.zeros(0)
+    return float(np.median(a)) if a.size else 0.0
 
 
 def detector_hint(device, recordings, poses: PoseSet | None) -> str:

@@ -51,9 +51,10 @@ def wide_rest_warning(dev_max: float, q_f: float) -> list[str]:
         return []
     coarse = (f"; {5 * top:.2g} with this sensor's code step of {q_f:.3g} m/s^2" if 5 * top > 0.26 else "")
     return [f"displacement: the noise estimated from the recording gives a rest test of |f - mean| <= {dev_max:.3g} "
-            f"m/s^2 (5 sigma), beyond what a sensor at rest shows (0.01-0.25 m/s^2{coarse}): no still stretch is "
-            "that quiet (vibration throughout, a flight), so a slow motion may pass for a rest; state the sensor's "
-            "noise_mps2 in the device file"]
+            f"m/s^2 (5 sigma), beyond what most sensors at rest show (0.01-0.25 m/s^2{coarse}): no still stretch "
+            "is that quiet (vibration throughout, a flight -- or a noisy sensor: an x-IMU reads 0.11 m/s^2 per axis "
+            "standing still), so a slow motion may pass for a rest; state the sensor's own noise_mps2 in the device "
+            "file"]
 
 
 def _band_share(blk, rp: RestParams) -> float:
