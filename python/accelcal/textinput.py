@@ -187,17 +187,23 @@ class Preamble:
     made: str | None = None
 
 
-def read_preamble(data: bytes) -> Preamble:
-    """Comments (metadata) and blank lines, then the header line."""
-    out = Preamble()
-    pos, line_no = 0, 0
-    last = None                                  # the comment line just before, (text, line, start)
+def byte_lines(data: bytes, pos: int = 0):
+    """Each line of ``data`` from byte ``pos`` on: (its text, its first byte, the byte after its
+    line end)."""
     while pos < len(data):
         end = data.find(b"\n", pos)
         end = len(data) if end < 0 else end
-        text = data[pos:end].decode("utf-8")
+        yield data[pos:end].decode("utf-8"), pos, end + 1
+        pos = end + 1
+
+
+def read_preamble(data: bytes) -> Preamble:
+    """Comments (metadata) and blank lines, then the header line."""
+    out = Preamble()
+    line_no = 0
+    last = None                                  # the comment line just before, (text, line, start)
+    for text, start, pos in byte_lines(data):
         line_no += 1
-        start, pos = pos, end + 1
         if text.startswith("#"):
             m = META_RE.fullmatch(text)
             if m:
@@ -252,14 +258,11 @@ def next_line(data: bytes, pos: int) -> tuple[str | None, int, int, int]:
     the lines passed to reach it, its first byte, the byte after its line end); (None, ...) at
     the end."""
     passed = 0
-    while pos < len(data):
-        end = data.find(b"\n", pos)
-        end = len(data) if end < 0 else end
-        text = data[pos:end].decode("utf-8")
+    for text, start, after in byte_lines(data, pos):
         passed += 1
-        start, pos = pos, end + 1
+        pos = after
         if text.strip() and not text.startswith("#"):
-            return text, passed, start, pos
+            return text, passed, start, after
     return None, passed, pos, pos
 
 

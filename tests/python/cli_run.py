@@ -1,9 +1,11 @@
 """Running the command line in-process for the tests (one home for it)."""
 from __future__ import annotations
 
+import json
 import warnings
 
 from accelcal.cli import main
+from accelcal.recording import read_recording
 
 
 def run(argv, capfd):
@@ -21,3 +23,30 @@ def one_refusal(err):
     made before it)."""
     lines = err.splitlines()
     return bool(lines) and ": error: " in lines[-1] and all(": note: " in line for line in lines[:-1])
+
+
+def write_lines(path, lines):
+    """A text file of ``lines`` (each ended by a newline); returns ``path``."""
+    path.write_text("".join(line + "\n" for line in lines))
+    return path
+
+
+def convert_ok(tmp_path, capfd, src, *args):
+    """``accelcal convert SRC ARGS -o o.csv --device-out d.json`` in ``tmp_path``, which must
+    succeed with no Python warning: (the recording, the device JSON, stderr, stdout)."""
+    out, dev = tmp_path / "o.csv", tmp_path / "d.json"
+    rc, said, err, caught = run(["convert", src, *args, "-o", out, "--device-out", dev], capfd)
+    assert rc == 0 and not caught, err
+    return read_recording(out), json.loads(dev.read_text()), err, said
+
+
+def convert_refused(tmp_path, capfd, src, *args, name="refused"):
+    """``accelcal convert SRC ARGS`` into a fresh directory ``tmp_path / name``, which must be
+    refused: exit 2, one refusal on stderr (notes before it allowed), no traceback, nothing
+    written; returns stderr."""
+    out = tmp_path / name
+    out.mkdir()
+    rc, _, err, _ = run(["convert", src, *args, "-o", out / "o.csv"], capfd)
+    assert rc == 2 and one_refusal(err) and "Traceback" not in err, err
+    assert not list(out.iterdir())
+    return err

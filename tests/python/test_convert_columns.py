@@ -8,13 +8,12 @@ give one line naming the file and row, exit 2, and no output.
 """
 from __future__ import annotations
 
-import json
 
 import numpy as np
 import pytest
 
 from accelcal.recording import read_recording
-from cli_run import one_refusal, run
+from cli_run import convert_ok, convert_refused, run, write_lines
 
 LSB_G = 1.0 / 4096                      # +-8 g at 16 bits
 G = 9.80665
@@ -25,25 +24,14 @@ def _counts(n, seed=0):
     return np.round([400.0, 180.0, 3150.0] + 6.0 * rng.standard_normal((n, 3))).astype(int)
 
 
-def _write(path, lines):
-    path.write_text("".join(line + "\n" for line in lines))
-    return path
-
-
 def _convert(tmp_path, capfd, src, *args):
-    out, dev = tmp_path / "o.csv", tmp_path / "d.json"
-    rc, said, err, caught = run(["convert", src, *args, "-o", out, "--device-out", dev], capfd)
-    assert rc == 0, err
-    assert said.startswith("table: ") and not caught
-    return read_recording(out), json.loads(dev.read_text()), err
+    rec, dev, err, said = convert_ok(tmp_path, capfd, src, *args)
+    assert said.startswith("table: ")
+    return rec, dev, err
 
 
 def _refused(tmp_path, capfd, src, *args, name="refused"):
-    out = tmp_path / name
-    out.mkdir()
-    rc, _, err, _ = run(["convert", src, *args, "-o", out / "o.csv"], capfd)
-    assert rc == 2 and one_refusal(err) and "Traceback" not in err, err
-    assert not list(out.iterdir())
+    err = convert_refused(tmp_path, capfd, src, *args, name=name)
     return err
 
 
@@ -56,12 +44,12 @@ def test_axes_named_by_their_letter_and_a_unit(tmp_path, capfd):
     column for axis x among the accelerometer columns (none)'.  A unit of acceleration says the
     columns are an accelerometer's; a gyroscope's 'x (deg/s)' is not taken for one."""
     c = _counts(400)
-    src = _write(tmp_path / "start_up_data_1.csv", ["time,x (g),y (g),z (g)"] + _rows(c))
+    src = write_lines(tmp_path / "start_up_data_1.csv", ["time,x (g),y (g),z (g)"] + _rows(c))
     rec, dev, _ = _convert(tmp_path, capfd, src, "--full-scale", "8")
     np.testing.assert_array_equal(rec.raw, c)
     np.testing.assert_allclose(rec.t, np.arange(400) / 180.0)
     assert dev["sample_rate_hz"] == pytest.approx(180.0)
-    gyro = _write(tmp_path / "gyro.csv", ["time,x (deg/s),y (deg/s),z (deg/s)"] + _rows(c))
+    gyro = write_lines(tmp_path / "gyro.csv", ["time,x (deg/s),y (deg/s),z (deg/s)"] + _rows(c))
     err = _refused(tmp_path, capfd, gyro, "--format", "table", "--full-scale", "8")
     assert "no column for axis x among the header's columns (the header's columns: 'time', 'x (deg/s)', " \
            "'y (deg/s)', 'z (deg/s)'" in err and "--columns" in err
@@ -71,7 +59,7 @@ def test_bare_x_y_z_beside_a_time_column_alone(tmp_path, capfd):
     """'time,x,y,z' and nothing else: the accelerometer's, with a note (a machine survey's
     'timestamp,x,y,z' had been refused though no other sensor's columns are there)."""
     c = _counts(200, seed=1)
-    src = _write(tmp_path / "survey.csv", ["time,x,y,z"] + _rows(c))
+    src = write_lines(tmp_path / "survey.csv", ["time,x,y,z"] + _rows(c))
     rec, _, err = _convert(tmp_path, capfd, src, "--units", "g", "--full-scale", "8")
     np.testing.assert_array_equal(rec.raw, c)
     assert "the columns x, y, z beside time and no other sensor's are taken as the accelerometer's" in err
@@ -83,13 +71,13 @@ def test_a_title_line_before_the_header_is_left_out(tmp_path, capfd):
     stay the file's."""
     c = _counts(300, seed=2)
     lines = ["Acceleration Data Collected on Level Surface. Z up.", "time,x (g),y (g),z (g)"] + _rows(c)
-    src = _write(tmp_path / "six_position.csv", lines)
+    src = write_lines(tmp_path / "six_position.csv", lines)
     rec, _, err = _convert(tmp_path, capfd, src, "--full-scale", "8")
     np.testing.assert_array_equal(rec.raw, c)
     assert "line 1 ('Acceleration Data Collected on Level Surface. Z up.') is neither a header nor data (a title " \
            "before the header on line 2): left out" in err
     lines[10] = lines[10] + ",0.5"
-    err = _refused(tmp_path, capfd, _write(tmp_path / "bad.csv", lines), "--full-scale", "8")
+    err = _refused(tmp_path, capfd, write_lines(tmp_path / "bad.csv", lines), "--full-scale", "8")
     assert "bad.csv: row 11: expected 4 cells as in the header, got 5" in err
 
 
@@ -102,17 +90,17 @@ def test_a_refusal_prints_the_notes_made_before_it(tmp_path, capfd):
     title = "Acceleration Data Collected on Level Surface. Z up."
     lines = [title, "time,x (g),y (g),z (g)"] + _rows(c)
     lines[10] = lines[10] + ",0.5"
-    err = _refused(tmp_path, capfd, _write(tmp_path / "bad.csv", lines), "--full-scale", "8").splitlines()
+    err = _refused(tmp_path, capfd, write_lines(tmp_path / "bad.csv", lines), "--full-scale", "8").splitlines()
     assert len(err) == 2 and err[0] == (f"accelcal convert: note: line 1 ({title!r}) is neither a header nor data (a "
                                         "title before the header on line 2): left out"), err
     assert err[1].startswith("accelcal convert: error: ") and err[1].endswith("row 11: expected 4 cells as in the "
                                                                               "header, got 5")
-    imucal = _write(tmp_path / "imucal.csv", [title, "acc_x,acc_y,acc_z"] + [",".join(map(str, r)) for r in c])
+    imucal = write_lines(tmp_path / "imucal.csv", [title, "acc_x,acc_y,acc_z"] + [",".join(map(str, r)) for r in c])
     err = _refused(tmp_path, capfd, imucal, name="imucal").splitlines()
     assert len(err) == 2 and "is neither a header nor data" in err[0], err
     assert "imucal files have no time column: give the sample rate with --rate HZ" in err[1]
     stamps = [f"2019-10-16T12:09:01.{40 * min(k, 20):03d}+02:00" for k in range(30)]   # rows 22-31 repeat row 21's
-    dated = _write(tmp_path / "dated.csv", ["timestamp,accX,accY,accZ"] + [f"{s},{a},{b},{d}"
+    dated = write_lines(tmp_path / "dated.csv", ["timestamp,accX,accY,accZ"] + [f"{s},{a},{b},{d}"
                                                                             for s, (a, b, d) in zip(stamps, c)])
     err = _refused(tmp_path, capfd, dated, name="dated").splitlines()
     assert "'timestamp' holds ISO-8601 date-times: t is seconds since 1970-01-01 UTC (their zone, UTC+2 h, taken " \
@@ -124,7 +112,7 @@ def test_columns_names_the_accelerometer(tmp_path, capfd):
     """--columns X,Y,Z names the three columns whatever they are called, a unit in () at a
     name's end stating the unit; a name not in the header is refused listing the header."""
     c = _counts(200, seed=3)
-    src = _write(tmp_path / "log.csv", ["stamp,temp,u1 (g),u2 (g),u3 (g)"] +
+    src = write_lines(tmp_path / "log.csv", ["stamp,temp,u1 (g),u2 (g),u3 (g)"] +
                  [f"{k / 100.0!r},21.5," + ",".join(repr(float(v) * LSB_G) for v in r) for k, r in enumerate(c)])
     rec, _, err = _convert(tmp_path, capfd, src, "--columns", "u1 (g),u2 (g),u3 (g)", "--full-scale", "8",
                            "--rate", "100")
@@ -144,7 +132,7 @@ def test_a_comment_naming_whitespace_columns_is_the_header(tmp_path, capfd):
     rows = [" ".join([f"{1535630275.9 + k / 100.0:.6f}"] + [f"{v * LSB_G * G:.10g}" for v in r] +
                      ["0.001", "-0.002", "0.003", "0", "0", "0", "0.1", "0.2", "0.3", "0.9"]) + " "
             for k, r in enumerate(c)]
-    src = _write(tmp_path / "imu_good1.txt", ["# time tx ty tz wx wy wz mx my mz qx qy qz qw"] + rows)
+    src = write_lines(tmp_path / "imu_good1.txt", ["# time tx ty tz wx wy wz mx my mz qx qy qz qw"] + rows)
     err = _refused(tmp_path, capfd, src)
     assert "imu_good1.txt: row 1: no column of this header ('# time tx ty tz wx wy wz mx my mz qx qy qz qw') says " \
            "it is an accelerometer's: if three of them are, name them with --columns tx,ty,tz (the header's " \
@@ -159,7 +147,7 @@ def test_a_comment_naming_a_logs_three_columns_keeps_it_a_log(tmp_path, capfd):
     """'# x y z' over lines of three numbers: still a monitor's log (--rate), not a table whose
     bare x, y, z are refused."""
     c = _counts(60, seed=5)
-    src = _write(tmp_path / "capture.txt", ["# x y z"] + [f"{r[0]} {r[1]} {r[2]}" for r in c])
+    src = write_lines(tmp_path / "capture.txt", ["# x y z"] + [f"{r[0]} {r[1]} {r[2]}" for r in c])
     out = tmp_path / "o.csv"
     rc, said, err, _ = run(["convert", src, "--rate", "50", "-o", out], capfd)
     assert rc == 0 and said.startswith("log: "), err

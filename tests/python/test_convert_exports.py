@@ -9,13 +9,11 @@ row, exit 2, and no output.
 from __future__ import annotations
 
 import datetime as dt
-import json
 
 import numpy as np
 import pytest
 
-from accelcal.recording import read_recording
-from cli_run import one_refusal, run
+from cli_run import convert_ok, convert_refused, write_lines
 
 G = 9.80665
 
@@ -25,25 +23,14 @@ def _counts(n, seed=0, mean=(-36.0, 620.0, -824.0), sd=4.0):
     return np.round(np.asarray(mean) + sd * rng.standard_normal((n, 3))).astype(int)
 
 
-def _write(path, lines):
-    path.write_text("".join(line + "\n" for line in lines))
-    return path
-
-
 def _convert(tmp_path, capfd, src, *args):
-    out, dev = tmp_path / "o.csv", tmp_path / "d.json"
-    rc, said, err, _ = run(["convert", src, *args, "-o", out, "--device-out", dev], capfd)
-    assert rc == 0, err
+    rec, dev, err, said = convert_ok(tmp_path, capfd, src, *args)
     assert len(said.splitlines()) == 1
-    return read_recording(out), json.loads(dev.read_text()), err, said
+    return rec, dev, err, said
 
 
 def _refused(tmp_path, capfd, src, *args, name="refused"):
-    out = tmp_path / name
-    out.mkdir()
-    rc, _, err, _ = run(["convert", src, *args, "-o", out / "o.csv"], capfd)
-    assert rc == 2 and one_refusal(err) and "Traceback" not in err, err
-    assert not list(out.iterdir())
+    err = convert_refused(tmp_path, capfd, src, *args, name=name)
     assert src.name in err
     return err
 
@@ -81,7 +68,7 @@ def test_iso_datetime_stamps_are_time_stamps(tmp_path, capfd, form, rate):
     offs_us = np.arange(n) * step_us + np.where(np.arange(n) >= 250, 50 * step_us, 0)
     whens = [start + dt.timedelta(microseconds=int(u)) for u in offs_us]
     c = _counts(n)
-    src = _write(tmp_path / "acc.csv", ["timestamp,accX,accY,accZ"] +
+    src = write_lines(tmp_path / "acc.csv", ["timestamp,accX,accY,accZ"] +
                  [f"{_stamp(w, form)},{a},{b},{d}" for w, (a, b, d) in zip(whens, c)])
     rec, dev, err, said = _convert(tmp_path, capfd, src)
     np.testing.assert_array_equal(rec.raw, c)
@@ -108,18 +95,18 @@ def test_a_zone_change_is_converted_to_utc_and_a_missing_zone_refused(tmp_path, 
     zoned = [w.astimezone(dt.timezone(dt.timedelta(hours=1 if k < 40 else 2))) for k, w in enumerate(utc)]
     c = _counts(n, seed=2)
     lines = [f"{w.isoformat(timespec='milliseconds')},{a},{b},{d}" for w, (a, b, d) in zip(zoned, c)]
-    src = _write(tmp_path / "dst.csv", ["time,accX,accY,accZ"] + lines)
+    src = write_lines(tmp_path / "dst.csv", ["time,accX,accY,accZ"] + lines)
     rec, dev, err, _ = _convert(tmp_path, capfd, src)
     np.testing.assert_allclose(np.diff(rec.t), 0.05, atol=1e-6)
     assert rec.t[0] == pytest.approx(utc[0].timestamp(), abs=1e-6)
     assert "zone changes at row 42 (UTC+1 h to UTC+2 h" in err
     lines[10] = lines[10].replace("+01:00", "")
-    bad = _write(tmp_path / "mixed.csv", ["time,accX,accY,accZ"] + lines)
+    bad = write_lines(tmp_path / "mixed.csv", ["time,accX,accY,accZ"] + lines)
     err = _refused(tmp_path, capfd, bad)
     assert "row 12, column time" in err and "states no zone where the first row's" in err
     err = _refused(tmp_path, capfd, src, "--time-unit", "ms", name="unit")
     assert "holds date-times, which carry their unit" in err
-    clock = _write(tmp_path / "clock.csv", ["time,accX,accY,accZ"] + [f"12:09:{k:02d},1,2,3" for k in range(10)])
+    clock = write_lines(tmp_path / "clock.csv", ["time,accX,accY,accZ"] + [f"12:09:{k:02d},1,2,3" for k in range(10)])
     err = _refused(tmp_path, capfd, clock, name="clock")
     assert "'12:09:00') is a clock time or a date, not time stamps" in err
 
@@ -138,7 +125,7 @@ def test_repeated_stamps_are_counted_and_can_be_left_out(tmp_path, capfd):
     c = _counts(n, seed=3)
     start = dt.datetime(2019, 10, 16, 12, 9, 1, 702000, tzinfo=dt.timezone(dt.timedelta(hours=2)))
     stamps = [(start + dt.timedelta(milliseconds=int(v))).isoformat(timespec="milliseconds") for v in ms]
-    src = _write(tmp_path / "acc.csv", ["timestamp;accX;accY;accZ"] +
+    src = write_lines(tmp_path / "acc.csv", ["timestamp;accX;accY;accZ"] +
                  [f"{s};{a};{b};{d}" for s, (a, b, d) in zip(stamps, c)])
     err = _refused(tmp_path, capfd, src)
     assert "row 54, column timestamp" in err and "time stamps must increase; 4 row(s) repeat the stamp" in err
@@ -150,7 +137,7 @@ def test_repeated_stamps_are_counted_and_can_be_left_out(tmp_path, capfd):
     np.testing.assert_array_equal(rec.raw, c[keep])
     assert dev["sample_rate_hz"] == pytest.approx(25.0, rel=1e-9)
     assert "4 row(s) repeat the time stamp of the row before with other readings" in err
-    err = _refused(tmp_path, capfd, _write(tmp_path / "r.csv", ["t,raw_0,raw_1,raw_2", "0,1,2,3", "1,1,2,3"]),
+    err = _refused(tmp_path, capfd, write_lines(tmp_path / "r.csv", ["t,raw_0,raw_1,raw_2", "0,1,2,3", "1,1,2,3"]),
                    "--repeated-stamps", "drop", name="csv")
     assert "--repeated-stamps applies to a table's time column" in err
 
@@ -180,7 +167,7 @@ def test_the_nominal_scale_is_taken_from_the_still_stretches(tmp_path, capfd):
     stretches read |f| = g whatever the orientation: their median |reading| over g is the
     scale (1000 counts per g here), with a note saying so."""
     c = _watch()
-    src = _write(tmp_path / "watch.csv", ["accX,accY,accZ"] + [f"{a},{b},{d}" for a, b, d in c])
+    src = write_lines(tmp_path / "watch.csv", ["accX,accY,accZ"] + [f"{a},{b},{d}" for a, b, d in c])
     rec, dev, err, _ = _convert(tmp_path, capfd, src, "--rate", "25")
     k = dev["channels"][0]["counts_per_mps2"]
     assert k == pytest.approx(1000.0 / G, rel=0.005), err
@@ -196,7 +183,7 @@ def test_without_a_still_stretch_the_spread_gives_the_scale(tmp_path, capfd):
     t = np.arange(n) / rate
     f = np.column_stack([np.cos(2.1 * t) * np.cos(0.7 * t), np.sin(2.1 * t) * np.cos(0.7 * t), np.sin(0.7 * t)])
     c = np.round(500.0 * f + 2.0 * np.random.default_rng(5).standard_normal(f.shape)).astype(int)
-    src = _write(tmp_path / "tumble.csv", ["accX,accY,accZ"] + [f"{a},{b},{d}" for a, b, d in c])
+    src = write_lines(tmp_path / "tumble.csv", ["accX,accY,accZ"] + [f"{a},{b},{d}" for a, b, d in c])
     rec, dev, err, _ = _convert(tmp_path, capfd, src, "--rate", "50")
     lo, hi = np.percentile(c, [1, 99], axis=0)
     assert dev["channels"][0]["counts_per_mps2"] == pytest.approx(round(np.mean(hi - lo) / 2 / G, 1))
@@ -211,20 +198,20 @@ def test_headerless_whitespace_rows_say_what_was_seen_and_what_to_do(tmp_path, c
     (Magneto's input) are a log like their comma-separated kin; four are imu_tk's, and --rate
     then says the file was read so rather than blaming imu_tk files the user never named."""
     c = _counts(40, mean=(608, -372, 15556))
-    six = _write(tmp_path / "sample_data.txt", [f"{a}\t{b}\t{d}\t-374\t166\t-77" for a, b, d in c])
+    six = write_lines(tmp_path / "sample_data.txt", [f"{a}\t{b}\t{d}\t-374\t166\t-77" for a, b, d in c])
     err = _refused(tmp_path, capfd, six)
     first = "\\t".join(str(v) for v in c[0])
     assert f"sample_data.txt: row 1: 6 whitespace-separated numbers a row and no header ('{first}\\t-374" in err
     assert ("imu_tk's text needs 4 (t ax ay az); for three readings a line give --format log --rate HZ; for other "
             "layouts add a header line naming the columns (ax ay az gx gy gz;") in err
     assert "as in the header" not in err
-    three = _write(tmp_path / "acceldata.txt", [f"{a}\t{b}\t{d}" for a, b, d in c])
+    three = write_lines(tmp_path / "acceldata.txt", [f"{a}\t{b}\t{d}" for a, b, d in c])
     rec, dev, err, said = _convert(tmp_path, capfd, three, "--rate", "10")
     np.testing.assert_array_equal(rec.raw, c)
     assert said.startswith("log: 40 rows")
     err = _refused(tmp_path, capfd, three, name="norate")
     assert "(lines of three numbers, no header) have no time column: give the sample rate with --rate HZ" in err
-    four = _write(tmp_path / "xsens.txt", [f"{k / 100:.2f} {a} {b} {d}" for k, (a, b, d) in enumerate(c)])
+    four = write_lines(tmp_path / "xsens.txt", [f"{k / 100:.2f} {a} {b} {d}" for k, (a, b, d) in enumerate(c)])
     err = _refused(tmp_path, capfd, four, "--rate", "100", name="four")
     assert "--rate: the file was read as imu_tk's text (4 numbers a row and no header: t ax ay az)" in err
 
@@ -235,15 +222,15 @@ def test_headerless_csv_rows_are_quoted_as_the_file_holds_them(tmp_path, capfd):
     after its rewrite as CSV).  It quotes the file's own line, says that there is no header,
     which one to add and when a first column is read as time without one."""
     c = _counts(30)
-    src = _write(tmp_path / "acc.csv", [f"{1200 + 40 * k};{a};{b};{d}" for k, (a, b, d) in enumerate(c)])
+    src = write_lines(tmp_path / "acc.csv", [f"{1200 + 40 * k};{a};{b};{d}" for k, (a, b, d) in enumerate(c)])
     err = _refused(tmp_path, capfd, src)
     assert (f"acc.csv: row 1: 4 numbers a row and no header ('1200;{';'.join(str(v) for v in c[0])}'): a first "
             "column is read as time without a header only when it holds ISO-8601 date-times, or numbers above 2^24 "
             "(16777216) that never decrease; for other layouts add a header line naming the columns (t,ax,ay,az;") \
         in err, err
-    back = _write(tmp_path / "back.csv", [f"{1551178506 + k / 100 - (k == 20):.4f},0.5,0.25,-1" for k in range(30)])
+    back = write_lines(tmp_path / "back.csv", [f"{1551178506 + k / 100 - (k == 20):.4f},0.5,0.25,-1" for k in range(30)])
     assert "row 1: 4 numbers a row and no header ('1551178506.0000,0.5," in _refused(tmp_path, capfd, back, name="b")
-    ax6 = _write(tmp_path / "ax6.csv", [f"2019-12-23 21:04:06.{10 * k:03d},0.5,0.25,-1,0.2,-0.5,15.7"
+    ax6 = write_lines(tmp_path / "ax6.csv", [f"2019-12-23 21:04:06.{10 * k:03d},0.5,0.25,-1,0.2,-0.5,15.7"
                                         for k in range(30)])
     err = _refused(tmp_path, capfd, ax6, name="ax6")
     assert ("7 numbers a row (the first a date-time) and no header ('2019-12-23 21:04:06.000,0.5,0.25,-1,0.2,-0.5,"
@@ -259,7 +246,7 @@ def test_headerless_rows_with_a_time_stamp_first_are_read_as_t_x_y_z(tmp_path, c
     c = _counts(60)
     rows = [f"2019-10-16T12:09:{1 + k // 25:02d}.{40 * (k % 25):03d}+02:00;{a};{b};{d}"
             for k, (a, b, d) in enumerate(c)]
-    src = _write(tmp_path / "acc.csv", rows)
+    src = write_lines(tmp_path / "acc.csv", rows)
     rec, dev, err, said = _convert(tmp_path, capfd, src)
     assert said.startswith("table: 60 rows, 3 channels, 25 Hz")
     np.testing.assert_array_equal(rec.raw, c)
@@ -267,10 +254,10 @@ def test_headerless_rows_with_a_time_stamp_first_are_read_as_t_x_y_z(tmp_path, c
     assert rec.t[0] == pytest.approx(1571220541.0, abs=1e-6)          # 12:09:01+02:00 in UTC
     assert ("no header: the 4 cells of each row are read as t,x,y,z (the first column holds ISO-8601 date-times: "
             "time stamps); a header line naming the columns states another layout") in err
-    headed, _, _, _ = _convert(tmp_path, capfd, _write(tmp_path / "h.csv", ["t;x;y;z"] + rows))
+    headed, _, _, _ = _convert(tmp_path, capfd, write_lines(tmp_path / "h.csv", ["t;x;y;z"] + rows))
     np.testing.assert_array_equal(headed.t, rec.t)
     g = c / 64.0
-    ax3 = _write(tmp_path / "ax3.csv", ["# an AX3 export"] + [f"{1551178506 + k / 100:.4f},{a:.6f},{b:.6f},{d:.6f}"
+    ax3 = write_lines(tmp_path / "ax3.csv", ["# an AX3 export"] + [f"{1551178506 + k / 100:.4f},{a:.6f},{b:.6f},{d:.6f}"
                                                              for k, (a, b, d) in enumerate(g)])
     err = _refused(tmp_path, capfd, ax3)
     assert f"ax3.csv: row 2, column x: reading {g[0, 0]:g} is not a whole count (readings in m/s^2 or g: state " \
@@ -279,7 +266,7 @@ def test_headerless_rows_with_a_time_stamp_first_are_read_as_t_x_y_z(tmp_path, c
     np.testing.assert_array_equal(rec.raw, c)
     assert said.startswith("table: 60 rows, 3 channels (g / 0.015625 g per count), 100 Hz")
     assert "(the first column holds numbers above 2^24 that never decrease, from 1551178506.0000: time stamps)" in err
-    spaced = _write(tmp_path / "sp.txt", [r.replace(";", " ") for r in rows])
+    spaced = write_lines(tmp_path / "sp.txt", [r.replace(";", " ") for r in rows])
     rec, _, err, _ = _convert(tmp_path, capfd, spaced)
     np.testing.assert_array_equal(rec.raw, c)
     assert "read as t x y z" in err
@@ -295,7 +282,7 @@ def test_an_empatica_e4_export_is_read_with_its_start_and_rate(tmp_path, capfd):
     layout; a row 2 that is no rate is one line saying what to do."""
     c = _counts(300, seed=6, mean=(-61, 25, 6), sd=2.0)
     pre = ["1560279825.000000, 1560279825.000000, 1560279825.000000", "32.000000, 32.000000, 32.000000"]
-    src = _write(tmp_path / "ACC.csv", pre + [f"{a},{b},{d}" for a, b, d in c])
+    src = write_lines(tmp_path / "ACC.csv", pre + [f"{a},{b},{d}" for a, b, d in c])
     rec, dev, err, said = _convert(tmp_path, capfd, src)
     assert said.startswith("e4: 300 rows, 3 channels, 32 Hz")
     np.testing.assert_array_equal(rec.raw, c)
@@ -308,7 +295,7 @@ def test_an_empatica_e4_export_is_read_with_its_start_and_rate(tmp_path, capfd):
     err = _refused(tmp_path, capfd, src, "--format", "log", "--rate", "32", "--bits", "8")
     assert "row 1: rows 1-2 are one value repeated, a start time and a rate, as an Empatica E4's export" in err
     assert "--bits" not in err
-    bad = _write(tmp_path / "bad.csv", [pre[0], "0.000000, 0.000000, 0.000000"] + [f"{a},{b},{d}" for a, b, d in c])
+    bad = write_lines(tmp_path / "bad.csv", [pre[0], "0.000000, 0.000000, 0.000000"] + [f"{a},{b},{d}" for a, b, d in c])
     err = _refused(tmp_path, capfd, bad, name="bad")
     assert "row 2: rows 1-2 look like an Empatica E4's start time (1560279825, unix s) and sample rate, but row 2's " \
            "'0.000000' is no rate in Hz: remove the two rows and give --rate HZ" in err
@@ -320,10 +307,10 @@ def test_bare_x_y_z_columns_are_refused_in_words_that_fit_any_logger(tmp_path, c
     says what the names lack, lists the header and names the option that states them, PX4's
     file name last.  (Beside a time column alone they are read: test_convert_columns.)"""
     rows = [f"2021-05-07T10:29:{k:02d}.172,0.05,-0.05,-0.98,21.5" for k in range(20)]
-    src = _write(tmp_path / "survey.csv", ["timestamp,x,y,z,temperature"] + rows)
+    src = write_lines(tmp_path / "survey.csv", ["timestamp,x,y,z,temperature"] + rows)
     err = _refused(tmp_path, capfd, src)
     assert ("the columns x, y, z do not say they are an accelerometer's (a gyroscope's or a magnetometer's are "
             "written alike; the header's columns: 'timestamp', 'x', 'y', 'z', 'temperature'): if they are, give "
             "--columns x,y,z (a PX4") in err
-    gyro = _write(tmp_path / "log_sensor_gyro_0.csv", ["timestamp,x,y,z"] + [r.rsplit(",", 1)[0] for r in rows])
+    gyro = write_lines(tmp_path / "log_sensor_gyro_0.csv", ["timestamp,x,y,z"] + [r.rsplit(",", 1)[0] for r in rows])
     assert "do not say they are an accelerometer's" in _refused(tmp_path, capfd, gyro, name="gyro")
