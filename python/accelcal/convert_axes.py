@@ -43,6 +43,7 @@ AXIS_PREFIXES = ("", "scaled", "raw")
 VIRTUAL_WORDS = ("linear", "gravity")
 #: a unit in an axis column's name (lower case, blanks dropped) -> units.UNITS
 NAMED_UNITS = {"g": "g", "m/s^2": "mps2", "m/s\u00b2": "mps2", "m/s/s": "mps2", "mps2": "mps2", "m/s2": "mps2",
+               "ms^-2": "mps2", "ms-2": "mps2", "m*s^-2": "mps2", "m.s^-2": "mps2", "m/s**2": "mps2",  # Kalibr, EuRoC
                "ms2": "mps2", "counts": "counts", "count": "counts", "lsb": "counts", "raw": "counts"}
 #: the units of NAMED_UNITS that only an accelerometer's readings have (a gyroscope's or a magnetometer's
 #: counts are counts too)
@@ -165,7 +166,8 @@ def columns_hint(names: list[str]) -> str:
 
 def find_named(source: str, names: list[str], stated: str, option: str, row: int) -> str:
     """The header's column an option names: the name equal to ``stated`` (blanks about it
-    dropped), else the only one equal to it ignoring case.
+    dropped), else the only one equal to it ignoring case, else the only one whose name without
+    the unit in () or [] at its end is.
 
     Raises
     ------
@@ -174,6 +176,10 @@ def find_named(source: str, names: list[str], stated: str, option: str, row: int
     """
     want = stated.strip()
     found = [n for n in names if n == want] or [n for n in names if n.lower() == want.lower()]
+    if not found:
+        # the name without the unit at its end (EuRoC's 'a_RS_S_x [m s^-2]' named as a_RS_S_x)
+        bare = [re.sub(UNIT_PART + r"\s*$", "", n).strip() for n in names]
+        found = [n for n, b in zip(names, bare) if b.lower() == want.lower()]
     if len(found) != 1:
         raise InputError(source, f"{option} {stated!r}: "
                          f"{'no such column' if not found else 'more than one column of that name'}; the columns are "

@@ -109,16 +109,20 @@ def test_a_refusal_prints_the_notes_made_before_it(tmp_path, capfd):
 
 
 def test_columns_names_the_accelerometer(tmp_path, capfd):
-    """--columns X,Y,Z names the three columns whatever they are called, a unit in () at a
-    name's end stating the unit; a name not in the header is refused listing the header."""
+    """--columns X,Y,Z names the three columns whatever they are called (with or without the unit
+    in () at a name's end, which states the unit); a name not in the header is refused listing
+    the header."""
     c = _counts(200, seed=3)
     src = write_lines(tmp_path / "log.csv", ["stamp,temp,u1 (g),u2 (g),u3 (g)"] +
                  [f"{k / 100.0!r},21.5," + ",".join(repr(float(v) * LSB_G) for v in r) for k, r in enumerate(c)])
     rec, _, err = _convert(tmp_path, capfd, src, "--columns", "u1 (g),u2 (g),u3 (g)", "--full-scale", "8",
                            "--rate", "100")
     np.testing.assert_array_equal(rec.raw, c)
-    err = _refused(tmp_path, capfd, src, "--columns", "u1,u2,u3", "--full-scale", "8")
-    assert "log.csv: row 1: --columns 'u1': no such column; the columns are 'stamp', 'temp', 'u1 (g)', 'u2 (g)', " \
+    # a name without its unit names the column too
+    rec, _, err = _convert(tmp_path, capfd, src, "--columns", "u1,u2,u3", "--full-scale", "8", "--rate", "100")
+    np.testing.assert_array_equal(rec.raw, c)
+    err = _refused(tmp_path, capfd, src, "--columns", "v1,v2,v3", "--full-scale", "8")
+    assert "log.csv: row 1: --columns 'v1': no such column; the columns are 'stamp', 'temp', 'u1 (g)', 'u2 (g)', " \
            "'u3 (g)'" in err
     err = _refused(tmp_path, capfd, src, "--columns", "u1 (g),u2 (g)", name="two")
     assert "expected the accelerometer's three columns X,Y,Z" in err
@@ -152,3 +156,20 @@ def test_a_comment_naming_a_logs_three_columns_keeps_it_a_log(tmp_path, capfd):
     rc, said, err, _ = run(["convert", src, "--rate", "50", "-o", out], capfd)
     assert rc == 0 and said.startswith("log: "), err
     np.testing.assert_array_equal(read_recording(out).raw, c)
+
+
+def test_a_kalibr_header_s_columns_and_unit_are_read(tmp_path, capfd):
+    """EuRoC's IMU files (Kalibr's layout): '#timestamp [ns],w_RS_S_x [rad s^-1],...,a_RS_S_x
+    [m s^-2],...'.  --columns a_RS_S_x,... had been 'no such column' (the names carry their unit),
+    and the unit 'm s^-2' was refused; both are read now."""
+    raw = _counts(400)
+    lsb = 9.80665 / 1200
+    head = ("#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+            "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]")
+    rows = [f"{1403636579758555392 + 5000000 * i},0.01,-0.02,0.03," + ",".join(f"{v * lsb:.10f}" for v in r)
+            for i, r in enumerate(raw)]
+    src = write_lines(tmp_path / "data.csv", [head] + rows)
+    rec, dev, err = _convert(tmp_path, capfd, src, "--columns", "a_RS_S_x,a_RS_S_y,a_RS_S_z", "--units", "mps2",
+                             "--lsb", str(lsb), "--round")
+    np.testing.assert_array_equal(rec.raw, raw)
+    assert dev["sample_rate_hz"] == pytest.approx(200.0, rel=1e-9)
