@@ -46,6 +46,7 @@ def calibrate_warnings(dev, cal) -> list[str]:
         warnings.append(f"fitted the jig-free '{fb['to']}' model ({what}, no cross-axis terms), as the poses do not "
                         f"determine {' or '.join(repr(m) for m in fb['reasons'])}. {why} (--jigfree-model chooses "
                         "the model)" + (f"; {fb['detector']}" if fb.get("detector") else ""))
+    poses = cal.extra.get("poses", []) if isinstance(cal.extra, dict) else []
     chi2, dof = fit.get("chi2"), fit.get("dof")
     red = chi2 / dof if chi2 is not None and dof else None
     cross_axis = fit.get("model", cal.method) == "full"
@@ -67,7 +68,6 @@ def calibrate_warnings(dev, cal) -> list[str]:
         known = "" if cal.method == "jigfree" else ", stated f off the poses' real one"
         also = (f", {red_wo:.3g} without the {len(outl['poses'])} pose(s) far off the fit named below"
                 if red_wo is not None else "")
-        poses = cal.extra.get("poses", []) if isinstance(cal.extra, dict) else []
         if poses and all(p.get("n_samples") == 1 for p in poses):
             why = ("each pose is one row (a file of pose means), whose noise is unknown and taken as the rounding's "
                    "(1/sqrt(12) count): the scatter is measured against that, not against the poses' own noise")
@@ -83,7 +83,6 @@ def calibrate_warnings(dev, cal) -> list[str]:
         warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}): the "
                         f"'{fit.get('model', cal.method)}' model has no cross-axis terms, which a real sensor "
                         f"has, and the poses may move while held; {use}")
-    poses = cal.extra.get("poses", []) if isinstance(cal.extra, dict) else []
     if poses:
         gs = None if cal.sensitivity_sigma is None else gain_sigma(cal.sensitivity, cal.sensitivity_sigma)
         # first to last sample, and one sample's step more: the time n samples take

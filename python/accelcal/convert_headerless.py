@@ -17,7 +17,7 @@ import dataclasses
 import numpy as np
 
 from .convert_time import is_datetime
-from .textinput import CELL_NUMBER_RE, NUMBER_RE, Preamble, line_cells
+from .textinput import CELL_NUMBER_RE, NUMBER_RE, Preamble, byte_lines, line_cells
 
 __all__ = ["STAMP_MIN", "HEADERLESS_NAMES", "timed_rows", "stamp_rule"]
 
@@ -37,17 +37,17 @@ def stamp_rule(cells: int) -> str:
             f"numbers above 2^24 ({STAMP_MIN:.0f}) that never decrease")
 
 
-def first_cells(data: bytes, pos: int, spaced: bool) -> list[bytes]:
+def first_cells(data: bytes, pos: int, spaced: bool) -> list[str]:
     """The first cell of every line from byte ``pos`` on that is neither blank nor a comment."""
     out = []
-    for line in data[pos:].split(b"\n"):
-        if not line.strip() or line.startswith(b"#"):
+    for line, _, _ in byte_lines(data, pos):
+        if not line.strip() or line.startswith("#"):
             continue
-        out.append(line.split(None, 1)[0] if spaced else line.split(b",", 1)[0].strip())
+        out.append(line.split(None, 1)[0] if spaced else line.split(",", 1)[0].strip())
     return out
 
 
-def rising_stamps(cells: list[bytes]) -> bool:
+def rising_stamps(cells: list[str]) -> bool:
     """Whether ``cells`` are numbers above STAMP_MIN that never decrease and rise from first to
     last."""
     try:

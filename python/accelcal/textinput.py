@@ -29,7 +29,7 @@ NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 CELL_NUMBER_RE = re.compile(NUMBER_RE.pattern + r"|[+-]?(?:nan|inf)", re.I)
 
 __all__ = ["NUMBER_RE", "CELL_NUMBER_RE", "GZIP_MAGIC", "COMPRESSIONS", "decompress", "semicolons_to_commas",
-           "Preamble", "read_text_bytes", "read_preamble", "table_preamble", "preamble_notes", "is_whitespace_header",
+           "byte_lines", "Preamble", "read_text_bytes", "read_preamble", "table_preamble", "preamble_notes", "is_whitespace_header",
            "split_whitespace_header",
            "whitespace_to_commas"]
 

@@ -193,8 +193,6 @@ def static_force(offsets, sensitivity, means, sigma=None) -> np.ndarray:
     return out
 
 
-
-
 def far_from_nominal(device, sensitivity) -> str | None:
     """A warning when a fitted sensitivity |s_i| (counts per m/s^2) is more than
     NOMINAL_FACTOR above or below the device file's ``counts_per_mps2`` (a real chip is

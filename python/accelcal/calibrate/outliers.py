@@ -27,8 +27,6 @@ from .checks import static_force
 __all__ = ["OUTLIER_K", "MIN_OUTLIER_POSES", "pose_chi", "outlier_poses", "norm_error", "subset", "outlier_report"]
 
 OUTLIER_K = 8.0            # robust sd of the poses' residual beyond their median that names a pose
-
-
 MIN_OUTLIER_POSES = 8      # fewer poses give no robust spread to judge one by
 
 

@@ -237,9 +237,13 @@ def rows_turn_deg(device, recordings) -> float:
 
 
 def detector_hint(device, recordings, poses: PoseSet | None) -> str:
-    """:func:`detector_found` as a clause to append ("; the static detector ..."; with
-    :data:`POSE_MEANS_HINT` after it where that applies), or ""."""
-    found = detector_found(device, recordings, poses)
+    """:func:`detector_found` as a clause to append (:func:`hint_clause`), or ""."""
+    return hint_clause(detector_found(device, recordings, poses))
+
+
+def hint_clause(found: tuple[str, bool] | None) -> str:
+    """A :func:`detector_found` result as a clause to append ("; the static detector ..."; with
+    :data:`POSE_MEANS_HINT` after it where that applies), or "" for None."""
     if found is None:
         return ""
     return "; " + found[0] + (": " + POSE_MEANS_HINT if found[1] else "")
@@ -252,7 +256,7 @@ def with_detector_hint(detail: str, device, recordings, poses: PoseSet | None) -
     'pose' column, not more poses."""
     found = detector_found(device, recordings, poses)
     if found is None or not found[1] or ADD_POSES not in detail:
-        return detail + detector_hint(device, recordings, poses)
+        return detail + hint_clause(found)
     return f"{POSE_MEANS_HINT}: {found[0]}; {detail.split(ADD_POSES)[0]}"
 
 

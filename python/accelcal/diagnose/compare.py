@@ -166,10 +166,10 @@ def within_pose_support(D, y, best: Cand, rival: Cand, repeats=(),
     return num / den, 1.0 / math.sqrt(den)
 
 
-def ruled_out(D, y, fit: Cand, rival: Cand, repeats=()) -> bool:
+def ruled_out(a: float, sa: float, repeats=()) -> bool:
     """Whether the data within the poses (and at the repeated orientations ``repeats``) rule out
-    the change a time-dependent ``fit`` claims there: its slope on them is below WITHIN_MIN by
-    more than WITHIN_Z standard errors (:func:`within_pose_support`), with an orientation held
+    the change a time-dependent fit claims there: its slope on them ``a`` (:func:`within_pose_support`,
+    with its standard error ``sa``) is below WITHIN_MIN by more than WITHIN_Z standard errors, with an orientation held
     again among the data (without one, a change made in the unrecorded turns between poses is
     not ruled out).  A drift that is not borne out is ambiguous with the verdict only where the
     data cannot rule it out (poses each held once); a tumble session that holds -x three times and -z twice met a
@@ -178,7 +178,6 @@ def ruled_out(D, y, fit: Cand, rival: Cand, repeats=()) -> bool:
         # the slopes within the poses alone do not rule out a change made while the sensor was
         # turned between them (a step in the unrecorded turns): only an orientation held again does
         return False
-    a, sa = within_pose_support(D, y, fit, rival, repeats)
     return a + WITHIN_Z * sa < WITHIN_MIN
 
 
@@ -189,10 +188,15 @@ def claims_time(D, y, best: Cand, rival: Cand, share: float = WITHIN_MIN, repeat
     change there: slope >= ``share`` and >= WITHIN_Z standard errors
     (:func:`within_pose_support`).  ``share`` 0 asks only whether the data change within the
     poses as the fit does at all (its size then comes from a joint fit)."""
-    a, sa = within_pose_support(D, y, best, rival, repeats, rival_at_repeats)
+    return judged(best.name, *within_pose_support(D, y, best, rival, repeats, rival_at_repeats), share, repeats)
+
+
+def judged(name: str, a: float, sa: float, share: float = WITHIN_MIN, repeats=()) -> tuple[bool, str]:
+    """:func:`claims_time`'s verdict and words from the slope ``a`` (with its standard error
+    ``sa``) that :func:`within_pose_support` found for the fit of effect ``name``."""
     ok = a >= share and a >= WITHIN_Z * sa
     where = "within the poses" + (" and at a repeated orientation" if len(repeats) else "")
-    return ok, f"{where} the data change by {a:.2f} +- {sa:.2f} of what {best.name} claims there"
+    return ok, f"{where} the data change by {a:.2f} +- {sa:.2f} of what {name} claims there"
 
 
 def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
@@ -242,10 +246,11 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
         elif c_time and (b_pose or not cands[best.name].time_dependent):
             # a drift's path takes each pose's level: it does not displace a verdict that does not
             # follow time (a tilt, a clip of one pose) unless the poses bear out its slope
-            ok, how = claims_time(D, y, c, best, repeats=reps)
+            a, sa = within_pose_support(D, y, c, best, reps)
+            ok, how = judged(c.name, a, sa, repeats=reps)
             out.tests[c.name]["within_poses"] = how
             if not ok:
-                if ruled_out(D, y, c, best, reps):
+                if ruled_out(a, sa, reps):
                     out.tests[c.name]["ruled_out"] = True
                 else:
                     out.ambiguous.append(c.name)

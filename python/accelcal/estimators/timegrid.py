@@ -116,7 +116,9 @@ def grid_places(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
         The blocks of :func:`stamp_trend`.
     """
     best = None
-    for step in (float(np.median(np.diff(t))), regular_step(t)[0]):
+    median, regular = float(np.median(np.diff(t))), regular_step(t)[0]
+    # the period a second start only where it differs (stamps on an even grid give one)
+    for step in (median,) + (() if abs(regular - median) <= 1e-12 * abs(median) else (regular,)):
         got = places_from(t, step)
         on = int(np.count_nonzero(np.abs(got[1]) <= ON_TIME))
         if best is None or on > best[0]:
