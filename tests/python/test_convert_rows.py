@@ -5,14 +5,12 @@ a file unusable).  The rows after a lost sample keep their places in time, so th
 fill the gap on their grid.  Files are written here from known counts."""
 from __future__ import annotations
 
-import json
 
 import numpy as np
 import pytest
 import scipy.io
 
-from accelcal.recording import read_recording
-from cli_run import one_refusal, run
+from cli_run import convert_ok, convert_refused
 
 LSB_G = 1e-4
 
@@ -23,19 +21,7 @@ def _counts(n, seed=0):
 
 
 def _convert(tmp_path, capfd, src, *args):
-    out, dev = tmp_path / "o.csv", tmp_path / "d.json"
-    rc, said, err, caught = run(["convert", src, *args, "-o", out, "--device-out", dev], capfd)
-    assert rc == 0 and not caught, err
-    return read_recording(out), json.loads(dev.read_text()), err
-
-
-def _refused(tmp_path, capfd, src, *args):
-    out = tmp_path / "refused"
-    out.mkdir()
-    rc, _, err, _ = run(["convert", src, *args, "-o", out / "o.csv"], capfd)
-    assert rc == 2 and one_refusal(err) and "Traceback" not in err, err
-    assert not list(out.iterdir())
-    return err
+    return convert_ok(tmp_path, capfd, src, *args)[:3]
 
 
 def _mat(tmp_path, a):
@@ -82,7 +68,7 @@ def test_a_lost_sample_is_left_out_and_keeps_its_place(tmp_path, capfd):
     assert "2 row(s) whose readings (SENSacc(:,1), SENSacc(:,2), SENSacc(:,3)) are all missing (empty or nan), the " \
            "first row 369: left out (samples the logger lost: the rows after keep their places in time" in err
     a[368, 1:] = c[368, 1:] * LSB_G
-    err = _refused(tmp_path, capfd, _mat(tmp_path, a), *GIVE)
+    err = convert_refused(tmp_path, capfd, _mat(tmp_path, a), *GIVE)
     assert "row 369, column SENSacc(:,1): expected a reading, got nan where SENSacc(:,2) and SENSacc(:,3) have one" \
         in err
 
