@@ -49,8 +49,8 @@ from typing import Any
 
 import numpy as np
 
-from .convert_common import (GYRO_RE, INDEX_COLUMNS, NUMBER_RE, Converted, Options, drop_note, exact_time, find_column,
-                             finish, header_cells, notes_on_refusal, read_columns, whole_counts)
+from .convert_common import (INDEX_COLUMNS, NUMBER_RE, Converted, Options, drop_note, exact_time, find_column,
+                             finish, header_cells, is_gyro, notes_on_refusal, read_columns, whole_counts)
 from .convert_e4 import convert_e4, is_e4
 from .convert_headerless import HEADERLESS_NAMES, stamp_rule, timed_rows
 from .convert_log import is_log, read_log
@@ -192,7 +192,7 @@ def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metada
         hint = f" (--format table reads the time column {timed!r})" if timed else ""
         raise InputError(source, f"{fmt} files have no time column: give the sample rate with --rate HZ{hint}")
     used = set(want)
-    dropped = [c for c in names if c and c not in used and GYRO_RE.fullmatch(c)]
+    dropped = [c for c in names if c and c not in used and is_gyro(c)]
     ignored = [c for c in names if c and c not in used and c not in dropped]
     return finish(source, fmt, raw, index, None, values.get(part_column), opts, scale, True, rate, metadata,
                   preamble_notes(pre) + drop_note(dropped, ignored) + shifted +

@@ -24,6 +24,9 @@ AXIS_RE = re.compile(r"(?P<pre>.*?)(?:accelerometer|acceleration|accel|acc|(?<![
 #: an axis named by its letter alone with a unit: ``x (g)``, ``Z [m/s^2]`` (an accelerometer's where the unit
 #: is one of acceleration, ACCELERATION_UNITS)
 BARE_UNIT_RE = re.compile(r"(?P<axis>[xyz])" + UNIT_PART, re.I)
+#: EuRoC's and Kalibr's frame-subscripted acceleration, ``a_RS_S_x [m s^-2]`` (the acceleration of S
+#: against R, in S's axes): an accelerometer's where the unit is one of acceleration (``w_RS_S_x`` is the gyro)
+FRAMED_AXIS_RE = re.compile(r"a_(?:[a-z0-9]+_)*(?P<axis>[xyz])" + UNIT_PART, re.I)
 #: a unit in a column's name, at its end
 NAME_UNIT_RE = re.compile(r".*?" + UNIT_PART)
 #: a file name that says its bare x, y, z are another sensor's (PX4's sensor_gyro, sensor_mag topics)
@@ -64,7 +67,8 @@ class AxisColumn:
 
 def axis_column(name: str) -> AxisColumn | None:
     """The accelerometer axis ``name`` is (``Acceleration x (m/s^2)``, ``scaledAccelX``,
-    ``AccX [g]``, ``acc_x_g``), or None: another column (a prefix other than scaled, raw,
+    ``AccX [g]``, ``acc_x_g``; ``x (g)`` and EuRoC's ``a_RS_S_x [m s^-2]`` where the unit is one of
+    acceleration), or None: another column (a prefix other than scaled, raw,
     or one naming linear acceleration or gravity, is not an accelerometer's axis)."""
     m = MESSAGE_AXIS_RE.fullmatch(name.strip())
     if m is not None:
@@ -72,7 +76,7 @@ def axis_column(name: str) -> AxisColumn | None:
         # (gravity in), PX4's accelerometer_m_s2[i] likewise
         axis = m.group("axis").lower() if m.group("axis") else "xyz"[int(m.group("index"))]
         return AxisColumn(name, axis, "mps2" if m.group("mps2") or m.group("ros") else None, False)
-    m = BARE_UNIT_RE.fullmatch(name.strip())
+    m = BARE_UNIT_RE.fullmatch(name.strip()) or FRAMED_AXIS_RE.fullmatch(name.strip())
     if m is not None:
         unit = re.sub(r"\s+", "", m.group("unit")).lower()
         named = NAMED_UNITS.get(unit)

@@ -25,10 +25,13 @@ from .units import STANDARD_GRAVITY, Scale
 
 __all__ = ["Converted", "Options", "INDEX_COLUMNS", "GYRO_RE", "NUMBER_RE", "header_cells", "read_columns",
            "find_column", "exact_time", "adc_range", "nominal_triad", "rest_scale", "check_range", "in_sample_order", "finish",
-           "notes_on_refusal", "stated_rate_off", "drop_note", "whole_counts"]
+           "notes_on_refusal", "stated_rate_off", "drop_note", "whole_counts", "is_gyro"]
 
 INDEX_COLUMNS = ("n_samples", "samples")
-GYRO_RE = re.compile(r"(gyr|gyro|g)[_ ]?[xyz]|w_?[xyz]", re.I)
+#: a gyroscope's column: gx, gyro_x, wx, w_x, EuRoC's frame-subscripted w_RS_S_x (a unit in () or [] after any)
+GYRO_RE = re.compile(r"(?:(?:gyr|gyro|g)[_ ]?[xyz]|w_?[xyz]|w_(?:[a-z0-9]+_)*[xyz])(?:\s*[(\[][^)\]]*[)\]])?", re.I)
+#: a unit of angular rate in a column's name: rad/s, rad s^-1, deg/s, dps, degrees per second
+ANGULAR_RATE_RE = re.compile(r"[(\[]\s*(?:rad|deg|\u00b0)\s*(?:/\s*s|s\s*\^?\s*-1)\s*[)\]]|[(\[]\s*dps\s*[)\]]", re.I)
 
 
 @dataclass
@@ -342,6 +345,12 @@ def stated_rate_off(rel: np.ndarray, stated: float | None) -> float | None:
         return None
     rate = 1.0 / step
     return rate if max(abs(stated / rate - 1.0), abs(rate / stated - 1.0)) > RATE_TOL else None
+
+
+def is_gyro(name: str) -> bool:
+    """Whether a column is a gyroscope's: named so (GYRO_RE, or ``gyr`` in it) or in a unit of
+    angular rate (``[rad s^-1]``, ``(deg/s)``, ``(dps)``)."""
+    return bool(GYRO_RE.fullmatch(name.strip()) or re.search(r"gyr", name, re.I) or ANGULAR_RATE_RE.search(name))
 
 
 def drop_note(dropped: list[str], ignored: list[str]) -> list[str]:

@@ -11,7 +11,7 @@ import numpy as np
 
 from .convert_axes import AxisColumn, find_named, names_unit, px4_export, stated_axes, table_axes
 from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
-                             notes_on_refusal, whole_counts)
+                             is_gyro, notes_on_refusal, whole_counts)
 from .convert_time import TIME_COLUMN_RE, datetime_stamps, is_datetime, unit_in_name
 from .csvtable import convert_columns, got_text
 from .errors import InputError
@@ -402,7 +402,7 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
     raw = to_counts(matrix, scale, source, locate, notes=notes) if converts else whole_counts(matrix, source, locate)
     t = None if stamps is None else table_time(source, stamps, table, rows, time_column, jt)
     used = set(want)
-    dropped = [c for c in names if c and c not in used and re.search(r"gyr", c, re.I)]
+    dropped = [c for c in names if c and c not in used and is_gyro(c)]
     ignored = [c for c in names if c and c not in used and c not in dropped]
     meta = {"table.columns": ", ".join(acc + ([time_column] if time_column else []))}
     return finish(source, "table", raw, np.arange(rows.size), t, None, opts, scale, converts or bool(np.any(raw < 0)),

@@ -173,3 +173,30 @@ def test_a_kalibr_header_s_columns_and_unit_are_read(tmp_path, capfd):
                              "--lsb", str(lsb), "--round")
     np.testing.assert_array_equal(rec.raw, raw)
     assert dev["sample_rate_hz"] == pytest.approx(200.0, rel=1e-9)
+
+
+def test_a_kalibr_header_s_accelerometer_is_found_unasked(tmp_path, capfd):
+    """EuRoC's IMU file without --columns: the 'a_' columns in m s^-2 are the accelerometer's, the
+    'w_' columns in rad s^-1 are dropped as the gyroscope's (named in the note), the commented
+    '#timestamp [ns]' is the time column in ns.  It had been refused ('no column of this header
+    says it is an accelerometer's')."""
+    raw = _counts(400)
+    lsb = 9.80665 / 1200
+    head = ("#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+            "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]")
+    rows = [f"{1403636579758555392 + 5000000 * i},0.01,-0.02,0.03," + ",".join(f"{v * lsb:.10f}" for v in r)
+            for i, r in enumerate(raw)]
+    src = write_lines(tmp_path / "data.csv", [head] + rows)
+    rec, dev, err = _convert(tmp_path, capfd, src, "--units", "mps2", "--lsb", str(lsb), "--round")
+    np.testing.assert_array_equal(rec.raw, raw)
+    assert dev["sample_rate_hz"] == pytest.approx(200.0, rel=1e-9)
+    np.testing.assert_allclose(np.diff(rec.t), 0.005, atol=1e-6)   # t an epoch in s: float64's spacing 2.4e-7 s
+    assert "dropped gyroscope columns w_RS_S_x [rad s^-1], w_RS_S_y [rad s^-1], w_RS_S_z [rad s^-1]" in err
+    assert "t read in ns" in err
+    # |f| at rest is the |f| written: counts over the device's scale
+    f = np.linalg.norm(rec.raw.mean(axis=0)) / dev["channels"][0]["counts_per_mps2"]
+    assert f == pytest.approx(np.linalg.norm(raw.mean(axis=0)) * lsb, rel=1e-6)
+    # the gyro's columns in a unit of angular rate are not taken for the accelerometer's
+    gyro = [head.rsplit(",", 3)[0]] + [r.rsplit(",", 3)[0] for r in rows]
+    err = _refused(tmp_path, capfd, write_lines(tmp_path / "gyro.csv", gyro))
+    assert "w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1]" in err
