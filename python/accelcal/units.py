@@ -339,8 +339,9 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
     InputError
         At the first reading (earliest row, then leftmost column) that is not a whole
         number of LSBs within ``REL_TOL``, nor within the rounding of the last significant
-        digit the values are printed with (the most any value of that column shows; a column of
-        zeros and one such value does not show it) where that is at most
+        digit the values are printed with (the most any value of that column shows, as significant
+        digits or as decimal places; a column of zeros and one such value does not show it) where
+        that is at most
         PRINT_TOL_COUNTS of a count (a value printed by '%g' as -0.020752 g is -340 counts of
         1/16384 g: -340.0008), or whose count does not fit 64 bits.
     """
@@ -366,8 +367,11 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
         # the printing precision shows in every value of the columns at fault, the whole ones too
         shown = np.unique(v[:, np.flatnonzero(sel.any(axis=0))])
         digits = max(_significant_digits(float(w)) for w in shown[np.isfinite(shown)])
+        places = max(_decimal_places(float(w)) for w in shown[np.isfinite(shown)])
         mag = np.floor(np.log10(np.maximum(np.abs(u), np.finfo(float).tiny)))
-        tol = (0.5 * 10.0 ** (mag - (digits - 1)) / scale.lsb)[inv.ravel()]
+        # printed with that many significant digits ('%g'), or with that many decimal places ('%.6f':
+        # an Axivity export's 0.007324 g is 15 counts of 1/2048 g, 14.99955)
+        tol = (np.maximum(0.5 * 10.0 ** (mag - (digits - 1)), 0.5 * 10.0 ** -places) / scale.lsb)[inv.ravel()]
         fine = tol <= PRINT_TOL_COUNTS
         ok = fine & (np.abs(x[sel] - n[sel]) <= tol * (1.0 + 1e-9) + REL_TOL * np.maximum(np.abs(n[sel]), 1.0))
         bad[sel] = ~ok
@@ -412,6 +416,11 @@ def grid_shift(x: np.ndarray) -> float | None:
     if abs(phase) <= SHIFT_TOL_COUNTS or float(np.max(np.abs(off))) > SHIFT_TOL_COUNTS:
         return None
     return 0.5 if abs(abs(phase) - 0.5) < 1e-6 else phase     # half a step: +0.5, one convention
+
+
+def _decimal_places(v: float) -> int:
+    """Decimal places of ``repr(v)`` past the point (0.007324 -> 6, 0.5 -> 1, 12.0 -> 0)."""
+    return max(0, -int(Decimal(repr(v)).normalize().as_tuple().exponent))
 
 
 def _significant_digits(v: float) -> int:

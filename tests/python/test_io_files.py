@@ -257,11 +257,13 @@ def test_to_counts_names_the_first_bad_value():
 
 
 @settings(max_examples=200, deadline=None)
-@given(st.lists(st.integers(-32768, 32767), min_size=20, max_size=200), st.sampled_from(["%g", "%.6g", "%.7g"]))
+@given(st.lists(st.integers(-32768, 32767), min_size=20, max_size=200), st.sampled_from(["%g", "%.6g", "%.7g", "%.6f"]))
 def test_to_counts_takes_values_printed_with_few_digits(counts, fmt):
     """A logger that prints g with '%g' (six significant digits, trailing zeros dropped: -0.14209
     for -2328 / 16384 = -0.14208984375) leaves each value up to half a unit in its last place off
-    its count (here <= 0.08 of a count): each is the count it rounds to.  The same values with a
+    its count (here <= 0.08 of a count): each is the count it rounds to.  So does one that prints
+    six decimal places ('%.6f', an Axivity export: 0.000305 g for 5 counts, 4.997; had been
+    refused, the tolerance taken from the significant digits alone).  The same values with a
     wrong LSB (1/12000 g) are still refused."""
     n = np.array(counts, float).reshape(-1, 1)
     # the column must show how it was printed: a column of zeros and one value 0.2229 (3652 counts
