@@ -27,8 +27,10 @@ Formats (``detect_format`` tells them from the first line that is not a comment)
   Told last, after the formats above.  A line of free text before the header (a title) is
   passed over with a note (:func:`textinput.table_preamble`).  Rows without a header of four
   cells whose first is a time stamp (an ISO-8601 date-time, or numbers above 2^24 that never
-  decrease: a Garmin watch's, an Axivity AX3's export) are read as ``t,x,y,z``, with a note
-  (:mod:`accelcal.convert_headerless`).
+  decrease: a Garmin watch's, an Axivity AX3's export) are read as ``t,x,y,z``, with a note; of
+  seven (an Axivity AX6's: the time, the accelerometer's x, y, z, the gyroscope's) the first three
+  numbers are the accelerometer's, the rest ignored; another count is left to ``--columns c2,c3,c4``
+  (cell k is ``ck``) (:mod:`accelcal.convert_headerless`).
 - ``e4``: an Empatica E4's ``ACC.csv``: row 1 the session's start (unix s) and row 2 the
   sample rate, each repeated in the three columns, then ``x,y,z`` in counts of 1/64 g
   (:mod:`accelcal.convert_e4`).
@@ -52,7 +54,7 @@ import numpy as np
 from .convert_common import (INDEX_COLUMNS, NUMBER_RE, Converted, Options, drop_note, exact_time, find_column,
                              finish, header_cells, is_gyro, notes_on_refusal, read_columns, whole_counts)
 from .convert_e4 import convert_e4, is_e4
-from .convert_headerless import HEADERLESS_NAMES, stamp_rule, timed_rows
+from .convert_headerless import HEADERLESS_NAMES, axes_known, stamp_rule, timed_rows
 from .convert_log import is_log, read_log
 from .convert_mat import convert_mat, is_mat
 from .convert_axes import BARE_AXES, axis_column, axis_triples, columns_hint
@@ -81,7 +83,7 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
     """The format of a file (its text ``data`` when already read), from its first line that
     is not a comment.  Without a header: four whitespace-separated numbers a row are imu_tk's
     text, three a line (whitespace or commas) a log, four whose first is a time stamp a table
-    of ``t,x,y,z`` (:func:`convert_headerless.timed_rows`).
+    of ``t,x,y,z``, seven ``t,ax,ay,az`` and three ignored (:func:`convert_headerless.timed_rows`).
 
     Raises
     ------
@@ -114,14 +116,17 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
         return "e4"
     if is_log(data):
         return "log"
-    if any(axis_column(c) for c in cells) or set(BARE_AXES) <= low or timed_rows(data, pre) is not None:
-        return "table"            # (rows without a header whose first cell is a time stamp: t,x,y,z)
+    timed = timed_rows(data, pre)
+    if any(axis_column(c) for c in cells) or set(BARE_AXES) <= low or timed is not None and axes_known(len(cells)):
+        return "table"            # (rows without a header whose first cell is a time stamp: t,x,y,z; t and 6)
     line = file_line(path, pre.header_line, pre.header)
     if len(cells) > 1 and all(CELL_NUMBER_RE.fullmatch(c.strip()) or is_datetime(c) for c in cells):
         dated = " (the first a date-time)" if is_datetime(cells[0]) else ""
         hints = ("imu_tk's text needs 4 (t ax ay az); " if spaced else "") + \
             ("for three readings a line give --format log --rate HZ; " if spaced or len(cells) == 3 else "") + \
-            (f"{stamp_rule(len(cells))}; " if len(cells) == len(HEADERLESS_NAMES) and not spaced or
+            (f"{stamp_rule(len(cells))}: --columns c2,c3,c4 reads cells 2-4 as its x, y, z (cell k is ck, the "
+             "first the time); " if timed is not None else
+             f"{stamp_rule(len(cells))}; " if len(cells) == len(HEADERLESS_NAMES) and not spaced or
              len(cells) > len(HEADERLESS_NAMES) and is_datetime(cells[0]) else "")
         raise InputError(source, f"{len(cells)} {'whitespace-separated ' if spaced else ''}numbers a row{dated} and no "
                          f"header ({line[:60]!r}): {hints}for other layouts add a header line naming the columns "

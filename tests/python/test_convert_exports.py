@@ -230,12 +230,39 @@ def test_headerless_csv_rows_are_quoted_as_the_file_holds_them(tmp_path, capfd):
         in err, err
     back = write_lines(tmp_path / "back.csv", [f"{1551178506 + k / 100 - (k == 20):.4f},0.5,0.25,-1" for k in range(30)])
     assert "row 1: 4 numbers a row and no header ('1551178506.0000,0.5," in _refused(tmp_path, capfd, back, name="b")
-    ax6 = write_lines(tmp_path / "ax6.csv", [f"2019-12-23 21:04:06.{10 * k:03d},0.5,0.25,-1,0.2,-0.5,15.7"
-                                        for k in range(30)])
-    err = _refused(tmp_path, capfd, ax6, name="ax6")
-    assert ("7 numbers a row (the first a date-time) and no header ('2019-12-23 21:04:06.000,0.5,0.25,-1,0.2,-0.5,"
-            "15.7'): a time and 6 numbers: which three are the accelerometer's no header says; for other layouts add "
-            "a header line naming the columns (t,ax,ay,az,gx,gy,gz;") in err, err
+    seven = write_lines(tmp_path / "seven.csv", [f"{1200 + 40 * k},0.5,0.25,-1,0.2,-0.5,15.7" for k in range(30)])
+    err = _refused(tmp_path, capfd, seven, name="seven")
+    assert ("7 numbers a row and no header ('1200,0.5,0.25,-1,0.2,-0.5,15.7'): for other layouts add a header line "
+            "naming the columns (t,ax,ay,az,gx,gy,gz;") in err, err
+
+
+def test_headerless_rows_of_a_time_and_two_triads_read_the_first_as_the_accelerometer(tmp_path, capfd):
+    """An Axivity AX6's export: no header, a date-time, the accelerometer's x, y, z in g ('%.6f'),
+    the gyroscope's in deg/s.  It had been refused ('which three are the accelerometer's no header
+    says').  Cells 2-4 are read as the accelerometer's, cells 5-7 ignored, each with a note; a
+    time and another count of numbers (5) stays refused, the refusal naming the --columns that
+    reads it, and that reads it."""
+    c = _counts(60, mean=(15.0, 146.0, 2048.0))
+    g = c / 2048.0
+    stamps = [f"2019-12-23 21:04:{6 + k // 100:02d}.{10 * (k % 100):03d}" for k in range(60)]
+    rows = [f"{s},{a:.6f},{b:.6f},{d:.6f},0.274658,-0.503540,15.769958" for s, (a, b, d) in zip(stamps, g)]
+    ax6 = write_lines(tmp_path / "ax6.csv", rows)
+    rec, dev, err, said = _convert(tmp_path, capfd, ax6, "--units", "g", "--lsb", str(1 / 2048))
+    np.testing.assert_array_equal(rec.raw, c)
+    assert said.startswith("table: 60 rows, 3 channels (g / 0.00048828125 g per count), 100 Hz")
+    assert ("no header: the 7 cells of each row are read as t,ax,ay,az,c5,c6,c7 (the first column holds ISO-8601 "
+            "date-times: time stamps; the next three the accelerometer's x, y, z, as an Axivity AX6's export orders "
+            "them, its gyroscope's after; --columns names three others, cell k as ck)") in err
+    assert "ignored columns c5, c6, c7" in err
+    five = write_lines(tmp_path / "five.csv", [r.rsplit(",", 2)[0] for r in rows])
+    first = rows[0].rsplit(",", 2)[0]
+    err = _refused(tmp_path, capfd, five, "--units", "g", "--lsb", str(1 / 2048), name="five")
+    assert (f"5 numbers a row (the first a date-time) and no header ('{first[:60]}'): a time and 4 numbers: which "
+            "three are the accelerometer's no header says: --columns c2,c3,c4 reads cells 2-4 as its x, y, z (cell k "
+            "is ck, the first the time);") in err, err
+    rec, _, err, _ = _convert(tmp_path, capfd, five, "--units", "g", "--lsb", str(1 / 2048), "--columns", "c2,c3,c4")
+    np.testing.assert_array_equal(rec.raw, c)
+    assert "ignored column c5" in err
 
 
 def test_headerless_rows_with_a_time_stamp_first_are_read_as_t_x_y_z(tmp_path, capfd):
