@@ -52,7 +52,7 @@ from typing import Any
 import numpy as np
 
 from .convert_common import (INDEX_COLUMNS, NUMBER_RE, Converted, Options, drop_note, exact_time, find_column,
-                             finish, header_cells, is_gyro, notes_on_refusal, read_columns, whole_counts)
+                             finish, header_cells, is_gyro, read_columns, whole_counts)
 from .convert_e4 import convert_e4, is_e4
 from .convert_headerless import HEADERLESS_NAMES, axes_known, stamp_rule, timed_rows
 from .convert_log import is_log, read_log
@@ -62,7 +62,7 @@ from .convert_named import convert_named
 from .convert_regions import POSE_DIRECTIONS, read_regions
 from .convert_rows import LOST_SAMPLES, lost_rows
 from .convert_time import TIME_COLUMN_RE, is_datetime, unit_in_name
-from .errors import InputError
+from .errors import InputError, notes_on_refusal
 from .held import held_runs, held_text
 from .recording import read_recording
 from .textinput import (CELL_NUMBER_RE, is_whitespace_header, preamble_notes, read_preamble, read_text_bytes,
@@ -188,14 +188,14 @@ def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metada
         return table.line(i), acc[j]
 
     shifted: list[str] = []
-    raw = to_counts(matrix, scale, source, locate, notes=shifted) if converts else matrix.astype(np.int64)
-    n = raw.shape[0]
-    index = values[index_column] if index_column else np.arange(n)
-    rate = opts.rate_hz
-    if rate is None:
-        timed = next((n for n in names if TIME_COLUMN_RE.fullmatch(n)), None)
-        hint = f" (--format table reads the time column {timed!r})" if timed else ""
-        raise InputError(source, f"{fmt} files have no time column: give the sample rate with --rate HZ{hint}")
+    with notes_on_refusal(lambda: preamble_notes(pre) + shifted):
+        raw = to_counts(matrix, scale, source, locate, notes=shifted) if converts else matrix.astype(np.int64)
+        rate = opts.rate_hz
+        if rate is None:
+            timed = next((n for n in names if TIME_COLUMN_RE.fullmatch(n)), None)
+            hint = f" (--format table reads the time column {timed!r})" if timed else ""
+            raise InputError(source, f"{fmt} files have no time column: give the sample rate with --rate HZ{hint}")
+    index = values[index_column] if index_column else np.arange(raw.shape[0])
     used = set(want)
     dropped = [c for c in names if c and c not in used and is_gyro(c)]
     ignored = [c for c in names if c and c not in used and c not in dropped]
@@ -235,45 +235,45 @@ def mpu6050_preamble(source: str, data: bytes, pre) -> tuple[Any, dict[str, str]
 
 
 def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Converted:
-    """A serial monitor's capture (:mod:`accelcal.convert_log`)."""
+    """A serial monitor's capture (:mod:`accelcal.convert_log`).  A refusal carries the notes made
+    before it (:func:`errors.notes_on_refusal`)."""
     if is_e4(data):
         raise InputError(source, "rows 1-2 are one value repeated, a start time and a rate, as an Empatica E4's "
                          "export begins: read it with --format e4 (or auto), or remove the two rows and give --rate HZ",
                          row=1)
     values, lines, block, info = read_log(source, data)
-    lost: list[str] = []
-    keep = lost_rows(source, values, lambda i: lines[i], lambda j: f"field {j + 1}",
-                     lambda i, j: repr(float(values[i, j])), lost, LOST_SAMPLES)
-    values, lines, block = values[keep], [lines[i] for i in keep.tolist()], [block[i] for i in keep.tolist()]
-
-    def locate(i: int, j: int) -> tuple[int, str]:
-        return lines[i], f"field {j + 1}"
-
-    scale = opts.scale
-    shifted: list[str] = []
-    raw = to_counts(values, scale, source, locate, notes=shifted) if scale is not None and scale.converts else \
-        whole_counts(values, source, locate)
-    if opts.rate_hz is None:
-        raise InputError(source, "log files (lines of three numbers, no header) have no time column: give the "
-                         "sample rate with --rate HZ")
-    if blocks and opts.regions is not None:
-        raise InputError(source, "--blocks and --regions both label the poses: give one")
     notes = [f"{info['text_lines']} line(s) of text (the first: {info['first_text']!r}) split the readings into "
              f"{info['blocks']} block(s)" + ("; each block is a pose" if blocks else
                                             "; --blocks labels each as a pose")] if info["text_lines"] else []
-    notes += lost + shifted + ([info["cut"]] if info["cut"] else [])
-    k, first = held_runs(raw)
-    n = raw.shape[0]
-    share = (n - first.size) / (n - 1) if n > 1 else 0.0      # rows that repeat the row before
-    if k > 1:
-        notes.append(f"{100 * share:.0f} % of the rows repeat the row before in all three readings (each reading "
-                     f"held for {held_text(k, first, n)}): the logger read the sensor faster than it updates; the "
-                     "distinct readings "
-                     f"come at about {opts.rate_hz / k:.4g} Hz, and successive rows are not independent samples")
-    meta = {"log.text_lines": str(info["text_lines"]), "log.blocks": str(info["blocks"]),
-            "log.held_share": f"{share:.4f}"}
-    return finish(source, "log", raw, keep, None, block if blocks else None, opts, scale,
-                  bool(np.any(raw < 0)), opts.rate_hz, meta, notes, locate, None)
+    notes += [info["cut"]] if info["cut"] else []       # a last line cut short, left out
+    with notes_on_refusal(lambda: notes):
+        keep = lost_rows(source, values, lambda i: lines[i], lambda j: f"field {j + 1}",
+                         lambda i, j: repr(float(values[i, j])), notes, LOST_SAMPLES)
+        values, lines, block = values[keep], [lines[i] for i in keep.tolist()], [block[i] for i in keep.tolist()]
+
+        def locate(i: int, j: int) -> tuple[int, str]:
+            return lines[i], f"field {j + 1}"
+
+        scale = opts.scale
+        raw = to_counts(values, scale, source, locate, notes=notes) if scale is not None and scale.converts else \
+            whole_counts(values, source, locate)
+        if opts.rate_hz is None:
+            raise InputError(source, "log files (lines of three numbers, no header) have no time column: give the "
+                             "sample rate with --rate HZ")
+        if blocks and opts.regions is not None:
+            raise InputError(source, "--blocks and --regions both label the poses: give one")
+        k, first = held_runs(raw)
+        n = raw.shape[0]
+        share = (n - first.size) / (n - 1) if n > 1 else 0.0      # rows that repeat the row before
+        if k > 1:
+            notes.append(f"{100 * share:.0f} % of the rows repeat the row before in all three readings (each "
+                         f"reading held for {held_text(k, first, n)}): the logger read the sensor faster than it "
+                         f"updates; the distinct readings come at about {opts.rate_hz / k:.4g} Hz, and successive "
+                         "rows are not independent samples")
+        meta = {"log.text_lines": str(info["text_lines"]), "log.blocks": str(info["blocks"]),
+                "log.held_share": f"{share:.4f}"}
+        return finish(source, "log", raw, keep, None, block if blocks else None, opts, scale,
+                      bool(np.any(raw < 0)), opts.rate_hz, meta, notes, locate, None)
 
 
 def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, rate_hz: float | None = None,
@@ -400,15 +400,16 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
             device, rec = load_xsens(path)
             device = device if scale is None or scale.lsb_g is None else None  # a stated full scale: the nominal device from it
         else:
-            device, rec = None, read_recording(path, scale=scale)
+            device, rec = None, read_recording(path, scale=scale)   # (its refusals carry its notes)
+        with notes_on_refusal(lambda: list(rec.notes)):
             if rec.n_channels != 3:
                 raise InputError(source, f"{rec.n_channels} raw channels: convert makes a triad's recording (3)")
+            kept = (rec.pose, rec.f) if fmt == "csv" and opts.regions is None else None
+            if kept is not None and stated_f:
+                raise InputError(source, "--stated-f: a recording's poses are its own; give --regions to name them")
+            t = rec.t if fmt != "csv" else exact_time(      # an epoch in ns, which float64 rounds, as int64
+                rec.t, lambda: read_columns(source, data, read_preamble(data), {"t": "text"})[1]["t"])
         signed = fmt == "csv" and bool(np.any(rec.raw < 0))
-        kept = (rec.pose, rec.f) if fmt == "csv" and opts.regions is None else None
-        if kept is not None and stated_f:
-            raise InputError(source, "--stated-f: a recording's poses are its own; give --regions to name them")
-        t = rec.t if fmt != "csv" else exact_time(      # an epoch in ns, which float64 rounds, as int64
-            rec.t, lambda: read_columns(source, data, read_preamble(data), {"t": "text"})[1]["t"])
         return finish(source, fmt, rec.raw, np.arange(rec.n_samples), t, None, opts, scale, signed, None,
                       dict(rec.metadata), list(rec.notes), lambda i, j: (rec.line(i), f"raw_{j}"), None, device, kept,
                       time_column="t" if fmt == "csv" else None)

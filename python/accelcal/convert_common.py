@@ -5,9 +5,8 @@ from __future__ import annotations
 
 import csv
 import re
-from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterator
+from typing import Any
 
 import numpy as np
 
@@ -16,7 +15,7 @@ from .convert_rows import placeholder_lead
 from .convert_time import FLOAT_EXACT, burst_fit, exact_stamps, rate_from_t, time_in_seconds
 from .csvtable import convert_columns, cut_short_end, make_table, split_header
 from .device import Device
-from .errors import AccelcalError, InputError
+from .errors import InputError, notes_on_refusal
 from .recording import Recording
 from .recording_checks import RATE_TOL
 from .static import detect_static, scale_agreement
@@ -25,7 +24,7 @@ from .units import STANDARD_GRAVITY, Scale
 
 __all__ = ["Converted", "Options", "INDEX_COLUMNS", "GYRO_RE", "NUMBER_RE", "header_cells", "read_columns",
            "find_column", "exact_time", "adc_range", "nominal_triad", "rest_scale", "check_range", "in_sample_order", "finish",
-           "notes_on_refusal", "stated_rate_off", "drop_note", "whole_counts", "is_gyro"]
+           "stated_rate_off", "drop_note", "whole_counts", "is_gyro"]
 
 INDEX_COLUMNS = ("n_samples", "samples")
 #: a gyroscope's column: gx, gyro_x, wx, w_x, EuRoC's frame-subscripted w_RS_S_x (a unit in () or [] after any)
@@ -256,7 +255,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
     """Range check, a leading placeholder left out (:func:`convert_rows.placeholder_lead`), sample
     order, time, poses, metadata and the nominal device, shared by the formats (without time
     stamps ``t``, t is ``t0`` (s) + the sample index over ``rate``: a row left out before keeps
-    its place).  A refusal carries ``notes``, those made before it (:func:`notes_on_refusal`)."""
+    its place).  A refusal carries ``notes``, those made before it (:func:`errors.notes_on_refusal`)."""
     with notes_on_refusal(lambda: notes):    # a refusal after notes were made: they go with it
         check_range(raw, opts.bits, signed, source, locate)
         gravity = opts.gravity_mps2 or (device.gravity_mps2 if device is not None else STANDARD_GRAVITY)
@@ -311,19 +310,6 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
         if device is None:
             device = nominal_triad(f"{fmt}-triad", rate, gravity, raw, opts.bits, signed, scale, device_notes, rec)
         return Converted(rec, device, fmt, names, notes, scale, order is not None, device_notes)
-
-
-@contextmanager
-def notes_on_refusal(notes: Callable[[], list[str]]) -> Iterator[None]:
-    """A context in which a refusal (an :class:`~accelcal.errors.AccelcalError`) is given the
-    notes made before it, ``notes()`` (called then), unless it already holds some (an inner
-    context's, which made more): ``accelcal convert`` prints them ahead of the error line."""
-    try:
-        yield
-    except AccelcalError as e:
-        if not e.notes:
-            e.notes = tuple(notes())
-        raise
 
 
 def stated_rate_off(rel: np.ndarray, stated: float | None) -> float | None:

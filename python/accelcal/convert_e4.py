@@ -11,7 +11,7 @@ import numpy as np
 from .convert_common import Converted, Options, finish, whole_counts
 from .convert_log import read_log
 from .convert_rows import LOST_SAMPLES, lost_rows
-from .errors import InputError
+from .errors import InputError, notes_on_refusal
 from .units import Scale, to_counts
 
 __all__ = ["E4_LSB_G", "E4_BITS", "e4_preamble", "is_e4", "convert_e4"]
@@ -59,7 +59,8 @@ def convert_e4(source: str, data: bytes, opts: Options) -> Converted:
     Raises
     ------
     InputError
-        Row 2 no sample rate; a row of the readings that is not three numbers (naming it).
+        Row 2 no sample rate; a row of the readings that is not three numbers (naming it).  A
+        refusal after the first note carries the notes (:func:`errors.notes_on_refusal`).
     """
     start, rate_text = e4_preamble(data)
     try:
@@ -76,26 +77,27 @@ def convert_e4(source: str, data: bytes, opts: Options) -> Converted:
     if info["text_lines"]:
         notes.append(f"{info['text_lines']} line(s) of text among the readings (the first: {info['first_text']!r}) "
                      "are left out")
-    rate = file_rate
-    if opts.rate_hz is not None and opts.rate_hz != file_rate:
-        rate = opts.rate_hz
-        notes.append(f"--rate {rate:g} Hz is used for the {file_rate:g} Hz row 2 states")
-    scale = opts.scale
-    if scale is None:
-        scale = Scale("counts", None, lsb_g=E4_LSB_G, how="the Empatica E4's")
-        notes.append("the readings are counts of 1/64 g, the E4's (--full-scale G states another)")
-    if opts.bits == 16:
-        opts.bits = E4_BITS
+    with notes_on_refusal(lambda: notes + ([info["cut"]] if info["cut"] else [])):
+        rate = file_rate
+        if opts.rate_hz is not None and opts.rate_hz != file_rate:
+            rate = opts.rate_hz
+            notes.append(f"--rate {rate:g} Hz is used for the {file_rate:g} Hz row 2 states")
+        scale = opts.scale
+        if scale is None:
+            scale = Scale("counts", None, lsb_g=E4_LSB_G, how="the Empatica E4's")
+            notes.append("the readings are counts of 1/64 g, the E4's (--full-scale G states another)")
+        if opts.bits == 16:
+            opts.bits = E4_BITS
 
-    keep = lost_rows(source, values, lambda i: lines[i], lambda j: "xyz"[j], lambda i, j: repr(float(values[i, j])),
-                     notes, LOST_SAMPLES)
-    values, lines = values[keep], [lines[i] for i in keep.tolist()]
+        keep = lost_rows(source, values, lambda i: lines[i], lambda j: "xyz"[j], lambda i, j: repr(float(values[i, j])),
+                         notes, LOST_SAMPLES)
+        values, lines = values[keep], [lines[i] for i in keep.tolist()]
 
-    def locate(i: int, j: int) -> tuple[int, str]:
-        return lines[i], "xyz"[j]
+        def locate(i: int, j: int) -> tuple[int, str]:
+            return lines[i], "xyz"[j]
 
-    raw = to_counts(values, scale, source, locate, notes=notes) if scale.converts else \
-        whole_counts(values, source, locate)
-    meta = {"e4.start_unix_s": f"{start:.6f}", "e4.rate_hz": f"{file_rate:g}"}
-    return finish(source, "e4", raw, keep, None, None, opts, scale, True, rate, meta,
-                  notes + ([info["cut"]] if info["cut"] else []), locate, None, t0=start)
+        raw = to_counts(values, scale, source, locate, notes=notes) if scale.converts else \
+            whole_counts(values, source, locate)
+        meta = {"e4.start_unix_s": f"{start:.6f}", "e4.rate_hz": f"{file_rate:g}"}
+        return finish(source, "e4", raw, keep, None, None, opts, scale, True, rate, meta,
+                      notes + ([info["cut"]] if info["cut"] else []), locate, None, t0=start)

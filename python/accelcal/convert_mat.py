@@ -19,7 +19,7 @@ import scipy.io
 
 from .convert_common import Converted, Options, finish, whole_counts
 from .convert_rows import LOST_SAMPLES, lost_rows
-from .errors import InputError
+from .errors import InputError, notes_on_refusal
 from .units import file_scale, to_counts
 
 __all__ = ["MAT_MAGIC", "is_mat", "mat_arrays", "pick_array", "convert_mat"]
@@ -235,44 +235,45 @@ def convert_mat(source: str, path: Any, opts: Options, variable: str | None = No
     readings are all NaN is a sample the logger lost: left out with a note, the rows after
     keeping their places (:func:`convert_rows.lost_rows`); one with some NaN is refused."""
     notes: list[str] = []
-    name, a = pick_array(mat_arrays(path, source, notes), variable, source)
-    timed = a.shape[1] == 4
-    first = 1 if timed else 0
-    readings = a[:, first:]
-    vectors = name.split(",") if "," in name else None
+    with notes_on_refusal(lambda: notes):       # a refusal after a note: it goes with it
+        name, a = pick_array(mat_arrays(path, source, notes), variable, source)
+        timed = a.shape[1] == 4
+        first = 1 if timed else 0
+        readings = a[:, first:]
+        vectors = name.split(",") if "," in name else None
 
-    def col(j: int) -> str:
-        return vectors[j] if vectors else f"{name}(:,{j + 1})"        # as MATLAB names them (1-based)
+        def col(j: int) -> str:
+            return vectors[j] if vectors else f"{name}(:,{j + 1})"        # as MATLAB names them (1-based)
 
-    column = [col(j + first) for j in range(3)]
+        column = [col(j + first) for j in range(3)]
 
-    keep = lost_rows(source, readings, lambda i: i + 1, lambda j: column[j],
-                     lambda i, j: repr(float(readings[i, j])), notes, LOST_SAMPLES)
-    bad = np.argwhere(~np.isfinite(a[keep]))
-    if bad.size:
-        i, j = int(keep[bad[0][0]]), int(bad[0][1])
-        raise InputError(source, f"{float(a[i, j])} is not a finite number", row=i + 1, column=col(j))
-    a, readings = a[keep], readings[keep]
+        keep = lost_rows(source, readings, lambda i: i + 1, lambda j: column[j],
+                         lambda i, j: repr(float(readings[i, j])), notes, LOST_SAMPLES)
+        bad = np.argwhere(~np.isfinite(a[keep]))
+        if bad.size:
+            i, j = int(keep[bad[0][0]]), int(bad[0][1])
+            raise InputError(source, f"{float(a[i, j])} is not a finite number", row=i + 1, column=col(j))
+        a, readings = a[keep], readings[keep]
 
-    def locate(i: int, j: int) -> tuple[int, str]:
-        return int(keep[i]) + 1, column[j]
+        def locate(i: int, j: int) -> tuple[int, str]:
+            return int(keep[i]) + 1, column[j]
 
-    t = None
-    if timed:
-        t = a[:, 0]
-        back = np.flatnonzero(np.diff(t) <= 0)
-        if back.size:
-            i = int(back[0]) + 1
-            raise InputError(source, f"t = {float(t[i]):.10g} is not after {float(t[i - 1]):.10g}: the first column "
-                             "is taken as time stamps, which must increase (--variable names another array)",
-                             row=int(keep[i]) + 1, column=col(0))
-    elif opts.rate_hz is None:
-        raise InputError(source, f"array {name} has no time column (3 columns): give the sample rate with --rate HZ")
-    elif opts.time_unit != "auto":
-        raise InputError(source, f"--time-unit: array {name} has no time column (3 columns; --rate states its rate)")
-    scale = file_scale(opts.scale, {}, {}, source)
-    converts = scale is not None and scale.converts
-    raw = to_counts(readings, scale, source, locate, notes=notes) if converts else \
-        whole_counts(readings, source, locate)
-    return finish(source, "mat", raw, keep, t, None, opts, scale, converts or bool(np.any(raw < 0)),
-                  opts.rate_hz, {"mat.variable": name}, notes, locate, None)
+        t = None
+        if timed:
+            t = a[:, 0]
+            back = np.flatnonzero(np.diff(t) <= 0)
+            if back.size:
+                i = int(back[0]) + 1
+                raise InputError(source, f"t = {float(t[i]):.10g} is not after {float(t[i - 1]):.10g}: the first column "
+                                 "is taken as time stamps, which must increase (--variable names another array)",
+                                 row=int(keep[i]) + 1, column=col(0))
+        elif opts.rate_hz is None:
+            raise InputError(source, f"array {name} has no time column (3 columns): give the sample rate with --rate HZ")
+        elif opts.time_unit != "auto":
+            raise InputError(source, f"--time-unit: array {name} has no time column (3 columns; --rate states its rate)")
+        scale = file_scale(opts.scale, {}, {}, source)
+        converts = scale is not None and scale.converts
+        raw = to_counts(readings, scale, source, locate, notes=notes) if converts else \
+            whole_counts(readings, source, locate)
+        return finish(source, "mat", raw, keep, t, None, opts, scale, converts or bool(np.any(raw < 0)),
+                      opts.rate_hz, {"mat.variable": name}, notes, locate, None)

@@ -11,10 +11,10 @@ import numpy as np
 
 from .convert_axes import AxisColumn, find_named, names_unit, px4_export, stated_axes, table_axes
 from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
-                             is_gyro, notes_on_refusal, whole_counts)
+                             is_gyro, whole_counts)
 from .convert_time import TIME_COLUMN_RE, datetime_stamps, is_datetime, unit_in_name
 from .csvtable import convert_columns, got_text
-from .errors import InputError
+from .errors import InputError, notes_on_refusal
 from .convert_rows import lost_rows
 from .recording_checks import repeated_rows
 from .textinput import preamble_notes
@@ -337,7 +337,7 @@ def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bo
     """A table with named columns: the three accelerometer axes (:func:`table_axes`), their
     unit (:func:`table_scale`), an optional time column (else ``--rate``); rows without
     readings skipped (:func:`present_rows`).  A refusal carries the notes made before it
-    (:func:`convert_common.notes_on_refusal`)."""
+    (:func:`errors.notes_on_refusal`)."""
     notes: list[str] = []
     with notes_on_refusal(lambda: preamble_notes(pre) + notes):
         return named_table(source, data, pre, opts, units_stated, notes)

@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import os
 import tempfile
-from typing import IO, Any, Callable
+from contextlib import contextmanager
+from typing import IO, Any, Callable, Iterator
 
 __all__ = [
     "AccelcalError",
@@ -23,6 +24,7 @@ __all__ = [
     "core_error",
     "atomic_write",
     "read_input",
+    "notes_on_refusal",
 ]
 
 
@@ -35,6 +37,20 @@ class AccelcalError(Exception):
     """
 
     notes: tuple[str, ...] = ()
+
+
+@contextmanager
+def notes_on_refusal(notes: Callable[[], list[str]]) -> Iterator[None]:
+    """A context in which a refusal (an :class:`AccelcalError`) is given the notes made before
+    it, ``notes()`` (called then), unless it already holds some (an inner context's, which made
+    more): ``accelcal convert`` prints them ahead of the error line.  The one mechanism by which
+    every reader and conversion path keeps its notes on a refusal."""
+    try:
+        yield
+    except AccelcalError as e:
+        if not e.notes:
+            e.notes = tuple(notes())
+        raise
 
 
 def _one_line(text: str) -> str:

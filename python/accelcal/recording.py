@@ -22,7 +22,7 @@ import numpy as np
 from .csvformat import INT, REPR, TEXT, csv_cell, csv_rows
 from .csvtable import (FLOAT_RE, META_KEY_RE, RAW_RE, REFERENCE_NAMES, VECTOR_COLUMNS, ByteTable, ListTable,
                        classify_columns, convert_columns, cut_short_end, fast_columns, make_table, quote_cell, split_header)
-from .errors import InputError, atomic_write
+from .errors import InputError, atomic_write, notes_on_refusal
 from .recording_checks import check_core_input, check_for_device, repeated_rows, repeats_note
 from .textinput import is_whitespace_header, read_preamble, read_text_bytes, split_whitespace_header, whitespace_to_commas
 from .units import Scale, converted_metadata, file_scale, to_counts
@@ -313,97 +313,98 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
     if end <= pos:
         raise InputError(source, "no data rows after the header", row=header_line)
     end, cut_note = cut_short_end(data, pos, end, len(names), header_line + 1)
-    if spaced:
-        data = whitespace_to_commas(data, pos, end, names, header_line + 1, source)
-        end = len(data)
-    m = len(names)
-    first = header_line + 1
-    table: Any = None
-    values = fast_columns(data, pos, end, m, cols)
-    if values is None:
-        # Anything pyarrow's reader did not take (quotes, '1.0' as an integer, an
-        # error): the numpy/Python path decides, with the exact message.
-        table = make_table(data, pos, end, m, first, source)
-        # Convert every column; report the earliest bad cell in the file.
-        values, err = convert_columns(table, cols)
-        if err is not None:
-            i, j, msg = err
-            raise InputError(source, msg, row=table.line(i), column=names[j])
-    n = len(values["t"])
-
-    def located() -> Any:
-        """The table that locates cells and lines; after pyarrow's reader (no quotes in
-        the file) built only when a message or an extra column needs it."""
-        nonlocal table
-        if table is None:
-            table = ByteTable(data, pos, end, m, first, source)
-        return table
-
-    t = values["t"]
-    same = repeated_rows(values.values()) if repeats else np.zeros(n, bool)
-    dt_bad = np.flatnonzero(~(np.diff(t) > 0) & ~same[1:])
-    if dt_bad.size:
-        i = int(dt_bad[0]) + 1
-        jt = cols["t"][0]
-        raise InputError(
-            source,
-            f"t must be strictly increasing, got {quote_cell(located().cell(i, jt).strip())} "
-            f"after {quote_cell(located().cell(i - 1, jt).strip())}",
-            row=located().line(i),
-            column="t",
-        )
-
-    n_raw = sum(1 for name in cols if RAW_RE.fullmatch(name))
     read_notes = [cut_note] if cut_note else []
-    if scale is not None and scale.converts:
-        raw = to_counts(np.column_stack([values[f"raw_{k}"] for k in range(n_raw)]), scale, source,
-                        lambda i, k: (located().line(i), f"raw_{k}"), notes=read_notes)
-        metadata = converted_metadata(metadata, scale)
-    else:
-        raw = np.empty((n, n_raw), dtype=np.int64)
-        for k in range(n_raw):
-            raw[:, k] = values[f"raw_{k}"]
-    vecs: dict[str, np.ndarray | None] = {}
-    for vec, comps in VECTOR_COLUMNS.items():
-        if comps[0] not in values:
-            vecs[vec] = None
-            continue
-        arr = np.column_stack([values[c] for c in comps])
-        fin = np.isfinite(arr)
-        part = np.flatnonzero(fin.any(axis=1) & ~fin.all(axis=1))
-        if part.size:
-            i = int(part[0])
-            given = comps[int(np.flatnonzero(fin[i])[0])]
-            missing = comps[int(np.flatnonzero(~fin[i])[0])]
+    with notes_on_refusal(lambda: read_notes):     # a refusal after a note: it goes with it
+        if spaced:
+            data = whitespace_to_commas(data, pos, end, names, header_line + 1, source)
+            end = len(data)
+        m = len(names)
+        first = header_line + 1
+        table: Any = None
+        values = fast_columns(data, pos, end, m, cols)
+        if values is None:
+            # Anything pyarrow's reader did not take (quotes, '1.0' as an integer, an
+            # error): the numpy/Python path decides, with the exact message.
+            table = make_table(data, pos, end, m, first, source)
+            # Convert every column; report the earliest bad cell in the file.
+            values, err = convert_columns(table, cols)
+            if err is not None:
+                i, j, msg = err
+                raise InputError(source, msg, row=table.line(i), column=names[j])
+        n = len(values["t"])
+
+        def located() -> Any:
+            """The table that locates cells and lines; after pyarrow's reader (no quotes in
+            the file) built only when a message or an extra column needs it."""
+            nonlocal table
+            if table is None:
+                table = ByteTable(data, pos, end, m, first, source)
+            return table
+
+        t = values["t"]
+        same = repeated_rows(values.values()) if repeats else np.zeros(n, bool)
+        dt_bad = np.flatnonzero(~(np.diff(t) > 0) & ~same[1:])
+        if dt_bad.size:
+            i = int(dt_bad[0]) + 1
+            jt = cols["t"][0]
             raise InputError(
                 source,
-                f"{given} is given but {missing} is not (give all of {', '.join(comps)} or none)",
+                f"t must be strictly increasing, got {quote_cell(located().cell(i, jt).strip())} "
+                f"after {quote_cell(located().cell(i - 1, jt).strip())}",
                 row=located().line(i),
-                column=missing,
+                column="t",
             )
-        vecs[vec] = arr
-    extra: dict[str, list[str]] = {}
-    for j, name in enumerate(names):
-        if name and name not in cols and name not in extra:
-            extra[name] = located().strings(j)
-    rec = Recording(
-        t=t,
-        raw=raw,
-        f=vecs["f"],
-        w=vecs["w"],
-        dw=vecs["dw"],
-        temp_c=values.get("temp_c"),
-        pose=values.get("pose"),
-        metadata=metadata,
-        extra=extra,
-        source=source,
-        lines=first if not isinstance(table, ListTable) else table.lines,
-    )
-    if same.any():
-        rec = rec.select(~same)
-        read_notes.append(repeats_note(int(same.sum()), located().line(int(np.argmax(same)))))
-    rec.notes.extend(read_notes)
-    return rec
+
+        n_raw = sum(1 for name in cols if RAW_RE.fullmatch(name))
+        if scale is not None and scale.converts:
+            raw = to_counts(np.column_stack([values[f"raw_{k}"] for k in range(n_raw)]), scale, source,
+                            lambda i, k: (located().line(i), f"raw_{k}"), notes=read_notes)
+            metadata = converted_metadata(metadata, scale)
+        else:
+            raw = np.empty((n, n_raw), dtype=np.int64)
+            for k in range(n_raw):
+                raw[:, k] = values[f"raw_{k}"]
+        vecs: dict[str, np.ndarray | None] = {}
+        for vec, comps in VECTOR_COLUMNS.items():
+            if comps[0] not in values:
+                vecs[vec] = None
+                continue
+            arr = np.column_stack([values[c] for c in comps])
+            fin = np.isfinite(arr)
+            part = np.flatnonzero(fin.any(axis=1) & ~fin.all(axis=1))
+            if part.size:
+                i = int(part[0])
+                given = comps[int(np.flatnonzero(fin[i])[0])]
+                missing = comps[int(np.flatnonzero(~fin[i])[0])]
+                raise InputError(
+                    source,
+                    f"{given} is given but {missing} is not (give all of {', '.join(comps)} or none)",
+                    row=located().line(i),
+                    column=missing,
+                )
+            vecs[vec] = arr
+        extra: dict[str, list[str]] = {}
+        for j, name in enumerate(names):
+            if name and name not in cols and name not in extra:
+                extra[name] = located().strings(j)
+        rec = Recording(
+            t=t,
+            raw=raw,
+            f=vecs["f"],
+            w=vecs["w"],
+            dw=vecs["dw"],
+            temp_c=values.get("temp_c"),
+            pose=values.get("pose"),
+            metadata=metadata,
+            extra=extra,
+            source=source,
+            lines=first if not isinstance(table, ListTable) else table.lines,
+        )
+        if same.any():
+            rec = rec.select(~same)
+            read_notes.append(repeats_note(int(same.sum()), located().line(int(np.argmax(same)))))
+        rec.notes.extend(read_notes)
+        return rec
 
 
 def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> None:

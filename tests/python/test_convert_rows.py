@@ -95,3 +95,37 @@ def test_a_lost_sample_of_a_timed_array_and_of_a_log(tmp_path, capfd):
     np.testing.assert_array_equal(rec.raw, np.delete(c, 40, axis=0))
     np.testing.assert_allclose(rec.t, np.delete(np.arange(150), 40) / 50.0)
     assert "the first row 42: left out" in err and "split the readings into 1 block(s)" in err
+
+
+def test_every_path_keeps_its_notes_on_a_refusal(tmp_path, capfd):
+    """A refusal after notes were made prints them ahead of its error line on every path (one
+    mechanism, errors.notes_on_refusal).  The log, E4, csv and MATLAB paths had dropped them: a log
+    with a sample lost and no --rate, an E4 export with a reading that is no whole count, a
+    recording whose last line was cut short with two channels, or whose t runs back, a MATLAB
+    array with a lost sample and no --rate."""
+    c = _counts(60, seed=3)
+    lines = [f"{r[0]},{r[1]},{r[2]}" for r in c]
+    lines[20] = "nan,nan,nan"
+    log = tmp_path / "capture.txt"
+    log.write_text("MPU6050 ready\n" + "".join(line + "\n" for line in lines))
+    err = convert_refused(tmp_path, capfd, log, "--format", "log", name="log")
+    assert "split the readings into 1 block(s)" in err and "the first row 22: left out" in err
+    assert err.splitlines()[-1].endswith("give the sample rate with --rate HZ")
+    e4 = tmp_path / "ACC.csv"
+    e4.write_text("1495437325.000000, 1495437325.000000, 1495437325.000000\n32.000000, 32.000000, 32.000000\n" +
+                  "".join(f"{r[0] // 100},{r[1] // 100},{r[2] // 100}\n" for r in c[:20]) + "1.5,2,3\n")
+    err = convert_refused(tmp_path, capfd, e4, name="e4")
+    assert "rows 1-2 are an Empatica E4's session start" in err and "row 23, column x" in err.splitlines()[-1]
+    rec = ["t,raw_0,raw_1"] + [f"{k / 100},{r[0]},{r[1]}" for k, r in enumerate(c)] + ["0.6,12"]
+    csv = tmp_path / "rec.csv"
+    csv.write_text("\n".join(rec))                       # the last line cut short, no newline after it
+    err = convert_refused(tmp_path, capfd, csv, name="csv")
+    assert "the last, is cut short" in err and "2 raw channels" in err.splitlines()[-1]
+    back = ["t,raw_0,raw_1,raw_2"] + [f"{k / 100 if k != 30 else 0.1},{r[0]},{r[1]},{r[2]}" for k, r in enumerate(c)]
+    csv.write_text("\n".join(back + ["0.6,12"]))
+    err = convert_refused(tmp_path, capfd, csv, name="back")
+    assert "the last, is cut short" in err and "t must be strictly increasing" in err.splitlines()[-1]
+    a = (c * LSB_G).astype(float)
+    a[10] = np.nan
+    err = convert_refused(tmp_path, capfd, _mat(tmp_path, a), "--units", "g", "--lsb", repr(LSB_G), name="mat")
+    assert "the first row 11: left out" in err and "give the sample rate with --rate HZ" in err.splitlines()[-1]
