@@ -156,7 +156,6 @@ def test_readings_held_for_uneven_runs_are_held(tmp_path, capfd):
     slide cut into 25 "rests".  Runs of one length (3) and chance repeats (geometric: single
     rows the most common; here also with a mean of 8 rows) keep the old verdicts."""
     import dataclasses
-    from cli_run import one_refusal, run
     from accelcal.device import save_device, default_triad
     from accelcal.calibration import Calibration, save_calibration
     from accelcal.recording import recording_from_arrays, write_recording
