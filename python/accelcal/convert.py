@@ -38,7 +38,9 @@ Formats (``detect_format`` tells them from the first line that is not a comment)
 On every path a logger's leading ``0, 0, 0`` placeholder is left out, and so is a row whose
 readings are all missing (a sample lost; a table's other packet), each with a note
 (:mod:`accelcal.convert_rows`); a lost sample's place is kept (its time, from the stamps or
-the rate), a gap the estimators fill on their time grid.  Gyroscope columns are dropped (one
+the rate), a gap the estimators fill on their time grid.  A table's rows after its last reading
+whose time cells run back or hold text (a spreadsheet's scratch below the data) are no samples:
+left out with a note that says so (:func:`convert_rows.trailer_note`).  Gyroscope columns are dropped (one
 note).  Pose regions named ``x_p, x_a, y_p, y_a, z_p,
 z_a`` (imucal's: that axis pointing up, or down) can state the reference specific force
 (``stated_f``): +-g along that axis, making a known-pose (``full``) calibration possible.

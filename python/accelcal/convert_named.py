@@ -13,9 +13,9 @@ from .convert_axes import AxisColumn, find_named, names_unit, px4_export, stated
 from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
                              is_gyro, whole_counts)
 from .convert_time import TIME_COLUMN_RE, datetime_stamps, is_datetime, unit_in_name
-from .csvtable import convert_columns, got_text
+from .csvtable import convert_columns, got_text, slow_float
 from .errors import InputError, notes_on_refusal
-from .convert_rows import lost_rows
+from .convert_rows import lost_rows, trailer_note, trailer_start
 from .recording_checks import repeated_rows
 from .textinput import preamble_notes
 from .units import STANDARD_GRAVITY, UNIT_TEXT, Scale, file_scale, to_counts
@@ -356,7 +356,10 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
     want = {a: "ref" for a in acc}
     names, values, table = read_columns(source, data, pre, want)
     js = [names.index(a) for a in acc]
-    rows = present_rows(source, np.column_stack([values[a] for a in acc]), table, axes, js, notes)
+    readings = np.column_stack([values[a] for a in acc])
+    at = len(notes)               # where the note on rows without readings is (:func:`trailer_note` may change it)
+    rows = present_rows(source, readings, table, axes, js, notes)
+    said = len(notes) - at
     if rows.size == 0:
         raise InputError(source, f"no row has readings in {', '.join(acc)}", row=pre.header_line)
     if opts.time_column is None:
@@ -385,10 +388,18 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
         if probe is not None and is_datetime(probe[1]):
             stamps = dated_stamps(source, table, rows, time_column, jt, opts, notes)
         else:
+            end = trailer_start(readings)
+            trailer = trailer_note(end, table.n, int(rows[-1]), lambda i: table.cell(i, jt), table.line)
+            if trailer is not None:       # rows after the last reading whose time cells are no stamps of it
+                lost: list[str] = []
+                present_rows(source, readings[:end], table, axes, js, lost)
+                notes[at:at + said] = lost + [trailer]
             numbers, err = convert_columns(table, {time_column: (jt, "ref")})
-            if err is not None:
+            if err is not None and (trailer is None or err[0] < end):
                 raise InputError(source, err[2], row=table.line(err[0]), column=time_column)
-            stamps = exact_time(numbers[time_column], lambda: table.strings(jt), rows)   # an epoch in ns: int64
+            stamps = numbers[time_column] if err is None else \
+                np.concatenate([slow_float(table.strings(jt)[:end], True), np.full(table.n - end, np.nan)])
+            stamps = exact_time(stamps, lambda: table.strings(jt), rows)   # an epoch in ns: int64
         sample_index(source, time_column, stamps[rows], opts.rate_hz, pre.header_line)
         rows = unrepeated(rows, stamps, np.column_stack([values[a] for a in acc]), notes)
         if opts.repeated_stamps == "drop":

@@ -1,7 +1,8 @@
 """Rows of another tool's file that are no samples of the sensor, one rule for every format
 ``accelcal convert`` reads: a logger's ``0, 0, 0`` placeholder before the sensor's first value
 (:func:`placeholder_lead`), and rows whose readings are all missing -- a sample the logger lost,
-or another packet's row -- (:func:`lost_rows`)."""
+or another packet's row -- (:func:`lost_rows`), and the rows after a table's last reading whose
+time cells do not continue its stamps (:func:`trailer_note`)."""
 from __future__ import annotations
 
 from typing import Callable
@@ -11,7 +12,8 @@ import numpy as np
 from .errors import InputError
 from .units import UNIT_TEXT, Scale
 
-__all__ = ["PLACEHOLDER_G", "PLACEHOLDER_COUNTS", "LOST_SAMPLES", "placeholder_lead", "lost_rows"]
+__all__ = ["PLACEHOLDER_G", "PLACEHOLDER_COUNTS", "LOST_SAMPLES", "placeholder_lead", "lost_rows", "trailer_start",
+           "trailer_note"]
 
 #: leading rows of readings all exactly 0 are a placeholder when the next row's |reading| is at
 #: least this share of g (and the median |reading| after them twice that)
@@ -114,3 +116,49 @@ def lost_rows(source: str, values: np.ndarray, line: Callable[[int], int], colum
         notes.append(f"{int(gone.sum())} row(s) whose readings ({names}) are all missing (empty or nan), the first "
                      f"row {line(first)}: left out ({why})")
     return np.flatnonzero(~gone)
+
+
+def trailer_start(values: np.ndarray) -> int:
+    """The index of the first row of ``values`` (n, 3; NaN where missing) after the last that holds
+    a reading: the rows from there on (none: n) hold no readings."""
+    held = np.flatnonzero(~np.isnan(values).all(axis=1))
+    return int(held[-1]) + 1 if held.size else 0
+
+
+def trailer_note(start: int, n: int, last_row: int, cell: Callable[[int], str], line: Callable[[int], int]) -> str | None:
+    """The note for the rows ``start..n-1`` after a table's last reading (row index ``last_row``)
+    whose time cells do not continue the stamps: a stamp not after the one before (they run back:
+    a spreadsheet's scratch below the data, stamps in another unit) or text.  They are no samples,
+    and none was lost: they are left out, and the note says so, quoting the first such cell.  None
+    where every such time cell is empty or a stamp after the one before (samples lost at the end:
+    :func:`lost_rows`'s).
+
+    Parameters
+    ----------
+    start, n : int
+        The first row after the last reading (:func:`trailer_start`), and the table's rows.
+    cell, line : callable
+        The text of row i's time cell; the file's line of row i.
+    """
+    def stamp(i: int) -> float:
+        try:
+            return float(cell(i))
+        except ValueError:
+            return float("nan")
+
+    prev, odd = last_row, None
+    for i in range(start, n):
+        text = cell(i).strip()
+        if not text or text.lower() == "nan":
+            continue
+        if not np.isfinite(stamp(i)) or not stamp(i) > stamp(prev):
+            odd = i
+            break
+        prev = i
+    if odd is None:
+        return None
+    what = (f"{cell(odd).strip()!r} is not after {cell(prev).strip()!r} (row {line(prev)}): the stamps run back"
+            if np.isfinite(stamp(odd)) else f"{cell(odd).strip()!r} is no time stamp")
+    rows = f"rows {line(start)}-{line(n - 1)}" if n - start > 1 else f"row {line(start)}"
+    return (f"the last {n - start} row(s) ({rows}) hold no readings, and their time cells do not continue the time "
+            f"stamps (row {line(odd)}: {what}): they are no samples, none lost; left out")

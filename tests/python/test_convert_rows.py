@@ -129,3 +129,35 @@ def test_every_path_keeps_its_notes_on_a_refusal(tmp_path, capfd):
     a[10] = np.nan
     err = convert_refused(tmp_path, capfd, _mat(tmp_path, a), "--units", "g", "--lsb", repr(LSB_G), name="mat")
     assert "the first row 11: left out" in err and "give the sample rate with --rate HZ" in err.splitlines()[-1]
+
+
+def test_stamps_that_run_back_after_the_last_reading_are_said_so_not_lost(tmp_path, capfd):
+    """A table whose last rows hold no readings and time stamps that run back (a spreadsheet's
+    scratch below EuRoC's data: the stamps again in s under a column in ns, then a line of text)
+    had been '7 row(s) ... left out (other packets' rows, or samples lost)', or refused at the
+    text.  The recording's t is strictly increasing either way and no sample is lost: they are
+    left out with a note that says the stamps run back, naming the row.  Stamps that do continue
+    after the last reading are samples lost, as before; a stamp that runs back among the readings
+    is still refused."""
+    c = _counts(100, seed=4)
+    lsb = 0.001
+    head = "#timestamp [ns],a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]"
+    rows = [f"{1403636579758555392 + 5000000 * k}," + ",".join(f"{v * lsb:.3f}" for v in r) for k, r in enumerate(c)]
+    src = tmp_path / "data.csv"
+    src.write_text("\n".join([head] + rows + [",,,", "1403636580.253,,,", "1403636580.248,,,", "Step: 0.005,,,"]) + "\n")
+    args = ("--units", "mps2", "--lsb", repr(lsb))
+    rec, dev, err = _convert(tmp_path, capfd, src, *args)
+    np.testing.assert_array_equal(rec.raw, c)
+    assert dev["sample_rate_hz"] == pytest.approx(200.0)
+    assert ("the last 4 row(s) (rows 102-105) hold no readings, and their time cells do not continue the time stamps "
+            f"(row 103: '1403636580.253' is not after '{1403636579758555392 + 5000000 * 99}' (row 101): the stamps "
+            "run back): they are no samples, none lost; left out") in err
+    assert "lost" not in err.replace("none lost", "")
+    later = [f"{1403636579758555392 + 5000000 * k},,," for k in (100, 101)]
+    src.write_text("\n".join([head] + rows + later) + "\n")
+    rec, dev, err = _convert(tmp_path, capfd, src, *args)
+    assert "2 row(s) whose readings" in err and "samples lost" in err and "run back" not in err
+    rows[50] = rows[50].replace(str(1403636579758555392 + 5000000 * 50), "1403636580.0")
+    src.write_text("\n".join([head] + rows) + "\n")
+    err = convert_refused(tmp_path, capfd, src, *args)
+    assert "row 52, column timestamp [ns]: time stamp '1403636580.0' is not after" in err.splitlines()[-1]
