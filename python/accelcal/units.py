@@ -343,8 +343,10 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
         digits or as decimal places; a column of zeros and one such value does not show it) where
         that is at most
         PRINT_TOL_COUNTS of a count (a value printed by '%g' as -0.020752 g is -340 counts of
-        1/16384 g: -340.0008), or whose count does not fit 64 bits.
+        1/16384 g: -340.0008), or whose count does not fit 64 bits; readings that are counts
+        (:func:`counts_stated_as_units`).
     """
+    counts_stated_as_units(np.asarray(values, dtype=np.float64), scale, source, locate)
     with np.errstate(invalid="ignore", over="ignore"):
         v = np.asarray(values, dtype=np.float64)
         x = v / scale.lsb
@@ -395,6 +397,37 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
                          "states)", row=row,
                          column=column)
     return n.astype(np.int64)
+
+
+#: distinct readings, all whole numbers, that show counts where a unit was stated with an LSB of at most half a unit
+WHOLE_MIN_VALUES = 10
+
+
+def counts_stated_as_units(v: np.ndarray, scale: Scale, source: str, locate: Callable[[int, int], tuple[int, str]]
+                           ) -> None:
+    """Refuse readings that are counts stated as m/s^2 or g (``--units g --lsb 0.001`` over
+    whole numbers: 1000 read as 1000 g): every one a whole number, at least WHOLE_MIN_VALUES
+    distinct, where the LSB is at most half a unit (whole numbers then lie 2 or more counts
+    apart: a sensor whose every reading falls on such a coarse grid is not read in that LSB).
+
+    Raises
+    ------
+    InputError
+        Naming the largest reading's row and column and the options meant: ``--units counts``
+        with the LSB's size, or ``--lsb 1`` for readings truly in whole units.
+    """
+    fin = v[np.isfinite(v)]
+    if not scale.converts or not scale.lsb or scale.lsb > 0.5 or np.unique(fin).size < WHOLE_MIN_VALUES or \
+            np.any(fin != np.round(fin)):
+        return
+    i, j = (int(k) for k in np.unravel_index(np.nanargmax(np.abs(v)), v.shape))
+    row, column = locate(i, j)
+    unit, suffix = UNIT_TEXT[scale.units], {"g": "g", "mps2": "mps2"}.get(scale.units, "")
+    raise InputError(source, f"every reading is a whole number ({np.unique(fin).size} distinct; this one, "
+                     f"{v[i, j]:g}, would be {v[i, j]:g} {unit}) where one count is {scale.lsb:.6g} {unit} (the LSB "
+                     f"stated by {scale.how or 'the options'}): they are counts -- give --units counts --lsb "
+                     f"{scale.lsb:.6g}{suffix} (or --full-scale G) for their size; were they whole {unit}, --lsb 1",
+                     row=row, column=column)
 
 
 #: distinct readings a column needs before a constant fraction of an LSB is taken for a shifted grid

@@ -200,3 +200,25 @@ def test_a_kalibr_header_s_accelerometer_is_found_unasked(tmp_path, capfd):
     gyro = [head.rsplit(",", 3)[0]] + [r.rsplit(",", 3)[0] for r in rows]
     err = _refused(tmp_path, capfd, write_lines(tmp_path / "gyro.csv", gyro))
     assert "w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1]" in err
+
+
+def test_whole_counts_stated_as_g_are_refused_with_the_option_meant(tmp_path, capfd):
+    """'--units g --lsb 0.001' over a logger's integer counts had read 1016 as 1016 g, caught
+    only by the range check (and not at all with --bits 32).  Every reading a whole number, where
+    one count is a thousandth of a g: they are counts, and the refusal says which option was
+    meant; given so, they are read.  Readings in g on that LSB are read as before."""
+    c = _counts(200)
+    src = write_lines(tmp_path / "log.csv", ["t,accX,accY,accZ"] + [f"{k / 100},{a},{b},{d}"
+                                                                     for k, (a, b, d) in enumerate(c)])
+    err = _refused(tmp_path, capfd, src, "--units", "g", "--lsb", "0.001", "--bits", "32")
+    top = np.unravel_index(np.argmax(np.abs(c)), c.shape)
+    assert (f"row {top[0] + 2}, column {'accX accY accZ'.split()[top[1]]}: every reading is a whole number" in err and
+            f"would be {c[top]} g) where one count is 0.001 g (the LSB stated by --lsb): they are counts -- give "
+            "--units counts --lsb 0.001g (or --full-scale G) for their size; were they whole g, --lsb 1") in err, err
+    rec, dev, err = _convert(tmp_path, capfd, src, "--units", "counts", "--lsb", "0.001g")
+    np.testing.assert_array_equal(rec.raw, c)
+    assert dev["channels"][0]["counts_per_mps2"] == pytest.approx(1000 / G)
+    g = write_lines(tmp_path / "g.csv", ["t,accX,accY,accZ"] + [f"{k / 100},{a / 1000},{b / 1000},{d / 1000}"
+                                                                 for k, (a, b, d) in enumerate(c)])
+    rec, _, _ = _convert(tmp_path, capfd, g, "--units", "g", "--lsb", "0.001")
+    np.testing.assert_array_equal(rec.raw, c)
