@@ -176,15 +176,29 @@ def test_displacement_no_rest_is_an_error():
             E.displacement_from_recording(d, Calibration.nominal(d), rec, engine)
 
 
-def test_displacement_motion_not_ending_at_rest_is_flagged():
+@pytest.mark.parametrize("engine, form", [("float", "offline"), ("float", "stream"), ("fixed", "stream")])
+def test_a_motion_not_ending_at_rest_is_left_out(engine, form):
+    """Without a rest at its end a motion's zero point cannot be removed (EuRoC's flying MAV:
+    53.8 km written, exit 0, with a warning): it is left out, the output ending in the rest before
+    it, with a line naming it; with no other motion the recording is refused."""
     d = default_triad()
-    sim = run_simulation(d, "linear_actuator", seed=2, distance_m=0.5, travel_s=2.0, rest_s=2.0)
-    rec = sim.recording.select(sim.recording.t < 3.0)      # cut in the middle of the stroke
-    for engine in ("float", "fixed"):
-        c = E.displacement_from_recording(d, Calibration.nominal(d), rec, engine)
-        assert any("does not end at rest" in w for w in c.warnings)
-        assert c["corrected"][-1] == 0
-    fx = E.displace_fixed(E.q_out(E.triad_apply_float(d.zero_counts, d.nominal_sensitivity(), rec.raw)),
+    cal = Calibration.nominal(d)
+    sim = run_simulation(d, "linear_actuator", seed=2, distance_m=0.5, travel_s=2.0, rest_s=2.0, strokes=2)
+    rec = sim.recording                                    # strokes at 2-4 s (out) and 6-8 s (back)
+    cut = rec.select(rec.t < 7.0)                          # cut in the middle of the second stroke
+    c = E.displacement_from_recording(d, cal, cut, engine, form=form)
+    line = [w for w in c.warnings if "does not end at rest" in w]
+    assert len(line) == 1 and "it is left out" in line[0], c.warnings
+    start = float(line[0].split("last motion (t = ")[1].split("-")[0])
+    assert c["t"][-1] < start and c["rest"][-1] == 1 and c["corrected"].any() and c.meta["segments"] == "1"
+    whole = E.displacement_from_recording(d, cal, rec, engine, form=form)
+    assert c["t"][-1] > 4.0 and abs(c["p_x"][-1] - whole["p_x"][len(c["t"]) - 1]) <= 1e-3
+    assert abs(np.hypot(c["p_x"][-1], c["p_y"][-1]) - 0.5) <= 0.005 * 0.5
+    one = rec.select(rec.t < 3.0)                         # cut in the middle of the first stroke
+    with pytest.raises(InputError, match=r"no motion can be reported: the last motion \(t = 2\.") as ei:
+        E.displacement_from_recording(d, cal, one, engine, form=form)
+    assert "does not end at rest" in str(ei.value)
+    fx = E.displace_fixed(E.q_out(E.triad_apply_float(d.zero_counts, d.nominal_sensitivity(), one.raw)),
                           E.DisplaceParams(dt=0.01, rest=E.default_rest_params(d)))
     assert fx["finish"] & E.DISP_OPEN
 
@@ -249,10 +263,16 @@ def test_the_mpu6050_log_rests_from_its_first_sample(shared_data):
                         scale=scale_from_options(full_scale_g=2))
     dev, rec = conv.device, conv.recording
     cal = calibrate(dev, rec)
+    # its first pose only: the log then turns to its other poses and never rests as it began
+    # (no motion to report: refused, and said)
+    first = rec.select(rec.t < 30.0)
     for engine in ("float", "fixed"):
-        c = E.displacement_from_recording(dev, cal, rec, engine)
+        c = E.displacement_from_recording(dev, cal, first, engine)
         assert c["rest"][0] == 1 and c["rest"][:100].all()
         assert not any("does not start at rest" in w for w in c.warnings)
+        with pytest.raises(InputError, match="no motion can be reported") as ei:
+            E.displacement_from_recording(dev, cal, rec, engine)
+        assert "does not start at rest" not in str(ei.value)
 
 
 def test_displacement_long_motion_not_corrected():
