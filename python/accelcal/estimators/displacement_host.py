@@ -21,7 +21,8 @@ from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OP
 from .displacement_checks import (REST_DEV_WARN_MPS2, no_rest_reason, still_but_turned, still_off_g,
                                   still_off_g_text, trend_warnings, turned_motions, turned_text, turned_warnings,
                                   wide_rest_warning)
-from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params, rest_dated_back, rest_without_trend
+from .rest import (REST_AT_REST, REST_QUIET, RestParams, default_rest_params, motion_window, rest_dated_back,
+                   rest_without_trend)
 from ..triad import triad_forces
 
 __all__ = ["retro_correct", "displace_offline", "displacement_from_recording"]
@@ -73,10 +74,11 @@ def retro_correct(t, v, p, flags, zp) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 
 def displace_offline(f, p: DisplaceParams, rest_flags=None) -> dict:
-    """Host offline form (float): the rest detector's segments, each widened by ``pad``
-    samples at the start (the detector lags a smooth start) and ending ``pad`` samples
-    after the first quiet sample of the final rest (not at the declaration); gravity and
-    the frame from the mean of the whole first rest; the correction over the whole path.
+    """Host offline form (float): the rest detector's segments, each dated from the rests' own
+    levels (:func:`motion_window`: the first samples of a smooth start, which the detector lags,
+    are integrated; the final rest's samples before its detector settled are not) and widened by
+    ``pad`` samples at each end; gravity and the frame from the mean of the whole first rest; the
+    correction over the whole path.
     Returns v, p (corrected), v_raw, p_raw (uncorrected: same segments, no zero-point
     correction), rest (n,) bool (as declared), quiet (n,) bool (the detector's quiet samples),
     corrected (n,) bool, segments [(anchor, end, zp)], frame, open (a motion still going at the
@@ -90,6 +92,7 @@ def displace_offline(f, p: DisplaceParams, rest_flags=None) -> dict:
     at = (np.asarray(rest_flags) & REST_AT_REST) != 0
     quiet = (np.asarray(rest_flags) & REST_QUIET) != 0
     pad = (2 ** p.rest.ema_shift) if p.pad is None else int(p.pad)
+    sigma = p.rest.dev_max / 5.0                # the rest test is 5 sigma of f's noise (default_rest_params)
     res = dict(v=np.zeros((n, 3)), p=np.zeros((n, 3)), v_raw=np.zeros((n, 3)), p_raw=np.zeros((n, 3)),
                rest=at.copy(), quiet=quiet, corrected=np.zeros(n, bool), segments=[], frame=None, open=False,
                no_rest=not at.any())
@@ -112,15 +115,16 @@ def displace_offline(f, p: DisplaceParams, rest_flags=None) -> dict:
         acc = np.zeros((n, 3))
         acc[:, p.axis] = f[:, p.axis]
     pos, pos_raw = np.zeros(3), np.zeros(3)
-    prev_end = re_ - 1
+    prev_end = rs                               # the earliest a motion's window may start
     last = first_rest
     for s, e in runs:
-        a_idx = max(s - 1 - pad, prev_end)          # anchor: at rest, before the motion
+        fq = None if e < 0 else e - p.rest.hold + 1     # first quiet sample of the final rest
+        a_idx, b = motion_window(acc, at, s, prev_end, fq, sigma, 1 if p.axis is not None else 3)
+        a_idx = max(a_idx - pad, prev_end)          # anchor: at rest, before the motion
         if e < 0:
             end, closed = n - 1, False
         else:
-            fq = e - p.rest.hold + 1                # first quiet sample of the final rest
-            end, closed = min(max(fq + pad, s), e), True
+            end, closed = min(max(b + pad, s), e), True
         res["p"][last:a_idx + 1] = pos
         res["p_raw"][last:a_idx + 1] = pos_raw
         idx = np.arange(a_idx, end + 1)
