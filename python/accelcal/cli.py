@@ -190,7 +190,7 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
         The parsed ``--units``/``--lsb``/``--full-scale``/``--bits``/``--gravity``
         (units_cli.add_units_options) the recording is read with.
     **options
-        To the estimator (attitude: gain, w2_gate, leak_tau_s; displacement: form, axis;
+        To the estimator (attitude: gain, w2_gate, leak_tau_s; displacement: form, axis, keep_turned;
         rate: leak_tau_s).
 
     Returns
@@ -246,6 +246,8 @@ def held_warnings(rec) -> list[str]:
 def _estimator(a, kind):
     options = {k: v for k, v in (("axis", getattr(a, "axis", None)), ("form", getattr(a, "form", None)))
                if v is not None}
+    if getattr(a, "keep_turned", False):
+        options["keep_turned"] = True
     for w in run_estimator(kind, a.device, a.calibration, a.recording, a.output, engine=a.engine,
                            report=a.report, units_args=a, **options):
         print(w, file=sys.stderr)
@@ -403,6 +405,10 @@ def build_parser() -> argparse.ArgumentParser:
                            help="1-D along this body axis (the seed's actuator; nothing removed)")
             s.add_argument("--form", choices=["offline", "stream"],
                            help="float engine: offline (default) or the firmware's streaming form")
+            s.add_argument("--keep-turned", action="store_true",
+                           help="write a motion during which the body turned (its zero point beyond what a "
+                           "calibration or tilt error gives), with a warning; by default it is left out, and the "
+                           "output ends at the rest before it")
         add_units_options(s)
         s.set_defaults(func=func)
 

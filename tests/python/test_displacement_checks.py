@@ -15,7 +15,7 @@ from accelcal.device import Device, default_triad, save_device
 from accelcal.errors import InputError
 from accelcal.recording import recording_from_arrays, write_recording
 from accelcal.simulate import run_simulation
-from cli_run import run
+from cli_run import one_refusal, run
 from estimator_devices import G
 
 RATE = 100.0
@@ -29,44 +29,65 @@ def _counts(d, body, sigma, seed):
     return raw.astype(np.int64)
 
 
-def _rocking(d, amp_deg, rest_s=2.0, move_s=10.0, hz=1.0, dist=0.0, seed=0):
-    """A triad at rest, then ``move_s`` s rocking about body y by amp_deg sin(2 pi hz t) (whole
-    periods: it ends as it began) while it travels ``dist`` m along x (min-jerk), then at rest:
-    counts from f = R^T (a + g z)."""
+def _rocking_body(amp_deg, rest_s=2.0, move_s=10.0, hz=1.0, dist=0.0):
+    """f = R^T (a + g z), m/s^2 (n, 3), of a body at rest, then ``move_s`` s rocking about body y
+    by amp_deg sin(2 pi hz t) (whole periods: it ends as it began) while it travels ``dist`` m
+    along x (min-jerk), then at rest."""
     t = np.arange(int((2 * rest_s + move_s) * RATE)) / RATE
     u = np.clip((t - rest_s) / move_s, 0.0, 1.0)
     inside = (t >= rest_s) & (t <= rest_s + move_s)
     acc = dist * (60 * u - 180 * u**2 + 120 * u**3) / move_s**2 * inside
     th = np.radians(amp_deg) * np.sin(2 * np.pi * hz * (t - rest_s)) * inside
     c, s = np.cos(th), np.sin(th)
-    body = np.column_stack([c * acc - s * G, np.zeros_like(t), s * acc + c * G])
-    return recording_from_arrays(t, _counts(d, body, 0.005, seed))
+    return np.column_stack([c * acc - s * G, np.zeros_like(t), s * acc + c * G])
+
+
+def _rocking(d, amp_deg, rest_s=2.0, move_s=10.0, hz=1.0, dist=0.0, seed=0):
+    """The counts of the triad ``d`` for :func:`_rocking_body`."""
+    body = _rocking_body(amp_deg, rest_s, move_s, hz, dist)
+    return recording_from_arrays(np.arange(body.shape[0]) / RATE, _counts(d, body, 0.005, seed))
 
 
 def _turn_warnings(c):
     return [w for w in c.warnings if "likely turned during the motion" in w]
 
 
+def _span(line):
+    """The motion's first and last time (s) a turned motion's line names."""
+    return tuple(float(x) for x in line.split("motion at t = ")[1].split(" s")[0].split("-"))
+
+
 @pytest.mark.parametrize("engine, form", [("float", "offline"), ("float", "stream"), ("fixed", "stream")])
-def test_a_body_rocking_during_a_motion_is_warned_of(engine, form):
+def test_a_body_rocking_during_a_motion_is_left_out_unless_kept(engine, form):
     """A triad rocked by +-45 deg for 10 s between two rests (a hand oscillating an x-IMU: 93 m
-    for decimetres, exit 0 and no word): no accelerometer alone tells the tilt from an
+    for decimetres, exit 0 and only a warning): no accelerometer alone tells the tilt from an
     acceleration, and the gravity that leaks in is g (1 - J0(45 deg)) = 1.45 m/s^2 on average --
-    the motion's zero point, far beyond a calibration error.  The warning names the motion,
-    |zp| and the tilt it equals; the same travel without rocking has none."""
+    the motion's zero point, far beyond a calibration error.  The stop-to-stop method assumes the
+    same attitude at both rests and none between: the motion is left out, and with no other motion
+    the recording is refused, naming the motion, |zp| and the tilt it equals.  keep_turned writes
+    it with the same words as a warning; the same travel without rocking has none."""
     d = default_triad()
     cal = Calibration.nominal(d)
-    c = E.displacement_from_recording(d, cal, _rocking(d, 45.0, dist=0.3), engine, form=form)
+    rec = _rocking(d, 45.0, dist=0.3)
+    with pytest.raises(InputError, match="no motion can be reported") as ei:
+        E.displacement_from_recording(d, cal, rec, engine, form=form)
+    msg = str(ei.value)
+    assert "likely turned during the motion" in msg and "--keep-turned" in msg and "is left out" in msg
+    c = E.displacement_from_recording(d, cal, rec, engine, form=form, keep_turned=True)
     w = _turn_warnings(c)
     assert len(w) == 1, c.warnings
-    t0, t1 = (float(x) for x in w[0].split("motion at t = ")[1].split(" s")[0].split("-"))
+    assert _span(w[0]) == _span(msg)
+    assert float(msg.split("a tilt of ")[1].split(" deg")[0]) == float(w[0].split("a tilt of ")[1].split(" deg")[0])
+    t0, t1 = _span(w[0])
     rp = E.default_rest_params(d)
     # from the rest before the rocking to the closing rest's declaration, at most hold samples
-    # into that rest (dated back to where it began) -- pad more offline, after its first quiet sample
+    # into that rest (dated back to where it began) -- pad more offline, after its first quiet
+    # sample; offline the window starts its pad sample (at rest) before the rest's last sample
     rest = c["rest"].astype(bool)
     i0, i1 = np.searchsorted(c["t"], [t0, t1])
     began = i1 - int(np.argmin(rest[i1::-1]))
-    assert t0 <= 2.0 and rest[:i0 + 1].all() and not rest[i0 + 1:began].any()
+    pad = E.DisplaceParams(dt=0.01).pad if form == "offline" else 0
+    assert t0 <= 2.0 and rest[:i0 + 1 + pad].all() and not rest[i0 + 1 + pad:began].any()
     assert c["t"][began] >= 12.0 and i1 - began + 1 <= rp.hold + 2
     # the velocity the leak leaves at the end, g (1 - J0(A)) over the 10 s, spread over the
     # integrated t1 - t0 (zp written to 3 digits: 0.5 %; the travel's part is 1e-3 of it)
@@ -77,8 +98,30 @@ def test_a_body_rocking_during_a_motion_is_warned_of(engine, form):
     assert abs(tilt - math.degrees(math.asin(zp / G))) <= 0.05 + 1e-9
     # (a travel of 2 s: over 10 s its middle, near constant speed, would be as quiet as a rest)
     c = E.displacement_from_recording(d, cal, _rocking(d, 0.0, move_s=2.0, dist=0.3), engine, form=form)
-    assert not _turn_warnings(c), c.warnings
+    assert not _turn_warnings(c) and not any("left out" in w for w in c.warnings), c.warnings
     assert abs(c["p_x"][-1] - 0.3) <= 0.01 * 0.3
+
+
+@pytest.mark.parametrize("engine, form", [("float", "offline"), ("fixed", "stream")])
+def test_motions_before_a_turned_one_are_written_up_to_the_rest_before_it(engine, form):
+    """A clean travel of 0.3 m, then a motion rocked by +-45 deg, then a third travel: the first
+    is written; the output ends in the rest before the rocked one (the third's position would
+    carry the rocked motion's unknown displacement), with one line naming the rocked motion and
+    the one after it."""
+    d = default_triad()
+    cal = Calibration.nominal(d)
+    body = np.vstack([_rocking_body(0.0, move_s=2.0, dist=0.3), _rocking_body(45.0, dist=0.3),
+                      _rocking_body(0.0, move_s=2.0, dist=0.3)])
+    rec = recording_from_arrays(np.arange(body.shape[0]) / RATE, _counts(d, body, 0.005, 1))
+    c = E.displacement_from_recording(d, cal, rec, engine, form=form)
+    line = [w for w in c.warnings if "is left out" in w]
+    assert len(line) == 1 and "likely turned during the motion" in line[0], c.warnings
+    assert "the 1 motion(s) after it are not reported" in line[0]
+    t0, _ = _span(line[0])
+    assert 6.0 + 1.5 <= t0 <= 6.0 + 2.0                         # in the rest before the rocking
+    assert c["t"][-1] <= t0 + 0.5 and c["t"][-1] >= 6.0 + 1.5 and c["rest"][-1] == 1
+    assert abs(c["p_x"][-1] - 0.3) <= 0.01 * 0.3 and c.meta["segments"] == "1"
+    assert f"the output ends at t = {c['t'][-1] - c['t'][0]:.3f} s" in line[0]
 
 
 def test_the_zero_point_a_rest_shows_is_no_turn():
@@ -103,13 +146,17 @@ def test_the_zero_point_limit_is_the_turn_plus_the_noise_and_the_detector_s_lag(
     assert E.zp_limit(1, 0.18, rp) > 100
 
 
-def test_the_cli_writes_the_warning_to_stderr_and_the_output_s_comments(tmp_path, capfd):
+def test_the_cli_refuses_a_turned_motion_and_keeps_it_with_keep_turned(tmp_path, capfd):
     d = default_triad()
     save_device(d, tmp_path / "dev.json")
     write_recording(tmp_path / "rec.csv", _rocking(d, 45.0))
     out = tmp_path / "out.csv"
-    rc, _, err, _ = run(["displacement", "--device", tmp_path / "dev.json", "--calibration", "nominal",
-                         tmp_path / "rec.csv", "-o", out], capfd)
+    args = ["displacement", "--device", tmp_path / "dev.json", "--calibration", "nominal", tmp_path / "rec.csv",
+            "-o", out]
+    rc, _, err, _ = run(args, capfd)
+    assert rc == 2 and not out.exists() and one_refusal(err)
+    assert "likely turned during the motion" in err and "--keep-turned" in err
+    rc, _, err, _ = run(args + ["--keep-turned"], capfd)
     assert rc == 0
     assert sum("likely turned during the motion" in ln for ln in err.splitlines()) == 1
     head = [ln for ln in out.read_text().splitlines() if ln.startswith("#")]
@@ -155,19 +202,24 @@ def test_a_steady_change_through_g_under_vibration_is_no_rest(engine, form, ramp
         # synthetic flight would itself widen the noise estimated from the data)
         d = dataclasses.replace(d, noise_mps2=0.134)
     rec, lift = _flight(d, ramp)
-    c = E.displacement_from_recording(d, Calibration.nominal(d), rec, engine, form=form)
-    rest = c["rest"].astype(bool)
-    assert rest[:int(2.5 * RATE)].all()                          # the pad
-    assert form != "offline" or not rest[lift:].any()
-    trend = [w for w in c.warnings if "f changes steadily" in w]
-    assert len(trend) == 1, c.warnings
     if form == "offline":
-        assert "not taken as rests" in trend[0]
+        # the flight never comes to rest: its one motion cannot be reported, and the refusal says why
+        with pytest.raises(InputError, match="no motion can be reported") as ei:
+            E.displacement_from_recording(d, Calibration.nominal(d), rec, engine, form=form)
+        assert str(ei.value).count("f changes steadily") == 1 and "not taken as rests" in str(ei.value)
+        assert "the last motion (t = 3." in str(ei.value)
     else:
+        # (the motion the streamed 'rest' ends carries the boost's speed: kept to see the rests)
+        c = E.displacement_from_recording(d, Calibration.nominal(d), rec, engine, form=form, keep_turned=True)
+        rest = c["rest"].astype(bool)
+        assert rest[:int(2.5 * RATE)].all()                          # the pad
+        trend = [w for w in c.warnings if "f changes steadily" in w]
+        assert len(trend) == 1, c.warnings
         assert "taken as rests by the streaming detector" in trend[0]
     # the same flight held at g (no change): a rest, and no word of a trend
     rec, lift = _flight(d, 0.0)
-    c = E.displacement_from_recording(d, Calibration.nominal(d), rec, engine, form=form)
+    # (a rest in flight is no standstill: the boost's speed is left in its zero point, kept here)
+    c = E.displacement_from_recording(d, Calibration.nominal(d), rec, engine, form=form, keep_turned=True)
     rest = c["rest"].astype(bool)
     assert rest[:int(2.5 * RATE)].all() and rest[lift + int(2 * RATE):].mean() > 0.9
     assert not any("f changes steadily" in w for w in c.warnings), c.warnings

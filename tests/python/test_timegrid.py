@@ -153,3 +153,29 @@ def test_a_place_in_epoch_stamps_is_named_in_seconds_from_the_start_and_by_row(t
     first = float(start[0].split("from t = ")[1].split(" s from the start")[0])
     rest = c["rest"].astype(bool)
     assert first == pytest.approx(c["t"][np.argmax(rest)] - c["t"][0], abs=5e-4), start[0]
+
+
+def test_a_refusal_of_stamps_off_the_grid_names_the_remedy():
+    """A polled logger whose stamps wander by 41 steps was refused with "the integrators need a
+    constant rate" and no word of what to do.  Stamps that wander (the wander test: a drift of 1.2
+    steps; a host whose local mean leaves the grid by 41 steps over the log), that jitter by +-0.45
+    of a step, that come from a loop whose period varies +-40 %, and whose rate changes part-way are
+    each refused naming accelcal convert --rate HZ; samples missing beyond filling (no remedy of the
+    stamps: the samples are gone) are not."""
+    n, dt = 6000, 0.004
+    i = np.arange(n)
+    rng = np.random.default_rng(11)
+    stamps = {
+        "drift": dt * (i + 1.2 * np.sin(2 * np.pi * i / 5000.0)),
+        "wander": dt * (i + 41.0 * np.sin(np.pi * i / n) ** 2),
+        "jitter": dt * (i + rng.uniform(-0.45, 0.45, n)),
+        "loop": dt * np.concatenate([[0.0], np.cumsum(rng.uniform(0.6, 1.4, n - 1))]),
+        "rate change": dt * (i + 0.002 * np.maximum(i - 4000, 0)),
+    }
+    for what, t in stamps.items():
+        with pytest.raises(InputError, match="not uniform") as ei:
+            on_uniform_grid(recording_from_arrays(t, _walk(n)))
+        assert str(ei.value).count("accelcal convert --rate HZ") == 1, (what, str(ei.value))
+    with pytest.raises(InputError, match=r"sample\(s\) missing") as ei:
+        on_uniform_grid(recording_from_arrays(dt * np.delete(i, np.arange(300, 320)), _walk(n - 20)))
+    assert "--rate" not in str(ei.value)

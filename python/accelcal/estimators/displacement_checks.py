@@ -14,7 +14,7 @@ from .rest import TREND_BLOCK_HOLDS, RestParams, trend_bound
 
 __all__ = ["REST_DEV_WARN_MPS2", "REST_NOISE_MAX_MPS2", "rest_noise_max", "wide_rest_warning", "ZP_TURN_MPS2",
            "no_rest_reason", "scale_off", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned",
-           "zp_limit", "turned_motions", "trend_warnings"]
+           "zp_limit", "turned_motions", "turned_text", "turned_warnings", "trend_warnings"]
 
 
 #: the noisiest sensor at rest of issue 13's range, m/s^2 per axis (its 5 sigma: 0.25)
@@ -241,19 +241,17 @@ def zp_limit(n: int, f_sigma: float, rp: RestParams) -> float:
     return ZP_TURN_MPS2 + 5.0 * float(f_sigma) / math.sqrt(n) + 2.0 * rp.dev_max * rp.hold / n
 
 
-def turned_motions(f, t, at, motions, f_sigma: float, rp: RestParams, axis: int | None, g: float,
-                   rec=None) -> list[str]:
-    """The warnings of corrected motions whose zero point is more than a calibration or tilt
-    error gives (:func:`zp_limit`): an accelerometer alone cannot tell a turn from an
-    acceleration, and a body that turned and turned back during a motion leaves a large zp
-    (the mean gravity that leaked in), which the correction spreads over the path.
+def turned_motions(f, at, motions, f_sigma: float, rp: RestParams, axis: int | None
+                   ) -> list[tuple[int, int, float, float]]:
+    """The corrected motions whose zero point is more than a calibration or tilt error gives
+    (:func:`zp_limit`): an accelerometer alone cannot tell a turn from an acceleration, and a body
+    that turned and turned back during a motion leaves a large zp (the mean gravity that leaked
+    in), which the correction spreads over the path.
 
     Parameters
     ----------
     f : ndarray (n, 3)
         Specific force in body axes, m/s^2.
-    t : ndarray (n,)
-        Time, s.
     at : ndarray (n,) bool
         At rest (each rest from where it began).
     motions : list of (int, int, array_like)
@@ -264,15 +262,11 @@ def turned_motions(f, t, at, motions, f_sigma: float, rp: RestParams, axis: int 
     rp : RestParams
     axis : int or None
         1-D along that body axis (nothing removed: the rest's level is part of zp), or None.
-    g : float
-        Gravity, m/s^2 (for the tilt the zp equals).
-    rec : Recording, optional
-        Whose rows the lines name (:func:`.common.time_span`).
 
     Returns
     -------
-    list of str
-        One line per motion (the first ZP_TURN_LINES, then one line for the others).
+    list of (int, int, float, float)
+        Each such motion's anchor and end sample, its |zp| and the limit it passed (m/s^2).
 
     Notes
     -----
@@ -297,12 +291,26 @@ def turned_motions(f, t, at, motions, f_sigma: float, rp: RestParams, axis: int 
                 float(np.linalg.norm(z)) - float(np.linalg.norm(level - m0)))
         lim = zp_limit(e - a, f_sigma, rp)
         if held > lim:
-            mag = float(np.linalg.norm(z))
-            out.append(f"displacement: the motion at {time_span(t, a, e, rec)} was corrected by a zero point of "
-                       f"|zp| = {mag:.3g} m/s^2, as much as a tilt of {math.degrees(math.asin(min(1.0, mag / g))):.1f} "
-                       f"deg held through the whole motion, beyond what a calibration or tilt error gives ({lim:.2g} "
-                       "m/s^2 here): the body likely turned during the motion, which an accelerometer-only estimate "
-                       "cannot follow (gravity leaks into the path); its path and the positions after it are not valid")
+            out.append((int(a), int(e), float(np.linalg.norm(z)), float(lim)))
+    return out
+
+
+def turned_text(t, turn: tuple[int, int, float, float], g: float, rec=None) -> str:
+    """The words for a motion of :func:`turned_motions` (``t`` in s; ``g``, m/s^2, for the tilt
+    its zp equals; ``rec`` names its rows, :func:`.common.time_span`)."""
+    a, e, mag, lim = turn
+    return (f"the motion at {time_span(t, a, e, rec)} was corrected by a zero point of |zp| = {mag:.3g} m/s^2, as "
+            f"much as a tilt of {math.degrees(math.asin(min(1.0, mag / g))):.1f} deg held through the whole motion, "
+            f"beyond what a calibration or tilt error gives ({lim:.2g} m/s^2 here): the body likely turned during the "
+            "motion, which an accelerometer-only estimate cannot follow (gravity leaks into the path), or was not at a "
+            "standstill at its end (a steady speed reads as a rest)")
+
+
+def turned_warnings(t, turns, g: float, rec=None) -> list[str]:
+    """The warnings of the turned motions ``turns`` (:func:`turned_motions`) kept in the output
+    (``--keep-turned``): one line per motion, the first ZP_TURN_LINES, then one line for the others."""
+    out = [f"displacement: {turned_text(t, x, g, rec)}; its path and the positions after it are not valid "
+           "(kept: --keep-turned)" for x in turns]
     if len(out) > ZP_TURN_LINES:
         out = out[:ZP_TURN_LINES] + [f"displacement: {len(out) - ZP_TURN_LINES} more motion(s) like these"]
     return out

@@ -19,8 +19,10 @@ from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OP
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
 from .displacement_checks import (REST_DEV_WARN_MPS2, no_rest_reason, still_but_turned, still_off_g,
-                                  still_off_g_text, trend_warnings, turned_motions, wide_rest_warning)
-from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params, rest_dated_back, rest_without_trend
+                                  still_off_g_text, trend_warnings, turned_motions, turned_text, turned_warnings,
+                                  wide_rest_warning)
+from .rest import (REST_AT_REST, REST_QUIET, RestParams, default_rest_params, motion_window, rest_dated_back,
+                   rest_without_trend)
 from ..triad import triad_forces
 
 __all__ = ["retro_correct", "displace_offline", "displacement_from_recording"]
@@ -72,10 +74,11 @@ def retro_correct(t, v, p, flags, zp) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 
 def displace_offline(f, p: DisplaceParams, rest_flags=None) -> dict:
-    """Host offline form (float): the rest detector's segments, each widened by ``pad``
-    samples at the start (the detector lags a smooth start) and ending ``pad`` samples
-    after the first quiet sample of the final rest (not at the declaration); gravity and
-    the frame from the mean of the whole first rest; the correction over the whole path.
+    """Host offline form (float): the rest detector's segments, each dated from the rests' own
+    levels (:func:`motion_window`: the first samples of a smooth start, which the detector lags,
+    are integrated; the final rest's samples before its detector settled are not) and widened by
+    ``pad`` samples at each end; gravity and the frame from the mean of the whole first rest; the
+    correction over the whole path.
     Returns v, p (corrected), v_raw, p_raw (uncorrected: same segments, no zero-point
     correction), rest (n,) bool (as declared), quiet (n,) bool (the detector's quiet samples),
     corrected (n,) bool, segments [(anchor, end, zp)], frame, open (a motion still going at the
@@ -89,6 +92,7 @@ def displace_offline(f, p: DisplaceParams, rest_flags=None) -> dict:
     at = (np.asarray(rest_flags) & REST_AT_REST) != 0
     quiet = (np.asarray(rest_flags) & REST_QUIET) != 0
     pad = (2 ** p.rest.ema_shift) if p.pad is None else int(p.pad)
+    sigma = p.rest.dev_max / 5.0                # the rest test is 5 sigma of f's noise (default_rest_params)
     res = dict(v=np.zeros((n, 3)), p=np.zeros((n, 3)), v_raw=np.zeros((n, 3)), p_raw=np.zeros((n, 3)),
                rest=at.copy(), quiet=quiet, corrected=np.zeros(n, bool), segments=[], frame=None, open=False,
                no_rest=not at.any())
@@ -111,15 +115,16 @@ def displace_offline(f, p: DisplaceParams, rest_flags=None) -> dict:
         acc = np.zeros((n, 3))
         acc[:, p.axis] = f[:, p.axis]
     pos, pos_raw = np.zeros(3), np.zeros(3)
-    prev_end = re_ - 1
+    prev_end = rs                               # the earliest a motion's window may start
     last = first_rest
     for s, e in runs:
-        a_idx = max(s - 1 - pad, prev_end)          # anchor: at rest, before the motion
+        fq = None if e < 0 else e - p.rest.hold + 1     # first quiet sample of the final rest
+        a_idx, b = motion_window(acc, at, s, prev_end, fq, sigma, 1 if p.axis is not None else 3)
+        a_idx = max(a_idx - pad, prev_end)          # anchor: at rest, before the motion
         if e < 0:
             end, closed = n - 1, False
         else:
-            fq = e - p.rest.hold + 1                # first quiet sample of the final rest
-            end, closed = min(max(fq + pad, s), e), True
+            end, closed = min(max(b + pad, s), e), True
         res["p"][last:a_idx + 1] = pos
         res["p_raw"][last:a_idx + 1] = pos_raw
         idx = np.arange(a_idx, end + 1)
@@ -219,22 +224,88 @@ def _axis_arg(axis) -> int | None:
     return m[axis]
 
 
+def _left_out(t, at, closed, long_anchors, is_open, turns, g, rec):
+    """Where the output ends: at the first motion that cannot be reported (one that does not end at
+    rest, one longer than the fixed core counts, or, in ``turns``, one the body turned in), which is
+    left out with everything after it (their positions would carry its unknown displacement).
+
+    Parameters
+    ----------
+    t : ndarray (n,)
+        s.
+    at : ndarray (n,) bool
+        At rest (dated back).
+    closed : list of (int, int, array_like)
+        The corrected motions: anchor (a rest sample before it), end sample, zp.
+    long_anchors : list of int
+        The anchors of the motions too long to be corrected.
+    is_open : bool
+        The last motion does not end at rest.
+    turns : list of (int, int, float, float)
+        The turned motions to leave out (:func:`.displacement_checks.turned_motions`).
+    g : float
+        Gravity, m/s^2.
+
+    Returns
+    -------
+    cut : int
+        The rows kept, [0, cut) (n: all).
+    line : str or None
+        What was left out and why, for the user.
+    kept : list of (int, int, array_like)
+        The motions of ``closed`` reported.
+    """
+    n = len(t)
+    at = np.asarray(at, bool)
+
+    def start(a: int) -> int:             # the motion's first sample not at rest after its anchor a
+        return a + 1 + int(np.argmin(at[a + 1:])) if a + 1 < n and not at[a + 1:].all() else min(a + 1, n)
+
+    cands = [(start(x[0]), turned_text(t, x, g, rec) + "; the stop-to-stop method assumes the same attitude at "
+              "both rests: it is left out (--keep-turned writes it, with a warning)") for x in turns]
+    cands += [(start(a), f"the motion from {time_span(t, start(a), rec=rec)} is longer than 65535 samples, the fixed "
+               "core's count, and has no zero-point correction: it is left out (the float engine's offline form has "
+               "no such limit)") for a in long_anchors]
+    starts = [start(m[0]) for m in closed] + [start(a) for a in long_anchors]
+    if is_open:
+        rest_idx = np.flatnonzero(at)
+        s = int(rest_idx[-1]) + 1 if rest_idx.size else 0
+        starts.append(s)
+        cands.append((s, f"the last motion ({time_span(t, s, n - 1, rec)}) does not end at rest: without a rest at its "
+                      "end its zero point cannot be removed (its drift grows with time squared), so it is left out"))
+    if not cands:
+        return n, None, list(closed)
+    cut, line = min(cands, key=lambda c: c[0])
+    kept = [m for m in closed if start(m[0]) < cut]
+    after = sum(1 for s in starts if s > cut)
+    if after:
+        line += (f"; the {after} motion(s) after it are not reported either (their positions would carry its "
+                 "displacement)")
+    if kept:
+        line += f"; the output ends at {time_span(t, cut - 1, rec=rec)}, in the rest before it"
+    return cut, line, kept
+
+
 def displacement_from_recording(device, cal, rec, engine: str = "float", *, form: str | None = None,
-                                axis=None, rest: RestParams | None = None) -> Columns:
+                                axis=None, rest: RestParams | None = None, keep_turned: bool = False) -> Columns:
     """`accelcal displacement`: columns t, v_x, v_y, v_z, p_x, p_y, p_z (frame of the first rest,
     z up, gravity removed; corrected between rests) plus p_raw_* (the same without the zero-point
     correction), rest (1 at rest: each rest from where it began, :func:`.rest.rest_dated_back`, not
     from where the detector declared it hold samples later) and corrected (1 on the samples of a
     motion closed by a rest, whose correction was applied: its integration runs to the rest's
     declaration, over the rest's first samples in the stream forms, pad samples past its first quiet
-    sample offline; 0 at rest otherwise and on a motion that never stopped).
+    sample offline; 0 at rest otherwise).
 
     engine "float": form "offline" (default) or "stream" (the float twin of the firmware form);
     engine "fixed": the C streaming form (ac_disp), with the path between rests corrected on the
     host from the core's per-motion zero-point estimate.  ``axis`` x/y/z: 1-D along that body
-    axis (the seed's case: nothing removed).  Errors: no rest at all (nothing can be anchored).
-    Flagged (warnings, column corrected = 0): a recording that does not start at rest (the part
-    before the first rest is not estimated), a motion that does not end at rest (uncorrected).
+    axis (the seed's case: nothing removed).  A motion is reported only with a rest at both ends
+    (its zero point removed) and no turn between them (:func:`.displacement_checks.turned_motions`;
+    ``keep_turned``: reported with a warning): the first that is not (the last motion that never
+    stops, one the body turned in, one beyond the fixed core's count) ends the output, at the rest
+    before it, with a warning naming it.  Errors: no rest at all (nothing can be anchored), or
+    motions none of which can be reported.  Flagged (warning, rows 0): a recording that does not
+    start at rest (the part before the first rest is not estimated).
     Samples a logger dropped are filled first (:func:`~.timegrid.on_uniform_grid`: warning and
     column ``filled``)."""
     if engine not in ("float", "fixed"):
@@ -261,6 +332,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         # the code step through the calibration: coarse codes widen the test of a sensor at rest
         q_f = force_noise(device, cal, [code_step(c) for c in np.asarray(rec.raw).T], channels)
         warnings += wide_rest_warning(rp.dev_max, q_f)
+    checked = len(warnings)             # the warnings from here on are the recording's, said in a refusal too
     if engine == "float" and form == "offline":
         flags = displace_stream(f, p)["rest"]
         declared = (flags & REST_AT_REST) != 0
@@ -285,6 +357,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         at, quiet, corrected = r["rest"], r["quiet"], r["corrected"]
         is_open = r["open"]
         closed = [s for s in r["segments"] if s[2] is not None]
+        long_anchors = []
     else:
         if engine == "float":
             r = displace_stream(f, p)
@@ -319,9 +392,9 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         warnings += trend_warnings(t, rest_without_trend(rest_dated_back(at, quiet, f_rest, rp), f_rest, rp,
                                                          f_sigma)[1], rp, f_sigma, True, rec)
         is_open = fin_open
-        closed = [(s - 1, e, zq[e]) for s, e in _segments_from_flags(fl) if e >= 0 and not fl[e] & DISP_LONG]
-        if (fl & DISP_LONG).any():
-            warnings.append("displacement: a motion longer than 65535 samples was not corrected")
+        segs = [(s - 1, e) for s, e in _segments_from_flags(fl) if e >= 0]
+        closed = [(a, e, zq[e]) for a, e in segs if not fl[e] & DISP_LONG]
+        long_anchors = [a for a, e in segs if fl[e] & DISP_LONG]
     f_host = f if engine == "float" else np.asarray(f, float) / 2.0**OUT_FRAC
     declared = int(np.argmax(at)) if np.any(at) else n
     # each rest from where it began, not from the detector's declaration hold samples later
@@ -339,9 +412,6 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                         f"{time_span(t, min(declared, n - 1))}; rows before are 0)" + "".join("; " + w for w in before))
         off_words = [w for w in off_words if w not in before]
     warnings += ["displacement: " + w for w in off_words]
-    if is_open:
-        warnings.append("displacement: the last motion does not end at rest: it is NOT corrected "
-                        "(column corrected = 0 there) and its drift grows with time squared")
     if device.is_array():
         # the rail assumption: no rotation between rests (checked from the resolved alpha)
         rot = _max_rotation_deg(device, cal, rec, np.asarray(at, bool), dt, noise)
@@ -349,25 +419,40 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
             warnings.append(f"displacement: the body turned by up to {rot:.1f} deg during a motion (from the "
                             "resolved alpha): gravity removal assumes no rotation between rests (a rail), so "
                             "the result is doubtful")
-    warnings += turned_motions(f_host, t, at, closed, f_sigma, rp, ax, float(device.gravity_mps2), rec)
-    zps = [z for _, _, z in closed]
+    g = float(device.gravity_mps2)
+    # a motion is reported only with a rest at both ends and no turn between them (the stop-to-stop
+    # method's assumptions); the first that is not ends the output
+    turns = turned_motions(f_host, at, closed, f_sigma, rp, ax)
+    if keep_turned:
+        warnings += turned_warnings(t, turns, g, rec)
+    cut, left_out, kept = _left_out(t, at, closed, long_anchors, is_open, [] if keep_turned else turns, g, rec)
+    zps = [z for _, _, z in kept]
     turned = still_but_turned(f_host, at, rp)
+    still_turned = None
     if turned is not None:
         ang, a0, a1 = turned
-        warnings.append(f"displacement: the body is still at {time_span(t, a0, a1, rec)} (the first such stretch) but "
-                        f"turned from the first rest (by up to {ang:.1f} deg over the recording): an accelerometer "
-                        "alone cannot "
-                        "tell a turn from an acceleration, so gravity leaks into the path from there on (up to "
-                        f"{2 * math.sin(math.radians(ang) / 2) * float(device.gravity_mps2):.3g} m/s^2) and such "
-                        "a stretch is not taken as a rest; the result after it is not valid")
+        still_turned = (f"the body is still at {time_span(t, a0, a1, rec)} (the first such stretch) but turned from the "
+                        f"first rest (by up to {ang:.1f} deg over the recording): an accelerometer alone cannot tell a "
+                        "turn from an acceleration, so gravity leaks into the path from there on (up to "
+                        f"{2 * math.sin(math.radians(ang) / 2) * g:.3g} m/s^2) and such a stretch is not taken as a "
+                        "rest; the result after it is not valid")
+    if left_out is not None:
+        warnings.append("displacement: " + left_out)
+    if still_turned is not None:
+        warnings.append("displacement: " + still_turned)
+    if left_out is not None and not kept:
+        raise InputError(rec.source, "displacement: no motion can be reported: " + "; ".join(
+            [left_out] + [w.removeprefix("displacement: ") for w in warnings[checked:] if w != "displacement: " + left_out])
+            + "; the stop-to-stop method needs a rest at both ends of each motion, at the same attitude")
     meta = {"engine": engine, "form": form, "device": device.name, "signal": note,
             "mode": "3-axis, gravity removed in the frame of the first rest" if ax is None else
             f"1-D along body {'xyz'[ax]}", "segments": str(len(zps))}
     if zps:
         meta["zero_point_mps2"] = "; ".join("(" + ", ".join(f"{c:.4g}" for c in np.atleast_1d(z)) + ")" for z in zps)
-    cols = Columns(t=t, v_x=v[:, 0], v_y=v[:, 1], v_z=v[:, 2], p_x=pp[:, 0], p_y=pp[:, 1], p_z=pp[:, 2],
-                   p_raw_x=p_raw[:, 0], p_raw_y=p_raw[:, 1], p_raw_z=p_raw[:, 2],
-                   rest=np.asarray(at, float), corrected=np.asarray(corrected, float),
-                   **({"filled": filled.astype(float)} if filled.any() else {}),
+    k = slice(0, cut)
+    cols = Columns(t=t[k], v_x=v[k, 0], v_y=v[k, 1], v_z=v[k, 2], p_x=pp[k, 0], p_y=pp[k, 1], p_z=pp[k, 2],
+                   p_raw_x=p_raw[k, 0], p_raw_y=p_raw[k, 1], p_raw_z=p_raw[k, 2],
+                   rest=np.asarray(at[k], float), corrected=np.asarray(corrected[k], float),
+                   **({"filled": filled[k].astype(float)} if filled[k].any() else {}),
                    warnings=warnings, meta=meta)
     return cols

@@ -12,9 +12,14 @@ from ..recording import Recording
 from ..recording_checks import regular_step
 from .common import time_span
 
-__all__ = ["MAX_FILL_SAMPLES", "MAX_FILL_SHARE", "MAX_JITTER_STEPS", "JITTER_NOTE_STEPS", "MAX_LATE_STEPS",
+__all__ = ["REGRID_HINT", "MAX_FILL_SAMPLES", "MAX_FILL_SHARE", "MAX_JITTER_STEPS", "JITTER_NOTE_STEPS", "MAX_LATE_STEPS",
            "MAX_WANDER_STEPS", "WANDER_BLOCK", "COHERENT_SHARE", "COHERENT_BLOCK", "block_phases", "stamp_trend",
            "grid_places", "places_from", "on_uniform_grid"]
+
+#: the remedy a refusal of stamps off the grid names (a sensor sampled at a constant rate whose stamps stray)
+REGRID_HINT = ("; if the sensor sampled at a constant rate and only its time stamps stray (a logger that polls it, a "
+               "host that stamps on arrival), accelcal convert --rate HZ (the sensor's rate) writes the recording on "
+               "that rate's grid, the stamps kept as column t_host")
 
 #: dropped samples are filled (linear interpolation) up to this many in one gap ...
 MAX_FILL_SAMPLES = 10
@@ -181,7 +186,7 @@ def crowded(rec, t: np.ndarray, late: np.ndarray, pushed: np.ndarray, dt: float)
                           "integrators need a constant rate", row=rec.line(same[-1]), column="t")
     return InputError(rec.source, f"{head}; row {rec.line(b)} would be {late[b]:.2f} of a step late (up to "
                       f"{MAX_LATE_STEPS:g} is taken as a sample delivered late, {MAX_JITTER_STEPS:g} as jitter of the "
-                      "stamps): the integrators need a constant rate", row=rec.line(e), column="t")
+                      "stamps): the integrators need a constant rate" + REGRID_HINT, row=rec.line(e), column="t")
 
 
 def incoherent(rec, t: np.ndarray, late: np.ndarray, dt: float) -> InputError | None:
@@ -205,8 +210,8 @@ def incoherent(rec, t: np.ndarray, late: np.ndarray, dt: float) -> InputError | 
                       f"off it ({time_span(t, i)} is {late[i]:+.2f} steps off a uniform grid of about {dt:.6g} s; "
                       f"their steps {(t[b] - t[a]) / (b - a):.6g} s on average): the rate changes, and up to "
                       f"{MAX_JITTER_STEPS:g} of a step off is taken as jitter of the stamps, a sample up to "
-                      f"{MAX_LATE_STEPS:g} late now and then as delivered late: the integrators need a constant rate",
-                      row=rec.line(i), column="t")
+                      f"{MAX_LATE_STEPS:g} late now and then as delivered late: the integrators need a constant rate"
+                      + REGRID_HINT, row=rec.line(i), column="t")
 
 
 def wander(off: np.ndarray, on: np.ndarray, edges: np.ndarray) -> float:
@@ -241,7 +246,7 @@ def wander_error(rec, t: np.ndarray, q: np.ndarray, on: np.ndarray, edges: np.nd
                       f"uniform grid of the rows before it ({s:.6g} s a step), the steps about it {local:.6g} s on "
                       f"average: the stamps' local mean may drift up to {MAX_WANDER_STEPS:g} of a step from one "
                       "uniform grid (a host's clock against the sensor's), the sample rate may not change: the "
-                      "integrators need a constant rate", row=rec.line(j), column="t")
+                      "integrators need a constant rate" + REGRID_HINT, row=rec.line(j), column="t")
 
 
 def on_uniform_grid(rec) -> tuple[Any, np.ndarray, str | None]:
