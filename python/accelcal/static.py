@@ -17,7 +17,7 @@ import numpy as np
 
 from .clipping import ClipLevels, clip_levels
 from .errors import InputError
-from .noise import colour_factor, estimate_noise, noise_for, pose_colour, window_std
+from .noise import colour_factor, noise_for, nyquist_tone, pose_colour, window_std, without_nyquist_tone
 from .recording import check_for_device
 from .steps import MOVE_PARTS, MOVE_RANGE, MOVE_STD, block_log_intervals, part_spread, step_splits
 
@@ -42,10 +42,6 @@ QUANT_VAR = 1.0 / 12.0    # variance of rounding to integer counts
 REST_F_RANGE = (0.5, 2.0)  # a static interval with no reference reads |f| within this x g (device file's scale) ...
 REST_F_AGREE = 0.1         # ... or within this of the median ratio of >= 3 such intervals (one wrong scale for
                            # all: a +-8 g log read as +-2 g); else it is no rest (a rocket coasting: 0.03-0.34 g)
-
-
-NYQUIST_RATIO = 1.5        # a channel carries a tone at half the sampling rate when its mean |lag-1 difference|
-                           # is this x its mean |lag-2 difference| (white noise: 1; smooth motion: < 1)
 
 
 @dataclass
@@ -201,46 +197,6 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
         free = [iv for iv in out if not any(iv[0] < b and a < iv[1] for a, b in blocks)]
         out = sorted(blocks + free)
     return out
-
-
-def nyquist_tone(raw: np.ndarray) -> np.ndarray:
-    """Channels that carry a tone at half the sampling rate.
-
-    50 Hz mains picked up by a logger sampling at 100 Hz aliases to the last bin of the
-    spectrum; the sampling clock and the mains drift apart, so the sampled tone's amplitude
-    swells and fades over seconds to minutes, and a window std test takes its quiet
-    stretches for rest and the rest for motion.  Such a tone alternates sign from sample to
-    sample: it is in every difference of neighbours and in no difference of samples two
-    apart.
-
-    Parameters
-    ----------
-    raw : array_like (n, N)
-        Readings (counts).
-
-    Returns
-    -------
-    ndarray (N,) of bool
-        Mean |x[k+1] - x[k]| >= NYQUIST_RATIO x mean |x[k+2] - x[k]|.
-    """
-    x = np.asarray(raw, float)
-    if x.shape[0] < 8:
-        return np.zeros(x.shape[1], bool)
-    d1 = np.mean(np.abs(np.diff(x, axis=0)), axis=0)
-    d2 = np.mean(np.abs(x[2:] - x[:-2]), axis=0)
-    return (d1 > 0) & (d1 >= NYQUIST_RATIO * d2)
-
-
-def without_nyquist_tone(raw: np.ndarray, tone: np.ndarray, sig: np.ndarray, w: int) -> tuple[np.ndarray, np.ndarray]:
-    """The readings with the channels ``tone`` averaged over neighbouring pairs (a zero at half
-    the sampling rate; slower content, motion included, is kept), and those channels' noise
-    estimated again from the averaged readings (counts).  The static detector's windows and
-    interval ends are then taken on them."""
-    x = np.asarray(raw, float).copy()
-    x[1:, tone] = 0.5 * (x[1:, tone] + x[:-1, tone])
-    s = np.asarray(sig, float).copy()
-    s[tone] = estimate_noise(x[:, tone], w, integer=False)
-    return x, s
 
 
 def sample_where(rec, i: int) -> str:
