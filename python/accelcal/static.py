@@ -398,14 +398,20 @@ def set_aside_off_gravity(rec, device, intervals: list, labels: list | None) -> 
     return split_aside(rec, intervals, labels, aside_of)
 
 
-#: what a recording without a static pose lacks (the calibration's error and its note)
-NO_POSE = (f"no static pose found (no 'pose' labels, and no interval of at least {MIN_POSE_S:g} s in which every "
-           f"channel is within {STATIC_THRESHOLD:g} x its noise)")
+#: how the calibration's error and its note on a recording without a static pose begin
+NO_POSE = "no static pose found"
+
+
+def no_pose(min_s: float = MIN_POSE_S) -> str:
+    """What a recording without a static pose lacks, under a minimum of ``min_s`` seconds (the
+    calibration's error and its note; begins with :data:`NO_POSE`)."""
+    return (f"{NO_POSE} (no 'pose' labels, and no interval of at least {min_s:g} s in which every channel is "
+            f"within {STATIC_THRESHOLD:g} x its noise)")
 
 
 def no_rest_clause(raw: np.ndarray, device, sig: np.ndarray) -> str:
     """Why a recording has no rest, where its noise ``sig`` (counts) is beyond REST_NOISE_MAX of
-    its |f| (:func:`noise_share`): ": the noise ... " to append to :data:`NO_POSE`; else ""."""
+    its |f| (:func:`noise_share`): ": the noise ... " to append to :func:`no_pose`; else ""."""
     share = noise_share(raw, device, sig)
     c = int(np.argmax(share))
     if not share[c] > REST_NOISE_MAX:
@@ -415,9 +421,11 @@ def no_rest_clause(raw: np.ndarray, device, sig: np.ndarray) -> str:
             "as rows pointing in unrelated directions")
 
 
-def poses_from_recording(rec, device, *, use_labels: bool | None = None, required: bool = True) -> PoseSet:
+def poses_from_recording(rec, device, *, use_labels: bool | None = None, required: bool = True,
+                         min_s: float = MIN_POSE_S) -> PoseSet:
     """The static poses of one recording: its ``pose`` labels when it has them (and
-    ``use_labels`` is not False), else :func:`detect_static`.  Poses with clipped
+    ``use_labels`` is not False), else :func:`detect_static` (``min_s``: its shortest interval
+    where a motion touches it, seconds).  Poses with clipped
     readings (:func:`accelcal.clipping.clip_levels`: at raw_min/raw_max or piled up at
     a level inside the range) are set aside and listed in ``set_aside``.  The reference
     specific force and temperature of a pose are the means of f_* and temp_c over it.
@@ -435,7 +443,7 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
         intervals = [np.sort(order[a:b]) for a, b in zip(*bounds)]
         labels = [int(v) for v in labs]
     else:
-        intervals = detect_static(rec, device, noise=noise)
+        intervals = detect_static(rec, device, noise=noise, min_s=min_s)
         labels = None
     levels = clip_levels(rec.raw, device, noise, w)
     intervals, labels, aside = set_aside_clipped(rec, intervals, labels, levels.mask(rec.raw), levels)
@@ -446,7 +454,7 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
     if not intervals and (not required or aside):
         return empty
     if not intervals:
-        raise InputError(rec.source, NO_POSE + no_rest_clause(rec.raw, device, noise))
+        raise InputError(rec.source, no_pose(min_s) + no_rest_clause(rec.raw, device, noise))
     means, cnt, std = pose_means(rec, intervals, device, labels=labels, noise=noise, check_motion=labelled)
     P = len(intervals)
     f_ref = np.full((P, 3), np.nan)

@@ -309,3 +309,38 @@ def test_a_recording_in_motion_is_not_told_its_rows_are_pose_means(tmp_path, cap
                               tmp_path / "f.json"], capfd)
     assert rc == 2 and not caught, err
     assert "the static detector takes a pose from a still stretch" in err and "'pose' column" not in err, err
+
+
+def test_a_robots_short_stops_are_counted_and_taken_with_min_static(tmp_path, capfd):
+    """A robot arm that stops 0.75-1 s at each pose (AhmedFouad23/Accelerometer_Calibration's
+    ALI runs: an MPU-6050 at 86.6 Hz, stops of 56-91 samples): the 1 s a still stretch needs
+    where a motion touches it (a pause in a hand's movement is no pose) left them out unsaid.
+    Now the error counts them, with their lengths and the --min-static that takes them; with it
+    the 12 stops of 0.8 s in 12 orientations give the full model, holding the truth within 4
+    sigma.  A --min-static that is no number of seconds >= 0 is refused in one line."""
+    rate = 86.6
+    d = dataclasses.replace(default_triad(), sample_rate_hz=rate, noise_mps2=0.04)
+    rng = np.random.default_rng(3)
+    b, S = draw_truth(d, rng)
+    rec = make_recording(d, b, S, d.gravity_mps2 * fib_dirs(12), rng, labels=False, hold=int(0.8 * rate),
+                         move=int(1.5 * rate))
+    d = dataclasses.replace(d, noise_mps2=0.0)                     # no noise stated: estimated from the recording
+    save_device(d, tmp_path / "d.json")
+    write_recording(tmp_path / "arm.csv", rec)
+    rc, _, err, _ = run(["calibrate", "--device", tmp_path / "d.json", tmp_path / "arm.csv", "-o",
+                         tmp_path / "c.json"], capfd)
+    assert rc == 2 and len(err.strip().splitlines()) == 1 and not (tmp_path / "c.json").exists(), err
+    assert "found 0" in err and "12 still stretch(es) of 0.8" in err and "shorter than 1 s" in err, err
+    told = err.split("--min-static ")[1].split()[0]
+    assert 0.75 <= float(told) <= 0.85, told
+    rc, out, err, _ = run(["calibrate", "--device", tmp_path / "d.json", tmp_path / "arm.csv", "--min-static", told,
+                           "-o", tmp_path / "c.json"], capfd)
+    assert rc == 0 and "from 12 static poses" in out and "'offset' model" not in err, (out, err)
+    cal = calibrate_recordings(d, [rec], min_static_s=float(told))
+    assert cal.extra["fit"]["model"] == "full" and "fallback" not in cal.extra["fit"]
+    assert np.all(np.abs(cal.offsets - b) < 4 * cal.offset_sigma), (cal.offsets - b) / cal.offset_sigma
+    for bad in ("-0.5", "nan", "1s"):
+        rc, _, err, _ = run(["calibrate", "--device", tmp_path / "d.json", tmp_path / "arm.csv", "--min-static", bad,
+                             "-o", tmp_path / "x.json"], capfd)
+        assert rc == 2 and len(err.strip().splitlines()) == 1 and f"--min-static '{bad}'" in err, err
+        assert not (tmp_path / "x.json").exists()
