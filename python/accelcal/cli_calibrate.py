@@ -107,7 +107,8 @@ def calibrate_warnings(dev, cal) -> list[str]:
             warnings.append(low)
     if far:
         warnings.append(far)
-    scale = far_from_nominal(dev, cal.sensitivity)
+    scale = far_from_nominal(dev, cal.sensitivity, None if cal.sensitivity_sigma is None
+                             else gain_sigma(cal.sensitivity, cal.sensitivity_sigma))
     if scale:
         warnings.append(scale)
     return warnings

@@ -17,7 +17,7 @@ import numpy as np
 
 from accelcal import model
 from accelcal.calibrate import calibrate_recordings, static_force
-from accelcal.calibrate.checks import gain_sigma
+from accelcal.calibrate.checks import far_from_nominal, gain_sigma
 from accelcal.calibrate.settings import EXCITATION_MIN_SPAN_G, POORLY_DETERMINED_MG
 from accelcal.cli_calibrate import calibrate_warnings
 from accelcal.device import default_triad, save_device
@@ -344,3 +344,25 @@ def test_a_robots_short_stops_are_counted_and_taken_with_min_static(tmp_path, ca
                              "-o", tmp_path / "x.json"], capfd)
         assert rc == 2 and len(err.strip().splitlines()) == 1 and f"--min-static '{bad}'" in err, err
         assert not (tmp_path / "x.json").exists()
+
+
+def test_a_gain_beyond_any_chips_tolerance_is_warned_of():
+    """A channel whose gain is 14 % below the device file's (within the 1.25 x that marks a wrong
+    scale) passed unsaid: datasheets hold a chip's sensitivity within +-3 % (MPU-6050) to +-10 %
+    (ADXL345's 230-282 LSB/g), so the device file's counts_per_mps2 is not this chip's or the
+    chip is out of its specification.  Warned of, naming the channel and the gain; a gain within
+    the tolerance, or one whose 1-sigma could bring it within, is not."""
+    d = default_triad()
+    rng = np.random.default_rng(4)
+    b, S = draw_truth(d, rng)
+    S[1] *= 0.86 / np.linalg.norm(S[1]) * d.counts_per_mps2[1]
+    rec = make_recording(d, b, S, d.gravity_mps2 * fib_dirs(24), rng, labels=False, hold=int(d.sample_rate_hz),
+                         move=int(0.5 * d.sample_rate_hz))
+    cal = calibrate_recordings(d, [rec], "jigfree")
+    w = [x for x in calibrate_warnings(d, cal) if "gain is" in x]
+    assert len(w) == 1 and w[0].startswith("channel 1's gain is -14 % from the device file's"), w
+    assert "(1 of 3 channels)" in w[0] and "check the device file's counts_per_mps2" in w[0], w[0]
+    S0 = d.nominal_sensitivity()
+    assert far_from_nominal(d, S0 * 1.09) is None
+    assert far_from_nominal(d, S0 * 0.86, np.full(3, 0.02)) is None     # -14 % +- 3 x 2 % reaches -8 %
+    assert "is 0.5 x the device file's" in far_from_nominal(d, S0 * 0.5, np.full(3, 0.02))
