@@ -38,6 +38,7 @@ from .convert import Converted, convert_file
 from .resolve import resolve_recording
 from .units import COUNTS_STATED, scale_from_options
 from .simulate import simulate as _simulate_impl
+from .static import MIN_POSE_S
 
 __all__ = ["Device", "Recording", "Calibration", "Columns", "ResolveResult", "AccelcalError",
            "default_device", "load_device", "save_device", "read_recording", "write_recording",
@@ -154,7 +155,8 @@ def _as_recordings(recordings: Any, device: Device) -> list[Recording]:
 
 
 def calibrate(device: Any, recordings: Any, method: str | None = None, *,
-              jig_accuracy_deg: float = 0.0, jigfree_model: str = "auto", drop_outliers: bool = False) -> Calibration:
+              jig_accuracy_deg: float = 0.0, jigfree_model: str = "auto", drop_outliers: bool = False,
+              min_static_s: float = MIN_POSE_S) -> Calibration:
     """Estimate a calibration from static poses (as ``accelcal calibrate``).
 
     Parameters
@@ -173,6 +175,10 @@ def calibrate(device: Any, recordings: Any, method: str | None = None, *,
     drop_outliers : bool
         Leave out the poses far off the fit (named in ``extra["outliers"]`` either way, with
         the fit's change without them).
+    min_static_s : float
+        Poses found by the static detector: the shortest still stretch taken for a pose
+        where a motion touches it (seconds; default 1, a pause in a hand's movement being
+        none; a robot arm that stops 0.75 s at each pose: 0.7).
 
     Returns
     -------
@@ -193,7 +199,7 @@ def calibrate(device: Any, recordings: Any, method: str | None = None, *,
     dev = as_device(device)
     cal = calibrate_recordings(dev, _as_recordings(recordings, dev), method=method,
                                jig_accuracy_deg=jig_accuracy_deg, jigfree_model=jigfree_model,
-                               drop_outliers=drop_outliers)
+                               drop_outliers=drop_outliers, min_static_s=min_static_s)
     record_warnings(dev, cal)
     return cal
 

@@ -18,7 +18,7 @@ from tqdm import tqdm
 from . import __version__
 from .calibrate import JIG_ACCURACY_DEG, JIGFREE_MODELS, calibrate_recordings
 from .calibration import load_calibration, save_calibration
-from .cli_calibrate import calibration_summary, jig_accuracy_arg, record_warnings
+from .cli_calibrate import calibration_summary, jig_accuracy_arg, min_static_arg, record_warnings
 from .cli_paths import check_not_an_input, check_output, check_output_dir
 from .convert_cli import add_convert_parser
 from .demo import run_demo
@@ -35,6 +35,7 @@ from .recording_checks import seconds
 from .report import REPORT_FILES, write_report
 from .resolve import resolve_recording
 from .simulate import run_simulation
+from .static import MIN_POSE_S
 from .units_cli import add_units_options, scale_from_args
 
 EXIT_INPUT = 2
@@ -152,10 +153,11 @@ def cmd_simulate(a):
 def cmd_calibrate(a):
     check_output(a.output)
     jig = jig_accuracy_arg(a.jig_accuracy)
+    min_static = min_static_arg(a.min_static)
     dev = _load_device(a.device)
     recs = _read(a.recordings, dev, "calibrate", a)
     cal = calibrate_recordings(dev, recs, method=a.method, jig_accuracy_deg=jig, jigfree_model=a.jigfree_model,
-                               drop_outliers=a.drop_outliers)
+                               drop_outliers=a.drop_outliers, min_static_s=min_static)
     warnings = record_warnings(dev, cal)
     save_calibration(cal, a.output)
     for n in cal.extra.get("notes", []) if isinstance(cal.extra, dict) else []:
@@ -368,6 +370,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help="leave out the poses far off the fit (residual over the noise beyond the poses' median + 8 "
                    "robust sd: a knock, a pose not held, a wrong row), which are otherwise kept and named in a "
                    "warning with how much the fit changes without them")
+    s.add_argument("--min-static", metavar="SECONDS", default=f"{MIN_POSE_S:g}",
+                   help="recordings without 'pose' labels: the shortest still stretch the static detector takes "
+                   "for a pose where a motion touches it (default %(default)s s: a pause in a hand's movement is "
+                   "none).  A robot arm that stops 0.75 s at each pose: --min-static 0.7 (the errors and warnings "
+                   "count the stretches left out as shorter).  Below the detector's 0.5 s window it acts as the "
+                   "window; a stretch joined to its neighbours by instant steps (a logger of static blocks) needs "
+                   "one window whatever it says")
     s.add_argument("-o", "--output", required=True, metavar="CAL.json", help="the calibration JSON to write")
     add_units_options(s)
     s.set_defaults(func=cmd_calibrate)

@@ -21,6 +21,18 @@ def jig_accuracy_arg(text) -> float:
     return v
 
 
+def min_static_arg(text) -> float:
+    """--min-static SECONDS: a finite number >= 0 (one-line error naming the option otherwise)."""
+    try:
+        v = float(text)
+    except ValueError:
+        v = float("nan")
+    if not (np.isfinite(v) and v >= 0):
+        raise AccelcalError(f"--min-static {text!r}: expected a finite number of seconds >= 0 (the shortest still "
+                            "stretch taken for a pose where a motion touches it)")
+    return v
+
+
 def calibrate_warnings(dev, cal) -> list[str]:
     """The warnings a calibration calls for, one line each: a jig-free model reduced from
     ``full``, poses scattered beyond their noise (with what causes it), channels whose offset
@@ -95,7 +107,8 @@ def calibrate_warnings(dev, cal) -> list[str]:
             warnings.append(low)
     if far:
         warnings.append(far)
-    scale = far_from_nominal(dev, cal.sensitivity)
+    scale = far_from_nominal(dev, cal.sensitivity, None if cal.sensitivity_sigma is None
+                             else gain_sigma(cal.sensitivity, cal.sensitivity_sigma))
     if scale:
         warnings.append(scale)
     return warnings

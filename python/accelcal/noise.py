@@ -20,6 +20,9 @@ rest; a reading that sits on one code has a window std of 0 and one that flips b
 two codes up to q/2.  Such a dither is noise of order q/sqrt(12), not motion, so the
 noise of an integer channel is sqrt(sigma^2 + q^2/12) (q = 1 for plain integers: the
 rounding to counts).
+
+A tone at half the sampling rate (:func:`nyquist_tone`: mains aliased by a 100 Hz logger)
+is no motion; :func:`without_nyquist_tone` takes it out before the static detector's windows.
 """
 from __future__ import annotations
 
@@ -34,6 +37,10 @@ NOISE_SPLIT_RATIO = 3.0    # rest and motion classes of window std at least this
 
 ONE_REGIME_RATIO = 3.0     # a recording with no rest/motion split: its window std level, at most this x
                            # the white noise level (the rest/motion ratio: more is motion throughout)
+
+
+NYQUIST_RATIO = 1.5        # a channel carries a tone at half the sampling rate when its mean |lag-1 difference|
+                           # is this x its mean |lag-2 difference| (white noise: 1; smooth motion: < 1)
 
 
 MAD_TO_STD = 1.4826        # std of a normal distribution per unit of median absolute deviation
@@ -326,6 +333,46 @@ def estimate_noise(x: np.ndarray, window: int, *, integer: bool | None = None) -
             # latter the windows hold the motion, which the white noise level shows up
             out[i] = min(out[i], ONE_REGIME_RATIO * white_noise(x[:, i]))
     return np.sqrt(out ** 2 + q ** 2 / 12.0)
+
+
+def nyquist_tone(raw: np.ndarray) -> np.ndarray:
+    """Channels that carry a tone at half the sampling rate.
+
+    50 Hz mains picked up by a logger sampling at 100 Hz aliases to the last bin of the
+    spectrum; the sampling clock and the mains drift apart, so the sampled tone's amplitude
+    swells and fades over seconds to minutes, and a window std test takes its quiet
+    stretches for rest and the rest for motion.  Such a tone alternates sign from sample to
+    sample: it is in every difference of neighbours and in no difference of samples two
+    apart.
+
+    Parameters
+    ----------
+    raw : array_like (n, N)
+        Readings (counts).
+
+    Returns
+    -------
+    ndarray (N,) of bool
+        Mean |x[k+1] - x[k]| >= NYQUIST_RATIO x mean |x[k+2] - x[k]|.
+    """
+    x = np.asarray(raw, float)
+    if x.shape[0] < 8:
+        return np.zeros(x.shape[1], bool)
+    d1 = np.mean(np.abs(np.diff(x, axis=0)), axis=0)
+    d2 = np.mean(np.abs(x[2:] - x[:-2]), axis=0)
+    return (d1 > 0) & (d1 >= NYQUIST_RATIO * d2)
+
+
+def without_nyquist_tone(raw: np.ndarray, tone: np.ndarray, sig: np.ndarray, w: int) -> tuple[np.ndarray, np.ndarray]:
+    """The readings with the channels ``tone`` averaged over neighbouring pairs (a zero at half
+    the sampling rate; slower content, motion included, is kept), and those channels' noise
+    estimated again from the averaged readings (counts).  The static detector's windows and
+    interval ends are then taken on them."""
+    x = np.asarray(raw, float).copy()
+    x[1:, tone] = 0.5 * (x[1:, tone] + x[:-1, tone])
+    s = np.asarray(sig, float).copy()
+    s[tone] = estimate_noise(x[:, tone], w, integer=False)
+    return x, s
 
 
 def noise_for(device, raw: np.ndarray, window: int) -> tuple[np.ndarray, str]:

@@ -17,7 +17,7 @@ import numpy as np
 
 from .clipping import ClipLevels, clip_levels
 from .errors import InputError
-from .noise import colour_factor, estimate_noise, noise_for, pose_colour, window_std
+from .noise import colour_factor, noise_for, nyquist_tone, pose_colour, window_std, without_nyquist_tone
 from .recording import check_for_device
 from .steps import MOVE_PARTS, MOVE_RANGE, MOVE_STD, block_log_intervals, part_spread, step_splits
 
@@ -39,13 +39,16 @@ EDGE_SIGMA = 4.0           # static interval ends: the nearest samples this x no
 QUANT_VAR = 1.0 / 12.0    # variance of rounding to integer counts
 
 
+REST_NOISE_MAX = 0.05      # a recording whose noise (stated or estimated) on a channel is beyond this x its readings'
+                           # median |f| has no rest in it: the static detector finds none, whatever the noise (real
+                           # rests: 0.001-0.01 x |f|, a robot arm's quiet windows up to 0.019; 2 x 0.05 is readings
+                           # turning by +-10 deg; a file of pose means in random order, whose rows are all its
+                           # 'noise': 0.2-0.6, and within twice that rows tens of degrees apart were one pose)
+
+
 REST_F_RANGE = (0.5, 2.0)  # a static interval with no reference reads |f| within this x g (device file's scale) ...
 REST_F_AGREE = 0.1         # ... or within this of the median ratio of >= 3 such intervals (one wrong scale for
                            # all: a +-8 g log read as +-2 g); else it is no rest (a rocket coasting: 0.03-0.34 g)
-
-
-NYQUIST_RATIO = 1.5        # a channel carries a tone at half the sampling rate when its mean |lag-1 difference|
-                           # is this x its mean |lag-2 difference| (white noise: 1; smooth motion: < 1)
 
 
 @dataclass
@@ -144,7 +147,9 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
 
     The noise is the device's ``noise_mps2`` (plus rounding) when it is given for
     every channel, else estimated from the data (:func:`accelcal.noise.estimate_noise`),
-    unless ``noise`` (counts, per channel) is passed.
+    unless ``noise`` (counts, per channel) is passed.  Where it is beyond REST_NOISE_MAX of
+    the readings' |f| on a channel (:func:`noise_share`) the recording has no rest in it and
+    no interval is returned.
     """
     raw = np.asarray(rec.raw)
     n = raw.shape[0]
@@ -152,6 +157,8 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
     if n < w:
         return []
     sig = np.asarray(noise, float) if noise is not None else noise_for(device, raw, w)[0]
+    if np.any(noise_share(raw, device, sig) > REST_NOISE_MAX):
+        return []
     tone = nyquist_tone(raw)
     if np.any(tone):
         raw, sig = without_nyquist_tone(raw, tone, sig, w)
@@ -203,44 +210,23 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
     return out
 
 
-def nyquist_tone(raw: np.ndarray) -> np.ndarray:
-    """Channels that carry a tone at half the sampling rate.
+def noise_share(raw: np.ndarray, device, sig: np.ndarray) -> np.ndarray:
+    """(N,) each channel's noise ``sig`` (counts) as a share of the readings' median |f| (the
+    device file's nominal offsets and sensitivities, least squares over the channels; a wrong
+    scale moves |f| and the noise alike); 0 where the median |f| is 0.
 
-    50 Hz mains picked up by a logger sampling at 100 Hz aliases to the last bin of the
-    spectrum; the sampling clock and the mains drift apart, so the sampled tone's amplitude
-    swells and fades over seconds to minutes, and a window std test takes its quiet
-    stretches for rest and the rest for motion.  Such a tone alternates sign from sample to
-    sample: it is in every difference of neighbours and in no difference of samples two
-    apart.
-
-    Parameters
-    ----------
-    raw : array_like (n, N)
-        Readings (counts).
-
-    Returns
-    -------
-    ndarray (N,) of bool
-        Mean |x[k+1] - x[k]| >= NYQUIST_RATIO x mean |x[k+2] - x[k]|.
+    A still sensor's noise is a small share of |f| (REST_NOISE_MAX).  A recording with no rest
+    in it (a file of pose means, one orientation a row, in random order) is one regime to
+    :func:`accelcal.noise.estimate_noise`, whose noise is then the scatter of its rows: within
+    twice that, rows pointing tens of degrees apart had been taken for one pose.
     """
-    x = np.asarray(raw, float)
-    if x.shape[0] < 8:
-        return np.zeros(x.shape[1], bool)
-    d1 = np.mean(np.abs(np.diff(x, axis=0)), axis=0)
-    d2 = np.mean(np.abs(x[2:] - x[:-2]), axis=0)
-    return (d1 > 0) & (d1 >= NYQUIST_RATIO * d2)
-
-
-def without_nyquist_tone(raw: np.ndarray, tone: np.ndarray, sig: np.ndarray, w: int) -> tuple[np.ndarray, np.ndarray]:
-    """The readings with the channels ``tone`` averaged over neighbouring pairs (a zero at half
-    the sampling rate; slower content, motion included, is kept), and those channels' noise
-    estimated again from the averaged readings (counts).  The static detector's windows and
-    interval ends are then taken on them."""
-    x = np.asarray(raw, float).copy()
-    x[1:, tone] = 0.5 * (x[1:, tone] + x[:-1, tone])
-    s = np.asarray(sig, float).copy()
-    s[tone] = estimate_noise(x[:, tone], w, integer=False)
-    return x, s
+    raw = np.asarray(raw)
+    S = device.nominal_sensitivity()
+    x = raw[:: max(1, raw.shape[0] // 5000)] - device.nominal_offsets()
+    ref = float(np.median(np.linalg.norm(np.linalg.lstsq(S, x.T, rcond=None)[0], axis=0))) if x.size else 0.0
+    if not ref > 0:
+        return np.zeros(raw.shape[1])
+    return np.asarray(sig, float) / (ref * np.linalg.norm(S, axis=1))
 
 
 def sample_where(rec, i: int) -> str:
@@ -412,14 +398,34 @@ def set_aside_off_gravity(rec, device, intervals: list, labels: list | None) -> 
     return split_aside(rec, intervals, labels, aside_of)
 
 
-#: what a recording without a static pose lacks (the calibration's error and its note)
-NO_POSE = (f"no static pose found (no 'pose' labels, and no interval of at least {MIN_POSE_S:g} s in which every "
-           f"channel is within {STATIC_THRESHOLD:g} x its noise)")
+#: how the calibration's error and its note on a recording without a static pose begin
+NO_POSE = "no static pose found"
 
 
-def poses_from_recording(rec, device, *, use_labels: bool | None = None, required: bool = True) -> PoseSet:
+def no_pose(min_s: float = MIN_POSE_S) -> str:
+    """What a recording without a static pose lacks, under a minimum of ``min_s`` seconds (the
+    calibration's error and its note; begins with :data:`NO_POSE`)."""
+    return (f"{NO_POSE} (no 'pose' labels, and no interval of at least {min_s:g} s in which every channel is "
+            f"within {STATIC_THRESHOLD:g} x its noise)")
+
+
+def no_rest_clause(raw: np.ndarray, device, sig: np.ndarray) -> str:
+    """Why a recording has no rest, where its noise ``sig`` (counts) is beyond REST_NOISE_MAX of
+    its |f| (:func:`noise_share`): ": the noise ... " to append to :func:`no_pose`; else ""."""
+    share = noise_share(raw, device, sig)
+    c = int(np.argmax(share))
+    if not share[c] > REST_NOISE_MAX:
+        return ""
+    return (f": its noise on raw_{c} ({sig[c]:.4g} counts) is {100 * share[c]:.3g} % of its readings' median |f|, "
+            f"beyond a still sensor's {100 * REST_NOISE_MAX:g} %: its readings scatter throughout, as a motion's or "
+            "as rows pointing in unrelated directions")
+
+
+def poses_from_recording(rec, device, *, use_labels: bool | None = None, required: bool = True,
+                         min_s: float = MIN_POSE_S) -> PoseSet:
     """The static poses of one recording: its ``pose`` labels when it has them (and
-    ``use_labels`` is not False), else :func:`detect_static`.  Poses with clipped
+    ``use_labels`` is not False), else :func:`detect_static` (``min_s``: its shortest interval
+    where a motion touches it, seconds).  Poses with clipped
     readings (:func:`accelcal.clipping.clip_levels`: at raw_min/raw_max or piled up at
     a level inside the range) are set aside and listed in ``set_aside``.  The reference
     specific force and temperature of a pose are the means of f_* and temp_c over it.
@@ -437,7 +443,7 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
         intervals = [np.sort(order[a:b]) for a, b in zip(*bounds)]
         labels = [int(v) for v in labs]
     else:
-        intervals = detect_static(rec, device, noise=noise)
+        intervals = detect_static(rec, device, noise=noise, min_s=min_s)
         labels = None
     levels = clip_levels(rec.raw, device, noise, w)
     intervals, labels, aside = set_aside_clipped(rec, intervals, labels, levels.mask(rec.raw), levels)
@@ -448,7 +454,7 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
     if not intervals and (not required or aside):
         return empty
     if not intervals:
-        raise InputError(rec.source, NO_POSE)
+        raise InputError(rec.source, no_pose(min_s) + no_rest_clause(rec.raw, device, noise))
     means, cnt, std = pose_means(rec, intervals, device, labels=labels, noise=noise, check_motion=labelled)
     P = len(intervals)
     f_ref = np.full((P, 3), np.nan)

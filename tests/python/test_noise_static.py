@@ -140,6 +140,30 @@ def test_mains_aliased_to_half_the_sampling_rate_is_not_motion():
         assert not bad, (with_tone, bad)
 
 
+@pytest.mark.parametrize("rate", [3.0, 12.0, 100.0])
+def test_rows_pointing_in_unrelated_directions_are_no_rest(rate):
+    """A file of pose means in random order (Magneto's input shuffled: 178 orientations, one a
+    row), no noise stated.  It has no rest and no motion apart, so its noise estimate was the
+    rows' own scatter, and rows tens of degrees apart within twice that were one "pose" (the
+    real file: 4 of them at 12 Hz, an offset-only fit at 3 Hz).  That noise, 10-60 % of |f|, is
+    no still sensor's: no interval, and the error says why.  A sensor whose noise is 2.5 % of
+    |f| (beyond any real rest: 0.1-1 %, a robot arm's quiet windows 1.9 %) keeps its poses."""
+    dev = bare(default_triad())
+    k = dev.counts_per_mps2[0]
+    rng = np.random.default_rng(int(rate))
+    F = Rotation.random(178, random_state=int(rate)).apply([0.0, 0.0, G])
+    rows = np.round(32768 + k * (F + 0.02 * rng.standard_normal(F.shape))).astype(np.int64)
+    rec = recording(rows, rate)
+    dev_r = dataclasses.replace(dev, sample_rate_hz=rate)
+    assert detect_static(rec, dev_r) == []
+    with pytest.raises(InputError, match="beyond a still sensor's 5 %: its readings scatter throughout"):
+        poses_from_recording(rec, dev_r)
+    # 12 poses of 2 s at 100 Hz joined by eased moves, white noise 0.25 m/s^2 (2.5 % of |f|)
+    f = eased_poses(3, pause=0)
+    raw = np.round(32768 + k * (f + 0.25 * rng.standard_normal(f.shape))).astype(np.int64)
+    assert len(detect_static(recording(raw, 100.0), dev)) == 12
+
+
 def eased_poses(seed, pause):
     """f (m/s^2) of 12 random poses held 2 s at 100 Hz, joined by moves eased over 0.5 s to
     the half-way direction, held there ``pause`` samples, and eased over 0.5 s on."""

@@ -11,8 +11,8 @@ import numpy as np
 from ..device import NOMINAL_FACTOR
 from ..errors import InputError
 from ..static import PoseSet
-from .settings import (CANDIDATES, EXCITATION_MIN_SPAN_G, POORLY_DETERMINED_MG, SCATTER_CHI2, TILTED,
-                       TILTED_AFTER_DEG)
+from .settings import (CANDIDATES, CHIP_GAIN_TOLERANCE, EXCITATION_MIN_SPAN_G, POORLY_DETERMINED_MG, SCATTER_CHI2,
+                       TILTED, TILTED_AFTER_DEG)
 
 
 def as_means(device, means, what="means") -> np.ndarray:
@@ -193,20 +193,33 @@ def static_force(offsets, sensitivity, means, sigma=None) -> np.ndarray:
     return out
 
 
-def far_from_nominal(device, sensitivity) -> str | None:
+def far_from_nominal(device, sensitivity, gain_sig=None) -> str | None:
     """A warning when a fitted sensitivity |s_i| (counts per m/s^2) is more than
-    NOMINAL_FACTOR above or below the device file's ``counts_per_mps2`` (a real chip is
-    within a few %: a wrong device file, full scale or LSB), else None."""
+    NOMINAL_FACTOR above or below the device file's ``counts_per_mps2`` (a wrong device
+    file, full scale or LSB); else when a gain |s_i| / k_i - 1 is beyond CHIP_GAIN_TOLERANCE
+    by more than 3 of its relative 1-sigma ``gain_sig`` (N,) (none given: 0), beyond any
+    chip's datasheet tolerance (a gain 14 % low had passed unsaid); else None."""
     got = np.linalg.norm(np.asarray(sensitivity, float), axis=1)
     nominal = np.asarray(device.counts_per_mps2, float)
     ratio = got / nominal
     off = np.flatnonzero((ratio > NOMINAL_FACTOR) | (ratio < 1.0 / NOMINAL_FACTOR))
+    if off.size:
+        i = int(off[np.argmax(np.abs(np.log(ratio[off])))])
+        return (f"channel {i}'s sensitivity, {got[i]:.4g} counts per m/s^2, is {ratio[i]:.3g} x the device file's "
+                f"{nominal[i]:.4g} ({off.size} of {ratio.size} channels beyond {NOMINAL_FACTOR:g} x either way): a "
+                "real chip is within a few %; check the device file and the recording's scale (--full-scale, --lsb)")
+    sig = np.zeros(ratio.size) if gain_sig is None else np.nan_to_num(np.asarray(gain_sig, float), nan=np.inf)
+    gain = ratio - 1.0
+    off = np.flatnonzero(np.abs(gain) - 3.0 * sig > CHIP_GAIN_TOLERANCE)
     if not off.size:
         return None
-    i = int(off[np.argmax(np.abs(np.log(ratio[off])))])
-    return (f"channel {i}'s sensitivity, {got[i]:.4g} counts per m/s^2, is {ratio[i]:.3g} x the device file's "
-            f"{nominal[i]:.4g} ({off.size} of {ratio.size} channels beyond {NOMINAL_FACTOR:g} x either way): a real "
-            "chip is within a few %; check the device file and the recording's scale (--full-scale, --lsb)")
+    i = int(off[np.argmax(np.abs(gain[off]))])
+    return (f"channel {i}'s gain is {100 * gain[i]:+.3g} % from the device file's {nominal[i]:.4g} counts per m/s^2"
+            + (f" (1-sigma {100 * sig[i]:.2g} %)" if gain_sig is not None else "")
+            + f" ({off.size} of {ratio.size} channels): beyond a chip's datasheet tolerance "
+            f"(+-{100 * CHIP_GAIN_TOLERANCE:g} % for the loosest, +-3 % for an MPU-6050); check the device file's "
+            "counts_per_mps2 (the range, --full-scale or --lsb of the conversion; a ratiometric sensor's supply) "
+            "or the chip")
 
 
 def gain_sigma(sensitivity, sensitivity_sigma) -> np.ndarray:

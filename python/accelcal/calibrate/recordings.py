@@ -1,14 +1,15 @@
 """The entry point the command line uses: recordings in, a Calibration out."""
 from __future__ import annotations
 
+import math
 from typing import Any, Sequence
 
 import numpy as np
 
 from ..errors import InputError
 from ..held import distinct_recordings
-from ..static import (MIN_POSE_S, NO_POSE, STATIC_THRESHOLD, STATIC_WINDOW_S, PoseSet, one_wrong_scale,
-                      poses_from_recording, window_len)
+from ..static import (MIN_POSE_S, NO_POSE, STATIC_THRESHOLD, STATIC_WINDOW_S, PoseSet, detect_static, no_pose,
+                      one_wrong_scale, poses_from_recording, window_len)
 from .checks import jig_accuracy_rad, pose_label
 from .known_poses import fit_known_poses
 from .outliers import outlier_poses, outlier_report, subset
@@ -20,7 +21,7 @@ from .static_model import fit_static
 
 def calibrate_recordings(device, recordings: Sequence[Any], method: str | None = None, *,
                          jig_accuracy_deg: float = JIG_ACCURACY_DEG, jigfree_model: str = "auto",
-                         drop_outliers: bool = False):
+                         drop_outliers: bool = False, min_static_s: float = MIN_POSE_S):
     """Calibrate ``device`` from recordings and return a Calibration.
 
     Static poses: a recording's ``pose`` labels when present, else automatic static
@@ -41,8 +42,14 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     and is named in those notes; with no pose in any, InputError.  Poses far off the fit
     (:mod:`accelcal.calibrate.outliers`) are named in ``extra["outliers"]`` with the fit's
     change without them; ``drop_outliers`` leaves them out (set aside, "far off the fit").
+    ``min_static_s``: the shortest still stretch the static detector takes for a pose where a
+    motion touches it (seconds; default MIN_POSE_S, a pause in a hand's movement being none;
+    below the detector's window it acts as the window).
     """
     jig_accuracy_rad(jig_accuracy_deg)
+    if not (np.isfinite(min_static_s) and min_static_s >= 0):
+        raise InputError("<arguments>", f"minimum static stretch {min_static_s!r}: expected a finite number of "
+                         "seconds >= 0", field="min_static_s")
     if jigfree_model not in JIGFREE_MODELS:
         raise InputError("<arguments>", f"unknown jig-free model {jigfree_model!r}; expected one of "
                          f"{', '.join(JIGFREE_MODELS)}", field="jigfree_model")
@@ -56,17 +63,18 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     # with several recordings, one without a static pose (a motion, a sweep) adds none and is named
     several = len(recordings) > 1
     try:
-        sets = [poses_from_recording(rec, device, required=not (rot.any() or several))
+        sets = [poses_from_recording(rec, device, required=not (rot.any() or several), min_s=min_static_s)
                 for rec, rot in zip(recordings, rotating)]
     except InputError as e:
         if not e.detail.startswith(NO_POSE):
             raise
-        raise InputError(e.source, with_detector_hint(e.detail, device, recordings, None), field=e.field) from None
+        raise InputError(e.source, with_detector_hint(e.detail, device, recordings, None, min_static_s),
+                         field=e.field) from None
     for rec, rot, ps in zip(recordings, rotating, sets):
         if several and not rot.any() and ps.n_poses == 0:
             clipped = (f" ({len(ps.set_aside)} set aside: "
                        f"{', '.join(sorted({setaside_reason(d) for d in ps.set_aside}))})" if ps.set_aside else "")
-            notes.append(f"{rec.source}: {NO_POSE}{clipped}: it adds none")
+            notes.append(f"{rec.source}: {no_pose(min_static_s)}{clipped}: it adds none")
     poses = PoseSet.concat(sets)
     if poses.n_poses == 0:
         why = (f" ({len(poses.set_aside)} set aside because "
@@ -117,7 +125,7 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
         if e.source != "<poses>":
             raise
         names = sorted({str(d.get("source")) for d in poses.info})
-        raise InputError(", ".join(names), with_detector_hint(e.detail, device, recordings, poses),
+        raise InputError(", ".join(names), with_detector_hint(e.detail, device, recordings, poses, min_static_s),
                          field=e.field) from None
     fit, fallback, outliers = without_outliers(device, fit, fallback, solve, drop_outliers)
 
@@ -135,7 +143,7 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
                                       source=rot[0][0].source)
     cal = to_calibration(device, fit, "jigfree" if jigfree else method, pos_fit)
     if fallback is not None:
-        hint = detector_hint(device, recordings, poses)
+        hint = hint_clause(detector_found(device, recordings, poses, min_static_s))
         if hint:
             fallback["detector"] = hint[2:]
         cal.extra["fit"]["fallback"] = fallback
@@ -180,12 +188,13 @@ POSE_MEANS_HINT = ("if each row is already one pose's mean (a file of pose means
                    "row its own label in a 'pose' column (0, 1, 2, ...), which takes each row as a pose")
 
 
-def detector_found(device, recordings, poses: PoseSet | None) -> tuple[str, bool] | None:
+def detector_found(device, recordings, poses: PoseSet | None, min_s: float = MIN_POSE_S) -> tuple[str, bool] | None:
     """What the static detector needs and found, where the poses were detected (no recording
     has ``pose`` labels; else None): a still stretch of several samples a pose, how many it
-    found and the rows they hold; and whether they hold less than half of the rows (a file whose
-    rows are each one pose's mean: Magneto's input, 178 hand-held orientations, one row each,
-    had been told "got 2; add poses").
+    found and the rows they hold, and the still stretches shorter than ``min_s`` that a motion
+    touches (:func:`short_stretches`: a robot arm's stops of 0.75-1 s had gone unmentioned); and
+    whether they hold less than half of the rows (a file whose rows are each one pose's mean:
+    Magneto's input, 178 hand-held orientations, one row each, had been told "got 2; add poses").
 
     Parameters
     ----------
@@ -193,6 +202,8 @@ def detector_found(device, recordings, poses: PoseSet | None) -> tuple[str, bool
     recordings : list of Recording
     poses : PoseSet or None
         The poses found (None: none).
+    min_s : float
+        The detector's shortest interval where a motion touches it (seconds).
 
     Returns
     -------
@@ -205,10 +216,27 @@ def detector_found(device, recordings, poses: PoseSet | None) -> tuple[str, bool
     held = 0 if poses is None else int(np.sum(poses.n))
     found = 0 if poses is None else poses.n_poses
     w = max(window_len(device, STATIC_WINDOW_S, rec.n_samples) for rec in recordings)
+    short = short_stretches(device, recordings, min_s)
+    span = "" if not short else (f"{min(short):.2g}" if f"{min(short):.2g}" == f"{max(short):.2g}"
+                                 else f"{min(short):.2g}-{max(short):.2g}")
+    shorter = (f"; {len(short)} still stretch(es) of {span} s, shorter than {min_s:g} s, were left out as pauses "
+               f"in a motion (--min-static {math.floor(100 * min(short)) / 100:g} takes them, if the sensor stood "
+               "still there: a robot's stops)" if short else "")
     return (f"the static detector takes a pose from a still stretch of several samples (at least {w} here, "
-            f"and {MIN_POSE_S:g} s where a motion touches it, with every channel within {STATIC_THRESHOLD:g} x "
-            f"its noise) and found {found}, holding {held} of {rows} rows"), \
+            f"and {min_s:g} s where a motion touches it, with every channel within {STATIC_THRESHOLD:g} x "
+            f"its noise) and found {found}, holding {held} of {rows} rows{shorter}"), \
         held < rows / 2 and rows_turn_deg(device, recordings) >= POSE_ROW_TURN_DEG
+
+
+def short_stretches(device, recordings, min_s: float) -> list[float]:
+    """The lengths (s) of the still stretches :func:`accelcal.static.detect_static` leaves out as
+    shorter than ``min_s`` where a motion touches them: those it finds with no minimum beyond its
+    window, less those it finds with ``min_s``."""
+    out: list[float] = []
+    for rec in recordings:
+        kept = set(detect_static(rec, device, min_s=min_s))
+        out += [(b - a) / device.sample_rate_hz for a, b in detect_static(rec, device, min_s=0.0) if (a, b) not in kept]
+    return out
 
 
 #: consecutive rows whose readings point this far apart (median, deg) are separate orientations,
@@ -236,11 +264,6 @@ def rows_turn_deg(device, recordings) -> float:
     return float(np.median(a)) if a.size else 0.0
 
 
-def detector_hint(device, recordings, poses: PoseSet | None) -> str:
-    """:func:`detector_found` as a clause to append (:func:`hint_clause`), or ""."""
-    return hint_clause(detector_found(device, recordings, poses))
-
-
 def hint_clause(found: tuple[str, bool] | None) -> str:
     """A :func:`detector_found` result as a clause to append ("; the static detector ..."; with
     :data:`POSE_MEANS_HINT` after it where that applies), or "" for None."""
@@ -249,12 +272,12 @@ def hint_clause(found: tuple[str, bool] | None) -> str:
     return "; " + found[0] + (": " + POSE_MEANS_HINT if found[1] else "")
 
 
-def with_detector_hint(detail: str, device, recordings, poses: PoseSet | None) -> str:
-    """A "too few poses" or "no static pose" error's ``detail`` with :func:`detector_hint`; where
-    the error advises adding poses (ADD_POSES) and the poses found hold less than half of the
-    rows (a file of pose means), the hint first and that advice left out: such a file needs a
-    'pose' column, not more poses."""
-    found = detector_found(device, recordings, poses)
+def with_detector_hint(detail: str, device, recordings, poses: PoseSet | None, min_s: float = MIN_POSE_S) -> str:
+    """A "too few poses" or "no static pose" error's ``detail`` with :func:`detector_found` (under
+    ``min_s``); where the error advises adding poses (ADD_POSES) and the poses found hold less
+    than half of the rows (a file of pose means), the hint first and that advice left out: such
+    a file needs a 'pose' column, not more poses."""
+    found = detector_found(device, recordings, poses, min_s)
     if found is None or not found[1] or ADD_POSES not in detail:
         return detail + hint_clause(found)
     return f"{POSE_MEANS_HINT}: {found[0]}; {detail.split(ADD_POSES)[0]}"
@@ -275,7 +298,7 @@ def fit_jigfree(device, poses: PoseSet, model: str, temperature: bool):
     fallback : dict or None
         ``{"from": "full", "to": model, "reasons": {model tried: why it was not determined}}``
         when ``auto`` fell back (:func:`calibrate_recordings` adds ``"detector"``, the
-        :func:`detector_hint`, where the poses were detected); None otherwise.
+        :func:`detector_found` clause, where the poses were detected); None otherwise.
 
     Raises
     ------

@@ -74,6 +74,13 @@ EXCITATION_MIN_SPAN_G = 1.0
 #: 0.7..2 %)
 POORLY_DETERMINED_MG = 5.0
 
+#: a chip's sensitivity is within this fraction of its datasheet's nominal (the loosest: an ADXL345's
+#: 230-282 LSB/g about 256, an ADXL335's 270-330 mV/g about 300; an MPU-6050's initial tolerance is
+#: +-3 %): a fitted gain beyond it by more than 3 of its 1-sigma, yet within the wrong-scale factor
+#: (device.NOMINAL_FACTOR), is warned of: the device file's counts_per_mps2 is not this chip's (another
+#: range, a ratiometric sensor at another supply), or the chip is out of its specification
+CHIP_GAIN_TOLERANCE = 0.10
+
 #: where a "too few poses" error's advice to add poses begins: calibrate_recordings leaves it out
 #: where the shortage is the static detector's (a file of pose means, one row a pose)
 ADD_POSES = "; add poses"
