@@ -256,7 +256,7 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
         def locate(i: int, j: int) -> tuple[int, str]:
             return lines[i], f"field {j + 1}"
 
-        scale = opts.scale
+        scale = file_scale(opts.scale, {}, {}, source)      # (--round over counts refused)
         raw = to_counts(values, scale, source, locate, notes=notes) if scale is not None and scale.converts else \
             whole_counts(values, source, locate)
         if opts.rate_hz is None:
@@ -398,6 +398,8 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
                              "--rate: imu_tk files have a time column and their own rate")
         if fmt == "imu_tk" and scale is not None and scale.converts:
             raise InputError(source, "imu_tk's readings are counts: --units mps2|g and --lsb do not apply")
+        if fmt == "imu_tk":
+            file_scale(scale, {}, {}, source)                   # (--round over counts refused)
         if fmt == "imu_tk":
             device, rec = load_xsens(path)
             device = device if scale is None or scale.lsb_g is None else None  # a stated full scale: the nominal device from it
