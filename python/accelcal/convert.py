@@ -65,7 +65,7 @@ from .convert_regions import POSE_DIRECTIONS, read_regions
 from .convert_rows import LOST_SAMPLES, lost_rows
 from .convert_time import TIME_COLUMN_RE, is_datetime, unit_in_name
 from .errors import InputError, notes_on_refusal
-from .held import held_runs, held_text
+from .held import held_runs
 from .recording import read_recording
 from .textinput import (CELL_NUMBER_RE, is_whitespace_header, preamble_notes, read_preamble, read_text_bytes,
                         table_preamble)
@@ -264,14 +264,9 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
                              "sample rate with --rate HZ")
         if blocks and opts.regions is not None:
             raise InputError(source, "--blocks and --regions both label the poses: give one")
-        k, first = held_runs(raw)
+        first = held_runs(raw)[1]                   # (the note on held readings is finish's)
         n = raw.shape[0]
         share = (n - first.size) / (n - 1) if n > 1 else 0.0      # rows that repeat the row before
-        if k > 1:
-            notes.append(f"{100 * share:.0f} % of the rows repeat the row before in all three readings (each "
-                         f"reading held for {held_text(k, first, n)}): the logger read the sensor faster than it "
-                         f"updates; the distinct readings come at about {opts.rate_hz / k:.4g} Hz, and successive "
-                         "rows are not independent samples")
         meta = {"log.text_lines": str(info["text_lines"]), "log.blocks": str(info["blocks"]),
                 "log.held_share": f"{share:.4f}"}
         return finish(source, "log", raw, keep, None, block if blocks else None, opts, scale,

@@ -16,6 +16,7 @@ from .convert_time import FLOAT_EXACT, burst_fit, exact_stamps, rate_from_t, tim
 from .csvtable import convert_columns, cut_short_end, make_table, split_header
 from .device import Device
 from .errors import InputError, notes_on_refusal
+from .held import held_runs, held_text, inner_runs, uneven
 from .recording import Recording
 from .recording_checks import RATE_TOL
 from .noise import window_std
@@ -26,7 +27,7 @@ from .units import STANDARD_GRAVITY, Scale
 __all__ = ["Converted", "Options", "INDEX_COLUMNS", "GYRO_RE", "NUMBER_RE", "header_cells", "read_columns",
            "find_column", "exact_time", "adc_range", "nominal_triad", "rest_scale", "check_range", "in_sample_order", "finish",
            "stated_rate_off", "drop_note", "whole_counts", "is_gyro", "GRAVITY_REMOVED_G", "stillest_force",
-           "gravity_removed_note"]
+           "gravity_removed_note", "held_note"]
 
 INDEX_COLUMNS = ("n_samples", "samples")
 #: a gyroscope's column: gx, gyro_x, wx, w_x, EuRoC's frame-subscripted w_RS_S_x (a unit in () or [] after any)
@@ -312,8 +313,22 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
             metadata["pose_names"] = " ".join(f"{k}={nm}" for k, nm in enumerate(names))
         rec = Recording(t=t, raw=raw, f=f, pose=pose, metadata=metadata, extra=extra_columns, source=source)
         device_notes: list[str] = []
+        k, first = held_runs(raw)
+        distinct_hz = None
+        if k > 1 and rate:
+            inner = inner_runs(first, raw.shape[0])
+            distinct_hz = rate / (float(np.mean(inner)) if uneven(k, inner) else k)   # rows per reading
+        if k > 1:
+            notes.append(held_note(k, first, raw.shape[0], distinct_hz))
         if device is None:
-            device = nominal_triad(f"{fmt}-triad", rate, gravity, raw, opts.bits, signed, scale, device_notes, rec)
+            # rows that hold each reading for k rows: the device states the sensor's rate, that of the distinct
+            # readings (calibrate, diagnose take it as such: held.distinct_recordings), unless --rate states one
+            own = distinct_hz if distinct_hz is not None and opts.rate_hz is None else None
+            device = nominal_triad(f"{fmt}-triad", own or rate, gravity, raw, opts.bits, signed, scale, device_notes,
+                                   rec)
+            if own is not None:
+                device_notes.append(f"the device's rate is {device.sample_rate_hz:.6g} Hz, the distinct readings'; "
+                                    f"the recording keeps every row (at {rate:.6g} Hz)")
         notes += gravity_removed_note(raw, scale, rate, lambda i: locate(i, 0)[0])
         return Converted(rec, device, fmt, names, notes, scale, order is not None, device_notes)
 
@@ -414,3 +429,14 @@ def gravity_removed_note(raw: np.ndarray, scale: Scale | None, rate_hz: float, l
             "as Sensor Logger's Accelerometer.csv); calibrate, diagnose and displacement need the accelerometer's "
             "own readings, gravity in (Sensor Logger's TotalAcceleration.csv or AccelerometerUncalibrated.csv, "
             "phyphox's 'Acceleration with g')"]
+
+
+def held_note(k: int, first: np.ndarray, n: int, distinct_hz: float | None) -> str:
+    """The note on readings held for ``k`` rows (:func:`held.held_runs`'s k and ``first`` over
+    ``n`` rows; ``distinct_hz``: the distinct readings' rate, Hz, when known)."""
+    share = (n - first.size) / (n - 1) if n > 1 else 0.0      # rows that repeat the row before
+    at = f" at about {distinct_hz:.4g} Hz" if distinct_hz is not None else ""
+    return (f"{100 * share:.0f} % of the rows repeat the row before in all three readings (each reading held for "
+            f"{held_text(k, first, n)}): the logger read the sensor faster than it updates; the {first.size} distinct "
+            f"readings come{at}, and successive rows are not independent samples (calibrate and diagnose count each "
+            "reading once)")
