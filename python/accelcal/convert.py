@@ -65,7 +65,7 @@ from .convert_regions import POSE_DIRECTIONS, read_regions
 from .convert_rows import LOST_SAMPLES, lost_rows
 from .convert_time import TIME_COLUMN_RE, is_datetime, unit_in_name
 from .errors import InputError, notes_on_refusal
-from .held import held_runs, held_text
+from .held import held_runs
 from .recording import read_recording
 from .textinput import (CELL_NUMBER_RE, is_whitespace_header, preamble_notes, read_preamble, read_text_bytes,
                         table_preamble)
@@ -256,7 +256,7 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
         def locate(i: int, j: int) -> tuple[int, str]:
             return lines[i], f"field {j + 1}"
 
-        scale = opts.scale
+        scale = file_scale(opts.scale, {}, {}, source)      # (--round over counts refused)
         raw = to_counts(values, scale, source, locate, notes=notes) if scale is not None and scale.converts else \
             whole_counts(values, source, locate)
         if opts.rate_hz is None:
@@ -264,14 +264,9 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
                              "sample rate with --rate HZ")
         if blocks and opts.regions is not None:
             raise InputError(source, "--blocks and --regions both label the poses: give one")
-        k, first = held_runs(raw)
+        first = held_runs(raw)[1]                   # (the note on held readings is finish's)
         n = raw.shape[0]
         share = (n - first.size) / (n - 1) if n > 1 else 0.0      # rows that repeat the row before
-        if k > 1:
-            notes.append(f"{100 * share:.0f} % of the rows repeat the row before in all three readings (each "
-                         f"reading held for {held_text(k, first, n)}): the logger read the sensor faster than it "
-                         f"updates; the distinct readings come at about {opts.rate_hz / k:.4g} Hz, and successive "
-                         "rows are not independent samples")
         meta = {"log.text_lines": str(info["text_lines"]), "log.blocks": str(info["blocks"]),
                 "log.held_share": f"{share:.4f}"}
         return finish(source, "log", raw, keep, None, block if blocks else None, opts, scale,
@@ -398,6 +393,8 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
                              "--rate: imu_tk files have a time column and their own rate")
         if fmt == "imu_tk" and scale is not None and scale.converts:
             raise InputError(source, "imu_tk's readings are counts: --units mps2|g and --lsb do not apply")
+        if fmt == "imu_tk":
+            file_scale(scale, {}, {}, source)                   # (--round over counts refused)
         if fmt == "imu_tk":
             device, rec = load_xsens(path)
             device = device if scale is None or scale.lsb_g is None else None  # a stated full scale: the nominal device from it

@@ -38,6 +38,11 @@ MESSAGE_AXIS_RE = re.compile(r"(?:(?:field\.)?(?P<ros>linear_acceleration)\.(?P<
 #: a file pyulog's ulog2csv wrote for PX4's sensor_accel topic (<log>_sensor_accel_<instance>.csv):
 #: its bare x, y, z columns are the accelerometer's, in m/s^2 (sensor_gyro and sensor_mag have the same)
 PX4_ACCEL_FILE_RE = re.compile(r"(?:^|_)sensor_accel(?:_\d+)?\.csv$", re.I)
+#: a file name that says its bare x, y, z are an accelerometer's (a phone app's Accelerometer.csv,
+#: AccelerometerUncalibrated.csv, TotalAcceleration.csv), unless it names another sensor too
+ACCEL_FILE_RE = re.compile(r"accel", re.I)
+#: a file name that says its readings are a phone's virtual sensor (linear acceleration, gravity)
+VIRTUAL_FILE_RE = re.compile(r"linear|gravity", re.I)
 #: the axes' columns named by the axis alone
 BARE_AXES = ("x", "y", "z")
 #: the prefixes of an accelerometer's own axis columns (LORD's scaledAccelX)
@@ -96,7 +101,10 @@ def axis_column(name: str) -> AxisColumn | None:
 def table_axes(source: str, names: list[str], row: int, notes: list[str] | None = None) -> list[AxisColumn]:
     """The x, y, z columns of a table's header (``row``: its line).  Bare ``x, y, z`` are the
     accelerometer's in PX4's sensor_accel export (m/s^2), and beside nothing but time columns
-    in a file whose name names no other sensor (a note appended to ``notes`` says so).
+    or in a file whose name says accelerometer (ACCEL_FILE_RE: a phone app's
+    ``AccelerometerUncalibrated.csv``), where that name names no other sensor and no virtual
+    one (a note appended to ``notes`` says so).  A refusal's ``--columns`` hint lists them in
+    X, Y, Z order, whatever the header's (Sensor Logger writes ``z,y,x``).
 
     Raises
     ------
@@ -110,17 +118,24 @@ def table_axes(source: str, names: list[str], row: int, notes: list[str] | None 
     if not found and len(bare) == len(BARE_AXES):
         others = [n for n in names if n and n not in bare]
         file = Path(source).name
+        ordered = sorted(bare, key=str.lower)           # X, Y, Z: --columns's order, not the header's
+        other_sensor = OTHER_SENSOR_FILE_RE.search(file) or VIRTUAL_FILE_RE.search(file)
         if PX4_ACCEL_FILE_RE.search(file):
             found = [AxisColumn(n, n.lower(), "mps2", False) for n in bare]
-        elif others and all(TIME_COLUMN_RE.fullmatch(n) for n in others) and not OTHER_SENSOR_FILE_RE.search(file):
+        elif others and all(TIME_COLUMN_RE.fullmatch(n) for n in others) and not other_sensor:
             found = [AxisColumn(n, n.lower(), None, False) for n in bare]
             if notes is not None:
-                notes.append(f"the columns {', '.join(bare)} beside {', '.join(others)} and no other sensor's are "
+                notes.append(f"the columns {', '.join(ordered)} beside {', '.join(others)} and no other sensor's are "
                              "taken as the accelerometer's (--columns names others)")
+        elif ACCEL_FILE_RE.search(file) and not other_sensor:
+            found = [AxisColumn(n, n.lower(), None, False) for n in bare]
+            if notes is not None:
+                notes.append(f"the columns {', '.join(ordered)} are taken as the accelerometer's, as the file's name "
+                             f"{file!r} says (--columns names others)")
         else:
             raise InputError(source, "the columns x, y, z do not say they are an accelerometer's (a gyroscope's or a "
                              f"magnetometer's are written alike; the header's columns: {listed(names)}): if they are, "
-                             f"give --columns {','.join(bare)} (a PX4 sensor_accel topic exported by ulog2csv: keep "
+                             f"give --columns {','.join(ordered)} (a PX4 sensor_accel topic exported by ulog2csv: keep "
                              "its file name <log>_sensor_accel_0.csv)", row=row)
     real = [c for c in found if not c.virtual]
     if not real and found:

@@ -16,21 +16,27 @@ from .convert_time import FLOAT_EXACT, burst_fit, exact_stamps, rate_from_t, tim
 from .csvtable import convert_columns, cut_short_end, make_table, split_header
 from .device import Device
 from .errors import InputError, notes_on_refusal
+from .held import held_runs, held_text, inner_runs, uneven
 from .recording import Recording
 from .recording_checks import RATE_TOL
-from .static import detect_static, scale_agreement
+from .noise import window_std
+from .static import STATIC_WINDOW_S, detect_static, scale_agreement
 from .textinput import NUMBER_RE, is_whitespace_header, split_whitespace_header, whitespace_to_commas
 from .units import STANDARD_GRAVITY, Scale
 
 __all__ = ["Converted", "Options", "INDEX_COLUMNS", "GYRO_RE", "NUMBER_RE", "header_cells", "read_columns",
            "find_column", "exact_time", "adc_range", "nominal_triad", "rest_scale", "check_range", "in_sample_order", "finish",
-           "stated_rate_off", "drop_note", "whole_counts", "is_gyro"]
+           "stated_rate_off", "drop_note", "whole_counts", "is_gyro", "GRAVITY_REMOVED_G", "stillest_force",
+           "gravity_removed_note", "held_note"]
 
 INDEX_COLUMNS = ("n_samples", "samples")
 #: a gyroscope's column: gx, gyro_x, wx, w_x, EuRoC's frame-subscripted w_RS_S_x (a unit in () or [] after any)
 GYRO_RE = re.compile(r"(?:(?:gyr|gyro|g)[_ ]?[xyz]|w_?[xyz]|w_(?:[a-z0-9]+_)*[xyz])(?:\s*[(\[][^)\]]*[)\]])?", re.I)
 #: a unit of angular rate in a column's name: rad/s, rad s^-1, deg/s, dps, degrees per second
 ANGULAR_RATE_RE = re.compile(r"[(\[]\s*(?:rad|deg|\u00b0)\s*(?:/\s*s|s\s*\^?\s*-1)\s*[)\]]|[(\[]\s*dps\s*[)\]]", re.I)
+#: the stillest stretch of readings in m/s^2 or g whose |f| is below this (g) has no gravity in it: a phone's
+#: linear or user acceleration (at rest |f| = 1 g; a gain error or a tilt never takes half of it)
+GRAVITY_REMOVED_G = 0.5
 
 
 @dataclass
@@ -307,8 +313,23 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
             metadata["pose_names"] = " ".join(f"{k}={nm}" for k, nm in enumerate(names))
         rec = Recording(t=t, raw=raw, f=f, pose=pose, metadata=metadata, extra=extra_columns, source=source)
         device_notes: list[str] = []
+        k, first = held_runs(raw)
+        distinct_hz = None
+        if k > 1 and rate:
+            inner = inner_runs(first, raw.shape[0])
+            distinct_hz = rate / (float(np.mean(inner)) if uneven(k, inner) else k)   # rows per reading
+        if k > 1:
+            notes.append(held_note(k, first, raw.shape[0], distinct_hz))
         if device is None:
-            device = nominal_triad(f"{fmt}-triad", rate, gravity, raw, opts.bits, signed, scale, device_notes, rec)
+            # rows that hold each reading for k rows: the device states the sensor's rate, that of the distinct
+            # readings (calibrate, diagnose take it as such: held.distinct_recordings), unless --rate states one
+            own = distinct_hz if distinct_hz is not None and opts.rate_hz is None else None
+            device = nominal_triad(f"{fmt}-triad", own or rate, gravity, raw, opts.bits, signed, scale, device_notes,
+                                   rec)
+            if own is not None:
+                device_notes.append(f"the device's rate is {device.sample_rate_hz:.6g} Hz, the distinct readings'; "
+                                    f"the recording keeps every row (at {rate:.6g} Hz)")
+        notes += gravity_removed_note(raw, scale, rate, lambda i: locate(i, 0)[0])
         return Converted(rec, device, fmt, names, notes, scale, order is not None, device_notes)
 
 
@@ -372,3 +393,50 @@ def whole_counts(values: np.ndarray, source: str, locate) -> np.ndarray:
         raise InputError(source, f"reading {values[i, j]:.10g} is not a whole count (readings in m/s^2 or g: "
                          "state --units mps2|g with --lsb VALUE or --full-scale G)", row=row, column=column)
     return values.astype(np.int64)
+
+
+def stillest_force(raw: np.ndarray, rate_hz: float) -> tuple[int, int, np.ndarray] | None:
+    """The stillest window of about STATIC_WINDOW_S (:func:`noise.window_std`: the one whose
+    largest channel std is least, the first of equals): its first sample, the sample after its
+    last and its mean reading (counts); None where the recording is shorter than a window."""
+    raw = np.asarray(raw)
+    w = max(3, int(round(STATIC_WINDOW_S * rate_hz))) if np.isfinite(rate_hz) and rate_hz > 0 else 3
+    ws, h, k = window_std(raw, w)
+    if ws.shape[0] == 0:
+        return None
+    j = int(np.argmin(ws.max(axis=1)))
+    a, b = j * h, (j + k) * h
+    return a, b, raw[a:b].mean(axis=0)
+
+
+def gravity_removed_note(raw: np.ndarray, scale: Scale | None, rate_hz: float, line) -> list[str]:
+    """A note where readings converted from m/s^2 or g (``scale``) read |f| below
+    GRAVITY_REMOVED_G g at their stillest (:func:`stillest_force`): gravity has been taken out (a
+    phone's linear or user acceleration), which no later command can use; ``line(i)`` is sample
+    i's row in the file.  Empty otherwise (readings in counts: their zero and scale are the
+    device's to say)."""
+    if scale is None or not scale.converts or not scale.lsb_g:
+        return []
+    still = stillest_force(raw, rate_hz)
+    if still is None:
+        return []
+    a, b, mean = still
+    f_g = float(np.linalg.norm(mean)) * scale.lsb_g
+    if f_g >= GRAVITY_REMOVED_G:
+        return []
+    return [f"the readings' stillest {(b - a) / rate_hz:.2g} s (rows {line(a)}-{line(b - 1)}) read |f| = {f_g:.3g} g, "
+            f"where anything at rest reads 1 g: gravity looks removed (a phone's linear or user acceleration, such "
+            "as Sensor Logger's Accelerometer.csv); calibrate, diagnose and displacement need the accelerometer's "
+            "own readings, gravity in (Sensor Logger's TotalAcceleration.csv or AccelerometerUncalibrated.csv, "
+            "phyphox's 'Acceleration with g')"]
+
+
+def held_note(k: int, first: np.ndarray, n: int, distinct_hz: float | None) -> str:
+    """The note on readings held for ``k`` rows (:func:`held.held_runs`'s k and ``first`` over
+    ``n`` rows; ``distinct_hz``: the distinct readings' rate, Hz, when known)."""
+    share = (n - first.size) / (n - 1) if n > 1 else 0.0      # rows that repeat the row before
+    at = f" at about {distinct_hz:.4g} Hz" if distinct_hz is not None else ""
+    return (f"{100 * share:.0f} % of the rows repeat the row before in all three readings (each reading held for "
+            f"{held_text(k, first, n)}): the logger read the sensor faster than it updates; the {first.size} distinct "
+            f"readings come{at}, and successive rows are not independent samples (calibrate and diagnose count each "
+            "reading once)")

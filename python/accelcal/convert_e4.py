@@ -12,7 +12,7 @@ from .convert_common import Converted, Options, finish, whole_counts
 from .convert_log import read_log
 from .convert_rows import LOST_SAMPLES, lost_rows
 from .errors import InputError, notes_on_refusal
-from .units import Scale, to_counts
+from .units import Scale, file_scale, to_counts
 
 __all__ = ["E4_LSB_G", "E4_BITS", "e4_preamble", "is_e4", "convert_e4"]
 
@@ -82,7 +82,7 @@ def convert_e4(source: str, data: bytes, opts: Options) -> Converted:
         if opts.rate_hz is not None and opts.rate_hz != file_rate:
             rate = opts.rate_hz
             notes.append(f"--rate {rate:g} Hz is used for the {file_rate:g} Hz row 2 states")
-        scale = opts.scale
+        scale = file_scale(opts.scale, {}, {}, source)      # (--round over counts refused)
         if scale is None:
             scale = Scale("counts", None, lsb_g=E4_LSB_G, how="the Empatica E4's")
             notes.append("the readings are counts of 1/64 g, the E4's (--full-scale G states another)")

@@ -271,8 +271,24 @@ def file_scale(option: Scale | None, metadata: dict[str, str], lines: dict[str, 
     Raises
     ------
     InputError
-        A bad comment, or one that contradicts the option (naming its line).
+        A bad comment, or one that contradicts the option (naming its line); ``--round``
+        (``option.rounds``) where the readings stay counts (:data:`ROUNDS_COUNTS`).
     """
+    scale = _weighed(option, metadata, lines, source, unit_source)
+    if option is not None and option.rounds and not (scale is not None and scale.converts):
+        raise InputError(source, ROUNDS_COUNTS)
+    return scale
+
+
+ROUNDS_COUNTS = ("--round: the readings are counts (no unit of m/s^2 or g is stated: not by --units, a '# units:' "
+                 "comment nor a table's column names), integers with nothing to round; for readings in m/s^2 or g "
+                 "state the unit with --units mps2|g")
+"""The refusal of ``--round`` (with ``--full-scale`` alone) over a file whose readings stay counts."""
+
+
+def _weighed(option: Scale | None, metadata: dict[str, str], lines: dict[str, int], source: str,
+             unit_source: str | None) -> Scale | None:
+    """:func:`file_scale` before its check of ``--round``."""
     if option is None:
         return scale_from_metadata(metadata, lines, source)
     by = option.how or "the option"

@@ -108,10 +108,14 @@ def scale_from_args(a: argparse.Namespace, device: Any = None, *, reader: bool =
     gravity = a.gravity if a.gravity is not None or device is None else device.gravity_mps2
     scale = scale_from_options(a.units, a.lsb, a.full_scale, bits, gravity)
     if getattr(a, "round", False):
-        if scale is None or not scale.lsb_g or not scale.converts:
+        # --full-scale without --units: the unit is the file's (a table's names, a '# units:' comment),
+        # weighed by units.file_scale, which refuses --round where it stays counts
+        if scale is None:
             raise AccelcalError("--round: it rounds readings in m/s^2 or g to their LSB; state the LSB with --lsb "
-                                "VALUE (and --units mps2|g) or --full-scale G (readings in counts are integers: "
-                                "nothing to round)")
+                                "VALUE (and --units mps2|g) or --full-scale G")
+        if a.units == "counts":
+            raise AccelcalError("--round with --units counts: readings in counts are integers, nothing to round "
+                                "(readings in m/s^2 or g: --units mps2|g)")
         scale = dataclasses.replace(scale, rounds=True)
     if scale is None and a.units == "counts":
         return COUNTS_STATED

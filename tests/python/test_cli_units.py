@@ -24,7 +24,7 @@ from accelcal.cli import main
 from accelcal.device import pendulum_device, save_device
 from accelcal.recording import write_recording
 from accelcal.simulate import run_simulation
-from cli_run import run
+from cli_run import convert_ok, convert_refused, run, write_lines
 
 FAST = settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
                                                                          HealthCheck.too_slow])
@@ -320,3 +320,34 @@ def test_counts_of_a_stated_size_are_taken_as_they_are(tmp_path, capfd):
     assert rc == 0, err
     body = [ln for ln in (tmp_path / "g.csv").read_text().splitlines() if not ln.startswith("#")][1:]
     assert np.array_equal(np.array([[int(v) for v in ln.split(",")[1:]] for ln in body]), raw)
+
+
+@pytest.mark.parametrize("header, unit", [
+    ("timestamp,accelerometer_m_s2[0],accelerometer_m_s2[1],accelerometer_m_s2[2]", "mps2"),  # PX4's ulog2csv
+    ('"Time (s)","X (m/s^2)","Y (m/s^2)","Z (m/s^2)"', "mps2"),                                 # phyphox
+    ("t,accX (g),accY (g),accZ (g)", "g")])
+def test_round_takes_the_unit_the_names_state(tmp_path, capfd, header, unit):
+    """A header that states the unit, over calibrated floats on no grid: the refusal without an LSB
+    advises --full-scale G and --round, and following it converts (the LSB --full-scale states, in
+    the names' unit); --round had been refused asking for --full-scale, which was given.  Readings
+    in counts with --full-scale and --round: refused, asking for no option given."""
+    rng = np.random.default_rng(3)
+    per = G if unit == "mps2" else 1.0
+    f = (np.array([0.2, -0.1, -1.0]) + 0.01 * rng.standard_normal((300, 3))) * per
+    src = write_lines(tmp_path / "f.csv", [header] + [f"{(k * 0.004 if k else 0):.6f}," + ",".join(
+        f"{v:.8f}" for v in r) for k, r in enumerate(f)])
+    err = convert_refused(tmp_path, capfd, src, name="bare")
+    assert "give --full-scale G" in err and "--round" in err, err
+    rec, dev, err, _ = convert_ok(tmp_path, capfd, src, "--full-scale", "16", "--round")
+    lsb = 32.0 / 2 ** 16 * per
+    np.testing.assert_array_equal(rec.raw, np.round(np.round(f, 8) / lsb).astype(int))
+    assert "--round" in err and dev["channels"][0]["counts_per_mps2"] == pytest.approx(1 / (32.0 / 2 ** 16 * G))
+    counts = write_lines(tmp_path / "c.csv", ["t,ax,ay,az"] + [f"{k * 0.004:.3f},1,2,3" for k in range(20)])
+    for options, said in ((["--full-scale", "16", "--round"], "--units mps2|g"),
+                          (["--units", "counts", "--full-scale", "16", "--round"], "--units mps2|g")):
+        err = convert_refused(tmp_path, capfd, counts, *options, name=options[1])
+        last = err.splitlines()[-1]
+        assert "--round" in last and "nothing to round" in last and said in last, err
+        for stated in options[1:]:
+            if stated.startswith("--") and stated != "--round":
+                assert f"give {stated}" not in last and f"or {stated}" not in last, (stated, last)

@@ -222,3 +222,26 @@ def test_whole_counts_stated_as_g_are_refused_with_the_option_meant(tmp_path, ca
                                                                  for k, (a, b, d) in enumerate(c)])
     rec, _, _ = _convert(tmp_path, capfd, g, "--units", "g", "--lsb", "0.001")
     np.testing.assert_array_equal(rec.raw, c)
+
+
+def test_a_phone_apps_z_y_x_columns_are_read_in_x_y_z_order(tmp_path, capfd):
+    """Sensor Logger's 'time,seconds_elapsed,z,y,x': in a file named AccelerometerUncalibrated.csv
+    the name says they are the accelerometer's (it had been refused); each column goes to its own
+    axis, raw_0 the x column.  In a file whose name says nothing, or names another sensor, they are
+    refused, and the hint lists them X,Y,Z (it had said '--columns z,y,x', which, followed, put the
+    file's z in raw_0: a mirrored frame)."""
+    c = _counts(300, seed=2)
+    rows = [f"{1699734109763076400 + k * 10_000_000},{k / 100:.6f}," + ",".join(repr(float(v) * LSB_G)
+                                                                            for v in r[::-1]) for k, r in enumerate(c)]
+    src = write_lines(tmp_path / "AccelerometerUncalibrated.csv", ["time,seconds_elapsed,z,y,x"] + rows)
+    rec, dev, err = _convert(tmp_path, capfd, src, "--full-scale", "8", "--units", "g")
+    np.testing.assert_array_equal(rec.raw, c)
+    assert "the columns x, y, z are taken as the accelerometer's, as the file's name " \
+           "'AccelerometerUncalibrated.csv' says" in err
+    assert dev["sample_rate_hz"] == pytest.approx(100.0)
+    for name in ("data.csv", "Gyroscope.csv", "Gravity.csv"):
+        other = write_lines(tmp_path / name, ["time,seconds_elapsed,z,y,x"] + rows)
+        err = _refused(tmp_path, capfd, other, "--full-scale", "8", "--units", "g", name=f"refused_{name}")
+        assert "do not say they are an accelerometer's" in err and "give --columns x,y,z " in err, err
+        rec, _, _ = _convert(tmp_path, capfd, other, "--full-scale", "8", "--units", "g", "--columns", "x,y,z")
+        np.testing.assert_array_equal(rec.raw, c)

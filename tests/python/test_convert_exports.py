@@ -341,3 +341,38 @@ def test_bare_x_y_z_columns_are_refused_in_words_that_fit_any_logger(tmp_path, c
             "--columns x,y,z (a PX4") in err
     gyro = write_lines(tmp_path / "log_sensor_gyro_0.csv", ["timestamp,x,y,z"] + [r.rsplit(",", 1)[0] for r in rows])
     assert "do not say they are an accelerometer's" in _refused(tmp_path, capfd, gyro, name="gyro")
+
+
+def _phone(n, gravity, seed=5):
+    """A phone's acceleration in m/s^2 at 100 Hz: 2 s held still (noise 0.02 m/s^2), then a
+    swing of 1-3 m/s^2 on every axis; ``gravity``: the specific force (g along -z, tilted), else
+    the user acceleration a phone app writes with gravity taken out."""
+    rng = np.random.default_rng(seed)
+    k = np.arange(n)
+    a = 0.02 * rng.standard_normal((n, 3))
+    a[200:] += np.column_stack([np.sin(k[200:] / 7.0), 3 * np.cos(k[200:] / 11.0), 2 * np.sin(k[200:] / 5.0)])
+    if gravity:
+        a += G * np.array([0.1, -0.3, -0.95]) / np.linalg.norm([0.1, -0.3, -0.95])
+    return np.round(a, 3)
+
+
+@pytest.mark.parametrize("gravity", [False, True])
+def test_gravity_removed_readings_are_named(tmp_path, capfd, gravity):
+    """Sensor Logger's Accelerometer.csv is user acceleration, gravity removed: |f| near 0 where
+    the phone is still.  It had been converted without a word, and every later command then blamed
+    something else (no static pose, the calibration's scale).  convert notes it, naming the still
+    rows and the export to use; the same phone with gravity in (TotalAcceleration.csv) has no such
+    note.  The counts are the readings' either way."""
+    a = _phone(600, gravity)
+    rows = [f"{1740240343434371300 + 10_000_000 * i},{i / 100:.6f}," + ",".join(f"{v:.3f}" for v in r[::-1])
+            for i, r in enumerate(a)]
+    src = write_lines(tmp_path / "Accelerometer.csv", ["time,seconds_elapsed,z,y,x"] + rows)
+    rec, _, err, _ = _convert(tmp_path, capfd, src, "--units", "mps2", "--lsb", "0.001")
+    np.testing.assert_array_equal(rec.raw, np.round(a / 0.001).astype(int))
+    said = [ln for ln in err.splitlines() if "gravity looks removed" in ln]
+    if gravity:
+        assert not said, err
+    else:
+        assert len(said) == 1 and "rows 2-" in said[0] and "TotalAcceleration.csv" in said[0], err
+        f_g = float(said[0].split("|f| = ")[1].split(" g")[0])
+        assert f_g < 0.01, said

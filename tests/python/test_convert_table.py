@@ -564,3 +564,19 @@ def test_px4_sensor_accel_export_is_read_by_its_file_name(tmp_path, capfd):
         assert "'timestamp_sample' used" in err and "timestamp_sample read in us, PX4's unit" in err
     err = _refused(tmp_path, capfd, _write(tmp_path / "gyro.csv", head, rows))
     assert "gyro.csv: row 1: the columns x, y, z do not say they are an accelerometer's" in err, err
+
+
+def test_readings_held_for_two_rows_give_the_device_the_sensor_s_rate(tmp_path, capfd):
+    """A LORD/MicroStrain SensorConnect export writes a 40 Hz sensor's readings twice, at 80 rows/s:
+    the device file had stated the rows' 80 Hz without a word.  Now a note counts the held rows
+    and the device states the distinct readings' 40 Hz; the recording keeps every row (t strictly
+    increasing, one row per line of the file), which calibrate and diagnose count once."""
+    c = np.repeat(_counts(400, seed=4), 2, axis=0)
+    rows = [f"{1777931640000 + round(k * 12.5)},{','.join(f'{v * LSB_G:.10g}' for v in r)}" for k, r in enumerate(c)]
+    src = _write(tmp_path / "SensorConnectData.csv", "Time,scaledAccelX,scaledAccelY,scaledAccelZ", rows)
+    rec, dev, err = _convert(tmp_path, capfd, src, "--units", "g", "--full-scale", "2")
+    np.testing.assert_array_equal(rec.raw, c)
+    assert rec.n_samples == 800 and np.all(np.diff(rec.t) > 0)
+    assert dev["sample_rate_hz"] == pytest.approx(40.0, rel=1e-3)
+    assert "each reading held for 2 rows" in err and "400 distinct readings come at about 40 Hz" in err, err
+    assert f"the device's rate is {dev['sample_rate_hz']:.6g} Hz, the distinct readings'" in err, err
