@@ -14,7 +14,8 @@ from .rest import TREND_BLOCK_HOLDS, RestParams, trend_bound
 
 __all__ = ["REST_DEV_WARN_MPS2", "REST_NOISE_MAX_MPS2", "rest_noise_max", "wide_rest_warning", "ZP_TURN_MPS2",
            "no_rest_reason", "scale_off", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned",
-           "zp_limit", "turned_motions", "turned_text", "turned_warnings", "trend_warnings"]
+           "zp_limit", "turned_motions", "turned_text", "turned_warnings", "trend_warnings", "motion_errors",
+           "motion_error_warnings"]
 
 
 #: the noisiest sensor at rest of issue 13's range, m/s^2 per axis (its 5 sigma: 0.25)
@@ -333,3 +334,108 @@ def trend_warnings(t, trends, rp: RestParams, sigma: float, streamed: bool, rec=
             f"to {TREND_BLOCK_HOLDS * rp.hold} samples; the largest change {ch:.3g} m/s^2 over "
             f"{time_span(t, b, e - 1, rec)}, beyond the {trend_bound(n, sigma):.2g} m/s^2 that noise of {sigma:.2g} "
             f"m/s^2 gives (5 sigma)): a slow motion, not a rest; they {what}"]
+
+
+def _rest_run(at, i: int, lo: int, hi: int) -> tuple[int, int]:
+    """The run [s, e) of at-rest samples through sample ``i``, kept within [lo, hi)."""
+    s = e = i
+    while s > lo and at[s - 1]:
+        s -= 1
+    while e < hi and at[e]:
+        e += 1
+    return s, e
+
+
+def motion_errors(f, p, at, motions, f_sigma: float, dt: float, axis: int | None
+                  ) -> list[tuple[int, int, float, float, float, float, float]]:
+    """What the zero-point correction leaves of each corrected motion's position, from what its
+    rests can tell.
+
+    The correction removes a zero point that stays constant through the motion (a calibration
+    error, a tilt held from rest to rest).  A change of it at an unknown time (a tilt change, a
+    drift) is not removed: a step of D at time tau of a motion of T leaves D tau (T - tau) / 2 at
+    its end, up to D T^2 / 8 at the middle.  D is the change between the rests' levels (their mean
+    f) or, where that is below what they can tell, the smallest change they tell: 5 sigma of the
+    difference of two means of n1 and n2 samples of noise sigma, 5 sigma sqrt(1/n1 + 1/n2).  The
+    noise itself leaves 5 sigma sqrt(dt T^3 / 12) (white noise integrated twice, the end pinned to
+    zero velocity).  The change grows with T^2, the noise with T^1.5: beyond
+    T_max = (40 sigma / D)^2 dt / 12 the change dominates (with D = what the rests tell,
+    T_max = 16/3 dt / (1/n1 + 1/n2): 8/3 of rests of equal length).
+
+    Parameters
+    ----------
+    f : ndarray (n, 3)
+        Specific force in body axes, m/s^2.
+    p : ndarray (n, 3)
+        The corrected position, m.
+    at : ndarray (n,) bool
+        At rest (each rest from where it began).
+    motions : list of (int, int, array_like)
+        Each corrected motion: anchor (a rest sample before it), end sample, zp.
+    f_sigma : float
+        The noise of f, m/s^2 per axis.
+    dt : float
+        s.
+    axis : int or None
+        1-D along that body axis, or None (3-axis).
+
+    Returns
+    -------
+    list of (int, int, float, float, float, float, float)
+        Per motion: anchor, end, the error bound E (m), its part from the change of level (m), the
+        change D used (m/s^2), the change the rests tell (5 sigma, m/s^2), and the path's largest
+        distance from its start (m).
+    """
+    at = np.asarray(at, bool)
+    f = np.asarray(f, float)
+    n = at.size
+    out = []
+    for k, (a, e, _) in enumerate(motions):
+        lo = motions[k - 1][1] + 1 if k else 0
+        hi = motions[k + 1][0] if k + 1 < len(motions) else n
+        b0, b1 = _rest_run(at, a, lo, a + 1) if at[a] else (a, a + 1)
+        j = e if at[e] else min(e + 1 + int(np.argmax(at[e + 1:])) if e + 1 < n and at[e + 1:].any() else e, n - 1)
+        c0, c1 = _rest_run(at, j, max(a + 1, lo), hi) if at[j] else (j, j + 1)
+        d = f[c0:c1].mean(axis=0) - f[b0:b1].mean(axis=0)
+        seen = abs(float(d[axis])) if axis is not None else float(np.linalg.norm(d))
+        tell = 5.0 * float(f_sigma) * math.sqrt(1.0 / (b1 - b0) + 1.0 / (c1 - c0))
+        D = max(seen, tell)
+        T = (e - a) * dt
+        tilt = D * T * T / 8.0
+        noise = 5.0 * float(f_sigma) * math.sqrt(dt * T ** 3 / 12.0)
+        seg = np.asarray(p[a:e + 1], float) - np.asarray(p[a], float)
+        path = float(np.max(np.abs(seg[:, axis]))) if axis is not None else float(np.max(np.linalg.norm(seg, axis=1)))
+        out.append((int(a), int(e), tilt + noise, tilt, D, tell, path))
+    return out
+
+
+def motion_error_warnings(t, errs, f_sigma: float, dt: float, g: float, rec=None) -> list[str]:
+    """The warnings of :func:`motion_errors`: a motion whose error from a change of its zero point
+    (D T^2 / 8) exceeds what its noise leaves -- longer than the stop-to-stop correction holds with
+    the rests about it (said to be not determined when that error reaches its path; a motion the
+    detector found in the noise has a path below its noise, which is no warning).  One line per motion, the first
+    ZP_TURN_LINES, then one line for the others.  ``t`` in s, ``f_sigma`` in m/s^2, ``dt`` in s,
+    ``g`` in m/s^2 (the tilt a change equals)."""
+    out = []
+    for a, e, err, tilt, D, tell, path in errs:
+        noise = err - tilt
+        if tilt <= noise:
+            continue
+        T = (e - a) * dt
+        if D > tell:
+            what = "the change of level between its rests"
+            hint = ("; the correction cannot remove a change of the zero point within a motion: keep the attitude "
+                    "from rest to rest (a rail, a fixture) and the motions short")
+        else:
+            what = "a change of level as small as its rests can tell (5 sigma)"
+            hint = (f"; with these rests the correction holds motions up to {(40.0 * f_sigma / D) ** 2 * dt / 12.0:.2g} "
+                    "s (longer rests tell a smaller change)")
+        out.append(
+            f"displacement: the motion at {time_span(t, a, e, rec)} lasts {T:.3g} s, longer than the stop-to-stop "
+            f"correction holds: it leaves up to {err:.3g} m of its position, against a path of {path:.3g} m from "
+            f"its start ({what}, {D:.2g} m/s^2 = {math.degrees(math.asin(min(1.0, D / g))):.2g} deg of tilt, at "
+            f"its middle: {tilt:.3g} m, growing with T^2; the noise: {noise:.2g} m)"
+            + ("; its path is no larger than that error: it is not determined" if err >= path else "") + hint)
+    if len(out) > ZP_TURN_LINES:
+        out = out[:ZP_TURN_LINES] + [f"displacement: {len(out) - ZP_TURN_LINES} more motion(s) like these"]
+    return out

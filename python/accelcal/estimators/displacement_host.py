@@ -18,9 +18,9 @@ from .timegrid import on_uniform_grid
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
-from .displacement_checks import (REST_DEV_WARN_MPS2, no_rest_reason, still_but_turned, still_off_g,
-                                  still_off_g_text, trend_warnings, turned_motions, turned_text, turned_warnings,
-                                  wide_rest_warning)
+from .displacement_checks import (REST_DEV_WARN_MPS2, motion_error_warnings, motion_errors, no_rest_reason,
+                                  still_but_turned, still_off_g, still_off_g_text, trend_warnings, turned_motions,
+                                  turned_text, turned_warnings, wide_rest_warning)
 from .rest import (REST_AT_REST, REST_QUIET, RestParams, default_rest_params, motion_window, rest_dated_back,
                    rest_without_trend)
 from ..triad import triad_forces
@@ -427,6 +427,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         warnings += turned_warnings(t, turns, g, rec)
     cut, left_out, kept = _left_out(t, at, closed, long_anchors, is_open, [] if keep_turned else turns, g, rec)
     zps = [z for _, _, z in kept]
+    errs = motion_errors(f_host, pp, at, kept, f_sigma, dt, ax)
+    warnings += motion_error_warnings(t, errs, f_sigma, dt, g, rec)
     turned = still_but_turned(f_host, at, rp)
     still_turned = None
     if turned is not None:
@@ -449,6 +451,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
             f"1-D along body {'xyz'[ax]}", "segments": str(len(zps))}
     if zps:
         meta["zero_point_mps2"] = "; ".join("(" + ", ".join(f"{c:.4g}" for c in np.atleast_1d(z)) + ")" for z in zps)
+        meta["error_bound_m"] = "; ".join(f"{x[2]:.3g}" for x in errs)
     k = slice(0, cut)
     cols = Columns(t=t[k], v_x=v[k, 0], v_y=v[k, 1], v_z=v[k, 2], p_x=pp[k, 0], p_y=pp[k, 1], p_z=pp[k, 2],
                    p_raw_x=p_raw[k, 0], p_raw_y=p_raw[k, 1], p_raw_z=p_raw[k, 2],

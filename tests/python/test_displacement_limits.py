@@ -1,0 +1,93 @@
+"""What stop-to-stop displacement can tell the user about the limits of its answer: how much of a
+motion's position its correction leaves (a long motion, a tilt change between its rests), a
+calibration whose scale is off, and a final rest rejected near its bound.  Every recording is
+built here."""
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from accelcal import estimators as E
+from accelcal.calibration import Calibration
+from accelcal.device import default_triad
+from accelcal.recording import recording_from_arrays
+from estimator_devices import G
+
+RATE = 80.0
+
+
+def _slide_body(move_s, dist, tilt_deg, rest_s=2.0, hz=0.5):
+    """f (n, 3), m/s^2, of a triad at rest, then sliding to and fro along x for ``move_s`` s (x =
+    ``dist`` sin^2(pi hz t): whole periods, back at rest where it began) while it tilts about y by
+    ``tilt_deg`` half-way through (a smooth step over 1 s), then at rest at that tilt; and the true
+    position along x (m)."""
+    t = np.arange(int((2 * rest_s + move_s) * RATE)) / RATE
+    inside = (t >= rest_s) & (t <= rest_s + move_s)
+    x = dist * np.sin(np.pi * hz * (t - rest_s)) ** 2 * inside
+    acc = dist * 2 * (np.pi * hz) ** 2 * np.cos(2 * np.pi * hz * (t - rest_s)) * inside
+    w = np.clip(t - (rest_s + 0.5 * move_s - 0.5), 0.0, 1.0)
+    th = np.radians(tilt_deg) * (3 * w**2 - 2 * w**3)
+    c, s = np.cos(th), np.sin(th)
+    return np.column_stack([c * acc - s * G, np.zeros_like(t), s * acc + c * G]), x
+
+
+def _slide(d, move_s, dist, tilt_deg, sigma=0.005, seed=4):
+    body, x = _slide_body(move_s, dist, tilt_deg)
+    rng = np.random.default_rng(seed)
+    raw = np.round(d.zero_counts + (body + sigma * rng.standard_normal(body.shape)) * d.counts_per_mps2)
+    return recording_from_arrays(np.arange(body.shape[0]) / RATE, raw.astype(np.int64)), x
+
+
+def _limit_warnings(c):
+    return [w for w in c.warnings if "longer than the stop-to-stop correction holds" in w]
+
+
+@pytest.mark.parametrize("engine, form", [("float", "offline"), ("float", "stream"), ("fixed", "stream")])
+def test_a_long_motion_with_a_tilt_change_is_told_what_the_correction_leaves(engine, form):
+    """A 40 s slide to and fro of 0.5 m whose attitude changes by 0.3 deg half-way (MicroStrain's 46 s and 60 s
+    motions between rests 0.31 and 0.63 deg apart: 92 m and 52 m written with exit 0 and no word):
+    the correction removes a zero point constant through the motion, and a step of g sin 0.3 deg =
+    0.051 m/s^2 at its middle leaves 0.051 x 40^2 / 8 = 10 m.  The user is told the motion's span,
+    that figure and the change behind it, and the figure bounds the real error; a 2 s slide without
+    a tilt change between the same rests is no such motion."""
+    d = dataclasses.replace(default_triad(), sample_rate_hz=RATE)
+    cal = Calibration.nominal(d)
+    rec, x = _slide(d, 40.0, 0.5, 0.3)
+    c = E.displacement_from_recording(d, cal, rec, engine, form=form)
+    w = _limit_warnings(c)
+    assert len(w) == 1, c.warnings
+    assert float(w[0].split("lasts ")[1].split(" s")[0]) == pytest.approx(40.0, abs=1.0)
+    assert "the change of level between its rests" in w[0]
+    change = float(w[0].split("between its rests, ")[1].split(" m/s^2")[0])
+    assert change == pytest.approx(G * math.sin(math.radians(0.3)), rel=0.1)
+    bound = float(w[0].split("leaves up to ")[1].split(" m")[0])
+    assert bound == pytest.approx(change * 40.0**2 / 8.0, rel=0.1)
+    err = abs(c["p_x"][-1] - x[len(c["p_x"]) - 1])
+    assert 1.0 < err <= bound, (err, bound)
+    assert c.meta["error_bound_m"] == f"{bound:.3g}"
+    short, _ = _slide(d, 2.0, 0.5, 0.0)
+    c2 = E.displacement_from_recording(d, cal, short, engine, form=form)
+    assert not _limit_warnings(c2), c2.warnings
+    assert float(c2.meta["error_bound_m"]) < 0.01
+
+
+def test_the_bound_is_the_larger_of_the_change_seen_and_the_change_the_rests_tell():
+    """The figures :func:`motion_errors` gives: D T^2 / 8 from the change D between the rests'
+    levels, or 5 sigma sqrt(1/n1 + 1/n2) where the rests show less; the noise 5 sigma sqrt(dt T^3 / 12)."""
+    from accelcal.estimators.displacement_checks import motion_errors
+    n1, m, n2, dt, sig = 100, 400, 50, 0.01, 0.01
+    n = n1 + m + n2
+    at = np.r_[np.ones(n1, bool), np.zeros(m, bool), np.ones(n2, bool)]
+    f = np.tile([0.0, 0.0, G], (n, 1))
+    p = np.zeros((n, 3))
+    p[n1:n1 + m, 0] = np.linspace(0.0, 1.0, m)
+    T = (n1 + m - (n1 - 1)) * dt
+    (a, e, err, tilt, D, tell, path), = motion_errors(f, p, at, [(n1 - 1, n1 + m, np.zeros(3))], sig, dt, None)
+    assert tell == pytest.approx(5 * sig * math.sqrt(1 / n1 + 1 / n2))
+    assert D == tell and tilt == pytest.approx(tell * T * T / 8)
+    assert err - tilt == pytest.approx(5 * sig * math.sqrt(dt * T**3 / 12))
+    assert path == pytest.approx(1.0)
+    f[n1 + m:, 0] = 0.05
+    (_, _, _, tilt, D, _, _), = motion_errors(f, p, at, [(n1 - 1, n1 + m, np.zeros(3))], sig, dt, None)
+    assert D == pytest.approx(0.05) and tilt == pytest.approx(0.05 * T * T / 8)
