@@ -211,6 +211,8 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
         check_output_dir(report, "--report")
     dev = _load_device(device_path)
     cal = _load_cal(calibration_path, dev)
+    if isinstance(cal.extra, dict) and cal.method != "nominal":
+        cal.extra["source"] = str(calibration_path)       # the calibration a message names
     scale = None if units_args is None else scale_from_args(units_args, dev, reader=True)
     # displacement leaves out a sample a logger wrote twice (with a note): its integrators need
     # each sample once, and the copy is plainly one

@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 from accelcal import estimators as E
-from accelcal.calibration import Calibration
-from accelcal.device import default_triad
-from accelcal.recording import recording_from_arrays
+from accelcal.calibration import Calibration, save_calibration
+from accelcal.device import default_triad, save_device
+from accelcal.recording import recording_from_arrays, write_recording
+from cli_run import one_refusal, run
 from estimator_devices import G
 
 RATE = 80.0
@@ -91,3 +92,38 @@ def test_the_bound_is_the_larger_of_the_change_seen_and_the_change_the_rests_tel
     f[n1 + m:, 0] = 0.05
     (_, _, _, tilt, D, _, _), = motion_errors(f, p, at, [(n1 - 1, n1 + m, np.zeros(3))], sig, dt, None)
     assert D == pytest.approx(0.05) and tilt == pytest.approx(0.05 * T * T / 8)
+
+
+def _scaled_still(d, gain, seed=6):
+    """A triad still for 6 s whose scale reads ``gain`` times |f| with its nominal values."""
+    n = int(6 * d.sample_rate_hz)
+    body = np.tile([0.0, 0.0, G], (n, 1)) * gain
+    rng = np.random.default_rng(seed)
+    raw = np.round(d.zero_counts + (body + 0.005 * rng.standard_normal(body.shape)) * d.counts_per_mps2)
+    return recording_from_arrays(np.arange(n) / d.sample_rate_hz, raw.astype(np.int64))
+
+
+@pytest.mark.parametrize("model, said", [("offset", "estimates the offsets only"),
+                                         ("gain", "its scale does not hold for this recording")])
+def test_a_calibration_given_is_named_with_what_is_off_about_it(tmp_path, capfd, model, said):
+    """A still triad that reads |f| 6 % high is no rest.  With ``--calibration nominal`` the user is
+    told to calibrate first; with a calibration given (an iPhone's jig-free 'offset' model from 4 poses:
+    'calibrate it first (accelcal calibrate)' before) the refusal names that file, its model and how
+    far |f| is off, and what to do: a model that estimates the scale, or a calibration of this device
+    as it is now."""
+    d = default_triad()
+    save_device(d, tmp_path / "dev.json")
+    write_recording(tmp_path / "rec.csv", _scaled_still(d, 1.06))
+    cal = Calibration(device=d.name, method="jigfree", offsets=d.zero_counts,
+                      sensitivity=np.diag(d.counts_per_mps2), poses_used=["p0", "p1", "p2", "p3"],
+                      extra={"fit": {"model": model}})
+    save_calibration(cal, tmp_path / "cal.json")
+    args = ["displacement", "--device", tmp_path / "dev.json", "--calibration", "{}", tmp_path / "rec.csv",
+            "-o", tmp_path / "out.csv"]
+    rc, _, err, _ = run([a if a != "{}" else "nominal" for a in args], capfd)
+    assert rc == 2 and "calibrate it first (accelcal calibrate)" in err, err
+    rc, _, err, _ = run([a if a != "{}" else tmp_path / "cal.json" for a in args], capfd)
+    assert rc == 2 and one_refusal(err), err
+    assert "calibrate it first" not in err
+    assert f"the calibration given ({tmp_path / 'cal.json'}: jigfree '{model}' model from 4 poses)" in err
+    assert said in err and "|f| +6 % off g" in err

@@ -13,7 +13,7 @@ from .common import time_span
 from .rest import TREND_BLOCK_HOLDS, RestParams, trend_bound
 
 __all__ = ["REST_DEV_WARN_MPS2", "REST_NOISE_MAX_MPS2", "rest_noise_max", "wide_rest_warning", "ZP_TURN_MPS2",
-           "no_rest_reason", "scale_off", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned",
+           "no_rest_reason", "scale_off", "scale_cause", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned",
            "zp_limit", "turned_motions", "turned_text", "turned_warnings", "trend_warnings", "motion_errors",
            "motion_error_warnings"]
 
@@ -77,26 +77,52 @@ def scale_off(norm: float, share: float, rp: RestParams) -> bool:
     return rp.g is not None and share > 0.0 and abs(norm - rp.g) >= rp.g_tol - 0.5 * rp.dev_max
 
 
-def still_off_g_text(t, off, rp: RestParams, rec=None) -> str:
-    """The words for :func:`still_off_g`'s stretch ``off`` (``t`` in s; ``rec`` names its rows)."""
+def still_off_g_text(t, off, rp: RestParams, rec=None, cal=None) -> str:
+    """The words for :func:`still_off_g`'s stretch ``off`` (``t`` in s; ``rec`` names its rows;
+    ``cal`` the calibration used, :func:`scale_cause`)."""
     a, b, norm, share = off
-    return f"the body is still at {time_span(t, a, b, rec)} but that is no rest: it {off_g_text(norm, share, rp)}"
+    return (f"the body is still at {time_span(t, a, b, rec)} but that is no rest: it "
+            f"{off_g_text(norm, share, rp, cal)}")
 
 
-def off_g_text(norm: float, share: float, rp: RestParams) -> str:
+def scale_cause(cal, norm: float, g: float) -> str:
+    """Why a still stretch's mean |f| (``norm``, m/s^2) is off ``g`` (m/s^2), after the calibration
+    ``cal`` used (None or the device's nominal values: calibrate first).  A calibration given is named
+    (``cal.extra['source']``, its file, else 'the calibration given'), with its method and model and
+    how far |f| is off: a model that estimates no scale (jig-free 'offset') keeps the device file's
+    nominal scale; one that does was made for another device, range or temperature."""
+    if cal is None or getattr(cal, "method", "nominal") == "nominal":
+        return "the calibration's scale is off (a chip's nominal scale?); calibrate it first (accelcal calibrate) and use that calibration"
+    extra = cal.extra if isinstance(cal.extra, dict) else {}
+    name = extra.get("source", "the calibration given")
+    model = (extra.get("fit") or {}).get("model") if isinstance(extra.get("fit"), dict) else None
+    poses = f" from {len(cal.poses_used)} poses" if cal.poses_used else ""
+    what = f"{cal.method}" + (f" '{model}' model" if model else "") + poses
+    off = f"|f| {100.0 * (norm / g - 1.0):+.2g} % off g"
+    if model == "offset":
+        return (f"the calibration given ({name}: {what}) estimates the offsets only and keeps the device file's "
+                f"nominal scale, which reads {off} here: calibrate with a model that estimates the scale (jig-free "
+                "'gain' or 'full', from poses in more orientations, or poses on a jig) and use that calibration")
+    return (f"the calibration given ({name}: {what}) reads {off} here: its scale does not hold for this recording "
+            "(made for another device, range setting or temperature?); calibrate from a recording of this device "
+            "as it is now")
+
+
+def off_g_text(norm: float, share: float, rp: RestParams, cal=None) -> str:
     """Why a still stretch is no rest when its |f| strays from g: its mean |f| (``norm``, m/s^2),
-    the ``share`` of its samples outside the rest test's band g +- g_tol, and the cause."""
+    the ``share`` of its samples outside the rest test's band g +- g_tol, and the cause
+    (:func:`scale_cause` of the calibration ``cal`` used)."""
     return (f"read |f| = {norm:.4g} m/s^2, {100 * share:.0f} % of the samples outside the rest test's "
-            f"{rp.g:g} +- {rp.g_tol:g} m/s^2: the calibration's scale is off (a chip's nominal scale?); "
-            "calibrate it first (accelcal calibrate) and use that calibration")
+            f"{rp.g:g} +- {rp.g_tol:g} m/s^2: {scale_cause(cal, norm, rp.g)}")
 
 
-def no_rest_reason(f, t, rp: RestParams) -> str:
+def no_rest_reason(f, t, rp: RestParams, cal=None) -> str:
     """Why no rest was found, for the error: the stillest block of ``rp.hold`` samples (blocks
     at a stride of half a block), how far its f strays from its mean, and, when it is still
     enough but some of its samples' |f| fall outside the rest test's band, that |f| (a
     calibration whose scale is off: an uncalibrated chip 7.7 % high read with its nominal scale;
-    a chip 5 % low whose mean |f| sits at the band's edge).  ``f`` in m/s^2, (n, 3); ``t`` in s."""
+    a chip 5 % low whose mean |f| sits at the band's edge; ``cal``, the calibration used, named by
+    :func:`scale_cause`).  ``f`` in m/s^2, (n, 3); ``t`` in s."""
     f = np.asarray(f, float)
     hold = max(int(rp.hold), 2)
     if f.shape[0] < hold:
@@ -122,7 +148,7 @@ def no_rest_reason(f, t, rp: RestParams) -> str:
         return (f"the stillest {hold} samples ({where}) stray only {dev:.3g} m/s^2 from their own mean and read "
                 f"|f| = {norm:.4g} m/s^2, but the rest detector's running mean never settles on a still stretch "
                 "that long: the body creeps or turns slowly throughout")
-    return f"the stillest {hold} samples ({where}) are still (within {dev:.3g} m/s^2) but {off_g_text(norm, share, rp)}"
+    return f"the stillest {hold} samples ({where}) are still (within {dev:.3g} m/s^2) but {off_g_text(norm, share, rp, cal)}"
 
 
 def _still_blocks(f, at_rest, rp: RestParams):

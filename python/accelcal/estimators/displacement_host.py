@@ -350,8 +350,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                              + (f" with |f| within {rp.g_tol:g} of {rp.g:g} m/s^2" if rp.g is not None else "")
                              + "): " + ("; ".join([w.removeprefix("displacement: ") for w in
                                                    trend_warnings(t, trends, rp, f_sigma, False, rec)]
-                                                  + ([still_off_g_text(t, off, rp, rec)] if off else []))
-                                        or no_rest_reason(f, t, rp))
+                                                  + ([still_off_g_text(t, off, rp, rec, cal)] if off else []))
+                                        or no_rest_reason(f, t, rp, cal))
                              + "; the stop-to-stop method needs a rest at both ends of each motion")
         v, pp, p_raw = r["v"], r["p"], r["p_raw"]
         at, quiet, corrected = r["rest"], r["quiet"], r["corrected"]
@@ -375,7 +375,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                                 "fixed-point core")
         if no_rest:
             raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording: "
-                             f"{no_rest_reason(f / 2.0**OUT_FRAC if engine == 'fixed' else f, t, rp)}"
+                             f"{no_rest_reason(f / 2.0**OUT_FRAC if engine == 'fixed' else f, t, rp, cal)}"
                              "; the stop-to-stop method needs a rest at both ends of "
                              "each motion")
         v, pp, corrected = retro_correct(t, vq, pq, fl, zq)
@@ -404,7 +404,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     # a still stretch kept from being a rest by its |f| (the scale), said once: where the recording
     # does not start at rest when it lies before the first rest, else on its own
     off = still_off_g(f_host, at, rp)
-    off_words = [] if off is None else [still_off_g_text(t, off, rp, rec)]
+    off_words = [] if off is None else [still_off_g_text(t, off, rp, rec, cal)]
     if first_at > 0:
         before = off_words if off is not None and off[0] < first_at else []
         warnings.append(f"displacement: the recording does not start at rest: nothing is estimated before the "
