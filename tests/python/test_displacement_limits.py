@@ -11,6 +11,8 @@ import pytest
 from accelcal import estimators as E
 from accelcal.calibration import Calibration, save_calibration
 from accelcal.device import default_triad, save_device
+from accelcal.errors import InputError
+from accelcal.estimators.rest import trend_bound
 from accelcal.recording import recording_from_arrays, write_recording
 from cli_run import one_refusal, run
 from estimator_devices import G
@@ -127,3 +129,32 @@ def test_a_calibration_given_is_named_with_what_is_off_about_it(tmp_path, capfd,
     assert "calibrate it first" not in err
     assert f"the calibration given ({tmp_path / 'cal.json'}: jigfree '{model}' model from 4 poses)" in err
     assert said in err and "|f| +6 % off g" in err
+
+
+def test_a_final_rest_rejected_by_its_trend_says_by_how_much():
+    """A push, then 0.9 s still with f along x drifting by 0.06 m/s^2 (phyphox: the last 0.93 s
+    rejected at 0.0387 against 0.037 m/s^2, and the path refused with no word that 4 % decided it):
+    the line of the motion that does not end at rest names that stretch, its change, the bound (5
+    sigma of the change of a line fitted to n samples of white noise: sigma sqrt(12/n)) and their
+    ratio."""
+    d = dataclasses.replace(default_triad(), noise_mps2=0.02)
+    rate = d.sample_rate_hz
+    n0, n1, n2 = int(2 * rate), int(1 * rate), int(0.9 * rate)
+    body = np.tile([0.0, 0.0, G], (n0 + n1 + n2, 1))
+    body[n0:n0 + n1, 0] = 2.0 * np.sin(2 * np.pi * np.arange(n1) / n1)
+    body[n0 + n1:, 0] += np.linspace(0.0, 0.06, n2)
+    rng = np.random.default_rng(8)
+    raw = np.round(d.zero_counts + (body + 0.02 * rng.standard_normal(body.shape)) * d.counts_per_mps2)
+    rec = recording_from_arrays(np.arange(body.shape[0]) / rate, raw.astype(np.int64))
+    with pytest.raises(InputError, match="does not end at rest") as ei:
+        E.displacement_from_recording(d, Calibration.nominal(d), rec)
+    msg = str(ei.value)
+    assert "is no rest by the trend test" in msg, msg
+    note = msg.split("is no rest by the trend test")[1]
+    ch = float(note.split("changes by ")[1].split(" m/s^2")[0])
+    ratio = float(note.split("over it, ")[1].split(" x the")[0])
+    bound = float(note.split(" x the ")[1].split(" m/s^2")[0])
+    k = int(msg.split("samples) is no rest")[0].split(", ")[-1].split(" ")[0])
+    assert bound == pytest.approx(trend_bound(k, 0.02), rel=0.01)
+    assert ratio == pytest.approx(ch / trend_bound(k, 0.02), rel=0.01) and ratio > 1.0
+    assert trend_bound(k, 0.02) == pytest.approx(5 * 0.02 * math.sqrt(12 / k), rel=0.02)

@@ -15,7 +15,7 @@ from .rest import TREND_BLOCK_HOLDS, RestParams, trend_bound
 __all__ = ["REST_DEV_WARN_MPS2", "REST_NOISE_MAX_MPS2", "rest_noise_max", "wide_rest_warning", "ZP_TURN_MPS2",
            "no_rest_reason", "scale_off", "scale_cause", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned",
            "zp_limit", "turned_motions", "turned_text", "turned_warnings", "trend_warnings", "motion_errors",
-           "motion_error_warnings"]
+           "motion_error_warnings", "final_trend_note"]
 
 
 #: the noisiest sensor at rest of issue 13's range, m/s^2 per axis (its 5 sigma: 0.25)
@@ -359,7 +359,28 @@ def trend_warnings(t, trends, rp: RestParams, sigma: float, streamed: bool, rec=
     return [f"displacement: f changes steadily where the rest detector found a rest ({len(trends)} block(s) of up "
             f"to {TREND_BLOCK_HOLDS * rp.hold} samples; the largest change {ch:.3g} m/s^2 over "
             f"{time_span(t, b, e - 1, rec)}, beyond the {trend_bound(n, sigma):.2g} m/s^2 that noise of {sigma:.2g} "
-            f"m/s^2 gives (5 sigma)): a slow motion, not a rest; they {what}"]
+            f"m/s^2 gives (5 sigma of the change of a line fitted to {n} samples of it)): a slow motion, not a rest; "
+            f"they {what}"]
+
+
+def final_trend_note(t, trends, kept, rp: RestParams, sigma: float, rec=None) -> str:
+    """Why the recording's end is no rest when the trend test rejected it (``trends`` of
+    :func:`.rest.rest_without_trend`, those with no rest in ``kept`` after them), for the line of a
+    last motion that does not end at rest: the stretch, its change against its bound (as a ratio: a
+    rejection by a few per cent decides between a corrected path and none), and that a longer final
+    rest decides more surely (the bound falls as n^-1/2).  Empty when no such stretch.  ``t`` in s,
+    ``sigma`` the noise of f in m/s^2."""
+    kept = np.asarray(kept, bool)
+    last = [x for x in trends if not kept[x[0]:].any()]
+    if not last:
+        return ""
+    b, e, ch = max(last, key=lambda x: x[0])
+    bound = trend_bound(e - b, sigma)
+    return (f"; the still stretch before its end ({time_span(t, b, e - 1, rec)}, {e - b} samples) is no rest by the "
+            f"trend test: a line fitted to f changes by {ch:.3g} m/s^2 over it, {ch / bound:.3g} x the {bound:.2g} "
+            f"m/s^2 that noise of {sigma:.2g} m/s^2 gives (5 sigma; a slow motion, or a rest rejected by "
+            f"{100 * (ch / bound - 1):.2g} %: end the recording with a longer rest, over which noise changes a fitted "
+            "line less, as n^-1/2)")
 
 
 def _rest_run(at, i: int, lo: int, hi: int) -> tuple[int, int]:

@@ -18,9 +18,9 @@ from .timegrid import on_uniform_grid
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
-from .displacement_checks import (REST_DEV_WARN_MPS2, motion_error_warnings, motion_errors, no_rest_reason,
-                                  still_but_turned, still_off_g, still_off_g_text, trend_warnings, turned_motions,
-                                  turned_text, turned_warnings, wide_rest_warning)
+from .displacement_checks import (REST_DEV_WARN_MPS2, final_trend_note, motion_error_warnings, motion_errors,
+                                  no_rest_reason, still_but_turned, still_off_g, still_off_g_text, trend_warnings,
+                                  turned_motions, turned_text, turned_warnings, wide_rest_warning)
 from .rest import (REST_AT_REST, REST_QUIET, RestParams, default_rest_params, motion_window, rest_dated_back,
                    rest_without_trend)
 from ..triad import triad_forces
@@ -224,7 +224,7 @@ def _axis_arg(axis) -> int | None:
     return m[axis]
 
 
-def _left_out(t, at, closed, long_anchors, is_open, turns, g, rec):
+def _left_out(t, at, closed, long_anchors, is_open, turns, g, rec, open_note=""):
     """Where the output ends: at the first motion that cannot be reported (one that does not end at
     rest, one longer than the fixed core counts, or, in ``turns``, one the body turned in), which is
     left out with everything after it (their positions would carry its unknown displacement).
@@ -245,6 +245,8 @@ def _left_out(t, at, closed, long_anchors, is_open, turns, g, rec):
         The turned motions to leave out (:func:`.displacement_checks.turned_motions`).
     g : float
         Gravity, m/s^2.
+    open_note : str
+        Added to the line of a last motion that does not end at rest (why its end is no rest).
 
     Returns
     -------
@@ -272,7 +274,8 @@ def _left_out(t, at, closed, long_anchors, is_open, turns, g, rec):
         s = int(rest_idx[-1]) + 1 if rest_idx.size else 0
         starts.append(s)
         cands.append((s, f"the last motion ({time_span(t, s, n - 1, rec)}) does not end at rest: without a rest at its "
-                      "end its zero point cannot be removed (its drift grows with time squared), so it is left out"))
+                      "end its zero point cannot be removed (its drift grows with time squared), so it is left out"
+                      + open_note))
     if not cands:
         return n, None, list(closed)
     cut, line = min(cands, key=lambda c: c[0])
@@ -343,6 +346,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         gone = declared & ~kept
         r = displace_offline(f, p, np.where(gone, flags & ~(REST_AT_REST | REST_QUIET), flags))
         warnings += trend_warnings(t, trends, rp, f_sigma, False, rec)
+        open_note = final_trend_note(t, trends, kept, rp, f_sigma, rec)
         if r["no_rest"]:
             off = still_off_g(f, np.zeros(n, bool), rp) if trends else None
             raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording "
@@ -395,6 +399,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         segs = [(s - 1, e) for s, e in _segments_from_flags(fl) if e >= 0]
         closed = [(a, e, zq[e]) for a, e in segs if not fl[e] & DISP_LONG]
         long_anchors = [a for a, e in segs if fl[e] & DISP_LONG]
+        open_note = ""
     f_host = f if engine == "float" else np.asarray(f, float) / 2.0**OUT_FRAC
     declared = int(np.argmax(at)) if np.any(at) else n
     # each rest from where it began, not from the detector's declaration hold samples later
@@ -425,7 +430,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     turns = turned_motions(f_host, at, closed, f_sigma, rp, ax)
     if keep_turned:
         warnings += turned_warnings(t, turns, g, rec)
-    cut, left_out, kept = _left_out(t, at, closed, long_anchors, is_open, [] if keep_turned else turns, g, rec)
+    cut, left_out, kept = _left_out(t, at, closed, long_anchors, is_open, [] if keep_turned else turns, g, rec,
+                                    open_note)
     zps = [z for _, _, z in kept]
     errs = motion_errors(f_host, pp, at, kept, f_sigma, dt, ax)
     warnings += motion_error_warnings(t, errs, f_sigma, dt, g, rec)
