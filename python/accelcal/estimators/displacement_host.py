@@ -14,7 +14,7 @@ from ..noise import code_step, states_noise
 from ..recording import check_core_input, check_for_device
 from .common import (CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_noise, force_noise,
                      resolve_array, time_span, uniform_dt)
-from .timegrid import on_uniform_grid
+from .timegrid import on_uniform_grid, resampled
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
@@ -25,7 +25,12 @@ from .rest import (REST_AT_REST, REST_QUIET, RestParams, default_rest_params, mo
                    rest_without_trend)
 from ..triad import triad_forces
 
-__all__ = ["retro_correct", "displace_offline", "displacement_from_recording"]
+__all__ = ["RESAMPLE_HINT", "retro_correct", "displace_offline", "displacement_from_recording"]
+
+#: the remedy a refusal of stamps off the grid names here
+RESAMPLE_HINT = ("; if the samples were taken at their stamps (a sensor read on a loop whose period varies, a driver "
+                 "that stamps each one as it reads it) or the stamps stray by less than a step, and no sample was "
+                 "lost, accelcal displacement --resample interpolates them onto a uniform grid")
 
 
 def _motion_runs(at_rest, start: int = 0) -> list[tuple[int, int]]:
@@ -290,7 +295,8 @@ def _left_out(t, at, closed, long_anchors, is_open, turns, g, rec, open_note="")
 
 
 def displacement_from_recording(device, cal, rec, engine: str = "float", *, form: str | None = None,
-                                axis=None, rest: RestParams | None = None, keep_turned: bool = False) -> Columns:
+                                axis=None, rest: RestParams | None = None, keep_turned: bool = False,
+                                resample: bool = False) -> Columns:
     """`accelcal displacement`: columns t, v_x, v_y, v_z, p_x, p_y, p_z (frame of the first rest,
     z up, gravity removed; corrected between rests) plus p_raw_* (the same without the zero-point
     correction), rest (1 at rest: each rest from where it began, :func:`.rest.rest_dated_back`, not
@@ -310,7 +316,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     motions none of which can be reported.  Flagged (warning, rows 0): a recording that does not
     start at rest (the part before the first rest is not estimated).
     Samples a logger dropped are filled first (:func:`~.timegrid.on_uniform_grid`: warning and
-    column ``filled``)."""
+    column ``filled``); ``resample``: the samples are first interpolated from their stamps onto a
+    uniform grid (:func:`~.timegrid.resampled`: stamps that keep no grid, no sample lost)."""
     if engine not in ("float", "fixed"):
         raise ValueError(f"unknown engine {engine!r}")
     form = form or ("offline" if engine == "float" else "stream")
@@ -320,7 +327,10 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     ax = _axis_arg(axis)
     if engine == "fixed":
         check_core_input(rec, device.raw_min < 0)
-    rec, filled, fill_note = on_uniform_grid(rec)
+    re_note = None
+    if resample:
+        rec, re_note = resampled(rec)
+    rec, filled, fill_note = on_uniform_grid(rec, RESAMPLE_HINT)
     dt = uniform_dt(rec)
     f, note = _body_forces(device, cal, rec, engine)
     noise = channel_noise(device, rec)
@@ -330,7 +340,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     p = DisplaceParams(dt=dt, axis=ax, rest=rp)
     t = np.asarray(rec.t, float)
     n = len(t)
-    warnings = [f"displacement: {fill_note}"] if fill_note else []
+    warnings = [f"displacement: {w}" for w in (re_note, fill_note) if w]
     if rest is None and rp.dev_max > REST_DEV_WARN_MPS2 and not states_noise(device):
         # the code step through the calibration: coarse codes widen the test of a sensor at rest
         q_f = force_noise(device, cal, [code_step(c) for c in np.asarray(rec.raw).T], channels)
