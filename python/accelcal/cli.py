@@ -192,7 +192,7 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
         The parsed ``--units``/``--lsb``/``--full-scale``/``--bits``/``--gravity``
         (units_cli.add_units_options) the recording is read with.
     **options
-        To the estimator (attitude: gain, w2_gate, leak_tau_s; displacement: form, axis, keep_turned;
+        To the estimator (attitude: gain, w2_gate, leak_tau_s; displacement: form, axis, keep_turned, resample;
         rate: leak_tau_s).
 
     Returns
@@ -213,6 +213,8 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
         check_output_dir(report, "--report")
     dev = _load_device(device_path)
     cal = _load_cal(calibration_path, dev)
+    if isinstance(cal.extra, dict) and cal.method != "nominal":
+        cal.extra["source"] = str(calibration_path)       # the calibration a message names
     scale = None if units_args is None else scale_from_args(units_args, dev, reader=True)
     # displacement leaves out a sample a logger wrote twice (with a note): its integrators need
     # each sample once, and the copy is plainly one
@@ -248,8 +250,9 @@ def held_warnings(rec) -> list[str]:
 def _estimator(a, kind):
     options = {k: v for k, v in (("axis", getattr(a, "axis", None)), ("form", getattr(a, "form", None)))
                if v is not None}
-    if getattr(a, "keep_turned", False):
-        options["keep_turned"] = True
+    for flag in ("keep_turned", "resample"):
+        if getattr(a, flag, False):
+            options[flag] = True
     for w in run_estimator(kind, a.device, a.calibration, a.recording, a.output, engine=a.engine,
                            report=a.report, units_args=a, **options):
         print(w, file=sys.stderr)
@@ -418,6 +421,11 @@ def build_parser() -> argparse.ArgumentParser:
                            help="write a motion during which the body turned (its zero point beyond what a "
                            "calibration or tilt error gives), with a warning; by default it is left out, and the "
                            "output ends at the rest before it")
+            s.add_argument("--resample", action="store_true",
+                           help="interpolate the samples from their time stamps onto a uniform grid first (stamps "
+                           "that keep no uniform grid: a sensor read on a loop whose period varies, a driver that "
+                           "stamps each sample as it reads it); refused where a sample was lost (a step beyond "
+                           "1.5 of the mean)")
         add_units_options(s)
         s.set_defaults(func=func)
 

@@ -179,3 +179,35 @@ def test_a_refusal_of_stamps_off_the_grid_names_the_remedy():
     with pytest.raises(InputError, match=r"sample\(s\) missing") as ei:
         on_uniform_grid(recording_from_arrays(dt * np.delete(i, np.arange(300, 320)), _walk(n - 20)))
     assert "--rate" not in str(ei.value)
+
+
+def test_samples_taken_at_uneven_stamps_are_resampled_on_request():
+    """A buoy's logger (8.5 Hz, ms stamps, steps 0.96-1.18 of the mean) and PX4's sensor_combined
+    (250 Hz) were refused by displacement with a remedy that did not work (convert --rate keeps stamps
+    within 20 % of the rate).  Samples taken at their stamps by a loop whose period varies +-30 % are
+    refused naming displacement --resample; with it they are interpolated onto a uniform grid of as
+    many samples and the stroke comes out as from uniform samples.  A step of 3 samples lost is
+    refused, naming its row: interpolation would bridge it."""
+    d = default_triad()
+    rec = run_simulation(d, "linear_actuator", seed=2).recording
+    cal = Calibration.nominal(d)
+    whole = E.displacement_from_recording(d, cal, rec)
+    t0 = np.asarray(rec.t, float)
+    rng = np.random.default_rng(7)
+    dt = float(np.median(np.diff(t0)))
+    t = t0[0] + dt * np.concatenate([[0.0], np.cumsum(rng.uniform(0.7, 1.3, t0.size - 1))])
+    t = t[t <= t0[-1]]
+    raw = np.rint(np.column_stack([np.interp(t, t0, np.asarray(rec.raw, float)[:, j]) for j in range(3)]))
+    uneven = recording_from_arrays(t, raw.astype(np.int64))
+    with pytest.raises(InputError, match="not uniform") as ei:
+        E.displacement_from_recording(d, cal, uneven)
+    assert "accelcal displacement --resample" in str(ei.value) and "convert --rate" not in str(ei.value)
+    c = E.displacement_from_recording(d, cal, uneven, resample=True)
+    assert any("--resample: " in w and "interpolated" in w for w in c.warnings), c.warnings
+    stroke = float(np.max(np.abs(whole["p_x"])))
+    for ax in ("p_x", "p_y", "p_z"):
+        assert c[ax][-1] == pytest.approx(whole[ax][-1], abs=0.01 * stroke), ax
+    gap = recording_from_arrays(np.delete(t, [400, 401, 402]), np.delete(raw, [400, 401, 402], axis=0).astype(np.int64))
+    with pytest.raises(InputError, match="samples were lost there") as ei:
+        E.displacement_from_recording(d, cal, gap, resample=True)
+    assert ei.value.row == 401, str(ei.value)

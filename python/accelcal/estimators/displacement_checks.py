@@ -13,8 +13,9 @@ from .common import time_span
 from .rest import TREND_BLOCK_HOLDS, RestParams, trend_bound
 
 __all__ = ["REST_DEV_WARN_MPS2", "REST_NOISE_MAX_MPS2", "rest_noise_max", "wide_rest_warning", "ZP_TURN_MPS2",
-           "no_rest_reason", "scale_off", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned",
-           "zp_limit", "turned_motions", "turned_text", "turned_warnings", "trend_warnings"]
+           "no_rest_reason", "scale_off", "scale_cause", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned",
+           "zp_limit", "turned_motions", "turned_text", "turned_warnings", "trend_warnings", "motion_errors",
+           "motion_error_warnings", "final_trend_note"]
 
 
 #: the noisiest sensor at rest of issue 13's range, m/s^2 per axis (its 5 sigma: 0.25)
@@ -76,26 +77,52 @@ def scale_off(norm: float, share: float, rp: RestParams) -> bool:
     return rp.g is not None and share > 0.0 and abs(norm - rp.g) >= rp.g_tol - 0.5 * rp.dev_max
 
 
-def still_off_g_text(t, off, rp: RestParams, rec=None) -> str:
-    """The words for :func:`still_off_g`'s stretch ``off`` (``t`` in s; ``rec`` names its rows)."""
+def still_off_g_text(t, off, rp: RestParams, rec=None, cal=None) -> str:
+    """The words for :func:`still_off_g`'s stretch ``off`` (``t`` in s; ``rec`` names its rows;
+    ``cal`` the calibration used, :func:`scale_cause`)."""
     a, b, norm, share = off
-    return f"the body is still at {time_span(t, a, b, rec)} but that is no rest: it {off_g_text(norm, share, rp)}"
+    return (f"the body is still at {time_span(t, a, b, rec)} but that is no rest: it "
+            f"{off_g_text(norm, share, rp, cal)}")
 
 
-def off_g_text(norm: float, share: float, rp: RestParams) -> str:
+def scale_cause(cal, norm: float, g: float) -> str:
+    """Why a still stretch's mean |f| (``norm``, m/s^2) is off ``g`` (m/s^2), after the calibration
+    ``cal`` used (None or the device's nominal values: calibrate first).  A calibration given is named
+    (``cal.extra['source']``, its file, else 'the calibration given'), with its method and model and
+    how far |f| is off: a model that estimates no scale (jig-free 'offset') keeps the device file's
+    nominal scale; one that does was made for another device, range or temperature."""
+    if cal is None or getattr(cal, "method", "nominal") == "nominal":
+        return "the calibration's scale is off (a chip's nominal scale?); calibrate it first (accelcal calibrate) and use that calibration"
+    extra = cal.extra if isinstance(cal.extra, dict) else {}
+    name = extra.get("source", "the calibration given")
+    model = (extra.get("fit") or {}).get("model") if isinstance(extra.get("fit"), dict) else None
+    poses = f" from {len(cal.poses_used)} poses" if cal.poses_used else ""
+    what = f"{cal.method}" + (f" '{model}' model" if model else "") + poses
+    off = f"|f| {100.0 * (norm / g - 1.0):+.2g} % off g"
+    if model == "offset":
+        return (f"the calibration given ({name}: {what}) estimates the offsets only and keeps the device file's "
+                f"nominal scale, which reads {off} here: calibrate with a model that estimates the scale (jig-free "
+                "'gain' or 'full', from poses in more orientations, or poses on a jig) and use that calibration")
+    return (f"the calibration given ({name}: {what}) reads {off} here: its scale does not hold for this recording "
+            "(made for another device, range setting or temperature?); calibrate from a recording of this device "
+            "as it is now")
+
+
+def off_g_text(norm: float, share: float, rp: RestParams, cal=None) -> str:
     """Why a still stretch is no rest when its |f| strays from g: its mean |f| (``norm``, m/s^2),
-    the ``share`` of its samples outside the rest test's band g +- g_tol, and the cause."""
+    the ``share`` of its samples outside the rest test's band g +- g_tol, and the cause
+    (:func:`scale_cause` of the calibration ``cal`` used)."""
     return (f"read |f| = {norm:.4g} m/s^2, {100 * share:.0f} % of the samples outside the rest test's "
-            f"{rp.g:g} +- {rp.g_tol:g} m/s^2: the calibration's scale is off (a chip's nominal scale?); "
-            "calibrate it first (accelcal calibrate) and use that calibration")
+            f"{rp.g:g} +- {rp.g_tol:g} m/s^2: {scale_cause(cal, norm, rp.g)}")
 
 
-def no_rest_reason(f, t, rp: RestParams) -> str:
+def no_rest_reason(f, t, rp: RestParams, cal=None) -> str:
     """Why no rest was found, for the error: the stillest block of ``rp.hold`` samples (blocks
     at a stride of half a block), how far its f strays from its mean, and, when it is still
     enough but some of its samples' |f| fall outside the rest test's band, that |f| (a
     calibration whose scale is off: an uncalibrated chip 7.7 % high read with its nominal scale;
-    a chip 5 % low whose mean |f| sits at the band's edge).  ``f`` in m/s^2, (n, 3); ``t`` in s."""
+    a chip 5 % low whose mean |f| sits at the band's edge; ``cal``, the calibration used, named by
+    :func:`scale_cause`).  ``f`` in m/s^2, (n, 3); ``t`` in s."""
     f = np.asarray(f, float)
     hold = max(int(rp.hold), 2)
     if f.shape[0] < hold:
@@ -121,7 +148,7 @@ def no_rest_reason(f, t, rp: RestParams) -> str:
         return (f"the stillest {hold} samples ({where}) stray only {dev:.3g} m/s^2 from their own mean and read "
                 f"|f| = {norm:.4g} m/s^2, but the rest detector's running mean never settles on a still stretch "
                 "that long: the body creeps or turns slowly throughout")
-    return f"the stillest {hold} samples ({where}) are still (within {dev:.3g} m/s^2) but {off_g_text(norm, share, rp)}"
+    return f"the stillest {hold} samples ({where}) are still (within {dev:.3g} m/s^2) but {off_g_text(norm, share, rp, cal)}"
 
 
 def _still_blocks(f, at_rest, rp: RestParams):
@@ -332,4 +359,130 @@ def trend_warnings(t, trends, rp: RestParams, sigma: float, streamed: bool, rec=
     return [f"displacement: f changes steadily where the rest detector found a rest ({len(trends)} block(s) of up "
             f"to {TREND_BLOCK_HOLDS * rp.hold} samples; the largest change {ch:.3g} m/s^2 over "
             f"{time_span(t, b, e - 1, rec)}, beyond the {trend_bound(n, sigma):.2g} m/s^2 that noise of {sigma:.2g} "
-            f"m/s^2 gives (5 sigma)): a slow motion, not a rest; they {what}"]
+            f"m/s^2 gives (5 sigma of the change of a line fitted to {n} samples of it)): a slow motion, not a rest; "
+            f"they {what}"]
+
+
+def final_trend_note(t, trends, kept, rp: RestParams, sigma: float, rec=None) -> str:
+    """Why the recording's end is no rest when the trend test rejected it (``trends`` of
+    :func:`.rest.rest_without_trend`, those with no rest in ``kept`` after them), for the line of a
+    last motion that does not end at rest: the stretch, its change against its bound (as a ratio: a
+    rejection by a few per cent decides between a corrected path and none), and that a longer final
+    rest decides more surely (the bound falls as n^-1/2).  Empty when no such stretch.  ``t`` in s,
+    ``sigma`` the noise of f in m/s^2."""
+    kept = np.asarray(kept, bool)
+    last = [x for x in trends if not kept[x[0]:].any()]
+    if not last:
+        return ""
+    b, e, ch = max(last, key=lambda x: x[0])
+    bound = trend_bound(e - b, sigma)
+    return (f"; the still stretch before its end ({time_span(t, b, e - 1, rec)}, {e - b} samples) is no rest by the "
+            f"trend test: a line fitted to f changes by {ch:.3g} m/s^2 over it, {ch / bound:.3g} x the {bound:.2g} "
+            f"m/s^2 that noise of {sigma:.2g} m/s^2 gives (5 sigma; a slow motion, or a rest rejected by "
+            f"{100 * (ch / bound - 1):.2g} %: end the recording with a longer rest, over which noise changes a fitted "
+            "line less, as n^-1/2)")
+
+
+def _rest_run(at, i: int, lo: int, hi: int) -> tuple[int, int]:
+    """The run [s, e) of at-rest samples through sample ``i``, kept within [lo, hi)."""
+    s = e = i
+    while s > lo and at[s - 1]:
+        s -= 1
+    while e < hi and at[e]:
+        e += 1
+    return s, e
+
+
+def motion_errors(f, p, at, motions, f_sigma: float, dt: float, axis: int | None
+                  ) -> list[tuple[int, int, float, float, float, float, float]]:
+    """What the zero-point correction leaves of each corrected motion's position, from what its
+    rests can tell.
+
+    The correction removes a zero point that stays constant through the motion (a calibration
+    error, a tilt held from rest to rest).  A change of it at an unknown time (a tilt change, a
+    drift) is not removed: a step of D at time tau of a motion of T leaves D tau (T - tau) / 2 at
+    its end, up to D T^2 / 8 at the middle.  D is the change between the rests' levels (their mean
+    f) or, where that is below what they can tell, the smallest change they tell: 5 sigma of the
+    difference of two means of n1 and n2 samples of noise sigma, 5 sigma sqrt(1/n1 + 1/n2).  The
+    noise itself leaves 5 sigma sqrt(dt T^3 / 12) (white noise integrated twice, the end pinned to
+    zero velocity).  The change grows with T^2, the noise with T^1.5: beyond
+    T_max = (40 sigma / D)^2 dt / 12 the change dominates (with D = what the rests tell,
+    T_max = 16/3 dt / (1/n1 + 1/n2): 8/3 of rests of equal length).
+
+    Parameters
+    ----------
+    f : ndarray (n, 3)
+        Specific force in body axes, m/s^2.
+    p : ndarray (n, 3)
+        The corrected position, m.
+    at : ndarray (n,) bool
+        At rest (each rest from where it began).
+    motions : list of (int, int, array_like)
+        Each corrected motion: anchor (a rest sample before it), end sample, zp.
+    f_sigma : float
+        The noise of f, m/s^2 per axis.
+    dt : float
+        s.
+    axis : int or None
+        1-D along that body axis, or None (3-axis).
+
+    Returns
+    -------
+    list of (int, int, float, float, float, float, float)
+        Per motion: anchor, end, the error bound E (m), its part from the change of level (m), the
+        change D used (m/s^2), the change the rests tell (5 sigma, m/s^2), and the path's largest
+        distance from its start (m).
+    """
+    at = np.asarray(at, bool)
+    f = np.asarray(f, float)
+    n = at.size
+    out = []
+    for k, (a, e, _) in enumerate(motions):
+        lo = motions[k - 1][1] + 1 if k else 0
+        hi = motions[k + 1][0] if k + 1 < len(motions) else n
+        b0, b1 = _rest_run(at, a, lo, a + 1) if at[a] else (a, a + 1)
+        j = e if at[e] else min(e + 1 + int(np.argmax(at[e + 1:])) if e + 1 < n and at[e + 1:].any() else e, n - 1)
+        c0, c1 = _rest_run(at, j, max(a + 1, lo), hi) if at[j] else (j, j + 1)
+        d = f[c0:c1].mean(axis=0) - f[b0:b1].mean(axis=0)
+        seen = abs(float(d[axis])) if axis is not None else float(np.linalg.norm(d))
+        tell = 5.0 * float(f_sigma) * math.sqrt(1.0 / (b1 - b0) + 1.0 / (c1 - c0))
+        D = max(seen, tell)
+        T = (e - a) * dt
+        tilt = D * T * T / 8.0
+        noise = 5.0 * float(f_sigma) * math.sqrt(dt * T ** 3 / 12.0)
+        seg = np.asarray(p[a:e + 1], float) - np.asarray(p[a], float)
+        path = float(np.max(np.abs(seg[:, axis]))) if axis is not None else float(np.max(np.linalg.norm(seg, axis=1)))
+        out.append((int(a), int(e), tilt + noise, tilt, D, tell, path))
+    return out
+
+
+def motion_error_warnings(t, errs, f_sigma: float, dt: float, g: float, rec=None) -> list[str]:
+    """The warnings of :func:`motion_errors`: a motion whose error from a change of its zero point
+    (D T^2 / 8) exceeds what its noise leaves -- longer than the stop-to-stop correction holds with
+    the rests about it (said to be not determined when that error reaches its path; a motion the
+    detector found in the noise has a path below its noise, which is no warning).  One line per motion, the first
+    ZP_TURN_LINES, then one line for the others.  ``t`` in s, ``f_sigma`` in m/s^2, ``dt`` in s,
+    ``g`` in m/s^2 (the tilt a change equals)."""
+    out = []
+    for a, e, err, tilt, D, tell, path in errs:
+        noise = err - tilt
+        if tilt <= noise:
+            continue
+        T = (e - a) * dt
+        if D > tell:
+            what = "the change of level between its rests"
+            hint = ("; the correction cannot remove a change of the zero point within a motion: keep the attitude "
+                    "from rest to rest (a rail, a fixture) and the motions short")
+        else:
+            what = "a change of level as small as its rests can tell (5 sigma)"
+            hint = (f"; with these rests the correction holds motions up to {(40.0 * f_sigma / D) ** 2 * dt / 12.0:.2g} "
+                    "s (longer rests tell a smaller change)")
+        out.append(
+            f"displacement: the motion at {time_span(t, a, e, rec)} lasts {T:.3g} s, longer than the stop-to-stop "
+            f"correction holds: it leaves up to {err:.3g} m of its position, against a path of {path:.3g} m from "
+            f"its start ({what}, {D:.2g} m/s^2 = {math.degrees(math.asin(min(1.0, D / g))):.2g} deg of tilt, at "
+            f"its middle: {tilt:.3g} m, growing with T^2; the noise: {noise:.2g} m)"
+            + ("; its path is no larger than that error: it is not determined" if err >= path else "") + hint)
+    if len(out) > ZP_TURN_LINES:
+        out = out[:ZP_TURN_LINES] + [f"displacement: {len(out) - ZP_TURN_LINES} more motion(s) like these"]
+    return out

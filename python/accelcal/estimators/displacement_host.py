@@ -14,18 +14,23 @@ from ..noise import code_step, states_noise
 from ..recording import check_core_input, check_for_device
 from .common import (CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_noise, force_noise,
                      resolve_array, time_span, uniform_dt)
-from .timegrid import on_uniform_grid
+from .timegrid import on_uniform_grid, resampled
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
-from .displacement_checks import (REST_DEV_WARN_MPS2, no_rest_reason, still_but_turned, still_off_g,
-                                  still_off_g_text, trend_warnings, turned_motions, turned_text, turned_warnings,
-                                  wide_rest_warning)
+from .displacement_checks import (REST_DEV_WARN_MPS2, final_trend_note, motion_error_warnings, motion_errors,
+                                  no_rest_reason, still_but_turned, still_off_g, still_off_g_text, trend_warnings,
+                                  turned_motions, turned_text, turned_warnings, wide_rest_warning)
 from .rest import (REST_AT_REST, REST_QUIET, RestParams, default_rest_params, motion_window, rest_dated_back,
                    rest_without_trend)
 from ..triad import triad_forces
 
-__all__ = ["retro_correct", "displace_offline", "displacement_from_recording"]
+__all__ = ["RESAMPLE_HINT", "retro_correct", "displace_offline", "displacement_from_recording"]
+
+#: the remedy a refusal of stamps off the grid names here
+RESAMPLE_HINT = ("; if the samples were taken at their stamps (a sensor read on a loop whose period varies, a driver "
+                 "that stamps each one as it reads it) or the stamps stray by less than a step, and no sample was "
+                 "lost, accelcal displacement --resample interpolates them onto a uniform grid")
 
 
 def _motion_runs(at_rest, start: int = 0) -> list[tuple[int, int]]:
@@ -224,7 +229,7 @@ def _axis_arg(axis) -> int | None:
     return m[axis]
 
 
-def _left_out(t, at, closed, long_anchors, is_open, turns, g, rec):
+def _left_out(t, at, closed, long_anchors, is_open, turns, g, rec, open_note=""):
     """Where the output ends: at the first motion that cannot be reported (one that does not end at
     rest, one longer than the fixed core counts, or, in ``turns``, one the body turned in), which is
     left out with everything after it (their positions would carry its unknown displacement).
@@ -245,6 +250,8 @@ def _left_out(t, at, closed, long_anchors, is_open, turns, g, rec):
         The turned motions to leave out (:func:`.displacement_checks.turned_motions`).
     g : float
         Gravity, m/s^2.
+    open_note : str
+        Added to the line of a last motion that does not end at rest (why its end is no rest).
 
     Returns
     -------
@@ -272,7 +279,8 @@ def _left_out(t, at, closed, long_anchors, is_open, turns, g, rec):
         s = int(rest_idx[-1]) + 1 if rest_idx.size else 0
         starts.append(s)
         cands.append((s, f"the last motion ({time_span(t, s, n - 1, rec)}) does not end at rest: without a rest at its "
-                      "end its zero point cannot be removed (its drift grows with time squared), so it is left out"))
+                      "end its zero point cannot be removed (its drift grows with time squared), so it is left out"
+                      + open_note))
     if not cands:
         return n, None, list(closed)
     cut, line = min(cands, key=lambda c: c[0])
@@ -287,7 +295,8 @@ def _left_out(t, at, closed, long_anchors, is_open, turns, g, rec):
 
 
 def displacement_from_recording(device, cal, rec, engine: str = "float", *, form: str | None = None,
-                                axis=None, rest: RestParams | None = None, keep_turned: bool = False) -> Columns:
+                                axis=None, rest: RestParams | None = None, keep_turned: bool = False,
+                                resample: bool = False) -> Columns:
     """`accelcal displacement`: columns t, v_x, v_y, v_z, p_x, p_y, p_z (frame of the first rest,
     z up, gravity removed; corrected between rests) plus p_raw_* (the same without the zero-point
     correction), rest (1 at rest: each rest from where it began, :func:`.rest.rest_dated_back`, not
@@ -307,7 +316,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     motions none of which can be reported.  Flagged (warning, rows 0): a recording that does not
     start at rest (the part before the first rest is not estimated).
     Samples a logger dropped are filled first (:func:`~.timegrid.on_uniform_grid`: warning and
-    column ``filled``)."""
+    column ``filled``); ``resample``: the samples are first interpolated from their stamps onto a
+    uniform grid (:func:`~.timegrid.resampled`: stamps that keep no grid, no sample lost)."""
     if engine not in ("float", "fixed"):
         raise ValueError(f"unknown engine {engine!r}")
     form = form or ("offline" if engine == "float" else "stream")
@@ -317,7 +327,10 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     ax = _axis_arg(axis)
     if engine == "fixed":
         check_core_input(rec, device.raw_min < 0)
-    rec, filled, fill_note = on_uniform_grid(rec)
+    re_note = None
+    if resample:
+        rec, re_note = resampled(rec)
+    rec, filled, fill_note = on_uniform_grid(rec, RESAMPLE_HINT)
     dt = uniform_dt(rec)
     f, note = _body_forces(device, cal, rec, engine)
     noise = channel_noise(device, rec)
@@ -327,7 +340,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     p = DisplaceParams(dt=dt, axis=ax, rest=rp)
     t = np.asarray(rec.t, float)
     n = len(t)
-    warnings = [f"displacement: {fill_note}"] if fill_note else []
+    warnings = [f"displacement: {w}" for w in (re_note, fill_note) if w]
     if rest is None and rp.dev_max > REST_DEV_WARN_MPS2 and not states_noise(device):
         # the code step through the calibration: coarse codes widen the test of a sensor at rest
         q_f = force_noise(device, cal, [code_step(c) for c in np.asarray(rec.raw).T], channels)
@@ -343,6 +356,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         gone = declared & ~kept
         r = displace_offline(f, p, np.where(gone, flags & ~(REST_AT_REST | REST_QUIET), flags))
         warnings += trend_warnings(t, trends, rp, f_sigma, False, rec)
+        open_note = final_trend_note(t, trends, kept, rp, f_sigma, rec)
         if r["no_rest"]:
             off = still_off_g(f, np.zeros(n, bool), rp) if trends else None
             raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording "
@@ -350,8 +364,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                              + (f" with |f| within {rp.g_tol:g} of {rp.g:g} m/s^2" if rp.g is not None else "")
                              + "): " + ("; ".join([w.removeprefix("displacement: ") for w in
                                                    trend_warnings(t, trends, rp, f_sigma, False, rec)]
-                                                  + ([still_off_g_text(t, off, rp, rec)] if off else []))
-                                        or no_rest_reason(f, t, rp))
+                                                  + ([still_off_g_text(t, off, rp, rec, cal)] if off else []))
+                                        or no_rest_reason(f, t, rp, cal))
                              + "; the stop-to-stop method needs a rest at both ends of each motion")
         v, pp, p_raw = r["v"], r["p"], r["p_raw"]
         at, quiet, corrected = r["rest"], r["quiet"], r["corrected"]
@@ -375,7 +389,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                                 "fixed-point core")
         if no_rest:
             raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording: "
-                             f"{no_rest_reason(f / 2.0**OUT_FRAC if engine == 'fixed' else f, t, rp)}"
+                             f"{no_rest_reason(f / 2.0**OUT_FRAC if engine == 'fixed' else f, t, rp, cal)}"
                              "; the stop-to-stop method needs a rest at both ends of "
                              "each motion")
         v, pp, corrected = retro_correct(t, vq, pq, fl, zq)
@@ -395,6 +409,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         segs = [(s - 1, e) for s, e in _segments_from_flags(fl) if e >= 0]
         closed = [(a, e, zq[e]) for a, e in segs if not fl[e] & DISP_LONG]
         long_anchors = [a for a, e in segs if fl[e] & DISP_LONG]
+        open_note = ""
     f_host = f if engine == "float" else np.asarray(f, float) / 2.0**OUT_FRAC
     declared = int(np.argmax(at)) if np.any(at) else n
     # each rest from where it began, not from the detector's declaration hold samples later
@@ -404,7 +419,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     # a still stretch kept from being a rest by its |f| (the scale), said once: where the recording
     # does not start at rest when it lies before the first rest, else on its own
     off = still_off_g(f_host, at, rp)
-    off_words = [] if off is None else [still_off_g_text(t, off, rp, rec)]
+    off_words = [] if off is None else [still_off_g_text(t, off, rp, rec, cal)]
     if first_at > 0:
         before = off_words if off is not None and off[0] < first_at else []
         warnings.append(f"displacement: the recording does not start at rest: nothing is estimated before the "
@@ -425,8 +440,11 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     turns = turned_motions(f_host, at, closed, f_sigma, rp, ax)
     if keep_turned:
         warnings += turned_warnings(t, turns, g, rec)
-    cut, left_out, kept = _left_out(t, at, closed, long_anchors, is_open, [] if keep_turned else turns, g, rec)
+    cut, left_out, kept = _left_out(t, at, closed, long_anchors, is_open, [] if keep_turned else turns, g, rec,
+                                    open_note)
     zps = [z for _, _, z in kept]
+    errs = motion_errors(f_host, pp, at, kept, f_sigma, dt, ax)
+    warnings += motion_error_warnings(t, errs, f_sigma, dt, g, rec)
     turned = still_but_turned(f_host, at, rp)
     still_turned = None
     if turned is not None:
@@ -449,6 +467,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
             f"1-D along body {'xyz'[ax]}", "segments": str(len(zps))}
     if zps:
         meta["zero_point_mps2"] = "; ".join("(" + ", ".join(f"{c:.4g}" for c in np.atleast_1d(z)) + ")" for z in zps)
+        meta["error_bound_m"] = "; ".join(f"{x[2]:.3g}" for x in errs)
     k = slice(0, cut)
     cols = Columns(t=t[k], v_x=v[k, 0], v_y=v[k, 1], v_z=v[k, 2], p_x=pp[k, 0], p_y=pp[k, 1], p_z=pp[k, 2],
                    p_raw_x=p_raw[k, 0], p_raw_y=p_raw[k, 1], p_raw_z=p_raw[k, 2],

@@ -12,7 +12,8 @@ from ..recording import Recording
 from ..recording_checks import regular_step
 from .common import time_span
 
-__all__ = ["REGRID_HINT", "MAX_FILL_SAMPLES", "MAX_FILL_SHARE", "MAX_JITTER_STEPS", "JITTER_NOTE_STEPS", "MAX_LATE_STEPS",
+__all__ = ["REGRID_HINT", "RESAMPLE_MAX_STEP", "resampled", "MAX_FILL_SAMPLES", "MAX_FILL_SHARE", "MAX_JITTER_STEPS",
+           "JITTER_NOTE_STEPS", "MAX_LATE_STEPS",
            "MAX_WANDER_STEPS", "WANDER_BLOCK", "COHERENT_SHARE", "COHERENT_BLOCK", "block_phases", "stamp_trend",
            "grid_places", "places_from", "on_uniform_grid"]
 
@@ -153,7 +154,8 @@ def places_from(t: np.ndarray, step: float) -> tuple[np.ndarray, np.ndarray, np.
     return q - q0, u - q, q < f, edges
 
 
-def crowded(rec, t: np.ndarray, late: np.ndarray, pushed: np.ndarray, dt: float) -> InputError | None:
+def crowded(rec, t: np.ndarray, late: np.ndarray, pushed: np.ndarray, dt: float, hint: str = REGRID_HINT
+            ) -> InputError | None:
     """The refusal of more samples than the grid has places for (one pushed back further than
     LATE_ROOM by those after it), or None.
 
@@ -186,10 +188,10 @@ def crowded(rec, t: np.ndarray, late: np.ndarray, pushed: np.ndarray, dt: float)
                           "integrators need a constant rate", row=rec.line(same[-1]), column="t")
     return InputError(rec.source, f"{head}; row {rec.line(b)} would be {late[b]:.2f} of a step late (up to "
                       f"{MAX_LATE_STEPS:g} is taken as a sample delivered late, {MAX_JITTER_STEPS:g} as jitter of the "
-                      "stamps): the integrators need a constant rate" + REGRID_HINT, row=rec.line(e), column="t")
+                      "stamps): the integrators need a constant rate" + hint, row=rec.line(e), column="t")
 
 
-def incoherent(rec, t: np.ndarray, late: np.ndarray, dt: float) -> InputError | None:
+def incoherent(rec, t: np.ndarray, late: np.ndarray, dt: float, hint: str = REGRID_HINT) -> InputError | None:
     """The refusal of stamps that keep no uniform grid over COHERENT_BLOCK samples (fewer than
     COHERENT_SHARE of them within ON_TIME of their places: the rate changes), or None -- named at the
     first stamp off the jitter in the first such block."""
@@ -211,7 +213,7 @@ def incoherent(rec, t: np.ndarray, late: np.ndarray, dt: float) -> InputError | 
                       f"their steps {(t[b] - t[a]) / (b - a):.6g} s on average): the rate changes, and up to "
                       f"{MAX_JITTER_STEPS:g} of a step off is taken as jitter of the stamps, a sample up to "
                       f"{MAX_LATE_STEPS:g} late now and then as delivered late: the integrators need a constant rate"
-                      + REGRID_HINT, row=rec.line(i), column="t")
+                      + hint, row=rec.line(i), column="t")
 
 
 def wander(off: np.ndarray, on: np.ndarray, edges: np.ndarray) -> float:
@@ -221,7 +223,8 @@ def wander(off: np.ndarray, on: np.ndarray, edges: np.ndarray) -> float:
                default=0.0)
 
 
-def wander_error(rec, t: np.ndarray, q: np.ndarray, on: np.ndarray, edges: np.ndarray) -> InputError:
+def wander_error(rec, t: np.ndarray, q: np.ndarray, on: np.ndarray, edges: np.ndarray, hint: str = REGRID_HINT
+                 ) -> InputError:
     """The refusal of stamps whose local mean leaves one uniform grid by more than MAX_WANDER_STEPS,
     named where it leaves the grid of the rows before it (the line through the blocks before the
     first block that no line through those before it and itself holds within MAX_WANDER_STEPS)."""
@@ -246,10 +249,10 @@ def wander_error(rec, t: np.ndarray, q: np.ndarray, on: np.ndarray, edges: np.nd
                       f"uniform grid of the rows before it ({s:.6g} s a step), the steps about it {local:.6g} s on "
                       f"average: the stamps' local mean may drift up to {MAX_WANDER_STEPS:g} of a step from one "
                       "uniform grid (a host's clock against the sensor's), the sample rate may not change: the "
-                      "integrators need a constant rate" + REGRID_HINT, row=rec.line(j), column="t")
+                      "integrators need a constant rate" + hint, row=rec.line(j), column="t")
 
 
-def on_uniform_grid(rec) -> tuple[Any, np.ndarray, str | None]:
+def on_uniform_grid(rec, hint: str = REGRID_HINT) -> tuple[Any, np.ndarray, str | None]:
     """A recording whose time stamps jitter, drift, come late on delivery, or whose logger dropped
     samples, on its uniform time grid.
 
@@ -261,6 +264,8 @@ def on_uniform_grid(rec) -> tuple[Any, np.ndarray, str | None]:
     mean interval).  Places left empty are dropped samples: up to MAX_FILL_SAMPLES in one gap and
     MAX_FILL_SHARE of the whole are filled by linear interpolation of the counts (rounded to whole
     counts), so that the integrators run at their constant rate.
+
+    ``hint`` ends a refusal of stamps that keep no uniform grid: the remedy the caller offers.
 
     Returns
     -------
@@ -286,7 +291,7 @@ def on_uniform_grid(rec) -> tuple[Any, np.ndarray, str | None]:
     d = np.diff(t)
     dt = float(np.median(d))
     q, late, pushed, edges = grid_places(t)
-    for err in (crowded(rec, t, late, pushed, dt), incoherent(rec, t, late, dt)):
+    for err in (crowded(rec, t, late, pushed, dt, hint), incoherent(rec, t, late, dt, hint)):
         if err is not None:
             raise err
     lt = late > ON_TIME
@@ -297,7 +302,7 @@ def on_uniform_grid(rec) -> tuple[Any, np.ndarray, str | None]:
     off = (t - icpt - slope * q) / slope
     drift = wander(off, on, edges)
     if drift > MAX_WANDER_STEPS:
-        raise wander_error(rec, t, q, on, edges)
+        raise wander_error(rec, t, q, on, edges, hint)
     missing = np.diff(q) - 1
     total = int(missing.sum())
     jitter = float(np.max(np.abs(off[on])))
@@ -339,3 +344,50 @@ def on_uniform_grid(rec) -> tuple[Any, np.ndarray, str | None]:
     full[kept] = np.asarray(rec.raw, np.int64)
     out = Recording(t=grid, raw=full, metadata=dict(rec.metadata), source=rec.source)
     return out, ~kept, "; ".join(notes)
+
+
+#: a step longer than this many of the recording's mean step is a sample lost (stamps within a quarter
+#: step of their sample times, MAX_JITTER_STEPS, give steps up to 1.5; a lost one, 2 - 0.5 at least):
+#: no interpolation bridges it
+RESAMPLE_MAX_STEP = 1.0 + 2 * MAX_JITTER_STEPS
+
+
+def resampled(rec) -> tuple[Any, str]:
+    """A recording whose samples were taken at their (uneven) time stamps -- a sensor read on a loop
+    whose period varies, a driver that stamps each sample as it reads it -- interpolated onto a
+    uniform grid of as many samples over the same span (linear interpolation of the counts, rounded
+    to whole counts; the grid's step is the mean step).  Only where no sample was lost: every step
+    within RESAMPLE_MAX_STEP of the mean step.
+
+    Returns
+    -------
+    rec : Recording
+        t on the uniform grid, raw interpolated.
+    note : str
+        What was done, for the user.
+
+    Raises
+    ------
+    InputError
+        A step beyond RESAMPLE_MAX_STEP mean steps (a sample lost), naming the row after it.
+    """
+    t = np.asarray(rec.t, float)
+    if t.size < 2:
+        raise InputError(rec.source, "the recording needs at least 2 samples")
+    d = np.diff(t)
+    step = (t[-1] - t[0]) / (t.size - 1)
+    i = int(np.argmax(d))
+    if d[i] > RESAMPLE_MAX_STEP * step:
+        raise InputError(rec.source, f"--resample: the step to {time_span(t, i + 1)} is {d[i]:.6g} s, "
+                         f"{d[i] / step:.3g} of the mean step {step:.6g} s (the longest of "
+                         f"{int(np.count_nonzero(d > RESAMPLE_MAX_STEP * step))} such steps): samples were lost there (beyond "
+                         f"{RESAMPLE_MAX_STEP:g} steps), and interpolation would bridge them with a straight line; "
+                         "cut the recording at the gap (each part on its own)", row=rec.line(i + 1), column="t")
+    grid = t[0] + step * np.arange(t.size)
+    raw = np.asarray(rec.raw, float)
+    out = np.rint(np.column_stack([np.interp(grid, t, raw[:, j]) for j in range(raw.shape[1])])).astype(np.int64)
+    off = float(np.max(np.abs(t - grid))) / step
+    note = (f"--resample: {t.size} samples interpolated (linearly) from their stamps onto a uniform "
+            f"{1.0 / step:.6g} Hz grid (steps {d.min() / step:.2f}-{d.max() / step:.2f} of the mean, the stamps up to "
+            f"{off:.2f} of a step off the grid)")
+    return Recording(t=grid, raw=out, metadata=dict(rec.metadata), source=rec.source), note

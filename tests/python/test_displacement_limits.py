@@ -1,0 +1,160 @@
+"""What stop-to-stop displacement can tell the user about the limits of its answer: how much of a
+motion's position its correction leaves (a long motion, a tilt change between its rests), a
+calibration whose scale is off, and a final rest rejected near its bound.  Every recording is
+built here."""
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from accelcal import estimators as E
+from accelcal.calibration import Calibration, save_calibration
+from accelcal.device import default_triad, save_device
+from accelcal.errors import InputError
+from accelcal.estimators.rest import trend_bound
+from accelcal.recording import recording_from_arrays, write_recording
+from cli_run import one_refusal, run
+from estimator_devices import G
+
+RATE = 80.0
+
+
+def _slide_body(move_s, dist, tilt_deg, rest_s=2.0, hz=0.5):
+    """f (n, 3), m/s^2, of a triad at rest, then sliding to and fro along x for ``move_s`` s (x =
+    ``dist`` sin^2(pi hz t): whole periods, back at rest where it began) while it tilts about y by
+    ``tilt_deg`` half-way through (a smooth step over 1 s), then at rest at that tilt; and the true
+    position along x (m)."""
+    t = np.arange(int((2 * rest_s + move_s) * RATE)) / RATE
+    inside = (t >= rest_s) & (t <= rest_s + move_s)
+    x = dist * np.sin(np.pi * hz * (t - rest_s)) ** 2 * inside
+    acc = dist * 2 * (np.pi * hz) ** 2 * np.cos(2 * np.pi * hz * (t - rest_s)) * inside
+    w = np.clip(t - (rest_s + 0.5 * move_s - 0.5), 0.0, 1.0)
+    th = np.radians(tilt_deg) * (3 * w**2 - 2 * w**3)
+    c, s = np.cos(th), np.sin(th)
+    return np.column_stack([c * acc - s * G, np.zeros_like(t), s * acc + c * G]), x
+
+
+def _slide(d, move_s, dist, tilt_deg, sigma=0.005, seed=4):
+    body, x = _slide_body(move_s, dist, tilt_deg)
+    rng = np.random.default_rng(seed)
+    raw = np.round(d.zero_counts + (body + sigma * rng.standard_normal(body.shape)) * d.counts_per_mps2)
+    return recording_from_arrays(np.arange(body.shape[0]) / RATE, raw.astype(np.int64)), x
+
+
+def _limit_warnings(c):
+    return [w for w in c.warnings if "longer than the stop-to-stop correction holds" in w]
+
+
+@pytest.mark.parametrize("engine, form", [("float", "offline"), ("float", "stream"), ("fixed", "stream")])
+def test_a_long_motion_with_a_tilt_change_is_told_what_the_correction_leaves(engine, form):
+    """A 40 s slide to and fro of 0.5 m whose attitude changes by 0.3 deg half-way (MicroStrain's 46 s and 60 s
+    motions between rests 0.31 and 0.63 deg apart: 92 m and 52 m written with exit 0 and no word):
+    the correction removes a zero point constant through the motion, and a step of g sin 0.3 deg =
+    0.051 m/s^2 at its middle leaves 0.051 x 40^2 / 8 = 10 m.  The user is told the motion's span,
+    that figure and the change behind it, and the figure bounds the real error; a 2 s slide without
+    a tilt change between the same rests is no such motion."""
+    d = dataclasses.replace(default_triad(), sample_rate_hz=RATE)
+    cal = Calibration.nominal(d)
+    rec, x = _slide(d, 40.0, 0.5, 0.3)
+    c = E.displacement_from_recording(d, cal, rec, engine, form=form)
+    w = _limit_warnings(c)
+    assert len(w) == 1, c.warnings
+    assert float(w[0].split("lasts ")[1].split(" s")[0]) == pytest.approx(40.0, abs=1.0)
+    assert "the change of level between its rests" in w[0]
+    change = float(w[0].split("between its rests, ")[1].split(" m/s^2")[0])
+    assert change == pytest.approx(G * math.sin(math.radians(0.3)), rel=0.1)
+    bound = float(w[0].split("leaves up to ")[1].split(" m")[0])
+    assert bound == pytest.approx(change * 40.0**2 / 8.0, rel=0.1)
+    err = abs(c["p_x"][-1] - x[len(c["p_x"]) - 1])
+    assert 1.0 < err <= bound, (err, bound)
+    assert c.meta["error_bound_m"] == f"{bound:.3g}"
+    short, _ = _slide(d, 2.0, 0.5, 0.0)
+    c2 = E.displacement_from_recording(d, cal, short, engine, form=form)
+    assert not _limit_warnings(c2), c2.warnings
+    assert float(c2.meta["error_bound_m"]) < 0.01
+
+
+def test_the_bound_is_the_larger_of_the_change_seen_and_the_change_the_rests_tell():
+    """The figures :func:`motion_errors` gives: D T^2 / 8 from the change D between the rests'
+    levels, or 5 sigma sqrt(1/n1 + 1/n2) where the rests show less; the noise 5 sigma sqrt(dt T^3 / 12)."""
+    from accelcal.estimators.displacement_checks import motion_errors
+    n1, m, n2, dt, sig = 100, 400, 50, 0.01, 0.01
+    n = n1 + m + n2
+    at = np.r_[np.ones(n1, bool), np.zeros(m, bool), np.ones(n2, bool)]
+    f = np.tile([0.0, 0.0, G], (n, 1))
+    p = np.zeros((n, 3))
+    p[n1:n1 + m, 0] = np.linspace(0.0, 1.0, m)
+    T = (n1 + m - (n1 - 1)) * dt
+    (a, e, err, tilt, D, tell, path), = motion_errors(f, p, at, [(n1 - 1, n1 + m, np.zeros(3))], sig, dt, None)
+    assert tell == pytest.approx(5 * sig * math.sqrt(1 / n1 + 1 / n2))
+    assert D == tell and tilt == pytest.approx(tell * T * T / 8)
+    assert err - tilt == pytest.approx(5 * sig * math.sqrt(dt * T**3 / 12))
+    assert path == pytest.approx(1.0)
+    f[n1 + m:, 0] = 0.05
+    (_, _, _, tilt, D, _, _), = motion_errors(f, p, at, [(n1 - 1, n1 + m, np.zeros(3))], sig, dt, None)
+    assert D == pytest.approx(0.05) and tilt == pytest.approx(0.05 * T * T / 8)
+
+
+def _scaled_still(d, gain, seed=6):
+    """A triad still for 6 s whose scale reads ``gain`` times |f| with its nominal values."""
+    n = int(6 * d.sample_rate_hz)
+    body = np.tile([0.0, 0.0, G], (n, 1)) * gain
+    rng = np.random.default_rng(seed)
+    raw = np.round(d.zero_counts + (body + 0.005 * rng.standard_normal(body.shape)) * d.counts_per_mps2)
+    return recording_from_arrays(np.arange(n) / d.sample_rate_hz, raw.astype(np.int64))
+
+
+@pytest.mark.parametrize("model, said", [("offset", "estimates the offsets only"),
+                                         ("gain", "its scale does not hold for this recording")])
+def test_a_calibration_given_is_named_with_what_is_off_about_it(tmp_path, capfd, model, said):
+    """A still triad that reads |f| 6 % high is no rest.  With ``--calibration nominal`` the user is
+    told to calibrate first; with a calibration given (an iPhone's jig-free 'offset' model from 4 poses:
+    'calibrate it first (accelcal calibrate)' before) the refusal names that file, its model and how
+    far |f| is off, and what to do: a model that estimates the scale, or a calibration of this device
+    as it is now."""
+    d = default_triad()
+    save_device(d, tmp_path / "dev.json")
+    write_recording(tmp_path / "rec.csv", _scaled_still(d, 1.06))
+    cal = Calibration(device=d.name, method="jigfree", offsets=d.zero_counts,
+                      sensitivity=np.diag(d.counts_per_mps2), poses_used=["p0", "p1", "p2", "p3"],
+                      extra={"fit": {"model": model}})
+    save_calibration(cal, tmp_path / "cal.json")
+    args = ["displacement", "--device", tmp_path / "dev.json", "--calibration", "{}", tmp_path / "rec.csv",
+            "-o", tmp_path / "out.csv"]
+    rc, _, err, _ = run([a if a != "{}" else "nominal" for a in args], capfd)
+    assert rc == 2 and "calibrate it first (accelcal calibrate)" in err, err
+    rc, _, err, _ = run([a if a != "{}" else tmp_path / "cal.json" for a in args], capfd)
+    assert rc == 2 and one_refusal(err), err
+    assert "calibrate it first" not in err
+    assert f"the calibration given ({tmp_path / 'cal.json'}: jigfree '{model}' model from 4 poses)" in err
+    assert said in err and "|f| +6 % off g" in err
+
+
+def test_a_final_rest_rejected_by_its_trend_says_by_how_much():
+    """A push, then 0.9 s still with f along x drifting by 0.06 m/s^2 (phyphox: the last 0.93 s
+    rejected at 0.0387 against 0.037 m/s^2, and the path refused with no word that 4 % decided it):
+    the line of the motion that does not end at rest names that stretch, its change, the bound (5
+    sigma of the change of a line fitted to n samples of white noise: sigma sqrt(12/n)) and their
+    ratio."""
+    d = dataclasses.replace(default_triad(), noise_mps2=0.02)
+    rate = d.sample_rate_hz
+    n0, n1, n2 = int(2 * rate), int(1 * rate), int(0.9 * rate)
+    body = np.tile([0.0, 0.0, G], (n0 + n1 + n2, 1))
+    body[n0:n0 + n1, 0] = 2.0 * np.sin(2 * np.pi * np.arange(n1) / n1)
+    body[n0 + n1:, 0] += np.linspace(0.0, 0.06, n2)
+    rng = np.random.default_rng(8)
+    raw = np.round(d.zero_counts + (body + 0.02 * rng.standard_normal(body.shape)) * d.counts_per_mps2)
+    rec = recording_from_arrays(np.arange(body.shape[0]) / rate, raw.astype(np.int64))
+    with pytest.raises(InputError, match="does not end at rest") as ei:
+        E.displacement_from_recording(d, Calibration.nominal(d), rec)
+    msg = str(ei.value)
+    assert "is no rest by the trend test" in msg, msg
+    note = msg.split("is no rest by the trend test")[1]
+    ch = float(note.split("changes by ")[1].split(" m/s^2")[0])
+    ratio = float(note.split("over it, ")[1].split(" x the")[0])
+    bound = float(note.split(" x the ")[1].split(" m/s^2")[0])
+    k = int(msg.split("samples) is no rest")[0].split(", ")[-1].split(" ")[0])
+    assert bound == pytest.approx(trend_bound(k, 0.02), rel=0.01)
+    assert ratio == pytest.approx(ch / trend_bound(k, 0.02), rel=0.01) and ratio > 1.0
+    assert trend_bound(k, 0.02) == pytest.approx(5 * 0.02 * math.sqrt(12 / k), rel=0.02)
