@@ -203,7 +203,8 @@ def fast_float(mb: tuple[np.ndarray, np.ndarray] | None, allow_empty: bool) -> n
         mat[empty, :3] = np.frombuffer(b"nan", dtype=np.uint8)
     strings = np.ascontiguousarray(mat).view(f"S{mat.shape[1]}").ravel()
     try:
-        return strings.astype(np.float64)
+        with np.errstate(over="ignore"):    # '1e400' is inf, as float() reads it, with no warning
+            return strings.astype(np.float64)
     except (ValueError, OverflowError):
         return None
 

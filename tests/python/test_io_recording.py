@@ -3,6 +3,7 @@ round trips, and fuzzed corruptions that must give InputError only."""
 
 import math
 import os
+import warnings
 
 import numpy as np
 import pytest
@@ -490,6 +491,24 @@ def test_property_fast_and_slow_paths_agree(kind, cells):
         assert np.array_equal(results[0][1], results[1][1], equal_nan=True)
     else:
         assert results[0] == results[1]
+
+
+@pytest.mark.parametrize("kind", ["t", "ref"])
+def test_a_number_beyond_float_range_reads_as_the_slow_path_without_a_warning(kind):
+    """'1e400' is inf to Python's float(), refused as no finite number; the byte path refuses it
+    alike, and its cast warns of nothing."""
+    text = "1e400,0\n-1e400,0"
+    data = text.encode()
+    results = []
+    for table in (ByteTable(data, 0, len(data), 2, 2, "x"), ListTable(text + "\n", 2, 2, "x")):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            try:
+                results.append(("ok", list(convert_column(table, 0, kind))))
+            except CellError as e:
+                results.append(("err", e.i, e.message))
+    assert results[0] == results[1]
+    assert results[0][0] == "err" and "finite" in results[0][2]
 
 
 def same_numbers(a, b):
