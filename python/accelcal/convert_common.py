@@ -14,7 +14,7 @@ from .convert_regions import label_poses
 from .convert_rows import placeholder_lead
 from .convert_time import FLOAT_EXACT, burst_fit, exact_stamps, rate_from_t, time_in_seconds
 from .csvtable import convert_columns, cut_short_end, make_table, split_header
-from .device import Device
+from .device import GRAVITY_REMOVED_G, Device
 from .errors import InputError, notes_on_refusal
 from .held import held_runs, held_text, inner_runs, uneven
 from .recording import Recording
@@ -26,7 +26,7 @@ from .units import STANDARD_GRAVITY, Scale
 
 __all__ = ["Converted", "Options", "INDEX_COLUMNS", "GYRO_RE", "NUMBER_RE", "header_cells", "read_columns",
            "find_column", "exact_time", "adc_range", "nominal_triad", "rest_scale", "check_range", "in_sample_order", "finish",
-           "stated_rate_off", "drop_note", "whole_counts", "is_gyro", "GRAVITY_REMOVED_G", "stillest_force",
+           "stated_rate_off", "drop_note", "whole_counts", "is_gyro", "stillest_force",
            "gravity_removed_note", "held_note"]
 
 INDEX_COLUMNS = ("n_samples", "samples")
@@ -34,9 +34,6 @@ INDEX_COLUMNS = ("n_samples", "samples")
 GYRO_RE = re.compile(r"(?:(?:gyr|gyro|g)[_ ]?[xyz]|w_?[xyz]|w_(?:[a-z0-9]+_)*[xyz])(?:\s*[(\[][^)\]]*[)\]])?", re.I)
 #: a unit of angular rate in a column's name: rad/s, rad s^-1, deg/s, dps, degrees per second
 ANGULAR_RATE_RE = re.compile(r"[(\[]\s*(?:rad|deg|\u00b0)\s*(?:/\s*s|s\s*\^?\s*-1)\s*[)\]]|[(\[]\s*dps\s*[)\]]", re.I)
-#: the stillest stretch of readings in m/s^2 or g whose |f| is below this (g) has no gravity in it: a phone's
-#: linear or user acceleration (at rest |f| = 1 g; a gain error or a tilt never takes half of it)
-GRAVITY_REMOVED_G = 0.5
 
 
 @dataclass

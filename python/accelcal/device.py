@@ -102,6 +102,9 @@ def _triad_groups(positions: np.ndarray, axes: np.ndarray) -> list[tuple[int, in
 #: a real chip's sensitivity is within this factor of its nominal, either way (datasheets: a few %,
 #: +-10 % for the loosest, an ADXL345's 230-282 LSB/g): beyond it the device file's scale is off
 NOMINAL_FACTOR = 1.25
+#: a still stretch whose |f| is below this share of g has no gravity in it: a phone's linear or user
+#: acceleration (at rest |f| = 1 g; a gain error within NOMINAL_FACTOR or a tilt never takes half of it)
+GRAVITY_REMOVED_G = 0.5
 
 
 @dataclass(frozen=True, eq=False)

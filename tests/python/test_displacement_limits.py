@@ -131,6 +131,21 @@ def test_a_calibration_given_is_named_with_what_is_off_about_it(tmp_path, capfd,
     assert said in err and "|f| +6 % off g" in err
 
 
+def test_a_still_stretch_without_gravity_is_named_so_not_a_scale(tmp_path, capfd):
+    """A phone app's user acceleration (Sensor Logger's Accelerometer.csv: gravity taken out, |f| 0.03 g
+    where the phone lies still) had been told 'the calibration's scale is off (a chip's nominal
+    scale?); calibrate it first'.  No scale takes 1 g to 0.03 g: the refusal says gravity has been
+    removed and which export holds it."""
+    d = default_triad()
+    save_device(d, tmp_path / "dev.json")
+    write_recording(tmp_path / "rec.csv", _scaled_still(d, 0.03))
+    rc, _, err, _ = run(["displacement", "--device", tmp_path / "dev.json", "--calibration", "nominal",
+                         tmp_path / "rec.csv", "-o", tmp_path / "out.csv"], capfd)
+    assert rc == 2 and one_refusal(err), err
+    assert "gravity has been removed" in err and "TotalAcceleration.csv" in err, err
+    assert "scale" not in err.split("|f| is ")[-1] and not (tmp_path / "out.csv").exists()
+
+
 def test_a_final_rest_rejected_by_its_trend_says_by_how_much():
     """A push, then 0.9 s still with f along x drifting by 0.06 m/s^2 (phyphox: the last 0.93 s
     rejected at 0.0387 against 0.037 m/s^2, and the path refused with no word that 4 % decided it):

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from ..device import GRAVITY_REMOVED_G
 from .common import time_span
 from .rest import TREND_BLOCK_HOLDS, RestParams, trend_bound
 
@@ -90,7 +91,13 @@ def scale_cause(cal, norm: float, g: float) -> str:
     ``cal`` used (None or the device's nominal values: calibrate first).  A calibration given is named
     (``cal.extra['source']``, its file, else 'the calibration given'), with its method and model and
     how far |f| is off: a model that estimates no scale (jig-free 'offset') keeps the device file's
-    nominal scale; one that does was made for another device, range or temperature."""
+    nominal scale; one that does was made for another device, range or temperature.  Below
+    ``GRAVITY_REMOVED_G`` of g no scale is to blame: the readings hold no gravity."""
+    if norm < GRAVITY_REMOVED_G * g:
+        return (f"|f| is {norm / g:.2g} g where the body is still, and any sensor at rest reads 1 g: gravity has been "
+                "removed from these readings (a phone's linear or user acceleration, such as Sensor Logger's "
+                "Accelerometer.csv); record the accelerometer's own readings (TotalAcceleration.csv or "
+                "AccelerometerUncalibrated.csv, phyphox's 'Acceleration with g')")
     if cal is None or getattr(cal, "method", "nominal") == "nominal":
         return "the calibration's scale is off (a chip's nominal scale?); calibrate it first (accelcal calibrate) and use that calibration"
     extra = cal.extra if isinstance(cal.extra, dict) else {}
