@@ -15,6 +15,7 @@ from .known_poses import fit_known_poses
 from .outliers import outlier_poses, outlier_report, subset
 from .lever_arms import calibrate_positions
 from .results import pose_names, set_aside_entry, to_calibration
+from .stated_poses import check_stated_poses, pose_titles
 from .settings import ADD_POSES, JIG_ACCURACY_DEG, JIGFREE_MODELS, METHODS, ROTATION_MIN_RADPS, TEMP_MIN_SPAN_C
 from .static_model import fit_static
 
@@ -44,7 +45,10 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     change without them; ``drop_outliers`` leaves them out (set aside, "far off the fit").
     ``min_static_s``: the shortest still stretch the static detector takes for a pose where a
     motion touches it (seconds; default MIN_POSE_S, a pause in a hand's movement being none;
-    below the detector's window it acts as the window).
+    below the detector's window it acts as the window).  Known poses whose readings, through the
+    device file's scale and axes, point beyond what a device within its description allows from
+    their stated f are refused before the fit, naming the pose (mislabelled) or, where most do or
+    one reversed axis explains them, the device file (:mod:`accelcal.calibrate.stated_poses`).
     """
     jig_accuracy_rad(jig_accuracy_deg)
     if not (np.isfinite(min_static_s) and min_static_s >= 0):
@@ -107,6 +111,8 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
         raise InputError(info["source"], f"method '{method}' needs the reference specific force f_x, f_y, f_z on "
                          f"every static pose, but {where} has none (use --method jigfree for unknown poses)",
                          column="f_x")
+    if not jigfree:
+        check_stated_poses(device, poses, pose_titles(poses.info, recordings), jig_accuracy_deg)
     temps = poses.temp
     temperature = bool(np.all(np.isfinite(temps)) and np.ptp(temps) >= TEMP_MIN_SPAN_C)
 
