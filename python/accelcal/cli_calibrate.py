@@ -206,6 +206,16 @@ def calibration_summary(cal, n_recordings: int, output) -> str:
         text += (f" {len(aside)} pose{'s' if len(aside) != 1 else ''} set aside ({count}): "
                  + "; ".join(f"{d['name']} ({d['levels']})" for d in aside[:3]) + ("; ..." if len(aside) > 3 else "")
                  + ".")
+    held = fit.get("not_fitted", {})
+    if "sensitivity" in held:
+        text += " Sensitivities held at the device file's nominal (not fitted, no sigma; the offsets' sigmas take them"
+        moves = fit.get("offset_counts_per_percent_gain")
+        sig = cal.offset_sigma
+        if moves is not None and sig is not None and np.any(np.abs(moves) > np.nan_to_num(sig, nan=np.inf)):
+            text += (" as exact: a chip's gain 1 % above the nominal would leave the offsets off by "
+                     + ", ".join(f"{v:+.3g}" for v in moves) + " counts).")
+        else:
+            text += " as exact)."
     if fit.get("jig_accuracy_deg"):
         text += f" Jig accuracy stated: {fit['jig_accuracy_deg']:g} deg."
     if cal.positions is not None:

@@ -17,11 +17,13 @@ from accelcal import model
 from accelcal.calibrate import (PoseSet, calibrate_jigfree, calibrate_known_poses, calibrate_recordings,
                                 detect_static, estimate_noise, fit_known_poses, fit_static, fit_temperature,
                                 gauge_rotation, pose_means, poses_from_recording, static_force)
-from accelcal.device import default_device, default_triad
+from accelcal.calibration import load_calibration
+from accelcal.device import default_device, default_triad, save_device
 from accelcal.errors import InputError
 from accelcal.xsens import load_xsens
 from shared_data import XSENS_ACC
 from accelcal.recording import Recording, read_recording, recording_from_arrays, write_recording
+from cli_run import run
 
 G = 9.80665
 
@@ -858,3 +860,41 @@ def test_poses_one_per_file_that_agree_far_from_g_name_the_scale():
     with pytest.raises(InputError, match=r"6 set aside because their \|f\| is far from g.*they agree at \|f\| = "
                                          r"9\.[6-9][0-9]* g: the readings' scale is off by that factor"):
         calibrate_recordings(big, recs, "jigfree")
+
+
+def test_parameters_a_method_holds_at_nominal_are_reported_as_not_fitted(tmp_path, capfd):
+    """--method offset had written each sensitivity with a 1-sigma of 0 (read as exact
+    knowledge) and offsets whose sigma takes the nominal gain as exact.  Now the sensitivities'
+    sigma is null (left out), extra fit.not_fitted names them (as diagnose's not_determined),
+    and offset_counts_per_percent_gain says how far a gain 1 % off moves each offset: from one
+    pose along -z a chip 1 % above nominal on z leaves its offset off by exactly that (here
+    -164 counts, 170 times its sigma); the summary says so.  'gain' names the direction it holds."""
+    d = dataclasses.replace(default_triad(), noise_mps2=0.02)
+    save_device(d, tmp_path / "d.json")
+    rng = np.random.default_rng(8)
+    b = d.zero_counts + np.array([300.0, -200.0, 500.0])
+    S = d.nominal_sensitivity() * np.array([1.0, 1.0, 1.01])[:, None]          # z 1 % above nominal
+    write_recording(tmp_path / "one.csv", make_recording(d, b, S, np.array([[0.0, 0.0, -G]]), rng, hold=2000,
+                                                         move=0))
+    rc, said, err, _ = run(["calibrate", "--device", tmp_path / "d.json", tmp_path / "one.csv", "--method", "offset",
+                            "-o", tmp_path / "c.json"], capfd)
+    assert rc == 0, err
+    js = json.loads((tmp_path / "c.json").read_text())
+    assert all("sensitivity_sigma" not in ch for ch in js["channels"]), js["channels"]
+    assert js["fit"]["not_fitted"] == {"sensitivity": [0, 1, 2]}, js["fit"]
+    moves = np.array(js["fit"]["offset_counts_per_percent_gain"])
+    assert np.allclose(moves, [0.0, 0.0, -0.01 * d.counts_per_mps2[2] * G]), moves
+    got = np.array([ch["offset_counts"] for ch in js["channels"]])
+    sig = np.array([ch["offset_sigma_counts"] for ch in js["channels"]])
+    assert abs(got[2] - b[2]) > 50 * sig[2] and abs(got[2] - b[2] - moves[2]) < 4 * sig[2], (got - b, moves, sig)
+    assert "Sensitivities held at the device file's nominal (not fitted, no sigma" in said, said
+    assert "1 % above the nominal would leave the offsets off by +0, +0, -164 counts" in said, said
+    cal = load_calibration(tmp_path / "c.json")
+    assert cal.sensitivity_sigma is None
+    F = G * AXES6
+    write_recording(tmp_path / "six.csv", make_recording(d, b, S, F, rng, hold=200))
+    rc, said, err, _ = run(["calibrate", "--device", tmp_path / "d.json", tmp_path / "six.csv", "--method", "gain",
+                            "-o", tmp_path / "g.json"], capfd)
+    js = json.loads((tmp_path / "g.json").read_text())
+    assert rc == 0 and js["fit"]["not_fitted"] == {"sensitivity_direction": [0, 1, 2]}, (err, js["fit"])
+    assert "offset_counts_per_percent_gain" not in js["fit"] and "Sensitivities held" not in said

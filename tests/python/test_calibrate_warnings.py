@@ -311,6 +311,37 @@ def test_a_recording_in_motion_is_not_told_its_rows_are_pose_means(tmp_path, cap
     assert "the static detector takes a pose from a still stretch" in err and "'pose' column" not in err, err
 
 
+def test_a_vibrating_flight_is_not_told_its_rows_are_pose_means(tmp_path, capfd):
+    """A 250 Hz flight whose motors shake the sensor (a PX4 log's sensor_combined: |f| 0.37-3.6 g,
+    1-99 %) turns by tens of degrees from one row to the next, as a file of pose means does, and
+    was told first to give every row its own 'pose' label.  Pose means each read |f| ~ g: its rows
+    do not, and the error leads with what is true: 3 still stretches in one orientation."""
+    d = default_triad()
+    d = dataclasses.replace(d, sample_rate_hz=250.0, raw_min=-32768, raw_max=32767, zero_counts=np.zeros(3),
+                            counts_per_mps2=np.full(3, 2048.0 / d.gravity_mps2), noise_mps2=0.03)    # +-16 g
+    save_device(d, tmp_path / "d.json")
+    rng = np.random.default_rng(6)
+    b, S = draw_truth(d, rng, offset=0.02)
+    g = d.gravity_mps2
+    parts = []
+    for still_s, fly_s in ((2.0, 20.0), (2.0, 20.0), (2.0, 20.0)):        # on the ground between flights
+        n_still, n_fly = int(still_s * d.sample_rate_hz), int(fly_s * d.sample_rate_hz)
+        parts.append(np.repeat([[0.0, 0.0, g]], n_still, 0))
+        parts.append(np.array([0.0, 0.0, g]) + 0.9 * g * rng.normal(size=(n_fly, 3)))   # motor vibration
+    F = np.vstack(parts)
+    t = np.arange(len(F)) / d.sample_rate_hz
+    sig = d.noise_mps2 * d.counts_per_mps2
+    m = np.round(model.predict_counts(b, S, d.positions, F) + sig * rng.normal(size=F.shape)).astype(np.int64)
+    write_recording(tmp_path / "flight.csv", recording_from_arrays(t, m))
+    rc, _, err, caught = run(["calibrate", "--device", tmp_path / "d.json", tmp_path / "flight.csv", "-o",
+                              tmp_path / "f.json"], capfd)
+    assert rc == 2 and not caught and len(err.strip().splitlines()) == 1, err
+    assert "'pose' column" not in err and "pose means" not in err, err
+    msg = err.split("field poses: ")[1]
+    assert msg.startswith("jig-free 'full' calibration") and "(3 poses, 1 orientations" in msg, err
+    assert "found 3, holding" in err, err
+
+
 def test_a_robots_short_stops_are_counted_and_taken_with_min_static(tmp_path, capfd):
     """A robot arm that stops 0.75-1 s at each pose (AhmedFouad23/Accelerometer_Calibration's
     ALI runs: an MPU-6050 at 86.6 Hz, stops of 56-91 samples): the 1 s a still stretch needs

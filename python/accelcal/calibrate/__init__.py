@@ -93,7 +93,8 @@ Modules: ``settings`` (constants), ``results`` (StaticFit, PositionFit), ``check
 (shared checks of pose sets), ``problem`` (the static model as a least-squares
 problem), ``static_model`` (the nonlinear fit by scipy.optimize.least_squares),
 ``known_poses`` (linear known-pose fits and the jig-accuracy joint fit),
-``lever_arms``, ``outliers`` (poses far off a fit, named with the fit without them),
+``lever_arms``, ``outliers`` (poses far off a fit, named with the fit without them), ``stated_poses``
+(known poses whose readings contradict their stated f, refused before the fit),
 ``recordings`` (recordings in, a Calibration out).
 """
 from ..noise import estimate_noise

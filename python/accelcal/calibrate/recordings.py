@@ -8,13 +8,14 @@ import numpy as np
 
 from ..errors import InputError
 from ..held import distinct_recordings
-from ..static import (MIN_POSE_S, NO_POSE, STATIC_THRESHOLD, STATIC_WINDOW_S, PoseSet, detect_static, no_pose,
-                      one_wrong_scale, poses_from_recording, window_len)
+from ..static import (MIN_POSE_S, NO_POSE, STATIC_THRESHOLD, STATIC_WINDOW_S, PoseSet, at_gravity, detect_static,
+                      no_pose, one_wrong_scale, poses_from_recording, window_len)
 from .checks import jig_accuracy_rad, pose_label
 from .known_poses import fit_known_poses
 from .outliers import outlier_poses, outlier_report, subset
 from .lever_arms import calibrate_positions
 from .results import pose_names, set_aside_entry, to_calibration
+from .stated_poses import check_stated_poses, pose_titles
 from .settings import ADD_POSES, JIG_ACCURACY_DEG, JIGFREE_MODELS, METHODS, ROTATION_MIN_RADPS, TEMP_MIN_SPAN_C
 from .static_model import fit_static
 
@@ -44,7 +45,10 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     change without them; ``drop_outliers`` leaves them out (set aside, "far off the fit").
     ``min_static_s``: the shortest still stretch the static detector takes for a pose where a
     motion touches it (seconds; default MIN_POSE_S, a pause in a hand's movement being none;
-    below the detector's window it acts as the window).
+    below the detector's window it acts as the window).  Known poses whose readings, through the
+    device file's scale and axes, point beyond what a device within its description allows from
+    their stated f are refused before the fit, naming the pose (mislabelled) or, where most do or
+    one reversed axis explains them, the device file (:mod:`accelcal.calibrate.stated_poses`).
     """
     jig_accuracy_rad(jig_accuracy_deg)
     if not (np.isfinite(min_static_s) and min_static_s >= 0):
@@ -107,6 +111,8 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
         raise InputError(info["source"], f"method '{method}' needs the reference specific force f_x, f_y, f_z on "
                          f"every static pose, but {where} has none (use --method jigfree for unknown poses)",
                          column="f_x")
+    if not jigfree:
+        check_stated_poses(device, poses, pose_titles(poses.info, recordings), jig_accuracy_deg)
     temps = poses.temp
     temperature = bool(np.all(np.isfinite(temps)) and np.ptp(temps) >= TEMP_MIN_SPAN_C)
 
@@ -193,8 +199,9 @@ def detector_found(device, recordings, poses: PoseSet | None, min_s: float = MIN
     has ``pose`` labels; else None): a still stretch of several samples a pose, how many it
     found and the rows they hold, and the still stretches shorter than ``min_s`` that a motion
     touches (:func:`short_stretches`: a robot arm's stops of 0.75-1 s had gone unmentioned); and
-    whether they hold less than half of the rows (a file whose rows are each one pose's mean:
-    Magneto's input, 178 hand-held orientations, one row each, had been told "got 2; add poses").
+    whether they hold less than half of the rows and the rows look like pose means
+    (:func:`rows_look_like_pose_means`: Magneto's input, 178 hand-held orientations, one row
+    each, had been told "got 2; add poses").
 
     Parameters
     ----------
@@ -225,7 +232,7 @@ def detector_found(device, recordings, poses: PoseSet | None, min_s: float = MIN
     return (f"the static detector takes a pose from a still stretch of several samples (at least {w} here, "
             f"and {min_s:g} s where a motion touches it, with every channel within {STATIC_THRESHOLD:g} x "
             f"its noise) and found {found}, holding {held} of {rows} rows{shorter}"), \
-        held < rows / 2 and rows_turn_deg(device, recordings) >= POSE_ROW_TURN_DEG
+        held < rows / 2 and rows_look_like_pose_means(device, recordings)
 
 
 def short_stretches(device, recordings, min_s: float) -> list[float]:
@@ -243,25 +250,54 @@ def short_stretches(device, recordings, min_s: float) -> list[float]:
 #: each a pose of its own (a file of pose means), not a motion sampled row by row
 POSE_ROW_TURN_DEG = 5.0
 
+#: the share of a file's rows that must read an |f| a rest can have (static.at_gravity) for its rows
+#: to be taken for pose means: each row of such a file is a rest; 5 % leaves room for a stray row (a
+#: vibrating flight's rows: 72 % of them within 0.5-2 g)
+POSE_ROWS_AT_REST = 0.95
+
+
+def nominal_rows(device, rec) -> np.ndarray:
+    """(n, 3) each row's reading through the device file's nominal offsets and sensitivities
+    (m/s^2; least squares over the channels)."""
+    raw = np.asarray(rec.raw, float) - device.nominal_offsets()
+    return np.linalg.lstsq(device.nominal_sensitivity(), raw.T, rcond=None)[0].T
+
 
 def rows_turn_deg(device, recordings) -> float:
-    """The median angle (deg) between consecutive rows' reading vectors (counts less the device's
-    zero, per m/s^2 on each channel's nominal axis), over the recordings; 0 for a device that is
-    not one triad.  Magneto's 178 hand-held pose means, one a row, turn by tens of degrees from
-    row to row; a 200 Hz flight by a fraction of one (it had been told to label its rows as pose
-    means)."""
+    """The median angle (deg) between consecutive rows' readings (:func:`nominal_rows`), over the
+    recordings; 0 for a device that is not one triad.  Magneto's 178 hand-held pose means, one a
+    row, turn by tens of degrees from row to row; a 200 Hz flight by a fraction of one (it had
+    been told to label its rows as pose means), a vibrating one by tens too (75 deg)."""
     if device.n_channels != 3:
         return 0.0
     angles = []
     for rec in recordings:
-        v = (np.asarray(rec.raw, float) - device.zero_counts) / device.counts_per_mps2
-        v = v @ np.asarray(device.axes, float)
+        v = nominal_rows(device, rec)
         n = np.linalg.norm(v, axis=1)
         ok = (n[1:] > 0) & (n[:-1] > 0)
         c = np.sum(v[1:] * v[:-1], axis=1)[ok] / (n[1:] * n[:-1])[ok]
         angles.append(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
     a = np.concatenate(angles) if angles else np.zeros(0)
     return float(np.median(a)) if a.size else 0.0
+
+
+def rows_at_rest(device, recordings) -> float:
+    """The share of the rows whose |f| (:func:`nominal_rows`) a rest can read
+    (:func:`accelcal.static.at_gravity`: within REST_F_RANGE x g, or with three or more rows
+    agreeing on one wrong scale), over the recordings."""
+    ratio = np.concatenate([np.linalg.norm(nominal_rows(device, rec), axis=1) for rec in recordings])
+    ratio /= device.gravity_mps2
+    return float(np.mean(at_gravity(ratio))) if ratio.size else 0.0
+
+
+def rows_look_like_pose_means(device, recordings) -> bool:
+    """Whether the rows look like a file of pose means, one orientation a row: consecutive rows
+    turn by POSE_ROW_TURN_DEG or more (median), and at least POSE_ROWS_AT_REST of them read an
+    |f| a rest can (:func:`rows_at_rest`).  A vibrating flight (PX4, 250 Hz) turns by 75 deg
+    from row to row, as pose means do, but its rows read 0.37-3.6 g (1-99 %): it had been told
+    to label its rows as pose means."""
+    return rows_turn_deg(device, recordings) >= POSE_ROW_TURN_DEG and \
+        rows_at_rest(device, recordings) >= POSE_ROWS_AT_REST
 
 
 def hint_clause(found: tuple[str, bool] | None) -> str:

@@ -152,6 +152,12 @@ def to_calibration(device, fit: StaticFit, method: str, positions: PositionFit |
         },
         "poses": pose_detail,
     }
+    sens_sigma = fit.sensitivity_sigma
+    held = not_fitted(device, fit)
+    if held:
+        extra["fit"].update(held)
+        if fit.method == "offset":
+            sens_sigma = np.full_like(sens_sigma, np.nan)      # not fitted: no sigma (null), not 0 (exact)
     if fit.poses.set_aside:
         extra["set_aside"] = [set_aside_entry(d) for d in fit.poses.set_aside]
     if not fit.jigfree:
@@ -196,7 +202,7 @@ def to_calibration(device, fit: StaticFit, method: str, positions: PositionFit |
         sensitivity=fit.sensitivity,
         positions=pos,
         offset_sigma=fit.offset_sigma,
-        sensitivity_sigma=fit.sensitivity_sigma,
+        sensitivity_sigma=sens_sigma,
         position_sigma=pos_sig,
         temp_ref_c=fit.temp_ref_c,
         offset_tc=offset_tc,
@@ -206,3 +212,49 @@ def to_calibration(device, fit: StaticFit, method: str, positions: PositionFit |
         poses_used=names,
         extra=extra,
     )
+
+
+def not_fitted(device, fit: StaticFit) -> dict:
+    """What the method holds at the device file's nominal instead of fitting, for the
+    calibration's ``extra["fit"]``: ``not_fitted`` ({param: [channels]}, as diagnose's
+    ``not_determined``) and ``not_fitted_note``; {} for ``full``.
+
+    ``offset``: the sensitivities are the nominal k_i u_i (their sigma is then null, not 0,
+    which would read as exact knowledge), and the offsets' sigmas take them as exact: a chip
+    whose gain is the nominal's times (1 + e) on channel i has its offset fitted off by
+    e k_i <u_i . f> (fitted minus true; <.> the weighted mean over the poses: zero for poses
+    balanced about the axis, as +-x, +-y, +-z; k_i g for one pose along it), given for e = 1 %
+    in ``offset_counts_per_percent_gain`` (known poses; jig-free the pose
+    forces absorb part of it).  ``gain``: the sensitivity's direction stays along the nominal
+    axis (its sigma across the axis, 0, is no measurement).
+
+    Parameters
+    ----------
+    device : Device
+    fit : StaticFit
+
+    Returns
+    -------
+    dict
+    """
+    N = device.n_channels
+    if fit.method == "gain":
+        return {"not_fitted": {"sensitivity_direction": list(range(N))},
+                "not_fitted_note": "the 'gain' model keeps each sensitivity along the device file's nominal axis: "
+                                   "its direction is not fitted (its sigma across the axis, 0, is no measurement)"}
+    if fit.method != "offset":
+        return {}
+    out: dict = {"not_fitted": {"sensitivity": list(range(N))},
+                 "not_fitted_note": "the 'offset' model holds the sensitivities at the device file's nominal "
+                                    "(counts_per_mps2 along its axes): not fitted, no sigma; the offsets' sigmas take "
+                                    "them as exact"}
+    if not fit.jigfree:
+        proj = fit.f @ np.asarray(device.axes, float).T                      # (P, N) m/s^2
+        sem = fit.poses.sem()
+        w = np.where(np.isfinite(sem) & (sem > 0), 1.0 / np.maximum(sem, 1e-300) ** 2, 1.0)
+        shift = 0.01 * np.asarray(device.counts_per_mps2, float) * np.sum(w * proj, axis=0) / np.sum(w, axis=0)
+        out["offset_counts_per_percent_gain"] = [float(v) + 0.0 for v in shift]
+        out["not_fitted_note"] += (" (a chip's gain 1 % above the nominal leaves each offset off by "
+                                   "offset_counts_per_percent_gain, fitted minus true: k_i <u_i . f> / 100 over "
+                                   "the poses)")
+    return out
