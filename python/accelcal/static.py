@@ -17,6 +17,7 @@ import numpy as np
 
 from .clipping import ClipLevels, clip_levels
 from .errors import InputError
+from .no_rest import REST_NOISE_MAX, gravity_removed_clause, no_rest_clause, noise_share
 from .noise import colour_factor, noise_for, nyquist_tone, pose_colour, window_std, without_nyquist_tone
 from .recording import check_for_device
 from .steps import MOVE_PARTS, MOVE_RANGE, MOVE_STD, block_log_intervals, part_spread, step_splits
@@ -39,11 +40,6 @@ EDGE_SIGMA = 4.0           # static interval ends: the nearest samples this x no
 QUANT_VAR = 1.0 / 12.0    # variance of rounding to integer counts
 
 
-REST_NOISE_MAX = 0.05      # a recording whose noise (stated or estimated) on a channel is beyond this x its readings'
-                           # median |f| has no rest in it: the static detector finds none, whatever the noise (real
-                           # rests: 0.001-0.01 x |f|, a robot arm's quiet windows up to 0.019; 2 x 0.05 is readings
-                           # turning by +-10 deg; a file of pose means in random order, whose rows are all its
-                           # 'noise': 0.2-0.6, and within twice that rows tens of degrees apart were one pose)
 
 
 REST_F_RANGE = (0.5, 2.0)  # a static interval with no reference reads |f| within this x g (device file's scale) ...
@@ -208,25 +204,6 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
         free = [iv for iv in out if not any(iv[0] < b and a < iv[1] for a, b in blocks)]
         out = sorted(blocks + free)
     return out
-
-
-def noise_share(raw: np.ndarray, device, sig: np.ndarray) -> np.ndarray:
-    """(N,) each channel's noise ``sig`` (counts) as a share of the readings' median |f| (the
-    device file's nominal offsets and sensitivities, least squares over the channels; a wrong
-    scale moves |f| and the noise alike); 0 where the median |f| is 0.
-
-    A still sensor's noise is a small share of |f| (REST_NOISE_MAX).  A recording with no rest
-    in it (a file of pose means, one orientation a row, in random order) is one regime to
-    :func:`accelcal.noise.estimate_noise`, whose noise is then the scatter of its rows: within
-    twice that, rows pointing tens of degrees apart had been taken for one pose.
-    """
-    raw = np.asarray(raw)
-    S = device.nominal_sensitivity()
-    x = raw[:: max(1, raw.shape[0] // 5000)] - device.nominal_offsets()
-    ref = float(np.median(np.linalg.norm(np.linalg.lstsq(S, x.T, rcond=None)[0], axis=0))) if x.size else 0.0
-    if not ref > 0:
-        return np.zeros(raw.shape[1])
-    return np.asarray(sig, float) / (ref * np.linalg.norm(S, axis=1))
 
 
 def sample_where(rec, i: int) -> str:
@@ -409,18 +386,6 @@ def no_pose(min_s: float = MIN_POSE_S) -> str:
             f"within {STATIC_THRESHOLD:g} x its noise)")
 
 
-def no_rest_clause(raw: np.ndarray, device, sig: np.ndarray) -> str:
-    """Why a recording has no rest, where its noise ``sig`` (counts) is beyond REST_NOISE_MAX of
-    its |f| (:func:`noise_share`): ": the noise ... " to append to :func:`no_pose`; else ""."""
-    share = noise_share(raw, device, sig)
-    c = int(np.argmax(share))
-    if not share[c] > REST_NOISE_MAX:
-        return ""
-    return (f": its noise on raw_{c} ({sig[c]:.4g} counts) is {100 * share[c]:.3g} % of its readings' median |f|, "
-            f"beyond a still sensor's {100 * REST_NOISE_MAX:g} %: its readings scatter throughout, as a motion's or "
-            "as rows pointing in unrelated directions")
-
-
 def poses_from_recording(rec, device, *, use_labels: bool | None = None, required: bool = True,
                          min_s: float = MIN_POSE_S) -> PoseSet:
     """The static poses of one recording: its ``pose`` labels when it has them (and
@@ -454,7 +419,8 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
     if not intervals and (not required or aside):
         return empty
     if not intervals:
-        raise InputError(rec.source, no_pose(min_s) + no_rest_clause(rec.raw, device, noise))
+        raise InputError(rec.source, no_pose(min_s) + no_rest_clause(rec.raw, device, noise)
+                         + gravity_removed_clause(rec.raw, device))
     means, cnt, std = pose_means(rec, intervals, device, labels=labels, noise=noise, check_motion=labelled)
     P = len(intervals)
     f_ref = np.full((P, 3), np.nan)

@@ -164,6 +164,24 @@ def test_rows_pointing_in_unrelated_directions_are_no_rest(rate):
     assert len(detect_static(recording(raw, 100.0), dev)) == 12
 
 
+def test_readings_without_gravity_are_named_so_where_no_rest_is_found():
+    """A phone app's user acceleration (Sensor Logger's Accelerometer.csv: gravity taken out, a hand's
+    motion of 0.3 g throughout) has no rest; the error had named only its scatter.  It now says
+    that its median |f| is far below 1 g and which export holds gravity; the same motion with
+    gravity in gets no such clause."""
+    dev = bare(default_triad())
+    k = dev.counts_per_mps2[0]
+    rng = np.random.default_rng(5)
+    a = lfilter([0.02], [1.0, -0.98], rng.standard_normal((3000, 3)), axis=0)
+    a *= 0.3 * G / np.median(np.linalg.norm(a, axis=1))
+    for f, said in ((a, True), (a + [0.0, 0.0, G], False)):
+        rows = np.round(32768 + k * (f + 0.01 * rng.standard_normal(f.shape))).astype(np.int64)
+        with pytest.raises(InputError, match="no static pose found") as e:
+            poses_from_recording(recording(rows, 100.0), dev)
+        assert ("gravity looks removed" in str(e.value)) == said, str(e.value)
+        assert ("TotalAcceleration.csv" in str(e.value)) == said
+
+
 def eased_poses(seed, pause):
     """f (m/s^2) of 12 random poses held 2 s at 100 Hz, joined by moves eased over 0.5 s to
     the half-way direction, held there ``pause`` samples, and eased over 0.5 s on."""
