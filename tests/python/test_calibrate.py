@@ -685,8 +685,12 @@ def test_jig_free_auto_falls_back_to_what_the_poses_determine_and_the_cli_says_w
     assert not (tmp_path / "c2.json").exists()
     same = make_recording(d, b, S, np.repeat(F[:1], 3, 0) + np.array([[0, 0.01, 0]]) * np.arange(3)[:, None],
                           rng, labels=False, hold=int(2 * d.sample_rate_hz), move=int(0.5 * d.sample_rate_hz))
-    with pytest.raises(InputError, match="jig-free 'full'"):
+    with pytest.raises(InputError, match="jig-free 'full'") as e:
         calibrate_recordings(d, [same], "jigfree")
+    # the default model falls back: the refusal says what fewer orientations determine (it had quoted
+    # full's 9 alone, where 3 faces of a box already give the offsets)
+    assert "the 'gain' model needs 6 orientations, the 'offset' model 3" in str(e.value)
+    assert "the 'offset' model" not in err      # --jigfree-model full asked for that model alone
     with pytest.raises(InputError, match="unknown jig-free model 'affine'"):
         calibrate_recordings(d, [rec], "jigfree", jigfree_model="affine")
 

@@ -10,7 +10,7 @@ from ..errors import InputError
 from ..held import distinct_recordings
 from ..static import (MIN_POSE_S, NO_POSE, STATIC_THRESHOLD, STATIC_WINDOW_S, PoseSet, at_gravity, detect_static,
                       no_pose, one_wrong_scale, poses_from_recording, window_len)
-from .checks import jig_accuracy_rad, pose_label
+from .checks import jig_accuracy_rad, min_poses, pose_label
 from .known_poses import fit_known_poses
 from .outliers import outlier_poses, outlier_report, subset
 from .lever_arms import calibrate_positions
@@ -354,7 +354,11 @@ def fit_jigfree(device, poses: PoseSet, model: str, temperature: bool):
             continue
         return fit, (None if not failed else {"from": "full", "to": m,
                                               "reasons": {k: v.detail for k, v in failed.items()}})
-    raise failed["full"]
+    e = failed["full"]
+    needs = {m: min_poses(device, m, temperature) for m in ("gain", "offset")}
+    raise InputError(e.source, e.detail + f"; fewer determine less: the 'gain' model needs {needs['gain']} orientations, "
+                     f"the 'offset' model {needs['offset']} (the default, --jigfree-model auto, fits the first of "
+                     "full, gain and offset that the poses determine)", field=e.field)
 
 
 def rotating_samples(rec) -> np.ndarray:
