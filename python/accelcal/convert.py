@@ -69,7 +69,7 @@ from .held import held_runs
 from .recording import read_recording
 from .textinput import (CELL_NUMBER_RE, is_whitespace_header, preamble_notes, read_preamble, read_text_bytes,
                         table_preamble)
-from .units import Scale, file_scale, to_counts
+from .units import Scale, file_scale, in_file_unit, to_counts
 from .xsens import load_xsens
 
 __all__ = ["FORMATS", "POSE_DIRECTIONS", "Converted", "detect_format", "convert_file", "read_regions", "axis_column",
@@ -400,6 +400,7 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
             device = device if scale is None or scale.lsb_g is None else None  # a stated full scale: the nominal device from it
         else:
             device, rec = None, read_recording(path, scale=scale)   # (its refusals carry its notes)
+            scale = in_file_unit(scale, rec.metadata.get("source_units"), source)  # as read_recording took it
         with notes_on_refusal(lambda: list(rec.notes)):
             if rec.n_channels != 3:
                 raise InputError(source, f"{rec.n_channels} raw channels: convert makes a triad's recording (3)")

@@ -4,7 +4,6 @@ column per accelerometer axis, the unit its name states, an optional time column
 whose three readings are all empty (another packet's) skipped."""
 from __future__ import annotations
 
-import dataclasses
 import re
 
 import numpy as np
@@ -18,7 +17,7 @@ from .errors import InputError, notes_on_refusal
 from .convert_rows import lost_rows, trailer_note, trailer_start
 from .recording_checks import repeated_rows
 from .textinput import preamble_notes
-from .units import STANDARD_GRAVITY, UNIT_TEXT, Scale, file_scale, to_counts
+from .units import UNIT_TEXT, Scale, file_scale, in_file_unit, to_counts
 
 __all__ = ["stated_time_column", "choose_time_column", "slipped_stamps", "convert_named"]
 #: rows whose first non-empty time cell tells a numeric time column from a clock time or a date
@@ -34,7 +33,7 @@ RATE_COMMENT_RE = re.compile(r"(?:data[ _]?rate|sampl(?:e|ing)[ _]?(?:rate|frequ
 
 
 def table_scale(source: str, pre, option: Scale | None, unit: str | None, units_stated: bool,
-                gravity: float, axes: list[AxisColumn], notes: list[str]) -> Scale | None:
+                axes: list[AxisColumn], notes: list[str]) -> Scale | None:
     """The Scale of a table's readings: the unit its axis names state weighed against the
     options and the ``# units:``/``# lsb:`` comments by :func:`units.file_scale` (the names'
     unit taken as the file's ``units``); ``--full-scale`` without ``--units``
@@ -60,8 +59,7 @@ def table_scale(source: str, pre, option: Scale | None, unit: str | None, units_
     if said is not None and said != unit:
         raise InputError(source, f"the comment '# units: {said}' contradicts the unit the header's columns state, "
                          f"{UNIT_TEXT[unit]} ({cols}): state the unit once", row=lines.get("units"))
-    if option is not None and not units_stated and not option.converts and option.lsb_g and unit != "counts":
-        option = dataclasses.replace(option, units=unit, lsb=option.lsb_g * (gravity if unit == "mps2" else 1.0))
+    option = in_file_unit(option, unit, source)       # --full-scale or --lsb alone: in the names' unit
     sized = any(k in meta for k in ("lsb", "full_scale_g")) or (option is not None and bool(option.lsb or option.lsb_g))
     if unit != "counts" and not sized and (option is None or option.units == unit):
         raise InputError(source, f"the readings are in {UNIT_TEXT[unit]} (the header's {cols}) and no LSB is "
@@ -350,7 +348,7 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
         table_axes(source, names, pre.header_line, notes)
     acc = [c.name for c in axes]
     scale = table_scale(source, pre, opts.scale, names_unit(source, axes, pre.header_line), units_stated,
-                        opts.gravity_mps2 or STANDARD_GRAVITY, axes, notes)
+                        axes, notes)
     if opts.time_column is not None:
         time_column = stated_time_column(source, names, acc, opts.time_column, pre.header_line)
     want = {a: "ref" for a in acc}
