@@ -8,7 +8,7 @@ import re
 
 import numpy as np
 
-from .convert_axes import AxisColumn, find_named, names_unit, px4_export, stated_axes, table_axes
+from .convert_axes import AxisColumn, find_named, mirrored_note, names_unit, px4_export, stated_axes, table_axes
 from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
                              is_gyro, whole_counts)
 from .convert_time import TIME_COLUMN_RE, datetime_stamps, is_datetime, unit_in_name
@@ -346,6 +346,7 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
     names = [c.strip() for c in header_cells(pre.header)]
     axes = stated_axes(source, names, opts.columns, pre.header_line) if opts.columns is not None else \
         table_axes(source, names, pre.header_line, notes)
+    notes += mirrored_note(axes) if opts.columns is not None else []
     acc = [c.name for c in axes]
     scale = table_scale(source, pre, opts.scale, names_unit(source, axes, pre.header_line), units_stated,
                         axes, notes)
