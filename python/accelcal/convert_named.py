@@ -19,7 +19,7 @@ from .recording_checks import repeated_rows
 from .textinput import preamble_notes
 from .units import UNIT_TEXT, Scale, file_scale, in_file_unit, to_counts
 
-__all__ = ["stated_time_column", "choose_time_column", "slipped_stamps", "convert_named"]
+__all__ = ["stated_time_column", "choose_time_column", "slipped_runs", "slipped_stamps", "shift_slipped", "convert_named"]
 #: rows whose first non-empty time cell tells a numeric time column from a clock time or a date
 DUPLICATE_MIN_SHARE = 0.5  # rows off the grid that repeat the row before are samples delivered twice only when
 DUPLICATE_RATIO = 5.0      # at least this share of them repeat, and this x the share of the rows on the grid
@@ -217,14 +217,15 @@ def dated_stamps(source: str, table, rows: np.ndarray, column: str, j: int, opts
     return stamps
 
 
-def repeated_stamps(stamps: np.ndarray, rows: np.ndarray, notes: list[str]) -> np.ndarray:
+def repeated_stamps(stamps: np.ndarray, rows: np.ndarray, notes: list[str], how: str = "drop") -> np.ndarray:
     """``rows`` less those whose time stamp repeats the row before's (``--repeated-stamps
-    drop``: the readings differ -- :func:`unrepeated` has left out the rows that repeat both),
-    with a note counting them."""
+    drop``, or ``shift`` for the repeats no slip explains: the readings differ --
+    :func:`unrepeated` has left out the rows that repeat both), with a note counting them."""
     same = np.flatnonzero(np.diff(stamps[rows]) == 0) + 1
     if same.size:
+        why = "" if how == "drop" else ": no step of two before them shows a slip"
         notes.append(f"{same.size} row(s) repeat the time stamp of the row before with other readings (a logger that "
-                     "stamps two samples with one stamp): left out (--repeated-stamps drop)")
+                     f"stamps two samples with one stamp): left out (--repeated-stamps {how}{why})")
     return np.delete(rows, same)
 
 
@@ -253,33 +254,65 @@ def table_time(source: str, stamps: np.ndarray, table, rows: np.ndarray, column:
                 f"; {same} row(s) repeat the stamp of the row before with other readings (a logger that stamps two "
                 "samples with one stamp)" + (f", {slipped} of them after a step of two (with steps of one between): "
                                              "stamps that slipped a place late and caught up, the samples on their "
-                                             "grid" if slipped else "") +
+                                             "grid (--repeated-stamps shift moves them back a step, every sample "
+                                             "kept)" if slipped else "") +
                 ": --repeated-stamps drop leaves them out (a sample each)")
         raise InputError(source, f"time stamp {table.cell(i, j).strip()!r} is not after {table.cell(h, j).strip()!r} "
                          f"(row {table.line(h)}): time stamps must increase{what}", row=table.line(i), column=column)
     return t
 
 
-def slipped_stamps(t: np.ndarray) -> int:
-    """How many of the stamps ``t`` (as written, any unit) that repeat the one before come after a
-    step of two median steps (1.5-2.5), with steps of one (0.5-1.5) between: the stamps from that
-    step to the repeat are a place late, and the repeat catches up (a Garmin watch's export: 90 of
+def slipped_runs(t: np.ndarray) -> list[tuple[int, int]]:
+    """The stamps ``t`` (as written, any unit) that slipped a place late: for each stamp that
+    repeats the one before and comes after a step of two median steps (1.5-2.5) with steps of
+    one (0.5-1.5) between, the indices (first, last) of the stamps from that step to the one the
+    repeat repeats -- each a step late, and the repeat catches up (a Garmin watch's export: 90 of
     its 92 repeats, 3-27 rows after such a step); the samples keep their even spacing."""
     steps = np.diff(t).astype(np.float64)
     ahead = steps[steps > 0]
     if not ahead.size:
-        return 0
+        return []
     k = steps / float(np.median(ahead))
-    count, pending = 0, False
-    for v in k.tolist():
+    runs, start = [], None
+    for i, v in enumerate(k.tolist()):
         if v == 0:
-            count += pending
-            pending = False
+            if start is not None:
+                runs.append((start, i))
+            start = None
         elif 1.5 <= v <= 2.5:
-            pending = True
+            start = i + 1
         elif not 0.5 <= v < 1.5:
-            pending = False
-    return count
+            start = None
+    return runs
+
+
+def slipped_stamps(t: np.ndarray) -> int:
+    """How many of the stamps ``t`` that repeat the one before catch up a slip
+    (:func:`slipped_runs`)."""
+    return len(slipped_runs(t))
+
+
+def shift_slipped(stamps: np.ndarray, rows: np.ndarray, notes: list[str]) -> np.ndarray:
+    """``stamps`` with each stamp of the rows read (``rows``) that slipped a place late
+    (:func:`slipped_runs`: proved by the step of two before and the repeat after) moved back
+    one median step (``--repeated-stamps shift``): every sample kept, the steps all ones where
+    they were two, ones and a repeat; with a note counting them."""
+    t = stamps[rows]
+    runs = slipped_runs(t)
+    if not runs:
+        return stamps
+    steps = np.diff(t)
+    step = np.median(steps[steps > 0])
+    step = np.round(step).astype(t.dtype) if np.issubdtype(t.dtype, np.integer) else step
+    moved = t.copy()
+    for first, last in runs:
+        moved[first:last + 1] -= step
+    out = stamps.copy()
+    out[rows] = moved
+    notes.append(f"{sum(b - a + 1 for a, b in runs)} time stamps in {len(runs)} run(s) slipped a place late (each run "
+                 "after a step of two median steps and caught up by a repeated stamp): moved back one step "
+                 "(--repeated-stamps shift), every sample kept")
+    return out
 
 
 def unrepeated(rows: np.ndarray, stamps: np.ndarray, readings: np.ndarray, notes: list[str]) -> np.ndarray:
@@ -401,8 +434,10 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
             stamps = exact_time(stamps, lambda: table.strings(jt), rows)   # an epoch in ns: int64
         sample_index(source, time_column, stamps[rows], opts.rate_hz, pre.header_line)
         rows = unrepeated(rows, stamps, np.column_stack([values[a] for a in acc]), notes)
-        if opts.repeated_stamps == "drop":
-            rows = repeated_stamps(stamps, rows, notes)
+        if opts.repeated_stamps == "shift":
+            stamps = shift_slipped(stamps, rows, notes)
+        if opts.repeated_stamps != "refuse":
+            rows = repeated_stamps(stamps, rows, notes, opts.repeated_stamps)
     matrix = np.column_stack([values[a][rows] for a in acc])
 
     def locate(i: int, j: int) -> tuple[int, str]:
