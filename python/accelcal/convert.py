@@ -69,7 +69,7 @@ from .held import held_runs
 from .recording import read_recording
 from .textinput import (CELL_NUMBER_RE, is_whitespace_header, preamble_notes, read_preamble, read_text_bytes,
                         table_preamble)
-from .units import Scale, file_scale, to_counts
+from .units import Scale, file_scale, in_file_unit, to_counts
 from .xsens import load_xsens
 
 __all__ = ["FORMATS", "POSE_DIRECTIONS", "Converted", "detect_format", "convert_file", "read_regions", "axis_column",
@@ -325,13 +325,16 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         names TIME_COLUMN_RE matches, those whose cells are numbers (a clock time or a date
         is no time stamp), the first whose name states a unit, else the first; a note names
         the one used and those passed over.
-    repeated_stamps : {"refuse", "drop"}
+    repeated_stamps : {"refuse", "drop", "shift"}
         A table's rows whose time stamp repeats the row before's with other readings (a watch
         that stamps two samples with one stamp: 93 of a Garmin export's 10,000 rows): refused,
         the message counting them and those after a step of two median steps
         (:func:`convert_named.slipped_stamps`: the stamps slipped a place late and caught up;
         the samples keep their grid, and ``drop`` loses one each), or left out with a note
-        (``drop``).  Rows that repeat the stamp and the readings are left out either way.
+        (``drop``); ``shift`` moves each stamp that slipped back one step
+        (:func:`convert_named.shift_slipped`: every sample kept) and leaves out the other
+        repeats as ``drop`` does.  Rows that repeat the stamp and the readings are left out
+        either way.
 
     Returns
     -------
@@ -400,6 +403,7 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
             device = device if scale is None or scale.lsb_g is None else None  # a stated full scale: the nominal device from it
         else:
             device, rec = None, read_recording(path, scale=scale)   # (its refusals carry its notes)
+            scale = in_file_unit(scale, rec.metadata.get("source_units"), source)  # as read_recording took it
         with notes_on_refusal(lambda: list(rec.notes)):
             if rec.n_channels != 3:
                 raise InputError(source, f"{rec.n_channels} raw channels: convert makes a triad's recording (3)")

@@ -14,7 +14,7 @@ from .convert_time import TIME_COLUMN_RE
 from .errors import InputError
 
 __all__ = ["AXIS_RE", "BARE_AXES", "PX4_ACCEL_FILE_RE", "NAMED_UNITS", "AxisColumn", "axis_column", "table_axes",
-           "px4_export", "names_unit", "find_named", "stated_axes", "axis_triples"]
+           "px4_export", "names_unit", "find_named", "stated_axes", "axis_triples", "mirrored_note"]
 
 #: a unit after a column's name, in () or []
 UNIT_PART = r"\s*[(\[](?P<unit>[^)\]]*)[)\]]"
@@ -230,6 +230,28 @@ def stated_axes(source: str, names: list[str], stated: str, row: int) -> list[Ax
         unit = known.unit if known is not None else (re.sub(r"\s+", "", m.group("unit")).lower() if m else None)
         out.append(AxisColumn(n, axis, unit, False))
     return out
+
+
+def mirrored_note(axes: list[AxisColumn]) -> list[str]:
+    """A note where ``--columns`` puts the columns whose names state the axes x, y, z (``accX``,
+    ``x (g)``, a bare ``x``) as an odd permutation of them: a swap of two mirrors the frame
+    (left-handed), which no mounting of a sensor gives; a cyclic order (y,z,x) is a rotation, no note.
+    (``--columns`` takes names only, no sign: it flips no axis.)"""
+    said = []
+    for c in axes:
+        known = axis_column(c.name)
+        said.append(known.axis if known is not None else c.name.strip().lower())
+    if sorted(said) != list(BARE_AXES) or said == list(BARE_AXES):
+        return []
+    order = [BARE_AXES.index(a) for a in said]
+    swaps = sum(order[i] > order[j] for i in range(3) for j in range(i + 1, 3))
+    if swaps % 2 == 0:
+        return []
+    moved = ", ".join(f"column {c.name!r} as the {c.axis} axis" for c, a in zip(axes, said) if a != c.axis)
+    xyz = [axes[said.index(a)].name for a in BARE_AXES]
+    cyclic = " or ".join(",".join(xyz[k:] + xyz[:k]) for k in range(3))
+    return [f"--columns puts {moved}: the frame is mirrored (left-handed), unless that is meant; a sensor mounted "
+            f"rotated is one of {cyclic}"]
 
 
 def px4_export(source: str, axes: list[AxisColumn]) -> bool:

@@ -106,10 +106,11 @@ def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
                    "the header names them (default: the names say: accX, 'Acceleration y (m/s^2)', 'x (g)', ...); a "
                    "unit in () or [] at a name's end states the readings' unit; a file not told otherwise is then "
                    "read as a table")
-    s.add_argument("--repeated-stamps", choices=("refuse", "drop"), default="refuse",
+    s.add_argument("--repeated-stamps", choices=("refuse", "drop", "shift"), default="refuse",
                    help="table: rows whose time stamp repeats the row before's with other readings (a watch that "
                    "stamps two samples with one stamp) are refused (default; the message counts them) or, with drop, "
-                   "left out with a note")
+                   "left out with a note; shift moves stamps that slipped a place late (after a step of two, caught "
+                   "up by the repeat) back one step, keeping every sample, and leaves out the other repeats")
     s.add_argument("--variable", metavar="NAME", help="mat: the array of readings (3 columns x, y, z, or 4: t, x, y, "
                    "z) where the MATLAB file holds more than one; or X,Y,Z (T,X,Y,Z): the names of vectors that hold "
                    "one channel each")

@@ -4,12 +4,11 @@ column per accelerometer axis, the unit its name states, an optional time column
 whose three readings are all empty (another packet's) skipped."""
 from __future__ import annotations
 
-import dataclasses
 import re
 
 import numpy as np
 
-from .convert_axes import AxisColumn, find_named, names_unit, px4_export, stated_axes, table_axes
+from .convert_axes import AxisColumn, find_named, mirrored_note, names_unit, px4_export, stated_axes, table_axes
 from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
                              is_gyro, whole_counts)
 from .convert_time import TIME_COLUMN_RE, datetime_stamps, is_datetime, unit_in_name
@@ -18,9 +17,9 @@ from .errors import InputError, notes_on_refusal
 from .convert_rows import lost_rows, trailer_note, trailer_start
 from .recording_checks import repeated_rows
 from .textinput import preamble_notes
-from .units import STANDARD_GRAVITY, UNIT_TEXT, Scale, file_scale, to_counts
+from .units import UNIT_TEXT, Scale, file_scale, in_file_unit, to_counts
 
-__all__ = ["stated_time_column", "choose_time_column", "slipped_stamps", "convert_named"]
+__all__ = ["stated_time_column", "choose_time_column", "slipped_runs", "slipped_stamps", "shift_slipped", "convert_named"]
 #: rows whose first non-empty time cell tells a numeric time column from a clock time or a date
 DUPLICATE_MIN_SHARE = 0.5  # rows off the grid that repeat the row before are samples delivered twice only when
 DUPLICATE_RATIO = 5.0      # at least this share of them repeat, and this x the share of the rows on the grid
@@ -34,7 +33,7 @@ RATE_COMMENT_RE = re.compile(r"(?:data[ _]?rate|sampl(?:e|ing)[ _]?(?:rate|frequ
 
 
 def table_scale(source: str, pre, option: Scale | None, unit: str | None, units_stated: bool,
-                gravity: float, axes: list[AxisColumn], notes: list[str]) -> Scale | None:
+                axes: list[AxisColumn], notes: list[str]) -> Scale | None:
     """The Scale of a table's readings: the unit its axis names state weighed against the
     options and the ``# units:``/``# lsb:`` comments by :func:`units.file_scale` (the names'
     unit taken as the file's ``units``); ``--full-scale`` without ``--units``
@@ -60,8 +59,7 @@ def table_scale(source: str, pre, option: Scale | None, unit: str | None, units_
     if said is not None and said != unit:
         raise InputError(source, f"the comment '# units: {said}' contradicts the unit the header's columns state, "
                          f"{UNIT_TEXT[unit]} ({cols}): state the unit once", row=lines.get("units"))
-    if option is not None and not units_stated and not option.converts and option.lsb_g and unit != "counts":
-        option = dataclasses.replace(option, units=unit, lsb=option.lsb_g * (gravity if unit == "mps2" else 1.0))
+    option = in_file_unit(option, unit, source)       # --full-scale or --lsb alone: in the names' unit
     sized = any(k in meta for k in ("lsb", "full_scale_g")) or (option is not None and bool(option.lsb or option.lsb_g))
     if unit != "counts" and not sized and (option is None or option.units == unit):
         raise InputError(source, f"the readings are in {UNIT_TEXT[unit]} (the header's {cols}) and no LSB is "
@@ -219,14 +217,15 @@ def dated_stamps(source: str, table, rows: np.ndarray, column: str, j: int, opts
     return stamps
 
 
-def repeated_stamps(stamps: np.ndarray, rows: np.ndarray, notes: list[str]) -> np.ndarray:
+def repeated_stamps(stamps: np.ndarray, rows: np.ndarray, notes: list[str], how: str = "drop") -> np.ndarray:
     """``rows`` less those whose time stamp repeats the row before's (``--repeated-stamps
-    drop``: the readings differ -- :func:`unrepeated` has left out the rows that repeat both),
-    with a note counting them."""
+    drop``, or ``shift`` for the repeats no slip explains: the readings differ --
+    :func:`unrepeated` has left out the rows that repeat both), with a note counting them."""
     same = np.flatnonzero(np.diff(stamps[rows]) == 0) + 1
     if same.size:
+        why = "" if how == "drop" else ": no step of two before them shows a slip"
         notes.append(f"{same.size} row(s) repeat the time stamp of the row before with other readings (a logger that "
-                     "stamps two samples with one stamp): left out (--repeated-stamps drop)")
+                     f"stamps two samples with one stamp): left out (--repeated-stamps {how}{why})")
     return np.delete(rows, same)
 
 
@@ -255,33 +254,65 @@ def table_time(source: str, stamps: np.ndarray, table, rows: np.ndarray, column:
                 f"; {same} row(s) repeat the stamp of the row before with other readings (a logger that stamps two "
                 "samples with one stamp)" + (f", {slipped} of them after a step of two (with steps of one between): "
                                              "stamps that slipped a place late and caught up, the samples on their "
-                                             "grid" if slipped else "") +
+                                             "grid (--repeated-stamps shift moves them back a step, every sample "
+                                             "kept)" if slipped else "") +
                 ": --repeated-stamps drop leaves them out (a sample each)")
         raise InputError(source, f"time stamp {table.cell(i, j).strip()!r} is not after {table.cell(h, j).strip()!r} "
                          f"(row {table.line(h)}): time stamps must increase{what}", row=table.line(i), column=column)
     return t
 
 
-def slipped_stamps(t: np.ndarray) -> int:
-    """How many of the stamps ``t`` (as written, any unit) that repeat the one before come after a
-    step of two median steps (1.5-2.5), with steps of one (0.5-1.5) between: the stamps from that
-    step to the repeat are a place late, and the repeat catches up (a Garmin watch's export: 90 of
+def slipped_runs(t: np.ndarray) -> list[tuple[int, int]]:
+    """The stamps ``t`` (as written, any unit) that slipped a place late: for each stamp that
+    repeats the one before and comes after a step of two median steps (1.5-2.5) with steps of
+    one (0.5-1.5) between, the indices (first, last) of the stamps from that step to the one the
+    repeat repeats -- each a step late, and the repeat catches up (a Garmin watch's export: 90 of
     its 92 repeats, 3-27 rows after such a step); the samples keep their even spacing."""
     steps = np.diff(t).astype(np.float64)
     ahead = steps[steps > 0]
     if not ahead.size:
-        return 0
+        return []
     k = steps / float(np.median(ahead))
-    count, pending = 0, False
-    for v in k.tolist():
+    runs, start = [], None
+    for i, v in enumerate(k.tolist()):
         if v == 0:
-            count += pending
-            pending = False
+            if start is not None:
+                runs.append((start, i))
+            start = None
         elif 1.5 <= v <= 2.5:
-            pending = True
+            start = i + 1
         elif not 0.5 <= v < 1.5:
-            pending = False
-    return count
+            start = None
+    return runs
+
+
+def slipped_stamps(t: np.ndarray) -> int:
+    """How many of the stamps ``t`` that repeat the one before catch up a slip
+    (:func:`slipped_runs`)."""
+    return len(slipped_runs(t))
+
+
+def shift_slipped(stamps: np.ndarray, rows: np.ndarray, notes: list[str]) -> np.ndarray:
+    """``stamps`` with each stamp of the rows read (``rows``) that slipped a place late
+    (:func:`slipped_runs`: proved by the step of two before and the repeat after) moved back
+    one median step (``--repeated-stamps shift``): every sample kept, the steps all ones where
+    they were two, ones and a repeat; with a note counting them."""
+    t = stamps[rows]
+    runs = slipped_runs(t)
+    if not runs:
+        return stamps
+    steps = np.diff(t)
+    step = np.median(steps[steps > 0])
+    step = np.round(step).astype(t.dtype) if np.issubdtype(t.dtype, np.integer) else step
+    moved = t.copy()
+    for first, last in runs:
+        moved[first:last + 1] -= step
+    out = stamps.copy()
+    out[rows] = moved
+    notes.append(f"{sum(b - a + 1 for a, b in runs)} time stamps in {len(runs)} run(s) slipped a place late (each run "
+                 "after a step of two median steps and caught up by a repeated stamp): moved back one step "
+                 "(--repeated-stamps shift), every sample kept")
+    return out
 
 
 def unrepeated(rows: np.ndarray, stamps: np.ndarray, readings: np.ndarray, notes: list[str]) -> np.ndarray:
@@ -348,9 +379,10 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
     names = [c.strip() for c in header_cells(pre.header)]
     axes = stated_axes(source, names, opts.columns, pre.header_line) if opts.columns is not None else \
         table_axes(source, names, pre.header_line, notes)
+    notes += mirrored_note(axes) if opts.columns is not None else []
     acc = [c.name for c in axes]
     scale = table_scale(source, pre, opts.scale, names_unit(source, axes, pre.header_line), units_stated,
-                        opts.gravity_mps2 or STANDARD_GRAVITY, axes, notes)
+                        axes, notes)
     if opts.time_column is not None:
         time_column = stated_time_column(source, names, acc, opts.time_column, pre.header_line)
     want = {a: "ref" for a in acc}
@@ -402,8 +434,10 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
             stamps = exact_time(stamps, lambda: table.strings(jt), rows)   # an epoch in ns: int64
         sample_index(source, time_column, stamps[rows], opts.rate_hz, pre.header_line)
         rows = unrepeated(rows, stamps, np.column_stack([values[a] for a in acc]), notes)
-        if opts.repeated_stamps == "drop":
-            rows = repeated_stamps(stamps, rows, notes)
+        if opts.repeated_stamps == "shift":
+            stamps = shift_slipped(stamps, rows, notes)
+        if opts.repeated_stamps != "refuse":
+            rows = repeated_stamps(stamps, rows, notes, opts.repeated_stamps)
     matrix = np.column_stack([values[a][rows] for a in acc])
 
     def locate(i: int, j: int) -> tuple[int, str]:

@@ -15,19 +15,20 @@ count size) the file is refused naming the comment's line -- neither silently wi
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from dataclasses import dataclass
-from decimal import Decimal
 from typing import Any, Callable
 
 import numpy as np
 
 from .errors import AccelcalError, InputError
+from .units_grid import decimal_places, grid_shift, significant_digits
 
 __all__ = ["UNITS", "REL_TOL", "Scale", "scale_from_options", "scale_from_metadata", "to_counts",
            "METADATA_KEYS", "STANDARD_GRAVITY", "OPTION_NAMES",
-           "converted_metadata", "file_scale", "COUNTS_STATED", "parse_bits", "split_lsb", "LSB_SUFFIXES"]
+           "converted_metadata", "file_scale", "in_file_unit", "unstated_lsb", "COUNTS_STATED", "parse_bits", "split_lsb", "LSB_SUFFIXES"]
 
 UNITS = ("counts", "mps2", "g")
 REL_TOL = 1e-6
@@ -63,6 +64,12 @@ class Scale:
     rounds : bool
         Readings are rounded to the nearest LSB (``--round``: a logger that writes calibrated
         floats, on no grid), with a note of how far, instead of refused when not whole.
+    unit_stated : bool
+        Whether ``units`` was stated (``--units``, a comment); False for ``--full-scale`` or
+        ``--lsb`` alone, which take the unit the file states (:func:`in_file_unit`): until then
+        ``units`` is ``"counts"``, with ``lsb`` the bare ``--lsb`` value (in the file's unit) or None.
+    gravity_mps2 : float
+        g in m/s^2, to size one count in m/s^2 from ``lsb_g`` once the file's unit is known.
     """
 
     units: str
@@ -70,6 +77,8 @@ class Scale:
     lsb_g: float | None = None
     how: str = ""
     rounds: bool = False
+    unit_stated: bool = True
+    gravity_mps2: float = STANDARD_GRAVITY
 
     @property
     def converts(self) -> bool:
@@ -178,11 +187,11 @@ def scale_from_options(units: str | None = None, lsb: Any = None, full_scale_g: 
     g = STANDARD_GRAVITY if gravity_mps2 is None else _positive(gravity_mps2, opt("gravity_mps2"), fail)
     if lsb is not None:
         num, unit = split_lsb(lsb)
-        if units is None:
-            raise fail(f"{opt('lsb')} {lsb}: state the unit of the readings it divides with {opt('units')} mps2|g; "
-                       f"for integer readings already in counts, {opt('units')} counts with one count's size and "
-                       f"its unit ({opt('lsb')} {num}g, or in mg or mps2) or {opt('full_scale_g')}")
         v = _positive(num, opt("lsb"), fail)
+        if units is None:       # in the unit the file states (in_file_unit), else refused there
+            in_g = None if unit is None else v * (1e-3 if unit == "mg" else 1.0 if unit == "g" else 1.0 / g)
+            return Scale("counts", v if unit is None else None, in_g, opt("lsb"), unit_stated=False,
+                         gravity_mps2=g)
         if units == "counts" and unit is None:
             raise fail(f"{opt('lsb')} {lsb} with {opt('units')} counts: give one count's size with its unit "
                        f"({opt('lsb')} {num}g, or in mg or mps2); the readings stay the integers they are")
@@ -194,9 +203,45 @@ def scale_from_options(units: str | None = None, lsb: Any = None, full_scale_g: 
         return Scale(units, v, v if units == "g" else v / g, opt("lsb"))
     fs = _positive(full_scale_g, opt("full_scale_g"), fail)
     lsb_g = 2.0 * fs / 2.0 ** parse_bits(bits, fail, opt("bits"))
-    units = units or "counts"
+    stated, units = units is not None, units or "counts"
     return Scale(units, None if units == "counts" else lsb_g * (g if units == "mps2" else 1.0), lsb_g,
-                 opt("full_scale_g"))
+                 opt("full_scale_g"), unit_stated=stated, gravity_mps2=g)
+
+
+def unstated_lsb(option: Scale) -> str:
+    """The refusal of ``--lsb`` without ``--units`` over a file that states no unit."""
+    num = f"{option.lsb:.12g}" if option.lsb else f"{option.lsb_g:.12g}g"
+    return (f"{option.how} {num}: state the unit of the readings it divides with {OPTION_NAMES['units']} mps2|g "
+            "(or by the file: a '# units:' comment, the columns' names); for integer readings already in counts, "
+            f"{OPTION_NAMES['units']} counts with one count's size and its unit ({option.how} {num.rstrip('g')}g, "
+            f"or in mg or mps2) or {OPTION_NAMES['full_scale_g']}")
+
+
+def in_file_unit(option: Scale | None, unit: str | None, source: str) -> Scale | None:
+    """``option`` in the unit the file states where the options stated none (``--full-scale``
+    or ``--lsb`` without ``--units``: ``option.unit_stated`` False): one count is then its
+    ``lsb_g`` (or the bare ``--lsb`` value) in ``unit``, the file's ``# units:`` comment or its
+    columns' names.  Else ``option`` unchanged.
+
+    Raises
+    ------
+    InputError
+        ``--lsb`` without ``--units`` over a file whose unit is not m/s^2 or g
+        (:func:`unstated_lsb`).
+    """
+    if option is None or option.unit_stated:
+        return option
+    if unit in ("mps2", "g"):
+        g = option.gravity_mps2
+        if option.lsb:                      # a bare --lsb: in the file's unit
+            lsb, lsb_g = option.lsb, option.lsb / (g if unit == "mps2" else 1.0)
+        else:
+            lsb, lsb_g = option.lsb_g * (g if unit == "mps2" else 1.0), option.lsb_g
+        how = f"{option.how} in the file's {UNIT_TEXT[unit]}"
+        return dataclasses.replace(option, units=unit, lsb=lsb, lsb_g=lsb_g, how=how)
+    if option.how == OPTION_NAMES["lsb"]:
+        raise InputError(source, unstated_lsb(option))
+    return option
 
 
 def scale_from_metadata(metadata: dict[str, str], lines: dict[str, int], source: str) -> Scale | None:
@@ -291,8 +336,9 @@ def _weighed(option: Scale | None, metadata: dict[str, str], lines: dict[str, in
     """:func:`file_scale` before its check of ``--round``."""
     if option is None:
         return scale_from_metadata(metadata, lines, source)
-    by = option.how or "the option"
     unit = metadata.get("units")
+    option = in_file_unit(option, unit, source)
+    by = option.how or "the option"
     if unit is not None and unit in UNITS and unit != option.units:
         with_ = "" if by.startswith(OPTION_NAMES["units"]) else f", with {by}"
         what = unit_source or f"the comment '# units: {unit}'"
@@ -384,8 +430,8 @@ def to_counts(values: np.ndarray, scale: Scale, source: str,
         u, inv = np.unique(v[sel], return_inverse=True)
         # the printing precision shows in every value of the columns at fault, the whole ones too
         shown = np.unique(v[:, np.flatnonzero(sel.any(axis=0))])
-        digits = max(_significant_digits(float(w)) for w in shown[np.isfinite(shown)])
-        places = max(_decimal_places(float(w)) for w in shown[np.isfinite(shown)])
+        digits = max(significant_digits(float(w)) for w in shown[np.isfinite(shown)])
+        places = max(decimal_places(float(w)) for w in shown[np.isfinite(shown)])
         mag = np.floor(np.log10(np.maximum(np.abs(u), np.finfo(float).tiny)))
         # printed with that many significant digits ('%g'), or with that many decimal places ('%.6f':
         # an Axivity export's 0.007324 g is 15 counts of 1/2048 g, 14.99955)
@@ -444,35 +490,3 @@ def counts_stated_as_units(v: np.ndarray, scale: Scale, source: str, locate: Cal
                      f"stated by {scale.how or 'the options'}): they are counts -- give --units counts --lsb "
                      f"{scale.lsb:.6g}{suffix} (or --full-scale G) for their size; were they whole {unit}, --lsb 1",
                      row=row, column=column)
-
-
-#: distinct readings a column needs before a constant fraction of an LSB is taken for a shifted grid
-SHIFT_MIN_VALUES = 20
-#: ... each within this much of a count of the grid
-SHIFT_TOL_COUNTS = 0.01
-
-
-def grid_shift(x: np.ndarray) -> float | None:
-    """The constant fraction (in (-0.5, 0.5], not ~0) by which every value of ``x`` (counts,
-    as floats) is off a whole number, within SHIFT_TOL_COUNTS, or None."""
-    x = np.asarray(x, float)
-    x = x[np.isfinite(x)]
-    if np.unique(x).size < SHIFT_MIN_VALUES:      # a column of a few values sits on any grid
-        return None
-    frac = x - np.round(x)
-    phase = float(np.angle(np.mean(np.exp(2j * np.pi * frac)))) / (2 * np.pi)
-    off = (frac - phase + 0.5) % 1.0 - 0.5
-    if abs(phase) <= SHIFT_TOL_COUNTS or float(np.max(np.abs(off))) > SHIFT_TOL_COUNTS:
-        return None
-    return 0.5 if abs(abs(phase) - 0.5) < 1e-6 else phase     # half a step: +0.5, one convention
-
-
-def _decimal_places(v: float) -> int:
-    """Decimal places of ``repr(v)`` past the point (0.007324 -> 6, 0.5 -> 1, 12.0 -> 0)."""
-    return max(0, -int(Decimal(repr(v)).normalize().as_tuple().exponent))
-
-
-def _significant_digits(v: float) -> int:
-    """Significant digits of ``repr(v)``, the shortest text that reads back as ``v``
-    (-0.020752 -> 5, -0.142090 printed by '%g' as -0.14209 -> 5, 1/3 -> 16)."""
-    return len(Decimal(repr(v)).normalize().as_tuple().digits)

@@ -22,11 +22,12 @@ UNITS_HELP = ("the unit of the recording's readings: counts (default), mps2 (m/s
               "else the first that is not is named by row and column.  The file's '# units:'/'# lsb:' "
               "comments state the same; given both, they must agree (a contradiction is refused, naming the "
               "comment)")
-LSB_HELP = ("one count, in --units (m/s^2 or g per count), e.g. 0.0047900390625 for 9.81/2048; or with its unit "
+LSB_HELP = ("one count, in --units (m/s^2 or g per count; without --units, in the unit the file states by a "
+            "'# units:' comment or its columns' names), e.g. 0.0047900390625 for 9.81/2048; or with its unit "
             "(mg, g, mps2): '--units counts --lsb 1mg' states integer readings already in counts of 1 mg each "
             "(the nominal scale; nothing is converted, and readings that are not integers are refused)")
-FULL_SCALE_HELP = ("the range's full scale in g (16 for +-16 g): one count is 2*G/2**bits g (--bits); with "
-                   "counts it {counts}")
+FULL_SCALE_HELP = ("the range's full scale in g (16 for +-16 g): one count is 2*G/2**bits g (--bits), in the unit "
+                   "--units or else the file states; with counts it {counts}")
 READER_BITS_HELP = ("the ADC's bits for --full-scale's LSB (default: from the device's raw range when "
                     "raw_max - raw_min + 1 is a power of two, else 16)")
 READER_GRAVITY_HELP = ("g in m/s^2 for --full-scale with --units mps2 (default: the device's gravity_mps2, as "

@@ -188,7 +188,8 @@ CONTRADICTIONS = [
     (["# units: g", f"# lsb: {1 / 16384!r}"], ["--units", "g", "--lsb", repr(1 / 8192)], "# lsb:"),
     (["# units: g", f"# lsb: {1 / 16384!r}"], ["--units", "g", "--full-scale", "4"], "# lsb:"),
     (["# units: g", f"# lsb: {1 / 16384!r}"], ["--units", "counts"], "# units: g"),
-    (["# units: g", f"# lsb: {1 / 16384!r}"], ["--full-scale", "2"], "# units: g"),
+    (["# units: g", f"# lsb: {1 / 16384!r}"], ["--full-scale", "4"], "# lsb:"),
+    (["# units: g", f"# lsb: {1 / 16384!r}"], ["--lsb", repr(1 / 8192)], "# lsb:"),
     (["# units: mps2", "# full_scale_g: 16", "# gravity_mps2: 9.81"],
      ["--units", "mps2", "--lsb", repr(9.80665 / 2048)], "# full_scale_g:"),
     (["# units: g"], ["--units", "mps2", "--lsb", repr(9.81 / 2048)], "# units: g"),
@@ -222,6 +223,40 @@ def test_a_comment_that_agrees_in_another_form_is_accepted(good, capfd):
     base = run_in(good, "calibrate", (good / "poses.csv").read_text(), [], capfd)
     got = run_in(good, "calibrate", text, FORMS["mps2-lsb"][2], capfd)
     assert got[0] == 0 and got[4] == base[4], got[2]
+
+
+ALONE = [["--full-scale", "4"], ["--lsb", repr(G / 8192)], ["--lsb", "0.1220703125mg"]]   # 2*4/2**16 g
+
+
+@pytest.mark.parametrize("options", ALONE)
+def test_full_scale_or_lsb_alone_take_the_comments_unit(good, options, capfd):
+    """--full-scale G or --lsb VALUE without --units states no unit: a file's '# units: mps2'
+    comment gives it (as a table's column names do), not refused as contradicting a
+    '--units counts' the user never gave; the result is the counts file's."""
+    text = (good / "poses.csv").read_text()
+    phys, _ = physical(text, "mps2", G / 8192, ["# units: mps2"])
+    base = run_in(good, "calibrate", text, [], capfd)
+    got = run_in(good, "calibrate", phys, options, capfd)
+    assert got[0] == 0 and got[4] == base[4], got[2]
+
+
+@pytest.mark.parametrize("options", ALONE)
+def test_convert_full_scale_or_lsb_alone_take_the_comments_unit(tmp_path, options, capfd):
+    """convert: the same for a table whose '# units: mps2' comment states the unit."""
+    counts = np.array([[0, 0, 8192], [10, -20, 8190], [-8192, 5, 3], [4, 8191, -7]] * 5)
+    write_lines(tmp_path / "m.csv", ["# units: mps2", "t,ax,ay,az"] +
+                [f"{i / 100!r}," + ",".join(repr(int(c) * G / 8192) for c in row) for i, row in enumerate(counts)])
+    rec, dev, err, _ = convert_ok(tmp_path, capfd, tmp_path / "m.csv", *options)
+    assert rec.raw.tolist() == counts.tolist(), err
+    assert dev["channels"][0]["counts_per_mps2"] == pytest.approx(8192 / G)
+
+
+@pytest.mark.parametrize("options", [["--lsb", "0.001"], ["--lsb", "1mg"]])
+def test_lsb_alone_over_a_file_that_states_no_unit_is_refused(good, options, capfd):
+    """Without --units nor a unit in the file, --lsb divides readings of no known unit."""
+    rc, _, err, caught, files = run_in(good, "calibrate", (good / "poses.csv").read_text(), options, capfd)
+    check_rejected(rc, err, caught, files, f"{options}")
+    assert "state the unit of the readings it divides with --units mps2|g" in err, err
 
 
 @pytest.mark.parametrize("options,frag", [

@@ -245,3 +245,21 @@ def test_a_phone_apps_z_y_x_columns_are_read_in_x_y_z_order(tmp_path, capfd):
         assert "do not say they are an accelerometer's" in err and "give --columns x,y,z " in err, err
         rec, _, _ = _convert(tmp_path, capfd, other, "--full-scale", "8", "--units", "g", "--columns", "x,y,z")
         np.testing.assert_array_equal(rec.raw, c)
+
+
+@pytest.mark.parametrize("order,mirrored", [("z,y,x", True), ("y,x,z", True), ("accX,accZ,accY", True),
+                                            ("y,z,x", False), ("z,x,y", False), ("x,y,z", False)])
+def test_columns_that_mirror_the_frame_are_noted(tmp_path, capfd, order, mirrored):
+    """--columns over columns named for the axes: an odd permutation of them (a swap) mirrors the
+    frame (left-handed), which no mounting gives: taken as stated, with a note naming the columns
+    moved; a cyclic order (a sensor mounted rotated) has none."""
+    c = _counts(40)
+    names = ["accX", "accY", "accZ"] if "acc" in order else ["x", "y", "z"]
+    src = write_lines(tmp_path / "log.csv", ["t," + ",".join(names)] +
+                      [f"{k / 100!r}," + ",".join(str(int(v)) for v in r) for k, r in enumerate(c)])
+    rec, _, err = _convert(tmp_path, capfd, src, "--columns", order)
+    picked = [names.index(n) for n in order.split(",")]
+    assert rec.raw.tolist() == c[:, picked].tolist()
+    assert ("the frame is mirrored (left-handed)" in err) == mirrored, err
+    if order == "z,y,x":
+        assert "--columns puts column 'z' as the x axis, column 'x' as the z axis" in err, err

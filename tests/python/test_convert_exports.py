@@ -130,8 +130,9 @@ def test_repeated_stamps_are_counted_and_can_be_left_out(tmp_path, capfd):
     err = _refused(tmp_path, capfd, src)
     assert "row 54, column timestamp" in err and "time stamps must increase; 4 row(s) repeat the stamp" in err
     assert ("(a logger that stamps two samples with one stamp), 3 of them after a step of two (with steps of one "
-            "between): stamps that slipped a place late and caught up, the samples on their grid: --repeated-stamps "
-            "drop leaves them out (a sample each)") in err, err
+            "between): stamps that slipped a place late and caught up, the samples on their grid (--repeated-stamps "
+            "shift moves them back a step, every sample kept): --repeated-stamps drop leaves them out (a sample "
+            "each)") in err, err
     rec, dev, err, _ = _convert(tmp_path, capfd, src, "--repeated-stamps", "drop")
     keep = np.delete(np.arange(n), [52, 91, 122, 172])
     np.testing.assert_array_equal(rec.raw, c[keep])
@@ -140,6 +141,38 @@ def test_repeated_stamps_are_counted_and_can_be_left_out(tmp_path, capfd):
     err = _refused(tmp_path, capfd, write_lines(tmp_path / "r.csv", ["t,raw_0,raw_1,raw_2", "0,1,2,3", "1,1,2,3"]),
                    "--repeated-stamps", "drop", name="csv")
     assert "--repeated-stamps applies to a table's time column" in err
+
+
+@pytest.mark.parametrize("kind", ["iso", "seconds"])
+def test_slipped_stamps_can_be_shifted_back(tmp_path, capfd, kind):
+    """--repeated-stamps shift: where a step of two and a repeat after steps of one prove that the
+    stamps between slipped a place late (a Garmin export: 399 stamps in 90 runs of its 10,000 rows),
+    each is moved back one step: every one of those samples is kept on its true stamp, t strictly
+    increasing; a repeat no step of two explains is left out as by drop, with its own note."""
+    n = 200
+    ms = 40 * np.arange(n)
+    true = ms.copy()
+    for k, run in ((50, 2), (120, 5), (170, 3)):     # a slot skipped, then `run` stamps late, caught up
+        ms[k:k + run] += 40
+        ms[k + run] = ms[k + run - 1]
+    ms[91] = ms[90]                                   # a repeat after steps of one only
+    c = _counts(n, seed=4)
+    if kind == "iso":
+        start = dt.datetime(2019, 10, 16, 12, 9, 1, 702000, tzinfo=dt.timezone(dt.timedelta(hours=2)))
+        stamps = [(start + dt.timedelta(milliseconds=int(v))).isoformat(timespec="milliseconds") for v in ms]
+        t0 = start.timestamp()
+    else:
+        stamps, t0 = [repr(float(v) / 1000 + 0.5) for v in ms], 0.5
+    src = write_lines(tmp_path / "acc.csv", ["timestamp;accX;accY;accZ"] +
+                      [f"{s};{a};{b};{d}" for s, (a, b, d) in zip(stamps, c)])
+    rec, dev, err, _ = _convert(tmp_path, capfd, src, "--repeated-stamps", "shift")
+    keep = np.delete(np.arange(n), [91])
+    np.testing.assert_array_equal(rec.raw, c[keep])
+    np.testing.assert_allclose(rec.t - t0, true[keep] / 1000, atol=1e-6)
+    assert np.all(np.diff(rec.t) > 0) and dev["sample_rate_hz"] == pytest.approx(25.0, rel=1e-9)
+    assert "10 time stamps in 3 run(s) slipped a place late" in err and "every sample kept" in err, err
+    assert "1 row(s) repeat the time stamp of the row before with other readings (a logger that stamps two samples " \
+           "with one stamp): left out (--repeated-stamps shift: no step of two before them shows a slip)" in err, err
 
 
 # ---- the nominal scale a device file gets from the readings ----------------------------

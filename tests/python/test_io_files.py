@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 from accelcal.device import default_triad, save_device
 from accelcal.errors import AccelcalError, InputError
 from accelcal.recording import read_recording, recording_from_arrays, write_recording
-from accelcal.units import Scale, scale_from_options, to_counts
+from accelcal.units import Scale, in_file_unit, scale_from_options, to_counts
 from cli_run import one_refusal, run
 
 FAST = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
@@ -229,11 +229,15 @@ def test_full_scale_gives_the_lsb():
     s = scale_from_options(None, full_scale_g=2)
     assert not s.converts and s.counts_per_mps2(9.80665) == pytest.approx(16384 / 9.80665)
     assert scale_from_options() is None and scale_from_options("counts") is None
+    # --lsb alone: in the unit the file states, else refused (naming --units)
+    s = scale_from_options(None, lsb=0.1)
+    assert not s.unit_stated and in_file_unit(s, "g", "f").lsb == 0.1
+    with pytest.raises(InputError, match="--units mps2[|]g"):
+        in_file_unit(s, None, "f")
 
 
 @pytest.mark.parametrize("kw,frag", [
     (dict(units="mps2"), "--lsb VALUE"),
-    (dict(lsb=0.1), "--units mps2|g"),
     (dict(units="mps2", lsb=0.1, full_scale_g=2), "both given"),
     (dict(units="g", lsb="nan"), "--lsb 'nan'"),
     (dict(units="g", lsb=0), "> 0"),
