@@ -326,7 +326,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
             if own is not None:
                 device_notes.append(f"the device's rate is {device.sample_rate_hz:.6g} Hz, the distinct readings'; "
                                     f"the recording keeps every row (at {rate:.6g} Hz)")
-        notes += gravity_removed_note(raw, scale, rate, lambda i: locate(i, 0)[0])
+        notes += gravity_removed_note(raw, scale, rate, lambda i: locate(i, 0)[0], pose)
         return Converted(rec, device, fmt, names, notes, scale, order is not None, device_notes)
 
 
@@ -392,33 +392,52 @@ def whole_counts(values: np.ndarray, source: str, locate) -> np.ndarray:
     return values.astype(np.int64)
 
 
-def stillest_force(raw: np.ndarray, rate_hz: float) -> tuple[int, int, np.ndarray] | None:
+def stillest_force(raw: np.ndarray, rate_hz: float, pose: np.ndarray | None = None) -> tuple[int, int, float] | None:
     """The stillest window of about STATIC_WINDOW_S (:func:`noise.window_std`: the one whose
     largest channel std is least, the first of equals): its first sample, the sample after its
-    last and its mean reading (counts); None where the recording is shorter than a window."""
+    last and the mean over its rows of |reading| (counts; each row's own magnitude, so that a
+    window over samples in different orientations -- a slow logger's, a file of pose means --
+    still reads |f|); None where the recording is shorter than a window.  With pose labels
+    (``pose``, -1 where none) a window lies within one labelled pose (a pose shorter than a
+    window is a window of its own)."""
     raw = np.asarray(raw)
     w = max(3, int(round(STATIC_WINDOW_S * rate_hz))) if np.isfinite(rate_hz) and rate_hz > 0 else 3
-    ws, h, k = window_std(raw, w)
-    if ws.shape[0] == 0:
+    spans = [(0, raw.shape[0])]
+    if pose is not None and np.any(pose >= 0):
+        cut = np.concatenate([[0], np.flatnonzero(np.diff(pose) != 0) + 1, [pose.size]])
+        spans = [(int(a), int(b)) for a, b in zip(cut[:-1], cut[1:]) if pose[a] >= 0]
+    best: tuple[float, int, int] | None = None
+    for s, e in spans:
+        ws, h, k = window_std(raw[s:e], w)
+        if ws.shape[0]:
+            j = int(np.argmin(ws.max(axis=1)))
+            cand = (float(ws[j].max()), s + j * h, s + (j + k) * h)
+        elif pose is not None and e > s:
+            cand = (float(raw[s:e].std(axis=0).max()), s, e)
+        else:
+            continue
+        if best is None or cand[0] < best[0]:
+            best = cand
+    if best is None:
         return None
-    j = int(np.argmin(ws.max(axis=1)))
-    a, b = j * h, (j + k) * h
-    return a, b, raw[a:b].mean(axis=0)
+    _, a, b = best
+    return a, b, float(np.mean(np.linalg.norm(raw[a:b].astype(float), axis=1)))
 
 
-def gravity_removed_note(raw: np.ndarray, scale: Scale | None, rate_hz: float, line) -> list[str]:
+def gravity_removed_note(raw: np.ndarray, scale: Scale | None, rate_hz: float, line,
+                         pose: np.ndarray | None = None) -> list[str]:
     """A note where readings converted from m/s^2 or g (``scale``) read |f| below
-    GRAVITY_REMOVED_G g at their stillest (:func:`stillest_force`): gravity has been taken out (a
-    phone's linear or user acceleration), which no later command can use; ``line(i)`` is sample
-    i's row in the file.  Empty otherwise (readings in counts: their zero and scale are the
-    device's to say)."""
+    GRAVITY_REMOVED_G g at their stillest (:func:`stillest_force`, within a pose where ``pose``
+    labels them): gravity has been taken out (a phone's linear or user acceleration), which no
+    later command can use; ``line(i)`` is sample i's row in the file.  Empty otherwise (readings
+    in counts: their zero and scale are the device's to say)."""
     if scale is None or not scale.converts or not scale.lsb_g:
         return []
-    still = stillest_force(raw, rate_hz)
+    still = stillest_force(raw, rate_hz, pose)
     if still is None:
         return []
-    a, b, mean = still
-    f_g = float(np.linalg.norm(mean)) * scale.lsb_g
+    a, b, norm = still
+    f_g = norm * scale.lsb_g
     if f_g >= GRAVITY_REMOVED_G:
         return []
     return [f"the readings' stillest {(b - a) / rate_hz:.2g} s (rows {line(a)}-{line(b - 1)}) read |f| = {f_g:.3g} g, "
