@@ -61,7 +61,7 @@ from .convert_log import is_log, read_log
 from .convert_mat import convert_mat, is_mat
 from .convert_axes import BARE_AXES, axis_column, axis_triples, columns_hint
 from .convert_named import convert_named
-from .convert_regions import POSE_DIRECTIONS, read_regions
+from .convert_regions import POSE_DIRECTIONS, read_regions, table_labels
 from .convert_rows import LOST_SAMPLES, lost_rows
 from .convert_time import TIME_COLUMN_RE, is_datetime, unit_in_name
 from .errors import InputError, notes_on_refusal
@@ -200,11 +200,15 @@ def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metada
     index = values[index_column] if index_column else np.arange(raw.shape[0])
     used = set(want)
     dropped = [c for c in names if c and c not in used and is_gyro(c)]
-    ignored = [c for c in names if c and c not in used and c not in dropped]
-    return finish(source, fmt, raw, index, None, values.get(part_column), opts, scale, True, rate, metadata,
-                  preamble_notes(pre) + drop_note(dropped, ignored) + shifted +
+    free = [c for c in names if c and c not in used and c not in dropped]
+    labels: list[str] = []
+    label_column, part, kept, hint = (None, None, None, None) if part_column else \
+        table_labels(source, names, free, table, list(range(table.n)), opts.regions is not None, opts.stated_f, labels)
+    ignored = [c for c in free if c != label_column]
+    return finish(source, fmt, raw, index, None, values.get(part_column, part), opts, scale, True, rate, metadata,
+                  preamble_notes(pre) + drop_note(dropped, ignored) + labels + shifted +
                   ([table.cut_note] if table.cut_note else []), locate,
-                  index_column)
+                  index_column, kept=kept, label_hint=hint)
 
 
 def mpu6050_preamble(source: str, data: bytes, pre) -> tuple[Any, dict[str, str], float | None]:

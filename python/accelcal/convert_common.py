@@ -253,12 +253,14 @@ def in_sample_order(index: np.ndarray, source: str, column: str | None, line) ->
 def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndarray | None, part: list[str] | None,
            opts: Options, scale: Scale | None, signed: bool, rate: float | None, metadata: dict[str, str],
            notes: list[str], locate, index_column: str | None, device: Device | None = None,
-           kept: tuple[np.ndarray, np.ndarray] | None = None, time_column: str | None = None,
-           t0: float = 0.0) -> Converted:
+           kept: tuple[np.ndarray, np.ndarray | None] | None = None, time_column: str | None = None,
+           t0: float = 0.0, label_hint: str | None = None) -> Converted:
     """Range check, a leading placeholder left out (:func:`convert_rows.placeholder_lead`), sample
     order, time, poses, metadata and the nominal device, shared by the formats (without time
     stamps ``t``, t is ``t0`` (s) + the sample index over ``rate``: a row left out before keeps
-    its place).  A refusal carries ``notes``, those made before it (:func:`errors.notes_on_refusal`)."""
+    its place).  ``kept``: the recording's own pose labels and f (f None: none); ``label_hint``: a
+    column that may name the poses (:func:`convert_regions.label_poses`).  A refusal carries
+    ``notes``, those made before it (:func:`errors.notes_on_refusal`)."""
     with notes_on_refusal(lambda: notes):    # a refusal after notes were made: they go with it
         check_range(raw, opts.bits, signed, source, locate)
         gravity = opts.gravity_mps2 or (device.gravity_mps2 if device is not None else STANDARD_GRAVITY)
@@ -267,7 +269,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
             raw, index = raw[lead:], index[lead:]
             t = None if t is None else t[lead:]
             part = None if part is None else part[lead:]
-            kept = None if kept is None else (kept[0][lead:], kept[1][lead:])
+            kept = None if kept is None else (kept[0][lead:], None if kept[1] is None else kept[1][lead:])
             shown = locate
 
             def locate(i: int, j: int) -> tuple[int, str]:
@@ -277,6 +279,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
         if order is not None:
             raw, index = raw[order], index[order]
             part = None if part is None else [part[i] for i in order.tolist()]
+            kept = None if kept is None else (kept[0][order], None if kept[1] is None else kept[1][order])
         if t is None:
             t = t0 + index / rate
         else:
@@ -300,7 +303,8 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
         if kept is not None:  # a contract recording without --regions keeps its labels and references
             (pose, f), names = kept, [str(k) for k in np.unique(kept[0][kept[0] >= 0])]
         else:
-            pose, f, names = label_poses(index, part, opts.regions, opts.stated_f, gravity, source, opts.regions_source)
+            pose, f, names = label_poses(index, part, opts.regions, opts.stated_f, gravity, source, opts.regions_source,
+                                         label_hint)
         metadata = {"source_file": " ".join(source.splitlines()), "source_format": fmt, **metadata}
         if scale is not None and (scale.converts or scale.lsb_g):
             metadata["source_scale"] = scale.describe()

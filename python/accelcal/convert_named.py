@@ -12,6 +12,7 @@ import numpy as np
 from .convert_axes import AxisColumn, find_named, names_unit, px4_export, stated_axes, table_axes
 from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
                              is_gyro, whole_counts)
+from .convert_regions import table_labels
 from .convert_time import TIME_COLUMN_RE, datetime_stamps, is_datetime, unit_in_name
 from .csvtable import convert_columns, got_text, slow_float
 from .errors import InputError, notes_on_refusal
@@ -414,10 +415,13 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
     t = None if stamps is None else table_time(source, stamps, table, rows, time_column, jt)
     used = set(want)
     dropped = [c for c in names if c and c not in used and is_gyro(c)]
-    ignored = [c for c in names if c and c not in used and c not in dropped]
+    free = [c for c in names if c and c not in used and c not in dropped]
+    label_column, part, kept, hint = table_labels(source, names, free, table, rows.tolist(), opts.regions is not None,
+                                                  opts.stated_f, notes)
+    ignored = [c for c in free if c != label_column]
     meta = {"table.columns": ", ".join(acc + ([time_column] if time_column else []))}
-    return finish(source, "table", raw, np.arange(rows.size), t, None, opts, scale, converts or bool(np.any(raw < 0)),
+    return finish(source, "table", raw, np.arange(rows.size), t, part, opts, scale, converts or bool(np.any(raw < 0)),
                   opts.rate_hz, meta,
                   preamble_notes(pre) + drop_note(dropped, ignored) + notes +
                   ([table.cut_note] if table.cut_note else []),
-                  locate, None, time_column=time_column)
+                  locate, None, kept=kept, time_column=time_column, label_hint=hint)

@@ -12,7 +12,7 @@ import json
 import numpy as np
 import pytest
 
-from cli_run import convert_ok, write_lines
+from cli_run import convert_ok, convert_refused, write_lines
 
 G = 9.80665
 #: six poses, each axis up then down, as a six-position calibration holds them
@@ -55,3 +55,53 @@ def test_slow_logger_turned_between_rows_is_not_told_gravity_removed(tmp_path, c
                                                                in enumerate(m)])
     _, _, err, _ = convert_ok(tmp_path, capfd, src, "--units", "mps2", "--lsb", "0.001", "--time-unit", "s")
     assert "gravity looks removed" not in err, err
+
+
+def _rows(m):
+    return [",".join(f"{v:.6f}" for v in r) for r in m]
+
+
+@pytest.mark.parametrize("header", ["pose,ax,ay,az", "t,pose,acc_x,acc_y,acc_z"])
+def test_a_pose_column_is_kept_as_the_recordings_pose_labels(tmp_path, capfd, header):
+    """The contract's own ``pose`` column (calibrate's recipe for a file of pose means: 'give
+    every row its own label in a pose column') had been 'ignored' by convert, and calibrate then
+    found no pose.  Its whole numbers are kept as written, -1 or empty while moving."""
+    m = np.repeat(_means(), 3, axis=0)
+    labels = [5, 5, 5, -1, 3, 3, 4, 4, 4, None, 0, 0, 1, 1, 1, 2, 2, 2]
+    cells = ["" if p is None else str(p) for p in labels]
+    timed = header.startswith("t,")
+    lines = [(f"{k / 10:.1f}," if timed else "") + f"{p}," + r for k, (p, r) in enumerate(zip(cells, _rows(m)))]
+    src = write_lines(tmp_path / "poses.csv", [header] + lines)
+    rec, _, err, _ = convert_ok(tmp_path, capfd, src, "--units", "mps2", "--lsb", "0.000001", "--bits", "32",
+                                *([] if timed else ["--rate", "10"]))
+    np.testing.assert_array_equal(rec.pose, [-1 if p is None else p for p in labels])
+    assert "ignored column" not in err, err
+
+
+def test_axis_and_sign_labels_are_read_as_poses_and_state_f(tmp_path, capfd):
+    """A pose-means table labelled ``Position`` = ``+X UP`` ... ``-Z UP`` (a ground station's
+    six-position result): the labels had been ignored and --stated-f refused 'no pose regions'.
+    They are read as x_p ... z_a (the signed axis that points up), with a note, and --stated-f
+    gives f = +-g along that axis."""
+    m = _means()
+    src = write_lines(tmp_path / "accel_calibration.csv", ["Position,ax,ay,az"] +
+                      [f"{n}," + r for (n, _), r in zip(SIX, _rows(m))])
+    rec, _, err, said = convert_ok(tmp_path, capfd, src, "--units", "mps2", "--lsb", "0.000001", "--bits", "32",
+                                   "--rate", "1", "--stated-f")
+    np.testing.assert_array_equal(rec.pose, np.arange(6))
+    np.testing.assert_allclose(rec.f, np.array([u for _, u in SIX]) * G)
+    assert "6 poses (x_p, x_a, y_p, y_a, z_p, z_a), reference f stated" in said, said
+    assert "pose labels from column Position (+X UP = x_p, -X UP = x_a," in err, err
+    assert "ignored column" not in err, err
+
+
+@pytest.mark.parametrize("label", ["pose", "where"])
+def test_stated_f_without_directions_names_the_column(tmp_path, capfd, label):
+    """--stated-f over labels that state no direction: whole numbers in a ``pose`` column, or a
+    text column that names no axis (``flat``, ``side``): refused, naming the column."""
+    m = _means()
+    cells = [str(k) for k in range(6)] if label == "pose" else ["flat", "upside", "left", "right", "nose", "tail"]
+    src = write_lines(tmp_path / "means.csv", [f"{label},ax,ay,az"] + [f"{c}," + r for c, r in zip(cells, _rows(m))])
+    err = convert_refused(tmp_path, capfd, src, "--units", "mps2", "--lsb", "0.000001", "--bits", "32", "--rate", "1",
+                          "--stated-f")
+    assert "--stated-f" in err and (f"column {label}" in err), err
