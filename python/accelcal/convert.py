@@ -63,7 +63,7 @@ from .convert_axes import BARE_AXES, axis_column, axis_triples, columns_hint
 from .convert_named import convert_named
 from .convert_regions import POSE_DIRECTIONS, read_regions, table_labels
 from .convert_rows import LOST_SAMPLES, lost_rows
-from .convert_time import TIME_COLUMN_RE, is_datetime, unit_in_name
+from .convert_time import is_datetime, is_time_name, unit_in_name
 from .errors import InputError, notes_on_refusal
 from .held import held_runs
 from .recording import read_recording
@@ -104,7 +104,7 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
         return "log"              # a comment naming a log's three columns ('# x y z') before its readings
     if "t" in cells and "raw_0" in cells:
         return "csv"
-    if any(TIME_COLUMN_RE.fullmatch(c.strip()) for c in cells) and any(axis_column(c) for c in cells):
+    if any(is_time_name(c) for c in cells) and any(axis_column(c) for c in cells):
         # a time column beside the axes: neither imucal's nor the MPU-6050 logger's (they have none)
         return "table"
     if set(ACC["imucal"]) <= low:
@@ -194,7 +194,7 @@ def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metada
         raw = to_counts(matrix, scale, source, locate, notes=shifted) if converts else matrix.astype(np.int64)
         rate = opts.rate_hz
         if rate is None:
-            timed = next((n for n in names if TIME_COLUMN_RE.fullmatch(n)), None)
+            timed = next((n for n in names if is_time_name(n)), None)
             hint = f" (--format table reads the time column {timed!r})" if timed else ""
             raise InputError(source, f"{fmt} files have no time column: give the sample rate with --rate HZ{hint}")
     index = values[index_column] if index_column else np.arange(raw.shape[0])
@@ -326,7 +326,8 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         more than one of 3 or 4 columns.
     time_column : str, optional
         A table's time column (its stamps in the unit ``time_unit`` gives).  Default: of the
-        names TIME_COLUMN_RE matches, those whose cells are numbers (a clock time or a date
+        names TIME_COLUMN_RE matches, then those with a time word among others (``unix_timestamp``,
+        ``epoch``) that state a unit or hold an epoch's stamps, those whose cells are numbers (a clock time or a date
         is no time stamp), the first whose name states a unit, else the first; a note names
         the one used and those passed over.
     repeated_stamps : {"refuse", "drop"}

@@ -13,7 +13,7 @@ from .convert_axes import AxisColumn, find_named, names_unit, px4_export, stated
 from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
                              is_gyro, whole_counts)
 from .convert_regions import table_labels
-from .convert_time import TIME_COLUMN_RE, datetime_stamps, is_datetime, unit_in_name
+from .convert_time import TIME_COLUMN_RE, datetime_stamps, epoch_like, is_datetime, is_time_name, unit_in_name
 from .csvtable import convert_columns, got_text, slow_float
 from .errors import InputError, notes_on_refusal
 from .convert_rows import lost_rows, trailer_note, trailer_start
@@ -149,7 +149,9 @@ def comment_rate(metadata: dict[str, str]) -> tuple[float, str] | None:
 def choose_time_column(source: str, names: list[str], acc: list[str], table, rows: np.ndarray, rate_stated: bool,
                        header_row: int, notes: list[str]) -> str | None:
     """The table's time column among the names TIME_COLUMN_RE matches (``Time (s)``,
-    ``timestamp_us``, ``Time(hh:mm:ss)``): those whose cells are numbers or full ISO-8601
+    ``timestamp_us``, ``Time(hh:mm:ss)``), then those with a time word among others
+    (:func:`convert_time.is_broad_time_name`: ``unix_timestamp``, ``epoch``) whose name states a
+    unit or whose first stamp is an epoch's (:func:`convert_time.epoch_like`): those whose cells are numbers or full ISO-8601
     date-times (:func:`convert_time.is_datetime`; a clock time ``05:34:44`` or a date alone
     is no time stamp), and of those the first whose name states a
     unit (``Timestamp(Ms)``), else the first.  A note names the column used and those passed
@@ -167,9 +169,13 @@ def choose_time_column(source: str, names: list[str], acc: list[str], table, row
         Candidates, none numeric, and no ``--rate``: naming each with the text it holds.
     """
     cands = [n for n in names if n and n not in acc and TIME_COLUMN_RE.fullmatch(n)]
+    seen = {n: first_cell(table, names.index(n), rows) for n in names if n and n not in acc and is_time_name(n)}
+    # a time word among others (unix_timestamp, epoch): a time column where the name states a unit or the
+    # stamps are an epoch's (a gyroscope's stamps are not the accelerometer's)
+    cands += [n for n in seen if n not in cands and not is_gyro(n) and
+              (unit_in_name(n) is not None or seen[n] is not None and (epoch_like(seen[n][1]) or is_datetime(seen[n][1])))]
     if not cands:
         return None
-    seen = {n: first_cell(table, names.index(n), rows) for n in cands}
     numeric = [n for n in cands if seen[n] is None or is_number(seen[n][1]) or is_datetime(seen[n][1])]
 
     def holds(n: str) -> str:
@@ -369,9 +375,12 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
     if time_column is None and opts.rate_hz is None:
         stated = comment_rate(pre.metadata)
         if stated is None:
-            raise InputError(source, "the table has no time column (t, time, timestamp, 'Time (s)', time_ms, ...): "
-                             "give the sample rate with --rate HZ (or name its column with --time-column NAME)",
-                             row=pre.header_line)
+            named = [n for n in names if n and n not in acc and is_time_name(n) and not is_gyro(n)]
+            said = f"; {', '.join(map(repr, named))} has a time's name but neither a unit in it nor an epoch's " \
+                "stamps: --time-column NAME (and --time-unit) reads it" if named else ""
+            raise InputError(source, "the table has no time column (t, time, timestamp, 'Time (s)', time_ms, "
+                             "unix_timestamp, ...): give the sample rate with --rate HZ (or name its column with "
+                             f"--time-column NAME){said}", row=pre.header_line)
         opts.rate_hz, key = stated
         notes.append(f"no time column: the rate is the {opts.rate_hz:g} Hz the file's comment '# {key}' states "
                      "(--rate HZ states another)")
