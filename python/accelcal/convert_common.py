@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from .clipping import clip_note
 from .convert_regions import label_poses
 from .convert_rows import placeholder_lead
 from .convert_time import FLOAT_EXACT, burst_fit, exact_stamps, rate_from_t, time_in_seconds
@@ -20,7 +21,7 @@ from .held import held_runs, held_text, inner_runs, uneven
 from .recording import Recording
 from .recording_checks import RATE_TOL
 from .noise import window_std
-from .static import STATIC_WINDOW_S, detect_static, scale_agreement
+from .static import STATIC_WINDOW_S, detect_static, scale_agreement, window_len
 from .textinput import NUMBER_RE, is_whitespace_header, split_whitespace_header, whitespace_to_commas
 from .units import STANDARD_GRAVITY, Scale
 
@@ -331,6 +332,8 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
                 device_notes.append(f"the device's rate is {device.sample_rate_hz:.6g} Hz, the distinct readings'; "
                                     f"the recording keeps every row (at {rate:.6g} Hz)")
         notes += gravity_removed_note(raw, scale, rate, lambda i: locate(i, 0)[0], pose)
+        clipped = clip_note(raw, device, window_len(device, STATIC_WINDOW_S, raw.shape[0]), lambda j: locate(0, j)[1])
+        notes += [clipped] if clipped else []
         return Converted(rec, device, fmt, names, notes, scale, order is not None, device_notes)
 
 

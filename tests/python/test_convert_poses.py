@@ -105,3 +105,25 @@ def test_stated_f_without_directions_names_the_column(tmp_path, capfd, label):
     err = convert_refused(tmp_path, capfd, src, "--units", "mps2", "--lsb", "0.000001", "--bits", "32", "--rate", "1",
                           "--stated-f")
     assert "--stated-f" in err and (f"column {label}" in err), err
+
+
+def test_clipped_readings_are_noted(tmp_path, capfd):
+    """A fan's vibration in g on a +-8 g 12-bit grid (1/256 g), some shocks beyond the range
+    written as -8.000 or 7.996 g (raw_min, raw_max): convert had passed them without a word.
+    The note counts them per column and end (clipping.clip_levels' rule)."""
+    rng = np.random.default_rng(7)
+    n = 3000
+    k = np.arange(n)
+    a = np.column_stack([5.0 * np.sin(k / 3.0), 4.0 * np.cos(k / 5.0), 1.0 + 0.3 * np.sin(k / 7.0)])
+    a += 0.05 * rng.standard_normal(a.shape)
+    a[rng.choice(n, 12, replace=False), 0] = 9.5          # shocks beyond +8 g
+    a[rng.choice(n, 5, replace=False), 1] = -11.0         # ... and below -8 g
+    counts = np.clip(np.round(a * 256), -2048, 2047).astype(int)
+    src = write_lines(tmp_path / "fan.csv", ["x,y,z"] + [",".join(f"{v / 256:.3f}" for v in r) for r in counts])
+    rec, _, err, _ = convert_ok(tmp_path, capfd, src, "--rate", "100", "--units", "g", "--full-scale", "8",
+                                "--bits", "12", "--columns", "x,y,z")
+    np.testing.assert_array_equal(rec.raw, counts)
+    hi, lo = int(np.sum(counts[:, 0] == 2047)), int(np.sum(counts[:, 1] == -2048))
+    said = [ln for ln in err.splitlines() if "clipped" in ln]
+    assert len(said) == 1 and f"{hi + lo} reading(s) sit at the ends of the range" in said[0], err
+    assert f"x {hi} at 2047 (raw_max)" in said[0] and f"y {lo} at -2048 (raw_min)" in said[0], said
