@@ -166,8 +166,11 @@ def header_example(cells: list[str], spaced: bool) -> str:
 
 # ---- the formats -----------------------------------------------------------------------
 
-def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metadata: dict[str, str]) -> Converted:
-    """imucal's CSV or the MPU-6050 log's rows (after its key,value lines)."""
+def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metadata: dict[str, str],
+                  label: str | None = None) -> Converted:
+    """imucal's CSV or the MPU-6050 log's rows (after its key,value lines); ``label``: the format
+    the recording's source_format names (default ``fmt``)."""
+    label = label or fmt
     names = [c.strip() for c in header_cells(pre.header)]
     acc = [find_column(names, a) for a in ACC[fmt]]
     if None in acc:
@@ -196,7 +199,7 @@ def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metada
         if rate is None:
             timed = next((n for n in names if is_time_name(n)), None)
             hint = f" (--format table reads the time column {timed!r})" if timed else ""
-            raise InputError(source, f"{fmt} files have no time column: give the sample rate with --rate HZ{hint}")
+            raise InputError(source, f"{label} files have no time column: give the sample rate with --rate HZ{hint}")
     index = values[index_column] if index_column else np.arange(raw.shape[0])
     used = set(want)
     dropped = [c for c in names if c and c not in used and is_gyro(c)]
@@ -205,7 +208,9 @@ def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metada
     label_column, part, kept, hint = (None, None, None, None) if part_column else \
         table_labels(source, names, free, table, list(range(table.n)), opts.regions is not None, opts.stated_f, labels)
     ignored = [c for c in free if c != label_column]
-    return finish(source, fmt, raw, index, None, values.get(part_column, part), opts, scale, True, rate, metadata,
+    if label != fmt:
+        metadata = {**metadata, "table.columns": ", ".join(acc)}
+    return finish(source, label, raw, index, None, values.get(part_column, part), opts, scale, True, rate, metadata,
                   preamble_notes(pre) + drop_note(dropped, ignored) + labels + shifted +
                   ([table.cut_note] if table.cut_note else []), locate,
                   index_column, kept=kept, label_hint=hint)
@@ -424,7 +429,11 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         return convert_named(source, data, timed_rows(data, pre) or pre, opts, units_stated)
     meta: dict[str, str] = {}
     with notes_on_refusal(lambda: preamble_notes(pre)):     # a title passed over, before a refusal
+        label = fmt
         if fmt == "mpu6050":
             pre, meta, fs = mpu6050_preamble(source, data, pre)
             opts.rate_hz = rate_hz if rate_hz is not None else fs
-        return convert_table(source, data, pre, fmt, opts, meta)
+            # the logger's key,value lines (Fs, ...) say it is the MPU-6050 logger's; a bare header ax,ay,az,...
+            # (such as a headerless file's, as the refusal suggests) says only that it is a table
+            label = "mpu6050" if meta or not told else "table"
+        return convert_table(source, data, pre, fmt, opts, meta, label)

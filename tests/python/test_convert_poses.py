@@ -127,3 +127,18 @@ def test_clipped_readings_are_noted(tmp_path, capfd):
     said = [ln for ln in err.splitlines() if "clipped" in ln]
     assert len(said) == 1 and f"{hi + lo} reading(s) sit at the ends of the range" in said[0], err
     assert f"x {hi} at 2047 (raw_max)" in said[0] and f"y {lo} at -2048 (raw_min)" in said[0], said
+
+
+@pytest.mark.parametrize("preamble", [False, True])
+def test_the_format_named_is_the_one_read(tmp_path, capfd, preamble):
+    """A headerless 6-column float log given the header the refusal suggests (ax,ay,az,gx,gy,gz)
+    had been labelled source_format 'mpu6050' though nothing says it is one: it is a table.  The
+    MPU-6050 logger's own file (its 'Fs,100' key,value line first) keeps its name."""
+    rng = np.random.default_rng(2)
+    counts = np.round(np.array([100.0, -50.0, 16000.0]) + 5 * rng.standard_normal((40, 3))).astype(int)
+    lines = (["Fs,100"] if preamble else []) + ["ax,ay,az,gx,gy,gz"] + [f"{a},{b},{c},1,2,3" for a, b, c in counts]
+    src = write_lines(tmp_path / "imu_data.csv", lines)
+    rec, _, _, said = convert_ok(tmp_path, capfd, src, *([] if preamble else ["--rate", "100"]))
+    np.testing.assert_array_equal(rec.raw, counts)
+    fmt = "mpu6050" if preamble else "table"
+    assert rec.metadata["source_format"] == fmt and said.startswith(f"{fmt}: 40 rows"), (rec.metadata, said)
