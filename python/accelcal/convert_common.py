@@ -431,12 +431,20 @@ def stillest_force(raw: np.ndarray, rate_hz: float, pose: np.ndarray | None = No
     return a, b, float(np.mean(np.linalg.norm(raw[a:b].astype(float), axis=1)))
 
 
+#: a unit read as another: |f| at rest, in g, that it gives (gravity_removed_note)
+MISREAD_UNITS = (("readings in mm/s^2 read as m/s^2", "mps2", 1000.0),
+                 ("readings in m/s^2 read as g", "g", STANDARD_GRAVITY),
+                 ("readings in mm/s^2 read as g", "g", 1000.0 * STANDARD_GRAVITY),
+                 ("readings in mg read as g", "g", 1000.0))
+
+
 def gravity_removed_note(raw: np.ndarray, scale: Scale | None, rate_hz: float, line,
                          pose: np.ndarray | None = None) -> list[str]:
     """A note where readings converted from m/s^2 or g (``scale``) read |f| below
     GRAVITY_REMOVED_G g at their stillest (:func:`stillest_force`, within a pose where ``pose``
     labels them): gravity has been taken out (a phone's linear or user acceleration), which no
-    later command can use; ``line(i)`` is sample i's row in the file.  Empty otherwise (readings
+    later command can use; or |f| at rest about a unit's factor off (MISREAD_UNITS: 1000 g for
+    mm/s^2 read as m/s^2); ``line(i)`` is sample i's row in the file.  Empty otherwise (readings
     in counts: their zero and scale are the device's to say)."""
     if scale is None or not scale.converts or not scale.lsb_g:
         return []
@@ -445,6 +453,12 @@ def gravity_removed_note(raw: np.ndarray, scale: Scale | None, rate_hz: float, l
         return []
     a, b, norm = still
     f_g = norm * scale.lsb_g
+    misread = [what for what, unit, factor in MISREAD_UNITS if unit == scale.units and abs(f_g / factor - 1) < 0.1]
+    if misread:
+        return [f"the readings' stillest {(b - a) / rate_hz:.2g} s (rows {line(a)}-{line(b - 1)}) read |f| = "
+                f"{f_g:.4g} g, where anything at rest reads 1 g: {misread[0]}? (Klipper's ACCELEROMETER_MEASURE "
+                "writes mm/s^2; accelcal reads m/s^2 and g: divide such readings by 1000 first); state the readings' "
+                "own unit with --units and --lsb"]
     if f_g >= GRAVITY_REMOVED_G:
         return []
     return [f"the readings' stillest {(b - a) / rate_hz:.2g} s (rows {line(a)}-{line(b - 1)}) read |f| = {f_g:.3g} g, "

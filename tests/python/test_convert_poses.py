@@ -142,3 +142,22 @@ def test_the_format_named_is_the_one_read(tmp_path, capfd, preamble):
     np.testing.assert_array_equal(rec.raw, counts)
     fmt = "mpu6050" if preamble else "table"
     assert rec.metadata["source_format"] == fmt and said.startswith(f"{fmt}: 40 rows"), (rec.metadata, said)
+
+
+@pytest.mark.parametrize("units,factor,said", [("mps2", 1000.0, "readings in mm/s^2 read as m/s^2?"),
+                                               ("g", 1.0, "readings in m/s^2 read as g?"), ("mps2", 1.0, None)])
+def test_readings_a_unit_off_are_noted(tmp_path, capfd, units, factor, said):
+    """Klipper's ACCELEROMETER_MEASURE writes mm/s^2; stated as m/s^2 they read |f| = 1000 g at
+    rest, and convert had passed them without a word (its note was for |f| below g/2 only).  A
+    note names the likely misreading (mm/s^2 as m/s^2, m/s^2 as g); readings in their own unit
+    get none.  (``factor``: 1000 where the file's readings are mm/s^2, else 1.)"""
+    rng = np.random.default_rng(4)
+    u = np.array([0.17, 0.985, 0.02]) / np.linalg.norm([0.17, 0.985, 0.02])
+    lsb = 0.019142581 * factor
+    counts = np.round(u * G / 0.019142581 + 2.5 * rng.standard_normal((400, 3))).astype(int)
+    rows = [f"{k / 394:.6f}," + ",".join(f"{v * lsb:.6f}" for v in r) for k, r in enumerate(counts)]
+    src = write_lines(tmp_path / "lis2dw-0.csv", ["#time,accel_x,accel_y,accel_z"] + rows)
+    rec, _, err, _ = convert_ok(tmp_path, capfd, src, "--units", units, "--lsb", f"{lsb:.9g}")
+    np.testing.assert_array_equal(rec.raw, counts)
+    notes = [ln for ln in err.splitlines() if "where anything at rest reads 1 g" in ln]
+    assert (len(notes) == 1 and said in notes[0]) if said else not notes, err
