@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .noise import code_step
+from .noise import code_step, noise_for
 
 
 CLIP_MIN_COUNT = 10        # readings at one extreme value before it can be a clip level
@@ -169,3 +169,30 @@ def clip_levels(raw: np.ndarray, device, noise: np.ndarray, window: int) -> Clip
         if bot is not None and bot > device.raw_min and (not coarse or pile_moves(raw, i, bot, noise, window)):
             lo[i], in_lo[i] = bot, True
     return ClipLevels(lo=lo, hi=hi, inside_lo=in_lo, inside_hi=in_hi)
+
+
+def clip_note(raw: np.ndarray, device, window: int, name=lambda i: f"raw_{i}") -> str | None:
+    """A note counting the clipped readings (:func:`clip_levels`, the noise from
+    :func:`noise.noise_for`) per channel and end: how many at each level, which is the
+    converter's limit (raw_min / raw_max) or a pile inside the range; None where there are none.
+    ``name(i)``: channel i's name for the note (a file's column)."""
+    raw = np.asarray(raw)
+    if raw.shape[0] < 2:
+        return None
+    levels = clip_levels(raw, device, noise_for(device, raw, window)[0], window)
+    parts, total = [], 0
+    for i in range(raw.shape[1]):
+        ends = []
+        for at, level, inside, limit in ((raw[:, i] <= levels.lo[i], levels.lo[i], levels.inside_lo[i], "raw_min"),
+                                         (raw[:, i] >= levels.hi[i], levels.hi[i], levels.inside_hi[i], "raw_max")):
+            k = int(np.count_nonzero(at))
+            if k:
+                total += k
+                ends.append(f"{k} at {int(level)}" + (" (a pile inside the range)" if inside else f" ({limit})"))
+        if ends:
+            parts.append(f"{name(i)} " + " and ".join(ends))
+    if not total:
+        return None
+    return (f"{total} reading(s) sit at the ends of the range, clipped (in counts: {'; '.join(parts)}): the sensor "
+            "went beyond its full scale there (shocks, vibration); calibrate and diagnose set aside the poses they "
+            "touch")

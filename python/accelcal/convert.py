@@ -61,9 +61,9 @@ from .convert_log import is_log, read_log
 from .convert_mat import convert_mat, is_mat
 from .convert_axes import BARE_AXES, axis_column, axis_triples, columns_hint
 from .convert_named import convert_named
-from .convert_regions import POSE_DIRECTIONS, read_regions
+from .convert_regions import POSE_DIRECTIONS, read_regions, table_labels
 from .convert_rows import LOST_SAMPLES, lost_rows
-from .convert_time import TIME_COLUMN_RE, is_datetime, unit_in_name
+from .convert_time import is_datetime, is_time_name, unit_in_name
 from .errors import InputError, notes_on_refusal
 from .held import held_runs
 from .recording import read_recording
@@ -104,7 +104,7 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
         return "log"              # a comment naming a log's three columns ('# x y z') before its readings
     if "t" in cells and "raw_0" in cells:
         return "csv"
-    if any(TIME_COLUMN_RE.fullmatch(c.strip()) for c in cells) and any(axis_column(c) for c in cells):
+    if any(is_time_name(c) for c in cells) and any(axis_column(c) for c in cells):
         # a time column beside the axes: neither imucal's nor the MPU-6050 logger's (they have none)
         return "table"
     if set(ACC["imucal"]) <= low:
@@ -166,8 +166,11 @@ def header_example(cells: list[str], spaced: bool) -> str:
 
 # ---- the formats -----------------------------------------------------------------------
 
-def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metadata: dict[str, str]) -> Converted:
-    """imucal's CSV or the MPU-6050 log's rows (after its key,value lines)."""
+def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metadata: dict[str, str],
+                  label: str | None = None) -> Converted:
+    """imucal's CSV or the MPU-6050 log's rows (after its key,value lines); ``label``: the format
+    the recording's source_format names (default ``fmt``)."""
+    label = label or fmt
     names = [c.strip() for c in header_cells(pre.header)]
     acc = [find_column(names, a) for a in ACC[fmt]]
     if None in acc:
@@ -194,17 +197,23 @@ def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metada
         raw = to_counts(matrix, scale, source, locate, notes=shifted) if converts else matrix.astype(np.int64)
         rate = opts.rate_hz
         if rate is None:
-            timed = next((n for n in names if TIME_COLUMN_RE.fullmatch(n)), None)
+            timed = next((n for n in names if is_time_name(n)), None)
             hint = f" (--format table reads the time column {timed!r})" if timed else ""
-            raise InputError(source, f"{fmt} files have no time column: give the sample rate with --rate HZ{hint}")
+            raise InputError(source, f"{label} files have no time column: give the sample rate with --rate HZ{hint}")
     index = values[index_column] if index_column else np.arange(raw.shape[0])
     used = set(want)
     dropped = [c for c in names if c and c not in used and is_gyro(c)]
-    ignored = [c for c in names if c and c not in used and c not in dropped]
-    return finish(source, fmt, raw, index, None, values.get(part_column), opts, scale, True, rate, metadata,
-                  preamble_notes(pre) + drop_note(dropped, ignored) + shifted +
+    free = [c for c in names if c and c not in used and c not in dropped]
+    labels: list[str] = []
+    label_column, part, kept, hint = (None, None, None, None) if part_column else \
+        table_labels(source, names, free, table, list(range(table.n)), opts.regions is not None, opts.stated_f, labels)
+    ignored = [c for c in free if c != label_column]
+    if label != fmt:
+        metadata = {**metadata, "table.columns": ", ".join(acc)}
+    return finish(source, label, raw, index, None, values.get(part_column, part), opts, scale, True, rate, metadata,
+                  preamble_notes(pre) + drop_note(dropped, ignored) + labels + shifted +
                   ([table.cut_note] if table.cut_note else []), locate,
-                  index_column)
+                  index_column, kept=kept, label_hint=hint)
 
 
 def mpu6050_preamble(source: str, data: bytes, pre) -> tuple[Any, dict[str, str], float | None]:
@@ -322,7 +331,8 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         more than one of 3 or 4 columns.
     time_column : str, optional
         A table's time column (its stamps in the unit ``time_unit`` gives).  Default: of the
-        names TIME_COLUMN_RE matches, those whose cells are numbers (a clock time or a date
+        names TIME_COLUMN_RE matches, then those with a time word among others (``unix_timestamp``,
+        ``epoch``) that state a unit or hold an epoch's stamps, those whose cells are numbers (a clock time or a date
         is no time stamp), the first whose name states a unit, else the first; a note names
         the one used and those passed over.
     repeated_stamps : {"refuse", "drop", "shift"}
@@ -423,7 +433,11 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         return convert_named(source, data, timed_rows(data, pre) or pre, opts, units_stated)
     meta: dict[str, str] = {}
     with notes_on_refusal(lambda: preamble_notes(pre)):     # a title passed over, before a refusal
+        label = fmt
         if fmt == "mpu6050":
             pre, meta, fs = mpu6050_preamble(source, data, pre)
             opts.rate_hz = rate_hz if rate_hz is not None else fs
-        return convert_table(source, data, pre, fmt, opts, meta)
+            # the logger's key,value lines (Fs, ...) say it is the MPU-6050 logger's; a bare header ax,ay,az,...
+            # (such as a headerless file's, as the refusal suggests) says only that it is a table
+            label = "mpu6050" if meta or not told else "table"
+        return convert_table(source, data, pre, fmt, opts, meta, label)

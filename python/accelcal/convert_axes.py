@@ -10,7 +10,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from .convert_time import TIME_COLUMN_RE
+from .convert_time import is_time_name
 from .errors import InputError
 
 __all__ = ["AXIS_RE", "BARE_AXES", "PX4_ACCEL_FILE_RE", "NAMED_UNITS", "AxisColumn", "axis_column", "table_axes",
@@ -122,7 +122,7 @@ def table_axes(source: str, names: list[str], row: int, notes: list[str] | None 
         other_sensor = OTHER_SENSOR_FILE_RE.search(file) or VIRTUAL_FILE_RE.search(file)
         if PX4_ACCEL_FILE_RE.search(file):
             found = [AxisColumn(n, n.lower(), "mps2", False) for n in bare]
-        elif others and all(TIME_COLUMN_RE.fullmatch(n) for n in others) and not other_sensor:
+        elif others and all(is_time_name(n) for n in others) and not other_sensor:
             found = [AxisColumn(n, n.lower(), None, False) for n in bare]
             if notes is not None:
                 notes.append(f"the columns {', '.join(ordered)} beside {', '.join(others)} and no other sensor's are "

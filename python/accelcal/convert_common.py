@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from .clipping import clip_note
 from .convert_regions import label_poses
 from .convert_rows import placeholder_lead
 from .convert_time import FLOAT_EXACT, burst_fit, exact_stamps, rate_from_t, time_in_seconds
@@ -20,7 +21,7 @@ from .held import held_runs, held_text, inner_runs, uneven
 from .recording import Recording
 from .recording_checks import RATE_TOL
 from .noise import window_std
-from .static import STATIC_WINDOW_S, detect_static, scale_agreement
+from .static import STATIC_WINDOW_S, detect_static, scale_agreement, window_len
 from .textinput import NUMBER_RE, is_whitespace_header, split_whitespace_header, whitespace_to_commas
 from .units import STANDARD_GRAVITY, Scale
 
@@ -253,12 +254,14 @@ def in_sample_order(index: np.ndarray, source: str, column: str | None, line) ->
 def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndarray | None, part: list[str] | None,
            opts: Options, scale: Scale | None, signed: bool, rate: float | None, metadata: dict[str, str],
            notes: list[str], locate, index_column: str | None, device: Device | None = None,
-           kept: tuple[np.ndarray, np.ndarray] | None = None, time_column: str | None = None,
-           t0: float = 0.0) -> Converted:
+           kept: tuple[np.ndarray, np.ndarray | None] | None = None, time_column: str | None = None,
+           t0: float = 0.0, label_hint: str | None = None) -> Converted:
     """Range check, a leading placeholder left out (:func:`convert_rows.placeholder_lead`), sample
     order, time, poses, metadata and the nominal device, shared by the formats (without time
     stamps ``t``, t is ``t0`` (s) + the sample index over ``rate``: a row left out before keeps
-    its place).  A refusal carries ``notes``, those made before it (:func:`errors.notes_on_refusal`)."""
+    its place).  ``kept``: the recording's own pose labels and f (f None: none); ``label_hint``: a
+    column that may name the poses (:func:`convert_regions.label_poses`).  A refusal carries
+    ``notes``, those made before it (:func:`errors.notes_on_refusal`)."""
     with notes_on_refusal(lambda: notes):    # a refusal after notes were made: they go with it
         check_range(raw, opts.bits, signed, source, locate)
         gravity = opts.gravity_mps2 or (device.gravity_mps2 if device is not None else STANDARD_GRAVITY)
@@ -267,7 +270,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
             raw, index = raw[lead:], index[lead:]
             t = None if t is None else t[lead:]
             part = None if part is None else part[lead:]
-            kept = None if kept is None else (kept[0][lead:], kept[1][lead:])
+            kept = None if kept is None else (kept[0][lead:], None if kept[1] is None else kept[1][lead:])
             shown = locate
 
             def locate(i: int, j: int) -> tuple[int, str]:
@@ -277,6 +280,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
         if order is not None:
             raw, index = raw[order], index[order]
             part = None if part is None else [part[i] for i in order.tolist()]
+            kept = None if kept is None else (kept[0][order], None if kept[1] is None else kept[1][order])
         if t is None:
             t = t0 + index / rate
         else:
@@ -300,7 +304,8 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
         if kept is not None:  # a contract recording without --regions keeps its labels and references
             (pose, f), names = kept, [str(k) for k in np.unique(kept[0][kept[0] >= 0])]
         else:
-            pose, f, names = label_poses(index, part, opts.regions, opts.stated_f, gravity, source, opts.regions_source)
+            pose, f, names = label_poses(index, part, opts.regions, opts.stated_f, gravity, source, opts.regions_source,
+                                         label_hint)
         metadata = {"source_file": " ".join(source.splitlines()), "source_format": fmt, **metadata}
         if scale is not None and (scale.converts or scale.lsb_g):
             metadata["source_scale"] = scale.describe()
@@ -326,7 +331,9 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
             if own is not None:
                 device_notes.append(f"the device's rate is {device.sample_rate_hz:.6g} Hz, the distinct readings'; "
                                     f"the recording keeps every row (at {rate:.6g} Hz)")
-        notes += gravity_removed_note(raw, scale, rate, lambda i: locate(i, 0)[0])
+        notes += gravity_removed_note(raw, scale, rate, lambda i: locate(i, 0)[0], pose)
+        clipped = clip_note(raw, device, window_len(device, STATIC_WINDOW_S, raw.shape[0]), lambda j: locate(0, j)[1])
+        notes += [clipped] if clipped else []
         return Converted(rec, device, fmt, names, notes, scale, order is not None, device_notes)
 
 
@@ -392,33 +399,66 @@ def whole_counts(values: np.ndarray, source: str, locate) -> np.ndarray:
     return values.astype(np.int64)
 
 
-def stillest_force(raw: np.ndarray, rate_hz: float) -> tuple[int, int, np.ndarray] | None:
+def stillest_force(raw: np.ndarray, rate_hz: float, pose: np.ndarray | None = None) -> tuple[int, int, float] | None:
     """The stillest window of about STATIC_WINDOW_S (:func:`noise.window_std`: the one whose
     largest channel std is least, the first of equals): its first sample, the sample after its
-    last and its mean reading (counts); None where the recording is shorter than a window."""
+    last and the mean over its rows of |reading| (counts; each row's own magnitude, so that a
+    window over samples in different orientations -- a slow logger's, a file of pose means --
+    still reads |f|); None where the recording is shorter than a window.  With pose labels
+    (``pose``, -1 where none) a window lies within one labelled pose (a pose shorter than a
+    window is a window of its own)."""
     raw = np.asarray(raw)
     w = max(3, int(round(STATIC_WINDOW_S * rate_hz))) if np.isfinite(rate_hz) and rate_hz > 0 else 3
-    ws, h, k = window_std(raw, w)
-    if ws.shape[0] == 0:
+    spans = [(0, raw.shape[0])]
+    if pose is not None and np.any(pose >= 0):
+        cut = np.concatenate([[0], np.flatnonzero(np.diff(pose) != 0) + 1, [pose.size]])
+        spans = [(int(a), int(b)) for a, b in zip(cut[:-1], cut[1:]) if pose[a] >= 0]
+    best: tuple[float, int, int] | None = None
+    for s, e in spans:
+        ws, h, k = window_std(raw[s:e], w)
+        if ws.shape[0]:
+            j = int(np.argmin(ws.max(axis=1)))
+            cand = (float(ws[j].max()), s + j * h, s + (j + k) * h)
+        elif pose is not None and e > s:
+            cand = (float(raw[s:e].std(axis=0).max()), s, e)
+        else:
+            continue
+        if best is None or cand[0] < best[0]:
+            best = cand
+    if best is None:
         return None
-    j = int(np.argmin(ws.max(axis=1)))
-    a, b = j * h, (j + k) * h
-    return a, b, raw[a:b].mean(axis=0)
+    _, a, b = best
+    return a, b, float(np.mean(np.linalg.norm(raw[a:b].astype(float), axis=1)))
 
 
-def gravity_removed_note(raw: np.ndarray, scale: Scale | None, rate_hz: float, line) -> list[str]:
+#: a unit read as another: |f| at rest, in g, that it gives (gravity_removed_note)
+MISREAD_UNITS = (("readings in mm/s^2 read as m/s^2", "mps2", 1000.0),
+                 ("readings in m/s^2 read as g", "g", STANDARD_GRAVITY),
+                 ("readings in mm/s^2 read as g", "g", 1000.0 * STANDARD_GRAVITY),
+                 ("readings in mg read as g", "g", 1000.0))
+
+
+def gravity_removed_note(raw: np.ndarray, scale: Scale | None, rate_hz: float, line,
+                         pose: np.ndarray | None = None) -> list[str]:
     """A note where readings converted from m/s^2 or g (``scale``) read |f| below
-    GRAVITY_REMOVED_G g at their stillest (:func:`stillest_force`): gravity has been taken out (a
-    phone's linear or user acceleration), which no later command can use; ``line(i)`` is sample
-    i's row in the file.  Empty otherwise (readings in counts: their zero and scale are the
-    device's to say)."""
+    GRAVITY_REMOVED_G g at their stillest (:func:`stillest_force`, within a pose where ``pose``
+    labels them): gravity has been taken out (a phone's linear or user acceleration), which no
+    later command can use; or |f| at rest about a unit's factor off (MISREAD_UNITS: 1000 g for
+    mm/s^2 read as m/s^2); ``line(i)`` is sample i's row in the file.  Empty otherwise (readings
+    in counts: their zero and scale are the device's to say)."""
     if scale is None or not scale.converts or not scale.lsb_g:
         return []
-    still = stillest_force(raw, rate_hz)
+    still = stillest_force(raw, rate_hz, pose)
     if still is None:
         return []
-    a, b, mean = still
-    f_g = float(np.linalg.norm(mean)) * scale.lsb_g
+    a, b, norm = still
+    f_g = norm * scale.lsb_g
+    misread = [what for what, unit, factor in MISREAD_UNITS if unit == scale.units and abs(f_g / factor - 1) < 0.1]
+    if misread:
+        return [f"the readings' stillest {(b - a) / rate_hz:.2g} s (rows {line(a)}-{line(b - 1)}) read |f| = "
+                f"{f_g:.4g} g, where anything at rest reads 1 g: {misread[0]}? (Klipper's ACCELEROMETER_MEASURE "
+                "writes mm/s^2; accelcal reads m/s^2 and g: divide such readings by 1000 first); state the readings' "
+                "own unit with --units and --lsb"]
     if f_g >= GRAVITY_REMOVED_G:
         return []
     return [f"the readings' stillest {(b - a) / rate_hz:.2g} s (rows {line(a)}-{line(b - 1)}) read |f| = {f_g:.3g} g, "

@@ -11,7 +11,8 @@ import numpy as np
 from .convert_axes import AxisColumn, find_named, mirrored_note, names_unit, px4_export, stated_axes, table_axes
 from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
                              is_gyro, whole_counts)
-from .convert_time import TIME_COLUMN_RE, datetime_stamps, is_datetime, unit_in_name
+from .convert_regions import table_labels
+from .convert_time import TIME_COLUMN_RE, datetime_stamps, epoch_like, is_datetime, is_time_name, unit_in_name
 from .csvtable import convert_columns, got_text, slow_float
 from .errors import InputError, notes_on_refusal
 from .convert_rows import lost_rows, trailer_note, trailer_start
@@ -146,7 +147,9 @@ def comment_rate(metadata: dict[str, str]) -> tuple[float, str] | None:
 def choose_time_column(source: str, names: list[str], acc: list[str], table, rows: np.ndarray, rate_stated: bool,
                        header_row: int, notes: list[str]) -> str | None:
     """The table's time column among the names TIME_COLUMN_RE matches (``Time (s)``,
-    ``timestamp_us``, ``Time(hh:mm:ss)``): those whose cells are numbers or full ISO-8601
+    ``timestamp_us``, ``Time(hh:mm:ss)``), then those with a time word among others
+    (:func:`convert_time.is_broad_time_name`: ``unix_timestamp``, ``epoch``) whose name states a
+    unit or whose first stamp is an epoch's (:func:`convert_time.epoch_like`): those whose cells are numbers or full ISO-8601
     date-times (:func:`convert_time.is_datetime`; a clock time ``05:34:44`` or a date alone
     is no time stamp), and of those the first whose name states a
     unit (``Timestamp(Ms)``), else the first.  A note names the column used and those passed
@@ -164,9 +167,13 @@ def choose_time_column(source: str, names: list[str], acc: list[str], table, row
         Candidates, none numeric, and no ``--rate``: naming each with the text it holds.
     """
     cands = [n for n in names if n and n not in acc and TIME_COLUMN_RE.fullmatch(n)]
+    seen = {n: first_cell(table, names.index(n), rows) for n in names if n and n not in acc and is_time_name(n)}
+    # a time word among others (unix_timestamp, epoch): a time column where the name states a unit or the
+    # stamps are an epoch's (a gyroscope's stamps are not the accelerometer's)
+    cands += [n for n in seen if n not in cands and not is_gyro(n) and
+              (unit_in_name(n) is not None or seen[n] is not None and (epoch_like(seen[n][1]) or is_datetime(seen[n][1])))]
     if not cands:
         return None
-    seen = {n: first_cell(table, names.index(n), rows) for n in cands}
     numeric = [n for n in cands if seen[n] is None or is_number(seen[n][1]) or is_datetime(seen[n][1])]
 
     def holds(n: str) -> str:
@@ -400,9 +407,12 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
     if time_column is None and opts.rate_hz is None:
         stated = comment_rate(pre.metadata)
         if stated is None:
-            raise InputError(source, "the table has no time column (t, time, timestamp, 'Time (s)', time_ms, ...): "
-                             "give the sample rate with --rate HZ (or name its column with --time-column NAME)",
-                             row=pre.header_line)
+            named = [n for n in names if n and n not in acc and is_time_name(n) and not is_gyro(n)]
+            said = f"; {', '.join(map(repr, named))} has a time's name but neither a unit in it nor an epoch's " \
+                "stamps: --time-column NAME (and --time-unit) reads it" if named else ""
+            raise InputError(source, "the table has no time column (t, time, timestamp, 'Time (s)', time_ms, "
+                             "unix_timestamp, ...): give the sample rate with --rate HZ (or name its column with "
+                             f"--time-column NAME){said}", row=pre.header_line)
         opts.rate_hz, key = stated
         notes.append(f"no time column: the rate is the {opts.rate_hz:g} Hz the file's comment '# {key}' states "
                      "(--rate HZ states another)")
@@ -448,10 +458,13 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
     t = None if stamps is None else table_time(source, stamps, table, rows, time_column, jt)
     used = set(want)
     dropped = [c for c in names if c and c not in used and is_gyro(c)]
-    ignored = [c for c in names if c and c not in used and c not in dropped]
+    free = [c for c in names if c and c not in used and c not in dropped]
+    label_column, part, kept, hint = table_labels(source, names, free, table, rows.tolist(), opts.regions is not None,
+                                                  opts.stated_f, notes)
+    ignored = [c for c in free if c != label_column]
     meta = {"table.columns": ", ".join(acc + ([time_column] if time_column else []))}
-    return finish(source, "table", raw, np.arange(rows.size), t, None, opts, scale, converts or bool(np.any(raw < 0)),
+    return finish(source, "table", raw, np.arange(rows.size), t, part, opts, scale, converts or bool(np.any(raw < 0)),
                   opts.rate_hz, meta,
                   preamble_notes(pre) + drop_note(dropped, ignored) + notes +
                   ([table.cut_note] if table.cut_note else []),
-                  locate, None, time_column=time_column)
+                  locate, None, kept=kept, time_column=time_column, label_hint=hint)

@@ -4,6 +4,7 @@
 force, and regions whose name ends in ``_rot`` are motions, not poses."""
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import numpy as np
@@ -11,10 +12,16 @@ import numpy as np
 from .errors import InputError
 from .jsonfields import JsonFields, read_json
 
-__all__ = ["POSE_DIRECTIONS", "is_motion", "label_poses", "read_regions"]
+__all__ = ["POSE_DIRECTIONS", "POSE_COLUMN", "is_motion", "label_poses", "read_regions", "axis_label",
+           "pose_column", "text_column", "table_labels"]
 
 POSE_DIRECTIONS = {"x_p": (1, 0, 0), "x_a": (-1, 0, 0), "y_p": (0, 1, 0), "y_a": (0, -1, 0),
                    "z_p": (0, 0, 1), "z_a": (0, 0, -1)}
+#: the contract's column of pose labels
+POSE_COLUMN = "pose"
+#: a pose named by an axis and its sign: ``+X UP``, ``-Z``, ``X-``, ``y down``, ``Z_UP``, imucal's ``x_p``
+AXIS_LABEL_RE = re.compile(r"(?:(?P<s1>[+-])\s*(?P<a1>[xyz])|(?P<a2>[xyz])\s*(?P<s2>[+-])|(?P<a3>[xyz])(?=[\s_]*(?:up|down)))"
+                           r"(?:[\s_]*(?P<ud>up|down))?|(?P<a4>[xyz])_(?P<pa>[pa])", re.I)
 
 
 def read_regions(path: Any) -> list[tuple[str, int, int]]:
@@ -54,13 +61,124 @@ def read_regions(path: Any) -> list[tuple[str, int, int]]:
     return out
 
 
+def axis_label(text: str) -> str | None:
+    """The POSE_DIRECTIONS name of a pose label that names an axis and its sign (``+X UP`` and
+    ``+X``: x up, x_p; ``-X UP``, ``X DOWN``: x_a; ``x_p`` as it is); None for any other text."""
+    m = AXIS_LABEL_RE.fullmatch(text.strip())
+    if m is None:
+        return None
+    g = m.groupdict()
+    if g["a4"]:
+        return f"{g['a4'].lower()}_{g['pa'].lower()}"
+    axis = (g["a1"] or g["a2"] or g["a3"]).lower()
+    up = (g["s1"] or g["s2"] or "+") == "+"
+    up = up if (g["ud"] or "up").lower() == "up" else not up
+    return f"{axis}_{'p' if up else 'a'}"
+
+
+def pose_column(source: str, names: list[str], free: list[str], cells, rows: list[int],
+                line) -> tuple[str | None, list[str] | None, np.ndarray | None, str | None]:
+    """A table's pose labels from one of its columns not otherwise read (``free``): the one named
+    ``pose`` (the contract's: whole numbers kept as written, -1 or empty while moving; other text
+    read as names, as a ``part`` column's), else the first whose every non-empty cell names an axis
+    and its sign (:func:`axis_label`: ``+X UP`` ... ``-Z UP`` of a pose-means table, read as x_p ...
+    z_a, which ``--stated-f`` takes).
+
+    Parameters
+    ----------
+    names, free : list of str
+        The header's columns; those not read as readings, time or index.
+    cells : callable
+        ``cells(j)``: column j's cells as text, one per table row.
+    rows : list of int
+        The table rows that are samples, in order.
+    line : callable
+        A table row's line in the file.
+
+    Returns
+    -------
+    (column, names per sample, integer labels per sample, note)
+        The column used (None: none), and either its names (for :func:`label_poses`) or its
+        integer labels (int64, -1 unlabelled), and a note saying how it was read.
+
+    Raises
+    ------
+    InputError
+        A ``pose`` cell that is a whole number below -1, naming its row.
+    """
+    pose = next((c for c in free if c.strip().lower() == POSE_COLUMN), None)
+    if pose is not None:
+        text = cells(names.index(pose))
+        got = [text[i].strip() for i in rows]
+        if all(re.fullmatch(r"[+-]?[0-9]+", v) or not v for v in got):
+            labels = np.array([int(v) if v else -1 for v in got], dtype=np.int64)
+            low = np.flatnonzero(labels < -1)
+            if low.size:
+                raise InputError(source, f"pose label {labels[low[0]]}: expected a whole number >= 0 (a pose), or -1 "
+                                 "or empty (moving)", row=line(rows[int(low[0])]), column=pose)
+            return pose, None, labels, None
+        axes = [axis_label(v) if v else "" for v in got]
+        named = axes if all(a is not None for a in axes) else got
+        return pose, named, None, None
+    for c in free:
+        text = cells(names.index(c))
+        got = [text[i].strip() for i in rows]
+        axes = [axis_label(v) if v else "" for v in got]
+        if any(axes) and all(a is not None for a in axes):
+            shown = dict(zip(axes, got))
+            said = ", ".join(f"{shown[a]} = {a}" for a in POSE_DIRECTIONS if a in shown)
+            return c, axes, None, f"pose labels from column {c} ({said}: the signed axis that points up)"
+    return None, None, None, None
+
+
+def text_column(names: list[str], free: list[str], cells, rows: list[int]) -> str | None:
+    """The first of the columns ``free`` (of ``names``; ``cells(j)``: column j's cells) whose
+    first non-empty cell among ``rows`` is no number (a label column, the likely home of a pose's
+    name), else None."""
+    for c in free:
+        text = cells(names.index(c))
+        got = next((v.strip() for v in (text[i] for i in rows[:100]) if v.strip()), "")
+        try:
+            float(got)
+        except ValueError:
+            if got:
+                return c
+    return None
+
+
+def table_labels(source: str, names: list[str], free: list[str], table, rows: list[int], regions_given: bool,
+                 stated_f: bool, notes: list[str]):
+    """A table's pose labels (:func:`pose_column`) unless ``--regions`` gives them
+    (``regions_given``): (the column read or None, names per sample or None, (integer labels,
+    None) for :func:`convert_common.finish`'s ``kept`` or None, a text column to name where
+    ``stated_f`` finds no poses or None); a note on how a label column was read goes to ``notes``.
+
+    Raises
+    ------
+    InputError
+        ``stated_f`` with integer labels (they state no direction), or a bad ``pose`` cell.
+    """
+    if regions_given:
+        return None, None, None, None
+    column, part, labels, note = pose_column(source, names, free, table.strings, rows, table.line)
+    notes += [note] if note else []
+    if labels is not None and stated_f:
+        raise InputError(source, f"--stated-f: the {column} column's labels are numbers, which state no direction: "
+                         "give --regions naming the poses x_p ... z_a, or label them so (or +X UP ... -Z UP) in the "
+                         "column", column=column)
+    hint = text_column(names, free, table.strings, rows) if column is None and stated_f else None
+    return column, part, None if labels is None else (labels, None), hint
+
+
 def is_motion(name: str) -> bool:
     return name.lower().endswith("_rot")
 
 
 def label_poses(index: np.ndarray, names_per_sample: list[str] | None, regions, stated_f: bool,
-                gravity: float, source: str, regions_source: str | None):
-    """(pose (n,), f (n, 3) or None, pose names) from regions of sample numbers or per-sample names."""
+                gravity: float, source: str, regions_source: str | None, label_hint: str | None = None):
+    """(pose (n,), f (n, 3) or None, pose names) from regions of sample numbers or per-sample names;
+    ``label_hint``: a column that may hold the poses' names (named in the refusal of
+    ``stated_f`` without poses)."""
     n = index.shape[0]
     pose = np.full(n, -1, dtype=np.int64)
     names: list[str] = []
@@ -85,7 +203,9 @@ def label_poses(index: np.ndarray, names_per_sample: list[str] | None, regions, 
     f = None
     if stated_f:
         if not names:
-            raise InputError(source, "--stated-f: no pose regions (give --regions JSON or a part column)")
+            likely = f"; column {label_hint} holds text: if it names the poses, name them x_p ... z_a or +X UP ... " \
+                "-Z UP (an axis and its sign), or call it part" if label_hint else ""
+            raise InputError(source, f"--stated-f: no pose regions (give --regions JSON or a part column{likely})")
         unknown = [nm for nm in names if nm not in POSE_DIRECTIONS]
         if unknown:
             raise InputError(regions_source or source, f"--stated-f: pose {unknown[0]!r} states no direction "

@@ -11,7 +11,7 @@ import numpy as np
 from .errors import InputError
 from .recording_checks import GAP_STEPS, even_steps, regular_step
 
-__all__ = ["TIME_FACTORS", "TIME_COLUMN_RE", "MIN_PLAUSIBLE_HZ", "BURST_SHARE", "FLOAT_EXACT", "unit_in_name",
+__all__ = ["TIME_FACTORS", "TIME_COLUMN_RE", "is_time_name", "is_broad_time_name", "EPOCH_MIN_S", "epoch_like", "MIN_PLAUSIBLE_HZ", "BURST_SHARE", "FLOAT_EXACT", "unit_in_name",
            "exact_stamps", "DATETIME_RE", "is_datetime", "datetime_stamps", "time_in_seconds", "burst_fit",
            "burst_starts", "burst_rate", "rate_from_t"]
 
@@ -38,6 +38,46 @@ INTEGER_CELLS_RE = re.compile(r"(?:[ \t]*[+-]?[0-9]+[ \t]*\n)*[ \t]*[+-]?[0-9]+[
 #: a table's time column: t, time, timestamp, with a unit in () or [] or after _ (``time_ms``)
 TIME_COLUMN_RE = re.compile(r"(?:t|ts|tstamp|time|timestamp|time[ _]stamp)(?:\s*[(\[][^)\]]*[)\]]|_[a-z\u00b5]+)?"
                             r"|%time|(?:field\.)?header\.stamp", re.I)     # rostopic echo -p: ns
+
+#: a word of a column's name that makes it a time column beyond TIME_COLUMN_RE's forms (unix_timestamp,
+#: epoch, unix_time, sensorTimestamp, time_since_boot_ms), and words that make it no time stamp (a step
+#: between samples, a zone, a duration)
+TIME_NAME_WORDS = ("time", "times", "timestamp", "timestamps", "stamp", "epoch", "ts", "datetime", "utime")
+NOT_TIME_WORDS = ("delta", "dt", "diff", "zone", "tz", "offset", "step", "interval", "period", "duration",
+                  "exposure", "sync", "zero")
+#: a stamp at least this far past 1970 in seconds (1973) whatever its unit: an epoch
+EPOCH_MIN_S = 1e8
+
+
+def name_words(name: str) -> list[str]:
+    """A column name's words, lower case: split at anything not a letter and at camelCase
+    (``unixTimestamp_US``: unix, timestamp, us)."""
+    return [w.lower() for w in re.findall(r"[A-Z]?[a-z\u00b5]+|[A-Z]+(?![a-z])", name)]
+
+
+def is_broad_time_name(name: str) -> bool:
+    """Whether a name not of TIME_COLUMN_RE's forms holds a time word (``unix_timestamp``,
+    ``epoch``, ``unix_time``, ``SensorTimestamp``) and none that makes it a step, zone or
+    duration (``delta_time``, ``time_zone``).  Such a column is a time column where its name
+    states a unit or its stamps are an epoch's (:func:`epoch_like`; the caller's rule)."""
+    words = name_words(name)
+    return any(w in TIME_NAME_WORDS for w in words) and not any(w in NOT_TIME_WORDS for w in words)
+
+
+def is_time_name(name: str) -> bool:
+    """Whether a column's name makes it a candidate time column: TIME_COLUMN_RE's forms, or a
+    time word among others (:func:`is_broad_time_name`)."""
+    name = name.strip()
+    return bool(TIME_COLUMN_RE.fullmatch(name)) or is_broad_time_name(name)
+
+
+def epoch_like(text: str) -> bool:
+    """Whether a time cell is a number of an epoch's magnitude in any unit (at least
+    EPOCH_MIN_S, s since 1970: 1973 in s, and any later epoch in ms, us or ns)."""
+    try:
+        return float(text) >= EPOCH_MIN_S
+    except ValueError:
+        return False
 
 
 #: an ISO-8601 date and time of day: ``2019-10-16T12:09:01.702+02:00``, ``2019-12-23 21:04:06.690``,

@@ -260,3 +260,35 @@ def test_a_clock_with_periodic_corrections_gives_its_mean_rate(tmp_path, capfd):
                            tmp_path / "d.json"], capfd)
     assert rc == 0, err
     assert json.loads((tmp_path / "d.json").read_text())["sample_rate_hz"] == pytest.approx(100.0, rel=1e-5)
+
+
+@pytest.mark.parametrize("name,start,step", [("unix_timestamp", 1764754394388530, 15625),
+                                             ("epoch", 1764754394.388530, 1 / 64), ("unix_time", 1764754394388.53, 15.625),
+                                             ("SensorTimestamp_ms", 1000.0, 15.625), ("time_s", 0.0, 1 / 64),
+                                             ("timestamp_us", 0, 15625)])
+def test_time_columns_of_other_spellings_are_found(tmp_path, capfd, name, start, step):
+    """Empatica EmbracePlus's ``unix_timestamp`` (us since 1970) had not been taken for a time
+    column ('the table has no time column'), nor ``epoch`` or ``unix_time``: a name with a time
+    word among others is one where it states a unit or its stamps are an epoch's (the unit then
+    from the steps)."""
+    counts = _counts(64)
+    t = [f"{start + k * step:.6f}" for k in range(64)]
+    rows = [f"{tt},{a},{b},{c}" for tt, (a, b, c) in zip(t, counts)]
+    src = tmp_path / "acc.csv"
+    src.write_text("\n".join([f"{name},accX,accY,accZ"] + rows) + "\n")
+    conv = convert_file(src)
+    np.testing.assert_array_equal(conv.recording.raw, counts)
+    np.testing.assert_allclose(np.diff(conv.recording.t), 1 / 64.0, rtol=1e-6)
+
+
+@pytest.mark.parametrize("name", ["elapsed_time", "delta_time"])
+def test_a_time_word_without_unit_or_epoch_is_no_time_column(tmp_path, capfd, name):
+    """A name with a time word but neither a unit nor epoch stamps (``elapsed_time`` 0, 0.01, ...)
+    is not guessed at: the refusal names it and --time-column; ``delta_time`` (a step between
+    samples) is no time column at all."""
+    rows = [f"{k / 100:.2f},{a},{b},{c}" for k, (a, b, c) in enumerate(_counts(20))]
+    src = tmp_path / "acc.csv"
+    src.write_text("\n".join([f"{name},accX,accY,accZ"] + rows) + "\n")
+    rc, _, err, _ = run(["convert", str(src), "-o", str(tmp_path / "o.csv")], capfd)
+    assert rc == 2 and "has no time column" in err, err
+    assert (f"'{name}' has a time's name" in err) == (name == "elapsed_time"), err
