@@ -9,13 +9,13 @@ import numpy as np
 
 from ..errors import InputError
 from ..recording import Recording
-from ..recording_checks import regular_step
+from ..recording_checks import CHANCE_REPEAT_P, GAP_STEPS, chance_repeats, regular_step
 from .common import time_span
 
 __all__ = ["REGRID_HINT", "RESAMPLE_MAX_STEP", "resampled", "MAX_FILL_SAMPLES", "MAX_FILL_SHARE", "MAX_JITTER_STEPS",
            "JITTER_NOTE_STEPS", "MAX_LATE_STEPS",
            "MAX_WANDER_STEPS", "WANDER_BLOCK", "COHERENT_SHARE", "COHERENT_BLOCK", "block_phases", "stamp_trend",
-           "grid_places", "places_from", "on_uniform_grid"]
+           "grid_places", "places_from", "on_uniform_grid", "long_gaps"]
 
 #: the remedy a refusal of stamps off the grid names (a sensor sampled at a constant rate whose stamps stray)
 REGRID_HINT = ("; if the sensor sampled at a constant rate and only its time stamps stray (a logger that polls it, a "
@@ -162,7 +162,9 @@ def crowded(rec, t: np.ndarray, late: np.ndarray, pushed: np.ndarray, dt: float,
     Rows b..e are named: e the first not pushed back after the first sample pushed too far, b the
     last one pushed too far before it; a row among them that repeats the readings of the row before
     exactly (a sample delivered twice) is named as such, and the refusal's row is the last of those,
-    else e."""
+    else e -- where the repeat is evidence of a copy: stamped within half a step of the row before,
+    or rows that repeat the row before far more often than chance gives
+    (:func:`~accelcal.recording_checks.chance_repeats`); a coarse grid's chance repeat is not."""
     bad = np.flatnonzero(pushed & (late > LATE_ROOM))
     if not bad.size:
         return None
@@ -170,7 +172,11 @@ def crowded(rec, t: np.ndarray, late: np.ndarray, pushed: np.ndarray, dt: float,
     e = j + int(np.flatnonzero(~pushed[j:])[0])
     b = int(bad[bad < e][-1])
     raw = np.asarray(rec.raw)
-    same = [m for m in range(b + 1, e + 1) if np.array_equal(raw[m], raw[m - 1])]
+    # a repeat is a copy only off the grid (within half a step of the row before: two samples on
+    # one place) or where repeats in the recording are beyond chance (a coarse grid repeats rows)
+    copies = chance_repeats(raw)[2] < CHANCE_REPEAT_P
+    same = [m for m in range(b + 1, e + 1) if np.array_equal(raw[m], raw[m - 1])
+            and (copies or t[m] - t[m - 1] < 0.5 * dt)]
     head = (f"sample times are not uniform: the step to {time_span(t, e)} is {t[e] - t[e - 1]:.6g} s, "
             f"{(t[e] - t[e - 1]) / dt:.2f} of the median step {dt:.6g} s: rows {rec.line(b)}-{rec.line(e)} are "
             f"{e - b + 1} samples within {(t[e] - t[b]) / dt:.2f} steps, one more than the uniform grid has places "
@@ -189,6 +195,33 @@ def crowded(rec, t: np.ndarray, late: np.ndarray, pushed: np.ndarray, dt: float,
     return InputError(rec.source, f"{head}; row {rec.line(b)} would be {late[b]:.2f} of a step late (up to "
                       f"{MAX_LATE_STEPS:g} is taken as a sample delivered late, {MAX_JITTER_STEPS:g} as jitter of the "
                       "stamps): the integrators need a constant rate" + hint, row=rec.line(e), column="t")
+
+
+def long_gaps(rec, t: np.ndarray) -> InputError | None:
+    """The refusal of a step that no filling bridges -- at least MAX_FILL_SAMPLES + 2 regular steps
+    (:func:`~accelcal.recording_checks.regular_step`), more than MAX_FILL_SAMPLES places empty
+    whatever the stamps' jitter or lateness -- named at the row after the first such step, with the
+    samples missing in the steps beyond GAP_STEPS x the median, the longest gap, and the share of the
+    span without samples (a
+    recording of captures joined, such as Klipper's: 10 gaps of 1.6 s, 61 %), or None.  It comes
+    before the grid's finer refusals, which such gaps would otherwise precede with a lesser defect."""
+    step, gaps, median = regular_step(t)
+    d = np.diff(t)
+    beyond = np.flatnonzero(d >= (MAX_FILL_SAMPLES + 2) * step)
+    if not beyond.size or step <= 0:
+        return None
+    i, j = int(beyond[0]), int(np.argmax(d))
+    long = d > GAP_STEPS * median
+    lost = np.rint(d[long] / step) - 1
+    span = float(t[-1] - t[0])
+    empty = 100 * float(np.sum(d[long] - step)) / span
+    return InputError(rec.source, f"sample times are not uniform: {int(lost.sum())} sample(s) missing in {gaps} gap(s), "
+                      f"the longest {int(lost.max())} ({d[j]:.6g} s against {step:.6g} s; a gap: a step beyond "
+                      f"{GAP_STEPS:g} x the median), {empty:.2g} % of the span of {span:.6g} s without samples; the first beyond "
+                      f"filling is the step to {time_span(t, i + 1)} ({d[i]:.6g} s): pauses between captures, or samples "
+                      f"lost, where at most {MAX_FILL_SAMPLES} in one gap and {100 * MAX_FILL_SHARE:g} % of the recording "
+                      "are filled by interpolation; cut the recording at the gaps (each part on its own): the integrators "
+                      "need a constant rate", row=rec.line(i + 1), column="t")
 
 
 def incoherent(rec, t: np.ndarray, late: np.ndarray, dt: float, hint: str = REGRID_HINT) -> InputError | None:
@@ -280,8 +313,8 @@ def on_uniform_grid(rec, hint: str = REGRID_HINT) -> tuple[Any, np.ndarray, str 
     Raises
     ------
     InputError
-        A sample with no place of its own (two on one place: a sample delivered twice, or stamped
-        too late; naming the second), a sample late with a gap after it, stamps that drift further
+        A step no filling bridges (:func:`long_gaps`, first), a sample with no place of its own
+        (two on one place: a sample delivered twice, or stamped too late; naming the second), a sample late with a gap after it, stamps that drift further
         (naming where they leave the grid of the rows before), or gaps beyond the limits (naming
         the row after the longest).
     """
@@ -290,6 +323,9 @@ def on_uniform_grid(rec, hint: str = REGRID_HINT) -> tuple[Any, np.ndarray, str 
         raise InputError(rec.source, "the recording needs at least 2 samples")
     d = np.diff(t)
     dt = float(np.median(d))
+    err = long_gaps(rec, t)
+    if err is not None:
+        raise err
     q, late, pushed, edges = grid_places(t)
     for err in (crowded(rec, t, late, pushed, dt, hint), incoherent(rec, t, late, dt, hint)):
         if err is not None:
