@@ -12,7 +12,7 @@ from ..recording import Recording
 from ..recording_checks import CHANCE_REPEAT_P, GAP_STEPS, chance_repeats, regular_step
 from .common import time_span
 
-__all__ = ["REGRID_HINT", "RESAMPLE_MAX_STEP", "resampled", "MAX_FILL_SAMPLES", "MAX_FILL_SHARE", "MAX_JITTER_STEPS",
+__all__ = ["REGRID_HINT", "RESAMPLE_BRIDGE_SAMPLES", "resampled", "MAX_FILL_SAMPLES", "MAX_FILL_SHARE", "MAX_JITTER_STEPS",
            "JITTER_NOTE_STEPS", "MAX_LATE_STEPS",
            "MAX_WANDER_STEPS", "WANDER_BLOCK", "COHERENT_SHARE", "COHERENT_BLOCK", "block_phases", "stamp_trend",
            "grid_places", "places_from", "on_uniform_grid", "long_gaps"]
@@ -382,18 +382,23 @@ def on_uniform_grid(rec, hint: str = REGRID_HINT) -> tuple[Any, np.ndarray, str 
     return out, ~kept, "; ".join(notes)
 
 
-#: a step longer than this many of the recording's mean step is a sample lost (stamps within a quarter
-#: step of their sample times, MAX_JITTER_STEPS, give steps up to 1.5; a lost one, 2 - 0.5 at least):
-#: no interpolation bridges it
-RESAMPLE_MAX_STEP = 1.0 + 2 * MAX_JITTER_STEPS
+#: --resample bridges a gap of up to this many samples lost in a row (a step of up to 2.5 regular steps):
+#: a straight line across one sample moves a 0.2 m stroke at 100 Hz by 3e-7 m (median over places) to
+#: 1.9e-4 m (its fastest part: about the noise's spread, within the output's error bound; figures in
+#: tests/python/test_timegrid.py), where cutting the recording at the gap loses the rests that anchor
+#: the path; longer gaps are refused, and at most MAX_FILL_SHARE of the grid is bridged.  A gap: a step beyond GAP_STEPS x the
+#: median step (the rule convert's note uses), its samples lost the whole regular steps less one
+RESAMPLE_BRIDGE_SAMPLES = 1
 
 
-def resampled(rec) -> tuple[Any, str]:
+def resampled(rec) -> tuple[Any, str, np.ndarray]:
     """A recording whose samples were taken at their (uneven) time stamps -- a sensor read on a loop
     whose period varies, a driver that stamps each sample as it reads it -- interpolated onto a
-    uniform grid of as many samples over the same span (linear interpolation of the counts, rounded
-    to whole counts; the grid's step is the mean step).  Only where no sample was lost: every step
-    within RESAMPLE_MAX_STEP of the mean step.
+    uniform grid over the same span (linear interpolation of the counts, rounded to whole counts).
+    Steps up to GAP_STEPS x the median step are taken as the loop's; a longer step is a gap, of
+    round(step / regular step) - 1 samples lost (:func:`~accelcal.recording_checks.regular_step`):
+    gaps of up to RESAMPLE_BRIDGE_SAMPLES are bridged, with a note, the grid holding one place for
+    each sample kept or lost (its step the span over them).
 
     Returns
     -------
@@ -401,29 +406,46 @@ def resampled(rec) -> tuple[Any, str]:
         t on the uniform grid, raw interpolated.
     note : str
         What was done, for the user.
+    bridged : ndarray of bool, shape (n_grid,)
+        True on the grid's samples inside a bridged gap.
 
     Raises
     ------
     InputError
-        A step beyond RESAMPLE_MAX_STEP mean steps (a sample lost), naming the row after it.
+        A gap of more than RESAMPLE_BRIDGE_SAMPLES lost, or more bridged than MAX_FILL_SHARE of
+        the grid, naming the row after the longest gap.
     """
     t = np.asarray(rec.t, float)
     if t.size < 2:
         raise InputError(rec.source, "the recording needs at least 2 samples")
     d = np.diff(t)
-    step = (t[-1] - t[0]) / (t.size - 1)
+    step, gaps, median = regular_step(t)
+    gap = d > GAP_STEPS * median
+    lost = np.where(gap, np.maximum(np.rint(d / step) - 1, 1), 0).astype(np.int64)
+    total = int(lost.sum())
     i = int(np.argmax(d))
-    if d[i] > RESAMPLE_MAX_STEP * step:
+    if lost[i] > RESAMPLE_BRIDGE_SAMPLES or total > MAX_FILL_SHARE * (t.size + total):
         raise InputError(rec.source, f"--resample: the step to {time_span(t, i + 1)} is {d[i]:.6g} s, "
-                         f"{d[i] / step:.3g} of the mean step {step:.6g} s (the longest of "
-                         f"{int(np.count_nonzero(d > RESAMPLE_MAX_STEP * step))} such steps): samples were lost there (beyond "
-                         f"{RESAMPLE_MAX_STEP:g} steps), and interpolation would bridge them with a straight line; "
-                         "cut the recording at the gap (each part on its own)", row=rec.line(i + 1), column="t")
-    grid = t[0] + step * np.arange(t.size)
+                         f"{d[i] / step:.3g} of the regular step {step:.6g} s (the longest of {gaps} steps beyond "
+                         f"{GAP_STEPS:g} x the median step, {total} sample(s) lost in all): about {int(lost[i])} "
+                         f"sample(s) lost there, where a gap of up to {RESAMPLE_BRIDGE_SAMPLES} sample(s) lost (and "
+                         f"{100 * MAX_FILL_SHARE:g} % of the recording in all) is bridged with a straight line; cut the "
+                         "recording at the gap (each part on its own)", row=rec.line(i + 1), column="t")
+    m = t.size + total
+    dt = (t[-1] - t[0]) / (m - 1)
+    grid = t[0] + dt * np.arange(m)
     raw = np.asarray(rec.raw, float)
     out = np.rint(np.column_stack([np.interp(grid, t, raw[:, j]) for j in range(raw.shape[1])])).astype(np.int64)
-    off = float(np.max(np.abs(t - grid))) / step
+    k = np.clip(np.searchsorted(t, grid, side="right") - 1, 0, d.size - 1)
+    bridged = gap[k] & (grid > t[k]) & (grid < t[k + 1])
+    regular = d[~gap]
+    places = np.arange(t.size) + np.concatenate([[0], np.cumsum(lost)])
+    off = float(np.max(np.abs(t - grid[places]))) / dt
     note = (f"--resample: {t.size} samples interpolated (linearly) from their stamps onto a uniform "
-            f"{1.0 / step:.6g} Hz grid (steps {d.min() / step:.2f}-{d.max() / step:.2f} of the mean, the stamps up to "
-            f"{off:.2f} of a step off the grid)")
-    return Recording(t=grid, raw=out, metadata=dict(rec.metadata), source=rec.source), note
+            f"{1.0 / dt:.6g} Hz grid (steps {regular.min() / dt:.2f}-{regular.max() / dt:.2f} of the grid's, the "
+            f"stamps up to {off:.2f} of a step off it)")
+    if total:
+        note += (f"; {int(gap.sum())} gap(s), {total} lost sample(s) (steps beyond {GAP_STEPS:g} x the median, the longest "
+                 f"{d[i]:.6g} s = {d[i] / dt:.2f} steps, after {time_span(t, i, rec=rec)}; {float(d[gap].sum()):.4g} s "
+                 "in all) bridged with a straight line; column filled = 1 there")
+    return Recording(t=grid, raw=out, metadata=dict(rec.metadata), source=rec.source), note, bridged
