@@ -424,8 +424,8 @@ def build_parser() -> argparse.ArgumentParser:
             s.add_argument("--resample", action="store_true",
                            help="interpolate the samples from their time stamps onto a uniform grid first (stamps "
                            "that keep no uniform grid: a sensor read on a loop whose period varies, a driver that "
-                           "stamps each sample as it reads it); refused where a sample was lost (a step beyond "
-                           "1.5 of the mean)")
+                           "stamps each sample as it reads it); a gap of one lost sample (a step beyond 1.8 x "
+                           "the median, up to 2.5 regular steps) is bridged with a note, a longer one refused")
         add_units_options(s)
         s.set_defaults(func=func)
 

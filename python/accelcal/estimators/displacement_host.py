@@ -14,7 +14,7 @@ from ..noise import code_step, states_noise
 from ..recording import check_core_input, check_for_device
 from .common import (CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_noise, force_noise,
                      resolve_array, time_span, uniform_dt)
-from .timegrid import on_uniform_grid, resampled
+from .timegrid import RESAMPLE_BRIDGE_SAMPLES, on_uniform_grid, resampled
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
@@ -29,8 +29,9 @@ __all__ = ["RESAMPLE_HINT", "retro_correct", "displace_offline", "displacement_f
 
 #: the remedy a refusal of stamps off the grid names here
 RESAMPLE_HINT = ("; if the samples were taken at their stamps (a sensor read on a loop whose period varies, a driver "
-                 "that stamps each one as it reads it) or the stamps stray by less than a step, and no sample was "
-                 "lost, accelcal displacement --resample interpolates them onto a uniform grid")
+                 "that stamps each one as it reads it) or the stamps stray by less than a step, and no more than "
+                 f"{RESAMPLE_BRIDGE_SAMPLES} sample in a row was lost, accelcal displacement --resample interpolates "
+                 "them onto a uniform grid")
 
 
 def _motion_runs(at_rest, start: int = 0) -> list[tuple[int, int]]:
@@ -317,7 +318,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     start at rest (the part before the first rest is not estimated).
     Samples a logger dropped are filled first (:func:`~.timegrid.on_uniform_grid`: warning and
     column ``filled``); ``resample``: the samples are first interpolated from their stamps onto a
-    uniform grid (:func:`~.timegrid.resampled`: stamps that keep no grid, no sample lost)."""
+    uniform grid (:func:`~.timegrid.resampled`: stamps that keep no grid; a gap of one lost sample
+    bridged, with a warning and column ``filled``)."""
     if engine not in ("float", "fixed"):
         raise ValueError(f"unknown engine {engine!r}")
     form = form or ("offline" if engine == "float" else "stream")
@@ -327,10 +329,12 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     ax = _axis_arg(axis)
     if engine == "fixed":
         check_core_input(rec, device.raw_min < 0)
-    re_note = None
+    re_note, bridged = None, None
     if resample:
-        rec, re_note = resampled(rec)
+        rec, re_note, bridged = resampled(rec)
     rec, filled, fill_note = on_uniform_grid(rec, RESAMPLE_HINT)
+    if bridged is not None and bridged.size == filled.size:
+        filled = filled | bridged
     dt = uniform_dt(rec)
     f, note = _body_forces(device, cal, rec, engine)
     noise = channel_noise(device, rec)

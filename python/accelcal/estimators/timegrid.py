@@ -9,13 +9,13 @@ import numpy as np
 
 from ..errors import InputError
 from ..recording import Recording
-from ..recording_checks import regular_step
+from ..recording_checks import CHANCE_REPEAT_P, GAP_STEPS, chance_repeats, regular_step
 from .common import time_span
 
-__all__ = ["REGRID_HINT", "RESAMPLE_MAX_STEP", "resampled", "MAX_FILL_SAMPLES", "MAX_FILL_SHARE", "MAX_JITTER_STEPS",
+__all__ = ["REGRID_HINT", "RESAMPLE_BRIDGE_SAMPLES", "resampled", "MAX_FILL_SAMPLES", "MAX_FILL_SHARE", "MAX_JITTER_STEPS",
            "JITTER_NOTE_STEPS", "MAX_LATE_STEPS",
            "MAX_WANDER_STEPS", "WANDER_BLOCK", "COHERENT_SHARE", "COHERENT_BLOCK", "block_phases", "stamp_trend",
-           "grid_places", "places_from", "on_uniform_grid"]
+           "grid_places", "places_from", "on_uniform_grid", "long_gaps"]
 
 #: the remedy a refusal of stamps off the grid names (a sensor sampled at a constant rate whose stamps stray)
 REGRID_HINT = ("; if the sensor sampled at a constant rate and only its time stamps stray (a logger that polls it, a "
@@ -162,7 +162,9 @@ def crowded(rec, t: np.ndarray, late: np.ndarray, pushed: np.ndarray, dt: float,
     Rows b..e are named: e the first not pushed back after the first sample pushed too far, b the
     last one pushed too far before it; a row among them that repeats the readings of the row before
     exactly (a sample delivered twice) is named as such, and the refusal's row is the last of those,
-    else e."""
+    else e -- where the repeat is evidence of a copy: stamped within half a step of the row before,
+    or rows that repeat the row before far more often than chance gives
+    (:func:`~accelcal.recording_checks.chance_repeats`); a coarse grid's chance repeat is not."""
     bad = np.flatnonzero(pushed & (late > LATE_ROOM))
     if not bad.size:
         return None
@@ -170,7 +172,11 @@ def crowded(rec, t: np.ndarray, late: np.ndarray, pushed: np.ndarray, dt: float,
     e = j + int(np.flatnonzero(~pushed[j:])[0])
     b = int(bad[bad < e][-1])
     raw = np.asarray(rec.raw)
-    same = [m for m in range(b + 1, e + 1) if np.array_equal(raw[m], raw[m - 1])]
+    # a repeat is a copy only off the grid (within half a step of the row before: two samples on
+    # one place) or where repeats in the recording are beyond chance (a coarse grid repeats rows)
+    copies = chance_repeats(raw)[2] < CHANCE_REPEAT_P
+    same = [m for m in range(b + 1, e + 1) if np.array_equal(raw[m], raw[m - 1])
+            and (copies or t[m] - t[m - 1] < 0.5 * dt)]
     head = (f"sample times are not uniform: the step to {time_span(t, e)} is {t[e] - t[e - 1]:.6g} s, "
             f"{(t[e] - t[e - 1]) / dt:.2f} of the median step {dt:.6g} s: rows {rec.line(b)}-{rec.line(e)} are "
             f"{e - b + 1} samples within {(t[e] - t[b]) / dt:.2f} steps, one more than the uniform grid has places "
@@ -189,6 +195,33 @@ def crowded(rec, t: np.ndarray, late: np.ndarray, pushed: np.ndarray, dt: float,
     return InputError(rec.source, f"{head}; row {rec.line(b)} would be {late[b]:.2f} of a step late (up to "
                       f"{MAX_LATE_STEPS:g} is taken as a sample delivered late, {MAX_JITTER_STEPS:g} as jitter of the "
                       "stamps): the integrators need a constant rate" + hint, row=rec.line(e), column="t")
+
+
+def long_gaps(rec, t: np.ndarray) -> InputError | None:
+    """The refusal of a step that no filling bridges -- at least MAX_FILL_SAMPLES + 2 regular steps
+    (:func:`~accelcal.recording_checks.regular_step`), more than MAX_FILL_SAMPLES places empty
+    whatever the stamps' jitter or lateness -- named at the row after the first such step, with the
+    samples missing in the steps beyond GAP_STEPS x the median, the longest gap, and the share of the
+    span without samples (a
+    recording of captures joined, such as Klipper's: 10 gaps of 1.6 s, 61 %), or None.  It comes
+    before the grid's finer refusals, which such gaps would otherwise precede with a lesser defect."""
+    step, gaps, median = regular_step(t)
+    d = np.diff(t)
+    beyond = np.flatnonzero(d >= (MAX_FILL_SAMPLES + 2) * step)
+    if not beyond.size or step <= 0:
+        return None
+    i, j = int(beyond[0]), int(np.argmax(d))
+    long = d > GAP_STEPS * median
+    lost = np.rint(d[long] / step) - 1
+    span = float(t[-1] - t[0])
+    empty = 100 * float(np.sum(d[long] - step)) / span
+    return InputError(rec.source, f"sample times are not uniform: {int(lost.sum())} sample(s) missing in {gaps} gap(s), "
+                      f"the longest {int(lost.max())} ({d[j]:.6g} s against {step:.6g} s; a gap: a step beyond "
+                      f"{GAP_STEPS:g} x the median), {empty:.2g} % of the span of {span:.6g} s without samples; the first beyond "
+                      f"filling is the step to {time_span(t, i + 1)} ({d[i]:.6g} s): pauses between captures, or samples "
+                      f"lost, where at most {MAX_FILL_SAMPLES} in one gap and {100 * MAX_FILL_SHARE:g} % of the recording "
+                      "are filled by interpolation; cut the recording at the gaps (each part on its own): the integrators "
+                      "need a constant rate", row=rec.line(i + 1), column="t")
 
 
 def incoherent(rec, t: np.ndarray, late: np.ndarray, dt: float, hint: str = REGRID_HINT) -> InputError | None:
@@ -280,8 +313,8 @@ def on_uniform_grid(rec, hint: str = REGRID_HINT) -> tuple[Any, np.ndarray, str 
     Raises
     ------
     InputError
-        A sample with no place of its own (two on one place: a sample delivered twice, or stamped
-        too late; naming the second), a sample late with a gap after it, stamps that drift further
+        A step no filling bridges (:func:`long_gaps`, first), a sample with no place of its own
+        (two on one place: a sample delivered twice, or stamped too late; naming the second), a sample late with a gap after it, stamps that drift further
         (naming where they leave the grid of the rows before), or gaps beyond the limits (naming
         the row after the longest).
     """
@@ -290,6 +323,9 @@ def on_uniform_grid(rec, hint: str = REGRID_HINT) -> tuple[Any, np.ndarray, str 
         raise InputError(rec.source, "the recording needs at least 2 samples")
     d = np.diff(t)
     dt = float(np.median(d))
+    err = long_gaps(rec, t)
+    if err is not None:
+        raise err
     q, late, pushed, edges = grid_places(t)
     for err in (crowded(rec, t, late, pushed, dt, hint), incoherent(rec, t, late, dt, hint)):
         if err is not None:
@@ -346,18 +382,23 @@ def on_uniform_grid(rec, hint: str = REGRID_HINT) -> tuple[Any, np.ndarray, str 
     return out, ~kept, "; ".join(notes)
 
 
-#: a step longer than this many of the recording's mean step is a sample lost (stamps within a quarter
-#: step of their sample times, MAX_JITTER_STEPS, give steps up to 1.5; a lost one, 2 - 0.5 at least):
-#: no interpolation bridges it
-RESAMPLE_MAX_STEP = 1.0 + 2 * MAX_JITTER_STEPS
+#: --resample bridges a gap of up to this many samples lost in a row (a step of up to 2.5 regular steps):
+#: a straight line across one sample moves a 0.2 m stroke at 100 Hz by 3e-7 m (median over places) to
+#: 1.9e-4 m (its fastest part: about the noise's spread, within the output's error bound; figures in
+#: tests/python/test_timegrid.py), where cutting the recording at the gap loses the rests that anchor
+#: the path; longer gaps are refused, and at most MAX_FILL_SHARE of the grid is bridged.  A gap: a step beyond GAP_STEPS x the
+#: median step (the rule convert's note uses), its samples lost the whole regular steps less one
+RESAMPLE_BRIDGE_SAMPLES = 1
 
 
-def resampled(rec) -> tuple[Any, str]:
+def resampled(rec) -> tuple[Any, str, np.ndarray]:
     """A recording whose samples were taken at their (uneven) time stamps -- a sensor read on a loop
     whose period varies, a driver that stamps each sample as it reads it -- interpolated onto a
-    uniform grid of as many samples over the same span (linear interpolation of the counts, rounded
-    to whole counts; the grid's step is the mean step).  Only where no sample was lost: every step
-    within RESAMPLE_MAX_STEP of the mean step.
+    uniform grid over the same span (linear interpolation of the counts, rounded to whole counts).
+    Steps up to GAP_STEPS x the median step are taken as the loop's; a longer step is a gap, of
+    round(step / regular step) - 1 samples lost (:func:`~accelcal.recording_checks.regular_step`):
+    gaps of up to RESAMPLE_BRIDGE_SAMPLES are bridged, with a note, the grid holding one place for
+    each sample kept or lost (its step the span over them).
 
     Returns
     -------
@@ -365,29 +406,46 @@ def resampled(rec) -> tuple[Any, str]:
         t on the uniform grid, raw interpolated.
     note : str
         What was done, for the user.
+    bridged : ndarray of bool, shape (n_grid,)
+        True on the grid's samples inside a bridged gap.
 
     Raises
     ------
     InputError
-        A step beyond RESAMPLE_MAX_STEP mean steps (a sample lost), naming the row after it.
+        A gap of more than RESAMPLE_BRIDGE_SAMPLES lost, or more bridged than MAX_FILL_SHARE of
+        the grid, naming the row after the longest gap.
     """
     t = np.asarray(rec.t, float)
     if t.size < 2:
         raise InputError(rec.source, "the recording needs at least 2 samples")
     d = np.diff(t)
-    step = (t[-1] - t[0]) / (t.size - 1)
+    step, gaps, median = regular_step(t)
+    gap = d > GAP_STEPS * median
+    lost = np.where(gap, np.maximum(np.rint(d / step) - 1, 1), 0).astype(np.int64)
+    total = int(lost.sum())
     i = int(np.argmax(d))
-    if d[i] > RESAMPLE_MAX_STEP * step:
+    if lost[i] > RESAMPLE_BRIDGE_SAMPLES or total > MAX_FILL_SHARE * (t.size + total):
         raise InputError(rec.source, f"--resample: the step to {time_span(t, i + 1)} is {d[i]:.6g} s, "
-                         f"{d[i] / step:.3g} of the mean step {step:.6g} s (the longest of "
-                         f"{int(np.count_nonzero(d > RESAMPLE_MAX_STEP * step))} such steps): samples were lost there (beyond "
-                         f"{RESAMPLE_MAX_STEP:g} steps), and interpolation would bridge them with a straight line; "
-                         "cut the recording at the gap (each part on its own)", row=rec.line(i + 1), column="t")
-    grid = t[0] + step * np.arange(t.size)
+                         f"{d[i] / step:.3g} of the regular step {step:.6g} s (the longest of {gaps} steps beyond "
+                         f"{GAP_STEPS:g} x the median step, {total} sample(s) lost in all): about {int(lost[i])} "
+                         f"sample(s) lost there, where a gap of up to {RESAMPLE_BRIDGE_SAMPLES} sample(s) lost (and "
+                         f"{100 * MAX_FILL_SHARE:g} % of the recording in all) is bridged with a straight line; cut the "
+                         "recording at the gap (each part on its own)", row=rec.line(i + 1), column="t")
+    m = t.size + total
+    dt = (t[-1] - t[0]) / (m - 1)
+    grid = t[0] + dt * np.arange(m)
     raw = np.asarray(rec.raw, float)
     out = np.rint(np.column_stack([np.interp(grid, t, raw[:, j]) for j in range(raw.shape[1])])).astype(np.int64)
-    off = float(np.max(np.abs(t - grid))) / step
+    k = np.clip(np.searchsorted(t, grid, side="right") - 1, 0, d.size - 1)
+    bridged = gap[k] & (grid > t[k]) & (grid < t[k + 1])
+    regular = d[~gap]
+    places = np.arange(t.size) + np.concatenate([[0], np.cumsum(lost)])
+    off = float(np.max(np.abs(t - grid[places]))) / dt
     note = (f"--resample: {t.size} samples interpolated (linearly) from their stamps onto a uniform "
-            f"{1.0 / step:.6g} Hz grid (steps {d.min() / step:.2f}-{d.max() / step:.2f} of the mean, the stamps up to "
-            f"{off:.2f} of a step off the grid)")
-    return Recording(t=grid, raw=out, metadata=dict(rec.metadata), source=rec.source), note
+            f"{1.0 / dt:.6g} Hz grid (steps {regular.min() / dt:.2f}-{regular.max() / dt:.2f} of the grid's, the "
+            f"stamps up to {off:.2f} of a step off it)")
+    if total:
+        note += (f"; {int(gap.sum())} gap(s), {total} lost sample(s) (steps beyond {GAP_STEPS:g} x the median, the longest "
+                 f"{d[i]:.6g} s = {d[i] / dt:.2f} steps, after {time_span(t, i, rec=rec)}; {float(d[gap].sum()):.4g} s "
+                 "in all) bridged with a straight line; column filled = 1 there")
+    return Recording(t=grid, raw=out, metadata=dict(rec.metadata), source=rec.source), note, bridged
