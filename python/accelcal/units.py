@@ -30,7 +30,7 @@ __all__ = ["UNITS", "REL_TOL", "Scale", "scale_from_options", "scale_from_metada
            "METADATA_KEYS", "STANDARD_GRAVITY", "OPTION_NAMES",
            "converted_metadata", "file_scale", "in_file_unit", "unstated_lsb", "COUNTS_STATED", "parse_bits", "split_lsb", "LSB_SUFFIXES"]
 
-UNITS = ("counts", "mps2", "g")
+UNITS = ("counts", "mps2", "mmps2", "g")
 REL_TOL = 1e-6
 """How far value / lsb may be from an integer n: ``REL_TOL * max(|n|, 1)``.  A float
 written by ``n * lsb`` and read back is within ~1e-15 of n; a wrong LSB is off by far more."""
@@ -40,7 +40,7 @@ significant place, where that half unit is at most this many counts (the count i
 unambiguous)."""
 STANDARD_GRAVITY = 9.80665
 METADATA_KEYS = ("units", "lsb", "full_scale_g", "bits", "gravity_mps2")
-UNIT_TEXT = {"counts": "counts", "mps2": "m/s^2", "g": "g"}
+UNIT_TEXT = {"counts": "counts", "mps2": "m/s^2", "mmps2": "mm/s^2", "g": "g"}
 OPTION_NAMES = {"units": "--units", "lsb": "--lsb", "full_scale_g": "--full-scale", "bits": "--bits",
                 "gravity_mps2": "--gravity"}
 METADATA_NAMES = {k: f"'# {k}:'" for k in METADATA_KEYS}
@@ -114,14 +114,20 @@ def _positive(text: Any, what: str, fail: Callable[[str], Exception]) -> float:
 
 
 #: the units one count may be stated in with a suffix to its LSB ("1mg"), and their size in g
-#: (mps2: 1 / g, filled in where g is known)
-LSB_SUFFIXES = ("mg", "g", "mps2")
+#: (mps2: 1 / g, mmps2: 0.001 / g, filled in where g is known: :func:`g_per`)
+LSB_SUFFIXES = ("mg", "g", "mps2", "mmps2")
+
+
+def g_per(unit: str, gravity_mps2: float) -> float:
+    """One ``unit`` (g, mg, mps2 or mmps2: m/s^2, mm/s^2 -- Klipper's ACCELEROMETER_MEASURE
+    writes mm/s^2) in g, with g = ``gravity_mps2`` m/s^2."""
+    return {"g": 1.0, "mg": 1e-3, "mps2": 1.0 / gravity_mps2, "mmps2": 1e-3 / gravity_mps2}[unit]
 
 
 def split_lsb(text: Any) -> tuple[str, str | None]:
     """An LSB's number and its unit suffix (one of LSB_SUFFIXES, else None): "1mg" -> ("1", "mg"),
     "0.0048 mps2" -> ("0.0048", "mps2"), "0.001" -> ("0.001", None)."""
-    m = re.fullmatch(r"\s*([0-9.eE+-]+?)\s*(mg|g|mps2)?\s*", str(text), flags=re.IGNORECASE)
+    m = re.fullmatch(r"\s*([0-9.eE+-]+?)\s*(mmps2|mg|g|mps2)?\s*", str(text), flags=re.IGNORECASE)
     if m is None:
         return str(text), None
     return m.group(1), None if m.group(2) is None else m.group(2).lower()
@@ -189,22 +195,22 @@ def scale_from_options(units: str | None = None, lsb: Any = None, full_scale_g: 
         num, unit = split_lsb(lsb)
         v = _positive(num, opt("lsb"), fail)
         if units is None:       # in the unit the file states (in_file_unit), else refused there
-            in_g = None if unit is None else v * (1e-3 if unit == "mg" else 1.0 if unit == "g" else 1.0 / g)
+            in_g = None if unit is None else v * g_per(unit, g)
             return Scale("counts", v if unit is None else None, in_g, opt("lsb"), unit_stated=False,
                          gravity_mps2=g)
         if units == "counts" and unit is None:
             raise fail(f"{opt('lsb')} {lsb} with {opt('units')} counts: give one count's size with its unit "
                        f"({opt('lsb')} {num}g, or in mg or mps2); the readings stay the integers they are")
         if unit is not None and unit != units:
-            in_g = v * (1e-3 if unit == "mg" else 1.0 if unit == "g" else 1.0 / g)
+            in_g = v * g_per(unit, g)
             if units == "counts":
                 return Scale("counts", None, in_g, opt("lsb"))
-            v = in_g if units == "g" else in_g * g
-        return Scale(units, v, v if units == "g" else v / g, opt("lsb"))
+            v = in_g / g_per(units, g)
+        return Scale(units, v, v * g_per(units, g), opt("lsb"))
     fs = _positive(full_scale_g, opt("full_scale_g"), fail)
     lsb_g = 2.0 * fs / 2.0 ** parse_bits(bits, fail, opt("bits"))
     stated, units = units is not None, units or "counts"
-    return Scale(units, None if units == "counts" else lsb_g * (g if units == "mps2" else 1.0), lsb_g,
+    return Scale(units, None if units == "counts" else lsb_g / g_per(units, g), lsb_g,
                  opt("full_scale_g"), unit_stated=stated, gravity_mps2=g)
 
 
@@ -231,12 +237,12 @@ def in_file_unit(option: Scale | None, unit: str | None, source: str) -> Scale |
     """
     if option is None or option.unit_stated:
         return option
-    if unit in ("mps2", "g"):
-        g = option.gravity_mps2
+    if unit in ("mps2", "mmps2", "g"):
+        per = g_per(unit, option.gravity_mps2)
         if option.lsb:                      # a bare --lsb: in the file's unit
-            lsb, lsb_g = option.lsb, option.lsb / (g if unit == "mps2" else 1.0)
+            lsb, lsb_g = option.lsb, option.lsb * per
         else:
-            lsb, lsb_g = option.lsb_g * (g if unit == "mps2" else 1.0), option.lsb_g
+            lsb, lsb_g = option.lsb_g / per, option.lsb_g
         how = f"{option.how} in the file's {UNIT_TEXT[unit]}"
         return dataclasses.replace(option, units=unit, lsb=lsb, lsb_g=lsb_g, how=how)
     if option.how == OPTION_NAMES["lsb"]:

@@ -16,7 +16,8 @@ from .units import COUNTS_STATED, UNITS, Scale, scale_from_options
 
 __all__ = ["add_units_options", "scale_from_args", "device_bits"]
 
-UNITS_HELP = ("the unit of the recording's readings: counts (default), mps2 (m/s^2) or g; mps2 and g need "
+UNITS_HELP = ("the unit of the recording's readings: counts (default), mps2 (m/s^2), mmps2 (mm/s^2: Klipper's "
+              "ACCELEROMETER_MEASURE files) or g; all but counts need "
               "--lsb or --full-scale, and every reading must then be a whole number of LSBs (within 1e-6, "
               "or within the rounding of the digits it is printed with, up to a quarter of a count), "
               "else the first that is not is named by row and column.  The file's '# units:'/'# lsb:' "
@@ -24,7 +25,7 @@ UNITS_HELP = ("the unit of the recording's readings: counts (default), mps2 (m/s
               "comment)")
 LSB_HELP = ("one count, in --units (m/s^2 or g per count; without --units, in the unit the file states by a "
             "'# units:' comment or its columns' names), e.g. 0.0047900390625 for 9.81/2048; or with its unit "
-            "(mg, g, mps2): '--units counts --lsb 1mg' states integer readings already in counts of 1 mg each "
+            "(mg, g, mps2, mmps2): '--units counts --lsb 1mg' states integer readings already in counts of 1 mg each "
             "(the nominal scale; nothing is converted, and readings that are not integers are refused)")
 FULL_SCALE_HELP = ("the range's full scale in g (16 for +-16 g): one count is 2*G/2**bits g (--bits), in the unit "
                    "--units or else the file states; with counts it {counts}")

@@ -161,3 +161,29 @@ def test_readings_a_unit_off_are_noted(tmp_path, capfd, units, factor, said):
     np.testing.assert_array_equal(rec.raw, counts)
     notes = [ln for ln in err.splitlines() if "where anything at rest reads 1 g" in ln]
     assert (len(notes) == 1 and said in notes[0]) if said else not notes, err
+
+
+def test_klipper_mm_per_s2_are_read_with_their_unit(tmp_path, capfd):
+    """Klipper's ACCELEROMETER_MEASURE files are always mm/s^2 (a LIS2DW on 19.142581 mm/s^2); there
+    was no unit for them, and the only way in was dividing every value by 1000 by hand.  `--units
+    mmps2 --lsb 19.142581` reads the counts exactly with the nominal scale 1000 / 19.142581 counts
+    per m/s^2, no note of a unit off; the same LSB as a suffix (`19.142581mmps2`) states integer
+    counts' size; the note for readings stated as m/s^2 names the unit to give."""
+    rng = np.random.default_rng(7)
+    u = np.array([0.17, 0.985, 0.02]) / np.linalg.norm([0.17, 0.985, 0.02])
+    counts = np.round(u * G * 1000 / 19.142581 + 2.5 * rng.standard_normal((400, 3))).astype(int)
+    rows = [f"{k / 394:.6f}," + ",".join(f"{v * 19.142581:.6f}" for v in r) for k, r in enumerate(counts)]
+    src = write_lines(tmp_path / "lis2dw-0.csv", ["#time,accel_x,accel_y,accel_z"] + rows)
+    rec, dev, err, _ = convert_ok(tmp_path, capfd, src, "--units", "mmps2", "--lsb", "19.142581")
+    np.testing.assert_array_equal(rec.raw, counts)
+    assert dev["channels"][0]["counts_per_mps2"] == pytest.approx(1000 / 19.142581, rel=1e-9)
+    assert "where anything at rest reads 1 g" not in err, err
+    whole = write_lines(tmp_path / "counts.csv", ["t,ax,ay,az"] + [f"{k / 394:.6f}," + ",".join(map(str, r))
+                                                                   for k, r in enumerate(counts)])
+    (tmp_path / "c").mkdir()
+    rec2, dev2, _, _ = convert_ok(tmp_path / "c", capfd, whole, "--units", "counts", "--lsb", "19.142581mmps2")
+    np.testing.assert_array_equal(rec2.raw, counts)
+    assert dev2["channels"][0]["counts_per_mps2"] == pytest.approx(1000 / 19.142581, rel=1e-9)
+    (tmp_path / "m").mkdir()
+    _, _, err, _ = convert_ok(tmp_path / "m", capfd, src, "--units", "mps2", "--lsb", "19.142581")
+    assert "--units mmps2" in err, err

@@ -87,7 +87,8 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
                if poses.set_aside else "")
         scale = one_wrong_scale(poses.set_aside)
         hint = (f"; {'they' if len(poses.set_aside) > 1 else 'it'} agree at |f| = {scale:.3g} g: the readings' scale "
-                "is off by that factor, not a free fall (readings in m/s^2 read as g give 9.81 g): check --units, "
+                "is off by that factor, not a free fall (readings in m/s^2 read as g give 9.81 g, in mm/s^2 read as m/s^2 "
+                "1000 g: Klipper's files, --units mmps2): check --units, "
                 "--full-scale or --lsb of the conversion, or the device file" if scale is not None else "")
         raise InputError(recordings[0].source, f"no usable static pose in any recording{why}{hint}: the offsets "
                          "and sensitivities need static poses (lever arms alone cannot be estimated without them)")
