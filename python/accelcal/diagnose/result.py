@@ -21,6 +21,7 @@ from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare
 from .compare import (OCCAM_SHRINK, Contest, Given, claims_time, conditional, contest, model_ambiguity, separable,
                       time_beside_pose, time_unmodelled)
+from .outliers import OUTLIER_MODES, find_outliers, outlier_entry, outlier_note, without_poses
 from .parsimony import simpler_model
 from .relinearise import heldout_path, joint_fit, relinearise
 from .leftover import leftover, with_settling
@@ -169,7 +170,7 @@ def same_change(D, best: Cand, cands: list[Cand], rtol: float = 1e-6) -> list[Ca
 
 def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, seed: int = 0,
              candidates: Sequence[str] | None = None, max_steps: int = MAX_STEPS, model_centripetal: bool = True,
-             progress: Any = None) -> DiagnosisResult:
+             progress: Any = None, outliers: str = "name") -> DiagnosisResult:
     """Diagnose the gap between recordings and a calibrated model (see the module doc).
 
     ``device``, ``calibration``: objects or JSON paths; ``recordings``: Recordings or CSV
@@ -177,12 +178,17 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     ``candidates``: effect names to try (default: every effect of the registry).
     ``model_centripetal``: False diagnoses a model without the omega x (omega x r) term.
     ``progress``: optional callable(name) called after each candidate is scored.
+    ``outliers``: static poses far off the calibration's terms (:mod:`.outliers`): "name" them
+    (``outliers`` in the JSON, with the diagnosis of the other poses and a note), "drop" them
+    (the diagnosis is of the others), or "keep" them unjudged.
     Returns the JSON object of the data contract (a dict; see :class:`DiagnosisResult`).
     Bad input raises :class:`~accelcal.errors.InputError` / AccelcalError (one line).
     """
     t_start = time.perf_counter()
     if isinstance(folds, bool) or not isinstance(folds, (int, np.integer)) or folds < 2:
         raise AccelcalError(f"diagnose: folds must be an integer >= 2, got {folds!r}")
+    if outliers not in OUTLIER_MODES:
+        raise AccelcalError(f"diagnose: outliers must be one of {', '.join(OUTLIER_MODES)}, got {outliers!r}")
     dev = as_device(device)
     cal, cal_src = as_calibration(calibration, dev)
     # readings held for several rows (a logger faster than the sensor) are counted once
@@ -200,6 +206,14 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     D = prepare(dev, cal, recs, int(folds), int(seed), m0)
     e = D.raw - D.p0
     setup_rows(D, e)
+    off_poses = find_outliers(D, e) if outliers != "keep" else None
+    again = dict(folds=folds, seed=seed, candidates=candidates, max_steps=max_steps,
+                 model_centripetal=model_centripetal, progress=progress, outliers="keep")
+    if off_poses is not None and outliers == "drop":
+        res = diagnose(dev, cal, without_poses(D, recs, off_poses), **again)
+        res["outliers"] = outlier_entry(D, recs, off_poses, dropped=True)
+        res["notes"] = held_notes + res["notes"] + [outlier_note(res["outliers"], res["verdict"])]
+        return res
 
     skipped = []
     active = []
@@ -440,6 +454,11 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         "elapsed_s": time.perf_counter() - t_start,
     })
     result["where"] = to_json(result["where"])
+    result["outliers"] = None
+    if off_poses is not None:
+        result["outliers"] = outlier_entry(D, recs, off_poses, dropped=False, without=diagnose(
+            dev, cal, without_poses(D, recs, off_poses), **again))
+        notes.append(outlier_note(result["outliers"], verdict))
     result.series = {
         "tg": D.tg, "t": D.t, "rec": D.rec, "residual": e, "residual_after": e - total_delta,
         "noise_floor": D.sigma, "sources": [ri["source"] for ri in D.rec_info], "static": D.static,
