@@ -21,6 +21,7 @@ from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare
 from .compare import (OCCAM_SHRINK, Contest, Given, claims_time, conditional, contest, model_ambiguity, separable,
                       time_beside_pose, time_unmodelled)
+from .determined import mark_not_determined
 from .outliers import OUTLIER_MODES, find_outliers, outlier_entry, outlier_note, without_poses
 from .parsimony import simpler_model
 from .relinearise import heldout_path, joint_fit, relinearise
@@ -454,6 +455,8 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         "elapsed_s": time.perf_counter() - t_start,
     })
     result["where"] = to_json(result["where"])
+    for ent in result["effects"]:
+        mark_not_determined(D, cands, ent, result["model"]["params_sigma"] if ent["selected"] else None)
     result["outliers"] = None
     if off_poses is not None:
         result["outliers"] = outlier_entry(D, recs, off_poses, dropped=False, without=diagnose(
