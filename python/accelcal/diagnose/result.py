@@ -29,7 +29,7 @@ from .leftover import leftover, with_settling
 from .scoring import rank_key, run_candidates
 from .settling import settling_ringing
 from .settings import FORMAT, MAX_STEPS, MIN_SHRINK, PENALTY_PER_PARAM, POSE_MEAN_NOTE_RATIO, T_MIN, TERMS_PASSES, Z_MIN
-from .text import entry, separate_by, to_json
+from .text import describe, entry, separate_by, to_json
 from .where import pose_mean_gap, where_breakdown
 from ..effects import EFFECTS
 
@@ -231,6 +231,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     first, _, S0u = run_candidates(D, cands, active, y, pcur, progress)
     base_rms = float(math.sqrt(S0u.sum() / (D.n * D.R)))
     steps: list[tuple[Cand, str]] = []
+    beyond = None              # the significant candidate the step limit left out
     results = first
     remaining = list(active)
     chosen: list[str] = []
@@ -270,7 +271,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         if best.gain > 0:
             y = y - best.delta
             pcur = pcur + best.delta
-        if len(chosen) >= max_steps or not remaining:
+        if not remaining:
             break
         if Dk.mode == "jigfree" and best.gain > 0 and cands[best.name].absorbs:
             # a change of the calibration itself: the next step is scored about the corrected
@@ -281,6 +282,10 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
             y = rl["e"] - rl["delta"]
             pcur = Dk.p0 + rl["delta"]
         results, _, _ = run_candidates(Dk, cands, remaining, y, pcur, progress)
+        if len(chosen) >= max_steps:
+            # the search stops here: what would have been the next step is said (not added)
+            beyond = min((c for c in results.values() if c.significant), key=rank_key, default=None)
+            break
 
     # --- a much simpler model that, refitted as a whole, leaves less (parsimony.py)
     alt, why = simpler_model(D, cands, first, [c for c, _ in steps], e)
@@ -395,6 +400,14 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         left = leftover(D, e - total_delta, base_rms, model_after)
     ring = settling_ringing(recs, dev)
     left = with_settling(left, ring, D, base_rms)
+    if beyond is not None and alt is None:
+        said = (f"{beyond.name} would be step {max_steps + 1} (held-out shrink {beyond.shrink:.3f} of what the "
+                f"{max_steps} effects leave; t {beyond.t:.3g}, z {beyond.z:.3g}), beyond the {max_steps} steps the "
+                "search takes: not in the model")
+        notes.append(said + ("; part of what is left unexplained may be it" if left is not None else ""))
+        if left is not None:
+            left["beyond_step_limit"] = {"name": beyond.name, "shrink": beyond.shrink, "summary": describe(
+                beyond.name, beyond.params, beyond.sigma, D)}
     if ring is not None:
         notes.append(f"a ringing at {ring['peak_hz']:.3g} Hz after {ring['n_stops']} stops (channels "
                      f"{', '.join(map(str, ring['channels']))}; {ring['ratio_to_onset']:.3g} x the power at the "
