@@ -154,6 +154,17 @@ def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, 
     return Contest(best=nxt, ambiguous=amb, swapped_from=best.name, why=why, tests=tests), nxt
 
 
+def next_point(dev, cal, recs, folds, seed, m0, cands, steps, best, Dk, y, pcur):
+    """The data, residual and prediction the next step is scored on: jig-free, after a change of
+    the calibration itself (``Effect.absorbs``), about the corrected calibration (new pose
+    forces), not on the first linearisation's residual; else as they are."""
+    if Dk.mode == "jigfree" and best.gain > 0 and cands[best.name].absorbs:
+        now = [c.name for c, _ in steps if c.gain > 0]
+        rl = relinearise(dev, cal, recs, int(folds), int(seed), m0, cands, now, {c.name: c for c, _ in steps}, Dk)
+        return rl["D"], rl["e"] - rl["delta"], rl["D"].p0 + rl["delta"]
+    return Dk, y, pcur
+
+
 def same_change(D, best: Cand, cands: list[Cand], rtol: float = 1e-6) -> list[Cand]:
     """The candidates (other than ``best``) whose in-sample change of every reading, as the data
     see it (``D.rows``: jig-free, the directions the poses' angles cannot absorb), is ``best``'s
@@ -231,7 +242,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     first, _, S0u = run_candidates(D, cands, active, y, pcur, progress)
     base_rms = float(math.sqrt(S0u.sum() / (D.n * D.R)))
     steps: list[tuple[Cand, str]] = []
-    beyond = None              # the significant candidate the step limit left out
+    stop = None                # where the step limit stopped the search
     results = first
     remaining = list(active)
     chosen: list[str] = []
@@ -273,19 +284,11 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
             pcur = pcur + best.delta
         if not remaining:
             break
-        if Dk.mode == "jigfree" and best.gain > 0 and cands[best.name].absorbs:
-            # a change of the calibration itself: the next step is scored about the corrected
-            # calibration (new pose forces), not on the first linearisation's residual
-            now = [c.name for c, _ in steps if c.gain > 0]
-            rl = relinearise(dev, cal, recs, int(folds), int(seed), m0, cands, now, {c.name: c for c, _ in steps}, Dk)
-            Dk = rl["D"]
-            y = rl["e"] - rl["delta"]
-            pcur = Dk.p0 + rl["delta"]
-        results, _, _ = run_candidates(Dk, cands, remaining, y, pcur, progress)
         if len(chosen) >= max_steps:
-            # the search stops here: what would have been the next step is said (not added)
-            beyond = min((c for c in results.values() if c.significant), key=rank_key, default=None)
+            stop = (best, Dk, y, pcur)       # scored for a next step only if something is left (below)
             break
+        Dk, y, pcur = next_point(dev, cal, recs, folds, seed, m0, cands, steps, best, Dk, y, pcur)
+        results, _, _ = run_candidates(Dk, cands, remaining, y, pcur, progress)
 
     # --- a much simpler model that, refitted as a whole, leaves less (parsimony.py)
     alt, why = simpler_model(D, cands, first, [c for c, _ in steps], e)
@@ -400,12 +403,15 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         left = leftover(D, e - total_delta, base_rms, model_after)
     ring = settling_ringing(recs, dev)
     left = with_settling(left, ring, D, base_rms)
-    if beyond is not None and alt is None:
-        said = (f"{beyond.name} would be step {max_steps + 1} (held-out shrink {beyond.shrink:.3f} of what the "
-                f"{max_steps} effects leave; t {beyond.t:.3g}, z {beyond.z:.3g}), beyond the {max_steps} steps the "
-                "search takes: not in the model")
-        notes.append(said + ("; part of what is left unexplained may be it" if left is not None else ""))
-        if left is not None:
+    if stop is not None and left is not None and alt is None:
+        # what the step limit left out, where something is left: said, not added
+        Dk, y, pcur = next_point(dev, cal, recs, folds, seed, m0, cands, steps, *stop)
+        more, _, _ = run_candidates(Dk, cands, remaining, y, pcur, progress)
+        beyond = min((c for c in more.values() if c.significant), key=rank_key, default=None)
+        if beyond is not None:
+            notes.append(f"{beyond.name} would be step {max_steps + 1} (held-out shrink {beyond.shrink:.3f} of what "
+                         f"the {max_steps} effects leave; t {beyond.t:.3g}, z {beyond.z:.3g}), beyond the {max_steps} "
+                         "steps the search takes: not in the model; part of what is left unexplained may be it")
             left["beyond_step_limit"] = {"name": beyond.name, "shrink": beyond.shrink, "summary": describe(
                 beyond.name, beyond.params, beyond.sigma, D)}
     if ring is not None:
