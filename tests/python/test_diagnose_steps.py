@@ -15,7 +15,7 @@ def test_a_hand_placed_tilt_after_the_calibration_terms_is_named_as_the_next_ste
     its nominal calibration: an offset of 0.42 m/s^2 on z, z's gain +1.7 %, z tilted 3 deg toward x,
     and each face placed by hand within 0.2 deg.  Offset, misalignment and gain are the three steps;
     the tilts are left, and had been reported only as 16 counts unexplained.  A fourth step is not
-    taken (on the independent benchmark it added an effect that is not in the data to 89 of the 91
+    taken (on the independent benchmark the fourth member was no effect of the data in 87 of the 91
     models it lengthened); the pose_error it would add is named, in unexplained.beyond_step_limit
     and a note."""
     assert MAX_STEPS == 3
