@@ -284,7 +284,8 @@ def cmd_diagnose(a):
         def scored(name):
             bar.set_postfix_str(name, refresh=False)
             bar.update()
-        result = diagnose(dev, cal, recs, folds=a.folds, seed=a.seed, progress=scored)
+        result = diagnose(dev, cal, recs, folds=a.folds, seed=a.seed, progress=scored,
+                          outliers="drop" if a.drop_outliers else "name")
     # the result is the contract's JSON object; it also carries the per-sample
     # series the report plots, so it goes to write_report as it is
     atomic_write(a.json, lambda f: json.dump(result, f, indent=2, default=_json_default))
@@ -438,6 +439,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--report", metavar="DIR", help="plots and a written summary")
     s.add_argument("--folds", type=int, default=5, help="blocked cross-validation folds")
     s.add_argument("--seed", type=int, default=0, help="seed of the cross-validation folds (default %(default)s)")
+    s.add_argument("--drop-outliers", action="store_true",
+                   help="set aside the static poses far off the calibration's terms fitted to the poses (calibrate's "
+                   "rule: a knocked or mislabelled pose), which are otherwise kept, named in the JSON's 'outliers' "
+                   "with the diagnosis of the other poses, and in a note")
     add_units_options(s)
     s.set_defaults(func=cmd_diagnose)
     add_convert_parser(sub, check_output)

@@ -1,33 +1,18 @@
-"""Poses far off a static fit: found by a robust rule, named with how far off they are, and
-the fit without them, so that the user can see what they change and decide (``calibrate
---drop-outliers`` leaves them out).
-
-The rule (:func:`outlier_poses`): each pose's residual over its noise,
-e_p = sqrt(sum_i (r_pi / sem_pi)^2), and the poses whose e_p exceeds the median of the
-e_p by more than OUTLIER_K robust standard deviations (1.4826 x the median absolute
-deviation of the e_p, at least 1: the noise itself).  A robust spread, because the poses to
-find inflate the ordinary one; in noise units, so that a well-fitting pose set (e_p ~ 1)
-names no pose within its noise.  OUTLIER_K = 8: e_p of a clean fit is at worst half-normal
-(one residual dimension a pose, the jig-free triad's |f| = g), whose median + 8 robust sd
-(0.67 + 8 x 0.59 sd = 5.4 sd) a pose passes with probability 7e-8, so 10,000 clean poses
-name none (P = 1e-3); real hand-held poses, whose e_p spread wider than the noise, set the
-yardstick by their own spread (Magneto's 178 poses: 3 at 47-51 robust sd, |f| - g = -0.74 to
--0.77 m/s^2, the next at 2.7; the suite's real recordings at most 3.0, Xsens's 40 hand-held
-poses).  At most a quarter of the poses are named (more are no outliers but the
-fit's), and none of fewer than MIN_OUTLIER_POSES.
+"""Poses far off a static fit, named with how far off they are and the fit without them, so
+that the user can see what they change and decide (``calibrate --drop-outliers`` leaves them
+out).  The rule itself (median + OUTLIER_K robust sd of the poses' residual over their noise)
+lives in :mod:`accelcal.outliers`, which ``diagnose`` uses too; here it is applied to a
+StaticFit's pose residuals.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..noise import MAD_TO_STD
+from ..outliers import MIN_OUTLIER_POSES, OUTLIER_K, OUTLIER_RULE, far_poses
 from ..static import PoseSet
 from .checks import static_force
 
 __all__ = ["OUTLIER_K", "MIN_OUTLIER_POSES", "pose_chi", "outlier_poses", "norm_error", "subset", "outlier_report"]
-
-OUTLIER_K = 8.0            # robust sd of the poses' residual beyond their median that names a pose
-MIN_OUTLIER_POSES = 8      # fewer poses give no robust spread to judge one by
 
 
 def pose_chi(fit) -> np.ndarray:
@@ -36,18 +21,10 @@ def pose_chi(fit) -> np.ndarray:
 
 
 def outlier_poses(fit, k: float = OUTLIER_K) -> np.ndarray:
-    """Indices of the poses far off ``fit`` (a StaticFit), worst first: e_p = :func:`pose_chi`
-    beyond median(e) + k max(1.4826 MAD(e), 1); none where more than a quarter of the poses
-    would be, or the fit has fewer than MIN_OUTLIER_POSES."""
-    e = pose_chi(fit)
-    if e.size < MIN_OUTLIER_POSES or not np.all(np.isfinite(e)):
-        return np.zeros(0, dtype=np.int64)
-    med = float(np.median(e))
-    sd = max(MAD_TO_STD * float(np.median(np.abs(e - med))), 1.0)
-    out = np.flatnonzero(e > med + k * sd)
-    if out.size > e.size // 4:
-        return np.zeros(0, dtype=np.int64)
-    return out[np.argsort(-e[out])]
+    """Indices of the poses far off ``fit`` (a StaticFit), worst first: :func:`accelcal.outliers.far_poses`
+    of e_p = :func:`pose_chi` (none where more than a quarter of the poses would be, or the fit
+    has fewer than MIN_OUTLIER_POSES)."""
+    return far_poses(pose_chi(fit), k)
 
 
 def norm_error(device, fit) -> np.ndarray:
@@ -74,7 +51,7 @@ def outlier_report(device, fit, out: np.ndarray, names: list, without=None) -> d
     d = norm_error(device, fit)
     rest = np.setdiff1d(np.arange(e.size), out)
     rep = {
-        "rule": f"residual over the noise beyond the poses' median + {OUTLIER_K:g} robust sd (1.4826 MAD, >= 1)",
+        "rule": OUTLIER_RULE,
         "poses": [{"name": names[p], "residual_over_noise": float(e[p]), "norm_error_mps2": float(d[p]),
                    **({"t_start_s": float(fit.poses.info[p]["t_start"])} if "t_start" in fit.poses.info[p] else {})}
                   for p in out],

@@ -97,6 +97,13 @@ def pose_force(S: np.ndarray, ybar: np.ndarray, g: float, wch: np.ndarray, f0: n
     return f
 
 
+def kept_recordings(recs: list) -> list[int]:
+    """The recordings a diagnosis uses (indices into ``recs``): those with a reference f where any
+    has one (the others are skipped with a note), else all of them (jig-free)."""
+    has_f = [rec.has_f() for rec in recs]
+    return [i for i, hf in enumerate(has_f) if hf] if any(has_f) else list(range(len(recs)))
+
+
 def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
 
     N = device.n_channels
@@ -110,14 +117,14 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
     notes: list[str] = []
     if any(has_f):
         mode = "reference"
-        keep = [i for i, hf in enumerate(has_f) if hf]
+        keep = kept_recordings(recs)
         for i, hf in enumerate(has_f):
             if not hf:
                 notes.append(f"{recs[i].source}: skipped: no reference f while other recordings have one "
                              "(diagnose it on its own for a jig-free diagnosis)")
     else:
         mode = "jigfree"
-        keep = list(range(len(recs)))
+        keep = kept_recordings(recs)
 
     parts = []
     rec_info = []

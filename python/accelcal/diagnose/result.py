@@ -21,13 +21,15 @@ from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare
 from .compare import (OCCAM_SHRINK, Contest, Given, claims_time, conditional, contest, model_ambiguity, separable,
                       time_beside_pose, time_unmodelled)
+from .determined import mark_not_determined
+from .outliers import OUTLIER_MODES, find_outliers, outlier_entry, outlier_note, without_poses
 from .parsimony import simpler_model
 from .relinearise import heldout_path, joint_fit, relinearise
 from .leftover import leftover, with_settling
 from .scoring import rank_key, run_candidates
 from .settling import settling_ringing
 from .settings import FORMAT, MAX_STEPS, MIN_SHRINK, PENALTY_PER_PARAM, POSE_MEAN_NOTE_RATIO, T_MIN, TERMS_PASSES, Z_MIN
-from .text import entry, separate_by, to_json
+from .text import describe, entry, separate_by, to_json
 from .where import pose_mean_gap, where_breakdown
 from ..effects import EFFECTS
 
@@ -152,6 +154,17 @@ def _terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, 
     return Contest(best=nxt, ambiguous=amb, swapped_from=best.name, why=why, tests=tests), nxt
 
 
+def next_point(dev, cal, recs, folds, seed, m0, cands, steps, best, Dk, y, pcur):
+    """The data, residual and prediction the next step is scored on: jig-free, after a change of
+    the calibration itself (``Effect.absorbs``), about the corrected calibration (new pose
+    forces), not on the first linearisation's residual; else as they are."""
+    if Dk.mode == "jigfree" and best.gain > 0 and cands[best.name].absorbs:
+        now = [c.name for c, _ in steps if c.gain > 0]
+        rl = relinearise(dev, cal, recs, int(folds), int(seed), m0, cands, now, {c.name: c for c, _ in steps}, Dk)
+        return rl["D"], rl["e"] - rl["delta"], rl["D"].p0 + rl["delta"]
+    return Dk, y, pcur
+
+
 def same_change(D, best: Cand, cands: list[Cand], rtol: float = 1e-6) -> list[Cand]:
     """The candidates (other than ``best``) whose in-sample change of every reading, as the data
     see it (``D.rows``: jig-free, the directions the poses' angles cannot absorb), is ``best``'s
@@ -169,7 +182,7 @@ def same_change(D, best: Cand, cands: list[Cand], rtol: float = 1e-6) -> list[Ca
 
 def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, seed: int = 0,
              candidates: Sequence[str] | None = None, max_steps: int = MAX_STEPS, model_centripetal: bool = True,
-             progress: Any = None) -> DiagnosisResult:
+             progress: Any = None, outliers: str = "name") -> DiagnosisResult:
     """Diagnose the gap between recordings and a calibrated model (see the module doc).
 
     ``device``, ``calibration``: objects or JSON paths; ``recordings``: Recordings or CSV
@@ -177,12 +190,17 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     ``candidates``: effect names to try (default: every effect of the registry).
     ``model_centripetal``: False diagnoses a model without the omega x (omega x r) term.
     ``progress``: optional callable(name) called after each candidate is scored.
+    ``outliers``: static poses far off the calibration's terms (:mod:`.outliers`): "name" them
+    (``outliers`` in the JSON, with the diagnosis of the other poses and a note), "drop" them
+    (the diagnosis is of the others), or "keep" them unjudged.
     Returns the JSON object of the data contract (a dict; see :class:`DiagnosisResult`).
     Bad input raises :class:`~accelcal.errors.InputError` / AccelcalError (one line).
     """
     t_start = time.perf_counter()
     if isinstance(folds, bool) or not isinstance(folds, (int, np.integer)) or folds < 2:
         raise AccelcalError(f"diagnose: folds must be an integer >= 2, got {folds!r}")
+    if outliers not in OUTLIER_MODES:
+        raise AccelcalError(f"diagnose: outliers must be one of {', '.join(OUTLIER_MODES)}, got {outliers!r}")
     dev = as_device(device)
     cal, cal_src = as_calibration(calibration, dev)
     # readings held for several rows (a logger faster than the sensor) are counted once
@@ -200,6 +218,14 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     D = prepare(dev, cal, recs, int(folds), int(seed), m0)
     e = D.raw - D.p0
     setup_rows(D, e)
+    off_poses = find_outliers(D, e) if outliers != "keep" else None
+    again = dict(folds=folds, seed=seed, candidates=candidates, max_steps=max_steps,
+                 model_centripetal=model_centripetal, progress=progress, outliers="keep")
+    if off_poses is not None and outliers == "drop":
+        res = diagnose(dev, cal, without_poses(D, recs, off_poses), **again)
+        res["outliers"] = outlier_entry(D, recs, off_poses, dropped=True)
+        res["notes"] = held_notes + res["notes"] + [outlier_note(res["outliers"], res["verdict"])]
+        return res
 
     skipped = []
     active = []
@@ -216,6 +242,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     first, _, S0u = run_candidates(D, cands, active, y, pcur, progress)
     base_rms = float(math.sqrt(S0u.sum() / (D.n * D.R)))
     steps: list[tuple[Cand, str]] = []
+    stop = None                # where the step limit stopped the search
     results = first
     remaining = list(active)
     chosen: list[str] = []
@@ -255,16 +282,12 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         if best.gain > 0:
             y = y - best.delta
             pcur = pcur + best.delta
-        if len(chosen) >= max_steps or not remaining:
+        if not remaining:
             break
-        if Dk.mode == "jigfree" and best.gain > 0 and cands[best.name].absorbs:
-            # a change of the calibration itself: the next step is scored about the corrected
-            # calibration (new pose forces), not on the first linearisation's residual
-            now = [c.name for c, _ in steps if c.gain > 0]
-            rl = relinearise(dev, cal, recs, int(folds), int(seed), m0, cands, now, {c.name: c for c, _ in steps}, Dk)
-            Dk = rl["D"]
-            y = rl["e"] - rl["delta"]
-            pcur = Dk.p0 + rl["delta"]
+        if len(chosen) >= max_steps:
+            stop = (best, Dk, y, pcur)       # scored for a next step only if something is left (below)
+            break
+        Dk, y, pcur = next_point(dev, cal, recs, folds, seed, m0, cands, steps, best, Dk, y, pcur)
         results, _, _ = run_candidates(Dk, cands, remaining, y, pcur, progress)
 
     # --- a much simpler model that, refitted as a whole, leaves less (parsimony.py)
@@ -380,6 +403,17 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         left = leftover(D, e - total_delta, base_rms, model_after)
     ring = settling_ringing(recs, dev)
     left = with_settling(left, ring, D, base_rms)
+    if stop is not None and left is not None and alt is None:
+        # what the step limit left out, where something is left: said, not added
+        Dk, y, pcur = next_point(dev, cal, recs, folds, seed, m0, cands, steps, *stop)
+        more, _, _ = run_candidates(Dk, cands, remaining, y, pcur, progress)
+        beyond = min((c for c in more.values() if c.significant), key=rank_key, default=None)
+        if beyond is not None:
+            notes.append(f"{beyond.name} would be step {max_steps + 1} (held-out shrink {beyond.shrink:.3f} of what "
+                         f"the {max_steps} effects leave; t {beyond.t:.3g}, z {beyond.z:.3g}), beyond the {max_steps} "
+                         "steps the search takes: not in the model; part of what is left unexplained may be it")
+            left["beyond_step_limit"] = {"name": beyond.name, "shrink": beyond.shrink, "summary": describe(
+                beyond.name, beyond.params, beyond.sigma, D)}
     if ring is not None:
         notes.append(f"a ringing at {ring['peak_hz']:.3g} Hz after {ring['n_stops']} stops (channels "
                      f"{', '.join(map(str, ring['channels']))}; {ring['ratio_to_onset']:.3g} x the power at the "
@@ -440,6 +474,13 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         "elapsed_s": time.perf_counter() - t_start,
     })
     result["where"] = to_json(result["where"])
+    for ent in result["effects"]:
+        mark_not_determined(D, cands, ent, result["model"]["params_sigma"] if ent["selected"] else None)
+    result["outliers"] = None
+    if off_poses is not None:
+        result["outliers"] = outlier_entry(D, recs, off_poses, dropped=False, without=diagnose(
+            dev, cal, without_poses(D, recs, off_poses), **again))
+        notes.append(outlier_note(result["outliers"], verdict))
     result.series = {
         "tg": D.tg, "t": D.t, "rec": D.rec, "residual": e, "residual_after": e - total_delta,
         "noise_floor": D.sigma, "sources": [ri["source"] for ri in D.rec_info], "static": D.static,

@@ -127,27 +127,54 @@ def where_breakdown(D: FitData, e: np.ndarray) -> dict:
     return out
 
 
-def pose_mean_gap(D: FitData, e: np.ndarray) -> dict:
-    """RMS of the static poses' mean residual rows against what the noise alone gives them:
-    the white noise's, widened by the colour of the noise within the poses
-    (:func:`accelcal.static.colour_factor`, which widens the calibration's pose sems alike)."""
+def pose_mean_rows(D: FitData, e: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The static poses' mean residual rows and the variance the noise alone gives them.
+
+    Parameters
+    ----------
+    D : FitData
+    e : ndarray, shape (n, N)
+        Residual in counts (channel space; projected here with ``D.rows``).
+
+    Returns
+    -------
+    poses : ndarray of int, shape (P',)
+        The global pose indices that hold samples.
+    means : ndarray, shape (P', R)
+        Each pose's mean residual row (counts).
+    var : ndarray, shape (P', R)
+        Its white-noise variance (counts^2, from the rows' weights).
+    r2 : ndarray, shape (P', R)
+        Each pose's own squared widening of its mean's spread beyond white noise's by the
+        noise's colour within it (:func:`accelcal.noise.pose_colour`; NaN for a short pose);
+        :func:`accelcal.noise.colour_factor` pools them as the calibration's pose sems are.
+    """
     P = len(D.pose_labels)
-    if P < 2:
-        return {}
     Rr = D.rows(e)
     cnt = np.bincount(D.pose[D.pose >= 0], minlength=P).astype(float)
     on = D.pose >= 0
+    ok = cnt > 0
     ms, vs = [], []
     for j in range(Rr.shape[1]):
         s1 = np.bincount(D.pose[on], weights=Rr[on, j], minlength=P)
         iv = np.bincount(D.pose[on], weights=1.0 / D.W[on, j], minlength=P)
-        ok = cnt > 0
-        ms.append((s1[ok] / cnt[ok]) ** 2)
+        ms.append(s1[ok] / cnt[ok])
         vs.append(iv[ok] / cnt[ok] ** 2)
-    rms = float(np.sqrt(np.mean(np.concatenate(ms))))
-    white = float(np.sqrt(np.mean(np.concatenate(vs))))
+    r2 = pose_colour(Rr, [np.flatnonzero(D.pose == p) for p in range(P) if cnt[p] > 0])
+    return np.flatnonzero(ok), np.array(ms).T, np.array(vs).T, r2
+
+
+def pose_mean_gap(D: FitData, e: np.ndarray) -> dict:
+    """RMS of the static poses' mean residual rows against what the noise alone gives them:
+    the white noise's, widened by the colour of the noise within the poses
+    (:func:`pose_mean_rows`)."""
+    if len(D.pose_labels) < 2:
+        return {}
+    poses, m, v, r2 = pose_mean_rows(D, e)
+    colour = colour_factor(r2)
+    rms = float(np.sqrt(np.mean(m ** 2)))
+    white = float(np.sqrt(np.mean(v)))
     # noise coloured within the poses (a hand's slow tremor) moves their means more than white noise
-    colour = colour_factor(pose_colour(Rr, [np.flatnonzero(D.pose == p) for p in range(P) if cnt[p] > 0]))
     noise = white * float(np.sqrt(np.mean(colour ** 2)))
     return {"pose_mean_rms_counts": rms, "pose_mean_noise_counts": noise, "pose_mean_white_noise_counts": white,
-            "pose_mean_ratio": rms / noise if noise > 0 else None, "n_poses": int(np.count_nonzero(cnt))}
+            "pose_mean_ratio": rms / noise if noise > 0 else None, "n_poses": int(poses.size)}
