@@ -166,9 +166,9 @@ def test_rows_pointing_in_unrelated_directions_are_no_rest(rate):
 
 def test_readings_without_gravity_are_named_so_where_no_rest_is_found():
     """A phone app's user acceleration (Sensor Logger's Accelerometer.csv: gravity taken out, a hand's
-    motion of 0.3 g throughout) has no rest; the error had named only its scatter.  It now says
-    that its median |f| is far below 1 g and which export holds gravity; the same motion with
-    gravity in gets no such clause."""
+    motion of 0.3 g throughout) has no rest; calibrate's error had named only its scatter, and
+    diagnose's only the missing reference.  Both now say that its median |f| is far below 1 g and
+    which export holds gravity; the same motion with gravity in gets no such clause."""
     dev = bare(default_triad())
     k = dev.counts_per_mps2[0]
     rng = np.random.default_rng(5)
@@ -180,6 +180,9 @@ def test_readings_without_gravity_are_named_so_where_no_rest_is_found():
             poses_from_recording(recording(rows, 100.0), dev)
         assert ("gravity looks removed" in str(e.value)) == said, str(e.value)
         assert ("TotalAcceleration.csv" in str(e.value)) == said
+        with pytest.raises(InputError, match="no reference to diagnose against") as e:   # diagnose alike
+            ac.diagnose(dev, ac.Calibration.nominal(dev), [recording(rows, 100.0)])
+        assert ("gravity looks removed" in str(e.value)) == said, str(e.value)
 
 
 def eased_poses(seed, pause):

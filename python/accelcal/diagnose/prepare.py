@@ -11,6 +11,7 @@ from ..effects.fitdata import FitData, tangent_basis
 from ..effects.settings import BLOCK_S, QUANT_DITHER_GRID
 from ..errors import InputError
 from ..motions import Trajectory
+from ..no_rest import gravity_removed_clause
 from ..noise import noise_for
 from ..sensor import evaluate, true_state
 from ..static import STATIC_WINDOW_S, detect_static, set_aside_off_gravity, window_len
@@ -195,7 +196,8 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
             if mode == "jigfree":
                 raise InputError(rec.source, "no reference to diagnose against: no f_x, f_y, f_z columns and no "
                                  "static interval (at least 1 s at rest) whose |f| = g could serve instead"
-                                 + (f" ({'; '.join(not_rest[:2])})" if not_rest else ""))
+                                 + (f" ({'; '.join(not_rest[:2])})" if not_rest else "")
+                                 + gravity_removed_clause(rec.raw, device))
             raise InputError(rec.source, "no sample has a complete reference (f_x, f_y, f_z, and w_*, dw_* while "
                              "moving) to predict the readings from", column="f_x")
         if mode == "reference" and usable.sum() < 0.5 * n:
