@@ -9,28 +9,28 @@ from .calibrate.settings import SCATTER_CHI2
 from .errors import AccelcalError
 
 
-def jig_accuracy_arg(text) -> float:
-    """--jig-accuracy DEG: a finite angle >= 0 (one-line error naming the option otherwise)."""
+def non_negative(text, option: str, what: str) -> float:
+    """A finite number >= 0 from ``text`` (a one-line error naming ``option`` and ``what`` it is
+    otherwise)."""
     try:
         v = float(text)
     except ValueError:
         v = float("nan")
     if not (np.isfinite(v) and v >= 0):
-        raise AccelcalError(f"--jig-accuracy {text!r}: expected a finite angle in degrees >= 0 (the rms "
-                            "rotation angle of the jig's pose errors; 0 = exact references)")
+        raise AccelcalError(f"{option} {text!r}: expected {what}")
     return v
+
+
+def jig_accuracy_arg(text) -> float:
+    """--jig-accuracy DEG: a finite angle >= 0 (one-line error naming the option otherwise)."""
+    return non_negative(text, "--jig-accuracy", "a finite angle in degrees >= 0 (the rms rotation angle of the "
+                        "jig's pose errors; 0 = exact references)")
 
 
 def min_static_arg(text) -> float:
     """--min-static SECONDS: a finite number >= 0 (one-line error naming the option otherwise)."""
-    try:
-        v = float(text)
-    except ValueError:
-        v = float("nan")
-    if not (np.isfinite(v) and v >= 0):
-        raise AccelcalError(f"--min-static {text!r}: expected a finite number of seconds >= 0 (the shortest still "
-                            "stretch taken for a pose where a motion touches it)")
-    return v
+    return non_negative(text, "--min-static", "a finite number of seconds >= 0 (the shortest still stretch taken "
+                        "for a pose where a motion touches it)")
 
 
 def calibrate_warnings(dev, cal) -> list[str]:

@@ -158,17 +158,23 @@ def test_a_comment_naming_a_logs_three_columns_keeps_it_a_log(tmp_path, capfd):
     np.testing.assert_array_equal(read_recording(out).raw, c)
 
 
-def test_a_kalibr_header_s_columns_and_unit_are_read(tmp_path, capfd):
-    """EuRoC's IMU files (Kalibr's layout): '#timestamp [ns],w_RS_S_x [rad s^-1],...,a_RS_S_x
-    [m s^-2],...'.  --columns a_RS_S_x,... had been 'no such column' (the names carry their unit),
-    and the unit 'm s^-2' was refused; both are read now."""
+def _kalibr_file(tmp_path):
+    """An EuRoC IMU file in Kalibr's layout (ns stamps at 200 Hz, gyroscope columns first, the
+    accelerometer in m s^-2 on an LSB of g/1200): its counts, LSB and path."""
     raw = _counts(400)
     lsb = 9.80665 / 1200
     head = ("#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
             "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]")
     rows = [f"{1403636579758555392 + 5000000 * i},0.01,-0.02,0.03," + ",".join(f"{v * lsb:.10f}" for v in r)
             for i, r in enumerate(raw)]
-    src = write_lines(tmp_path / "data.csv", [head] + rows)
+    return raw, lsb, write_lines(tmp_path / "data.csv", [head] + rows)
+
+
+def test_a_kalibr_header_s_columns_and_unit_are_read(tmp_path, capfd):
+    """EuRoC's IMU files (Kalibr's layout): '#timestamp [ns],w_RS_S_x [rad s^-1],...,a_RS_S_x
+    [m s^-2],...'.  --columns a_RS_S_x,... had been 'no such column' (the names carry their unit),
+    and the unit 'm s^-2' was refused; both are read now."""
+    raw, lsb, src = _kalibr_file(tmp_path)
     rec, dev, err = _convert(tmp_path, capfd, src, "--columns", "a_RS_S_x,a_RS_S_y,a_RS_S_z", "--units", "mps2",
                              "--lsb", str(lsb), "--round")
     np.testing.assert_array_equal(rec.raw, raw)
@@ -180,13 +186,7 @@ def test_a_kalibr_header_s_accelerometer_is_found_unasked(tmp_path, capfd):
     'w_' columns in rad s^-1 are dropped as the gyroscope's (named in the note), the commented
     '#timestamp [ns]' is the time column in ns.  It had been refused ('no column of this header
     says it is an accelerometer's')."""
-    raw = _counts(400)
-    lsb = 9.80665 / 1200
-    head = ("#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
-            "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]")
-    rows = [f"{1403636579758555392 + 5000000 * i},0.01,-0.02,0.03," + ",".join(f"{v * lsb:.10f}" for v in r)
-            for i, r in enumerate(raw)]
-    src = write_lines(tmp_path / "data.csv", [head] + rows)
+    raw, lsb, src = _kalibr_file(tmp_path)
     rec, dev, err = _convert(tmp_path, capfd, src, "--units", "mps2", "--lsb", str(lsb), "--round")
     np.testing.assert_array_equal(rec.raw, raw)
     assert dev["sample_rate_hz"] == pytest.approx(200.0, rel=1e-9)
@@ -197,7 +197,7 @@ def test_a_kalibr_header_s_accelerometer_is_found_unasked(tmp_path, capfd):
     f = np.linalg.norm(rec.raw.mean(axis=0)) / dev["channels"][0]["counts_per_mps2"]
     assert f == pytest.approx(np.linalg.norm(raw.mean(axis=0)) * lsb, rel=1e-6)
     # the gyro's columns in a unit of angular rate are not taken for the accelerometer's
-    gyro = [head.rsplit(",", 3)[0]] + [r.rsplit(",", 3)[0] for r in rows]
+    gyro = [line.rsplit(",", 3)[0] for line in src.read_text().splitlines()]
     err = _refused(tmp_path, capfd, write_lines(tmp_path / "gyro.csv", gyro))
     assert "w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1]" in err
 

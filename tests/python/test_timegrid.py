@@ -182,6 +182,18 @@ def test_a_refusal_of_stamps_off_the_grid_names_the_remedy():
     assert "--rate" not in str(ei.value)
 
 
+def _uneven_stamps(rec, seed=7):
+    """``rec``'s samples as a polling loop whose period varies +-30 % takes them: stamps 0.7-1.3
+    steps apart over the same span, the counts interpolated at them (rounded)."""
+    t0 = np.asarray(rec.t, float)
+    rng = np.random.default_rng(seed)
+    dt = float(np.median(np.diff(t0)))
+    t = t0[0] + dt * np.concatenate([[0.0], np.cumsum(rng.uniform(0.7, 1.3, t0.size - 1))])
+    t = t[t <= t0[-1]]
+    raw = np.rint(np.column_stack([np.interp(t, t0, np.asarray(rec.raw, float)[:, j]) for j in range(3)]))
+    return t, raw.astype(np.int64)
+
+
 def test_samples_taken_at_uneven_stamps_are_resampled_on_request():
     """A buoy's logger (8.5 Hz, ms stamps, steps 0.96-1.18 of the mean) and PX4's sensor_combined
     (250 Hz) were refused by displacement with a remedy that did not work (convert --rate keeps stamps
@@ -193,13 +205,8 @@ def test_samples_taken_at_uneven_stamps_are_resampled_on_request():
     rec = run_simulation(d, "linear_actuator", seed=2).recording
     cal = Calibration.nominal(d)
     whole = E.displacement_from_recording(d, cal, rec)
-    t0 = np.asarray(rec.t, float)
-    rng = np.random.default_rng(7)
-    dt = float(np.median(np.diff(t0)))
-    t = t0[0] + dt * np.concatenate([[0.0], np.cumsum(rng.uniform(0.7, 1.3, t0.size - 1))])
-    t = t[t <= t0[-1]]
-    raw = np.rint(np.column_stack([np.interp(t, t0, np.asarray(rec.raw, float)[:, j]) for j in range(3)]))
-    uneven = recording_from_arrays(t, raw.astype(np.int64))
+    t, raw = _uneven_stamps(rec)
+    uneven = recording_from_arrays(t, raw)
     with pytest.raises(InputError, match="not uniform") as ei:
         E.displacement_from_recording(d, cal, uneven)
     assert "accelcal displacement --resample" in str(ei.value) and "convert --rate" not in str(ei.value)
@@ -284,13 +291,8 @@ def test_resample_bridges_one_lost_sample_and_names_longer_gaps_against_the_regu
     d = default_triad()
     rec = run_simulation(d, "linear_actuator", seed=2).recording
     cal = Calibration.nominal(d)
-    t0 = np.asarray(rec.t, float)
-    rng = np.random.default_rng(7)
-    dt = float(np.median(np.diff(t0)))
-    t = t0[0] + dt * np.concatenate([[0.0], np.cumsum(rng.uniform(0.7, 1.3, t0.size - 1))])
-    t = t[t <= t0[-1]]
-    raw = np.rint(np.column_stack([np.interp(t, t0, np.asarray(rec.raw, float)[:, j]) for j in range(3)]))
-    raw = raw.astype(np.int64)
+    t, raw = _uneven_stamps(rec)
+    dt = float(np.median(np.diff(rec.t)))
     full = E.displacement_from_recording(d, cal, recording_from_arrays(t, raw), resample=True)
     bound = float(full.meta["error_bound_m"])
     pair = t[2:] - t[:-2]
