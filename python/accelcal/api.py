@@ -35,7 +35,7 @@ from .estimators import Columns, attitude_from_recording, displacement_from_reco
 from .header import calibration_header
 from .recording import Recording, read_recording as _read_recording_file, write_recording
 from .convert import Converted, convert_file
-from .resolve import resolve_recording
+from .resolve import at_rails, resolve_recording
 from .units import COUNTS_STATED, scale_from_options
 from .simulate import simulate as _simulate_impl
 from .static import MIN_POSE_S
@@ -217,13 +217,19 @@ class ResolveResult:
     alpha : ndarray, shape (n, 3)
         Angular acceleration (rad/s^2).
     saturated : ndarray of uint8, shape (n,), or None
-        The C core's saturation flags (``engine="fixed"`` only).
+        The C core's saturation flags (``engine="fixed"`` only): its own arithmetic saturated
+        (a pre-trim beyond 16 bits), which a reading at the chip's rail sets or not by the sign
+        of its trim; see ``clipped``.
+    clipped : ndarray of bool, shape (n,), or None
+        Samples with a channel at the ADC's rail (the device's ``raw_min`` or ``raw_max``),
+        either engine: the chip clipped, and f there is short of the truth.
     """
 
     t: np.ndarray
     f: np.ndarray
     alpha: np.ndarray
     saturated: np.ndarray | None = None
+    clipped: np.ndarray | None = None
 
 
 def resolve(device: Any, calibration: Any, recording: Any, engine: str = "float",
@@ -248,7 +254,7 @@ def resolve(device: Any, calibration: Any, recording: Any, engine: str = "float"
     cal = as_calibration(calibration, dev)
     rec = as_recording(recording, dev)
     f, alpha, flags = resolve_recording(dev, cal, rec, engine, omega)
-    return ResolveResult(t=rec.t, f=f, alpha=alpha, saturated=flags)
+    return ResolveResult(t=rec.t, f=f, alpha=alpha, saturated=flags, clipped=at_rails(rec, dev))
 
 
 def diagnose(device: Any, calibration: Any, recordings: Any, **options: Any) -> dict:

@@ -33,7 +33,7 @@ from .motions import describe_motions
 from .recording import read_recording, write_columns_csv, write_recording
 from .recording_checks import seconds
 from .report import REPORT_FILES, write_report
-from .resolve import resolve_recording
+from .resolve import at_rails, rails_warning, resolve_recording
 from .simulate import run_simulation
 from .static import MIN_POSE_S
 from .units_cli import add_units_options, scale_from_args
@@ -109,12 +109,19 @@ def cmd_resolve(a):
     comments = {"engine": a.engine, "device": dev.name}
     if flags is not None and flags.any():
         print(f"accelcal resolve: warning: {int(np.count_nonzero(flags))} samples saturated in the "
-              "fixed-point core (see column saturated)", file=sys.stderr)
+              "fixed-point core's arithmetic (see column saturated)", file=sys.stderr)
+    clipped = at_rails(rec, dev)
+    rails = rails_warning(clipped, rec, dev)
+    if rails:
+        print(f"accelcal resolve: warning: {rails}", file=sys.stderr)
     cols = [rec.t, f[:, 0], f[:, 1], f[:, 2], al[:, 0], al[:, 1], al[:, 2]]
     header = ["t", "f_x", "f_y", "f_z", "dw_x", "dw_y", "dw_z"]
     if flags is not None:
         cols.append(flags.astype(float))
         header.append("saturated")
+    if rails:
+        cols.append(clipped.astype(float))
+        header.append("clipped")
     _write_csv(a.output, header, cols, comments)
     return 0
 

@@ -111,7 +111,38 @@ def calibrate_warnings(dev, cal) -> list[str]:
                              else gain_sigma(cal.sensitivity, cal.sensitivity_sigma))
     if scale:
         warnings.append(scale)
+    warnings += clipping_warnings(dev, cal)
     return warnings
+
+
+def clipping_warnings(dev, cal) -> list[str]:
+    """Poses set aside because their readings clip (the calibration's ``extra["set_aside"]``), and
+    channels whose range, through the calibration, does not reach 1 g either way along their own
+    axis: (raw_min - b_i) / |s_i| to (raw_max - b_i) / |s_i| m/s^2.  A chip whose offset leaves
+    less than g before its rail clips in its ordinary attitudes, and firmware that reads it there
+    gets f short of the truth (the C core's saturation flag reports its own arithmetic, not the
+    chip's rail)."""
+    out = []
+    aside = [d for d in (cal.extra.get("set_aside", []) if isinstance(cal.extra, dict) else [])
+             if d.get("n_clipped")]
+    if aside:
+        out.append(f"{len(aside)} pose(s) set aside because their readings clip ("
+                   + "; ".join(f"{d['name']}: {d['n_clipped']} samples, {d.get('levels', '')}".rstrip(", ")
+                               for d in aside[:3]) + ("; ..." if len(aside) > 3 else "")
+                   + "): the calibration is fitted without them, and readings at those levels are clipped")
+    g = dev.gravity_mps2
+    k = np.linalg.norm(np.asarray(cal.sensitivity, float), axis=1)
+    b = np.asarray(cal.offsets, float)
+    lo, hi = (dev.raw_min - b) / k, (dev.raw_max - b) / k
+    short = [i for i in range(len(k)) if k[i] > 0 and min(-lo[i], hi[i]) < g]
+    if short:
+        out.append("the range through this calibration does not reach 1 g on "
+                   + "; ".join(f"channel {i} ({lo[i] / g:+.3g} to {hi[i] / g:+.3g} g along its axis: its offset "
+                               f"{b[i]:.0f} counts leaves {min(-lo[i], hi[i]) / g:.3g} g before the rail)"
+                               for i in short)
+                   + ": readings beyond clip at the ADC's rail and f there is short of the truth (accelcal resolve "
+                     "flags them in its column clipped; firmware should compare raw with the rails)")
+    return out
 
 
 def outlier_warning(dev, outl: dict) -> str:

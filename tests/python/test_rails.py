@@ -1,0 +1,68 @@
+"""Readings at the ADC's rails: the chip clipped there, whatever the fixed-point core's own
+saturation flag says (it reports its arithmetic: a pre-trim beyond 16 bits, set or not by the
+sign of a rail reading's trim).  A tester's MPU-6050 row 32767,-32768,-32768 had come out of
+`resolve` unflagged, and a calibration whose z offset left 0.94 g before the rail had no warning."""
+import dataclasses
+
+import numpy as np
+import pytest
+
+import accelcal as ac
+from accelcal.calibration import Calibration, save_calibration
+from accelcal.cli_calibrate import clipping_warnings
+from accelcal.device import default_triad, save_device
+from accelcal.errors import AccelcalError
+from accelcal.recording import recording_from_arrays, write_recording
+from cli_run import run
+
+G = 9.80665
+
+
+def _still_with_rails(d):
+    """A triad lying level (z up) for 200 samples, rows 50-59 with x at raw_max and rows 120-124
+    with y at raw_min (the chip clipped on a knock)."""
+    raw = np.round(d.zero_counts + np.array([0.0, 0.0, G]) * d.counts_per_mps2) + np.zeros((200, 3))
+    raw[50:60, 0] = d.raw_max
+    raw[120:125, 1] = d.raw_min
+    return recording_from_arrays(np.arange(200) / d.sample_rate_hz, raw.astype(np.int64))
+
+
+@pytest.mark.parametrize("engine", ["float", "fixed"])
+def test_readings_at_the_rails_are_flagged_in_either_engine(tmp_path, capfd, engine):
+    d = default_triad()
+    rec = _still_with_rails(d)
+    r = ac.resolve(d, Calibration.nominal(d), rec, engine=engine)
+    want = np.zeros(200, bool)
+    want[50:60] = want[120:125] = True
+    np.testing.assert_array_equal(r.clipped, want)
+    save_device(d, tmp_path / "d.json")
+    save_calibration(Calibration.nominal(d), tmp_path / "c.json")
+    write_recording(tmp_path / "r.csv", rec)
+    rc, _, err, _ = run(["resolve", "--device", tmp_path / "d.json", "--calibration", tmp_path / "c.json",
+                         tmp_path / "r.csv", "--engine", engine, "-o", tmp_path / "out.csv"], capfd)
+    assert rc == 0 and "15 samples read a channel at the ADC's rail" in err, err
+    assert "raw_0: 0 at 0, 10 at 65535" in err and "raw_1: 5 at 0, 0 at 65535" in err, err
+    lines = [ln for ln in (tmp_path / "out.csv").read_text().splitlines() if not ln.startswith("#")]
+    col = lines[0].split(",").index("clipped")
+    np.testing.assert_array_equal([float(ln.split(",")[col]) for ln in lines[1:]], want.astype(float))
+
+
+def test_a_recording_off_the_rails_gets_no_column_and_an_unknown_engine_is_an_accelcal_error(tmp_path, capfd):
+    d = default_triad()
+    rec = _still_with_rails(d)
+    clean = recording_from_arrays(rec.t, np.tile(rec.raw[0], (200, 1)))
+    assert not ac.resolve(d, Calibration.nominal(d), clean).clipped.any()
+    with pytest.raises(AccelcalError, match="unknown engine 'fast'"):
+        ac.resolve(d, Calibration.nominal(d), clean, engine="fast")
+
+
+def test_a_calibration_whose_offset_leaves_less_than_g_before_the_rail_is_warned_of():
+    """z's offset 17,000 counts above the middle of a +-2 g 16-bit range (16384 counts per g) leaves
+    (32767 - 17000) / 16384 = 0.962 g before the rail: lying level the chip clips."""
+    d = dataclasses.replace(default_triad(), raw_min=-32768, raw_max=32767,
+                            zero_counts=np.zeros(3), counts_per_mps2=np.full(3, 16384 / G))
+    cal = Calibration.nominal(d)
+    assert clipping_warnings(d, cal) == []
+    cal = dataclasses.replace(cal, offsets=np.array([0.0, 0.0, 17000.0]))
+    w, = clipping_warnings(d, cal)
+    assert "does not reach 1 g on channel 2 (-3.04 to +0.962 g" in w and "0.962 g before the rail" in w, w
