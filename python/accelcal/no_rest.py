@@ -5,16 +5,47 @@ calibrate and diagnose that found no rest share these rules."""
 from __future__ import annotations
 
 import numpy as np
+from scipy.signal import welch
 
 from .device import GRAVITY_REMOVED_G
 
-__all__ = ["REST_NOISE_MAX", "noise_share", "median_force", "no_rest_clause", "gravity_removed_clause"]
+__all__ = ["REST_NOISE_MAX", "noise_share", "median_force", "no_rest_clause", "gravity_removed_clause", "tonal",
+           "TONE_SHARE", "TONE_MIN_BINS"]
 
 REST_NOISE_MAX = 0.05      # a recording whose noise (stated or estimated) on a channel is beyond this x its readings'
                            # median |f| has no rest in it: the static detector finds none, whatever the noise (real
                            # rests: 0.001-0.01 x |f|, a robot arm's quiet windows up to 0.019; 2 x 0.05 is readings
                            # turning by +-10 deg; a file of pose means in random order, whose rows are all its
                            # 'noise': 0.2-0.6, and within twice that rows tens of degrees apart were one pose)
+
+TONE_SHARE = 0.5           # a channel whose fluctuation within the static windows holds more than this share of
+                           # its power in TONE_BINS bins around one frequency is a line (mains pickup) ...
+TONE_BINS = 5
+TONE_MIN_BINS = 50         # ... judged where the band has at least this many bins (white noise: 5/50 = 0.1)
+
+
+def tonal(raw: np.ndarray, rate_hz: float, window: int) -> np.ndarray:
+    """(N,) bool: channels whose fluctuation within a static window (frequencies from 2 / the
+    window's length up) is a line: more than TONE_SHARE of its power (Welch's periodogram) in
+    TONE_BINS bins around one frequency.  Such noise is stationary and averages out within a
+    window: a rest still holds its mean under it (50 Hz mains picked up at 200 Hz, 6 % of |f|:
+    its 29 poses had been no rest by REST_NOISE_MAX), where the scatter of rows in unrelated
+    directions (a file of pose means shuffled) is white."""
+    x = np.asarray(raw, float)
+    n, N = x.shape
+    out = np.zeros(N, bool)
+    if n < 8 or window < 2:
+        return out
+    f, p = welch(x - x.mean(axis=0), fs=rate_hz, nperseg=min(1024, n), axis=0, detrend="linear")
+    band = f >= 2.0 * rate_hz / window
+    p = p[band]
+    if p.shape[0] < TONE_MIN_BINS:
+        return out
+    for j in range(N):
+        k = int(np.argmax(p[:, j]))
+        total = float(p[:, j].sum())
+        out[j] = total > 0 and p[max(0, k - TONE_BINS // 2):k + TONE_BINS // 2 + 1, j].sum() > TONE_SHARE * total
+    return out
 
 
 def noise_share(raw: np.ndarray, device, sig: np.ndarray) -> np.ndarray:

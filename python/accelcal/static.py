@@ -17,7 +17,7 @@ import numpy as np
 
 from .clipping import ClipLevels, clip_levels
 from .errors import InputError
-from .no_rest import REST_NOISE_MAX, gravity_removed_clause, no_rest_clause, noise_share
+from .no_rest import REST_NOISE_MAX, gravity_removed_clause, no_rest_clause, noise_share, tonal
 from .noise import colour_factor, noise_for, nyquist_tone, pose_colour, window_std, without_nyquist_tone
 from .recording import check_for_device
 from .steps import MOVE_PARTS, MOVE_RANGE, MOVE_STD, block_log_intervals, part_spread, step_splits
@@ -153,11 +153,11 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
     if n < w:
         return []
     sig = np.asarray(noise, float) if noise is not None else noise_for(device, raw, w)[0]
-    if np.any(noise_share(raw, device, sig) > REST_NOISE_MAX):
-        return []
     tone = nyquist_tone(raw)
     if np.any(tone):
         raw, sig = without_nyquist_tone(raw, tone, sig, w)
+    if np.any((noise_share(raw, device, sig) > REST_NOISE_MAX) & ~tonal(raw, device.sample_rate_hz, w)):
+        return []     # no rest in it (a line's noise, mains aliased to Nyquist or not, is no scatter)
     sig = np.maximum(sig, 1e-9)
     ws, h, k = window_std(raw, w)
     nw = ws.shape[0]
