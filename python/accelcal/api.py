@@ -118,7 +118,8 @@ def as_recording(recording: Any, device: Device) -> Recording:
     ----------
     recording : Recording, path or array_like
         An array is taken as integer raw counts, one row per sample, sampled at the
-        device's ``sample_rate_hz`` from t = 0, with no reference columns.
+        device's ``sample_rate_hz`` from t = 0, with no reference columns; a 1-D array of
+        one count per channel is one sample.
     device : Device
 
     Returns
@@ -135,13 +136,16 @@ def as_recording(recording: Any, device: Device) -> Recording:
     if isinstance(recording, (str, Path)):
         return _read_recording_file(recording, device.n_channels)
     raw = np.asarray(recording)
+    if raw.ndim == 1 and raw.shape[0] == device.n_channels:     # one reading: one sample
+        raw = raw[None, :]
     if raw.ndim != 2 or raw.shape[1] != device.n_channels:
         raise AccelcalError(f"raw counts: expected an (n, {device.n_channels}) array for device "
                             f"{device.name!r}, got shape {raw.shape}")
     if raw.dtype.kind == "f":
         if not np.all(np.isfinite(raw)) or np.any(raw != np.round(raw)):
             bad = int(np.argmax(~np.isfinite(raw).all(axis=1) | (raw != np.round(raw)).any(axis=1)))
-            raise AccelcalError(f"raw counts: row {bad} is not integer counts ({raw[bad].tolist()})")
+            raise AccelcalError(f"<array>: row {bad + 1}: not integer counts ({raw[bad].tolist()}; rows counted "
+                                "from 1, as in every message)")
     elif raw.dtype.kind not in "iu":
         raise AccelcalError(f"raw counts: expected integers, got dtype {raw.dtype}")
     t = np.arange(raw.shape[0]) / float(device.sample_rate_hz)

@@ -66,3 +66,19 @@ def test_a_calibration_whose_offset_leaves_less_than_g_before_the_rail_is_warned
     cal = dataclasses.replace(cal, offsets=np.array([0.0, 0.0, 17000.0]))
     w, = clipping_warnings(d, cal)
     assert "does not reach 1 g on channel 2 (-3.04 to +0.962 g" in w and "0.962 g before the rail" in w, w
+
+
+def test_one_reading_is_one_sample_and_array_rows_count_from_one():
+    """A notebook's first try, one reading (shape (3,)), had been refused ('expected an (n, 3)
+    array'); and a NaN in an array's first row was 'row 0' where an out-of-range value there was
+    'row 1'."""
+    d = default_triad()
+    cal = Calibration.nominal(d)
+    raw = np.array([[32768, 32768, 49152], [40000, 32768, 32768]])
+    one = ac.resolve(d, cal, raw[0])
+    np.testing.assert_array_equal(one.f, ac.resolve(d, cal, raw[:1]).f)
+    assert one.f.shape == (1, 3)
+    with pytest.raises(AccelcalError, match=r"<array>: row 1: not integer counts"):
+        ac.resolve(d, cal, np.array([[np.nan, 1.0, 2.0]]))
+    with pytest.raises(AccelcalError, match=r"row 1, column raw_0"):
+        ac.resolve(d, cal, np.array([[70000, 1, 2]]))
