@@ -54,9 +54,37 @@ def _opt_array(value: Any, shape: tuple[int, ...], name: str) -> np.ndarray | No
 class Calibration:
     """Per-channel calibration of a device (counts, m, SI units).
 
-    ``positions`` None means every channel is at its nominal position; a NaN
-    row means that channel's position was not estimated (nominal).  Optional
-    per-channel arrays use NaN the same way.
+    The reading model is ``raw_i = b_i + s_i . f(r_i)``: apply it to a 3-axis
+    reading as ``f = np.linalg.solve(sensitivity, raw - offsets)`` (or
+    :func:`accelcal.resolve`, either engine).  ``positions`` None means every
+    channel is at its nominal position; a NaN row means that channel's position
+    was not estimated (nominal).  Optional per-channel arrays use NaN the same
+    way; a sigma that is None (or NaN) is unknown or not fitted.
+
+    Attributes
+    ----------
+    device : str
+        The device's name.
+    method : str
+        ``full``, ``gain``, ``offset``, ``jigfree`` or ``nominal``.
+    offsets : ndarray, shape (N,)
+        b_i, counts at f = 0.
+    sensitivity : ndarray, shape (N, 3)
+        Row i is s_i, counts per m/s^2 (its norm the gain, its direction the axis).
+    positions : ndarray, shape (N, 3), or None
+        r_i, m.
+    offset_sigma, sensitivity_sigma, position_sigma : ndarray or None
+        1-sigma of each (counts; counts per m/s^2; m).
+    temp_ref_c, offset_tc, gain_tc : float, ndarray (N,) or None
+        Temperature terms: reference degC, counts per degC, fraction per degC.
+    residual_rms_per_channel : ndarray, shape (N,), or None
+        Counts.
+    residual_rms_per_pose : dict of str to float, or None
+        Counts, by pose name.
+    poses_used : list of str or None
+    extra : dict
+        The fit's details: ``fit`` (model, chi2, dof, not_fitted ...), ``poses``
+        (each pose's f and samples), ``set_aside``, ``outliers``, ``warnings``.
     """
 
     device: str

@@ -112,6 +112,26 @@ class Device:
     """Nominal description of N single-axis channels (SI units, body frame).
 
     Arrays are stored read-only; ``axes`` rows are unit vectors.
+
+    Attributes
+    ----------
+    name : str
+    sample_rate_hz : float
+        Hz.
+    gravity_mps2 : float
+        g at the site, m/s^2.
+    raw_min, raw_max : int
+        The ADC's rails, counts (signed chips: raw_min < 0).
+    positions : ndarray, shape (N, 3)
+        r_i, m.
+    axes : ndarray, shape (N, 3)
+        u_i, unit vectors.
+    counts_per_mps2 : ndarray, shape (N,)
+        k_i, the nominal scale.
+    zero_counts : ndarray, shape (N,)
+        z_i, counts at 0 m/s^2.
+    noise_mps2 : float
+        One channel's rms noise, m/s^2; 0: unknown, estimated from the data.
     """
 
     name: str
