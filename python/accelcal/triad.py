@@ -22,7 +22,7 @@ OUT_FRAC = FORMATS.out_frac
 I16_MIN, I16_MAX = -32768, 32767
 
 __all__ = ["TriadTable", "triad_matrix", "quantize_triad", "build_triad_on_device", "triad_apply_fixed", "triad_exact",
-           "triad_apply_float", "triad_forces"]
+           "triad_apply_float", "triad_forces", "triad_rounding_bound"]
 
 
 @dataclass
@@ -164,6 +164,20 @@ def triad_exact(table: TriadTable, raw) -> np.ndarray:
     """The triad table's exact result in output LSB (before the final rounding), (n, 3)."""
     x = np.clip(np.asarray(raw, np.int64) - table.trim.astype(np.int64), I16_MIN, I16_MAX)
     return (x @ table.m.T.astype(float) - table.k) * 2.0 ** (-table.shift.astype(float))
+
+
+def triad_rounding_bound(table: TriadTable, offsets3, sens3, raw_min: int, raw_max: int) -> np.ndarray:
+    """(3,) the largest |triad_exact - f_float| (output LSB) over every reading in
+    [raw_min, raw_max]^3 that the trim does not clip: the table's rounding (of S~, o~, m and k).
+    Both sides are affine in the reading on that box, so the largest difference is at one of its
+    8 corners; the core's final rounding adds 0.5 LSB on top."""
+    trim = table.trim.astype(np.int64)
+    lo = np.maximum(raw_min, trim + I16_MIN)
+    hi = np.minimum(raw_max, trim + I16_MAX)
+    corners = np.array([[(lo, hi)[(c >> j) & 1][j] for j in range(3)] for c in range(8)], np.int64)
+    exact = triad_exact(table, corners)
+    ref = triad_apply_float(offsets3, sens3, corners) * 2.0 ** OUT_FRAC
+    return np.max(np.abs(exact - ref), axis=0)
 
 
 def triad_apply_float(offsets3, sens3, raw) -> np.ndarray:

@@ -17,7 +17,7 @@ from accelcal.header import calibration_header
 from accelcal.native import cptr, ffi, lib, offset_binary
 from accelcal.recording import recording_from_arrays, write_recording
 from accelcal.resolve import resolve_recording
-from accelcal.triad import build_triad_on_device
+from accelcal.triad import build_triad_on_device, triad_rounding_bound
 from core_settings import estimator
 from toolchains import build_host, cross_compile
 
@@ -291,3 +291,30 @@ def test_mpu6050_signed_triad_from_calibration_to_header_and_fixed_resolve(tmp_p
     vals = np.array([[float(v) if v else np.nan for v in ln.split(",")] for ln in lines[1:]])
     fr = vals[:, hdr.index("f_x"):hdr.index("f_x") + 3]
     assert np.sqrt(np.mean((np.linalg.norm(fr, axis=1) - G) ** 2)) < 0.01
+
+
+@estimator
+@given(st.one_of(signed_triads().map(lambda t: (t, True)), unsigned_triads().map(lambda t: (t, False))),
+       st.lists(st.floats(0.0, 1.0), min_size=3, max_size=3))
+@example(((np.zeros(3), np.eye(3) * 16384 / G), True), [0.0, 1.0, 0.5])
+def test_the_headers_rounding_figure_bounds_every_reading(drawn, u):
+    """The triad header states the table's rounding as a figure (a tester had to measure it:
+    0.894 LSB for an MPU-6050's calibration, nowhere in the header): the largest |exact - float|
+    over the readings the trim does not clip, at a corner of that box (both sides affine).  The
+    core's output stays within 0.5 LSB of it for any reading in the box, and the header says it."""
+    (b, S), signed = drawn
+    lo_r, hi_r = (-32768, 32767) if signed else (0, 65535)
+    tab = E.quantize_triad(b, S, signed=signed)
+    bound = triad_rounding_bound(tab, b, S, lo_r, hi_r)
+    trim = tab.trim.astype(np.int64)
+    lo, hi = np.maximum(lo_r, trim - 32768), np.minimum(hi_r, trim + 32767)
+    raw = np.rint(lo + np.asarray(u) * (hi - lo)).astype(np.int64)[None, :]
+    f_q, sat = E.triad_apply_fixed(tab, raw)
+    if not sat[0]:
+        ref = E.triad_apply_float(b, S, raw) * 1024.0
+        assert np.all(np.abs(f_q - ref) <= 0.5 + bound + 1e-6 * (1.0 + np.abs(ref))), (f_q - ref, bound)
+    dev = Device(name="t", sample_rate_hz=100.0, gravity_mps2=G, raw_min=lo_r, raw_max=hi_r,
+                 positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, 1000.0),
+                 zero_counts=np.zeros(3))
+    text = calibration_header(dev, Calibration(device="t", method="full", offsets=b, sensitivity=S))
+    assert "the table's rounding, which is at most " + ", ".join(f"{v:.3g}" for v in bound) + " LSB" in text
