@@ -28,6 +28,7 @@ import numpy as np
 from .calibrate import calibrate_recordings
 from .calibration import Calibration, load_calibration, save_calibration
 from .cli_calibrate import record_warnings
+from .clipping import at_rails
 from .device import Device, default_device, load_device, save_device
 from .diagnose import diagnose as _diagnose_impl
 from .errors import AccelcalError, atomic_write
@@ -35,7 +36,7 @@ from .estimators import Columns, attitude_from_recording, displacement_from_reco
 from .header import calibration_header
 from .recording import Recording, read_recording as _read_recording_file, write_recording
 from .convert import Converted, convert_file
-from .resolve import at_rails, resolve_recording
+from .resolve import resolve_recording
 from .units import COUNTS_STATED, scale_from_options
 from .simulate import simulate as _simulate_impl
 from .static import MIN_POSE_S

@@ -20,6 +20,7 @@ from .calibrate import JIG_ACCURACY_DEG, JIGFREE_MODELS, calibrate_recordings
 from .calibration import load_calibration, save_calibration
 from .cli_calibrate import calibration_summary, jig_accuracy_arg, min_static_arg, record_warnings
 from .cli_paths import check_not_an_input, check_output, check_output_dir
+from .clipping import at_rails, rails_warning
 from .convert_cli import add_convert_parser
 from .demo import run_demo
 from .device import default_device, load_device
@@ -33,7 +34,7 @@ from .motions import describe_motions
 from .recording import read_recording, write_columns_csv, write_recording
 from .recording_checks import seconds
 from .report import REPORT_FILES, write_report
-from .resolve import at_rails, rails_warning, resolve_recording
+from .resolve import resolve_recording
 from .simulate import run_simulation
 from .static import MIN_POSE_S
 from .units_cli import add_units_options, scale_from_args
@@ -111,7 +112,7 @@ def cmd_resolve(a):
         print(f"accelcal resolve: warning: {int(np.count_nonzero(flags))} samples saturated in the "
               "fixed-point core's arithmetic (see column saturated)", file=sys.stderr)
     clipped = at_rails(rec, dev)
-    rails = rails_warning(clipped, rec, dev)
+    rails = rails_warning(rec, dev)
     if rails:
         print(f"accelcal resolve: warning: {rails}", file=sys.stderr)
     cols = [rec.t, f[:, 0], f[:, 1], f[:, 2], al[:, 0], al[:, 1], al[:, 2]]

@@ -95,8 +95,8 @@ def calibrate_warnings(dev, cal) -> list[str]:
         warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}): the "
                         f"'{fit.get('model', cal.method)}' model has no cross-axis terms, which a real sensor "
                         f"has, and the poses may move while held; {use}")
+    gs = None if cal.sensitivity_sigma is None else gain_sigma(cal.sensitivity, cal.sensitivity_sigma)
     if poses:
-        gs = None if cal.sensitivity_sigma is None else gain_sigma(cal.sensitivity, cal.sensitivity_sigma)
         # first to last sample, and one sample's step more: the time n samples take
         held = [(p["t_stop_s"] - p["t_start_s"]) * p["n_samples"] / max(p["n_samples"] - 1, 1)
                 for p in poses if "t_start_s" in p and "n_samples" in p]
@@ -107,8 +107,7 @@ def calibrate_warnings(dev, cal) -> list[str]:
             warnings.append(low)
     if far:
         warnings.append(far)
-    scale = far_from_nominal(dev, cal.sensitivity, None if cal.sensitivity_sigma is None
-                             else gain_sigma(cal.sensitivity, cal.sensitivity_sigma))
+    scale = far_from_nominal(dev, cal.sensitivity, gs)
     if scale:
         warnings.append(scale)
     warnings += clipping_warnings(dev, cal)

@@ -196,3 +196,28 @@ def clip_note(raw: np.ndarray, device, window: int, name=lambda i: f"raw_{i}") -
     return (f"{total} reading(s) sit at the ends of the range, clipped (in counts: {'; '.join(parts)}): the sensor "
             "went beyond its full scale there (shocks, vibration); calibrate and diagnose set aside the poses they "
             "touch")
+
+
+def at_rails(rec, device) -> np.ndarray:
+    """(n,) bool: samples with a channel at the ADC's rail (``raw_min`` or ``raw_max`` of the
+    device): the chip clipped there, and f read from it is short of the truth, whatever the
+    engine.  The C core's saturation flag reports its own arithmetic (a pre-trim that leaves 16
+    bits), which a rail reading sets or not by the sign of its trim; this is the sensor's."""
+    raw = np.asarray(rec.raw)
+    return np.any((raw <= device.raw_min) | (raw >= device.raw_max), axis=1)
+
+
+def rails_warning(rec, device) -> str | None:
+    """The warning for samples at the ADC's rails (:func:`at_rails`), per channel, or None."""
+    raw = np.asarray(rec.raw)
+    low, high = raw <= device.raw_min, raw >= device.raw_max
+    clipped = np.any(low | high, axis=1)
+    if not clipped.any():
+        return None
+    per = [f"raw_{j}: {int(low[:, j].sum())} at {device.raw_min}, {int(high[:, j].sum())} at {device.raw_max}"
+           for j in range(raw.shape[1]) if low[:, j].any() or high[:, j].any()]
+    first = int(np.argmax(clipped))
+    return (f"{int(np.count_nonzero(clipped))} samples read a channel at the ADC's rail ({'; '.join(per)}; the first "
+            f"at row {rec.line(first)}): the chip clipped there and their f is short of the truth (see column "
+            "clipped)")
+

@@ -67,27 +67,3 @@ def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str
     out, flags = native.process_batch(t.resolver(), t.trim, rec.raw, w_q)
     y = out / 2.0 ** FORMATS.out_frac
     return y[:, :3], y[:, 3:], flags
-
-
-def at_rails(rec, device) -> np.ndarray:
-    """(n,) bool: samples with a channel at the ADC's rail (``raw_min`` or ``raw_max`` of the
-    device): the chip clipped there, and f read from it is short of the truth, whatever the
-    engine.  The C core's saturation flag reports its own arithmetic (a pre-trim that leaves 16
-    bits), which a rail reading sets or not by the sign of its trim; this is the sensor's."""
-    raw = np.asarray(rec.raw)
-    return np.any((raw <= device.raw_min) | (raw >= device.raw_max), axis=1)
-
-
-def rails_warning(clipped: np.ndarray, rec, device) -> str | None:
-    """The warning for samples at the ADC's rails (:func:`at_rails`), per channel, or None."""
-    if not clipped.any():
-        return None
-    raw = np.asarray(rec.raw)
-    per = [f"raw_{j}: {int(np.count_nonzero(raw[:, j] <= device.raw_min))} at {device.raw_min}, "
-           f"{int(np.count_nonzero(raw[:, j] >= device.raw_max))} at {device.raw_max}"
-           for j in range(raw.shape[1]) if np.any((raw[:, j] <= device.raw_min) | (raw[:, j] >= device.raw_max))]
-    first = int(np.argmax(clipped))
-    return (f"{int(np.count_nonzero(clipped))} samples read a channel at the ADC's rail ({'; '.join(per)}; the first "
-            f"at row {rec.line(first)}): the chip clipped there and their f is short of the truth (see column "
-            "clipped)")
-

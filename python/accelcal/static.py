@@ -156,7 +156,8 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
     tone = nyquist_tone(raw)
     if np.any(tone):
         raw, sig = without_nyquist_tone(raw, tone, sig, w)
-    if np.any((noise_share(raw, device, sig) > REST_NOISE_MAX) & ~tonal(raw, device.sample_rate_hz, w)):
+    noisy = noise_share(raw, device, sig) > REST_NOISE_MAX
+    if noisy.any() and np.any(noisy & ~tonal(raw, device.sample_rate_hz, w)):
         return []     # no rest in it (a line's noise, mains aliased to Nyquist or not, is no scatter)
     sig = np.maximum(sig, 1e-9)
     ws, h, k = window_std(raw, w)

@@ -10,7 +10,7 @@ from ..errors import InputError
 from ..held import distinct_recordings
 from ..static import (MIN_POSE_S, NO_POSE, STATIC_THRESHOLD, STATIC_WINDOW_S, PoseSet, at_gravity, detect_static,
                       no_pose, one_wrong_scale, poses_from_recording, window_len)
-from .checks import jig_accuracy_rad, min_poses, pose_label
+from .checks import jig_accuracy_rad, min_poses, pose_label, static_force
 from .known_poses import fit_known_poses
 from .outliers import outlier_poses, outlier_report, subset
 from .lever_arms import calibrate_positions
@@ -259,21 +259,17 @@ POSE_ROWS_AT_REST = 0.95
 
 def nominal_rows(device, rec) -> np.ndarray:
     """(n, 3) each row's reading through the device file's nominal offsets and sensitivities
-    (m/s^2; least squares over the channels)."""
-    raw = np.asarray(rec.raw, float) - device.nominal_offsets()
-    return np.linalg.lstsq(device.nominal_sensitivity(), raw.T, rcond=None)[0].T
+    (m/s^2; least squares over the channels: :func:`accelcal.calibrate.checks.static_force`)."""
+    return static_force(device.nominal_offsets(), device.nominal_sensitivity(), rec.raw)
 
 
-def rows_turn_deg(device, recordings) -> float:
-    """The median angle (deg) between consecutive rows' readings (:func:`nominal_rows`), over the
-    recordings; 0 for a device that is not one triad.  Magneto's 178 hand-held pose means, one a
-    row, turn by tens of degrees from row to row; a 200 Hz flight by a fraction of one (it had
-    been told to label its rows as pose means), a vibrating one by tens too (75 deg)."""
-    if device.n_channels != 3:
-        return 0.0
+def rows_turn_deg(rows: list[np.ndarray]) -> float:
+    """The median angle (deg) between consecutive rows' readings (each recording's
+    :func:`nominal_rows`).  Magneto's 178 hand-held pose means, one a row, turn by tens of degrees
+    from row to row; a 200 Hz flight by a fraction of one (it had been told to label its rows as
+    pose means), a vibrating one by tens too (75 deg)."""
     angles = []
-    for rec in recordings:
-        v = nominal_rows(device, rec)
+    for v in rows:
         n = np.linalg.norm(v, axis=1)
         ok = (n[1:] > 0) & (n[:-1] > 0)
         c = np.sum(v[1:] * v[:-1], axis=1)[ok] / (n[1:] * n[:-1])[ok]
@@ -282,23 +278,25 @@ def rows_turn_deg(device, recordings) -> float:
     return float(np.median(a)) if a.size else 0.0
 
 
-def rows_at_rest(device, recordings) -> float:
-    """The share of the rows whose |f| (:func:`nominal_rows`) a rest can read
+def rows_at_rest(device, rows: list[np.ndarray]) -> float:
+    """The share of the rows (each recording's :func:`nominal_rows`) whose |f| a rest can read
     (:func:`accelcal.static.at_gravity`: within REST_F_RANGE x g, or with three or more rows
-    agreeing on one wrong scale), over the recordings."""
-    ratio = np.concatenate([np.linalg.norm(nominal_rows(device, rec), axis=1) for rec in recordings])
+    agreeing on one wrong scale)."""
+    ratio = np.concatenate([np.linalg.norm(v, axis=1) for v in rows]) if rows else np.zeros(0)
     ratio /= device.gravity_mps2
     return float(np.mean(at_gravity(ratio))) if ratio.size else 0.0
 
 
 def rows_look_like_pose_means(device, recordings) -> bool:
-    """Whether the rows look like a file of pose means, one orientation a row: consecutive rows
-    turn by POSE_ROW_TURN_DEG or more (median), and at least POSE_ROWS_AT_REST of them read an
-    |f| a rest can (:func:`rows_at_rest`).  A vibrating flight (PX4, 250 Hz) turns by 75 deg
-    from row to row, as pose means do, but its rows read 0.37-3.6 g (1-99 %): it had been told
-    to label its rows as pose means."""
-    return rows_turn_deg(device, recordings) >= POSE_ROW_TURN_DEG and \
-        rows_at_rest(device, recordings) >= POSE_ROWS_AT_REST
+    """Whether the rows of a triad's recordings look like a file of pose means, one orientation a
+    row: consecutive rows turn by POSE_ROW_TURN_DEG or more (median), and at least
+    POSE_ROWS_AT_REST of them read an |f| a rest can (:func:`rows_at_rest`).  A vibrating flight
+    (PX4, 250 Hz) turns by 75 deg from row to row, as pose means do, but its rows read 0.37-3.6 g
+    (1-99 %): it had been told to label its rows as pose means."""
+    if device.n_channels != 3:
+        return False
+    rows = [nominal_rows(device, rec) for rec in recordings]
+    return rows_turn_deg(rows) >= POSE_ROW_TURN_DEG and rows_at_rest(device, rows) >= POSE_ROWS_AT_REST
 
 
 def hint_clause(found: tuple[str, bool] | None) -> str:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..clipping import clip_levels
+from ..clipping import at_rails, clip_levels
 from ..effects.adc import Quantization
 from ..effects.fitdata import FitData, tangent_basis
 from ..effects.settings import BLOCK_S, QUANT_DITHER_GRID
@@ -186,7 +186,7 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
             pose_lab = key
             how = f"jig-free: {len(poses)} static poses, |f| = g"
         # readings at the ADC limits carry no information about the model (they would answer no effect)
-        at_limit = np.any((rec.raw <= device.raw_min) | (rec.raw >= device.raw_max), axis=1)
+        at_limit = at_rails(rec, device)
         usable0 = usable
         if np.any(at_limit & usable):
             notes.append(f"{rec.source}: {int(np.count_nonzero(at_limit & usable))} samples with a reading at the "
