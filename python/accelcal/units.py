@@ -113,21 +113,18 @@ def _positive(text: Any, what: str, fail: Callable[[str], Exception]) -> float:
     return v
 
 
-#: the units one count may be stated in with a suffix to its LSB ("1mg"), and their size in g
-#: (mps2: 1 / g, mmps2: 0.001 / g, filled in where g is known: :func:`g_per`)
-LSB_SUFFIXES = ("mg", "g", "mps2", "mmps2")
+LSB_SUFFIXES = ("mmps2", "mps2", "mg", "g")  # units an LSB may carry ("1mg"; size: g_per), longest first as tried
 
 
 def g_per(unit: str, gravity_mps2: float) -> float:
-    """One ``unit`` (g, mg, mps2 or mmps2: m/s^2, mm/s^2 -- Klipper's ACCELEROMETER_MEASURE
-    writes mm/s^2) in g, with g = ``gravity_mps2`` m/s^2."""
+    """One ``unit`` (LSB_SUFFIXES; mmps2: Klipper's files) in g, with g = ``gravity_mps2`` m/s^2."""
     return {"g": 1.0, "mg": 1e-3, "mps2": 1.0 / gravity_mps2, "mmps2": 1e-3 / gravity_mps2}[unit]
 
 
 def split_lsb(text: Any) -> tuple[str, str | None]:
     """An LSB's number and its unit suffix (one of LSB_SUFFIXES, else None): "1mg" -> ("1", "mg"),
     "0.0048 mps2" -> ("0.0048", "mps2"), "0.001" -> ("0.001", None)."""
-    m = re.fullmatch(r"\s*([0-9.eE+-]+?)\s*(mmps2|mg|g|mps2)?\s*", str(text), flags=re.IGNORECASE)
+    m = re.fullmatch(rf"\s*([0-9.eE+-]+?)\s*({'|'.join(LSB_SUFFIXES)})?\s*", str(text), flags=re.IGNORECASE)
     if m is None:
         return str(text), None
     return m.group(1), None if m.group(2) is None else m.group(2).lower()
@@ -262,6 +259,11 @@ def scale_from_metadata(metadata: dict[str, str], lines: dict[str, int], source:
     given = {k: metadata[k] for k in METADATA_KEYS if k in metadata}
     if not given or set(given) == {"gravity_mps2"}:
         return None
+    if "lsb" in given and "units" not in given:     # a comment's lsb has no file unit to take (in_file_unit)
+        n, (lsb, units, fs) = split_lsb(given["lsb"])[0], (METADATA_NAMES[k] for k in ("lsb", "units", "full_scale_g"))
+        raise InputError(source, f"{lsb} {given['lsb']}: state the unit of the readings it divides with {units} "
+                         f"mps2|g; for integer readings already in counts, {units} counts with one count's size and its "
+                         f"unit ({lsb} {n}g, or in mg or mps2) or {fs}", row=lines.get("lsb"))
     try:
         scale = scale_from_options(given.get("units"), given.get("lsb"), given.get("full_scale_g"),
                                    given.get("bits", 16), given.get("gravity_mps2"), names=METADATA_NAMES)

@@ -603,3 +603,14 @@ def test_a_column_of_a_few_values_is_not_taken_for_a_shifted_grid():
     vals = np.tile([[3.5, 1.0, 2.0], [7.5, 1.0, 2.0]], (20, 1)) * 0.01
     with pytest.raises(InputError, match="not a whole number"):
         to_counts(vals, Scale("g", 0.01, 0.01, "--lsb"), "f", lambda i, j: (i + 1, "c"), notes=[])
+
+
+def test_an_lsb_comment_without_a_units_comment_is_refused(tmp_path):
+    """'# lsb: 0.001' with no '# units:' states no unit for the readings it divides (an option's bare
+    --lsb takes the unit the file states; a comment has none to take).  It had become counts without
+    a word when --lsb alone learnt to take the file's unit."""
+    path = tmp_path / "r.csv"
+    path.write_text("# lsb: 0.001\nt,raw_0,raw_1,raw_2\n0,1,2,3\n0.01,1,2,3\n")
+    with pytest.raises(InputError, match=r"row 1: '# lsb:' 0.001: state the unit of the readings it divides with "
+                                         r"'# units:' mps2\|g"):
+        read_recording(path, 3)
