@@ -116,16 +116,13 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
     h = 1.0 / float(device.sample_rate_hz)
     has_f = [rec.has_f() for rec in recs]
     notes: list[str] = []
+    keep = kept_recordings(recs)
+    mode = "reference" if any(has_f) else "jigfree"
     if any(has_f):
-        mode = "reference"
-        keep = kept_recordings(recs)
         for i, hf in enumerate(has_f):
             if not hf:
                 notes.append(f"{recs[i].source}: skipped: no reference f while other recordings have one "
                              "(diagnose it on its own for a jig-free diagnosis)")
-    else:
-        mode = "jigfree"
-        keep = kept_recordings(recs)
 
     parts = []
     rec_info = []

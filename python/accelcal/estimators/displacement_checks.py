@@ -11,7 +11,7 @@ import numpy as np
 
 from ..device import GRAVITY_REMOVED_G
 from .common import time_span
-from .rest import TREND_BLOCK_HOLDS, RestParams, trend_bound
+from .rest import TREND_BLOCK_HOLDS, RestParams, rest_run, trend_bound
 
 __all__ = ["REST_DEV_WARN_MPS2", "REST_NOISE_MAX_MPS2", "rest_noise_max", "wide_rest_warning", "ZP_TURN_MPS2",
            "no_rest_reason", "scale_off", "scale_cause", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned",
@@ -316,9 +316,7 @@ def turned_motions(f, at, motions, f_sigma: float, rp: RestParams, axis: int | N
     m0 = f[first:first_end].mean(axis=0)
     out = []
     for a, e, zp in motions:
-        s = a
-        while s > 0 and at[s - 1]:
-            s -= 1
+        s = rest_run(at, a, 0, a)[0]
         level = f[s:a + 1].mean(axis=0) if at[a] else m0
         z = np.asarray(zp, float)
         held = (abs(z[axis] - level[axis]) if axis is not None else
@@ -390,16 +388,6 @@ def final_trend_note(t, trends, kept, rp: RestParams, sigma: float, rec=None) ->
             "line less, as n^-1/2)")
 
 
-def _rest_run(at, i: int, lo: int, hi: int) -> tuple[int, int]:
-    """The run [s, e) of at-rest samples through sample ``i``, kept within [lo, hi)."""
-    s = e = i
-    while s > lo and at[s - 1]:
-        s -= 1
-    while e < hi and at[e]:
-        e += 1
-    return s, e
-
-
 def motion_errors(f, p, at, motions, f_sigma: float, dt: float, axis: int | None
                   ) -> list[tuple[int, int, float, float, float, float, float]]:
     """What the zero-point correction leaves of each corrected motion's position, from what its
@@ -447,9 +435,9 @@ def motion_errors(f, p, at, motions, f_sigma: float, dt: float, axis: int | None
     for k, (a, e, _) in enumerate(motions):
         lo = motions[k - 1][1] + 1 if k else 0
         hi = motions[k + 1][0] if k + 1 < len(motions) else n
-        b0, b1 = _rest_run(at, a, lo, a + 1) if at[a] else (a, a + 1)
+        b0, b1 = rest_run(at, a, lo, a + 1) if at[a] else (a, a + 1)
         j = e if at[e] else min(e + 1 + int(np.argmax(at[e + 1:])) if e + 1 < n and at[e + 1:].any() else e, n - 1)
-        c0, c1 = _rest_run(at, j, max(a + 1, lo), hi) if at[j] else (j, j + 1)
+        c0, c1 = rest_run(at, j, max(a + 1, lo), hi) if at[j] else (j, j + 1)
         d = f[c0:c1].mean(axis=0) - f[b0:b1].mean(axis=0)
         seen = abs(float(d[axis])) if axis is not None else float(np.linalg.norm(d))
         tell = 5.0 * float(f_sigma) * math.sqrt(1.0 / (b1 - b0) + 1.0 / (c1 - c0))

@@ -359,15 +359,15 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                                           f_sigma)
         gone = declared & ~kept
         r = displace_offline(f, p, np.where(gone, flags & ~(REST_AT_REST | REST_QUIET), flags))
-        warnings += trend_warnings(t, trends, rp, f_sigma, False, rec)
+        tw = trend_warnings(t, trends, rp, f_sigma, False, rec)
+        warnings += tw
         open_note = final_trend_note(t, trends, kept, rp, f_sigma, rec)
         if r["no_rest"]:
             off = still_off_g(f, np.zeros(n, bool), rp) if trends else None
             raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording "
                              f"(rest = |f - mean| <= {rp.dev_max:.3g} m/s^2 for {rp.hold} samples"
                              + (f" with |f| within {rp.g_tol:g} of {rp.g:g} m/s^2" if rp.g is not None else "")
-                             + "): " + ("; ".join([w.removeprefix("displacement: ") for w in
-                                                   trend_warnings(t, trends, rp, f_sigma, False, rec)]
+                             + "): " + ("; ".join([w.removeprefix("displacement: ") for w in tw]
                                                   + ([still_off_g_text(t, off, rp, rec, cal)] if off else []))
                                         or no_rest_reason(f, t, rp, cal))
                              + "; the stop-to-stop method needs a rest at both ends of each motion")

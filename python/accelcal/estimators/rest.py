@@ -22,7 +22,7 @@ from .common import CLIP, CLIP_LO, OUT_FRAC
 __all__ = ["REST_QUIET", "REST_AT_REST", "REST_ENTER", "REST_LEAVE", "REST_CLIP", "RestParams",
            "default_rest_params", "rest_cfg_fixed", "RestThresholds", "rest_params_as_stored", "RestState",
            "rest_detect", "rest_fixed", "rest_dated_back", "TREND_BLOCK_HOLDS", "trend_bound", "rest_without_trend",
-           "REST_LEVEL_P", "motion_window"]
+           "REST_LEVEL_P", "motion_window", "rest_run"]
 
 # flag bits, from the compiled core (include/accelcal/ac_rest.h)
 REST_QUIET, REST_AT_REST, REST_ENTER, REST_LEAVE, REST_CLIP = (
@@ -323,6 +323,16 @@ def rest_without_trend(at, f, p: RestParams, sigma: float) -> tuple[np.ndarray, 
 REST_LEVEL_P = 0.95
 
 
+def rest_run(at, i: int, lo: int, hi: int) -> tuple[int, int]:
+    """The run [s, e) of at-rest samples (``at``, bool) through sample ``i``, kept within [lo, hi)."""
+    s = e = i
+    while s > lo and at[s - 1]:
+        s -= 1
+    while e < hi and at[e]:
+        e += 1
+    return s, e
+
+
 def motion_window(acc, at, s: int, lo: int, fq: int | None, sigma: float, k: int) -> tuple[int, int | None]:
     """The samples a motion's integration runs over, from the rest before it to the rest after it.
 
@@ -359,9 +369,7 @@ def motion_window(acc, at, s: int, lo: int, fq: int | None, sigma: float, k: int
         The anchor (at rest, v = 0) and the end (the first sample at rest; None when ``fq`` is None).
     """
     thr = float(sigma) * math.sqrt(float(chi2.ppf(REST_LEVEL_P, k)))
-    r0 = s - 1
-    while r0 > lo and at[r0 - 1]:
-        r0 -= 1
+    r0 = rest_run(at, s - 1, lo, s - 1)[0]
     level = acc[r0:s].mean(axis=0)
     a = s - 1
     while a > max(lo, r0) and float(np.linalg.norm(acc[a] - level)) > thr:

@@ -122,7 +122,7 @@ def grid_places(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
         The blocks of :func:`stamp_trend`.
     """
     best = None
-    median, regular = float(np.median(np.diff(t))), regular_step(t)[0]
+    regular, _, median = regular_step(t)
     # the period a second start only where it differs (stamps on an even grid give one)
     for step in (median,) + (() if abs(regular - median) <= 1e-12 * abs(median) else (regular,)):
         got = places_from(t, step)
