@@ -408,7 +408,6 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
             raise InputError(source, "imu_tk's readings are counts: --units mps2|g and --lsb do not apply")
         if fmt == "imu_tk":
             file_scale(scale, {}, {}, source)                   # (--round over counts refused)
-        if fmt == "imu_tk":
             device, rec = load_xsens(path)
             device = device if scale is None or scale.lsb_g is None else None  # a stated full scale: the nominal device from it
         else:

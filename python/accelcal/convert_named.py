@@ -408,11 +408,11 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
         stated = comment_rate(pre.metadata)
         if stated is None:
             named = [n for n in names if n and n not in acc and is_time_name(n) and not is_gyro(n)]
-            said = f"; {', '.join(map(repr, named))} has a time's name but neither a unit in it nor an epoch's " \
+            hint = f"; {', '.join(map(repr, named))} has a time's name but neither a unit in it nor an epoch's " \
                 "stamps: --time-column NAME (and --time-unit) reads it" if named else ""
             raise InputError(source, "the table has no time column (t, time, timestamp, 'Time (s)', time_ms, "
                              "unix_timestamp, ...): give the sample rate with --rate HZ (or name its column with "
-                             f"--time-column NAME){said}", row=pre.header_line)
+                             f"--time-column NAME){hint}", row=pre.header_line)
         opts.rate_hz, key = stated
         notes.append(f"no time column: the rate is the {opts.rate_hz:g} Hz the file's comment '# {key}' states "
                      "(--rate HZ states another)")
@@ -443,12 +443,12 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
                 np.concatenate([slow_float(table.strings(jt)[:end], True), np.full(table.n - end, np.nan)])
             stamps = exact_time(stamps, lambda: table.strings(jt), rows)   # an epoch in ns: int64
         sample_index(source, time_column, stamps[rows], opts.rate_hz, pre.header_line)
-        rows = unrepeated(rows, stamps, np.column_stack([values[a] for a in acc]), notes)
+        rows = unrepeated(rows, stamps, readings, notes)
         if opts.repeated_stamps == "shift":
             stamps = shift_slipped(stamps, rows, notes)
         if opts.repeated_stamps != "refuse":
             rows = repeated_stamps(stamps, rows, notes, opts.repeated_stamps)
-    matrix = np.column_stack([values[a][rows] for a in acc])
+    matrix = readings[rows]
 
     def locate(i: int, j: int) -> tuple[int, str]:
         return table.line(int(rows[i])), acc[j]
