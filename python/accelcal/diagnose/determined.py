@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..effects.fitdata import FitData
-from ..effects.fitting import LinearCandidate, jig_rows
+from ..effects.fitting import LinearCandidate, jig_rows, kept_space
 from ..effects.settings import SEEN_MIN
 from .text import describe
 
@@ -39,10 +39,7 @@ def not_determined(D: FitData, effect) -> dict | None:
     Xr = jig_rows(D, X)                                        # (n, R, N)
     Xw = Xr * np.sqrt(D.W)[:, :, None]
     G = np.einsum("trp,trq->pq", Xw, Xw)
-    d = np.sqrt(np.einsum("tnk,tnk->n", X, X))
-    d = np.where(d > 0, d, 1.0)
-    lam, V = np.linalg.eigh(G / d[:, None] / d[None, :])
-    keep = lam > SEEN_MIN * max(float(lam.max()), 1e-300)
+    _, V, keep, _ = kept_space(G, np.sqrt(np.einsum("tnk,tnk->n", X, X)), SEEN_MIN)
     share = np.sum(V[:, keep] ** 2, axis=1)
     out = np.flatnonzero(share < DETERMINED_SHARE)
     return {effect.pname: [int(i) for i in out]} if out.size else None

@@ -43,16 +43,21 @@ def block_ss(D: FitData, Rr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return D.bsum(np.sum(sq * D.W, axis=1)), D.bsum(sq.sum(axis=1))
 
 
+def kept_space(G: np.ndarray, d: np.ndarray, rtol: float):
+    """The eigen-decomposition of G (..., k, k) scaled by ``d`` (..., k; zeros taken as 1) and the
+    directions a min-norm solve keeps: (lam, V, keep, d), keep where lam > rtol x the largest."""
+    d = np.where(d > 0, d, 1.0)
+    lam, V = np.linalg.eigh(G / d[..., :, None] / d[..., None, :])
+    keep = lam > rtol * np.maximum(np.max(lam, axis=-1, keepdims=True), 1e-300)
+    return lam, V, keep, d
+
+
 def solve_groups(G: np.ndarray, h: np.ndarray, rtol: float = 1e-10, scale: np.ndarray | None = None):
     """Batched min-norm solve of G theta = h (G (g,k,k) symmetric PSD), with Jacobi scaling:
     the norm minimised is that of theta x ``scale`` (g,k), default sqrt(diag G).
     Returns theta (g,k), G^+ (g,k,k), rank (g,)."""
     d = np.sqrt(np.maximum(np.einsum("gii->gi", G), 0.0)) if scale is None else np.asarray(scale, float)
-    d = np.where(d > 0, d, 1.0)
-    Gs = G / d[:, :, None] / d[:, None, :]
-    lam, V = np.linalg.eigh(Gs)
-    lmax = np.max(lam, axis=-1, keepdims=True)
-    keep = lam > rtol * np.maximum(lmax, 1e-300)
+    lam, V, keep, d = kept_space(G, d, rtol)
     inv = np.where(keep, 1.0 / np.where(keep, lam, 1.0), 0.0)
     Ginv = np.einsum("gij,gj,gkj->gik", V, inv, V) / d[:, :, None] / d[:, None, :]
     theta = np.einsum("gij,gj->gi", Ginv, h)
