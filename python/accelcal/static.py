@@ -139,7 +139,8 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
     5. A recording made of static blocks alone (:func:`accelcal.steps.logger_steps`: its
        large changes are nearly all isolated steps) gives its blocks whose means hold
        still, however much a hand trembles in them (:func:`accelcal.steps.block_log_intervals`),
-       in place of the intervals found in them above.
+       in place of the intervals found in them above; a block holding two of those intervals
+       at different levels spans a motion and is dropped (:func:`holds_two_levels`).
 
     The noise is the device's ``noise_mps2`` (plus rounding) when it is given for
     every channel, else estimated from the data (:func:`accelcal.noise.estimate_noise`),
@@ -199,12 +200,31 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
     starts = {n} | {iv[0] for iv in out}
     out = [iv for iv in out if iv[1] - iv[0] >= min_n or (iv[0] in stops and iv[1] in starts)]
     # a recording of static blocks alone: its blocks whose means hold still, tremor or not,
-    # and the intervals above that none of them overlaps
-    blocks = block_log_intervals(raw, sig, w, h)
+    # and the intervals above that none of them overlaps; a block that holds two of those
+    # intervals at different levels spans a motion and is not one
+    blocks = [bl for bl in block_log_intervals(raw, sig, w, h) if not holds_two_levels(raw, bl, out, sig)]
     if blocks:
         free = [iv for iv in out if not any(iv[0] < b and a < iv[1] for a, b in blocks)]
         out = sorted(blocks + free)
     return out
+
+
+def holds_two_levels(raw: np.ndarray, block: tuple[int, int], intervals: Sequence[tuple[int, int]],
+                     sig: np.ndarray) -> bool:
+    """Whether a logger's block (:func:`accelcal.steps.block_log_intervals`) holds two of the
+    window test's static intervals whose means differ by more than MOVE_RANGE x the larger of
+    the noise ``sig`` and their std on some channel: two poses with a motion between them, not
+    one trembling pose (a recording whose 180 deg turns are instant flips but whose other turns
+    are smooth motions: the flips make it look like a logger's blocks, a block then spans the
+    smooth turns)."""
+    a, b = block
+    inside = [(max(a, lo), min(b, hi)) for lo, hi in intervals if lo < b and a < hi]
+    inside = [iv for iv in inside if iv[1] - iv[0] >= 2]
+    if len(inside) < 2:
+        return False
+    means = np.array([raw[lo:hi].mean(axis=0) for lo, hi in inside])
+    yard = np.maximum(sig, np.median([raw[lo:hi].std(axis=0, ddof=1) for lo, hi in inside], axis=0))
+    return bool(np.any((means.max(axis=0) - means.min(axis=0)) > MOVE_RANGE * yard))
 
 
 def sample_where(rec, i: int) -> str:

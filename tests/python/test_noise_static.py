@@ -271,6 +271,44 @@ def test_motions_between_poses_are_no_logger_of_blocks(shared_data):
         assert logger_steps(raw, estimate_noise(raw, w), w) is None
 
 
+def test_a_block_that_spans_a_smooth_turn_is_not_one_pose():
+    """26 poses of a 10-bit chip at 50 Hz (6 faces, 12 edges, 8 corners) held 3 s, joined by
+    1.5 s turns with 0.3 m/s^2 of jerk: smooth ones, except that a 180 deg turn flips f at once
+    (a tester's generator did so). The flips are isolated steps, so the recording looked like a
+    logger's blocks, and each block then spanned the smooth turns: 8 intervals, several holding
+    3-4 poses and the turns between them, the 'offset' model only. A block that holds the window
+    test's intervals at different levels is a motion."""
+    dev = bare(default_triad())
+    rate, k = 50.0, 256 / G
+    dev = dataclasses.replace(dev, raw_min=-512, raw_max=511, counts_per_mps2=np.full(3, k),
+                              zero_counts=np.zeros(3))
+    faces = [s * e for e in np.eye(3) for s in (1, -1)]
+    edges = [np.array(v) / np.sqrt(2) for v in ((1, 1, 0), (1, -1, 0), (-1, 1, 0), (-1, -1, 0), (1, 0, 1),
+                                              (1, 0, -1), (-1, 0, 1), (-1, 0, -1), (0, 1, 1), (0, 1, -1),
+                                              (0, -1, 1), (0, -1, -1))]
+    corners = [np.array([x, y, z]) / np.sqrt(3) for x in (1, -1) for y in (1, -1) for z in (1, -1)]
+    ups = faces + edges + corners
+    jerk, noise = np.random.default_rng(2), np.random.default_rng(3)
+    s = 0.5 - 0.5 * np.cos(np.linspace(0, np.pi, 77)[1:-1])[:, None]
+    segs, lab = [], []
+    for p, u in enumerate(ups):
+        if p:
+            w = ups[p - 1] * (1 - s) + u * s          # through 0 (an instant flip) where u = -previous
+            segs.append(G * w / np.linalg.norm(w, axis=1)[:, None] + jerk.normal(0, 0.3, (75, 3)))
+            lab.append(np.full(75, -1))
+        segs.append(np.tile(G * u, (150, 1)))
+        lab.append(np.full(150, p))
+    f, lab = np.concatenate(segs), np.concatenate(lab)
+    S = k * (np.diag([1.01, 0.995, 1.02]) + np.array([[0, .002, -.001], [.001, 0, .003], [-.002, .001, 0]]))
+    raw = np.clip(np.round(f @ S.T + [4.6, -3.1, 7.7] + noise.normal(0, 0.05 * k, f.shape)), -512, 511)
+    raw = raw.astype(np.int64)
+    iv = detect_static(recording(raw, rate), dev)
+    assert len(iv) == 26                                 # 8 before
+    held = [np.unique(lab[a:b][lab[a:b] >= 0]) for a, b in iv]
+    # one pose each (with at most the half of a flip's turn that stays at the pose's f)
+    assert [h.tolist() for h in held] == [[p] for p in range(26)]
+
+
 def test_labelled_pose_with_strong_tremor_is_not_motion_but_a_slow_turn_is():
     """One labelled pose sways at 2 Hz four times as hard as the others shake (its eighths'
     means swing with it, as in CK-Explorer's hand-held blocks): it is a pose (refused
