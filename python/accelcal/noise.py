@@ -30,6 +30,7 @@ import math
 from typing import Sequence
 
 import numpy as np
+from scipy.optimize import brentq
 
 
 NOISE_SPLIT_RATIO = 3.0    # rest and motion classes of window std at least this far apart (ratio of medians)
@@ -440,3 +441,37 @@ def colour_factor(r2: np.ndarray) -> np.ndarray:
         return np.ones(N)
     med = np.median(r2[ok], axis=0)
     return np.where(med > COLOUR_MIN_RATIO2, np.sqrt(med), 1.0)
+
+
+ROUNDING_HARMONICS = 256   # terms of the rounding bias's Fourier series summed (those beyond: 0.2 % of q^2/12)
+
+
+def rounding_bias_var(sigma, q):
+    """Variance, over where a level falls between two codes, of the bias that rounding to a code
+    step ``q`` leaves in the mean of many readings with Gaussian noise ``sigma`` before it
+    (counts): round(x) - x is a sawtooth, sum_k (-1)^k q/(pi k) sin(2 pi k x / q), and the noise
+    damps its k-th term by exp(-2 pi^2 k^2 sigma^2 / q^2), so the variance is
+    sum_k q^2 / (2 pi^2 k^2) exp(-4 pi^2 k^2 sigma^2 / q^2): q^2/12 for a level on one code
+    (sigma = 0: averaging does not remove it), 0.0015 q^2 at sigma = 0.3 q."""
+    sigma, q = np.broadcast_arrays(np.asarray(sigma, float), np.asarray(q, float))
+    k = np.arange(1, ROUNDING_HARMONICS + 1, dtype=float).reshape((-1,) + (1,) * q.ndim)
+    r = np.divide(sigma, q, out=np.zeros(q.shape), where=q > 0)
+    return np.sum(q ** 2 / (2 * math.pi ** 2 * k ** 2) * np.exp(-4 * math.pi ** 2 * k ** 2 * r ** 2), axis=0)
+
+
+def noise_before_rounding(s, q):
+    """The Gaussian noise (counts) before a rounding to step ``q`` that gives readings of std
+    ``s`` about their level: the root of sigma^2 + q^2/12 - rounding_bias_var(sigma, q) = s^2
+    (Sheppard's correction, with the part of the rounding that stays in the mean taken out:
+    readings on one code have s = 0 and sigma 0), elementwise."""
+    s, q = np.broadcast_arrays(np.asarray(s, float), np.asarray(q, float))
+    out = np.zeros(s.shape)
+    for i in np.ndindex(s.shape):
+        si, qi = float(s[i]), float(q[i])
+        if si <= 0 or qi <= 0:
+            out[i] = si if qi <= 0 else 0.0
+            continue
+        # q^2/12 as the series sums it (its truncation at sigma = 0), so that sigma = 0 is the root at s = 0
+        whole = float(rounding_bias_var(0.0, qi))
+        out[i] = brentq(lambda x: x * x + whole - float(rounding_bias_var(x, qi)) - si * si, 0.0, si)
+    return out

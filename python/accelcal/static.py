@@ -18,7 +18,8 @@ import numpy as np
 from .clipping import ClipLevels, clip_levels
 from .errors import InputError
 from .no_rest import REST_NOISE_MAX, gravity_removed_clause, no_rest_clause, noise_share, tonal
-from .noise import colour_factor, noise_for, nyquist_tone, pose_colour, window_std, without_nyquist_tone
+from .noise import (code_step, colour_factor, noise_before_rounding, noise_for, nyquist_tone, pose_colour,
+                    rounding_bias_var, window_std, without_nyquist_tone)
 from .recording import check_for_device
 from .steps import MOVE_PARTS, MOVE_RANGE, MOVE_STD, block_log_intervals, part_spread, step_splits
 
@@ -57,7 +58,8 @@ class PoseSet:
     set_aside: one dict a pose left out (source, label, t range, reason, clipped
     samples and the channels and levels they sit at); colour_r2 (P,N) or None: each pose's
     batch-means variance over the white-noise sem^2 (:func:`pose_colour`; NaN for a pose too
-    short to tell), pooled over every pose of the set by :meth:`sem`.
+    short to tell), pooled over every pose of the set by :meth:`sem`; step (P,N) or None: the
+    code step of each pose's channel (counts; None: 1, whole counts).
     """
 
     means: np.ndarray
@@ -68,6 +70,7 @@ class PoseSet:
     info: list[dict] = field(default_factory=list)
     set_aside: list[dict] = field(default_factory=list)
     colour_r2: np.ndarray | None = None
+    step: np.ndarray | None = None
 
     @property
     def n_poses(self) -> int:
@@ -91,10 +94,18 @@ class PoseSet:
         return colour_factor(self.colour_r2)
 
     def sem(self) -> np.ndarray:
-        """(P,N) standard error of each pose mean: the pooled channel noise over sqrt(n), times
-        :meth:`sem_scale` (noise coloured within the poses: a hand's slow tremor, 1/f noise)."""
-        white = self.channel_noise()[None, :] / np.sqrt(np.maximum(self.n, 1))[:, None]
-        return white * self.sem_scale()[None, :]
+        """(P,N) standard error of each pose mean: the pooled within-pose std over sqrt(n), times
+        :meth:`sem_scale` (noise coloured within the poses: a hand's slow tremor, 1/f noise), and
+        the rounding's bias, which averaging does not remove where the noise before the rounding
+        is below the code step (:func:`accelcal.noise.rounding_bias_var`; a pose on one code is
+        off by up to half a step: q/sqrt(12) rms)."""
+        N = self.means.shape[1]
+        dof = np.maximum(self.n - 1, 0).astype(float)
+        var = (dof[:, None] * self.std ** 2).sum(0) / dof.sum() if dof.sum() > 0 else np.zeros(N)
+        q = np.ones(N) if self.step is None or not self.step.size else self.step.max(axis=0)
+        bias = rounding_bias_var(noise_before_rounding(np.sqrt(var), q), q)
+        white = var[None, :] * self.sem_scale()[None, :] ** 2 / np.maximum(self.n, 1)[:, None]
+        return np.sqrt(white + bias[None, :])
 
     @staticmethod
     def concat(sets: Sequence["PoseSet"]) -> "PoseSet":
@@ -108,6 +119,8 @@ class PoseSet:
             set_aside=[d for s in sets for d in s.set_aside],
             colour_r2=(None if all(s.colour_r2 is None for s in sets) else np.concatenate(
                 [np.full_like(s.means, np.nan) if s.colour_r2 is None else s.colour_r2 for s in sets])),
+            step=(None if all(s.step is None for s in sets) else np.concatenate(
+                [np.ones_like(s.means) if s.step is None else s.step for s in sets])),
         )
 
 
@@ -468,7 +481,8 @@ def poses_from_recording(rec, device, *, use_labels: bool | None = None, require
             "n": int(cnt[p]),
         })
     return PoseSet(means=means, n=cnt, std=std, f_ref=f_ref, temp=temp, info=info, set_aside=aside,
-                   colour_r2=pose_colour(rec.raw, [interval_index(iv) for iv in intervals]))
+                   colour_r2=pose_colour(rec.raw, [interval_index(iv) for iv in intervals]),
+                   step=np.tile([float(code_step(rec.raw[:, i])) for i in range(rec.raw.shape[1])], (P, 1)))
 
 
 def one_wrong_scale(aside: list[dict]) -> float | None:

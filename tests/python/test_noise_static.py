@@ -8,6 +8,7 @@ import dataclasses
 import numpy as np
 import pytest
 from scipy.signal import lfilter
+from scipy.stats import chi2
 from scipy.spatial.transform import Rotation, Slerp
 
 import accelcal as ac
@@ -16,7 +17,7 @@ from accelcal.clipping import clip_levels
 from accelcal.convert import convert_file
 from accelcal.device import default_device, default_triad
 from accelcal.errors import InputError
-from accelcal.noise import estimate_noise
+from accelcal.noise import estimate_noise, noise_before_rounding, rounding_bias_var
 from accelcal.recording import Recording
 from accelcal.static import detect_static, poses_from_recording
 from accelcal.steps import logger_steps
@@ -92,6 +93,58 @@ def test_labelled_jig_with_coarse_quantization_is_calibrated(make, step):
     assert "set_aside" not in cal.extra
     # a reading stuck between codes is biased by up to half a step, no more
     assert np.max(np.abs(cal.offsets - dev.zero_counts)) <= step / 2 + 1.0
+
+
+@pytest.mark.parametrize("sigma", [0.0, 0.05, 0.15, 0.3, 0.6])
+def test_rounding_bias_of_a_mean_follows_a_monte_carlo(sigma):
+    """The bias rounding leaves in a pose's mean, and the noise before the rounding from the
+    rounded readings' std, against a brute-force draw (levels uniform between codes)."""
+    rng = np.random.default_rng(int(100 * sigma))
+    x = rng.uniform(0, 1, 3000)
+    r = np.round(x[:, None] + sigma * rng.standard_normal((3000, 2000)))
+    # the means' scatter less the part the draw's noise leaves in a mean of 2000 readings
+    bias_var = float(np.var(r.mean(axis=1) - x) - np.mean(r.var(axis=1, ddof=1)) / 2000)
+    assert abs(float(rounding_bias_var(sigma, 1.0)) - bias_var) <= 0.05 * abs(bias_var) + 2e-5
+    s = np.sqrt(np.mean(r.var(axis=1, ddof=1)))
+    assert abs(float(noise_before_rounding(s, 1.0)) - sigma) <= 0.02
+    # a coarse step scales both
+    assert np.isclose(float(rounding_bias_var(64 * sigma, 64.0)), 64 ** 2 * float(rounding_bias_var(sigma, 1.0)))
+
+
+def sub_code_jig(q, sigma, k, lo, hi, seed=4):
+    """26 known poses (faces, edges, corners) held 3 s at 100 Hz, read with a gain and offset
+    error, noise ``sigma`` counts before a rounding to step ``q``: each pose on one or two codes."""
+    rng = np.random.default_rng(seed)
+    ups = [s * e for e in np.eye(3) for s in (1, -1)]
+    ups += [np.array(v) / np.linalg.norm(v) for v in ((1, 1, 0), (1, -1, 0), (-1, 1, 0), (-1, -1, 0), (1, 0, 1),
+                                                      (1, 0, -1), (-1, 0, 1), (-1, 0, -1), (0, 1, 1), (0, 1, -1),
+                                                      (0, -1, 1), (0, -1, -1))]
+    ups += [np.array([x, y, z]) / np.sqrt(3) for x in (1, -1) for y in (1, -1) for z in (1, -1)]
+    f = np.repeat(G * np.array(ups), 300, axis=0)
+    S = k * (np.diag([1.01, 0.995, 1.02]) + np.array([[0, .002, -.001], [.001, 0, .003], [-.002, .001, 0]]))
+    x = f @ S.T + [4.6, -3.1, 7.7] + sigma * rng.standard_normal(f.shape)
+    raw = np.clip(q * np.round(x / q), lo, hi).astype(np.int64)
+    pose = np.repeat(np.arange(26), 300)
+    n = raw.shape[0]
+    rec = Recording(t=np.arange(n) / 100.0, raw=raw, f=f, w=np.zeros((n, 3)), dw=np.zeros((n, 3)),
+                    temp_c=np.full(n, np.nan), pose=pose, source="jig.csv")
+    dev = dataclasses.replace(bare(default_triad()), raw_min=lo, raw_max=hi, counts_per_mps2=np.full(3, k),
+                              zero_counts=np.zeros(3))
+    return dev, rec
+
+
+@pytest.mark.parametrize("q,sigma,k,lo,hi", [(1, 0.05, 256 / G, -512, 511),       # a 10-bit chip: 0.002 m/s^2
+                                             (64, 0.3, 16384 / G, -32768, 32767)])  # 64-count steps, no dither
+def test_poses_on_one_code_are_weighted_by_their_rounding(q, sigma, k, lo, hi):
+    """Where the noise before the rounding is well below the code step, each pose sits on one
+    code and its mean is off by up to half a step however long it is held: the pose means'
+    standard error is the rounding's (q/sqrt(12) rms), not the noise over sqrt(n). chi2/dof had
+    been 112 (the 10-bit chip) and 8.9e4 (64-count steps, blamed on a hand's tremor)."""
+    dev, rec = sub_code_jig(q, sigma, k, lo, hi)
+    cal = calibrate_recordings(dev, [rec])
+    fit = cal.extra["fit"]
+    assert fit["chi2"] / fit["dof"] <= chi2.ppf(0.999, fit["dof"]) / fit["dof"]
+    assert not any("tremor" in w for w in cal.extra.get("warnings", []))
 
 
 def test_instant_steps_split_static_blocks_and_tremor_is_not_motion():

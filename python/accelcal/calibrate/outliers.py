@@ -39,7 +39,8 @@ def subset(poses: PoseSet, keep: np.ndarray) -> PoseSet:
     keep = np.asarray(keep, dtype=np.int64)
     return PoseSet(means=poses.means[keep], n=poses.n[keep], std=poses.std[keep], f_ref=poses.f_ref[keep],
                    temp=poses.temp[keep], info=[poses.info[p] for p in keep], set_aside=list(poses.set_aside),
-                   colour_r2=None if poses.colour_r2 is None else poses.colour_r2[keep])
+                   colour_r2=None if poses.colour_r2 is None else poses.colour_r2[keep],
+                   step=None if poses.step is None else poses.step[keep])
 
 
 def outlier_report(device, fit, out: np.ndarray, names: list, without=None) -> dict:
