@@ -78,7 +78,7 @@ def test_a_long_motion_with_a_tilt_change_is_told_what_the_correction_leaves(eng
 def test_the_bound_is_the_larger_of_the_change_seen_and_the_change_the_rests_tell():
     """The figures :func:`motion_errors` gives: D T^2 / 8 from the change D between the rests'
     levels, or 5 sigma sqrt(1/n1 + 1/n2) where the rests show less; the noise 5 sigma sqrt(dt T^3 / 12)."""
-    from accelcal.estimators.displacement_checks import motion_errors
+    from accelcal.estimators.motion_checks import motion_errors
     n1, m, n2, dt, sig = 100, 400, 50, 0.01, 0.01
     n = n1 + m + n2
     at = np.r_[np.ones(n1, bool), np.zeros(m, bool), np.ones(n2, bool)]

@@ -1,7 +1,7 @@
 """The displacement's host forms: the offline estimator (:func:`displace_offline`), the
 seed's correction applied to the streamed path between rests (:func:`retro_correct`), and
 the recording form behind ``accelcal displacement`` (:func:`displacement_from_recording`;
-its checks for the warnings in :mod:`.displacement_checks`).
+its checks for the warnings in :mod:`.displacement_checks` and :mod:`.motion_checks`).
 """
 from __future__ import annotations
 
@@ -18,9 +18,9 @@ from .timegrid import RESAMPLE_BRIDGE_SAMPLES, on_uniform_grid, resampled
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
-from .displacement_checks import (REST_DEV_WARN_MPS2, final_trend_note, motion_error_warnings, motion_errors,
-                                  no_rest_reason, still_but_turned, still_off_g, still_off_g_text, trend_warnings,
-                                  turned_motions, turned_text, turned_warnings, wide_rest_warning)
+from .displacement_checks import (REST_DEV_WARN_MPS2, final_trend_note, no_rest_reason, still_but_turned, still_off_g,
+                                  still_off_g_text, trend_warnings, wide_rest_warning)
+from .motion_checks import motion_error_warnings, motion_errors, turned_motions, turned_text, turned_warnings
 from .rest import (REST_AT_REST, REST_QUIET, RestParams, default_rest_params, motion_window, rest_dated_back,
                    rest_without_trend)
 from ..triad import triad_forces
@@ -248,7 +248,7 @@ def _left_out(t, at, closed, long_anchors, is_open, turns, g, rec, open_note="")
     is_open : bool
         The last motion does not end at rest.
     turns : list of (int, int, float, float)
-        The turned motions to leave out (:func:`.displacement_checks.turned_motions`).
+        The turned motions to leave out (:func:`.motion_checks.turned_motions`).
     g : float
         Gravity, m/s^2.
     open_note : str
@@ -310,7 +310,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     engine "fixed": the C streaming form (ac_disp), with the path between rests corrected on the
     host from the core's per-motion zero-point estimate.  ``axis`` x/y/z: 1-D along that body
     axis (the seed's case: nothing removed).  A motion is reported only with a rest at both ends
-    (its zero point removed) and no turn between them (:func:`.displacement_checks.turned_motions`;
+    (its zero point removed) and no turn between them (:func:`.motion_checks.turned_motions`;
     ``keep_turned``: reported with a warning): the first that is not (the last motion that never
     stops, one the body turned in, one beyond the fixed core's count) ends the output, at the rest
     before it, with a warning naming it.  Errors: no rest at all (nothing can be anchored), or
