@@ -12,7 +12,7 @@ from accelcal import estimators as E
 from accelcal.calibration import Calibration, save_calibration
 from accelcal.device import default_triad, save_device
 from accelcal.errors import InputError
-from accelcal.estimators.rest import trend_bound
+from accelcal.estimators.trend import trend_bound
 from accelcal.recording import recording_from_arrays, write_recording
 from cli_run import one_refusal, run
 from estimator_devices import G

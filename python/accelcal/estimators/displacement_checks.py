@@ -11,7 +11,8 @@ import numpy as np
 
 from ..device import GRAVITY_REMOVED_G
 from .common import time_span
-from .rest import TREND_BLOCK_HOLDS, RestParams, trend_bound
+from .rest import RestParams
+from .trend import TREND_BLOCK_HOLDS, trend_bound
 
 __all__ = ["REST_DEV_WARN_MPS2", "REST_NOISE_MAX_MPS2", "rest_noise_max", "wide_rest_warning", "no_rest_reason",
            "scale_off", "scale_cause", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned",
@@ -252,41 +253,46 @@ def still_but_turned(f, at_rest, rp: RestParams) -> tuple[float, int, int] | Non
     return None if first is None else (worst, first[0], first[1])
 
 
-def trend_warnings(t, trends, rp: RestParams, sigma: float, streamed: bool, rec=None) -> list[str]:
+def trend_warnings(t, trends, rp: RestParams, streamed: bool, rec=None) -> list[str]:
     """The warning (one line, or none) of the stretches the detector declared at rest in which f
-    changes steadily (``trends`` of :func:`.rest.rest_without_trend`: (first, end, change in
-    m/s^2)); ``streamed``: the streaming forms, which took them as rests (the firmware's detector
-    cannot look back), else the offline form, which left them out.  ``t`` in s, ``sigma`` the
-    noise of f in m/s^2; ``rec`` names the rows (:func:`.common.time_span`)."""
+    changes steadily (``trends`` of :func:`.trend.rest_without_trend`: (first, end, change, its bound,
+    its axis's noise sigma, all m/s^2)); ``streamed``: the streaming forms, which took them as rests
+    (the firmware's detector cannot look back), else the offline form, which left them out.  ``t``
+    in s; ``rec`` names the rows (:func:`.common.time_span`)."""
     if not trends:
         return []
-    b, e, ch = max(trends, key=lambda x: x[2])
+    b, e, ch, bound, sk = max(trends, key=lambda x: x[2])
     n = e - b
     what = ("were taken as rests by the streaming detector (it cannot look back): the motions about them "
             "are cut there and doubtful; the offline form (--form offline) leaves them out" if streamed else
             "are not taken as rests")
     return [f"displacement: f changes steadily where the rest detector found a rest ({len(trends)} block(s) of up "
             f"to {TREND_BLOCK_HOLDS * rp.hold} samples; the largest change {ch:.3g} m/s^2 over "
-            f"{time_span(t, b, e - 1, rec)}, beyond the {trend_bound(n, sigma):.2g} m/s^2 that noise of {sigma:.2g} "
-            f"m/s^2 gives (5 sigma of the change of a line fitted to {n} samples of it)): a slow motion, not a rest; "
-            f"they {what}"]
+            f"{time_span(t, b, e - 1, rec)}, beyond the {bound:.2g} m/s^2 that noise of {sk:.2g} m/s^2 on that axis "
+            f"gives (5 sigma of the change of a line fitted to {n} samples of it, {_correlated(bound, n, sk)})): a "
+            f"slow motion, not a rest; they {what}"]
 
 
-def final_trend_note(t, trends, kept, rp: RestParams, sigma: float, rec=None) -> str:
+def _correlated(bound: float, n: int, sigma: float) -> str:
+    """How a trend bound reads its noise: as white, or widened by the noise's correlation at rest."""
+    w = bound / trend_bound(n, sigma) if sigma > 0 else 1.0
+    return ("white: its samples not correlated at rest" if w < 1.005 else
+            f"x {w:.2g} for its samples' correlation at rest")
+
+
+def final_trend_note(t, trends, kept, rec=None) -> str:
     """Why the recording's end is no rest when the trend test rejected it (``trends`` of
-    :func:`.rest.rest_without_trend`, those with no rest in ``kept`` after them), for the line of a
+    :func:`.trend.rest_without_trend`, those with no rest in ``kept`` after them), for the line of a
     last motion that does not end at rest: the stretch, its change against its bound (as a ratio: a
     rejection by a few per cent decides between a corrected path and none), and that a longer final
-    rest decides more surely (the bound falls as n^-1/2).  Empty when no such stretch.  ``t`` in s,
-    ``sigma`` the noise of f in m/s^2."""
+    rest decides more surely (the bound falls as n^-1/2).  Empty when no such stretch.  ``t`` in s."""
     kept = np.asarray(kept, bool)
     last = [x for x in trends if not kept[x[0]:].any()]
     if not last:
         return ""
-    b, e, ch = max(last, key=lambda x: x[0])
-    bound = trend_bound(e - b, sigma)
+    b, e, ch, bound, sk = max(last, key=lambda x: x[0])
     return (f"; the still stretch before its end ({time_span(t, b, e - 1, rec)}, {e - b} samples) is no rest by the "
             f"trend test: a line fitted to f changes by {ch:.3g} m/s^2 over it, {ch / bound:.3g} x the {bound:.2g} "
-            f"m/s^2 that noise of {sigma:.2g} m/s^2 gives (5 sigma; a slow motion, or a rest rejected by "
-            f"{100 * (ch / bound - 1):.2g} %: end the recording with a longer rest, over which noise changes a fitted "
-            "line less, as n^-1/2)")
+            f"m/s^2 that noise of {sk:.2g} m/s^2 on that axis gives (5 sigma, {_correlated(bound, e - b, sk)}; a "
+            f"slow motion, or a rest rejected by {100 * (ch / bound - 1):.2g} %: end the recording with a longer rest, "
+            "over which noise changes a fitted line less, as n^-1/2)")

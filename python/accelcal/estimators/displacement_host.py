@@ -13,7 +13,7 @@ from ..errors import AccelcalError, InputError
 from ..noise import code_step, states_noise
 from ..recording import check_core_input, check_for_device
 from .common import (CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_noise, force_noise,
-                     resolve_array, time_span, uniform_dt)
+                     force_noise_axes, resolve_array, time_span, uniform_dt)
 from .timegrid import RESAMPLE_BRIDGE_SAMPLES, on_uniform_grid, resampled
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
@@ -21,8 +21,8 @@ from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OP
 from .displacement_checks import (REST_DEV_WARN_MPS2, final_trend_note, no_rest_reason, still_but_turned, still_off_g,
                                   still_off_g_text, trend_warnings, wide_rest_warning)
 from .motion_checks import motion_error_warnings, motion_errors, turned_motions, turned_text, turned_warnings
-from .rest import (REST_AT_REST, REST_QUIET, RestParams, default_rest_params, motion_window, rest_dated_back,
-                   rest_without_trend)
+from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params, motion_window, rest_dated_back
+from .trend import rest_without_trend
 from ..triad import triad_forces
 
 __all__ = ["RESAMPLE_HINT", "retro_correct", "displace_offline", "displacement_from_recording"]
@@ -339,7 +339,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     f, note = _body_forces(device, cal, rec, engine)
     noise = channel_noise(device, rec)
     channels = None if device.is_array() else device.triads()[0]
-    f_sigma = force_noise(device, cal, noise, channels)
+    f_axes = force_noise_axes(device, cal, noise, channels)       # per body axis, m/s^2
+    f_sigma = float(np.max(f_axes))
     rp = rest or default_rest_params(device, 1.0 / dt, f_sigma=f_sigma)
     p = DisplaceParams(dt=dt, axis=ax, rest=rp)
     t = np.asarray(rec.t, float)
@@ -356,12 +357,12 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         # each rest tested for a trend from where it began (the detector declares it hold samples
         # later: a rocket's 0.36 s "rest" mid-flight held 12 declared samples and 36 in all)
         kept, trends = rest_without_trend(rest_dated_back(declared, (flags & REST_QUIET) != 0, f, rp), f, rp,
-                                          f_sigma)
+                                          f_axes)
         gone = declared & ~kept
         r = displace_offline(f, p, np.where(gone, flags & ~(REST_AT_REST | REST_QUIET), flags))
-        tw = trend_warnings(t, trends, rp, f_sigma, False, rec)
+        tw = trend_warnings(t, trends, rp, False, rec)
         warnings += tw
-        open_note = final_trend_note(t, trends, kept, rp, f_sigma, rec)
+        open_note = final_trend_note(t, trends, kept, rec)
         if r["no_rest"]:
             off = still_off_g(f, np.zeros(n, bool), rp) if trends else None
             raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording "
@@ -408,7 +409,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         at, quiet = (fl & DISP_REST) != 0, (r["rest"] & REST_QUIET) != 0
         f_rest = f if engine == "float" else np.asarray(f, float) / 2.0**OUT_FRAC
         warnings += trend_warnings(t, rest_without_trend(rest_dated_back(at, quiet, f_rest, rp), f_rest, rp,
-                                                         f_sigma)[1], rp, f_sigma, True, rec)
+                                                         f_axes)[1], rp, True, rec)
         is_open = fin_open
         segs = [(s - 1, e) for s, e in _segments_from_flags(fl) if e >= 0]
         closed = [(a, e, zq[e]) for a, e in segs if not fl[e] & DISP_LONG]
