@@ -12,6 +12,7 @@ from .common import time_span
 from .rest import RestParams, rest_run
 
 __all__ = ["ZP_TURN_MPS2", "ZP_TURN_LINES", "zp_limit", "turned_motions", "turned_text", "turned_warnings",
+           "ROTATION_MAX_DEG", "rotated_motions", "rotated_text",
            "motion_errors", "motion_error_warnings"]
 
 
@@ -100,11 +101,45 @@ def turned_text(t, turn: tuple[int, int, float, float], g: float, rec=None) -> s
             "standstill at its end (a steady speed reads as a rest)")
 
 
-def turned_warnings(t, turns, g: float, rec=None) -> list[str]:
-    """The warnings of the turned motions ``turns`` (:func:`turned_motions`) kept in the output
-    (``--keep-turned``): one line per motion, the first ZP_TURN_LINES, then one line for the others."""
-    out = [f"displacement: {turned_text(t, x, g, rec)}; its path and the positions after it are not valid "
-           "(kept: --keep-turned)" for x in turns]
+#: a 6-DOF array's turn within a motion (from its resolved alpha) beyond which the motion is not
+#: reported (deg): gravity leaks into the path by g sin(angle), 0.51 m/s^2 at 3 deg -- ZP_TURN_MPS2
+ROTATION_MAX_DEG = 3.0
+
+
+def rotated_motions(alpha, at, motions, dt: float, alpha_sigma: float) -> list[tuple[int, int, float]]:
+    """The corrected motions in which a 6-DOF array turned by more than ROTATION_MAX_DEG: the largest
+    angle (deg) from the motion's anchor, integrating the resolved ``alpha`` ((n, 3), rad/s^2) twice
+    from rest (omega = 0 at the anchor, at rest) over anchor .. end; angles within 5 sigma of what
+    the alpha noise alone (``alpha_sigma``, rad/s^2 per axis) integrates to are not counted (a
+    double random walk: sigma_alpha dt^2 sqrt(k^3 / 3) after k steps).  ``at``: at rest (n,) bool;
+    ``motions``: (anchor, end, zp) each; ``dt`` in s.  Returns (anchor, end, angle) of each."""
+    alpha = np.asarray(alpha, float)
+    out = []
+    for a, e, _ in motions:
+        w = np.cumsum(alpha[a + 1:e + 1] * dt, axis=0)
+        ang = np.linalg.norm(np.cumsum(w * dt, axis=0), axis=1)
+        k = np.arange(1, ang.size + 1, dtype=float)
+        sig = float(alpha_sigma) * dt * dt * np.sqrt(k ** 3 / 3.0)
+        worst = math.degrees(float(np.max(np.where(ang > 5.0 * sig, ang, 0.0), initial=0.0)))
+        if worst > ROTATION_MAX_DEG:
+            out.append((int(a), int(e), worst))
+    return out
+
+
+def rotated_text(t, rot: tuple[int, int, float], rec=None) -> str:
+    """The words for a motion of :func:`rotated_motions` (``t`` in s; ``rec`` names its rows)."""
+    a, e, ang = rot
+    return (f"the body turned by up to {ang:.1f} deg during the motion at {time_span(t, a, e, rec)} (from the "
+            f"resolved alpha), beyond the {ROTATION_MAX_DEG:g} deg the stop-to-stop method takes (gravity removal "
+            "assumes no rotation between rests, a rail: gravity leaks into the path)")
+
+
+def turned_warnings(turns) -> list[str]:
+    """The warnings of the turned motions ``turns`` ((anchor, words) each: :func:`turned_text`,
+    :func:`rotated_text`) kept in the output (``--keep-turned``): one line per motion, the first
+    ZP_TURN_LINES, then one line for the others."""
+    out = [f"displacement: {words}; its path and the positions after it are not valid (kept: --keep-turned)"
+           for _, words in turns]
     if len(out) > ZP_TURN_LINES:
         out = out[:ZP_TURN_LINES] + [f"displacement: {len(out) - ZP_TURN_LINES} more motion(s) like these"]
     return out
