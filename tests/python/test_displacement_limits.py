@@ -69,6 +69,10 @@ def test_a_long_motion_with_a_tilt_change_is_told_what_the_correction_leaves(eng
     err = abs(c["p_x"][-1] - x[len(c["p_x"]) - 1])
     assert 1.0 < err <= bound, (err, bound)
     assert c.meta["error_bound_m"] == f"{bound:.3g}"
+    # the output says what that figure covers, and what it does not (it is no total)
+    covers = c.meta["error_bound_covers"]
+    assert "D T^2 / 8" in covers and "sqrt(dt T^3 / 12)" in covers and "not covered" in covers
+    assert all(w in covers.split("not covered")[1] for w in ("turn", "correlated", "scale"))
     short, _ = _slide(d, 2.0, 0.5, 0.0)
     c2 = E.displacement_from_recording(d, cal, short, engine, form=form)
     assert not _limit_warnings(c2), c2.warnings

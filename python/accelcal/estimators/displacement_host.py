@@ -20,8 +20,8 @@ from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OP
                            tilt_frame)
 from .displacement_checks import (REST_DEV_WARN_MPS2, final_trend_note, no_rest_reason, still_but_turned, still_off_g,
                                   still_off_g_text, trend_warnings, wide_rest_warning)
-from .motion_checks import (motion_error_warnings, motion_errors, rotated_motions, rotated_text, turned_motions,
-                            turned_text, turned_warnings)
+from .motion_checks import (ERROR_BOUND_COVERS, motion_error_warnings, motion_errors, rotated_motions, rotated_text,
+                            turned_motions, turned_text, turned_warnings)
 from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params, motion_window, rest_dated_back
 from .trend import rest_without_trend
 from ..triad import triad_forces
@@ -453,6 +453,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     if zps:
         meta["zero_point_mps2"] = "; ".join("(" + ", ".join(f"{c:.4g}" for c in np.atleast_1d(z)) + ")" for z in zps)
         meta["error_bound_m"] = "; ".join(f"{x[2]:.3g}" for x in errs)
+        meta["error_bound_covers"] = ERROR_BOUND_COVERS
     k = slice(0, cut)
     cols = Columns(t=t[k], v_x=v[k, 0], v_y=v[k, 1], v_z=v[k, 2], p_x=pp[k, 0], p_y=pp[k, 1], p_z=pp[k, 2],
                    p_raw_x=p_raw[k, 0], p_raw_y=p_raw[k, 1], p_raw_z=p_raw[k, 2],

@@ -12,7 +12,7 @@ from .common import time_span
 from .rest import RestParams, rest_run
 
 __all__ = ["ZP_TURN_MPS2", "ZP_TURN_LINES", "zp_limit", "turned_motions", "turned_text", "turned_warnings",
-           "ROTATION_MAX_DEG", "rotated_motions", "rotated_text",
+           "ROTATION_MAX_DEG", "rotated_motions", "rotated_text", "ERROR_BOUND_COVERS",
            "motion_errors", "motion_error_warnings"]
 
 
@@ -206,6 +206,16 @@ def motion_errors(f, p, at, motions, f_sigma: float, dt: float, axis: int | None
         path = float(np.max(np.abs(seg[:, axis]))) if axis is not None else float(np.max(np.linalg.norm(seg, axis=1)))
         out.append((int(a), int(e), tilt + noise, tilt, D, tell, path))
     return out
+
+
+#: what the figures of ``error_bound_m`` (:func:`motion_errors`, one per motion) cover, for the output's meta
+ERROR_BOUND_COVERS = (
+    "per motion, m, at its end: 5 sigma of the noise of f integrated twice over the motion with its end "
+    "velocity pinned to 0 (sigma sqrt(dt T^3 / 12), the noise taken as white and the largest axis's), plus "
+    "D T^2 / 8 for a change D of the zero point between its rests (or the smallest change they tell, 5 sigma); "
+    "not covered: a turn within the motion undone by its end (a triad's up to the turned-motion limit on its "
+    "zero point), noise whose samples are correlated (a low-pass chip, a hand's tremor: larger than white noise "
+    "of its sigma gives), and the calibration's scale and cross-axis errors (a share of the path)")
 
 
 def motion_error_warnings(t, errs, f_sigma: float, dt: float, g: float, rec=None) -> list[str]:
