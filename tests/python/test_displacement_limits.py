@@ -12,7 +12,7 @@ from accelcal import estimators as E
 from accelcal.calibration import Calibration, save_calibration
 from accelcal.device import default_triad, save_device
 from accelcal.errors import InputError
-from accelcal.estimators.rest import trend_bound
+from accelcal.estimators.trend import trend_bound
 from accelcal.recording import recording_from_arrays, write_recording
 from cli_run import one_refusal, run
 from estimator_devices import G
@@ -69,6 +69,10 @@ def test_a_long_motion_with_a_tilt_change_is_told_what_the_correction_leaves(eng
     err = abs(c["p_x"][-1] - x[len(c["p_x"]) - 1])
     assert 1.0 < err <= bound, (err, bound)
     assert c.meta["error_bound_m"] == f"{bound:.3g}"
+    # the output says what that figure covers, and what it does not (it is no total)
+    covers = c.meta["error_bound_covers"]
+    assert "D T^2 / 8" in covers and "sqrt(dt T^3 / 12)" in covers and "not covered" in covers
+    assert all(w in covers.split("not covered")[1] for w in ("turn", "correlated", "scale"))
     short, _ = _slide(d, 2.0, 0.5, 0.0)
     c2 = E.displacement_from_recording(d, cal, short, engine, form=form)
     assert not _limit_warnings(c2), c2.warnings
@@ -78,7 +82,7 @@ def test_a_long_motion_with_a_tilt_change_is_told_what_the_correction_leaves(eng
 def test_the_bound_is_the_larger_of_the_change_seen_and_the_change_the_rests_tell():
     """The figures :func:`motion_errors` gives: D T^2 / 8 from the change D between the rests'
     levels, or 5 sigma sqrt(1/n1 + 1/n2) where the rests show less; the noise 5 sigma sqrt(dt T^3 / 12)."""
-    from accelcal.estimators.displacement_checks import motion_errors
+    from accelcal.estimators.motion_checks import motion_errors
     n1, m, n2, dt, sig = 100, 400, 50, 0.01, 0.01
     n = n1 + m + n2
     at = np.r_[np.ones(n1, bool), np.zeros(m, bool), np.ones(n2, bool)]

@@ -296,14 +296,23 @@ def test_nonuniform_time_is_an_error():
         E.displacement_from_recording(d, Calibration.nominal(d), bad)
 
 
-def test_displacement_flags_rotation_between_rests():
-    """A lane change is no rail: the array's alpha shows the turn and the result is flagged;
-    a rail gives no such warning."""
+@pytest.mark.parametrize("engine", ["float", "fixed"])
+def test_a_motion_the_array_turned_in_ends_the_output_as_a_triad_s_does(engine):
+    """A lane change is no rail: the array's alpha shows the turn, and as for a triad's turn (its zero
+    point) the motion is left out with everything after it -- here the only motion, so nothing can be
+    reported -- unless --keep-turned, which writes it with a warning (it had only been warned of);
+    a rail gives no such word."""
     d = default_device()
     cal = Calibration.nominal(d)
-    c = E.displacement_from_recording(d, cal, run_simulation(d, "lane_change", seed=4).recording, "fixed")
-    assert any("turned" in w for w in c.warnings)
-    c = E.displacement_from_recording(d, cal, run_simulation(d, "linear_actuator", seed=4).recording, "fixed")
+    rec = run_simulation(d, "lane_change", seed=4).recording
+    with pytest.raises(InputError, match="no motion can be reported") as ei:
+        E.displacement_from_recording(d, cal, rec, engine)
+    assert "(from the resolved alpha)" in str(ei.value) and "--keep-turned writes it" in str(ei.value)
+    c = E.displacement_from_recording(d, cal, rec, engine, keep_turned=True)
+    turned = [w for w in c.warnings if "(from the resolved alpha)" in w]
+    assert turned and all("kept: --keep-turned" in w for w in turned), c.warnings
+    assert len(c["t"]) == len(rec.t)
+    c = E.displacement_from_recording(d, cal, run_simulation(d, "linear_actuator", seed=4).recording, engine)
     assert not any("turned" in w for w in c.warnings)
 
 

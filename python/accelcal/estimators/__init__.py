@@ -14,9 +14,9 @@ One module per estimator, each with three layers as everywhere in accelcal:
   :mod:`.plots`.
 
 Modules: :mod:`.common` (Columns, input conventions), :mod:`.triad`, :mod:`.rest`,
-:mod:`.attitude`, :mod:`.displacement` (streaming, the firmware's form),
+:mod:`.trend` (the rests' trend test), :mod:`.attitude`, :mod:`.displacement` (streaming, the firmware's form),
 :mod:`.displacement_host` (offline form, path correction, recordings), :mod:`.displacement_checks`
-(its warnings), :mod:`.rate`,
+and :mod:`.motion_checks` (its warnings: of the rests, of the motions), :mod:`.rate`,
 :mod:`.plots`.  Q formats come from the compiled core (``native.FORMATS``).
 Conventions follow docs/data-contract.md.
 """
@@ -32,13 +32,14 @@ from .displacement import (A_FRAC, DISP_BAD_REF, DISP_LONG, DISP_MOVING, DISP_NO
                            DISP_REF_SET, DISP_REST, DISP_SAT, DISP_SEG_END, G_FRAC, GSUM_MAX, P_FRAC, ROT_FRAC,
                            V_FRAC, DisplaceParams, disp_cfg_fixed, displace_core, displace_error_bound,
                            displace_fixed, displace_stream, displace_twin, tilt_frame)
-from .displacement_checks import ZP_TURN_MPS2, turned_motions, zp_limit
+from .motion_checks import ZP_TURN_MPS2, turned_motions, zp_limit
 from .displacement_host import displace_offline, displacement_from_recording, retro_correct
 from .plots import report_plots
 from .rate import rate_from_recording, rate_rest_fixed, rate_rest_float
 from .rest import (REST_AT_REST, REST_CLIP, REST_ENTER, REST_LEAVE, REST_QUIET, RestParams, RestState,
                    RestThresholds, default_rest_params, rest_cfg_fixed, rest_dated_back, rest_detect, rest_fixed,
-                   rest_params_as_stored, rest_without_trend, trend_bound)
+                   rest_params_as_stored)
+from .trend import rest_without_trend, trend_bound
 from ..triad import (TriadTable, quantize_triad, triad_apply_fixed, triad_apply_float, triad_exact, triad_forces,
                     triad_matrix)
 

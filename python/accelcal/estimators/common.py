@@ -17,7 +17,8 @@ from ..recording import check_core_input
 from ..static import STATIC_WINDOW_S, window_len
 
 __all__ = ["Columns", "OUT_FRAC", "OMEGA_FRAC", "CLIP", "CLIP_LO", "dt_fixed", "clip_i16", "q_out",
-           "time_span", "uniform_dt", "alpha_noise", "channel_noise", "force_noise", "resolve_array"]
+           "time_span", "uniform_dt", "alpha_noise", "channel_noise", "force_noise", "force_noise_axes",
+           "resolve_array"]
 
 OUT_FRAC = FORMATS.out_frac        # AC_OUT_FRAC: f (m/s^2), alpha (rad/s^2)
 OMEGA_FRAC = FORMATS.omega_frac    # AC_OMEGA_FRAC: omega (rad/s)
@@ -149,12 +150,13 @@ def alpha_noise(device, cal, noise_counts=None) -> float:
     return float(np.max(np.sqrt(np.sum((M[3:] * k[None, :]) ** 2, axis=1))))
 
 
-def force_noise(device, cal, noise_counts, channels=None) -> float:
-    """The largest per-axis standard deviation (m/s^2) of f that the channels' noise
+def force_noise_axes(device, cal, noise_counts, channels=None) -> np.ndarray:
+    """The standard deviation (m/s^2) of each body axis of f that the channels' noise
     (``noise_counts`` (N,), counts) gives: through the resolve matrix for a 6-DOF array,
-    through the inverse sensitivity of the triad at ``channels`` otherwise."""
+    through the inverse sensitivity of the triad at ``channels`` otherwise.  (3,), zeros for a
+    calibration that does not invert (reported where it is used)."""
     k = np.asarray(noise_counts, float)
-    with np.errstate(all="ignore"):      # a degenerate calibration is reported where it is used
+    with np.errstate(all="ignore"):
         try:
             if channels is None:
                 M = model.resolve_matrix(cal.positions_or_nominal(device), cal.sensitivity)[:3]
@@ -163,9 +165,15 @@ def force_noise(device, cal, noise_counts, channels=None) -> float:
                 M = np.zeros((3, k.size))
                 M[:, ch] = np.linalg.inv(np.asarray(cal.sensitivity, float)[ch])
         except (np.linalg.LinAlgError, ValueError):
-            return 0.0
-        out = float(np.max(np.sqrt(np.sum((M * k[None, :]) ** 2, axis=1))))
-    return out if math.isfinite(out) else 0.0
+            return np.zeros(3)
+        out = np.sqrt(np.sum((M * k[None, :]) ** 2, axis=1))
+    return out if np.all(np.isfinite(out)) else np.zeros(3)
+
+
+def force_noise(device, cal, noise_counts, channels=None) -> float:
+    """The largest per-axis standard deviation (m/s^2) of f that the channels' noise
+    (``noise_counts`` (N,), counts) gives (:func:`force_noise_axes`)."""
+    return float(np.max(force_noise_axes(device, cal, noise_counts, channels)))
 
 
 def resolve_array(device, cal, rec, engine: str) -> tuple[np.ndarray, np.ndarray]:

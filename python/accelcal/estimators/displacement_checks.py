@@ -1,8 +1,8 @@
 """The displacement's checks of a recording, for its warnings and errors: why no rest was
 found (:func:`no_rest_reason`), a still stretch that is no rest because its |f| strays from g
 (:func:`still_off_g`: the calibration's scale) or because the body turned
-(:func:`still_but_turned`), and corrected motions whose zero point only a turn explains
-(:func:`turned_motions`), rests that hold a trend (:func:`trend_warnings`)."""
+(:func:`still_but_turned`), rests that hold a trend (:func:`trend_warnings`).  The checks of the
+corrected motions (a turn, what the correction leaves) are in :mod:`.motion_checks`."""
 from __future__ import annotations
 
 import math
@@ -11,12 +11,12 @@ import numpy as np
 
 from ..device import GRAVITY_REMOVED_G
 from .common import time_span
-from .rest import TREND_BLOCK_HOLDS, RestParams, rest_run, trend_bound
+from .rest import RestParams
+from .trend import TREND_BLOCK_HOLDS, trend_bound
 
-__all__ = ["REST_DEV_WARN_MPS2", "REST_NOISE_MAX_MPS2", "rest_noise_max", "wide_rest_warning", "ZP_TURN_MPS2",
-           "no_rest_reason", "scale_off", "scale_cause", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned",
-           "zp_limit", "turned_motions", "turned_text", "turned_warnings", "trend_warnings", "motion_errors",
-           "motion_error_warnings", "final_trend_note"]
+__all__ = ["REST_DEV_WARN_MPS2", "REST_NOISE_MAX_MPS2", "rest_noise_max", "wide_rest_warning", "no_rest_reason",
+           "scale_off", "scale_cause", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned",
+           "trend_warnings", "final_trend_note"]
 
 
 #: the noisiest sensor at rest of issue 13's range, m/s^2 per axis (its 5 sigma: 0.25)
@@ -253,231 +253,46 @@ def still_but_turned(f, at_rest, rp: RestParams) -> tuple[float, int, int] | Non
     return None if first is None else (worst, first[0], first[1])
 
 
-#: a motion's zero point held beyond what the rests show, past which the motion is warned of
-#: (m/s^2): g sin 2.9 deg, a tilt of 2.9 deg held through the whole motion and undone by its end.
-#: For a body that only translates, every calibration error is constant and enters the rest's
-#: mean f, which is removed (offset, gain, misalignment alike); a gain error acts on the motion's
-#: mean acceleration, zero from stop to stop; what is left is the zero point's drift over a
-#: motion (0.05 m/s^2 at most, the room the rest's reference test leaves): ten times that is a
-#: turn, not an error of the sensor
-ZP_TURN_MPS2 = 0.5
-#: motions named one line each up to this many (then one line for the rest)
-ZP_TURN_LINES = 5
-
-
-def zp_limit(n: int, f_sigma: float, rp: RestParams) -> float:
-    """The largest |zp| (m/s^2) a motion of ``n`` samples gets without turning:
-    ZP_TURN_MPS2, plus 5 sigma of zp's own noise (zp = v(T) / T sums n samples of f whose noise is
-    ``f_sigma``, m/s^2: sigma / sqrt(n)), plus the detector's lag (up to ``rp.hold`` samples at
-    each end within ``rp.dev_max`` of the rest's level, not integrated: a velocity of up to
-    2 dev_max hold dt, over T = n dt)."""
-    n = max(int(n), 1)
-    return ZP_TURN_MPS2 + 5.0 * float(f_sigma) / math.sqrt(n) + 2.0 * rp.dev_max * rp.hold / n
-
-
-def turned_motions(f, at, motions, f_sigma: float, rp: RestParams, axis: int | None
-                   ) -> list[tuple[int, int, float, float]]:
-    """The corrected motions whose zero point is more than a calibration or tilt error gives
-    (:func:`zp_limit`): an accelerometer alone cannot tell a turn from an acceleration, and a body
-    that turned and turned back during a motion leaves a large zp (the mean gravity that leaked
-    in), which the correction spreads over the path.
-
-    Parameters
-    ----------
-    f : ndarray (n, 3)
-        Specific force in body axes, m/s^2.
-    at : ndarray (n,) bool
-        At rest (each rest from where it began).
-    motions : list of (int, int, array_like)
-        Each corrected motion: its anchor (the rest sample before it), its end sample, and zp
-        (m/s^2, the integrator's frame: the first rest's, or 1-D along ``axis``).
-    f_sigma : float
-        The noise of f, m/s^2.
-    rp : RestParams
-    axis : int or None
-        1-D along that body axis (nothing removed: the rest's level is part of zp), or None.
-
-    Returns
-    -------
-    list of (int, int, float, float)
-        Each such motion's anchor and end sample, its |zp| and the limit it passed (m/s^2).
-
-    Notes
-    -----
-    What the rest before the motion shows is not held against it: its mean f less the first
-    rest's (3-axis: by the triangle inequality, |zp| less the norm of that difference), or its
-    mean f along ``axis`` (1-D: a tilted rail's g sin tilt, a calibration's offset).
-    """
-    at = np.asarray(at, bool)
-    if not at.any():
-        return []
-    first = int(np.argmax(at))
-    first_end = first + int(np.argmin(at[first:])) if not at[first:].all() else at.size
-    m0 = f[first:first_end].mean(axis=0)
-    out = []
-    for a, e, zp in motions:
-        s = rest_run(at, a, 0, a)[0]
-        level = f[s:a + 1].mean(axis=0) if at[a] else m0
-        z = np.asarray(zp, float)
-        held = (abs(z[axis] - level[axis]) if axis is not None else
-                float(np.linalg.norm(z)) - float(np.linalg.norm(level - m0)))
-        lim = zp_limit(e - a, f_sigma, rp)
-        if held > lim:
-            out.append((int(a), int(e), float(np.linalg.norm(z)), float(lim)))
-    return out
-
-
-def turned_text(t, turn: tuple[int, int, float, float], g: float, rec=None) -> str:
-    """The words for a motion of :func:`turned_motions` (``t`` in s; ``g``, m/s^2, for the tilt
-    its zp equals; ``rec`` names its rows, :func:`.common.time_span`)."""
-    a, e, mag, lim = turn
-    return (f"the motion at {time_span(t, a, e, rec)} was corrected by a zero point of |zp| = {mag:.3g} m/s^2, as "
-            f"much as a tilt of {math.degrees(math.asin(min(1.0, mag / g))):.1f} deg held through the whole motion, "
-            f"beyond what a calibration or tilt error gives ({lim:.2g} m/s^2 here): the body likely turned during the "
-            "motion, which an accelerometer-only estimate cannot follow (gravity leaks into the path), or was not at a "
-            "standstill at its end (a steady speed reads as a rest)")
-
-
-def turned_warnings(t, turns, g: float, rec=None) -> list[str]:
-    """The warnings of the turned motions ``turns`` (:func:`turned_motions`) kept in the output
-    (``--keep-turned``): one line per motion, the first ZP_TURN_LINES, then one line for the others."""
-    out = [f"displacement: {turned_text(t, x, g, rec)}; its path and the positions after it are not valid "
-           "(kept: --keep-turned)" for x in turns]
-    if len(out) > ZP_TURN_LINES:
-        out = out[:ZP_TURN_LINES] + [f"displacement: {len(out) - ZP_TURN_LINES} more motion(s) like these"]
-    return out
-
-
-def trend_warnings(t, trends, rp: RestParams, sigma: float, streamed: bool, rec=None) -> list[str]:
+def trend_warnings(t, trends, rp: RestParams, streamed: bool, rec=None) -> list[str]:
     """The warning (one line, or none) of the stretches the detector declared at rest in which f
-    changes steadily (``trends`` of :func:`.rest.rest_without_trend`: (first, end, change in
-    m/s^2)); ``streamed``: the streaming forms, which took them as rests (the firmware's detector
-    cannot look back), else the offline form, which left them out.  ``t`` in s, ``sigma`` the
-    noise of f in m/s^2; ``rec`` names the rows (:func:`.common.time_span`)."""
+    changes steadily (``trends`` of :func:`.trend.rest_without_trend`: (first, end, change, its bound,
+    its axis's noise sigma, all m/s^2)); ``streamed``: the streaming forms, which took them as rests
+    (the firmware's detector cannot look back), else the offline form, which left them out.  ``t``
+    in s; ``rec`` names the rows (:func:`.common.time_span`)."""
     if not trends:
         return []
-    b, e, ch = max(trends, key=lambda x: x[2])
+    b, e, ch, bound, sk = max(trends, key=lambda x: x[2])
     n = e - b
     what = ("were taken as rests by the streaming detector (it cannot look back): the motions about them "
             "are cut there and doubtful; the offline form (--form offline) leaves them out" if streamed else
             "are not taken as rests")
     return [f"displacement: f changes steadily where the rest detector found a rest ({len(trends)} block(s) of up "
             f"to {TREND_BLOCK_HOLDS * rp.hold} samples; the largest change {ch:.3g} m/s^2 over "
-            f"{time_span(t, b, e - 1, rec)}, beyond the {trend_bound(n, sigma):.2g} m/s^2 that noise of {sigma:.2g} "
-            f"m/s^2 gives (5 sigma of the change of a line fitted to {n} samples of it)): a slow motion, not a rest; "
-            f"they {what}"]
+            f"{time_span(t, b, e - 1, rec)}, beyond the {bound:.2g} m/s^2 that noise of {sk:.2g} m/s^2 on that axis "
+            f"gives (5 sigma of the change of a line fitted to {n} samples of it, {_correlated(bound, n, sk)})): a "
+            f"slow motion, not a rest; they {what}"]
 
 
-def final_trend_note(t, trends, kept, rp: RestParams, sigma: float, rec=None) -> str:
+def _correlated(bound: float, n: int, sigma: float) -> str:
+    """How a trend bound reads its noise: as white, or widened by the noise's correlation at rest."""
+    w = bound / trend_bound(n, sigma) if sigma > 0 else 1.0
+    return ("white: its samples not correlated at rest" if w < 1.005 else
+            f"x {w:.2g} for its samples' correlation at rest")
+
+
+def final_trend_note(t, trends, kept, rec=None) -> str:
     """Why the recording's end is no rest when the trend test rejected it (``trends`` of
-    :func:`.rest.rest_without_trend`, those with no rest in ``kept`` after them), for the line of a
+    :func:`.trend.rest_without_trend`, those with no rest in ``kept`` after them), for the line of a
     last motion that does not end at rest: the stretch, its change against its bound (as a ratio: a
     rejection by a few per cent decides between a corrected path and none), and that a longer final
-    rest decides more surely (the bound falls as n^-1/2).  Empty when no such stretch.  ``t`` in s,
-    ``sigma`` the noise of f in m/s^2."""
+    rest decides more surely (the bound falls as n^-1/2).  Empty when no such stretch.  ``t`` in s."""
     kept = np.asarray(kept, bool)
     last = [x for x in trends if not kept[x[0]:].any()]
     if not last:
         return ""
-    b, e, ch = max(last, key=lambda x: x[0])
-    bound = trend_bound(e - b, sigma)
+    b, e, ch, bound, sk = max(last, key=lambda x: x[0])
     return (f"; the still stretch before its end ({time_span(t, b, e - 1, rec)}, {e - b} samples) is no rest by the "
             f"trend test: a line fitted to f changes by {ch:.3g} m/s^2 over it, {ch / bound:.3g} x the {bound:.2g} "
-            f"m/s^2 that noise of {sigma:.2g} m/s^2 gives (5 sigma; a slow motion, or a rest rejected by "
-            f"{100 * (ch / bound - 1):.2g} %: end the recording with a longer rest, over which noise changes a fitted "
-            "line less, as n^-1/2)")
-
-
-def motion_errors(f, p, at, motions, f_sigma: float, dt: float, axis: int | None
-                  ) -> list[tuple[int, int, float, float, float, float, float]]:
-    """What the zero-point correction leaves of each corrected motion's position, from what its
-    rests can tell.
-
-    The correction removes a zero point that stays constant through the motion (a calibration
-    error, a tilt held from rest to rest).  A change of it at an unknown time (a tilt change, a
-    drift) is not removed: a step of D at time tau of a motion of T leaves D tau (T - tau) / 2 at
-    its end, up to D T^2 / 8 at the middle.  D is the change between the rests' levels (their mean
-    f) or, where that is below what they can tell, the smallest change they tell: 5 sigma of the
-    difference of two means of n1 and n2 samples of noise sigma, 5 sigma sqrt(1/n1 + 1/n2).  The
-    noise itself leaves 5 sigma sqrt(dt T^3 / 12) (white noise integrated twice, the end pinned to
-    zero velocity).  The change grows with T^2, the noise with T^1.5: beyond
-    T_max = (40 sigma / D)^2 dt / 12 the change dominates (with D = what the rests tell,
-    T_max = 16/3 dt / (1/n1 + 1/n2): 8/3 of rests of equal length).
-
-    Parameters
-    ----------
-    f : ndarray (n, 3)
-        Specific force in body axes, m/s^2.
-    p : ndarray (n, 3)
-        The corrected position, m.
-    at : ndarray (n,) bool
-        At rest (each rest from where it began).
-    motions : list of (int, int, array_like)
-        Each corrected motion: anchor (a rest sample before it), end sample, zp.
-    f_sigma : float
-        The noise of f, m/s^2 per axis.
-    dt : float
-        s.
-    axis : int or None
-        1-D along that body axis, or None (3-axis).
-
-    Returns
-    -------
-    list of (int, int, float, float, float, float, float)
-        Per motion: anchor, end, the error bound E (m), its part from the change of level (m), the
-        change D used (m/s^2), the change the rests tell (5 sigma, m/s^2), and the path's largest
-        distance from its start (m).
-    """
-    at = np.asarray(at, bool)
-    f = np.asarray(f, float)
-    n = at.size
-    out = []
-    for k, (a, e, _) in enumerate(motions):
-        lo = motions[k - 1][1] + 1 if k else 0
-        hi = motions[k + 1][0] if k + 1 < len(motions) else n
-        b0, b1 = rest_run(at, a, lo, a + 1) if at[a] else (a, a + 1)
-        j = e if at[e] else min(e + 1 + int(np.argmax(at[e + 1:])) if e + 1 < n and at[e + 1:].any() else e, n - 1)
-        c0, c1 = rest_run(at, j, max(a + 1, lo), hi) if at[j] else (j, j + 1)
-        d = f[c0:c1].mean(axis=0) - f[b0:b1].mean(axis=0)
-        seen = abs(float(d[axis])) if axis is not None else float(np.linalg.norm(d))
-        tell = 5.0 * float(f_sigma) * math.sqrt(1.0 / (b1 - b0) + 1.0 / (c1 - c0))
-        D = max(seen, tell)
-        T = (e - a) * dt
-        tilt = D * T * T / 8.0
-        noise = 5.0 * float(f_sigma) * math.sqrt(dt * T ** 3 / 12.0)
-        seg = np.asarray(p[a:e + 1], float) - np.asarray(p[a], float)
-        path = float(np.max(np.abs(seg[:, axis]))) if axis is not None else float(np.max(np.linalg.norm(seg, axis=1)))
-        out.append((int(a), int(e), tilt + noise, tilt, D, tell, path))
-    return out
-
-
-def motion_error_warnings(t, errs, f_sigma: float, dt: float, g: float, rec=None) -> list[str]:
-    """The warnings of :func:`motion_errors`: a motion whose error from a change of its zero point
-    (D T^2 / 8) exceeds what its noise leaves -- longer than the stop-to-stop correction holds with
-    the rests about it (said to be not determined when that error reaches its path; a motion the
-    detector found in the noise has a path below its noise, which is no warning).  One line per motion, the first
-    ZP_TURN_LINES, then one line for the others.  ``t`` in s, ``f_sigma`` in m/s^2, ``dt`` in s,
-    ``g`` in m/s^2 (the tilt a change equals)."""
-    out = []
-    for a, e, err, tilt, D, tell, path in errs:
-        noise = err - tilt
-        if tilt <= noise:
-            continue
-        T = (e - a) * dt
-        if D > tell:
-            what = "the change of level between its rests"
-            hint = ("; the correction cannot remove a change of the zero point within a motion: keep the attitude "
-                    "from rest to rest (a rail, a fixture) and the motions short")
-        else:
-            what = "a change of level as small as its rests can tell (5 sigma)"
-            hint = (f"; with these rests the correction holds motions up to {(40.0 * f_sigma / D) ** 2 * dt / 12.0:.2g} "
-                    "s (longer rests tell a smaller change)")
-        out.append(
-            f"displacement: the motion at {time_span(t, a, e, rec)} lasts {T:.3g} s, longer than the stop-to-stop "
-            f"correction holds: it leaves up to {err:.3g} m of its position, against a path of {path:.3g} m from "
-            f"its start ({what}, {D:.2g} m/s^2 = {math.degrees(math.asin(min(1.0, D / g))):.2g} deg of tilt, at "
-            f"its middle: {tilt:.3g} m, growing with T^2; the noise: {noise:.2g} m)"
-            + ("; its path is no larger than that error: it is not determined" if err >= path else "") + hint)
-    if len(out) > ZP_TURN_LINES:
-        out = out[:ZP_TURN_LINES] + [f"displacement: {len(out) - ZP_TURN_LINES} more motion(s) like these"]
-    return out
+            f"m/s^2 that noise of {sk:.2g} m/s^2 on that axis gives (5 sigma, {_correlated(bound, e - b, sk)}; a "
+            f"slow motion, or a rest rejected by {100 * (ch / bound - 1):.2g} %: end the recording with a longer rest, "
+            "over which noise changes a fitted line less, as n^-1/2)")

@@ -1,7 +1,7 @@
 """The displacement's host forms: the offline estimator (:func:`displace_offline`), the
 seed's correction applied to the streamed path between rests (:func:`retro_correct`), and
 the recording form behind ``accelcal displacement`` (:func:`displacement_from_recording`;
-its checks for the warnings in :mod:`.displacement_checks`).
+its checks for the warnings in :mod:`.displacement_checks` and :mod:`.motion_checks`).
 """
 from __future__ import annotations
 
@@ -13,16 +13,17 @@ from ..errors import AccelcalError, InputError
 from ..noise import code_step, states_noise
 from ..recording import check_core_input, check_for_device
 from .common import (CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_noise, force_noise,
-                     resolve_array, time_span, uniform_dt)
+                     force_noise_axes, resolve_array, time_span, uniform_dt)
 from .timegrid import RESAMPLE_BRIDGE_SAMPLES, on_uniform_grid, resampled
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
-from .displacement_checks import (REST_DEV_WARN_MPS2, final_trend_note, motion_error_warnings, motion_errors,
-                                  no_rest_reason, still_but_turned, still_off_g, still_off_g_text, trend_warnings,
-                                  turned_motions, turned_text, turned_warnings, wide_rest_warning)
-from .rest import (REST_AT_REST, REST_QUIET, RestParams, default_rest_params, motion_window, rest_dated_back,
-                   rest_without_trend)
+from .displacement_checks import (REST_DEV_WARN_MPS2, final_trend_note, no_rest_reason, still_but_turned, still_off_g,
+                                  still_off_g_text, trend_warnings, wide_rest_warning)
+from .motion_checks import (ERROR_BOUND_COVERS, motion_error_warnings, motion_errors, rotated_motions, rotated_text,
+                            turned_motions, turned_text, turned_warnings)
+from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params, motion_window, rest_dated_back
+from .trend import rest_without_trend
 from ..triad import triad_forces
 
 __all__ = ["RESAMPLE_HINT", "retro_correct", "displace_offline", "displacement_from_recording"]
@@ -204,23 +205,6 @@ def _body_forces(device, cal, rec, engine):
                      "(a triad at channels 0-2)")
 
 
-def _max_rotation_deg(device, cal, rec, at_rest, dt, noise) -> float:
-    """Largest angle (deg) turned within any run of not-at-rest samples, integrating the
-    resolved alpha twice from rest (omega = 0 at rest); angles within 5 sigma of what the
-    alpha noise alone integrates to are not counted."""
-    _, a = resolve_array(device, cal, rec, "float")
-    sig_a = alpha_noise(device, cal, noise)
-    worst = 0.0
-    for i, j in _motion_runs(at_rest):
-        w = np.cumsum(a[i:j] * dt, axis=0)
-        ang = np.linalg.norm(np.cumsum(w * dt, axis=0), axis=1)
-        # noise alone: a double random walk, sigma = sigma_alpha dt^2 sqrt(k^3 / 3) after k steps
-        k = np.arange(1, j - i + 1, dtype=float)
-        sig = sig_a * dt * dt * np.sqrt(k**3 / 3.0)
-        worst = max(worst, float(np.max(np.where(ang > 5.0 * sig, ang, 0.0))))
-    return math.degrees(worst)
-
-
 def _axis_arg(axis) -> int | None:
     if axis is None or axis in ("3d", "xyz", "all"):
         return None
@@ -230,7 +214,7 @@ def _axis_arg(axis) -> int | None:
     return m[axis]
 
 
-def _left_out(t, at, closed, long_anchors, is_open, turns, g, rec, open_note=""):
+def _left_out(t, at, closed, long_anchors, is_open, turns, rec, open_note=""):
     """Where the output ends: at the first motion that cannot be reported (one that does not end at
     rest, one longer than the fixed core counts, or, in ``turns``, one the body turned in), which is
     left out with everything after it (their positions would carry its unknown displacement).
@@ -247,10 +231,9 @@ def _left_out(t, at, closed, long_anchors, is_open, turns, g, rec, open_note="")
         The anchors of the motions too long to be corrected.
     is_open : bool
         The last motion does not end at rest.
-    turns : list of (int, int, float, float)
-        The turned motions to leave out (:func:`.displacement_checks.turned_motions`).
-    g : float
-        Gravity, m/s^2.
+    turns : list of (int, str)
+        The turned motions to leave out: anchor, and why (:func:`.motion_checks.turned_text`,
+        :func:`.motion_checks.rotated_text`).
     open_note : str
         Added to the line of a last motion that does not end at rest (why its end is no rest).
 
@@ -269,8 +252,8 @@ def _left_out(t, at, closed, long_anchors, is_open, turns, g, rec, open_note="")
     def start(a: int) -> int:             # the motion's first sample not at rest after its anchor a
         return a + 1 + int(np.argmin(at[a + 1:])) if a + 1 < n and not at[a + 1:].all() else min(a + 1, n)
 
-    cands = [(start(x[0]), turned_text(t, x, g, rec) + "; the stop-to-stop method assumes the same attitude at "
-              "both rests: it is left out (--keep-turned writes it, with a warning)") for x in turns]
+    cands = [(start(a), words + "; the stop-to-stop method assumes the same attitude at both rests: it is left "
+              "out (--keep-turned writes it, with a warning)") for a, words in turns]
     cands += [(start(a), f"the motion from {time_span(t, start(a), rec=rec)} is longer than 65535 samples, the fixed "
                "core's count, and has no zero-point correction: it is left out (the float engine's offline form has "
                "no such limit)") for a in long_anchors]
@@ -310,7 +293,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     engine "fixed": the C streaming form (ac_disp), with the path between rests corrected on the
     host from the core's per-motion zero-point estimate.  ``axis`` x/y/z: 1-D along that body
     axis (the seed's case: nothing removed).  A motion is reported only with a rest at both ends
-    (its zero point removed) and no turn between them (:func:`.displacement_checks.turned_motions`;
+    (its zero point removed) and no turn between them (:func:`.motion_checks.turned_motions`;
     ``keep_turned``: reported with a warning): the first that is not (the last motion that never
     stops, one the body turned in, one beyond the fixed core's count) ends the output, at the rest
     before it, with a warning naming it.  Errors: no rest at all (nothing can be anchored), or
@@ -339,7 +322,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     f, note = _body_forces(device, cal, rec, engine)
     noise = channel_noise(device, rec)
     channels = None if device.is_array() else device.triads()[0]
-    f_sigma = force_noise(device, cal, noise, channels)
+    f_axes = force_noise_axes(device, cal, noise, channels)       # per body axis, m/s^2
+    f_sigma = float(np.max(f_axes))
     rp = rest or default_rest_params(device, 1.0 / dt, f_sigma=f_sigma)
     p = DisplaceParams(dt=dt, axis=ax, rest=rp)
     t = np.asarray(rec.t, float)
@@ -356,12 +340,12 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         # each rest tested for a trend from where it began (the detector declares it hold samples
         # later: a rocket's 0.36 s "rest" mid-flight held 12 declared samples and 36 in all)
         kept, trends = rest_without_trend(rest_dated_back(declared, (flags & REST_QUIET) != 0, f, rp), f, rp,
-                                          f_sigma)
+                                          f_axes)
         gone = declared & ~kept
         r = displace_offline(f, p, np.where(gone, flags & ~(REST_AT_REST | REST_QUIET), flags))
-        tw = trend_warnings(t, trends, rp, f_sigma, False, rec)
+        tw = trend_warnings(t, trends, rp, False, rec)
         warnings += tw
-        open_note = final_trend_note(t, trends, kept, rp, f_sigma, rec)
+        open_note = final_trend_note(t, trends, kept, rec)
         if r["no_rest"]:
             off = still_off_g(f, np.zeros(n, bool), rp) if trends else None
             raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording "
@@ -408,7 +392,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         at, quiet = (fl & DISP_REST) != 0, (r["rest"] & REST_QUIET) != 0
         f_rest = f if engine == "float" else np.asarray(f, float) / 2.0**OUT_FRAC
         warnings += trend_warnings(t, rest_without_trend(rest_dated_back(at, quiet, f_rest, rp), f_rest, rp,
-                                                         f_sigma)[1], rp, f_sigma, True, rec)
+                                                         f_axes)[1], rp, True, rec)
         is_open = fin_open
         segs = [(s - 1, e) for s, e in _segments_from_flags(fl) if e >= 0]
         closed = [(a, e, zq[e]) for a, e in segs if not fl[e] & DISP_LONG]
@@ -431,20 +415,17 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
                         f"{time_span(t, min(declared, n - 1))}; rows before are 0)" + "".join("; " + w for w in before))
         off_words = [w for w in off_words if w not in before]
     warnings += ["displacement: " + w for w in off_words]
-    if device.is_array():
-        # the rail assumption: no rotation between rests (checked from the resolved alpha)
-        rot = _max_rotation_deg(device, cal, rec, np.asarray(at, bool), dt, noise)
-        if rot > 3.0:
-            warnings.append(f"displacement: the body turned by up to {rot:.1f} deg during a motion (from the "
-                            "resolved alpha): gravity removal assumes no rotation between rests (a rail), so "
-                            "the result is doubtful")
     g = float(device.gravity_mps2)
     # a motion is reported only with a rest at both ends and no turn between them (the stop-to-stop
-    # method's assumptions); the first that is not ends the output
-    turns = turned_motions(f_host, at, closed, f_sigma, rp, ax)
+    # method's assumptions); the first that is not ends the output.  A 6-DOF array measures its turn
+    # (from the resolved alpha); a triad's shows in the motion's zero point
+    turns = [(x[0], turned_text(t, x, g, rec)) for x in turned_motions(f_host, at, closed, f_sigma, rp, ax)]
+    if device.is_array():
+        turns += [(x[0], rotated_text(t, x, rec)) for x in rotated_motions(
+            resolve_array(device, cal, rec, "float")[1], np.asarray(at, bool), closed, dt, alpha_noise(device, cal, noise))]
     if keep_turned:
-        warnings += turned_warnings(t, turns, g, rec)
-    cut, left_out, kept = _left_out(t, at, closed, long_anchors, is_open, [] if keep_turned else turns, g, rec,
+        warnings += turned_warnings(sorted(turns))
+    cut, left_out, kept = _left_out(t, at, closed, long_anchors, is_open, [] if keep_turned else turns, rec,
                                     open_note)
     zps = [z for _, _, z in kept]
     errs = motion_errors(f_host, pp, at, kept, f_sigma, dt, ax)
@@ -472,6 +453,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     if zps:
         meta["zero_point_mps2"] = "; ".join("(" + ", ".join(f"{c:.4g}" for c in np.atleast_1d(z)) + ")" for z in zps)
         meta["error_bound_m"] = "; ".join(f"{x[2]:.3g}" for x in errs)
+        meta["error_bound_covers"] = ERROR_BOUND_COVERS
     k = slice(0, cut)
     cols = Columns(t=t[k], v_x=v[k, 0], v_y=v[k, 1], v_z=v[k, 2], p_x=pp[k, 0], p_y=pp[k, 1], p_z=pp[k, 2],
                    p_raw_x=p_raw[k, 0], p_raw_y=p_raw[k, 1], p_raw_z=p_raw[k, 2],

@@ -21,8 +21,7 @@ from .common import CLIP, CLIP_LO, OUT_FRAC
 
 __all__ = ["REST_QUIET", "REST_AT_REST", "REST_ENTER", "REST_LEAVE", "REST_CLIP", "RestParams",
            "default_rest_params", "rest_cfg_fixed", "RestThresholds", "rest_params_as_stored", "RestState",
-           "rest_detect", "rest_fixed", "rest_dated_back", "TREND_BLOCK_HOLDS", "trend_bound", "rest_without_trend",
-           "REST_LEVEL_P", "motion_window", "rest_run"]
+           "rest_detect", "rest_fixed", "rest_dated_back", "REST_LEVEL_P", "motion_window", "rest_run"]
 
 # flag bits, from the compiled core (include/accelcal/ac_rest.h)
 REST_QUIET, REST_AT_REST, REST_ENTER, REST_LEAVE, REST_CLIP = (
@@ -242,80 +241,6 @@ def rest_dated_back(at, quiet, f, p: RestParams) -> np.ndarray:
         if np.all(np.max(np.abs(f[:s] - m), axis=1) <= p.dev_max) and np.all((g2 >= lo) & (g2 <= hi)):
             out[:s] = True
     return out
-
-
-#: a rest is tested for a trend in blocks of this many hold lengths (1 s at the default 0.25 s)
-TREND_BLOCK_HOLDS = 4
-
-
-def trend_bound(n: int, sigma: float) -> float:
-    """5 sigma of the change (m/s^2) over ``n`` samples of the least-squares line through white
-    noise of ``sigma`` (m/s^2): the slope's sigma per sample, sigma sqrt(12 / (n (n^2 - 1))),
-    times n - 1 samples; sigma sqrt(12 / n) for large n."""
-    n = int(n)
-    if n < 2:
-        return math.inf
-    return 5.0 * float(sigma) * (n - 1) * math.sqrt(12.0 / (n * (n * n - 1.0)))
-
-
-def rest_without_trend(at, f, p: RestParams, sigma: float) -> tuple[np.ndarray, list[tuple[int, int, float]]]:
-    """The rests less their stretches in which f changes steadily.
-
-    The detector's test, max |f - mean| <= dev_max about a running mean, holds a slow steady
-    change when dev_max is wide (vibration: a rocket's 0.67 m/s^2, whose slow change of f
-    through |f| = g mid-flight was taken as a rest): its mean follows the trend.  A rest holds no
-    trend: each declared rest is cut in blocks of TREND_BLOCK_HOLDS hold lengths (the last one
-    aligned to the rest's end; a shorter rest is one block), and a block in which the straight
-    line fitted to any axis of f changes by more than :func:`trend_bound` (5 sigma of that
-    change for white noise of ``sigma``) is not at rest; what is left of a rest shorter than
-    ``p.hold`` is no rest either.  (The firmware's streaming detector cannot look back: a host
-    check of its decisions.)
-
-    Parameters
-    ----------
-    at : array_like (n,) bool
-        The detector's at-rest decisions (as declared).
-    f : array_like (n, 3)
-        Specific force, m/s^2.
-    p : RestParams
-        hold (samples).
-    sigma : float
-        The noise of f, m/s^2 per axis.
-
-    Returns
-    -------
-    at : ndarray (n,) bool
-        At rest, without the stretches of a trend.
-    trends : list of (int, int, float)
-        Each block taken out: first sample, end (exclusive), and its largest change over the
-        block, m/s^2.
-    """
-    at = np.array(at, bool)
-    f = np.asarray(f, float)
-    edges = np.diff(np.concatenate(([0], at.astype(np.int8), [0])))
-    L = max(2, TREND_BLOCK_HOLDS * int(p.hold))
-    trends = []
-    for s, e in zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist()):
-        starts = list(range(s, e, L))
-        if len(starts) > 1 and e - starts[-1] < L:
-            starts[-1] = e - L
-        cut = False
-        for b in starts:
-            c = min(b + L, e)
-            if c - b < 2:
-                continue
-            slope = np.polyfit(np.arange(c - b, dtype=float), f[b:c], 1)[0]     # per sample, each axis
-            change = float(np.max(np.abs(slope))) * (c - b - 1)
-            if change > trend_bound(c - b, sigma):
-                at[b:c] = False
-                trends.append((b, c, change))
-                cut = True
-        if cut:
-            left = np.diff(np.concatenate(([0], at[s:e].astype(np.int8), [0])))
-            for i, j in zip(np.flatnonzero(left == 1), np.flatnonzero(left == -1)):
-                if j - i < p.hold:
-                    at[s + i:s + j] = False
-    return at, trends
 
 
 #: a sample within this share of the noise's spread of its rest's level (chi-square, per component

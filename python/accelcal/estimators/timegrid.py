@@ -15,7 +15,7 @@ from .common import time_span
 __all__ = ["REGRID_HINT", "RESAMPLE_BRIDGE_SAMPLES", "resampled", "MAX_FILL_SAMPLES", "MAX_FILL_SHARE", "MAX_JITTER_STEPS",
            "JITTER_NOTE_STEPS", "MAX_LATE_STEPS",
            "MAX_WANDER_STEPS", "WANDER_BLOCK", "COHERENT_SHARE", "COHERENT_BLOCK", "block_phases", "stamp_trend",
-           "grid_places", "places_from", "on_uniform_grid", "long_gaps"]
+           "grid_places", "places_from", "on_uniform_grid", "long_gaps", "beyond_filling"]
 
 #: the remedy a refusal of stamps off the grid names (a sensor sampled at a constant rate whose stamps stray)
 REGRID_HINT = ("; if the sensor sampled at a constant rate and only its time stamps stray (a logger that polls it, a "
@@ -249,6 +249,17 @@ def incoherent(rec, t: np.ndarray, late: np.ndarray, dt: float, hint: str = REGR
                       + hint, row=rec.line(i), column="t")
 
 
+def beyond_filling(lost: np.ndarray, limit: int) -> bool:
+    """Whether the samples ``lost`` after each sample (a recording's steps, whole samples) are more than
+    interpolation fills: more than ``limit`` in one gap, or more than MAX_FILL_SHARE of the grid (the
+    samples kept and lost) in all.  The rule of the filling of dropped samples
+    (:func:`on_uniform_grid`, MAX_FILL_SAMPLES) and of --resample's bridge (:func:`resampled`,
+    RESAMPLE_BRIDGE_SAMPLES); each caller words its own refusal."""
+    lost = np.asarray(lost, np.int64)
+    total = int(lost.sum())
+    return bool(lost.size) and (int(lost.max()) > limit or total > MAX_FILL_SHARE * (lost.size + 1 + total))
+
+
 def wander(off: np.ndarray, on: np.ndarray, edges: np.ndarray) -> float:
     """How far (steps) the stamps ``off`` a grid drift from it: the largest |median| over the
     blocks ``edges`` of the stamps on time (``on``); blocks without one left out."""
@@ -361,7 +372,7 @@ def on_uniform_grid(rec, hint: str = REGRID_HINT) -> tuple[Any, np.ndarray, str 
                      f"grid{drifts}: taken as jitter of the stamps, the samples as uniform (t is written on that grid)")
     if total:
         i = int(np.argmax(missing))
-        if missing[i] > MAX_FILL_SAMPLES or total > MAX_FILL_SHARE * (t.size + total):
+        if beyond_filling(missing, MAX_FILL_SAMPLES):
             raise InputError(rec.source, f"sample times are not uniform: {total} sample(s) missing in "
                              f"{int(np.count_nonzero(missing))} gap(s), "
                              f"the longest {int(missing[i])} ({d[i]:.6g} s against {dt:.6g} s): the integrators "
@@ -424,7 +435,7 @@ def resampled(rec) -> tuple[Any, str, np.ndarray]:
     lost = np.where(gap, np.maximum(np.rint(d / step) - 1, 1), 0).astype(np.int64)
     total = int(lost.sum())
     i = int(np.argmax(d))
-    if lost[i] > RESAMPLE_BRIDGE_SAMPLES or total > MAX_FILL_SHARE * (t.size + total):
+    if beyond_filling(lost, RESAMPLE_BRIDGE_SAMPLES):
         raise InputError(rec.source, f"--resample: the step to {time_span(t, i + 1)} is {d[i]:.6g} s, "
                          f"{d[i] / step:.3g} of the regular step {step:.6g} s (the longest of {gaps} steps beyond "
                          f"{GAP_STEPS:g} x the median step, {total} sample(s) lost in all): about {int(lost[i])} "
