@@ -69,7 +69,8 @@ from .held import held_runs
 from .recording import read_recording
 from .textinput import (CELL_NUMBER_RE, is_whitespace_header, preamble_notes, read_preamble, read_text_bytes,
                         table_preamble)
-from .units import Scale, file_scale, in_file_unit, to_counts
+from .units import Scale, file_scale, in_file_unit
+from .units_counts import to_counts
 from .xsens import load_xsens
 
 __all__ = ["FORMATS", "POSE_DIRECTIONS", "Converted", "detect_format", "convert_file", "read_regions", "axis_column",

@@ -18,7 +18,8 @@ from .errors import InputError, notes_on_refusal
 from .convert_rows import lost_rows, trailer_note, trailer_start
 from .recording_checks import repeated_rows
 from .textinput import preamble_notes
-from .units import UNIT_TEXT, Scale, file_scale, in_file_unit, to_counts
+from .units import UNIT_TEXT, Scale, file_scale, in_file_unit
+from .units_counts import to_counts
 
 __all__ = ["stated_time_column", "choose_time_column", "slipped_runs", "slipped_stamps", "shift_slipped", "convert_named"]
 #: rows whose first non-empty time cell tells a numeric time column from a clock time or a date
