@@ -51,6 +51,8 @@ class Converted:
     format, pose_names, notes, scale, sorted_rows
         The format read; the region name of pose label 0, 1, ...; lines for stderr;
         what one count of the file's readings was; whether the rows were put in sample order.
+    device_notes : list of str
+        How the nominal device was made (its rate, its scale): lines for stderr when it is written.
     """
 
     recording: Recording
@@ -60,7 +62,7 @@ class Converted:
     notes: list[str] = field(default_factory=list)
     scale: Scale | None = None
     sorted_rows: bool = False
-    device_notes: list[str] = field(default_factory=list)  # how the nominal device was made
+    device_notes: list[str] = field(default_factory=list)
 
     def summary(self, output: Any) -> str:
         """One line: rows, channels, rate, poses, where it went."""

@@ -40,8 +40,35 @@ class Recording:
     """One recording: n samples of N raw channels plus reference columns.
 
     Unknown reference values are NaN (``pose`` -1); absent columns are
-    all-NaN.  ``metadata`` holds ``# key: value`` comments, ``extra`` any
-    unknown columns as text.
+    all-NaN.  Vectors are in the body frame B (the data contract).
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+        Sample times, s (strictly increasing in a file).
+    raw : ndarray of int64, shape (n, N)
+        Channel readings, counts.
+    f : ndarray, shape (n, 3)
+        Reference specific force at the origin O, m/s^2 (NaN: unknown).
+    w : ndarray, shape (n, 3)
+        Reference angular velocity, rad/s (NaN: unknown).
+    dw : ndarray, shape (n, 3)
+        Reference angular acceleration, rad/s^2 (NaN: unknown).
+    temp_c : ndarray, shape (n,)
+        Temperature, degC (NaN: unknown).
+    pose : ndarray of int64, shape (n,)
+        Static-pose label (>= 0) shared by one pose's samples; -1 while moving or unknown.
+    metadata : dict of str to str
+        The file's ``# key: value`` comments.
+    extra : dict of str to list of str
+        Unknown columns, as text, n values each.
+    source : str
+        The file read from, for messages (``"<memory>"`` when built in memory).
+    lines : int, ndarray of int64 (n,) or None
+        Each sample's line in the CSV file it was read from (an int: the first sample's, the
+        others following); None when built in memory (see :meth:`line`).
+    notes : list of str
+        What a check changed in reading the file (e.g. t read as milliseconds).
     """
 
     t: np.ndarray  # (n,) s

@@ -62,6 +62,24 @@ def test_public_names_are_documented():
             assert obj.__doc__, name
 
 
+def test_public_dataclasses_document_every_field():
+    """Each public dataclass's numpydoc Attributes section names every field (with its unit there)."""
+    import dataclasses
+    import inspect
+    import re
+    for name in ac.__all__:
+        obj = getattr(ac, name)
+        if not (inspect.isclass(obj) and dataclasses.is_dataclass(obj)):
+            continue
+        doc = inspect.getdoc(obj) or ""
+        assert "Attributes\n----------\n" in doc, f"{name}: no Attributes section"
+        section = doc.split("Attributes\n----------\n", 1)[1]
+        named = {w.strip() for line in section.splitlines() if line and not line.startswith(" ")
+                 for w in re.split(r",", line.split(" : ")[0])}
+        missing = [f.name for f in dataclasses.fields(obj) if f.name not in named]
+        assert not missing, f"{name}: fields not in its Attributes section: {missing}"
+
+
 def test_docstring_examples_run():
     api = importlib.import_module("accelcal.api")
     result = doctest.testmod(api, optionflags=doctest.ELLIPSIS)
