@@ -15,12 +15,12 @@ from .convert_regions import label_poses
 from .convert_rows import placeholder_lead
 from .convert_time import FLOAT_EXACT, burst_fit, exact_stamps, rate_from_t, time_in_seconds
 from .csvtable import convert_columns, cut_short_end, make_table, split_header
-from .device import GRAVITY_REMOVED_G, Device
+from .device import GRAVITY_REMOVED_G, GRAVITY_REMOVED_TEXT, Device
 from .errors import InputError, notes_on_refusal
-from .held import held_runs, held_text, inner_runs, uneven
+from .held import held_runs, held_share, held_text, inner_runs, uneven
 from .recording import Recording
 from .recording_checks import RATE_TOL
-from .noise import window_std
+from .noise import noise_for, window_std
 from .static import STATIC_WINDOW_S, detect_static, scale_agreement, window_len
 from .textinput import NUMBER_RE, is_whitespace_header, split_whitespace_header, whitespace_to_commas
 from .units import STANDARD_GRAVITY, Scale
@@ -177,13 +177,22 @@ def adc_range(bits: int, signed: bool) -> tuple[int, int]:
 
 
 def nominal_triad(name: str, rate: float, gravity: float, raw: np.ndarray, bits: int, signed: bool,
-                  scale: Scale | None, notes: list[str], rec: Recording | None = None) -> Device:
+                  scale: Scale | None, notes: list[str], rec: Recording | None = None
+                  ) -> tuple[Device, np.ndarray | None]:
     """A triad at the origin along x, y, z: counts per m/s^2 from the LSB when stated, else from
     the readings: the median |reading vector| over the still stretches of ``rec``
     (:func:`rest_scale`: |f| = g at rest, whatever the orientation), and where there is none
     half the spread of each axis between its 1st and 99th percentiles, over g (as load_xsens;
     that assumes every axis turned through +-1 g: a wrist watch whose z never points up read
-    74 counts per m/s^2 for 105.8).  A note says which."""
+    74 counts per m/s^2 for 105.8).  A note says which.
+
+    Returns
+    -------
+    device : Device
+    noise : ndarray (3,) or None
+        The readings' noise, counts per channel (:func:`noise.noise_for` of the device: it states
+        none), where the still stretches were looked for; else None.
+    """
     k = scale.counts_per_mps2(gravity) if scale is not None else None
     zero = np.full(3, 0.0 if signed else 2.0 ** (bits - 1))
     lo, hi = adc_range(bits, signed)
@@ -193,10 +202,15 @@ def nominal_triad(name: str, rate: float, gravity: float, raw: np.ndarray, bits:
                       positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, k),
                       zero_counts=zero, noise_mps2=0.0)
 
+    noise = None
     if k is None:
         spread_lo, spread_hi = np.percentile(raw, [1.0, 99.0], axis=0)
         k = round(float(np.mean((spread_hi - spread_lo) / 2.0)) / gravity, 1)
-        at_rest = rest_scale(rec, triad(k), zero, gravity) if rec is not None and k > 0 else None
+        at_rest = None
+        if rec is not None and k > 0:
+            probe = triad(k)         # (its noise is the final device's: the same rate, neither states one)
+            noise = noise_for(probe, rec.raw, window_len(probe, STATIC_WINDOW_S, rec.n_samples))[0]
+            at_rest = rest_scale(rec, probe, zero, gravity, noise)
         if at_rest is not None:
             k = at_rest[0]
             notes.append(f"the device's nominal scale, {k:g} counts per m/s^2, is the median |reading| of "
@@ -210,17 +224,18 @@ def nominal_triad(name: str, rate: float, gravity: float, raw: np.ndarray, bits:
             k = 2.0 ** (bits - 1) / (2.0 * gravity)
             notes.append(f"the readings span no range: the device's nominal scale is a guess ({k:g} counts per "
                          "m/s^2, +-2 g); state --full-scale G")
-    return triad(k)
+    return triad(k), noise
 
 
-def rest_scale(rec: Recording, device: Device, zero: np.ndarray, gravity: float) -> tuple[float, int] | None:
+def rest_scale(rec: Recording, device: Device, zero: np.ndarray, gravity: float,
+               noise: np.ndarray | None = None) -> tuple[float, int] | None:
     """Counts per m/s^2 from the recording's still stretches (:func:`static.detect_static`,
-    the noise estimated from the readings): the median over them of |mean reading - zero|
+    the noise ``noise`` (counts per channel) or else estimated from the readings): the median over them of |mean reading - zero|
     over ``gravity`` (|f| = g at rest, the three channels together), of those that agree
     within REST_F_AGREE where three or more do (:func:`static.scale_agreement`: a stretch in
     free fall is no rest), to 4 significant digits; and how many stretches gave it.  None
     where there is no still stretch (or they read no force)."""
-    intervals = detect_static(rec, device)
+    intervals = detect_static(rec, device, noise=noise)
     norms = np.array([np.linalg.norm(rec.raw[a:b].mean(axis=0) - zero) for a, b in intervals])
     if norms.size == 0 or not np.any(norms > 0):
         return None
@@ -317,6 +332,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
             metadata["pose_names"] = " ".join(f"{k}={nm}" for k, nm in enumerate(names))
         rec = Recording(t=t, raw=raw, f=f, pose=pose, metadata=metadata, extra=extra_columns, source=source)
         device_notes: list[str] = []
+        noise = None
         k, first = held_runs(raw)
         distinct_hz = None
         if k > 1 and rate:
@@ -328,13 +344,14 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
             # rows that hold each reading for k rows: the device states the sensor's rate, that of the distinct
             # readings (calibrate, diagnose take it as such: held.distinct_recordings), unless --rate states one
             own = distinct_hz if distinct_hz is not None and opts.rate_hz is None else None
-            device = nominal_triad(f"{fmt}-triad", own or rate, gravity, raw, opts.bits, signed, scale, device_notes,
-                                   rec)
+            device, noise = nominal_triad(f"{fmt}-triad", own or rate, gravity, raw, opts.bits, signed, scale,
+                                          device_notes, rec)
             if own is not None:
                 device_notes.append(f"the device's rate is {device.sample_rate_hz:.6g} Hz, the distinct readings'; "
                                     f"the recording keeps every row (at {rate:.6g} Hz)")
         notes += gravity_removed_note(raw, scale, rate, lambda i: locate(i, 0)[0], pose)
-        clipped = clip_note(raw, device, window_len(device, STATIC_WINDOW_S, raw.shape[0]), lambda j: locate(0, j)[1])
+        clipped = clip_note(raw, device, window_len(device, STATIC_WINDOW_S, raw.shape[0]), lambda j: locate(0, j)[1],
+                            noise)
         notes += [clipped] if clipped else []
         return Converted(rec, device, fmt, names, notes, scale, order is not None, device_notes)
 
@@ -463,16 +480,13 @@ def gravity_removed_note(raw: np.ndarray, scale: Scale | None, rate_hz: float, l
     if f_g >= GRAVITY_REMOVED_G:
         return []
     return [f"the readings' stillest {(b - a) / rate_hz:.2g} s (rows {line(a)}-{line(b - 1)}) read |f| = {f_g:.3g} g, "
-            f"where anything at rest reads 1 g: gravity looks removed (a phone's linear or user acceleration, such "
-            "as Sensor Logger's Accelerometer.csv); calibrate, diagnose and displacement need the accelerometer's "
-            "own readings, gravity in (Sensor Logger's TotalAcceleration.csv or AccelerometerUncalibrated.csv, "
-            "phyphox's 'Acceleration with g')"]
+            f"where anything at rest reads 1 g: {GRAVITY_REMOVED_TEXT}"]
 
 
 def held_note(k: int, first: np.ndarray, n: int, distinct_hz: float | None) -> str:
     """The note on readings held for ``k`` rows (:func:`held.held_runs`'s k and ``first`` over
     ``n`` rows; ``distinct_hz``: the distinct readings' rate, Hz, when known)."""
-    share = (n - first.size) / (n - 1) if n > 1 else 0.0      # rows that repeat the row before
+    share = held_share(first, n)
     at = f" at about {distinct_hz:.4g} Hz" if distinct_hz is not None else ""
     return (f"{100 * share:.0f} % of the rows repeat the row before in all three readings (each reading held for "
             f"{held_text(k, first, n)}): the logger read the sensor faster than it updates; the {first.size} distinct "

@@ -34,12 +34,12 @@ RATE_COMMENT_RE = re.compile(r"(?:data[ _]?rate|sampl(?:e|ing)[ _]?(?:rate|frequ
                              r"([0-9]+(?:\.[0-9]*)?)\s*hz\b", re.I)
 
 
-def table_scale(source: str, pre, option: Scale | None, unit: str | None, units_stated: bool,
-                axes: list[AxisColumn], notes: list[str]) -> Scale | None:
+def table_scale(source: str, pre, option: Scale | None, unit: str | None, axes: list[AxisColumn],
+                notes: list[str]) -> Scale | None:
     """The Scale of a table's readings: the unit its axis names state weighed against the
     options and the ``# units:``/``# lsb:`` comments by :func:`units.file_scale` (the names'
     unit taken as the file's ``units``); ``--full-scale`` without ``--units``
-    (``units_stated`` False) is read in the names' unit.  ``--units`` stated with another unit
+    (``option.unit_stated`` False) is read in the names' unit.  ``--units`` stated with another unit
     than the names' overrides them, with a note appended to ``notes`` (a logger's header that
     says ``aX (g)`` over readings it printed in m/s^2).
 
@@ -51,7 +51,7 @@ def table_scale(source: str, pre, option: Scale | None, unit: str | None, units_
     """
     meta, lines = dict(pre.metadata), dict(pre.metadata_lines)
     cols = ", ".join(c.name for c in axes)
-    if unit is not None and units_stated and option is not None and option.units != unit:
+    if unit is not None and option is not None and option.unit_stated and option.units != unit:
         notes.append(f"--units {option.units} overrides the unit the header's columns state, {UNIT_TEXT[unit]} "
                      f"({cols})")
         unit = None
@@ -372,25 +372,24 @@ def unrepeated(rows: np.ndarray, stamps: np.ndarray, readings: np.ndarray, notes
     return rows[np.concatenate([[True], ~(same | again)])]
 
 
-def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bool) -> Converted:
+def convert_named(source: str, data: bytes, pre, opts: Options) -> Converted:
     """A table with named columns: the three accelerometer axes (:func:`table_axes`), their
     unit (:func:`table_scale`), an optional time column (else ``--rate``); rows without
     readings skipped (:func:`present_rows`).  A refusal carries the notes made before it
     (:func:`errors.notes_on_refusal`)."""
     notes: list[str] = []
     with notes_on_refusal(lambda: preamble_notes(pre) + notes):
-        return named_table(source, data, pre, opts, units_stated, notes)
+        return named_table(source, data, pre, opts, notes)
 
 
-def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool, notes: list[str]) -> Converted:
+def named_table(source: str, data: bytes, pre, opts: Options, notes: list[str]) -> Converted:
     """:func:`convert_named`, appending its notes to ``notes`` as it goes."""
     names = [c.strip() for c in header_cells(pre.header)]
     axes = stated_axes(source, names, opts.columns, pre.header_line) if opts.columns is not None else \
         table_axes(source, names, pre.header_line, notes)
     notes += mirrored_note(axes) if opts.columns is not None else []
     acc = [c.name for c in axes]
-    scale = table_scale(source, pre, opts.scale, names_unit(source, axes, pre.header_line), units_stated,
-                        axes, notes)
+    scale = table_scale(source, pre, opts.scale, names_unit(source, axes, pre.header_line), axes, notes)
     if opts.time_column is not None:
         time_column = stated_time_column(source, names, acc, opts.time_column, pre.header_line)
     want = {a: "ref" for a in acc}
