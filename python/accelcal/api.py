@@ -425,7 +425,8 @@ def convert(path: Any, fmt: str = "auto", *, units: str | None = None, lsb: floa
         ``# lsb:`` comments, else counts; stated by both, they must agree (a contradiction
         is refused, naming the comment's line).
     rate_hz : float, optional
-        Hz, for files without a time column.
+        Hz, for files without a time column; a file of pose means (every row a labelled pose of
+        its own) needs none: its t counts the rows (``table.time`` in its metadata says so).
     regions : path, optional
         JSON of pose regions ``{name: {"start": s, "end": e}}`` (sample numbers).
     stated_f : bool

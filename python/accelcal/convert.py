@@ -62,7 +62,8 @@ from .convert_log import is_log, read_log
 from .convert_mat import convert_mat, is_mat
 from .convert_axes import BARE_AXES, axis_column, axis_triples, columns_hint
 from .convert_named import convert_named
-from .convert_regions import POSE_DIRECTIONS, read_regions, table_labels
+from .convert_regions import (MEANS_HINT, MEANS_RATE_HZ, MEANS_TIME, POSE_DIRECTIONS, means_note, read_regions,
+                              rows_are_poses, table_labels)
 from .convert_rows import LOST_SAMPLES, lost_rows
 from .convert_time import is_datetime, is_time_name, unit_in_name
 from .errors import InputError, notes_on_refusal
@@ -202,24 +203,30 @@ def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metada
         return table.line(i), acc[j]
 
     shifted: list[str] = []
-    with notes_on_refusal(lambda: preamble_notes(pre) + shifted):
+    labels: list[str] = []
+    with notes_on_refusal(lambda: preamble_notes(pre) + labels + shifted):
         raw = to_counts(matrix, scale, source, locate, notes=shifted) if converts else matrix.astype(np.int64)
+        used = set(want)
+        dropped = [c for c in names if c and c not in used and is_gyro(c)]
+        free = [c for c in names if c and c not in used and c not in dropped]
+        label_column, part, kept, hint = (part_column, values[part_column], None, None) if part_column else \
+            table_labels(source, names, free, table, list(range(table.n)), opts.regions is not None, opts.stated_f,
+                         labels)
         rate = opts.rate_hz
-        if rate is None:
+        if rate is None and rows_are_poses(part, None if kept is None else kept[0]):
+            rate = MEANS_RATE_HZ           # pose means carry no time: t counts the rows
+            labels.append(means_note(label_column, raw.shape[0]))
+            metadata = {**metadata, "table.time": MEANS_TIME}
+        elif rate is None:
             timed = next((n for n in names if is_time_name(n)), None)
             hint = f" (--format table reads the time column {timed!r})" if timed else ""
-            raise InputError(source, f"{label} files have no time column: give the sample rate with --rate HZ{hint}")
+            raise InputError(source, f"{label} files have no time column: give the sample rate with --rate HZ{hint} "
+                             f"({MEANS_HINT})")
     index = values[index_column] if index_column else np.arange(raw.shape[0])
-    used = set(want)
-    dropped = [c for c in names if c and c not in used and is_gyro(c)]
-    free = [c for c in names if c and c not in used and c not in dropped]
-    labels: list[str] = []
-    label_column, part, kept, hint = (None, None, None, None) if part_column else \
-        table_labels(source, names, free, table, list(range(table.n)), opts.regions is not None, opts.stated_f, labels)
     ignored = [c for c in free if c != label_column]
     if label != fmt:
         metadata = {**metadata, "table.columns": ", ".join(acc)}
-    return finish(source, label, raw, index, None, values.get(part_column, part), opts, scale, True, rate, metadata,
+    return finish(source, label, raw, index, None, part, opts, scale, True, rate, metadata,
                   preamble_notes(pre) + drop_note(dropped, ignored) + labels + shifted +
                   ([table.cut_note] if table.cut_note else []), locate,
                   index_column, kept=kept, label_hint=hint)
@@ -312,7 +319,9 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     rate_hz : float, optional
         Sample rate, Hz, for files without a time column (imucal, log, a table without one;
         the MPU-6050 log's ``Fs`` otherwise); with a time column (csv, table), the device's
-        rate where t's steps do not give it (a host's time stamps).
+        rate where t's steps do not give it (a host's time stamps).  A table of pose means
+        (every row a labelled pose of its own: :func:`convert_regions.rows_are_poses`) needs
+        none: its means carry no time, and t counts its rows at MEANS_RATE_HZ (a note says so).
     regions : path, optional
         JSON ``{name: {"start": s, "end": e}}`` of sample numbers (end excluded): pose labels.
     stated_f : bool

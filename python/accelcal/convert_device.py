@@ -24,7 +24,8 @@ def nominal_triad(name: str, rate: float, gravity: float, raw: np.ndarray, bits:
                   ) -> tuple[Device, np.ndarray | None]:
     """A triad at the origin along x, y, z: counts per m/s^2 from the LSB when stated, else from
     the readings: the median |reading vector| over the still stretches of ``rec``
-    (:func:`rest_scale`: |f| = g at rest, whatever the orientation), and where there is none
+    (:func:`rest_scale`: |f| = g at rest, whatever the orientation; each row of a file of pose
+    means, every row a pose of its own), and where there is none
     half the spread of each axis between its 1st and 99th percentiles, over g (as load_xsens;
     that assumes every axis turned through +-1 g: a wrist watch whose z never points up read
     74 counts per m/s^2 for 105.8).  A note says which.
@@ -50,15 +51,19 @@ def nominal_triad(name: str, rate: float, gravity: float, raw: np.ndarray, bits:
         spread_lo, spread_hi = np.percentile(raw, [1.0, 99.0], axis=0)
         k = round(float(np.mean((spread_hi - spread_lo) / 2.0)) / gravity, 1)
         at_rest = None
-        if rec is not None and k > 0:
+        means = rec is not None and bool(np.all(rec.pose >= 0)) and np.unique(rec.pose).size == rec.n_samples
+        if means:                    # pose means: each row is at rest
+            at_rest = rest_scale(rec, triad(k), zero, gravity, intervals=[(i, i + 1) for i in range(rec.n_samples)])
+        elif rec is not None and k > 0:
             probe = triad(k)         # (its noise is the final device's: the same rate, neither states one)
             noise = noise_for(probe, rec.raw, window_len(probe, STATIC_WINDOW_S, rec.n_samples))[0]
             at_rest = rest_scale(rec, probe, zero, gravity, noise)
         if at_rest is not None:
             k = at_rest[0]
-            notes.append(f"the device's nominal scale, {k:g} counts per m/s^2, is the median |reading| of "
-                         f"{at_rest[1]} still stretch{'es' if at_rest[1] > 1 else ''} over g (|f| = g at rest; "
-                         "state --full-scale G for the chip's)")
+            of = f"the {at_rest[1]} pose means" if means else \
+                f"{at_rest[1]} still stretch{'es' if at_rest[1] > 1 else ''}"
+            notes.append(f"the device's nominal scale, {k:g} counts per m/s^2, is the median |reading| of {of} over g "
+                         "(|f| = g at rest; state --full-scale G for the chip's)")
         elif k > 0:
             notes.append(f"the device's nominal scale, {k:g} counts per m/s^2, is taken from the readings' "
                          "spread, 1st to 99th percentile, as if every axis turned through +-1 g (no still stretch "
@@ -71,14 +76,16 @@ def nominal_triad(name: str, rate: float, gravity: float, raw: np.ndarray, bits:
 
 
 def rest_scale(rec: Recording, device: Device, zero: np.ndarray, gravity: float,
-               noise: np.ndarray | None = None) -> tuple[float, int] | None:
-    """Counts per m/s^2 from the recording's still stretches (:func:`static.detect_static`,
-    the noise ``noise`` (counts per channel) or else estimated from the readings): the median over them of |mean reading - zero|
+               noise: np.ndarray | None = None, intervals: list[tuple[int, int]] | None = None
+               ) -> tuple[float, int] | None:
+    """Counts per m/s^2 from the recording's still stretches (``intervals`` of samples [a, b), else
+    :func:`static.detect_static`'s with the noise ``noise`` (counts per channel) or else estimated
+    from the readings): the median over them of |mean reading - zero|
     over ``gravity`` (|f| = g at rest, the three channels together), of those that agree
     within REST_F_AGREE where three or more do (:func:`static.scale_agreement`: a stretch in
     free fall is no rest), to 4 significant digits; and how many stretches gave it.  None
     where there is no still stretch (or they read no force)."""
-    intervals = detect_static(rec, device, noise=noise)
+    intervals = detect_static(rec, device, noise=noise) if intervals is None else intervals
     norms = np.array([np.linalg.norm(rec.raw[a:b].mean(axis=0) - zero) for a, b in intervals])
     if norms.size == 0 or not np.any(norms > 0):
         return None

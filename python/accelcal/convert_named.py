@@ -11,7 +11,7 @@ import numpy as np
 from .convert_axes import AxisColumn, find_named, mirrored_note, names_unit, px4_export, stated_axes, table_axes
 from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
                              is_gyro, whole_counts)
-from .convert_regions import table_labels
+from .convert_regions import MEANS_HINT, MEANS_RATE_HZ, MEANS_TIME, means_note, rows_are_poses, table_labels
 from .convert_time import TIME_COLUMN_RE, datetime_stamps, epoch_like, is_datetime, is_time_name, unit_in_name
 from .csvtable import convert_columns, got_text, slow_float
 from .errors import InputError, notes_on_refusal
@@ -404,7 +404,17 @@ def named_table(source: str, data: bytes, pre, opts: Options, notes: list[str]) 
     if opts.time_column is None:
         time_column = choose_time_column(source, names, acc, table, rows, opts.rate_hz is not None, pre.header_line,
                                          notes)
-    if time_column is None and opts.rate_hz is None:
+    labelled, means = None, False
+    if time_column is None and opts.rate_hz is None and comment_rate(pre.metadata) is None:
+        # (no time: the rows' labels are read here; a row a pose of its own needs none)
+        free = [c for c in names if c and c not in want and not is_gyro(c)]
+        labelled = table_labels(source, names, free, table, rows.tolist(), opts.regions is not None, opts.stated_f,
+                                notes)
+        means = rows_are_poses(labelled[1], None if labelled[2] is None else labelled[2][0])
+    if means:
+        opts.rate_hz = MEANS_RATE_HZ
+        notes.append(means_note(labelled[0], rows.size))
+    elif time_column is None and opts.rate_hz is None:
         stated = comment_rate(pre.metadata)
         if stated is None:
             named = [n for n in names if n and n not in acc and is_time_name(n) and not is_gyro(n)]
@@ -412,7 +422,7 @@ def named_table(source: str, data: bytes, pre, opts: Options, notes: list[str]) 
                 "stamps: --time-column NAME (and --time-unit) reads it" if named else ""
             raise InputError(source, "the table has no time column (t, time, timestamp, 'Time (s)', time_ms, "
                              "unix_timestamp, ...): give the sample rate with --rate HZ (or name its column with "
-                             f"--time-column NAME){hint}", row=pre.header_line)
+                             f"--time-column NAME; {MEANS_HINT}){hint}", row=pre.header_line)
         opts.rate_hz, key = stated
         notes.append(f"no time column: the rate is the {opts.rate_hz:g} Hz the file's comment '# {key}' states "
                      "(--rate HZ states another)")
@@ -459,10 +469,12 @@ def named_table(source: str, data: bytes, pre, opts: Options, notes: list[str]) 
     used = set(want)
     dropped = [c for c in names if c and c not in used and is_gyro(c)]
     free = [c for c in names if c and c not in used and c not in dropped]
-    label_column, part, kept, hint = table_labels(source, names, free, table, rows.tolist(), opts.regions is not None,
-                                                  opts.stated_f, notes)
+    label_column, part, kept, hint = labelled or table_labels(source, names, free, table, rows.tolist(),
+                                                              opts.regions is not None, opts.stated_f, notes)
     ignored = [c for c in free if c != label_column]
     meta = {"table.columns": ", ".join(acc + ([time_column] if time_column else []))}
+    if means:
+        meta["table.time"] = MEANS_TIME
     return finish(source, "table", raw, np.arange(rows.size), t, part, opts, scale, converts or bool(np.any(raw < 0)),
                   opts.rate_hz, meta,
                   preamble_notes(pre) + drop_note(dropped, ignored) + notes +
