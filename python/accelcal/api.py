@@ -19,9 +19,11 @@ Errors in the inputs raise :class:`~accelcal.errors.AccelcalError` (its subclass
 """
 from __future__ import annotations
 
+import functools
+import inspect
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Callable, Iterable
 
 import numpy as np
 
@@ -31,9 +33,10 @@ from .cli_calibrate import record_warnings
 from .clipping import at_rails
 from .device import Device, default_device, load_device, save_device
 from .diagnose import diagnose as _diagnose_impl
-from .errors import AccelcalError, atomic_write
+from .errors import AccelcalError, atomic_write, unknown_option
 from .estimators import Columns, attitude_from_recording, displacement_from_recording, rate_from_recording
 from .header import calibration_header
+from .motions import MOTIONS, Motion
 from .recording import Recording, read_recording as _read_recording_file, write_recording
 from .convert import Converted, convert_file
 from .resolve import resolve_recording
@@ -45,6 +48,43 @@ __all__ = ["Device", "Recording", "Calibration", "Columns", "ResolveResult", "Ac
            "default_device", "load_device", "save_device", "read_recording", "write_recording",
            "load_calibration", "save_calibration", "as_recording", "calibrate", "resolve", "diagnose",
            "header", "simulate", "attitude", "displacement", "rate", "convert", "Converted"]
+
+
+def options_checked(*targets: Callable[..., Any], extra: Callable[..., Any] | None = None) -> Callable:
+    """Decorator of the public functions: a keyword argument that is none of the function's
+    parameters -- nor, for one that forwards ``**options``, a keyword-only parameter of one of
+    ``targets`` or a name ``extra(*args, **kwargs)`` lists (a motion's parameters; None: not
+    known here, the callee decides) -- raises :class:`~accelcal.errors.OptionError` before
+    anything runs, naming the public function, the option and the closest valid one."""
+    def wrap(fn: Callable[..., Any]) -> Callable[..., Any]:
+        params = [p for p in inspect.signature(fn).parameters.values() if p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
+        named = [p.name for p in params]
+        options = [p.name for p in params if p.default is not p.empty]
+        forwarded = list(dict.fromkeys(p.name for t in targets for p in inspect.signature(t).parameters.values()
+                                       if p.kind is p.KEYWORD_ONLY and p.name not in named))
+
+        @functools.wraps(fn)
+        def checked(*args: Any, **kwargs: Any) -> Any:
+            more = extra(*args, **kwargs) if extra is not None else []
+            if more is not None:
+                unknown = next((k for k in kwargs if k not in named and k not in forwarded and k not in more), None)
+                if unknown is not None:
+                    raise unknown_option(fn.__name__, unknown, named + forwarded + more, options + forwarded + more)
+            return fn(*args, **kwargs)
+        return checked
+    return wrap
+
+
+def motion_params(device: Any = None, motion: Any = None, *args: Any, **kwargs: Any) -> list[str] | None:
+    """The parameters :func:`simulate`'s ``motion`` takes (a registered name, a spec string
+    ``"name:k=v"`` or a Motion; none for a ready trajectory), or None where the name is not a
+    motion's (simulate's refusal names the motions)."""
+    if isinstance(motion, Motion):
+        return [p.name for p in motion.all_params]
+    if isinstance(motion, str):
+        m = MOTIONS.get(motion.split(":")[0].strip())
+        return None if m is None else [p.name for p in m.all_params]
+    return []
 
 
 def as_device(device: Any) -> Device:
@@ -67,6 +107,7 @@ def as_calibration(calibration: Any, device: Device) -> Calibration:
     raise TypeError(f"calibration: expected a Calibration or a JSON path, not {type(calibration).__name__}")
 
 
+@options_checked()
 def read_recording(path: Any, device: Any = None, *, units: str | None = None, lsb: float | None = None,
                    full_scale_g: float | None = None, bits: int = 16,
                    gravity_mps2: float | None = None) -> Recording:
@@ -112,6 +153,7 @@ def read_recording(path: Any, device: Any = None, *, units: str | None = None, l
     return _read_recording_file(path, n, scale=scale)
 
 
+@options_checked()
 def as_recording(recording: Any, device: Device) -> Recording:
     """A Recording from a Recording, a CSV path, or an (n, N) array of raw counts.
 
@@ -159,6 +201,7 @@ def _as_recordings(recordings: Any, device: Device) -> list[Recording]:
     return [as_recording(r, device) for r in recordings]
 
 
+@options_checked()
 def calibrate(device: Any, recordings: Any, method: str | None = None, *,
               jig_accuracy_deg: float = 0.0, jigfree_model: str = "auto", drop_outliers: bool = False,
               min_static_s: float = MIN_POSE_S) -> Calibration:
@@ -237,6 +280,7 @@ class ResolveResult:
     clipped: np.ndarray | None = None
 
 
+@options_checked()
 def resolve(device: Any, calibration: Any, recording: Any, engine: str = "float",
             omega: str = "auto") -> ResolveResult:
     """Per-sample f and alpha (as ``accelcal resolve``).
@@ -262,6 +306,7 @@ def resolve(device: Any, calibration: Any, recording: Any, engine: str = "float"
     return ResolveResult(t=rec.t, f=f, alpha=alpha, saturated=flags, clipped=at_rails(rec, dev))
 
 
+@options_checked(_diagnose_impl)
 def diagnose(device: Any, calibration: Any, recordings: Any, **options: Any) -> dict:
     """The sim-to-real diagnosis (as ``accelcal diagnose``); returns the JSON object.
 
@@ -282,6 +327,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, **options: Any) -> 
     return _diagnose_impl(dev, as_calibration(calibration, dev), _as_recordings(recordings, dev), **options)
 
 
+@options_checked()
 def header(device: Any, calibration: Any, *, prefix: str = "AC_CAL", output: Any = None) -> str:
     """The C header for firmware (as ``accelcal header``): the 6-DOF resolver's tables for an
     array, the triad table (f only) for a 3-axis sensor; int16 types for a chip with signed
@@ -309,6 +355,7 @@ def header(device: Any, calibration: Any, *, prefix: str = "AC_CAL", output: Any
     return text
 
 
+@options_checked(_simulate_impl, extra=motion_params)
 def simulate(device: Any, motion: str, *, effects: Iterable[Any] = (), seed: int = 0,
              calibration: Any = None, **motion_params: Any) -> Recording:
     """A simulated recording (as ``accelcal simulate``).
@@ -340,23 +387,27 @@ def _estimate(fn, device, calibration, recording, engine, options) -> Columns:
     return fn(dev, as_calibration(calibration, dev), as_recording(recording, dev), engine, **options)
 
 
+@options_checked(attitude_from_recording)
 def attitude(device: Any, calibration: Any, recording: Any, engine: str = "float", **options: Any) -> Columns:
     """Pendulum attitude from two triads (as ``accelcal attitude``): columns t, theta_rad, w_y, dw_y."""
     return _estimate(attitude_from_recording, device, calibration, recording, engine, options)
 
 
+@options_checked(displacement_from_recording)
 def displacement(device: Any, calibration: Any, recording: Any, engine: str = "float",
                  **options: Any) -> Columns:
     """Stop-to-stop displacement (as ``accelcal displacement``): columns t, v_*, p_* (m/s, m)."""
     return _estimate(displacement_from_recording, device, calibration, recording, engine, options)
 
 
+@options_checked(rate_from_recording)
 def rate(device: Any, calibration: Any, recording: Any, engine: str = "float", **options: Any) -> Columns:
     """Angular rate from alpha, reset on rest (as ``accelcal rate``)."""
     return _estimate(rate_from_recording, device, calibration, recording, engine, options)
 
 
 
+@options_checked()
 def convert(path: Any, fmt: str = "auto", *, units: str | None = None, lsb: float | None = None,
             full_scale_g: float | None = None, bits: int = 16, rate_hz: float | None = None, regions: Any = None,
             stated_f: bool = False, gravity_mps2: float | None = None, blocks: bool = False) -> Converted:
@@ -374,7 +425,8 @@ def convert(path: Any, fmt: str = "auto", *, units: str | None = None, lsb: floa
         ``# lsb:`` comments, else counts; stated by both, they must agree (a contradiction
         is refused, naming the comment's line).
     rate_hz : float, optional
-        Hz, for files without a time column.
+        Hz, for files without a time column; a file of pose means (every row a labelled pose of
+        its own) needs none: its t counts the rows (``table.time`` in its metadata says so).
     regions : path, optional
         JSON of pose regions ``{name: {"start": s, "end": e}}`` (sample numbers).
     stated_f : bool

@@ -171,15 +171,17 @@ def clip_levels(raw: np.ndarray, device, noise: np.ndarray, window: int) -> Clip
     return ClipLevels(lo=lo, hi=hi, inside_lo=in_lo, inside_hi=in_hi)
 
 
-def clip_note(raw: np.ndarray, device, window: int, name=lambda i: f"raw_{i}") -> str | None:
-    """A note counting the clipped readings (:func:`clip_levels`, the noise from
-    :func:`noise.noise_for`) per channel and end: how many at each level, which is the
-    converter's limit (raw_min / raw_max) or a pile inside the range; None where there are none.
-    ``name(i)``: channel i's name for the note (a file's column)."""
+def clip_note(raw: np.ndarray, device, window: int, name=lambda i: f"raw_{i}",
+              noise: np.ndarray | None = None) -> str | None:
+    """A note counting the clipped readings (:func:`clip_levels`, the noise ``noise``, counts per
+    channel, else from :func:`noise.noise_for`) per channel and end: how many at each level, which
+    is the converter's limit (raw_min / raw_max) or a pile inside the range; None where there are
+    none.  ``name(i)``: channel i's name for the note (a file's column)."""
     raw = np.asarray(raw)
     if raw.shape[0] < 2:
         return None
-    levels = clip_levels(raw, device, noise_for(device, raw, window)[0], window)
+    noise = noise_for(device, raw, window)[0] if noise is None else noise
+    levels = clip_levels(raw, device, noise, window)
     parts, total = [], 0
     for i in range(raw.shape[1]):
         ends = []

@@ -49,7 +49,8 @@ Regions whose name ends in ``_rot`` are motions, not poses.
 from __future__ import annotations
 
 import re
-from typing import Any
+from functools import cache, partial
+from typing import Any, Callable
 
 import numpy as np
 
@@ -61,15 +62,17 @@ from .convert_log import is_log, read_log
 from .convert_mat import convert_mat, is_mat
 from .convert_axes import BARE_AXES, axis_column, axis_triples, columns_hint
 from .convert_named import convert_named
-from .convert_regions import POSE_DIRECTIONS, read_regions, table_labels
+from .convert_regions import (MEANS_HINT, MEANS_RATE_HZ, MEANS_TIME, POSE_DIRECTIONS, means_note, read_regions,
+                              rows_are_poses, table_labels)
 from .convert_rows import LOST_SAMPLES, lost_rows
 from .convert_time import is_datetime, is_time_name, unit_in_name
 from .errors import InputError, notes_on_refusal
-from .held import held_runs
+from .held import held_runs, held_share
 from .recording import read_recording
 from .textinput import (CELL_NUMBER_RE, is_whitespace_header, preamble_notes, read_preamble, read_text_bytes,
                         table_preamble)
-from .units import Scale, file_scale, in_file_unit, to_counts
+from .units import Scale, file_scale, in_file_unit
+from .units_counts import to_counts
 from .xsens import load_xsens
 
 __all__ = ["FORMATS", "POSE_DIRECTIONS", "Converted", "detect_format", "convert_file", "read_regions", "axis_column",
@@ -96,6 +99,14 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
     """
     source, data = read_text_bytes(path) if data is None else (str(path), data)
     pre = table_preamble(data)
+    return told_format(path, source, data, pre, cache(partial(timed_rows, data, pre)))
+
+
+def told_format(path: Any, source: str, data: bytes, pre, timed: Callable[[], Any]) -> str:
+    """:func:`detect_format` of a file whose text ``data`` and preamble ``pre``
+    (:func:`textinput.table_preamble`) are read; ``timed()`` is its
+    :func:`convert_headerless.timed_rows` (called where the header may be rows, and cached by
+    the caller: ``convert_file`` reads a table by it)."""
     if pre.header is None:
         raise InputError(source, "the file is empty (nothing but comments and blank lines)")
     cells = header_cells(pre.header)
@@ -118,8 +129,7 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
         return "e4"
     if is_log(data):
         return "log"
-    timed = timed_rows(data, pre)
-    if any(axis_column(c) for c in cells) or set(BARE_AXES) <= low or timed is not None and axes_known(len(cells)):
+    if any(axis_column(c) for c in cells) or set(BARE_AXES) <= low or timed() is not None and axes_known(len(cells)):
         return "table"            # (rows without a header whose first cell is a time stamp: t,x,y,z; t and 6)
     line = file_line(path, pre.header_line, pre.header)
     if len(cells) > 1 and all(CELL_NUMBER_RE.fullmatch(c.strip()) or is_datetime(c) for c in cells):
@@ -127,7 +137,7 @@ def detect_format(path: Any, data: bytes | None = None) -> str:
         hints = ("imu_tk's text needs 4 (t ax ay az); " if spaced else "") + \
             ("for three readings a line give --format log --rate HZ; " if spaced or len(cells) == 3 else "") + \
             (f"{stamp_rule(len(cells))}: --columns c2,c3,c4 reads cells 2-4 as its x, y, z (cell k is ck, the "
-             "first the time); " if timed is not None else
+             "first the time); " if timed() is not None else
              f"{stamp_rule(len(cells))}; " if len(cells) == len(HEADERLESS_NAMES) and not spaced or
              len(cells) > len(HEADERLESS_NAMES) and is_datetime(cells[0]) else "")
         raise InputError(source, f"{len(cells)} {'whitespace-separated ' if spaced else ''}numbers a row{dated} and no "
@@ -193,24 +203,30 @@ def convert_table(source: str, data: bytes, pre, fmt: str, opts: Options, metada
         return table.line(i), acc[j]
 
     shifted: list[str] = []
-    with notes_on_refusal(lambda: preamble_notes(pre) + shifted):
+    labels: list[str] = []
+    with notes_on_refusal(lambda: preamble_notes(pre) + labels + shifted):
         raw = to_counts(matrix, scale, source, locate, notes=shifted) if converts else matrix.astype(np.int64)
+        used = set(want)
+        dropped = [c for c in names if c and c not in used and is_gyro(c)]
+        free = [c for c in names if c and c not in used and c not in dropped]
+        label_column, part, kept, hint = (part_column, values[part_column], None, None) if part_column else \
+            table_labels(source, names, free, table, list(range(table.n)), opts.regions is not None, opts.stated_f,
+                         labels)
         rate = opts.rate_hz
-        if rate is None:
+        if rate is None and rows_are_poses(part, None if kept is None else kept[0]):
+            rate = MEANS_RATE_HZ           # pose means carry no time: t counts the rows
+            labels.append(means_note(label_column, raw.shape[0]))
+            metadata = {**metadata, "table.time": MEANS_TIME}
+        elif rate is None:
             timed = next((n for n in names if is_time_name(n)), None)
             hint = f" (--format table reads the time column {timed!r})" if timed else ""
-            raise InputError(source, f"{label} files have no time column: give the sample rate with --rate HZ{hint}")
+            raise InputError(source, f"{label} files have no time column: give the sample rate with --rate HZ{hint} "
+                             f"({MEANS_HINT})")
     index = values[index_column] if index_column else np.arange(raw.shape[0])
-    used = set(want)
-    dropped = [c for c in names if c and c not in used and is_gyro(c)]
-    free = [c for c in names if c and c not in used and c not in dropped]
-    labels: list[str] = []
-    label_column, part, kept, hint = (None, None, None, None) if part_column else \
-        table_labels(source, names, free, table, list(range(table.n)), opts.regions is not None, opts.stated_f, labels)
     ignored = [c for c in free if c != label_column]
     if label != fmt:
         metadata = {**metadata, "table.columns": ", ".join(acc)}
-    return finish(source, label, raw, index, None, values.get(part_column, part), opts, scale, True, rate, metadata,
+    return finish(source, label, raw, index, None, part, opts, scale, True, rate, metadata,
                   preamble_notes(pre) + drop_note(dropped, ignored) + labels + shifted +
                   ([table.cut_note] if table.cut_note else []), locate,
                   index_column, kept=kept, label_hint=hint)
@@ -273,9 +289,7 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
                              "sample rate with --rate HZ")
         if blocks and opts.regions is not None:
             raise InputError(source, "--blocks and --regions both label the poses: give one")
-        first = held_runs(raw)[1]                   # (the note on held readings is finish's)
-        n = raw.shape[0]
-        share = (n - first.size) / (n - 1) if n > 1 else 0.0      # rows that repeat the row before
+        share = held_share(held_runs(raw)[1], raw.shape[0])    # (the note on held readings is finish's)
         meta = {"log.text_lines": str(info["text_lines"]), "log.blocks": str(info["blocks"]),
                 "log.held_share": f"{share:.4f}"}
         return finish(source, "log", raw, keep, None, block if blocks else None, opts, scale,
@@ -284,8 +298,7 @@ def convert_log(source: str, data: bytes, opts: Options, blocks: bool) -> Conver
 
 def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, rate_hz: float | None = None,
                  regions: Any = None, stated_f: bool = False, gravity_mps2: float | None = None,
-                 bits: int = 16, blocks: bool = False, time_unit: str = "auto",
-                 units_stated: bool = True, variable: str | None = None,
+                 bits: int = 16, blocks: bool = False, time_unit: str = "auto", variable: str | None = None,
                  time_column: str | None = None, repeated_stamps: str = "refuse",
                  columns: str | None = None) -> Converted:
     """Read another tool's file as a contract recording of a triad.
@@ -300,11 +313,15 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         The readings' unit and LSB (``--units``/``--lsb``/``--full-scale``), or the
         file's ``# units:``/``# lsb:`` comments, else counts; stated by both, they must
         agree (:func:`units.file_scale`).  A table's axis names may state the unit
-        (``Accelerometer X (g)``): the same rule, the names taken as the file's unit.
+        (``Accelerometer X (g)``): the same rule, the names taken as the file's unit; a
+        ``--full-scale`` or ``--lsb`` without ``--units`` (``scale.unit_stated`` False) is read
+        in the names' unit, a ``--units`` that names another overrides them (a note).
     rate_hz : float, optional
         Sample rate, Hz, for files without a time column (imucal, log, a table without one;
         the MPU-6050 log's ``Fs`` otherwise); with a time column (csv, table), the device's
-        rate where t's steps do not give it (a host's time stamps).
+        rate where t's steps do not give it (a host's time stamps).  A table of pose means
+        (every row a labelled pose of its own: :func:`convert_regions.rows_are_poses`) needs
+        none: its means carry no time, and t counts its rows at MEANS_RATE_HZ (a note says so).
     regions : path, optional
         JSON ``{name: {"start": s, "end": e}}`` of sample numbers (end excluded): pose labels.
     stated_f : bool
@@ -323,9 +340,6 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         integers, their steps exactly.  The recording's t is written in seconds; the device's
         rate is from t's median step, or where its mean step disagrees (bursts of a host's stamps)
         from the samples between the bursts' stamps (:func:`convert_time.burst_rate`; a note).
-    units_stated : bool
-        Whether ``scale``'s unit was stated (``--units``); when not, a ``--full-scale``
-        alone (a Scale in counts) is read in the unit a table's axis names state.
     variable : str, optional
         A MATLAB file's array of readings (:mod:`accelcal.convert_mat`), where it holds
         more than one of 3 or 4 columns.
@@ -371,9 +385,11 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     if variable is not None:
         raise InputError(str(path), "--variable names an array of a MATLAB file")
     source, data = read_text_bytes(path)
+    pre = table_preamble(data)
+    timed = cache(partial(timed_rows, data, pre))     # (detection and a table's reading: computed once)
     told = fmt == "auto"
     if told:
-        fmt = "table" if columns is not None else detect_format(source, data)
+        fmt = "table" if columns is not None else told_format(source, source, data, pre, timed)
     if fmt not in FORMATS:
         raise ValueError(f"unknown format {fmt!r}")
     if repeated_stamps != "refuse" and fmt != "table":
@@ -425,11 +441,10 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         return finish(source, fmt, rec.raw, np.arange(rec.n_samples), t, None, opts, scale, signed, None,
                       dict(rec.metadata), list(rec.notes), lambda i, j: (rec.line(i), f"raw_{j}"), None, device, kept,
                       time_column="t" if fmt == "csv" else None)
-    pre = table_preamble(data)
     if pre.header is None:
         raise InputError(source, "the file is empty (nothing but comments and blank lines)")
     if fmt == "table":
-        return convert_named(source, data, timed_rows(data, pre) or pre, opts, units_stated)
+        return convert_named(source, data, timed() or pre, opts)
     meta: dict[str, str] = {}
     with notes_on_refusal(lambda: preamble_notes(pre)):     # a title passed over, before a refusal
         label = fmt

@@ -67,7 +67,7 @@ def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int
     try:
         conv = convert_file(a.input, a.format, scale=scale, rate_hz=positive(a.rate, "--rate"), regions=a.regions,
                             stated_f=a.stated_f, gravity_mps2=positive(a.gravity, "--gravity"), bits=bits,
-                            blocks=a.blocks, time_unit=a.time_unit, units_stated=a.units is not None,
+                            blocks=a.blocks, time_unit=a.time_unit,
                             variable=a.variable, time_column=a.time_column,
                             repeated_stamps=a.repeated_stamps, columns=a.columns)
     except AccelcalError as e:          # the notes made before a refusal, ahead of its error line

@@ -1,6 +1,7 @@
 """What every format of ``accelcal convert`` shares: the result (:class:`Converted`), the
 options the command line states, reading a table's named columns, and :func:`finish` --
-range check, sample order, time, poses, metadata and the nominal device."""
+range check, sample order, time, poses, metadata and the nominal device
+(:mod:`accelcal.convert_device`)."""
 from __future__ import annotations
 
 import csv
@@ -11,22 +12,23 @@ from typing import Any
 import numpy as np
 
 from .clipping import clip_note
+from .convert_device import check_range, nominal_triad
 from .convert_regions import label_poses
 from .convert_rows import placeholder_lead
 from .convert_time import FLOAT_EXACT, burst_fit, exact_stamps, rate_from_t, time_in_seconds
 from .csvtable import convert_columns, cut_short_end, make_table, split_header
-from .device import GRAVITY_REMOVED_G, Device
+from .device import GRAVITY_REMOVED_G, GRAVITY_REMOVED_TEXT, Device
 from .errors import InputError, notes_on_refusal
-from .held import held_runs, held_text, inner_runs, uneven
+from .held import held_runs, held_share, held_text, inner_runs, uneven
 from .recording import Recording
 from .recording_checks import RATE_TOL
 from .noise import window_std
-from .static import STATIC_WINDOW_S, detect_static, scale_agreement, window_len
+from .static import STATIC_WINDOW_S, window_len
 from .textinput import NUMBER_RE, is_whitespace_header, split_whitespace_header, whitespace_to_commas
 from .units import STANDARD_GRAVITY, Scale
 
 __all__ = ["Converted", "Options", "INDEX_COLUMNS", "GYRO_RE", "NUMBER_RE", "header_cells", "read_columns",
-           "find_column", "exact_time", "adc_range", "nominal_triad", "rest_scale", "check_range", "in_sample_order", "finish",
+           "find_column", "exact_time", "in_sample_order", "finish",
            "stated_rate_off", "drop_note", "whole_counts", "is_gyro", "stillest_force",
            "gravity_removed_note", "held_note"]
 
@@ -51,6 +53,8 @@ class Converted:
     format, pose_names, notes, scale, sorted_rows
         The format read; the region name of pose label 0, 1, ...; lines for stderr;
         what one count of the file's readings was; whether the rows were put in sample order.
+    device_notes : list of str
+        How the nominal device was made (its rate, its scale): lines for stderr when it is written.
     """
 
     recording: Recording
@@ -60,7 +64,7 @@ class Converted:
     notes: list[str] = field(default_factory=list)
     scale: Scale | None = None
     sorted_rows: bool = False
-    device_notes: list[str] = field(default_factory=list)  # how the nominal device was made
+    device_notes: list[str] = field(default_factory=list)
 
     def summary(self, output: Any) -> str:
         """One line: rows, channels, rate, poses, where it went."""
@@ -170,74 +174,6 @@ def exact_time(stamps: np.ndarray, cells, rows: np.ndarray | None = None) -> np.
     return out
 
 
-def adc_range(bits: int, signed: bool) -> tuple[int, int]:
-    return (-(2 ** (bits - 1)), 2 ** (bits - 1) - 1) if signed else (0, 2 ** bits - 1)
-
-
-def nominal_triad(name: str, rate: float, gravity: float, raw: np.ndarray, bits: int, signed: bool,
-                  scale: Scale | None, notes: list[str], rec: Recording | None = None) -> Device:
-    """A triad at the origin along x, y, z: counts per m/s^2 from the LSB when stated, else from
-    the readings: the median |reading vector| over the still stretches of ``rec``
-    (:func:`rest_scale`: |f| = g at rest, whatever the orientation), and where there is none
-    half the spread of each axis between its 1st and 99th percentiles, over g (as load_xsens;
-    that assumes every axis turned through +-1 g: a wrist watch whose z never points up read
-    74 counts per m/s^2 for 105.8).  A note says which."""
-    k = scale.counts_per_mps2(gravity) if scale is not None else None
-    zero = np.full(3, 0.0 if signed else 2.0 ** (bits - 1))
-    lo, hi = adc_range(bits, signed)
-
-    def triad(k: float) -> Device:
-        return Device(name=name, sample_rate_hz=round(rate, 6), gravity_mps2=gravity, raw_min=lo, raw_max=hi,
-                      positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, k),
-                      zero_counts=zero, noise_mps2=0.0)
-
-    if k is None:
-        spread_lo, spread_hi = np.percentile(raw, [1.0, 99.0], axis=0)
-        k = round(float(np.mean((spread_hi - spread_lo) / 2.0)) / gravity, 1)
-        at_rest = rest_scale(rec, triad(k), zero, gravity) if rec is not None and k > 0 else None
-        if at_rest is not None:
-            k = at_rest[0]
-            notes.append(f"the device's nominal scale, {k:g} counts per m/s^2, is the median |reading| of "
-                         f"{at_rest[1]} still stretch{'es' if at_rest[1] > 1 else ''} over g (|f| = g at rest; "
-                         "state --full-scale G for the chip's)")
-        elif k > 0:
-            notes.append(f"the device's nominal scale, {k:g} counts per m/s^2, is taken from the readings' "
-                         "spread, 1st to 99th percentile, as if every axis turned through +-1 g (no still stretch "
-                         "found; state --full-scale G for the chip's)")
-        else:
-            k = 2.0 ** (bits - 1) / (2.0 * gravity)
-            notes.append(f"the readings span no range: the device's nominal scale is a guess ({k:g} counts per "
-                         "m/s^2, +-2 g); state --full-scale G")
-    return triad(k)
-
-
-def rest_scale(rec: Recording, device: Device, zero: np.ndarray, gravity: float) -> tuple[float, int] | None:
-    """Counts per m/s^2 from the recording's still stretches (:func:`static.detect_static`,
-    the noise estimated from the readings): the median over them of |mean reading - zero|
-    over ``gravity`` (|f| = g at rest, the three channels together), of those that agree
-    within REST_F_AGREE where three or more do (:func:`static.scale_agreement`: a stretch in
-    free fall is no rest), to 4 significant digits; and how many stretches gave it.  None
-    where there is no still stretch (or they read no force)."""
-    intervals = detect_static(rec, device)
-    norms = np.array([np.linalg.norm(rec.raw[a:b].mean(axis=0) - zero) for a, b in intervals])
-    if norms.size == 0 or not np.any(norms > 0):
-        return None
-    agreed = scale_agreement(norms)
-    if agreed is not None:
-        norms = norms[agreed[1]]
-    return float(f"{float(np.median(norms)) / gravity:.4g}"), int(norms.size)
-
-
-def check_range(raw: np.ndarray, bits: int, signed: bool, source: str, locate) -> None:
-    lo, hi = adc_range(bits, signed)
-    out = np.argwhere((raw < lo) | (raw > hi))
-    if out.size:
-        i, j = (int(v) for v in out[0])
-        row, column = locate(i, j)
-        raise InputError(source, f"reading {int(raw[i, j])} counts is outside {'signed' if signed else 'unsigned'} "
-                         f"{bits}-bit [{lo}, {hi}] (state --bits N)", row=row, column=column)
-
-
 def in_sample_order(index: np.ndarray, source: str, column: str | None, line) -> np.ndarray | None:
     """The permutation putting the rows in order of their sample numbers (None when they are)."""
     if np.all(np.diff(index) > 0):
@@ -315,6 +251,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
             metadata["pose_names"] = " ".join(f"{k}={nm}" for k, nm in enumerate(names))
         rec = Recording(t=t, raw=raw, f=f, pose=pose, metadata=metadata, extra=extra_columns, source=source)
         device_notes: list[str] = []
+        noise = None
         k, first = held_runs(raw)
         distinct_hz = None
         if k > 1 and rate:
@@ -326,13 +263,14 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
             # rows that hold each reading for k rows: the device states the sensor's rate, that of the distinct
             # readings (calibrate, diagnose take it as such: held.distinct_recordings), unless --rate states one
             own = distinct_hz if distinct_hz is not None and opts.rate_hz is None else None
-            device = nominal_triad(f"{fmt}-triad", own or rate, gravity, raw, opts.bits, signed, scale, device_notes,
-                                   rec)
+            device, noise = nominal_triad(f"{fmt}-triad", own or rate, gravity, raw, opts.bits, signed, scale,
+                                          device_notes, rec)
             if own is not None:
                 device_notes.append(f"the device's rate is {device.sample_rate_hz:.6g} Hz, the distinct readings'; "
                                     f"the recording keeps every row (at {rate:.6g} Hz)")
         notes += gravity_removed_note(raw, scale, rate, lambda i: locate(i, 0)[0], pose)
-        clipped = clip_note(raw, device, window_len(device, STATIC_WINDOW_S, raw.shape[0]), lambda j: locate(0, j)[1])
+        clipped = clip_note(raw, device, window_len(device, STATIC_WINDOW_S, raw.shape[0]), lambda j: locate(0, j)[1],
+                            noise)
         notes += [clipped] if clipped else []
         return Converted(rec, device, fmt, names, notes, scale, order is not None, device_notes)
 
@@ -461,16 +399,13 @@ def gravity_removed_note(raw: np.ndarray, scale: Scale | None, rate_hz: float, l
     if f_g >= GRAVITY_REMOVED_G:
         return []
     return [f"the readings' stillest {(b - a) / rate_hz:.2g} s (rows {line(a)}-{line(b - 1)}) read |f| = {f_g:.3g} g, "
-            f"where anything at rest reads 1 g: gravity looks removed (a phone's linear or user acceleration, such "
-            "as Sensor Logger's Accelerometer.csv); calibrate, diagnose and displacement need the accelerometer's "
-            "own readings, gravity in (Sensor Logger's TotalAcceleration.csv or AccelerometerUncalibrated.csv, "
-            "phyphox's 'Acceleration with g')"]
+            f"where anything at rest reads 1 g: {GRAVITY_REMOVED_TEXT}"]
 
 
 def held_note(k: int, first: np.ndarray, n: int, distinct_hz: float | None) -> str:
     """The note on readings held for ``k`` rows (:func:`held.held_runs`'s k and ``first`` over
     ``n`` rows; ``distinct_hz``: the distinct readings' rate, Hz, when known)."""
-    share = (n - first.size) / (n - 1) if n > 1 else 0.0      # rows that repeat the row before
+    share = held_share(first, n)
     at = f" at about {distinct_hz:.4g} Hz" if distinct_hz is not None else ""
     return (f"{100 * share:.0f} % of the rows repeat the row before in all three readings (each reading held for "
             f"{held_text(k, first, n)}): the logger read the sensor faster than it updates; the {first.size} distinct "

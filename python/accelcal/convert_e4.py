@@ -12,7 +12,8 @@ from .convert_common import Converted, Options, finish, whole_counts
 from .convert_log import read_log
 from .convert_rows import LOST_SAMPLES, lost_rows
 from .errors import InputError, notes_on_refusal
-from .units import Scale, file_scale, to_counts
+from .units import Scale, file_scale
+from .units_counts import to_counts
 
 __all__ = ["E4_LSB_G", "E4_BITS", "e4_preamble", "is_e4", "convert_e4"]
 

@@ -20,7 +20,8 @@ import scipy.io
 from .convert_common import Converted, Options, finish, whole_counts
 from .convert_rows import LOST_SAMPLES, lost_rows
 from .errors import InputError, notes_on_refusal
-from .units import file_scale, to_counts
+from .units import file_scale
+from .units_counts import to_counts
 
 __all__ = ["MAT_MAGIC", "is_mat", "mat_arrays", "pick_array", "convert_mat"]
 

@@ -11,14 +11,15 @@ import numpy as np
 from .convert_axes import AxisColumn, find_named, mirrored_note, names_unit, px4_export, stated_axes, table_axes
 from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
                              is_gyro, whole_counts)
-from .convert_regions import table_labels
+from .convert_regions import MEANS_HINT, MEANS_RATE_HZ, MEANS_TIME, means_note, rows_are_poses, table_labels
 from .convert_time import TIME_COLUMN_RE, datetime_stamps, epoch_like, is_datetime, is_time_name, unit_in_name
 from .csvtable import convert_columns, got_text, slow_float
 from .errors import InputError, notes_on_refusal
 from .convert_rows import lost_rows, trailer_note, trailer_start
 from .recording_checks import repeated_rows
 from .textinput import preamble_notes
-from .units import UNIT_TEXT, Scale, file_scale, in_file_unit, to_counts
+from .units import UNIT_TEXT, Scale, file_scale, in_file_unit
+from .units_counts import to_counts
 
 __all__ = ["stated_time_column", "choose_time_column", "slipped_runs", "slipped_stamps", "shift_slipped", "convert_named"]
 #: rows whose first non-empty time cell tells a numeric time column from a clock time or a date
@@ -33,12 +34,12 @@ RATE_COMMENT_RE = re.compile(r"(?:data[ _]?rate|sampl(?:e|ing)[ _]?(?:rate|frequ
                              r"([0-9]+(?:\.[0-9]*)?)\s*hz\b", re.I)
 
 
-def table_scale(source: str, pre, option: Scale | None, unit: str | None, units_stated: bool,
-                axes: list[AxisColumn], notes: list[str]) -> Scale | None:
+def table_scale(source: str, pre, option: Scale | None, unit: str | None, axes: list[AxisColumn],
+                notes: list[str]) -> Scale | None:
     """The Scale of a table's readings: the unit its axis names state weighed against the
     options and the ``# units:``/``# lsb:`` comments by :func:`units.file_scale` (the names'
     unit taken as the file's ``units``); ``--full-scale`` without ``--units``
-    (``units_stated`` False) is read in the names' unit.  ``--units`` stated with another unit
+    (``option.unit_stated`` False) is read in the names' unit.  ``--units`` stated with another unit
     than the names' overrides them, with a note appended to ``notes`` (a logger's header that
     says ``aX (g)`` over readings it printed in m/s^2).
 
@@ -50,7 +51,7 @@ def table_scale(source: str, pre, option: Scale | None, unit: str | None, units_
     """
     meta, lines = dict(pre.metadata), dict(pre.metadata_lines)
     cols = ", ".join(c.name for c in axes)
-    if unit is not None and units_stated and option is not None and option.units != unit:
+    if unit is not None and option is not None and option.unit_stated and option.units != unit:
         notes.append(f"--units {option.units} overrides the unit the header's columns state, {UNIT_TEXT[unit]} "
                      f"({cols})")
         unit = None
@@ -371,25 +372,24 @@ def unrepeated(rows: np.ndarray, stamps: np.ndarray, readings: np.ndarray, notes
     return rows[np.concatenate([[True], ~(same | again)])]
 
 
-def convert_named(source: str, data: bytes, pre, opts: Options, units_stated: bool) -> Converted:
+def convert_named(source: str, data: bytes, pre, opts: Options) -> Converted:
     """A table with named columns: the three accelerometer axes (:func:`table_axes`), their
     unit (:func:`table_scale`), an optional time column (else ``--rate``); rows without
     readings skipped (:func:`present_rows`).  A refusal carries the notes made before it
     (:func:`errors.notes_on_refusal`)."""
     notes: list[str] = []
     with notes_on_refusal(lambda: preamble_notes(pre) + notes):
-        return named_table(source, data, pre, opts, units_stated, notes)
+        return named_table(source, data, pre, opts, notes)
 
 
-def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool, notes: list[str]) -> Converted:
+def named_table(source: str, data: bytes, pre, opts: Options, notes: list[str]) -> Converted:
     """:func:`convert_named`, appending its notes to ``notes`` as it goes."""
     names = [c.strip() for c in header_cells(pre.header)]
     axes = stated_axes(source, names, opts.columns, pre.header_line) if opts.columns is not None else \
         table_axes(source, names, pre.header_line, notes)
     notes += mirrored_note(axes) if opts.columns is not None else []
     acc = [c.name for c in axes]
-    scale = table_scale(source, pre, opts.scale, names_unit(source, axes, pre.header_line), units_stated,
-                        axes, notes)
+    scale = table_scale(source, pre, opts.scale, names_unit(source, axes, pre.header_line), axes, notes)
     if opts.time_column is not None:
         time_column = stated_time_column(source, names, acc, opts.time_column, pre.header_line)
     want = {a: "ref" for a in acc}
@@ -404,7 +404,17 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
     if opts.time_column is None:
         time_column = choose_time_column(source, names, acc, table, rows, opts.rate_hz is not None, pre.header_line,
                                          notes)
-    if time_column is None and opts.rate_hz is None:
+    labelled, means = None, False
+    if time_column is None and opts.rate_hz is None and comment_rate(pre.metadata) is None:
+        # (no time: the rows' labels are read here; a row a pose of its own needs none)
+        free = [c for c in names if c and c not in want and not is_gyro(c)]
+        labelled = table_labels(source, names, free, table, rows.tolist(), opts.regions is not None, opts.stated_f,
+                                notes)
+        means = rows_are_poses(labelled[1], None if labelled[2] is None else labelled[2][0])
+    if means:
+        opts.rate_hz = MEANS_RATE_HZ
+        notes.append(means_note(labelled[0], rows.size))
+    elif time_column is None and opts.rate_hz is None:
         stated = comment_rate(pre.metadata)
         if stated is None:
             named = [n for n in names if n and n not in acc and is_time_name(n) and not is_gyro(n)]
@@ -412,7 +422,7 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
                 "stamps: --time-column NAME (and --time-unit) reads it" if named else ""
             raise InputError(source, "the table has no time column (t, time, timestamp, 'Time (s)', time_ms, "
                              "unix_timestamp, ...): give the sample rate with --rate HZ (or name its column with "
-                             f"--time-column NAME){hint}", row=pre.header_line)
+                             f"--time-column NAME; {MEANS_HINT}){hint}", row=pre.header_line)
         opts.rate_hz, key = stated
         notes.append(f"no time column: the rate is the {opts.rate_hz:g} Hz the file's comment '# {key}' states "
                      "(--rate HZ states another)")
@@ -459,10 +469,12 @@ def named_table(source: str, data: bytes, pre, opts: Options, units_stated: bool
     used = set(want)
     dropped = [c for c in names if c and c not in used and is_gyro(c)]
     free = [c for c in names if c and c not in used and c not in dropped]
-    label_column, part, kept, hint = table_labels(source, names, free, table, rows.tolist(), opts.regions is not None,
-                                                  opts.stated_f, notes)
+    label_column, part, kept, hint = labelled or table_labels(source, names, free, table, rows.tolist(),
+                                                              opts.regions is not None, opts.stated_f, notes)
     ignored = [c for c in free if c != label_column]
     meta = {"table.columns": ", ".join(acc + ([time_column] if time_column else []))}
+    if means:
+        meta["table.time"] = MEANS_TIME
     return finish(source, "table", raw, np.arange(rows.size), t, part, opts, scale, converts or bool(np.any(raw < 0)),
                   opts.rate_hz, meta,
                   preamble_notes(pre) + drop_note(dropped, ignored) + notes +

@@ -13,7 +13,8 @@ from .errors import InputError
 from .jsonfields import JsonFields, read_json
 
 __all__ = ["POSE_DIRECTIONS", "POSE_COLUMN", "is_motion", "label_poses", "read_regions", "axis_label",
-           "pose_column", "text_column", "table_labels"]
+           "pose_column", "text_column", "table_labels", "rows_are_poses", "MEANS_RATE_HZ", "MEANS_TIME", "MEANS_HINT",
+           "means_note"]
 
 POSE_DIRECTIONS = {"x_p": (1, 0, 0), "x_a": (-1, 0, 0), "y_p": (0, 1, 0), "y_a": (0, -1, 0),
                    "z_p": (0, 0, 1), "z_a": (0, 0, -1)}
@@ -168,6 +169,34 @@ def table_labels(source: str, names: list[str], free: list[str], table, rows: li
                          "column", column=column)
     hint = text_column(names, free, table.strings, rows) if column is None and stated_f else None
     return column, part, None if labels is None else (labels, None), hint
+
+
+def rows_are_poses(part: list[str] | None, labels: np.ndarray | None) -> bool:
+    """Whether a table's labels (:func:`table_labels`: names per row, or integer labels) make every
+    row a pose of its own: each labelled (a name that is no motion's, or a label >= 0) and no two
+    alike -- a file of pose means (``+X UP ... -Z UP`` and three means), whose rows carry no time."""
+    if part is not None:
+        got = [p.strip() for p in part]
+        return bool(got) and all(g and not is_motion(g) for g in got) and len(set(got)) == len(got)
+    return labels is not None and labels.size > 0 and bool(np.all(labels >= 0)) and \
+        np.unique(labels).size == labels.size
+
+
+#: the rate, Hz, t is written at for a file of pose means without a time column (:func:`rows_are_poses`):
+#: t counts its rows
+MEANS_RATE_HZ = 1.0
+#: what a refusal for want of a rate says of such a file
+MEANS_HINT = "a file of pose means, one row a pose, needs none: label each row in a 'pose' column"
+#: the metadata ``table.time`` of such a file
+MEANS_TIME = f"none: pose means, one row a pose; t is the row's number ({MEANS_RATE_HZ:g} Hz)"
+
+
+def means_note(column: str | None, n: int) -> str:
+    """The note on a file of pose means converted without a time column or ``--rate``: its ``n``
+    rows, labelled by ``column``, carry no time, and t counts them."""
+    return (f"no time column, and each row is a pose of its own (column {column}: {n} poses, one row each): pose "
+            f"means, which carry no time; t counts the rows (0, 1, 2, ... s: a placeholder {MEANS_RATE_HZ:g} Hz; "
+            "--rate HZ states a rate where the rows are samples)")
 
 
 def is_motion(name: str) -> bool:

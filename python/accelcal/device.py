@@ -105,6 +105,12 @@ NOMINAL_FACTOR = 1.25
 #: a still stretch whose |f| is below this share of g has no gravity in it: a phone's linear or user
 #: acceleration (at rest |f| = 1 g; a gain error within NOMINAL_FACTOR or a tilt never takes half of it)
 GRAVITY_REMOVED_G = 0.5
+#: what readings below GRAVITY_REMOVED_G at rest are, and what to record instead: the one wording of the
+#: convert note, the no-rest refusal's clause and displacement's, after each one's evidence ("|f| = 0.02 g ...: ")
+GRAVITY_REMOVED_TEXT = ("gravity looks removed (a phone's linear or user acceleration, such as Sensor Logger's "
+                        "Accelerometer.csv); calibrate, diagnose and displacement need the accelerometer's own readings, "
+                        "gravity in (Sensor Logger's TotalAcceleration.csv or AccelerometerUncalibrated.csv, phyphox's "
+                        "'Acceleration with g')")
 
 
 @dataclass(frozen=True, eq=False)

@@ -6,14 +6,17 @@ one complete line: the command line prints exactly that, with no traceback.
 
 from __future__ import annotations
 
+import difflib
 import os
 import tempfile
 from contextlib import contextmanager
-from typing import IO, Any, Callable, Iterator
+from typing import IO, Any, Callable, Iterable, Iterator
 
 __all__ = [
     "AccelcalError",
     "InputError",
+    "OptionError",
+    "unknown_option",
     "CoreError",
     "NullError",
     "SizeError",
@@ -100,6 +103,25 @@ class InputError(AccelcalError):
 
 def _rebuild_input_error(source, detail, row, field, column):
     return InputError(source, detail, row=row, field=field, column=column)
+
+
+class OptionError(AccelcalError, TypeError):
+    """An unknown keyword option to a public API function (``ac.calibrate(dev, rec,
+    jig_acuracy_deg=1)``).  A ``TypeError``, as Python raises for any unexpected keyword
+    argument (``except TypeError`` catches it), and an :class:`AccelcalError` whose one line
+    names the public function, the option and the closest valid one (:func:`unknown_option`),
+    where Python's own names the internal function the option was forwarded to
+    (``attitude_from_recording()``) and suggests nothing."""
+
+
+def unknown_option(function: str, name: str, valid: Iterable[str], options: Iterable[str]) -> OptionError:
+    """The :class:`OptionError` of option ``name`` given to the public ``function``: the closest
+    of ``valid`` (every keyword it takes) where one is close (:func:`difflib.get_close_matches`),
+    then the list of its ``options``."""
+    close = difflib.get_close_matches(name, list(valid), n=1)
+    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    return OptionError(_one_line(f"accelcal.{function}(): unknown option {name!r}{hint}; its options: "
+                                 f"{', '.join(options) or 'none'}"))
 
 
 class CoreError(AccelcalError):

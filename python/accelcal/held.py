@@ -24,7 +24,7 @@ from .recording import Recording
 from .recording_checks import RATE_TOL, rate_for
 
 __all__ = ["HELD_MODAL_SHARE", "HELD_MAX", "HELD_MIN_RUNS", "HELD_SINGLE_SHARE", "HELD_MIN_RUNS_UNEVEN",
-           "HELD_CHANGED_SHARE", "held_runs", "held_factor", "held_text", "readings_rate", "distinct_rows",
+           "HELD_CHANGED_SHARE", "held_runs", "held_factor", "held_share", "held_text", "readings_rate", "distinct_rows",
            "distinct_recordings"]
 
 HELD_MODAL_SHARE = 0.8     # rows are held when at least this share of the runs of identical rows
@@ -81,6 +81,13 @@ def uneven(k: int, inner: np.ndarray) -> bool:
     """Whether held runs (``inner``: :func:`inner_runs`) are of uneven lengths: fewer than
     HELD_MODAL_SHARE of them ``k`` rows long."""
     return bool(inner.size) and float(np.mean(inner == k)) < HELD_MODAL_SHARE
+
+
+def held_share(first: np.ndarray, n: int) -> float:
+    """The share of the rows that repeat the row before in every reading (:func:`held_runs`'s
+    ``first`` over ``n`` rows: each run's rows after its first), of the ``n - 1`` that could; 0
+    for one row."""
+    return (n - first.size) / (n - 1) if n > 1 else 0.0
 
 
 def held_text(k: int, first: np.ndarray, n: int) -> str:

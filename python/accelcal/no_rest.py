@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import welch
 
-from .device import GRAVITY_REMOVED_G
+from .device import GRAVITY_REMOVED_G, GRAVITY_REMOVED_TEXT
 
 __all__ = ["REST_NOISE_MAX", "noise_share", "median_force", "no_rest_clause", "gravity_removed_clause", "tonal",
            "TONE_SHARE", "TONE_MIN_BINS"]
@@ -84,8 +84,7 @@ def gravity_removed_clause(raw: np.ndarray, device) -> str:
     if not 0 < ref < GRAVITY_REMOVED_G * g:
         return ""
     return (f"; the readings' median |f| is {ref / g:.2g} g with the device file's scale, where a sensor at rest reads "
-            "1 g: gravity looks removed (a phone's linear or user acceleration, such as Sensor Logger's "
-            "Accelerometer.csv; its TotalAcceleration.csv or AccelerometerUncalibrated.csv holds gravity)")
+            f"1 g: {GRAVITY_REMOVED_TEXT}")
 
 
 def no_rest_clause(raw: np.ndarray, device, sig: np.ndarray) -> str:

@@ -1,4 +1,4 @@
-"""How readings in physical units sit on an LSB's grid (:func:`accelcal.units.to_counts`): a
+"""How readings in physical units sit on an LSB's grid (:func:`accelcal.units_counts.to_counts`): a
 column shifted off the grid by a constant fraction of an LSB, and the digits a value was
 printed with."""
 from __future__ import annotations

@@ -62,6 +62,53 @@ def test_public_names_are_documented():
             assert obj.__doc__, name
 
 
+@pytest.mark.parametrize("call, function, wrong, right", [
+    (lambda d, dev, rec, cal: ac.calibrate(dev, rec, jig_acuracy_deg=1), "calibrate", "jig_acuracy_deg",
+     "jig_accuracy_deg"),
+    (lambda d, dev, rec, cal: ac.diagnose(dev, cal, rec, fold=3), "diagnose", "fold", "folds"),
+    (lambda d, dev, rec, cal: ac.resolve(dev, cal, rec, engin="fixed"), "resolve", "engin", "engine"),
+    (lambda d, dev, rec, cal: ac.convert(d / "absent.csv", rate=100), "convert", "rate", "rate_hz"),
+    (lambda d, dev, rec, cal: ac.read_recording(d / "poses.csv", unit="g"), "read_recording", "unit", "units"),
+    (lambda d, dev, rec, cal: ac.header(dev, cal, prefx="X"), "header", "prefx", "prefix"),
+    (lambda d, dev, rec, cal: ac.simulate(dev, "static_poses", efects=["x"]), "simulate", "efects", "effects"),
+    (lambda d, dev, rec, cal: ac.simulate(dev, "static_poses", pose="24"), "simulate", "pose", "poses"),
+    (lambda d, dev, rec, cal: ac.attitude(dev, cal, rec, gian=2.0), "attitude", "gian", "gain"),
+    (lambda d, dev, rec, cal: ac.displacement(dev, cal, rec, axs="x"), "displacement", "axs", "axis"),
+    (lambda d, dev, rec, cal: ac.rate(dev, cal, rec, leak_tau=1.0), "rate", "leak_tau", "leak_tau_s"),
+])
+def test_a_misspelt_option_names_the_public_function_and_the_closest(setup, call, function, wrong, right):
+    """A misspelt keyword option: Python's TypeError had named the internal function it was
+    forwarded to (``attitude_from_recording() got an unexpected keyword argument``) and suggested
+    nothing.  Now an OptionError -- a TypeError, as Python's convention has it, and an
+    AccelcalError, one line, as every accelcal error -- naming ``accelcal.<function>()``, the
+    option and the closest valid one, raised before any work (convert's file is absent)."""
+    d, dev, rec = setup
+    cal = ac.calibrate(dev, rec)
+    with pytest.raises(TypeError) as e:
+        call(d, dev, rec, cal)
+    msg = str(e.value)
+    assert isinstance(e.value, AccelcalError) and "\n" not in msg, msg
+    assert msg.startswith(f"accelcal.{function}(): unknown option {wrong!r} (did you mean {right!r}?)"), msg
+
+
+def test_public_dataclasses_document_every_field():
+    """Each public dataclass's numpydoc Attributes section names every field (with its unit there)."""
+    import dataclasses
+    import inspect
+    import re
+    for name in ac.__all__:
+        obj = getattr(ac, name)
+        if not (inspect.isclass(obj) and dataclasses.is_dataclass(obj)):
+            continue
+        doc = inspect.getdoc(obj) or ""
+        assert "Attributes\n----------\n" in doc, f"{name}: no Attributes section"
+        section = doc.split("Attributes\n----------\n", 1)[1]
+        named = {w.strip() for line in section.splitlines() if line and not line.startswith(" ")
+                 for w in re.split(r",", line.split(" : ")[0])}
+        missing = [f.name for f in dataclasses.fields(obj) if f.name not in named]
+        assert not missing, f"{name}: fields not in its Attributes section: {missing}"
+
+
 def test_docstring_examples_run():
     api = importlib.import_module("accelcal.api")
     result = doctest.testmod(api, optionflags=doctest.ELLIPSIS)

@@ -187,3 +187,64 @@ def test_klipper_mm_per_s2_are_read_with_their_unit(tmp_path, capfd):
     (tmp_path / "m").mkdir()
     _, _, err, _ = convert_ok(tmp_path / "m", capfd, src, "--units", "mps2", "--lsb", "19.142581")
     assert "--units mmps2" in err, err
+
+
+@pytest.mark.parametrize("header, label", [("Position,ax,ay,az", "axes"), ("Position,accX,accY,accZ", "axes"),
+                                           ("pose,acc_x,acc_y,acc_z", "numbers")])
+def test_pose_means_convert_without_a_rate_and_calibrate(tmp_path, capfd, header, label):
+    """A file of pose means (one row a pose, labelled, three means, no time column) had been
+    refused without --rate ('no time column: give the sample rate'), although its means carry no
+    time and calibrate needs none from them: it takes each labelled pose's mean.  Now t counts
+    the rows (0, 1, 2, ... at a placeholder 1 Hz, which a note and the table.time metadata say),
+    the device's scale is the median |mean| over g (it had been the readings' percentile spread),
+    and calibrate takes the six poses -- with --stated-f, the known-pose 'full' calibration, the
+    same as with --rate 1.  Rows that are samples (no labels, or a label over several rows) still
+    need the rate, and the refusal says what a pose-means file needs instead."""
+    from accelcal.calibration import load_calibration
+    from accelcal.cli import main
+    from accelcal.device import load_device
+    m = _means()
+    labels = [n for n, _ in SIX] if label == "axes" else [str(k) for k in range(6)]
+    src = write_lines(tmp_path / "means.csv", [header] + [f"{n}," + r for n, r in zip(labels, _rows(m))])
+    units = ["--units", "mps2", "--lsb", "0.000001", "--bits", "32"] + (["--stated-f"] if label == "axes" else [])
+    rec, dev, err, said = convert_ok(tmp_path, capfd, src, *units)
+    np.testing.assert_array_equal(rec.raw, np.round(m / 1e-6).astype(np.int64))
+    np.testing.assert_array_equal(rec.t, np.arange(6.0))
+    np.testing.assert_array_equal(rec.pose, np.arange(6))
+    assert dev["sample_rate_hz"] == 1.0 and "t is the row's number" in rec.metadata["table.time"]
+    assert "pose means, which carry no time; t counts the rows" in err, err
+    assert "6 poses" in said, said
+    out = tmp_path / "o.csv"
+    assert main(["calibrate", "--device", str(tmp_path / "d.json"), str(out), "-o", str(tmp_path / "c.json")]) == 0
+    cal = load_calibration(tmp_path / "c.json", load_device(tmp_path / "d.json"))
+    assert cal.method == ("full" if label == "axes" else "jigfree")
+    if label == "axes":          # the LSB is stated: the device's scale is the LSB's, and f is known
+        rated = tmp_path / "rated"
+        rated.mkdir()
+        assert main(["convert", str(src), *units, "--rate", "1", "-o", str(rated / "o.csv"), "--device-out",
+                     str(rated / "d.json")]) == 0
+        assert main(["calibrate", "--device", str(rated / "d.json"), str(rated / "o.csv"), "-o",
+                     str(rated / "c.json")]) == 0
+        other = load_calibration(rated / "c.json", load_device(rated / "d.json"))
+        np.testing.assert_allclose(cal.sensitivity, other.sensitivity, rtol=1e-12)
+        np.testing.assert_allclose(cal.offsets, other.offsets, rtol=1e-12, atol=1e-9)
+    # rows that are samples: two rows a pose, or no labels at all, still need a rate
+    twice = write_lines(tmp_path / "twice.csv", [header] + [f"{n}," + r for n, r in zip(labels * 2, _rows(m) * 2)])
+    err = convert_refused(tmp_path, capfd, twice, *units, name="twice")
+    assert "--rate HZ" in err and "label each row in a 'pose' column" in err, err
+    bare = write_lines(tmp_path / "bare.csv", [header.split(",", 1)[1]] + _rows(m))
+    err = convert_refused(tmp_path, capfd, bare, "--units", "mps2", "--lsb", "0.000001", "--bits", "32", name="bare")
+    assert "--rate HZ" in err and "label each row in a 'pose' column" in err, err
+
+
+def test_pose_means_give_the_device_their_scale(tmp_path, capfd):
+    """Pose means in counts without a stated LSB: the nominal scale is the median |mean| over g
+    (each row is at rest), 1670 counts per m/s^2 for means of 16,380 counts; the readings'
+    1st-99th percentile spread of six rows had given 1587."""
+    c = np.round(np.array([u for _, u in SIX]) * 16380 + [[40, -25, 60]]).astype(int)
+    src = write_lines(tmp_path / "m.csv", ["Position,ax,ay,az"] + [f"{n},{a},{b},{d}" for (n, _), (a, b, d)
+                                                                     in zip(SIX, c)])
+    _, dev, err, _ = convert_ok(tmp_path, capfd, src, "--rate", "1")
+    k = dev["channels"][0]["counts_per_mps2"]
+    assert k == pytest.approx(float(f"{np.median(np.linalg.norm(c, axis=1)) / G:.4g}")), err
+    assert "median |reading| of the 6 pose means over g" in err, err
