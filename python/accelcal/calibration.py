@@ -59,7 +59,8 @@ class Calibration:
     :func:`accelcal.resolve`, either engine).  ``positions`` None means every
     channel is at its nominal position; a NaN row means that channel's position
     was not estimated (nominal).  Optional per-channel arrays use NaN the same
-    way; a sigma that is None (or NaN) is unknown or not fitted.
+    way; a sigma that is None (or NaN) is unknown or not fitted (a 3-vector sigma may be NaN in
+    some components: those the method held instead of fitting, null in the JSON).
 
     Attributes
     ----------
@@ -186,6 +187,9 @@ def _row_or_none(arr: np.ndarray | None, i: int, name: str) -> list | float | No
     if not fin.any():
         return None
     if not fin.all():
+        if name in _NONNEGATIVE:
+            # a sigma a method leaves out for some components (held, not fitted): null there
+            return [float(x) if f else None for x, f in zip(row, fin)]
         raise ValueError(f"Calibration.{name}: channel {i} is partly NaN (give all 3 values or none)")
     return float(row[0]) if arr.ndim == 1 else [float(x) for x in row]
 
@@ -273,7 +277,13 @@ def calibration_from_dict(d: Any, source: str = "<dict>", device: Device | None 
                 continue
             fp = f"{p}.{key}"
             if width == 3:
-                value = v.vector(ch[key], fp)
+                raw = ch[key]
+                # a sigma may be null for components the method held instead of fitting (not all three)
+                held = (attr in _NONNEGATIVE and isinstance(raw, list) and None in raw
+                        and any(x is not None for x in raw))
+                value = v.vector([0.0 if x is None else x for x in raw] if held else raw, fp)
+                if held:
+                    value[[x is None for x in raw]] = np.nan
             else:
                 value = np.array([v.number(ch[key], fp)])
             if key == "position_m":

@@ -246,6 +246,9 @@ def calibration_summary(cal, n_recordings: int, output) -> str:
                      + ", ".join(f"{v:+.3g}" for v in moves) + " counts).")
         else:
             text += " as exact)."
+    if "sensitivity_direction" in held:
+        text += (" Sensitivity directions held along the device file's nominal axes (not fitted: no sigma for the "
+                 "components held at 0).")
     if fit.get("jig_accuracy_deg"):
         text += f" Jig accuracy stated: {fit['jig_accuracy_deg']:g} deg."
     if cal.positions is not None:

@@ -17,6 +17,7 @@ from accelcal import model
 from accelcal.calibrate import (PoseSet, calibrate_jigfree, calibrate_known_poses, calibrate_recordings,
                                 detect_static, estimate_noise, fit_known_poses, fit_static, fit_temperature,
                                 gauge_rotation, pose_means, poses_from_recording, static_force)
+from accelcal.calibrate.checks import gain_sigma
 from accelcal.calibration import load_calibration
 from accelcal.device import default_device, default_triad, save_device
 from accelcal.errors import InputError
@@ -635,7 +636,7 @@ def test_too_few_orientations_are_counted_as_such_and_a_tilted_pose_is_asked_for
     # the truth within 4 of the fit's own 1-sigma (offsets in counts, gains along the axes)
     assert np.all(np.abs(cal.offsets - b) < 4 * cal.offset_sigma), (cal.offsets - b, cal.offset_sigma)
     gain = np.sum(cal.sensitivity * d.axes, axis=1)
-    g_sig = np.sum(cal.sensitivity_sigma * d.axes, axis=1)
+    g_sig = gain_sigma(cal.sensitivity, cal.sensitivity_sigma) * np.linalg.norm(cal.sensitivity, axis=1)
     assert np.all(np.abs(gain - np.linalg.norm(S, axis=1)) < 4 * g_sig), (gain - np.linalg.norm(S, axis=1), g_sig)
 
 
@@ -902,3 +903,12 @@ def test_parameters_a_method_holds_at_nominal_are_reported_as_not_fitted(tmp_pat
     js = json.loads((tmp_path / "g.json").read_text())
     assert rc == 0 and js["fit"]["not_fitted"] == {"sensitivity_direction": [0, 1, 2]}, (err, js["fit"])
     assert "offset_counts_per_percent_gain" not in js["fit"] and "Sensitivities held" not in said
+    # the components across each axis are held at 0: null sigma (they had been 0, read as exact); the
+    # component along the axis keeps its sigma
+    for i, ch in enumerate(js["channels"]):
+        assert [s is None for s in ch["sensitivity_sigma"]] == [c != i for c in range(3)], ch
+        assert ch["sensitivity_sigma"][i] > 0
+    assert "Sensitivity directions held along the device file's nominal axes (not fitted" in said, said
+    gcal = load_calibration(tmp_path / "g.json")
+    assert np.array_equal(np.isnan(gcal.sensitivity_sigma), ~np.eye(3, dtype=bool))
+    assert np.all(np.isfinite(gain_sigma(gcal.sensitivity, gcal.sensitivity_sigma)))

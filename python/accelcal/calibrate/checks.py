@@ -228,7 +228,9 @@ def gain_sigma(sensitivity, sensitivity_sigma) -> np.ndarray:
     component along s_i dominates)."""
     s = np.asarray(sensitivity, float)
     n = np.linalg.norm(s, axis=1)
-    return np.sqrt(np.sum((np.asarray(sensitivity_sigma, float) * s / n[:, None]) ** 2, axis=1)) / n
+    # a component held at 0 (no sigma: NaN) adds nothing to |s_i|
+    part = np.where(s != 0.0, np.asarray(sensitivity_sigma, float) * s / n[:, None], 0.0)
+    return np.sqrt(np.sum(part ** 2, axis=1)) / n
 
 
 def poorly_determined(device, F, offset_sigma=None, gain_sig=None, n_samples=None,

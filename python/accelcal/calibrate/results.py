@@ -158,6 +158,9 @@ def to_calibration(device, fit: StaticFit, method: str, positions: PositionFit |
         extra["fit"].update(held)
         if fit.method == "offset":
             sens_sigma = np.full_like(sens_sigma, np.nan)      # not fitted: no sigma (null), not 0 (exact)
+        elif fit.method == "gain":
+            # the components across the nominal axis are held at 0, not fitted: null, not 0 (exact)
+            sens_sigma = np.where(np.asarray(device.axes, float) == 0.0, np.nan, sens_sigma)
     if fit.poses.set_aside:
         extra["set_aside"] = [set_aside_entry(d) for d in fit.poses.set_aside]
     if not fit.jigfree:
@@ -226,7 +229,7 @@ def not_fitted(device, fit: StaticFit) -> dict:
     balanced about the axis, as +-x, +-y, +-z; k_i g for one pose along it), given for e = 1 %
     in ``offset_counts_per_percent_gain`` (known poses; jig-free the pose
     forces absorb part of it).  ``gain``: the sensitivity's direction stays along the nominal
-    axis (its sigma across the axis, 0, is no measurement).
+    axis (the components it holds at 0 get a null sigma, not 0, which would read as exact).
 
     Parameters
     ----------
@@ -241,7 +244,8 @@ def not_fitted(device, fit: StaticFit) -> dict:
     if fit.method == "gain":
         return {"not_fitted": {"sensitivity_direction": list(range(N))},
                 "not_fitted_note": "the 'gain' model keeps each sensitivity along the device file's nominal axis: "
-                                   "its direction is not fitted (its sigma across the axis, 0, is no measurement)"}
+                                   "its direction is not fitted (the components the axis holds at 0 have no "
+                                   "sigma: null)"}
     if fit.method != "offset":
         return {}
     out: dict = {"not_fitted": {"sensitivity": list(range(N))},

@@ -10,7 +10,9 @@ The method and the JSON format are documented in docs/diagnosis-json.md.  Module
 the data tell the verdict from its rivals), ``relinearise`` (the joint fit about the
 corrected calibration), ``leftover`` (what is left: ``unexplained``), ``settling`` (a
 ringing after the stops), ``where`` (the breakdown), ``text`` (JSON entries and prose),
-``result`` (the stepwise search and the verdict).  Each effect's own fit lives with the effect (:mod:`accelcal.effects`).
+``stepping`` (one step of the search: rivals the data cannot tell apart, the calibration's
+terms against a verdict that mimics them, the next step's point), ``result`` (the stepwise
+search and the verdict).  Each effect's own fit lives with the effect (:mod:`accelcal.effects`).
 """
 from ..report import write_report
 from .result import DiagnosisResult, diagnose

@@ -1,70 +1,120 @@
 """Which of an effect's parameters the data determine at all.
 
 Jig-free the pose angles absorb the directions of channel space across each pose's force, and
-what is left may fix only combinations of the per-channel parameters (a board held in one
-orientation sees |f| alone: the gains of the axes that never see gravity are not measured).
-The fit then reports the smallest change that fits (min-norm), and its covariance is that of
-the combinations fixed, so a 1-sigma read off it for a parameter the data do not see is no
-measurement (a real x-IMU's x and y gains had been -2.705 +- 0.017 %, the same figure as z's).
-A parameter is *not determined* when less than half of its own direction (squared norm, in the
-parameters scaled as the fit scales them) lies in the space the fit keeps (eigenvalues of the
-scaled normal matrix above SEEN_MIN of the largest, as :func:`accelcal.effects.fitting.linear_fit`
-keeps them); its sigma is then reported as null and the parameter named in ``not_determined``.
-For the one-parameter-a-channel linear effects (``offset``, ``gain``).
+what is left may fix only combinations of the parameters (a board held in one orientation sees
+|f| alone: the gains of the axes that never see gravity are not measured; six face poses see no
+misalignment at all, and any set of poses no common rotation of the axes).  With a reference a
+column the poses never excite fixes nothing either (on poses along the axes alone a cube is a
+gain, and the fit carries no cube there; a channel's tilt toward an axis no pose's force has a
+component along).  The fit then reports the smallest change that fits (min-norm), and its
+covariance is that of the combinations fixed, so a 1-sigma read off it for a parameter the data
+do not see is no measurement (a real x-IMU's x and y gains had been -2.705 +- 0.017 %, the same
+figure as z's; a cube held at 0 +- 0).
+
+One rule for every parameter of every linear effect (``LinearCandidate.param_columns``: the
+columns its fit solved for and the map from their coefficients to each reported value): a value
+is *not determined* when less than DETERMINED_SHARE of its own direction (squared norm, in the
+parameters scaled as the fit scales them) lies in the space the data see
+(:func:`accelcal.effects.fitting.seen_space`: kept by the fit's cut and, jig-free, keeping at
+least SEEN_MIN of its change through the poses' projection).  Its sigma is then reported as null
+and the value named in ``not_determined``.
 """
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
+from ..effects.base import as_float_array
 from ..effects.fitdata import FitData
-from ..effects.fitting import LinearCandidate, jig_rows, kept_space
-from ..effects.settings import SEEN_MIN
+from ..effects.fitting import LinearCandidate, seen_space
 from .text import describe
 
-__all__ = ["DETERMINED_SHARE", "JUDGED", "not_determined", "mark_not_determined"]
+__all__ = ["DETERMINED_SHARE", "not_determined", "mark_not_determined"]
 
-DETERMINED_SHARE = 0.5     # share of a parameter's direction (squared) the kept space must hold
-JUDGED = ("offset", "gain")  # one column a channel (LinearCandidate.columns)
+#: share of a value's direction (squared) the seen space must hold.  Not a half: jig-free the poses
+#: absorb a common rotation of the axes, which takes about half of each single tilt (0.38-0.63 of
+#: them on 24 general poses): a half would name some of a set of equally undetermined tilts and not
+#: the others.  At 0.9 at most a tenth of a determined value's direction is one the data do not see
+DETERMINED_SHARE = 0.9
 
 
-def not_determined(D: FitData, effect) -> dict | None:
-    """{param name: [channels]} of ``effect``'s parameters the data do not determine, or None
-    (reference data, where each channel's parameter is fitted on its own, or an effect of
-    another form)."""
-    if D.Qp is None or not isinstance(effect, LinearCandidate) or effect.name not in JUDGED:
+def not_determined(D: FitData, effect, params: dict) -> dict | None:
+    """{param name: [channels]} (or [[channel, component]] for a parameter with several values a
+    channel, as ``rot``) of the values of ``effect``'s fit ``params`` the data do not determine,
+    or None (none, or an effect whose fit is no linear least squares).  A value the effect's form
+    fixes (a tilt's part along the axis itself: a map of zeros) is no parameter and not judged."""
+    if not isinstance(effect, LinearCandidate):
         return None
-    X = effect.columns(D)
-    if X.ndim != 3 or X.shape[2] != 1:
+    got = effect.param_columns(D, params)
+    if got is None:
         return None
-    Xr = jig_rows(D, X)                                        # (n, R, N)
-    Xw = Xr * np.sqrt(D.W)[:, :, None]
-    G = np.einsum("trp,trq->pq", Xw, Xw)
-    _, V, keep, _ = kept_space(G, np.sqrt(np.einsum("tnk,tnk->n", X, X)), SEEN_MIN)
-    share = np.sum(V[:, keep] ** 2, axis=1)
-    out = np.flatnonzero(share < DETERMINED_SHARE)
-    return {effect.pname: [int(i) for i in out]} if out.size else None
+    X, maps = got
+    k = X.shape[2]
+    V, seen, d = seen_space(D, X)
+    per_channel = D.Qp is None
+    out = {}
+    for pname, A in maps.items():
+        A3 = A[:, :, None] if A.ndim == 2 else A                      # (N, k, m)
+        bad = []
+        for i in range(D.N):
+            g, lo = (i, 0) if per_channel else (0, i * k)
+            Vs = V[g][:, seen[g]]
+            for c in range(A3.shape[2]):
+                w = np.zeros(V.shape[1])
+                w[lo:lo + k] = A3[i, :, c] / d[g, lo:lo + k]         # the value as a functional of the scaled fit
+                ww = float(w @ w)
+                if ww == 0.0:
+                    continue
+                if float(np.sum((Vs.T @ w) ** 2)) < DETERMINED_SHARE * ww:
+                    bad.append(i if A.ndim == 2 else [i, c])
+        if bad:
+            out[pname] = bad
+    return out or None
+
+
+def _null(sig: list, where: list) -> list:
+    """``sig`` (a JSON list, one value or one list of values a channel) with the sigmas at
+    ``where`` (channels, or [channel, component]) set to None."""
+    s = [list(v) if isinstance(v, list) else v for v in sig]
+    for w in where:
+        if isinstance(w, list):
+            s[w[0]][w[1]] = None
+        else:
+            s[w] = None
+    return s
 
 
 def mark_not_determined(D: FitData, cands, entry: dict, model_sigma: dict | None = None) -> None:
     """Null the 1-sigma of the parameters of a result entry (and of the model's, ``model_sigma``:
     {effect: {param: sigma}}) that the data do not determine, name them in
     ``entry["not_determined"]`` and say so in its summary."""
-    nd = not_determined(D, cands[entry["name"]])
+    nd = not_determined(D, cands[entry["name"]], entry["params"])
     if nd is None:
         return
     entry["not_determined"] = nd
-    for pname, chans in nd.items():
-        for sig in [entry["params_sigma"]] + ([model_sigma[entry["name"]]] if model_sigma
-                                              and entry["name"] in model_sigma else []):
-            s = list(sig[pname])
-            for i in chans:
-                s[i] = None
-            sig[pname] = s
-    chans = sorted({i for v in nd.values() for i in v})
-    nan = {k: np.array([np.nan if x is None else x for x in v], float) for k, v in entry["params_sigma"].items()
-           if k in nd}
+    sigmas = [entry["params_sigma"]] + ([model_sigma[entry["name"]]] if model_sigma and entry["name"] in model_sigma
+                                        else [])
+    for sig in sigmas:
+        for pname, where in nd.items():
+            sig[pname] = _null(sig[pname], where)
     with np.errstate(invalid="ignore"):
-        said = describe(entry["name"], {k: np.asarray(v, float) for k, v in entry["params"].items() if k in nd},
-                        nan, D)
-    entry["summary"] = said.replace(" +- nan", "") + (f"; not determined by these data on channel(s) {', '.join(map(str, chans))} (the poses "
-                         "fix only combinations there: the figure is the smallest change that fits, no sigma)")
+        said = describe(entry["name"], _floats(entry["params"]), _floats(entry["params_sigma"]), D)
+    which = "; ".join(f"{p} on channel(s) {', '.join(map(str, _once(where)))}" for p, where in nd.items())
+    entry["summary"] = (re.sub(r" ?\(\+- nan\)| \+- nan", "", said) + f"; not determined by these data: {which} "
+                        "(the poses fix at most combinations there: the figure is no measurement, no sigma)")
+
+
+def _floats(p: dict) -> dict:
+    """A JSON parameter dict with its lists as float arrays (null as NaN) for the prose."""
+    return {k: as_float_array(v) if isinstance(v, list) else v for k, v in p.items()}
+
+
+def _once(where: list) -> list:
+    """The channels of ``where`` (channels or [channel, component]), each once, in order."""
+    seen = []
+    for w in where:
+        c = w[0] if isinstance(w, list) else w
+        if c not in seen:
+            seen.append(c)
+    return seen

@@ -213,6 +213,11 @@ class Misalignment(LinearCandidate, Effect):
         d = np.einsum("tnc,nc->tn", fa, S1 - D.s)
         return d * D.gain_t if D.gain_t is not None else d, S1
 
+    def param_columns(self, D, params):
+        # rot_i = E_i^T theta_i: the two tilts across s_i (its part along s_i is no parameter)
+        X, E = self._cols(D, force_at(D), D.s)
+        return X, {"rot": E}
+
     def cv(self, D, y, pcur, S0w, S0u, folds=True):
         fa = force_at(D)
         X, E = self._cols(D, fa, D.s)

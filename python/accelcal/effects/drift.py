@@ -128,6 +128,15 @@ class BiasDrift(LinearCandidate, Effect):
         s.update(path=np.zeros((D.N, 0)))
         return p, s
 
+    def param_columns(self, D, params):
+        knots = np.asarray(params.get("path_t", ()), float).ravel()
+        if knots.size < 2:
+            return super().param_columns(D, params)
+        K = knots.size - 1
+        A = np.zeros((D.N, K, K + 1))
+        A[:, np.arange(K), np.arange(1, K + 1)] = 1.0           # the path at the first knot is 0
+        return self._path_columns(D, float(knots[0]), float(knots[1] - knots[0]), K), {"path": A}
+
     def _spacings(self, D) -> list[tuple[float, int]]:
         span = float(np.max(D.t)) - float(np.min(D.rec_t0))
         return [(span * frac, int(round(1.0 / frac))) for frac in DRIFT_KNOT_FRACTIONS

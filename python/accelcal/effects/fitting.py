@@ -133,6 +133,41 @@ def jig_rows(D: FitData, X: np.ndarray) -> np.ndarray:
     return np.einsum("tmi,tij->tmij", Q, X).reshape(n, Q.shape[1], N * k)
 
 
+def fit_cut(D: FitData, X: np.ndarray) -> tuple[np.ndarray | None, float]:
+    """The Jacobi scale (1, N k) -- or None, sqrt(diag G) -- and the cut ``rtol`` with which
+    :func:`linear_fit` solves for the per-channel columns X (n, N, k): with a reference each
+    channel alone, rank cut 1e-10; jig-free all channels at once, the parameters weighed by their
+    unprojected columns' norms (the smallest change of the readings themselves), cut SEEN_MIN."""
+    if D.Qp is None:
+        return None, 1e-10
+    return np.sqrt(np.einsum("tnk,tnk->nk", X, X)).reshape(1, -1), SEEN_MIN
+
+
+def seen_space(D: FitData, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The directions of the per-channel columns X (n, N, k) that the data see, as
+    :func:`linear_fit` scales them: (V (g, P, P) eigenvectors of the scaled normal matrix,
+    seen (g, P) bool, d (g, P) the scale), per channel (g = N, P = k) with a reference, one
+    group (g = 1, P = N k) jig-free.  Seen: kept by the fit's cut (:func:`kept_space`) and,
+    jig-free, keeping at least SEEN_MIN of its change of the readings through the poses'
+    projection (energy; the cut is relative to the best-seen direction, and on six face poses
+    jig-free every misalignment keeps < 6e-4 of its change, yet the fit kept a 95 deg tilt)."""
+    scale, rtol = fit_cut(D, X)
+    n, N, k = X.shape
+    if D.Qp is None:
+        # per channel: its constant weight changes neither the scaled matrix nor its kept space
+        G = np.einsum("tnk,tnl->nkl", X, X)
+        lam, V, keep, d = kept_space(G, np.sqrt(np.maximum(np.einsum("nkk->nk", G), 0.0)), rtol)
+        return V, keep, d
+    Xr = jig_rows(D, X)
+    Xw = Xr * np.sqrt(D.W)[:, :, None]
+    lam, V, keep, d = kept_space(np.einsum("trp,trq->pq", Xw, Xw)[None], scale, rtol)
+    Z = V[0] / d[0][:, None]                                   # the eigen-combinations, unscaled
+    kept = np.einsum("trp,pj->trj", Xr, Z)
+    whole = np.einsum("tnk,nkj->tnj", X, Z.reshape(N, k, -1))
+    share = np.einsum("trj,trj->j", kept, kept) / np.maximum(np.einsum("tnj,tnj->j", whole, whole), 1e-300)
+    return V, keep & (share >= SEEN_MIN)[None], d
+
+
 def linear_fit(D: FitData, X: np.ndarray, y: np.ndarray, S0w, S0u):
     """CV of the per-channel linear columns X (n,N,k) on the target y (n,N).
     Returns Sw, Su, theta (N,k), cov (N,k,k), n_params, delta (n,N)."""
@@ -152,8 +187,8 @@ def linear_fit(D: FitData, X: np.ndarray, y: np.ndarray, S0w, S0u):
         # (a combination of which the projection leaves less than SEEN_MIN of the readings' change
         # is not fixed either: a board held in one orientation had put -1.6 m/s^2 of offset on y
         # and +5857 % of gain on x, on directions that kept 1e-6..6e-5 of their change)
-        scale = np.sqrt(np.einsum("tnk,tnk->nk", X, X)).reshape(1, N * k)
-        Sw, Su, th, Ginv, rank, Sall = lin_cv(D, Gw, hw, Gu, hu, S0w, S0u, scale, rtol=SEEN_MIN)
+        scale, rtol = fit_cut(D, X)
+        Sw, Su, th, Ginv, rank, Sall = lin_cv(D, Gw, hw, Gu, hu, S0w, S0u, scale, rtol=rtol)
         theta = th[0].reshape(N, k)
         full = Ginv[0]
         cov = np.stack([full[i * k:(i + 1) * k, i * k:(i + 1) * k] for i in range(N)])
@@ -191,6 +226,15 @@ class LinearCandidate(Candidate):
     def to_params(self, D: FitData, theta: np.ndarray, cov: np.ndarray) -> tuple[dict, dict]:
         sd = np.sqrt(np.maximum(np.einsum("nkk->nk", cov), 0.0))
         return {self.pname: theta[:, 0]}, {self.pname: sd[:, 0]}
+
+    def param_columns(self, D: FitData, params: dict) -> tuple[np.ndarray, dict] | None:
+        """The per-channel columns X (n, N, k) the fit that gave ``params`` solved for, and for
+        each fitted parameter the map A from a channel's coefficients theta_i (k,) to its values:
+        A (N, k) for one value a channel (value_i = A_i . theta_i), (N, k, m) for m values
+        (value_ic = A_i[:, c] . theta_i); None where the effect's fit is of another form.
+        Default: one column a channel, the parameter ``pname`` (plus a constant)."""
+        X = self.columns(D)
+        return (X, {self.pname: np.ones((D.N, 1))}) if X.ndim == 3 and X.shape[2] == 1 else None
 
     def cv(self, D, y, pcur, S0w, S0u, folds=True):
         X = self.columns(D)

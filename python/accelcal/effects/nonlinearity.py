@@ -116,6 +116,10 @@ class Nonlinearity(LinearCandidate, Effect):
         sd = np.sqrt(np.maximum(np.einsum("nkk->nk", cov), 0.0))
         return {"k2": theta[:, 0], "k3": theta[:, 1]}, {"k2": sd[:, 0], "k3": sd[:, 1]}
 
+    def param_columns(self, D, params):
+        # the cube's column is zero on a channel whose input does not tell it from a gain
+        return self.columns(D), {"k2": np.tile([1.0, 0.0], (D.N, 1)), "k3": np.tile([0.0, 1.0], (D.N, 1))}
+
     # -- the benchmark --------------------------------------------------------
 
     bench_size = 0.01
