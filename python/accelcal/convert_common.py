@@ -137,7 +137,7 @@ def read_columns(source: str, data: bytes, pre, want: dict[str, str]) -> tuple[l
     if err is not None:
         i, j, msg = err
         if want[names[j]] == "raw" and names[j] not in INDEX_COLUMNS and NUMBER_RE.fullmatch(table.cell(i, j).strip()):
-            msg += " (readings in m/s^2, mm/s^2 or g: state --units mps2|mmps2|g with --lsb VALUE or --full-scale G)"
+            msg += " (readings in m/s^2, mm/s^2, g or mg: state --units mps2|mmps2|g|mg with --lsb VALUE or --full-scale G)"
         raise InputError(source, msg, row=table.line(i), column=names[j])
     return names, values, table
 
@@ -373,7 +373,8 @@ def stillest_force(raw: np.ndarray, rate_hz: float, pose: np.ndarray | None = No
 MISREAD_UNITS = (("readings in mm/s^2 read as m/s^2", "mps2", 1000.0),
                  ("readings in m/s^2 read as g", "g", STANDARD_GRAVITY),
                  ("readings in mm/s^2 read as g", "g", 1000.0 * STANDARD_GRAVITY),
-                 ("readings in mg read as g", "g", 1000.0))
+                 ("readings in mg read as g", "g", 1000.0),
+                 ("readings in g read as mg", "mg", 0.001))
 
 
 def gravity_removed_note(raw: np.ndarray, scale: Scale | None, rate_hz: float, line,
@@ -395,7 +396,7 @@ def gravity_removed_note(raw: np.ndarray, scale: Scale | None, rate_hz: float, l
     if misread:
         return [f"the readings' stillest {(b - a) / rate_hz:.2g} s (rows {line(a)}-{line(b - 1)}) read |f| = "
                 f"{f_g:.4g} g, where anything at rest reads 1 g: {misread[0]}? (Klipper's ACCELEROMETER_MEASURE "
-                "writes mm/s^2: --units mmps2); state the readings' own unit with --units and --lsb"]
+                "writes mm/s^2: --units mmps2; readings in mg: --units mg); state the readings' own unit with --units and --lsb"]
     if f_g >= GRAVITY_REMOVED_G:
         return []
     return [f"the readings' stillest {(b - a) / rate_hz:.2g} s (rows {line(a)}-{line(b - 1)}) read |f| = {f_g:.3g} g, "

@@ -26,13 +26,13 @@ __all__ = ["UNITS", "REL_TOL", "Scale", "scale_from_options", "scale_from_metada
            "METADATA_KEYS", "STANDARD_GRAVITY", "OPTION_NAMES",
            "converted_metadata", "file_scale", "in_file_unit", "unstated_lsb", "COUNTS_STATED", "parse_bits", "split_lsb", "LSB_SUFFIXES"]
 
-UNITS = ("counts", "mps2", "mmps2", "g")
+UNITS = ("counts", "mps2", "mmps2", "g", "mg")
 REL_TOL = 1e-6
 """How far value / lsb may be from an integer n: ``REL_TOL * max(|n|, 1)``.  A float
 written by ``n * lsb`` and read back is within ~1e-15 of n; a wrong LSB is off by far more."""
 STANDARD_GRAVITY = 9.80665
 METADATA_KEYS = ("units", "lsb", "full_scale_g", "bits", "gravity_mps2")
-UNIT_TEXT = {"counts": "counts", "mps2": "m/s^2", "mmps2": "mm/s^2", "g": "g"}
+UNIT_TEXT = {"counts": "counts", "mps2": "m/s^2", "mmps2": "mm/s^2", "g": "g", "mg": "mg"}
 OPTION_NAMES = {"units": "--units", "lsb": "--lsb", "full_scale_g": "--full-scale", "bits": "--bits",
                 "gravity_mps2": "--gravity"}
 METADATA_NAMES = {k: f"'# {k}:'" for k in METADATA_KEYS}
@@ -226,7 +226,7 @@ def in_file_unit(option: Scale | None, unit: str | None, source: str) -> Scale |
     """
     if option is None or option.unit_stated:
         return option
-    if unit in ("mps2", "mmps2", "g"):
+    if unit in ("mps2", "mmps2", "g", "mg"):
         per = g_per(unit, option.gravity_mps2)
         if option.lsb:                      # a bare --lsb: in the file's unit
             lsb, lsb_g = option.lsb, option.lsb * per

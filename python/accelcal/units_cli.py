@@ -17,7 +17,7 @@ from .units import COUNTS_STATED, UNITS, Scale, scale_from_options
 __all__ = ["add_units_options", "scale_from_args", "device_bits"]
 
 UNITS_HELP = ("the unit of the recording's readings: counts (default), mps2 (m/s^2), mmps2 (mm/s^2: Klipper's "
-              "ACCELEROMETER_MEASURE files) or g; all but counts need "
+              "ACCELEROMETER_MEASURE files), g or mg; all but counts need "
               "--lsb or --full-scale, and every reading must then be a whole number of LSBs (within 1e-6, "
               "or within the rounding of the digits it is printed with, up to a quarter of a count), "
               "else the first that is not is named by row and column.  The file's '# units:'/'# lsb:' "

@@ -280,7 +280,7 @@ def test_help_shows_the_options(cmd, capsys):
         main([cmd, "--help"])
     text = capsys.readouterr().out
     assert "readings in physical units" in text
-    for opt in ("--units {counts,mps2,mmps2,g}", "--lsb VALUE", "--full-scale G", "--bits N", "--gravity MPS2"):
+    for opt in ("--units {counts,mps2,mmps2,g,mg}", "--lsb VALUE", "--full-scale G", "--bits N", "--gravity MPS2"):
         assert opt in text, f"{cmd} --help: no {opt}"
     assert "must agree" in " ".join(text.split())
 

@@ -189,6 +189,26 @@ def test_klipper_mm_per_s2_are_read_with_their_unit(tmp_path, capfd):
     assert "--units mmps2" in err, err
 
 
+def test_a_logger_in_mg_is_read_with_its_unit(tmp_path, capfd):
+    """An LSM303 at +-16 g logged as mg floats (11.72 mg a count, millis() stamps: HPMR-24-25/Vanguard-RTOS's
+    SensorAnalysis files). 'mg' was no choice of --units, and the way round it, --units g --lsb 11.72,
+    wrote a device 1000 x off (0.0087 counts per m/s^2). `--units mg --lsb 11.72` reads the counts
+    exactly, sized 1 / (11.72e-3 g) per m/s^2; readings in g stated as mg are named so."""
+    rng = np.random.default_rng(0)
+    counts = np.round(np.array([-10.0, 6.3, 81.5]) + rng.normal(0, [1.1, 1.4, 1.0], (600, 3))).astype(int)
+    rows = [",".join(f"{np.float32(v * 11.72):.6f}" for v in r) + f",{431218 + 4 * k}" for k, r in enumerate(counts)]
+    src = write_lines(tmp_path / "lsm303.csv", ["accelX,accelY,accelZ,timestamp"] + rows)
+    rec, dev, err, _ = convert_ok(tmp_path, capfd, src, "--units", "mg", "--lsb", "11.72")
+    np.testing.assert_array_equal(rec.raw, counts)
+    assert dev["channels"][0]["counts_per_mps2"] == pytest.approx(1 / (11.72e-3 * G), rel=1e-9)
+    assert "where anything at rest reads 1 g" not in err, err
+    in_g = write_lines(tmp_path / "g.csv", ["accelX,accelY,accelZ,timestamp"] + [
+        ",".join(f"{v * 11.72e-3:.5f}" for v in r) + f",{431218 + 4 * k}" for k, r in enumerate(counts)])
+    (tmp_path / "g").mkdir()
+    _, _, err, _ = convert_ok(tmp_path / "g", capfd, in_g, "--units", "mg", "--lsb", "0.01172")
+    assert "readings in g read as mg" in err, err
+
+
 @pytest.mark.parametrize("header, label", [("Position,ax,ay,az", "axes"), ("Position,accX,accY,accZ", "axes"),
                                            ("pose,acc_x,acc_y,acc_z", "numbers")])
 def test_pose_means_convert_without_a_rate_and_calibrate(tmp_path, capfd, header, label):
