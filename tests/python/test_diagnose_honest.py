@@ -421,3 +421,13 @@ def test_one_orientation_names_the_simplest_term_and_its_equals(seed):
     assert res["verdict"] in ("offset", "gain"), (res["verdict"], res["effects"][0]["summary"])
     other = "gain" if res["verdict"] == "offset" else "offset"
     assert other in res["ambiguous_with"], res["ambiguous_with"]
+
+
+def test_a_clip_on_one_side_is_described_without_infinities():
+    """A channel clipped on one side only was described as '-inf..36512' (a tester's clipped Xsens)."""
+    class Fit:
+        N = 3
+    text = EFFECTS["saturation"].describe({"lo": [-np.inf, -np.inf, 29024.0], "hi": [36512.0, 36512.0, np.inf]},
+                                          {}, Fit)
+    assert "inf" not in text
+    assert "ch 0: 36512 (above)" in text and "ch 2: 29024 (below)" in text

@@ -177,8 +177,13 @@ class Saturation(Candidate, Effect):
 
     def describe(self, p: dict, s: dict, D: FitData) -> str:
         """One line in physical units for the report (p: parameters, s: their 1-sigma)."""
-        parts = [f"ch {i}: " + "..".join(f"{x:g}" for x in (p["lo"][i], p["hi"][i]))
-                 for i in range(D.N) if np.isfinite(p["lo"][i]) or np.isfinite(p["hi"][i])]
+        def level(i):
+            lo, hi = float(p["lo"][i]), float(p["hi"][i])
+            if math.isfinite(lo) and math.isfinite(hi):
+                return f"{lo:g} and {hi:g}"
+            return f"{hi:g} (above)" if math.isfinite(hi) else f"{lo:g} (below)"
+
+        parts = [f"ch {i}: {level(i)}" for i in range(D.N) if np.isfinite(p["lo"][i]) or np.isfinite(p["hi"][i])]
         return "readings clip at " + ("; ".join(parts) if parts else "(no limit found)")
 
 
