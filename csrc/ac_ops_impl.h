@@ -8,7 +8,8 @@
 #ifndef AC_OPS_IMPL_H
 #define AC_OPS_IMPL_H
 
-/* Combine two statuses: the first error wins, otherwise any saturation. */
+/* Combine two statuses: the first error wins, otherwise the warnings of both
+ * (the bits AC_SATURATED and AC_AT_RAIL). */
 AC_HELPER ac_status ac_merge(ac_status a, ac_status b)
 {
     if (a < 0) {
@@ -17,7 +18,7 @@ AC_HELPER ac_status ac_merge(ac_status a, ac_status b)
     if (b < 0) {
         return b;
     }
-    return (a == AC_SATURATED || b == AC_SATURATED) ? AC_SATURATED : AC_OK;
+    return (ac_status)((unsigned)a | (unsigned)b);
 }
 
 AC_HELPER int32_t ac_i_from_u(uint32_t u)

@@ -124,7 +124,7 @@ ac_status ac_process(const ac_resolver *r, const uint16_t *trim, const uint16_t 
     if (st != AC_OK) {
         return st;
     }
-    st_trim = ac_trim(raw, trim, r->n, x);
+    st_trim = ac_trim_rails(raw, trim, r->n, r->raw_min, r->raw_max, x);
     if (st_trim < 0) {
         return st_trim;
     }

@@ -38,7 +38,8 @@ ac_status ac_process_batch(const ac_resolver *r, const uint16_t *trim, const uin
                            uint32_t count, const int16_t *omega, int32_t *out, uint8_t *flags)
 {
     int16_t x[AC_MAX_CHANNELS];
-    ac_status st, any = AC_OK;
+    ac_status st;
+    unsigned any = 0u;
     uint32_t k;
     if (raw == 0 || trim == 0 || out == 0) {
         return AC_ERR_NULL;
@@ -49,17 +50,18 @@ ac_status ac_process_batch(const ac_resolver *r, const uint16_t *trim, const uin
     }
     for (k = 0u; k < count; k++) {
         uint8_t f = 0u;
-        ac_status s1 = ac_trim(raw, trim, r->n, x);
+        ac_status s1 = ac_trim_rails(raw, trim, r->n, r->raw_min, r->raw_max, x);
         ac_status s2 = ac_resolve_kernel(r, x, omega, out);
-        if (s1 == AC_SATURATED) {
+        if (((unsigned)s1 & (unsigned)AC_SATURATED) != 0u) {
             f |= AC_FLAG_TRIM_SAT;
+        }
+        if (((unsigned)s1 & (unsigned)AC_AT_RAIL) != 0u) {
+            f |= AC_FLAG_AT_RAIL;
         }
         if (s2 == AC_SATURATED) {
             f |= AC_FLAG_OUT_SAT;
         }
-        if (f != 0u) {
-            any = AC_SATURATED;
-        }
+        any |= (unsigned)s1 | (unsigned)s2;
         if (flags != 0) {
             flags[k] = f;
         }
@@ -69,5 +71,5 @@ ac_status ac_process_batch(const ac_resolver *r, const uint16_t *trim, const uin
             omega += 3;
         }
     }
-    return any;
+    return (ac_status)any;
 }

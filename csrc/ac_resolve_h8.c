@@ -25,14 +25,22 @@
  * borrow equals the sign; the clips out of line) goes straight into the x
  * registers of pass 1, and the kernel's frame is the only one.  n > 6: the
  * pre-trim into a stack buffer and a call of ac_resolve_kernel.
- * Status: AC_SATURATED if the pre-trim or the kernel clipped, as the C.
+ * The rails (ac_trim_rails): each raw reading is compared with raw_min (e1) and
+ * raw_max (e6) as it is loaded, two CMP.W and two Bcc, 12 states a channel; a
+ * reading at a rail branches out of line, where raw_min >= raw_max (rails
+ * unknown) flags nothing.
+ * Status: AC_SATURATED if the pre-trim or the kernel clipped, AC_AT_RAIL if a
+ * reading sits at a rail, both bits for both, as the C.  n = 6 keeps the rail
+ * bit in the flag word's high byte (the kernel writes 1 into its low byte),
+ * and the exit ORs the two bytes.
  *
  * ac_resolve_kernel (r0 = r, r1 = x, r2 = omega, out @(4,sp)): the C calling
  * convention of h8300-hms-gcc -mh -mn; status (AC_OK / AC_SATURATED) in r0;
  * er4-er6 saved, er0-er3 clobbered.  Needs a table that passed
  * ac_resolver_shape (6 <= n <= AC_MAX_CHANNELS, shifts in -31..31).
  * Frame (both entries, n = 6 in ac_process): er4-er6 (12 bytes), then 8 bytes
- * of locals: @(0) the saturation flag (a word, 0 or 1: the status), @(2)
+ * of locals: @(0) the flags (a word: the low byte the saturation flag, 0 or 1;
+ * the high byte 2 for a reading at a rail, n = 6 only; their OR is the status), @(2)
  * omega, @(4) r, @(6) out; 2 more in the cold paths.  ac_process with omega
  * uses 28 bytes of stack with its return address (n > 6: a 2 AC_MAX_CHANNELS
  * buffer and the kernel's frame more).
@@ -88,11 +96,13 @@ AC_STATIC_ASSERT(h8_off_gs, offsetof(ac_resolver, g_shift) == 8);
 AC_STATIC_ASSERT(h8_off_k, offsetof(ac_resolver, k) == 16);
 AC_STATIC_ASSERT(h8_off_m, offsetof(ac_resolver, m) == 40);
 AC_STATIC_ASSERT(h8_off_g, offsetof(ac_resolver, g) == 40 + 12 * AC_MAX_CHANNELS);
+AC_STATIC_ASSERT(h8_off_rlo, offsetof(ac_resolver, raw_min) == 40 + 12 * AC_MAX_CHANNELS + 72);
+AC_STATIC_ASSERT(h8_off_rhi, offsetof(ac_resolver, raw_max) == 40 + 12 * AC_MAX_CHANNELS + 74);
 AC_STATIC_ASSERT(h8_ptr16, sizeof(const int16_t *) == 2);
 /* the per-row shift g_shift - m_shift + 2 AC_OMEGA_FRAC - s must fit a signed byte */
 AC_STATIC_ASSERT(h8_omega_frac, AC_OMEGA_FRAC >= 0 && AC_OMEGA_FRAC <= 32);
 /* the status codes the assembly returns (the saturation flag word is the status) */
-AC_STATIC_ASSERT(h8_st_ok, AC_OK == 0 && AC_SATURATED == 1);
+AC_STATIC_ASSERT(h8_st_ok, AC_OK == 0 && AC_SATURATED == 1 && AC_AT_RAIL == 2);
 AC_STATIC_ASSERT(h8_st_err, AC_ERR_NULL == -1 && AC_ERR_SIZE == -2 && AC_ERR_FORMAT == -6);
 
 __asm__(
@@ -102,6 +112,8 @@ __asm__(
     "\t.equ\tMAXCH, " AC_H8_XSTR(AC_MAX_CHANNELS) "\n"
     "\t.equ\tMSTRIDE, 2*MAXCH\n"
     "\t.equ\tOFF_G, OFF_M+6*MSTRIDE\n"
+    "\t.equ\tOFF_RLO, OFF_G+72\n"
+    "\t.equ\tOFF_RHI, OFF_G+74\n"
     "\t.equ\tW2F, 2*" AC_H8_XSTR(AC_OMEGA_FRAC) "\n"
     "\t.equ\tSATB, 1\n"
     "\t.equ\tOMEGA, 2\n"
@@ -160,7 +172,11 @@ __asm__(
     "\tadd.b\t#0xc1,r4l\n"
     "\trotxl.w\te5\n"
     "\t.endr\n"
+    /* the rails (raw_min in e1, raw_max in e6) for both pre-trims; e0 the flags: 1 a clip, */
+    /* 0x200 a rail (the flag word's high byte, merged into the status at the exit) */
     "\tsub.w\te0,e0\n"
+    "\tmov.w\t@(OFF_RLO,er0),e1\n"
+    "\tmov.w\t@(OFF_RHI,er0),e6\n"
     "\tmov.w\te5,e5\n"
     "\tbeq\t.Lpr_trim\n"
     "\tmov.w\te5,r4\n"
@@ -176,7 +192,7 @@ __asm__(
     ".Lpt_h_\\x:\n"
     "\tmov.w\t#0x7fff,\\x\n"
     ".Lpt_s_\\x:\n"
-    "\tmov.w\t#1,e0\n"
+    "\tor.w\t#1,e0\n"
     "\tbra\t.Lpt_ok_\\x\n"
     "\t.endr\n"
     /* n = 6: the pre-trim into x0..x5 = e4 r4 e5 r5 e2 e3 (raw through r6, trim through r1) */
@@ -184,12 +200,28 @@ __asm__(
     "\tmov.w\tr2,r6\n"
     "\t.irp\tx,e4,r4,e5,r5,e2,e3\n"
     "\tmov.w\t@er6+,\\x\n"
+    "\tcmp.w\te1,\\x\n"
+    "\tbls\t.Lpt_r_\\x\n"
+    "\tcmp.w\te6,\\x\n"
+    "\tbhs\t.Lpt_r_\\x\n"
+    ".Lpt_c_\\x:\n"
     "\tmov.w\t@er1+,r2\n"
     "\tsub.w\tr2,\\x\n"
     "\tbcs\t.Lpt_b_\\x\n"
     "\tbmi\t.Lpt_h_\\x\n"
     ".Lpt_ok_\\x:\n"
     "\t.endr\n"
+    "\tbra\t.Lpt_done\n"
+    /* a reading at a rail (raw <= raw_min or >= raw_max, out of line): flagged unless the */
+    /* rails are unknown (raw_min >= raw_max) */
+    "\t.irp\tx,e4,r4,e5,r5,e2,e3\n"
+    ".Lpt_r_\\x:\n"
+    "\tcmp.w\te6,e1\n"
+    "\tbhs\t.Lpt_c_\\x\n"
+    "\tor.w\t#0x200,e0\n"
+    "\tbra\t.Lpt_c_\\x\n"
+    "\t.endr\n"
+    ".Lpt_done:\n"
     /* the locals: @(0) the saturation flag (a word, 0 or 1: the status), @(2) omega, @(4) r, @(6) out */
     "\tmov.w\tr3,@-er7\n"
     "\tmov.w\tr0,@-er7\n"
@@ -437,6 +469,8 @@ __asm__(
     "\tbcc\t.Lrk_a_row:16\n"
     ".Lrk_exit:\n"
     "\tmov.w\t@er7+,r0\n"
+    "\tor.b\tr0h,r0l\n"
+    "\textu.w\tr0\n"
     "\tadd.w\t#6,r7\n"
     "\tmov.l\t@er7+,er6\n"
     "\tmov.l\t@er7+,er5\n"
@@ -538,9 +572,13 @@ __asm__(
     "\tmov.w\t@er0,r5\n"
     "\tadd.w\t#-2*MAXCH,r7\n"
     "\tmov.w\tr7,r6\n"
-    "\tsub.w\te6,e6\n"
+    "\tsub.w\te5,e5\n"
     "1:\tmov.w\t@er2+,r4\n"
-    "\tmov.w\t@er1+,e4\n"
+    "\tcmp.w\te1,r4\n"
+    "\tbls\t7f\n"
+    "\tcmp.w\te6,r4\n"
+    "\tbhs\t7f\n"
+    "8:\tmov.w\t@er1+,e4\n"
     "\tsub.w\te4,r4\n"
     "\tbcs\t3f\n"
     "\tbmi\t4f\n"
@@ -553,8 +591,12 @@ __asm__(
     "\tmov.w\t#0x8000,r4\n"
     "\tbra\t5f\n"
     "4:\tmov.w\t#0x7fff,r4\n"
-    "5:\tmov.w\t#1,e6\n"
+    "5:\tor.w\t#1,e5\n"
     "\tbra\t2b\n"
+    "7:\tcmp.w\te6,e1\n"
+    "\tbhs\t8b\n"
+    "\tor.w\t#2,e5\n"
+    "\tbra\t8b\n"
     "6:\tmov.l\ter3,@-er7\n"
     "\tmov.w\tr7,r1\n"
     "\tadds\t#4,er1\n"
@@ -562,9 +604,7 @@ __asm__(
     "\tjsr\t@_ac_resolve_kernel\n"
     "\tadds\t#4,er7\n"
     "\tadd.w\t#2*MAXCH,r7\n"
-    "\tmov.w\te6,e6\n"
-    "\tbeq\t.Lpr_ret:16\n"
-    "\tmov.w\t#1,r0\n"
+    "\tor.w\te5,r0\n"
     "\tbra\t.Lpr_ret:16\n"
     /* ---- ac_resolve_kernel: r0 = r, r1 = x, r2 = omega, out @(4,sp) */
     "\t.global\t_ac_resolve_kernel\n"

@@ -109,6 +109,8 @@ ac_status ac_resolver_build(const ac_channel_cal *cal, uint16_t n, ac_build_work
             }
             ac_inv_clear(out->m, sizeof out->m);
             out->n = n;
+            out->raw_min = 0u; /* the rails are the converter's: unknown here (ac_resolve.h) */
+            out->raw_max = 0u;
         }
         for (i = 0u; i < n; i++) {
             const xf *u = v;

@@ -56,7 +56,7 @@ ac_status ac_triad_apply(const ac_triad *t, const uint16_t *raw, int32_t *f)
     if (t == 0 || raw == 0 || f == 0) {
         return AC_ERR_NULL;
     }
-    s = ac_trim(raw, t->trim, 3u, x);
+    s = ac_trim_rails(raw, t->trim, 3u, t->raw_min, t->raw_max, x);
     if (s < 0) {
         return s;
     }

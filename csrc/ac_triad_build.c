@@ -62,6 +62,8 @@ ac_status ac_triad_build(const ac_channel_cal *cal, const uint16_t *trim, ac_bui
         }
         shift[j] = (int8_t)s;
     }
+    out->raw_min = 0u; /* the rails are the converter's: unknown here (ac_attitude.h) */
+    out->raw_max = 0u;
     for (j = 0u; j < 3u; j++) {
         out->trim[j] = trim[j];
         out->shift[j] = shift[j];

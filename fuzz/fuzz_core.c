@@ -84,6 +84,8 @@ static int status_valid(ac_status s)
     switch (s) {
     case AC_OK:
     case AC_SATURATED:
+    case AC_AT_RAIL:
+    case AC_AT_RAIL_SATURATED:
     case AC_ERR_NULL:
     case AC_ERR_SIZE:
     case AC_ERR_SINGULAR:
@@ -302,6 +304,20 @@ static void gen_table(rd *r, ac_resolver *t, int valid)
             t->g_shift[j] = rd_i8(r);
         }
     }
+    /* the converter's rails: any pair (raw_min >= raw_max: unknown, nothing flagged) */
+    t->raw_min = rd_u16(r);
+    t->raw_max = rd_u16(r);
+}
+
+/* the rail test of ac_trim_rails, written out: some raw_i <= lo or >= hi, known rails */
+static int at_rail(const uint16_t *raw, uint16_t n, uint16_t lo, uint16_t hi)
+{
+    uint16_t i;
+    int any = 0;
+    for (i = 0; i < n; i++) {
+        any |= raw[i] <= lo || raw[i] >= hi;
+    }
+    return lo < hi && any;
 }
 
 static int table_row_ok(const ac_resolver *t)
@@ -526,7 +542,7 @@ static ac_status merge(ac_status a, ac_status b)
     if (b < 0) {
         return b;
     }
-    return (a == AC_SATURATED || b == AC_SATURATED) ? AC_SATURATED : AC_OK;
+    return (ac_status)((unsigned)a | (unsigned)b);
 }
 
 static void target_process(rd *r)
@@ -574,9 +590,13 @@ static void target_process(rd *r)
             ac_status sp = ac_process(t, trim, raw + k * n, om, o1);
             ac_status s1 = ac_trim(raw + k * n, trim, n, x);
             ac_status s2 = ac_resolve(t, x, om, o2);
+            int rail = at_rail(raw + k * n, n, t->raw_min, t->raw_max);
             uint8_t f = (uint8_t)((s1 == AC_SATURATED ? AC_FLAG_TRIM_SAT : 0u) |
-                                  (s2 == AC_SATURATED ? AC_FLAG_OUT_SAT : 0u));
+                                  (s2 == AC_SATURATED ? AC_FLAG_OUT_SAT : 0u) | (rail ? AC_FLAG_AT_RAIL : 0u));
             CHECK_STATUS(sp);
+            if (rail && s2 >= 0) {
+                s1 = merge(s1, AC_AT_RAIL);
+            }
             CHECK(sp == merge(s1, s2), "ac_process %d, trim %d + resolve %d", sp, s1, s2);
             CHECK(memcmp(o1, o2, sizeof o1) == 0, "ac_process != ac_trim + ac_resolve");
             CHECK(memcmp(o1, out + 6u * k, sizeof o1) == 0, "batch sample %u != ac_process", k);
@@ -584,9 +604,7 @@ static void target_process(rd *r)
                 CHECK(flags[k] == f, "batch flags[%u]=%u, expected %u", k, flags[k], f);
             }
             check_resolve(t, x, om, o2, s2, "ac_process");
-            if (sp == AC_SATURATED) {
-                any = AC_SATURATED;
-            }
+            any = merge(any, sp);
         }
         CHECK(st == any, "ac_process_batch %d, samples %d", st, any);
     }
@@ -2121,6 +2139,10 @@ static void target_attitude(rd *r)
             int64_t l1 = 0;
             t.trim[j] = rd_u16(r);
             raw[j] = (mode & 2u) ? rd_u16(r) : (uint16_t)(t.trim[j] + (uint16_t)rd_i16(r) / 4u);
+            if (j == 0) {
+                t.raw_min = rd_u16(r);
+                t.raw_max = rd_u16(r);
+            }
             t.shift[j] = (mode & 4u) ? rd_i8(r) : (int8_t)((int)(rd_u8(r) % 63u) - 31);
             t.k[j] = rd_i32_edge(r);
             for (i = 0; i < 3; i++) {
@@ -2144,6 +2166,8 @@ static void target_attitude(rd *r)
             CHECK(is_sentinel(f, sizeof f), "ac_triad_apply wrote on error %d", s);
             return;
         }
+        CHECK(((s & AC_AT_RAIL) != 0) == at_rail(raw, 3u, t.raw_min, t.raw_max),
+              "ac_triad_apply status %d, rails %u %u", s, t.raw_min, t.raw_max);
         if (ok) {
             int clipped = 0;
             for (j = 0; j < 3; j++) {
@@ -2159,11 +2183,11 @@ static void target_attitude(rd *r)
                 if (fits32(acc) && fits32(e)) {
                     CHECK(f[j] == (int32_t)e, "triad f[%d]=%ld, exact %.17g", j, (long)f[j], (double)e);
                 } else {
-                    CHECK(s == AC_SATURATED, "triad: clipped without AC_SATURATED");
+                    CHECK(s & AC_SATURATED, "triad: clipped without AC_SATURATED");
                 }
             }
             if (clipped) {
-                CHECK(s == AC_SATURATED, "triad: trim clipped without AC_SATURATED");
+                CHECK(s & AC_SATURATED, "triad: trim clipped without AC_SATURATED");
             }
         }
         return;

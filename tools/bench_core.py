@@ -36,7 +36,8 @@ def make_header():
         d.counts_per_mps2[:, None] * rng.normal(0, 0.0175, (6, 3))
     b = d.zero_counts + rng.uniform(-0.28, 0.28, 6) * 9.80665 * d.counts_per_mps2
     BUILD.mkdir(parents=True, exist_ok=True)
-    (BUILD / "cal.h").write_text(render_header(quantize(b, s, d.positions, d.name)))
+    # the device's rails in the table, as the generated header has them (ac_process tests them)
+    (BUILD / "cal.h").write_text(render_header(quantize(b, s, d.positions, d.name, rails=(d.raw_min, d.raw_max))))
     make_triad_header(rng)
     return d, quantize(b, s, d.positions, d.name), b, s
 
@@ -52,7 +53,8 @@ def make_triad_header(rng):
     s = d.nominal_sensitivity() * (1 + rng.uniform(-0.007, 0.036, (3, 1))) + \
         d.counts_per_mps2[:, None] * rng.normal(0, 0.0175, (3, 3))
     b = d.zero_counts + rng.uniform(-0.28, 0.28, 3) * 9.80665 * d.counts_per_mps2
-    (BUILD / "triad.h").write_text(render_triad_header(quantize_triad(b, s), device="bench triad",
+    (BUILD / "triad.h").write_text(render_triad_header(quantize_triad(b, s, rails=(d.raw_min, d.raw_max)),
+                                                       device="bench triad",
                                                        prefix="AC_TRI"))
 
 

@@ -93,19 +93,28 @@
  * estimators.quantize_triad makes it; rows obey sum_i |m[j][i]| <= 65535, shifts
  * in -31..31; check a table you did not make once with ac_triad_check: one that
  * breaks the row sums gives wrong numbers, never undefined behaviour).  Exact before
- * the final rounding: |f - exact| <= 0.5 LSB. */
+ * the final rounding: |f - exact| <= 0.5 LSB.
+ * raw_min, raw_max: the converter's rails as uint16 codes (offset binary for a signed chip,
+ * like trim); ac_triad_apply flags a reading <= raw_min or >= raw_max with the status bit
+ * AC_AT_RAIL (ac_trim_rails): the chip clipped it, f is not a measurement.  raw_min >=
+ * raw_max (0, 0: a zeroed table, one ac_triad_build made): rails unknown, nothing flagged;
+ * the generated header fills them from the device. */
 typedef struct ac_triad {
     uint16_t trim[3];
     int8_t shift[3];
     int32_t k[3];
     int16_t m[3][3];
+    uint16_t raw_min;
+    uint16_t raw_max;
 } ac_triad;
 
 ac_status ac_triad_check(const ac_triad *t);
-/* Pre-trim (t->trim) and resolve one sample: raw[3] counts -> f[3]. */
+/* Pre-trim (t->trim) and resolve one sample: raw[3] counts -> f[3].  Status: AC_SATURATED
+ * if the pre-trim or f clipped, the bit AC_AT_RAIL if a reading sits at a rail (t->raw_min,
+ * t->raw_max), AC_AT_RAIL_SATURATED for both. */
 ac_status ac_triad_apply(const ac_triad *t, const uint16_t *raw, int32_t *f);
 /* Resolve readings already pre-trimmed (x[3] = raw - trim, e.g. by ac_trim_s16 for a
- * chip with signed output) -> f[3]; t->trim is not used. */
+ * chip with signed output) -> f[3]; t->trim and the rails are not used (no reading here). */
 ac_status ac_triad_resolve(const ac_triad *t, const int16_t *x, int32_t *f);
 
 /* ---- the pendulum estimator ---------------------------------------------------- */

@@ -51,11 +51,20 @@ typedef struct ac_resolver {
     int32_t k[6];
     int16_t m[6][AC_MAX_CHANNELS];
     int16_t g[6][6];
+    /* The converter's rails, uint16 codes (offset binary raw + 32768 for a chip with
+     * signed output): ac_process flags a reading <= raw_min or >= raw_max (AC_AT_RAIL).
+     * raw_min >= raw_max (0, 0 in a zeroed table, one ac_resolver_build made, or one from
+     * a header older than the field): rails unknown, nothing flagged.  The generated
+     * header fills them from the device's raw_min / raw_max; after an on-device build,
+     * copy them in from there. */
+    uint16_t raw_min;
+    uint16_t raw_max;
 } ac_resolver;
 
 /* Per-sample flags written by ac_resolve_batch. */
 #define AC_FLAG_TRIM_SAT 0x01u    /* a channel clipped in the pre-trim */
 #define AC_FLAG_OUT_SAT 0x02u     /* an output or the centripetal term clipped */
+#define AC_FLAG_AT_RAIL 0x04u     /* a raw reading at the converter's rail (raw_min / raw_max) */
 
 /* AC_OK if the table keeps every invariant above, AC_ERR_SIZE / AC_ERR_FORMAT if not. */
 ac_status ac_resolver_check(const ac_resolver *r);
@@ -67,12 +76,18 @@ ac_status ac_resolver_check(const ac_resolver *r);
  * never undefined behaviour.  ac_process_batch runs the full check itself. */
 ac_status ac_resolve(const ac_resolver *r, const int16_t *x, const int16_t *omega, int32_t *out);
 
-/* Pre-trim and resolve one sample of raw readings (what firmware calls per sample). */
+/* Pre-trim and resolve one sample of raw readings (what firmware calls per sample).
+ * Status: AC_SATURATED as ac_resolve (or the pre-trim clipped), and the bit AC_AT_RAIL when
+ * a raw reading sits at a rail of the table (ac_trim_rails with r->raw_min, r->raw_max: the
+ * chip clipped it, so out is not a measurement); AC_AT_RAIL_SATURATED for both.  Cost of
+ * the rail test: see ac_trim_rails (H8/300H assembly: 12 states a channel, 92 a sample). */
 ac_status ac_process(const ac_resolver *r, const uint16_t *trim, const uint16_t *raw,
                      const int16_t *omega, int32_t *out);
 
 /* count samples: raw is count x n (row-major), omega count x 3 or NULL, out count x 6,
- * flags count bytes (AC_FLAG_*) or NULL.  AC_SATURATED if any sample clipped. */
+ * flags count bytes (AC_FLAG_*) or NULL.  The status bits of every sample together:
+ * AC_SATURATED if any sample clipped (AC_FLAG_TRIM_SAT, AC_FLAG_OUT_SAT), AC_AT_RAIL if
+ * any read a rail (AC_FLAG_AT_RAIL). */
 ac_status ac_process_batch(const ac_resolver *r, const uint16_t *trim, const uint16_t *raw,
                            uint32_t count, const int16_t *omega, int32_t *out, uint8_t *flags);
 

@@ -15,7 +15,7 @@ import numpy as np
 from . import __version__
 from .triad import TriadTable, quantize_triad, triad_rounding_bound
 from .native import FORMATS
-from .quantize import FixedTables, quantize_calibration, to_fixed
+from .quantize import FixedTables, quantize_calibration, resolver_rounding_bound, to_fixed
 
 
 def _c_ident(text: str) -> str:
@@ -51,10 +51,33 @@ def _opening(guard: str, *formats: tuple[str, int]) -> list[str]:
             f"#if {cond}", "#error \"calibration header made for other fixed-point formats: regenerate it\"", "#endif"]
 
 
+def resolver_bound_lines(rounding_lsb) -> list[str]:
+    """The header comment's statement of the 6-channel error bound, from
+    :func:`accelcal.quantize.resolver_rounding_bound`'s (linear (6,), centripetal (6,)); a
+    sentence without figures for None."""
+    if rounding_lsb is None:
+        return [" *   |out - M (raw - b - C p(omega))| <= 0.5 LSB + the table's rounding (ac_resolve.h:"
+                " the exact semantics)"]
+    lin, cen = (np.asarray(v, float) for v in rounding_lsb)
+    lsb = 2.0 ** -FORMATS.out_frac
+    lf, la, cf, ca = lin[:3].max() + 0.5, lin[3:].max() + 0.5, cen[:3].max(), cen[3:].max()
+    return [" * Error bound against the float reference M (raw - b - C p(omega)) with this calibration:",
+            f" *   linear part: at most {lf:.3g} LSB on f ({lf * lsb:.3g} m/s^2), {la:.3g} LSB on alpha"
+            f" ({la * lsb:.3g} rad/s^2)",
+            " *     for every reading the trim does not clip (0.5 LSB final rounding + the table's, the",
+            " *     largest at a corner of the reading box: both sides are affine in the reading);",
+            f" *   centripetal term (quadratic in omega, bounded apart): + {cf:.3g} LSB on f, {ca:.3g} LSB on",
+            " *     alpha per (rad/s)^2 of max_a omega_a^2 (its coefficients' rounding), and for any",
+            " *     |omega_a| >= 0.125 rad/s the squared rates' rounding E_j of ac_resolve.h."]
+
+
 def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method: str = "",
-                  temp_ref_c: float | None = None, offset_tc=None, gain_tc=None, warnings=()) -> str:
+                  temp_ref_c: float | None = None, offset_tc=None, gain_tc=None, warnings=(),
+                  rounding_lsb=None) -> str:
     """The header text for tables t (see quantize.quantize); ``warnings`` (the calibration's,
-    one line each) go into its opening comment."""
+    one line each) go into its opening comment; ``rounding_lsb`` (linear (6,) LSB, centripetal
+    (6,) LSB per (rad/s)^2: :func:`accelcal.quantize.resolver_rounding_bound`) the error bound
+    it states."""
     f = FORMATS
     p = _c_ident(prefix)
     guard = f"{p}_{_c_ident(t.device or 'DEVICE')}_H"
@@ -67,7 +90,7 @@ def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method:
         *warning_lines(warnings),
         " * Use: in exactly one .c file",
         f" *     #define {p}_IMPLEMENTATION",
-        f" *     #include \"this header\"",
+        " *     #include \"this header\"",
         " * then per sample:",
     ] + ([
         f" *     int16_t x[{n}];   (raw: int16_t[{n}], the chip's signed readings)",
@@ -75,6 +98,8 @@ def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method:
         f" *     ac_resolve(&{p}_RESOLVER, x, omega_or_NULL, out);",
     ] if t.signed else [
         f" *     ac_process(&{p}_RESOLVER, {p}_TRIM, raw, omega_or_NULL, out);   (raw: uint16_t[{n}])",
+        " *   its status has the bit AC_AT_RAIL when a reading sits at the converter's rail",
+        f" *   ({t.rails[0]} or {t.rails[1]}, {p}_RESOLVER.raw_min/raw_max): the chip clipped it, out is not a measurement",
     ]) + [
         " *",
         " * Fixed-point formats (fractional bits; the core refuses to build with others):",
@@ -88,6 +113,7 @@ def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method:
         f" *   {p}_CHANNELS: s_i Q.{f.sens_frac} counts per m/s^2, r_i Q.{f.pos_frac} m,",
         f" *     b_i - trim_i Q.{f.offset_frac} counts (input to ac_resolver_build)",
         f" * 1-norm condition number of the inverted matrix: about 2^{t.cond_log2}.",
+        *resolver_bound_lines(rounding_lsb),
         *_opening(guard, ("OUT", f.out_frac), ("OMEGA", f.omega_frac), ("SENS", f.sens_frac), ("POS", f.pos_frac),
                   ("OFFSET", f.offset_frac)),
         f"#if AC_MAX_CHANNELS < {n}",
@@ -120,7 +146,8 @@ def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method:
     lines += [f"        {_row(t.m[j])}," for j in range(6)]
     lines += ["    },", "    { /* g[6][6] */"]
     lines += [f"        {_row(t.g[j])}," for j in range(6)]
-    lines += ["    }", "};", f"const ac_channel_cal {p}_CHANNELS[{n}] = {{"]
+    lines += ["    },", f"    {int(t.rails[0])}u, {int(t.rails[1])}u /* raw_min, raw_max (codes) */",
+              "};", f"const ac_channel_cal {p}_CHANNELS[{n}] = {{"]
     for i in range(n):
         lines.append(f"    {{{{{', '.join(f'{int(v)}L' for v in t.sens_q[i])}}}, "
                      f"{{{', '.join(f'{int(v)}L' for v in t.pos_q[i])}}}, {int(t.offset_q[i])}L}},")
@@ -167,7 +194,9 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
                   f" *     ac_trim_s16(raw, {p}_TRIM, 3, x);",
                   f" *     ac_triad_resolve(&{p}_TRIAD, x, f);"]
     else:
-        lines += [f" *     ac_triad_apply(&{p}_TRIAD, raw, f);   (raw: uint16_t[3])"]
+        lines += [f" *     ac_triad_apply(&{p}_TRIAD, raw, f);   (raw: uint16_t[3])",
+                  " *   its status has the bit AC_AT_RAIL when a reading sits at the converter's rail",
+                  f" *   ({t.rails[0]} or {t.rails[1]}, {p}_TRIAD.raw_min/raw_max): the chip clipped it, f is not a measurement"]
     lines += [
         " *",
         " * Fixed-point formats (fractional bits; the core refuses to build with others):",
@@ -194,7 +223,8 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
         f"    {_row(t.trim_code())}, /* trim (uint16 code) */",
         f"    {_row(t.shift)}, /* shift */",
         f"    {{{', '.join(f'{int(v)}L' for v in t.k)}}}, /* k */",
-        f"    {{{_row(t.m[0])}, {_row(t.m[1])}, {_row(t.m[2])}}} /* m */",
+        f"    {{{_row(t.m[0])}, {_row(t.m[1])}, {_row(t.m[2])}}}, /* m */",
+        f"    {int(t.rails[0])}u, {int(t.rails[1])}u /* raw_min, raw_max (codes) */",
         "};",
         f"const ac_channel_cal {p}_CHANNELS[3] = {{",
     ] + [f"    {{{{{', '.join(f'{int(v)}L' for v in t.sens_q[i])}}}, {{0L, 0L, 0L}}, {int(t.offset_q[i])}L}},"
@@ -214,10 +244,14 @@ def calibration_header(device, cal, *, prefix: str = "AC_CAL") -> str:
     readings.  The calibration's warnings (``extra["warnings"]``) go into the opening comment."""
     warnings = cal.extra.get("warnings", []) if isinstance(getattr(cal, "extra", None), dict) else []
     if device.is_triad():
-        t = quantize_triad(cal.offsets, cal.sensitivity, signed=device.raw_min < 0)
+        t = quantize_triad(cal.offsets, cal.sensitivity, signed=device.raw_min < 0,
+                           rails=(device.raw_min, device.raw_max))
         rounding = triad_rounding_bound(t, cal.offsets, cal.sensitivity, device.raw_min, device.raw_max)
         return render_triad_header(t, device=device.name, prefix=prefix, calibration_method=cal.method,
                                    warnings=warnings, rounding_lsb=rounding)
-    return render_header(quantize_calibration(device, cal), prefix=prefix, calibration_method=cal.method,
+    t = quantize_calibration(device, cal)
+    pos = cal.positions_or_nominal(device)
+    rounding = resolver_rounding_bound(t, cal.offsets, cal.sensitivity, pos, device.raw_min, device.raw_max)
+    return render_header(t, prefix=prefix, calibration_method=cal.method,
                          temp_ref_c=getattr(cal, "temp_ref_c", None), offset_tc=getattr(cal, "offset_tc", None),
-                         gain_tc=getattr(cal, "gain_tc", None), warnings=warnings)
+                         gain_tc=getattr(cal, "gain_tc", None), warnings=warnings, rounding_lsb=rounding)

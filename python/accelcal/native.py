@@ -50,10 +50,17 @@ FORMATS = Formats(out_frac=lib.AC_OUT_FRAC, omega_frac=lib.AC_OMEGA_FRAC,
 
 
 def check(status: int, context: str) -> bool:
-    """Raise for an error status; return True when the core reports saturation."""
+    """Raise for an error status; return True when the core reports saturation (the status
+    bit AC_SATURATED; the other warning bit, AC_AT_RAIL, is :func:`at_rail`'s)."""
     if status < 0:
         raise core_error(int(status), context)
-    return status == lib.AC_SATURATED
+    return bool(status & lib.AC_SATURATED)
+
+
+def at_rail(status: int) -> bool:
+    """The status bit AC_AT_RAIL: a raw reading sat at a rail of the table (its raw_min /
+    raw_max), so the outputs are not a measurement (ac_trim_rails, ac_process, ac_triad_apply)."""
+    return status >= 0 and bool(status & lib.AC_AT_RAIL)
 
 
 def cptr(ctype: str, arr: np.ndarray):
@@ -61,12 +68,14 @@ def cptr(ctype: str, arr: np.ndarray):
     return ffi.cast(ctype, ffi.from_buffer(arr))
 
 
-def new_resolver(m, m_shift, k, g, g_shift):
-    """An ``ac_resolver`` filled from table arrays (m is 6 x N)."""
+def new_resolver(m, m_shift, k, g, g_shift, rails=(0, 0)):
+    """An ``ac_resolver`` filled from table arrays (m is 6 x N); ``rails`` the converter's
+    (raw_min, raw_max) as uint16 codes ((0, 0): unknown, nothing flagged)."""
     m = np.asarray(m)
     n = m.shape[1]
     r = ffi.new("ac_resolver *")
     r.n = n
+    r.raw_min, r.raw_max = (int(v) for v in rails)
     for j in range(6):
         r.m_shift[j] = int(m_shift[j])
         r.g_shift[j] = int(g_shift[j])
@@ -87,6 +96,7 @@ def resolver_arrays(r) -> dict:
         k=np.array([r.k[j] for j in range(6)], dtype=np.int32),
         g=np.array([[r.g[j][q] for q in range(6)] for j in range(6)], dtype=np.int16),
         g_shift=np.array([r.g_shift[j] for j in range(6)], dtype=np.int8),
+        rails=(int(r.raw_min), int(r.raw_max)),
     )
 
 

@@ -88,6 +88,7 @@ class FixedTables:
     cond_log2: int
     extra: dict = field(default_factory=dict)
     signed: bool = False  # the chip's readings are int16 (pre-trim with ac_trim_s16)
+    rails: tuple = (0, 0)  # the converter's (raw_min, raw_max) as uint16 codes (rail_codes); (0, 0) unknown
 
     @property
     def n(self) -> int:
@@ -104,7 +105,7 @@ class FixedTables:
         return self.trim + self.offset_q / 2.0**FORMATS.offset_frac
 
     def resolver(self):
-        return new_resolver(self.m, self.m_shift, self.k, self.g, self.g_shift)
+        return new_resolver(self.m, self.m_shift, self.k, self.g, self.g_shift, self.rails)
 
 
 def cond_log2_equilibrated(R: np.ndarray) -> int:
@@ -122,9 +123,25 @@ def trim_range(signed: bool) -> tuple[int, int]:
     return (-32768, 32767) if signed else (0, 65535)
 
 
-def quantize(offsets, sensitivity, positions, device: str = "", signed: bool = False) -> FixedTables:
+def rail_codes(raw_min: int | None, raw_max: int | None, signed: bool) -> tuple[int, int]:
+    """The converter's rails (counts) as the uint16 codes the core's tables hold (offset binary,
+    count + 32768, for a chip with signed output, as the trim codes); (0, 0), "unknown: flag
+    nothing", for None.  QuantizeError naming the rail outside the code range."""
+    if raw_min is None or raw_max is None:
+        return (0, 0)
+    lo, hi = trim_range(signed)
+    for name, v in (("raw_min", raw_min), ("raw_max", raw_max)):
+        if not lo <= v <= hi:
+            raise QuantizeError(f"{name} = {v} is outside the core's reading range [{lo}, {hi}]")
+    off = 32768 if signed else 0
+    return (int(raw_min) + off, int(raw_max) + off)
+
+
+def quantize(offsets, sensitivity, positions, device: str = "", signed: bool = False,
+             rails: tuple[int, int] | None = None) -> FixedTables:
     """Quantise a calibration (b (N,), s (N,3), r (N,3)) into the core's tables
-    (``signed``: the chip's readings are int16, and so is the trim)."""
+    (``signed``: the chip's readings are int16, and so is the trim; ``rails``: the converter's
+    (raw_min, raw_max) in counts, flagged by the core as AC_AT_RAIL, or None: unknown)."""
     f = FORMATS
     b = np.asarray(offsets, float)
     n = len(b)
@@ -159,13 +176,15 @@ def quantize(offsets, sensitivity, positions, device: str = "", signed: bool = F
                        sens_q=sens_q.astype(np.int32),
                        pos_q=pos_q.astype(np.int32), offset_q=offset_q.astype(np.int32),
                        m=m, m_shift=m_shift.astype(np.int8), k=k.astype(np.int32), g=g,
-                       g_shift=g_shift.astype(np.int8), cond_log2=cl2, signed=signed)
+                       g_shift=g_shift.astype(np.int8), cond_log2=cl2, signed=signed,
+                       rails=rail_codes(*(rails or (None, None)), signed))
 
 
 def quantize_calibration(device, cal) -> FixedTables:
     """quantize() for a Device and a Calibration (positions default to the device's)."""
     pos = cal.positions_or_nominal(device)
-    return quantize(cal.offsets, cal.sensitivity, pos, device.name, signed=device.raw_min < 0)
+    return quantize(cal.offsets, cal.sensitivity, pos, device.name, signed=device.raw_min < 0,
+                    rails=(device.raw_min, device.raw_max))
 
 
 def omega_to_fixed(omega) -> np.ndarray:
@@ -212,3 +231,39 @@ def table_error_bound(t: FixedTables, raw: np.ndarray, omega_q: np.ndarray | Non
         p = np.abs(model.omega_products(np.atleast_2d(omega_q) / 2.0 ** FORMATS.omega_frac))
         bound = bound + p.sum(axis=1, keepdims=True) * 0.5 * 2.0 ** (-t.g_shift.astype(float))
     return bound
+
+
+def resolver_rounding_bound(t: FixedTables, offsets, sensitivity, positions, raw_min: int,
+                            raw_max: int) -> tuple[np.ndarray, np.ndarray]:
+    """What the table's rounding (of s~, r~, o~, m, k and g) can add to the core's error against
+    the float reference ``model.resolve`` with the unquantised calibration: the 6-channel
+    analogue of :func:`accelcal.triad.triad_rounding_bound`.
+
+    The result is not affine in the reading alone (the centripetal term is quadratic in
+    omega), so the two parts are bounded separately:
+
+    * linear part, (6,) output LSB: the largest |(m x - k) 2^-m_shift - M (raw - b) 2^AC_OUT_FRAC|
+      over every reading in [raw_min, raw_max]^N that the trim does not clip.  Both sides are
+      affine in the reading on that box, so the largest difference is |d(mid)| + sum_i |A_i| h_i
+      (A the difference's slope, mid and h the box's centre and half-widths): reached at a corner.
+    * centripetal part, (6,) output LSB per (rad/s)^2: sum_q |g_jq 2^-g_shift_j - (M C)_jq
+      2^AC_OUT_FRAC|; times max_a omega_a^2 it bounds the table's centripetal error at any omega
+      (every |p_q| <= max_a omega_a^2), the float fed the same (quantised) omega.
+
+    The core adds its final rounding (0.5 LSB) and, for |omega_a| >= 0.125 rad/s, the rounding
+    of the squared rates E_j of ac_resolve.h (:func:`exact_fixed_semantics`'s bound).
+    """
+    f = FORMATS
+    raw_min, raw_max = int(raw_min), int(raw_max)
+    trim = t.trim.astype(np.int64)
+    lo = np.maximum(raw_min, trim - 32768).astype(float)
+    hi = np.minimum(raw_max, trim + 32767).astype(float)
+    M = model.resolve_matrix(np.asarray(positions, float), np.asarray(sensitivity, float)) * 2.0 ** f.out_frac
+    scale = 2.0 ** (-t.m_shift.astype(float))[:, None]
+    A = t.m.astype(float) * scale - M                                   # LSB per count
+    c = -(t.k.astype(float) + t.m.astype(float) @ trim.astype(float)) * scale[:, 0] + M @ np.asarray(offsets, float)
+    mid, half = (lo + hi) / 2.0, (hi - lo) / 2.0
+    linear = np.abs(A @ mid + c) + np.abs(A) @ half
+    G = M @ model.centripetal_matrix(np.asarray(positions, float), np.asarray(sensitivity, float))
+    centripetal = np.abs(t.g.astype(float) * 2.0 ** (-t.g_shift.astype(float))[:, None] - G).sum(axis=1)
+    return linear, centripetal

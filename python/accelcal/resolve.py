@@ -66,4 +66,5 @@ def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str
     w_q = None if omega is None else omega_to_fixed(omega)
     out, flags = native.process_batch(t.resolver(), t.trim, rec.raw, w_q)
     y = out / 2.0 ** FORMATS.out_frac
-    return y[:, :3], y[:, 3:], flags
+    # the flags of the core's own arithmetic; its rail bit is the recording's `clipped` (at_rails)
+    return y[:, :3], y[:, 3:], flags & ~np.uint8(native.lib.AC_FLAG_AT_RAIL)

@@ -16,7 +16,7 @@ import numpy as np
 
 from .errors import AccelcalError
 from .native import FORMATS, check, cptr, ffi, lib
-from .quantize import round_half_up, row_shift, to_fixed, trim_range
+from .quantize import rail_codes, round_half_up, row_shift, to_fixed, trim_range
 
 OUT_FRAC = FORMATS.out_frac
 I16_MIN, I16_MAX = -32768, 32767
@@ -35,6 +35,7 @@ class TriadTable:
     signed: bool = False   # int16 readings: pre-trim with ac_trim_s16, then ac_triad_resolve
     sens_q: np.ndarray | None = None    # (3,3) int32 Q.AC_SENS_FRAC: s~ (the header's channel entries)
     offset_q: np.ndarray | None = None  # (3,) int32 Q.AC_OFFSET_FRAC: b - trim
+    rails: tuple = (0, 0)   # the converter's (raw_min, raw_max), uint16 codes (quantize.rail_codes)
 
     def trim_code(self) -> np.ndarray:
         """The trim as the uint16 code ac_triad's ``trim`` field holds: offset binary
@@ -52,6 +53,7 @@ class TriadTable:
             t.k[j] = int(self.k[j])
             for i in range(3):
                 t.m[j][i] = int(self.m[j, i])
+        t.raw_min, t.raw_max = (int(v) for v in self.rails)
         return t
 
 
@@ -69,7 +71,7 @@ def triad_matrix(sens3: np.ndarray) -> np.ndarray:
     return np.linalg.inv(S)
 
 
-def quantize_triad(offsets3, sens3, signed: bool = False) -> TriadTable:
+def quantize_triad(offsets3, sens3, signed: bool = False, rails: tuple[int, int] | None = None) -> TriadTable:
     """The triad's table by the rules of quantize.quantize.
 
     Parameters
@@ -80,6 +82,9 @@ def quantize_triad(offsets3, sens3, signed: bool = False) -> TriadTable:
         Sensitivity rows s_i, counts per m/s^2.
     signed : bool
         The chip's readings are int16 (trim in -32768..32767), else uint16.
+    rails : (int, int) or None
+        The converter's (raw_min, raw_max), counts: ``ac_triad_apply`` flags a reading there
+        (AC_AT_RAIL); None: unknown, nothing flagged.
 
     Returns
     -------
@@ -100,7 +105,7 @@ def quantize_triad(offsets3, sens3, signed: bool = False) -> TriadTable:
     k = to_fixed((M @ o) * 2.0 ** shift, 0, "triad offset term k")
     return TriadTable(trim=trim.astype(np.int16 if signed else np.uint16), m=m, shift=shift.astype(np.int8),
                       k=k.astype(np.int32), signed=signed, sens_q=sens_q.astype(np.int32),
-                      offset_q=offset_q.astype(np.int32))
+                      offset_q=offset_q.astype(np.int32), rails=rail_codes(*(rails or (None, None)), signed))
 
 
 def build_triad_on_device(table: TriadTable) -> TriadTable:
@@ -119,7 +124,7 @@ def build_triad_on_device(table: TriadTable) -> TriadTable:
     return TriadTable(trim=table.trim.copy(), m=np.array([[out.m[j][i] for i in range(3)] for j in range(3)], np.int16),
                       shift=np.array([out.shift[j] for j in range(3)], np.int8),
                       k=np.array([out.k[j] for j in range(3)], np.int32), signed=table.signed,
-                      sens_q=table.sens_q, offset_q=table.offset_q)
+                      sens_q=table.sens_q, offset_q=table.offset_q, rails=table.rails)
 
 
 def triad_apply_fixed(table: TriadTable, raw) -> tuple[np.ndarray, np.ndarray]:

@@ -1332,6 +1332,135 @@ static void bench(void)
     bench_end(AC_STR("(empty)"));
 }
 
+/* ---- the converter's rails (ac_trim_rails, ac_process, ac_process_batch, ac_triad_apply) --
+ * Rails from a few kinds (a 16-bit and a 12-bit converter, arbitrary, one code apart,
+ * equal and inverted: rails unknown), readings at and around them (raw_min - 1 .. + 1,
+ * raw_max - 1 .. + 1, the code range's ends) and random; the H8/300H checks them in its
+ * assembly pre-trim (n = 6 in registers, n > 6 into a buffer), so both shapes run. */
+static uint16_t rail_pick(uint16_t lo, uint16_t hi)
+{
+    switch (below(10u)) {
+    case 0u: return lo;
+    case 1u: return (uint16_t)(lo + 1u);
+    case 2u: return (uint16_t)(lo - 1u);
+    case 3u: return hi;
+    case 4u: return (uint16_t)(hi - 1u);
+    case 5u: return (uint16_t)(hi + 1u);
+    case 6u: return (rnd() & 1UL) ? 0u : 65535u;
+    default: return (uint16_t)rnd();
+    }
+}
+
+static void rail_pair(uint16_t t, uint16_t *lo, uint16_t *hi)
+{
+    switch (t % 7u) {
+    case 0u: *lo = 0u; *hi = 65535u; break;
+    case 1u: *lo = 0u; *hi = 4095u; break;
+    case 2u: *lo = (uint16_t)rnd(); *hi = (uint16_t)(*lo + 1u + below(60000u)); break;
+    case 3u: *lo = (uint16_t)rnd(); *hi = (uint16_t)(*lo + 1u); break;
+    case 4u: *lo = 0u; *hi = 0u; break;
+    case 5u: *lo = (uint16_t)rnd(); *hi = *lo; break;
+    default: *hi = (uint16_t)rnd(); *lo = (uint16_t)(*hi + 1u + below(1000u)); break;
+    }
+}
+
+static void vec_rails(void)
+{
+    uint16_t t, i, k, lo, hi;
+    uint16_t raw[AC_MAX_CHANNELS + 2u], trim[AC_MAX_CHANNELS + 2u];
+    int16_t x[AC_MAX_CHANNELS + 2u];
+    int32_t out[6];
+    for (t = 0u; t < 70u; t++) {
+        uint16_t n = (uint16_t)(1u + below(AC_MAX_CHANNELS + 2u));
+        rail_pair(t, &lo, &hi);
+        for (k = 0u; k < n; k++) {
+            raw[k] = rail_pick(lo, hi);
+            trim[k] = (t & 8u) ? (uint16_t)rnd() : (uint16_t)(raw[k] + (uint16_t)below(2000u) - 1000u);
+            x[k] = 0;
+        }
+        TAG("RLT");
+        h16((int16_t)lo);
+        h16((int16_t)hi);
+        st(ac_trim_rails(raw, trim, n, lo, hi, x));
+        for (k = 0u; k < n; k++) {
+            h16(x[k]);
+        }
+        nl();
+    }
+    TAG("RLT0");
+    st(ac_trim_rails(raw, trim, 0u, 0u, 4095u, x));
+    st(ac_trim_rails(0, trim, 1u, 0u, 4095u, x));
+    st(ac_trim_rails(raw, 0, 1u, 0u, 4095u, x));
+    st(ac_trim_rails(raw, trim, 1u, 0u, 4095u, 0));
+    nl();
+    for (t = 0u; t < 42u; t++) {
+        ac_status s;
+        random_table();
+        if (t & 1u) {
+            res.n = 6u; /* the H8's registers path */
+        }
+        rail_pair(t / 2u, &lo, &hi);
+        res.raw_min = lo;
+        res.raw_max = hi;
+        for (i = 0u; i < res.n; i++) {
+            trim[i] = (uint16_t)rnd_range(1000, 7000);
+        }
+        for (k = 0u; k < BATCH; k++) {
+            for (i = 0u; i < res.n; i++) {
+                /* mostly inside: one rail reading in a sample, or none */
+                mem.batch.raw[k * res.n + i] = (uint16_t)(trim[i] + (uint16_t)below(200u));
+            }
+            if (below(3u) != 0u) {
+                mem.batch.raw[k * res.n + below(res.n)] = rail_pick(lo, hi);
+            }
+            random_omega(&mem.batch.omega[k * 3u]);
+        }
+        for (k = 0u; k < BATCH; k++) {
+            s = ac_process(&res, trim, &mem.batch.raw[k * res.n], (k & 1u) ? &mem.batch.omega[k * 3u] : 0, out);
+            TAG("RLP");
+            h8((uint8_t)res.n);
+            st(s);
+            print_out6(out);
+            nl();
+        }
+        s = ac_process_batch(&res, trim, mem.batch.raw, BATCH, (t & 2u) ? mem.batch.omega : 0, mem.batch.out,
+                             mem.batch.flags);
+        TAG("RLB");
+        st(s);
+        for (k = 0u; k < BATCH; k++) {
+            h8(mem.batch.flags[k]);
+        }
+        nl();
+    }
+    res.raw_min = 0u;
+    res.raw_max = 0u;
+    for (t = 0u; t < 28u; t++) {
+        ac_triad tr;
+        int32_t f[3];
+        uint8_t j, q;
+        rail_pair(t, &lo, &hi);
+        tr.raw_min = lo;
+        tr.raw_max = hi;
+        for (j = 0u; j < 3u; j++) {
+            raw[j] = rail_pick(lo, hi);
+            tr.trim[j] = (uint16_t)(raw[j] + (uint16_t)below(4000u) - 2000u);
+            tr.shift[j] = (int8_t)((int16_t)below(20u) - 2);
+            tr.k[j] = (int32_t)rnd_range(-30000, 30000);
+            for (q = 0u; q < 3u; q++) {
+                tr.m[j][q] = (int16_t)rnd_range(-20000, 20000);
+            }
+        }
+        TAG("RLA");
+        h16((int16_t)lo);
+        h16((int16_t)hi);
+        st(ac_triad_apply(&tr, raw, f));
+        for (j = 0u; j < 3u; j++) {
+            h32(f[j]);
+        }
+        nl();
+    }
+}
+
 int main(void)
 {
     ac_test_platform_init();
@@ -1350,6 +1479,7 @@ int main(void)
     vec_rate();
     vec_resolve_errors();
     vec_tshift_edges();
+    vec_rails();
     framing = 0u;
     OUT_S("END accelcal-vectors ");
     out_hex(n_lines, 8u);

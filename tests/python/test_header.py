@@ -2,11 +2,13 @@
 linked with the C core, reproduces the quantizer's tables and the float
 reference within the core's bound."""
 import subprocess
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from accelcal import model
+from accelcal.clipping import at_rails
 from accelcal.device import default_device
 from accelcal.header import render_header
 from accelcal.quantize import FORMATS, exact_fixed_semantics, quantize
@@ -51,7 +53,7 @@ def case(tmp_path_factory):
     s = d.nominal_sensitivity() * (1 + rng.uniform(-0.007, 0.036, (6, 1))) + \
         d.counts_per_mps2[:, None] * rng.normal(0, 0.0175, (6, 3))
     b = d.zero_counts + rng.uniform(-0.28, 0.28, 6) * 9.80665 * d.counts_per_mps2
-    t = quantize(b, s, d.positions, d.name)
+    t = quantize(b, s, d.positions, d.name, rails=(d.raw_min, d.raw_max))
     tmp = tmp_path_factory.mktemp("hdr")
     (tmp / "cal.h").write_text(render_header(t, offset_tc=rng.normal(0, 0.5, 6),
                                              gain_tc=rng.normal(0, 1e-4, 6), temp_ref_c=25.0))
@@ -77,7 +79,9 @@ def test_host_build_reproduces_reference(case):
     assert rows.shape == (n, 7)
     status, out = rows[:, 0], rows[:, 1:]
     exact, bound, _ = exact_fixed_semantics(t, raw, w_q)
-    ok = status == 0
+    # the header's rails are the device's: AC_AT_RAIL on the samples the host's at_rails names
+    assert np.array_equal(status & 2 != 0, at_rails(SimpleNamespace(raw=raw), d))
+    ok = status & 1 == 0
     assert ok.mean() > 0.99
     assert np.all(np.abs(out[ok] - exact[ok]) <= 0.5 + bound[ok] + 1e-9)
     # and the float reference with the unquantised calibration, in physical units

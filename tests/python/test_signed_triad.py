@@ -11,6 +11,7 @@ from hypothesis import example, given, strategies as st
 
 from accelcal import estimators as E
 from accelcal.calibration import Calibration, load_calibration
+from accelcal.clipping import at_rails
 from accelcal.cli import main
 from accelcal.device import Device
 from accelcal.header import calibration_header
@@ -215,7 +216,9 @@ def test_triad_header_on_the_host_equals_resolve_fixed(tmp_path, signed):
     rec = recording_from_arrays(np.arange(len(raw)) / 100.0, raw)
     f, a, flags = resolve_recording(d, cal, rec, "fixed")
     assert np.array_equal(rows[:, 1:], np.round(f * 1024).astype(np.int64))
-    assert np.array_equal(rows[:, 0] != 0, flags.astype(bool))
+    assert np.array_equal((rows[:, 0] & 1) != 0, flags.astype(bool))     # AC_SATURATED
+    # AC_AT_RAIL: ac_triad_apply flags the host's at_rails samples (ac_trim_s16 sees no rails)
+    assert np.array_equal((rows[:, 0] & 2) != 0, at_rails(rec, d) & (not signed))
     assert np.all(np.isnan(a))
     ff, _, _ = resolve_recording(d, cal, rec, "float")
     ok = flags == 0

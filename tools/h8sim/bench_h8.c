@@ -184,6 +184,8 @@ int main(void)
         cal[2u * k + 1u].offset = -200;
     }
     MEASURE(R_BUILD, 1u, ac_resolver_build(cal, 6u, &work, &res, 0));
+    res.raw_min = 0u; /* the converter's rails, copied in after the build (ac_resolve.h) */
+    res.raw_max = 65535u;
     for (k = 0u; k < 3u; k++) {
         for (a = 0u; a < 3u; a++) {
             tcal[k].sens[a] = triad_sens[k][a];
@@ -193,6 +195,8 @@ int main(void)
         trim[k] = (uint16_t)(5000u + 10u * k);
     }
     MEASURE(R_TRIAD_BUILD, 1u, ac_triad_build(tcal, trim, &work, &tri));
+    tri.raw_min = 0u;
+    tri.raw_max = 65535u;
     (void)ac_rate_init(&rate, 34953u, 21u, 655u); /* 60 Hz */
     (void)ac_att_init(&att, 104858L, 314573L, 34953u, 21u, 512u, 1000L, 328u);
     dcfg.rest.dev_max = 51;

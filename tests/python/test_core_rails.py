@@ -1,0 +1,158 @@
+"""The C core flags a reading at the converter's rails (raw_min / raw_max) as the host does.
+
+ac_trim_rails, ac_process, ac_process_batch and ac_triad_apply against the host's
+:func:`accelcal.clipping.at_rails` over whole reading ranges, the boundary values raw_min,
+raw_min + 1, raw_max - 1 and raw_max drawn often; the rail test changes no number (x, the
+outputs and the saturation bits equal those of a table without rails)."""
+from types import SimpleNamespace
+
+import numpy as np
+from core_settings import core
+from hypothesis import assume, given, strategies as st
+
+from accelcal.clipping import at_rails
+from accelcal.errors import IllConditionedError, SingularError
+from accelcal.native import at_rail, check, cptr, ffi, lib, offset_binary, process_batch
+from accelcal.quantize import QuantizeError, quantize, rail_codes
+from accelcal.triad import quantize_triad, triad_apply_fixed
+from test_core_resolve import random_geometry
+
+SAT, RAIL = lib.AC_SATURATED, lib.AC_AT_RAIL
+
+
+@st.composite
+def rails(draw, signed=None):
+    """(raw_min, raw_max, signed): a full 16-bit converter, a 12-bit one, or any pair."""
+    signed = draw(st.booleans()) if signed is None else signed
+    lo, hi = (-32768, 32767) if signed else (0, 65535)
+    kind = draw(st.sampled_from(["full", "12bit", "any"]))
+    if kind == "full":
+        return lo, hi, signed
+    if kind == "12bit":
+        return (-2048, 2047, signed) if signed else (0, 4095, signed)
+    a = draw(st.integers(lo, hi - 1))
+    return a, draw(st.integers(a + 1, hi)), signed
+
+
+def readings(draw, raw_min, raw_max, shape):
+    """Readings in [raw_min, raw_max], a third of them on or next to a rail."""
+    edge = st.sampled_from([raw_min, raw_min + 1, raw_max - 1, raw_max]).map(lambda v: min(max(v, raw_min), raw_max))
+    vals = draw(st.lists(st.one_of(edge, st.integers(raw_min, raw_max)), min_size=int(np.prod(shape)),
+                         max_size=int(np.prod(shape))))
+    return np.array(vals, np.int64).reshape(shape)
+
+
+def host_rails(raw, raw_min, raw_max):
+    return at_rails(SimpleNamespace(raw=raw), SimpleNamespace(raw_min=raw_min, raw_max=raw_max))
+
+
+def codes(a, signed):
+    return offset_binary(a) if signed else np.asarray(a).astype(np.uint16)
+
+
+def trim_rails(raw_c, trim_c, lo_c, hi_c):
+    """ac_trim_rails on one sample of uint16 codes -> (status, x)."""
+    n = len(raw_c)
+    x = np.zeros(n, np.int16)
+    s = lib.ac_trim_rails(cptr("uint16_t *", np.ascontiguousarray(raw_c, np.uint16)),
+                          cptr("uint16_t *", np.ascontiguousarray(trim_c, np.uint16)), n, int(lo_c), int(hi_c),
+                          cptr("int16_t *", x))
+    return int(s), x
+
+
+def trim_plain(raw_c, trim_c):
+    n = len(raw_c)
+    x = np.zeros(n, np.int16)
+    s = lib.ac_trim(cptr("uint16_t *", np.ascontiguousarray(raw_c, np.uint16)),
+                    cptr("uint16_t *", np.ascontiguousarray(trim_c, np.uint16)), n, cptr("int16_t *", x))
+    return int(s), x
+
+
+@core
+@given(st.data())
+def test_trim_rails_flags_what_at_rails_flags(data):
+    raw_min, raw_max, signed = data.draw(rails())
+    n = data.draw(st.integers(1, 14))
+    raw = readings(data.draw, raw_min, raw_max, (n,))
+    trim = np.array(data.draw(st.lists(st.integers(*((-32768, 32767) if signed else (0, 65535))),
+                                       min_size=n, max_size=n)), np.int64)
+    lo_c, hi_c = rail_codes(raw_min, raw_max, signed)
+    s, x = trim_rails(codes(raw, signed), codes(trim, signed), lo_c, hi_c)
+    s0, x0 = trim_plain(codes(raw, signed), codes(trim, signed))
+    assert bool(s & RAIL) == bool(host_rails(raw[None, :], raw_min, raw_max)[0])
+    assert (s & SAT) == s0 and np.array_equal(x, x0)
+
+
+@core
+@given(st.integers(0, 65535), st.integers(0, 65535), st.lists(st.integers(0, 65535), min_size=1, max_size=14))
+def test_unknown_rails_flag_nothing(a, b, raw):
+    """raw_min >= raw_max (0, 0 in a zeroed table): no reading is flagged, 0 and 65535 included."""
+    lo, hi = max(a, b), min(a, b)
+    raw = np.array(raw + [0, 65535, lo, hi], np.uint16)
+    s, x = trim_rails(raw, raw[::-1].copy(), lo, hi)
+    s0, x0 = trim_plain(raw, raw[::-1].copy())
+    assert s == s0 and np.array_equal(x, x0)
+
+
+@core
+@given(st.data())
+def test_process_and_batch_flag_the_rails(data):
+    raw_min, raw_max, signed = data.draw(rails())
+    seed = data.draw(st.integers(0, 2**32 - 1))
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(6, 13))
+    pos, ax = random_geometry(rng, n)
+    k = 10 ** rng.uniform(0, 3.4)
+    sens = k * ax * (1 + rng.uniform(-0.01, 0.04, (n, 1))) + k * rng.normal(0, 0.0175, (n, 3))
+    offsets = rng.uniform(raw_min, raw_max, n)
+    try:
+        t = quantize(offsets, sens, pos, "rails", signed=signed, rails=(raw_min, raw_max))
+    except (IllConditionedError, SingularError, QuantizeError):
+        assume(False)
+    count = 4
+    raw = readings(data.draw, raw_min, raw_max, (count, n))
+    w = rng.integers(-3000, 3000, (count, 3)) if rng.random() < 0.5 else None
+    expect = host_rails(raw, raw_min, raw_max)
+    out, flags = process_batch(t.resolver(), t.trim, raw, w)
+    t0 = quantize(offsets, sens, pos, "rails", signed=signed)            # the same table, no rails
+    out0, flags0 = process_batch(t0.resolver(), t0.trim, raw, w)
+    assert np.array_equal(flags & lib.AC_FLAG_AT_RAIL != 0, expect)
+    assert np.array_equal(flags & ~np.uint8(lib.AC_FLAG_AT_RAIL), flags0) and np.array_equal(out, out0)
+    r = t.resolver()
+    trim_c = np.ascontiguousarray(codes(t.trim, signed), np.uint16)
+    o = np.zeros(6, np.int32)
+    for i in range(count):
+        wp = ffi.NULL if w is None else cptr("int16_t *", np.ascontiguousarray(w[i], np.int16))
+        s = int(lib.ac_process(r, cptr("uint16_t *", trim_c),
+                               cptr("uint16_t *", np.ascontiguousarray(codes(raw[i], signed), np.uint16)), wp,
+                               cptr("int32_t *", o)))
+        assert at_rail(s) == expect[i] and np.array_equal(o, out[i])
+        assert check(s, "ac_process") == bool(flags0[i])
+
+
+@core
+@given(st.data())
+def test_triad_apply_flags_the_rails(data):
+    raw_min, raw_max, _ = data.draw(rails(signed=False))
+    seed = data.draw(st.integers(0, 2**32 - 1))
+    rng = np.random.default_rng(seed)
+    S = np.diag(10 ** rng.uniform(0, 3.4, 3)) @ (np.eye(3) + rng.normal(0, 0.02, (3, 3)))
+    b = rng.uniform(raw_min, raw_max, 3)
+    try:
+        t = quantize_triad(b, S, rails=(raw_min, raw_max))
+    except QuantizeError:
+        assume(False)
+    raw = readings(data.draw, raw_min, raw_max, (5, 3))
+    f, sat = triad_apply_fixed(t, raw)
+    f0, sat0 = triad_apply_fixed(quantize_triad(b, S), raw)
+    assert np.array_equal(f, f0) and np.array_equal(sat, sat0)
+    c = t.cdata()
+    fo = ffi.new("int32_t[3]")
+    got = [at_rail(lib.ac_triad_apply(c, cptr("uint16_t *", np.ascontiguousarray(r, np.uint16)), fo)) for r in raw]
+    assert got == list(host_rails(raw, raw_min, raw_max))
+
+
+def test_rail_codes_of_a_signed_chip_are_offset_binary():
+    assert rail_codes(-2048, 2047, True) == (30720, 34815)
+    assert rail_codes(0, 4095, False) == (0, 4095)
+    assert rail_codes(None, None, False) == (0, 0)
