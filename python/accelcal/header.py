@@ -30,15 +30,17 @@ def _row(values, width: int = 0) -> str:
     return "{" + ", ".join(vals) + "}"
 
 
-def warning_lines(warnings) -> list[str]:
+def warning_lines(warnings, notes=()) -> list[str]:
     """The header comment's lines for a calibration's warnings (its JSON's ``warnings``: what
     ``accelcal calibrate`` warned of), each wrapped at 100 columns under "WARNING", so that a
-    poorly determined calibration is not burnt into firmware without a word; [] for none."""
+    poorly determined calibration is not burnt into firmware without a word, then its ``notes``
+    under "NOTE" (what the method held at nominal, not fitted); [] for none."""
     lines = []
-    for w in warnings or ():
-        text = str(w).replace("*/", "* /")
-        lines += textwrap.wrap(f"WARNING (accelcal calibrate): {text}", width=100, initial_indent=" * ",
-                               subsequent_indent=" *   ", break_on_hyphens=False, break_long_words=False)
+    for label, texts in (("WARNING", warnings), ("NOTE", notes)):
+        for w in texts or ():
+            text = str(w).replace("*/", "* /")
+            lines += textwrap.wrap(f"{label} (accelcal calibrate): {text}", width=100, initial_indent=" * ",
+                                   subsequent_indent=" *   ", break_on_hyphens=False, break_long_words=False)
     return lines + [" *"] if lines else []
 
 
@@ -73,9 +75,9 @@ def resolver_bound_lines(rounding_lsb) -> list[str]:
 
 def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method: str = "",
                   temp_ref_c: float | None = None, offset_tc=None, gain_tc=None, warnings=(),
-                  rounding_lsb=None) -> str:
+                  rounding_lsb=None, notes=()) -> str:
     """The header text for tables t (see quantize.quantize); ``warnings`` (the calibration's,
-    one line each) go into its opening comment; ``rounding_lsb`` (linear (6,) LSB, centripetal
+    one line each) and ``notes`` go into its opening comment; ``rounding_lsb`` (linear (6,) LSB, centripetal
     (6,) LSB per (rad/s)^2: :func:`accelcal.quantize.resolver_rounding_bound`) the error bound
     it states."""
     f = FORMATS
@@ -87,7 +89,7 @@ def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method:
         f" * Device: {t.device}   channels: {n}" + (f"   calibration method: {calibration_method}"
                                                    if calibration_method else ""),
         " *",
-        *warning_lines(warnings),
+        *warning_lines(warnings, notes),
         " * Use: in exactly one .c file",
         f" *     #define {p}_IMPLEMENTATION",
         " *     #include \"this header\"",
@@ -162,10 +164,10 @@ def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method:
 
 
 def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", calibration_method: str = "",
-                        warnings=(), rounding_lsb=None) -> str:
+                        warnings=(), rounding_lsb=None, notes=()) -> str:
     """The header text for one 3-axis sensor's table (see estimators.triad.quantize_triad):
     f only, f = S^-1 (raw - b), by ``ac_triad_apply`` (uint16 readings) or ``ac_trim_s16``
-    + ``ac_triad_resolve`` (int16 readings); ``warnings`` (the calibration's) go into its
+    + ``ac_triad_resolve`` (int16 readings); ``warnings`` and ``notes`` (the calibration's) go into its
     opening comment; ``rounding_lsb`` ((3,) output LSB, :func:`accelcal.triad.triad_rounding_bound`)
     the table's rounding over every reading the trim does not clip, stated with the bound."""
     f = FORMATS
@@ -183,7 +185,7 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
         f" * Device: {device}   a 3-axis sensor" + (f"   calibration method: {calibration_method}"
                                                     if calibration_method else ""),
         " *",
-        *warning_lines(warnings),
+        *warning_lines(warnings, notes),
         " * Use: in exactly one .c file",
         f" *     #define {p}_IMPLEMENTATION",
         " *     #include \"this header\"",
@@ -241,17 +243,22 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
 def calibration_header(device, cal, *, prefix: str = "AC_CAL") -> str:
     """The firmware header for a device and its calibration: the 6-DOF resolver's tables for
     an array (N >= 6), the triad table for a 3-axis sensor; uint16 or int16 (raw_min < 0)
-    readings.  The calibration's warnings (``extra["warnings"]``) go into the opening comment."""
-    warnings = cal.extra.get("warnings", []) if isinstance(getattr(cal, "extra", None), dict) else []
+    readings.  The calibration's warnings (``extra["warnings"]``) and what its method did not fit
+    (``extra["fit"]["not_fitted_note"]``) go into the opening comment."""
+    extra = cal.extra if isinstance(getattr(cal, "extra", None), dict) else {}
+    warnings = extra.get("warnings", [])
+    fit = extra.get("fit") if isinstance(extra.get("fit"), dict) else {}
+    notes = [fit["not_fitted_note"]] if fit.get("not_fitted_note") else []
     if device.is_triad():
         t = quantize_triad(cal.offsets, cal.sensitivity, signed=device.raw_min < 0,
                            rails=(device.raw_min, device.raw_max))
         rounding = triad_rounding_bound(t, cal.offsets, cal.sensitivity, device.raw_min, device.raw_max)
         return render_triad_header(t, device=device.name, prefix=prefix, calibration_method=cal.method,
-                                   warnings=warnings, rounding_lsb=rounding)
+                                   warnings=warnings, rounding_lsb=rounding, notes=notes)
     t = quantize_calibration(device, cal)
     pos = cal.positions_or_nominal(device)
     rounding = resolver_rounding_bound(t, cal.offsets, cal.sensitivity, pos, device.raw_min, device.raw_max)
     return render_header(t, prefix=prefix, calibration_method=cal.method,
                          temp_ref_c=getattr(cal, "temp_ref_c", None), offset_tc=getattr(cal, "offset_tc", None),
-                         gain_tc=getattr(cal, "gain_tc", None), warnings=warnings, rounding_lsb=rounding)
+                         gain_tc=getattr(cal, "gain_tc", None), warnings=warnings, rounding_lsb=rounding,
+                         notes=notes)

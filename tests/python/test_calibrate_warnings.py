@@ -21,6 +21,8 @@ from accelcal.calibrate.checks import far_from_nominal, gain_sigma
 from accelcal.calibrate.settings import EXCITATION_MIN_SPAN_G, POORLY_DETERMINED_MG
 from accelcal.cli_calibrate import calibrate_warnings
 from accelcal.device import default_triad, save_device
+from accelcal.header import calibration_header
+from accelcal.simulate import simulate
 from accelcal.recording import recording_from_arrays, write_recording
 from accelcal.steps import MOVE_PARTS, MOVE_RANGE, part_spread
 
@@ -397,3 +399,21 @@ def test_a_gain_beyond_any_chips_tolerance_is_warned_of():
     assert far_from_nominal(d, S0 * 1.09) is None
     assert far_from_nominal(d, S0 * 0.86, np.full(3, 0.02)) is None     # -14 % +- 3 x 2 % reaches -8 %
     assert "is 0.5 x the device file's" in far_from_nominal(d, S0 * 0.5, np.full(3, 0.02))
+
+
+def test_the_header_says_what_the_method_did_not_fit():
+    """A header from `--method offset` or `gain` carried the tables without a word that the
+    sensitivities (or their directions) were held at the device file's nominal, not fitted:
+    the calibration's `fit.not_fitted_note` goes into the opening comment as a NOTE; `full`
+    fits everything and has none."""
+    dev = default_triad()
+    rec = simulate(dev, "static_poses", seed=4)
+    for method in ("offset", "gain", "full"):
+        cal = calibrate_recordings(dev, [rec], method=method)
+        text = calibration_header(dev, cal)
+        comment = " ".join(text[:text.index("*/")].split())
+        if method == "full":
+            assert "NOTE" not in comment
+        else:
+            assert f"NOTE (accelcal calibrate): the '{method}' model" in comment, comment
+            assert "not fitted" in comment
