@@ -168,6 +168,28 @@ def _grow(first, i: int, hold: int):
     return (first[0], i + hold - 1) if first[1] >= i - 1.5 * (hold - 1) else first
 
 
+def _held_stretches(blocks, hold: int, dev_max: float):
+    """The stretches of ``blocks`` ((first sample, mean f (3,) in m/s^2) of still blocks of ``hold``
+    samples, in order) in which the body holds one f: each grown block by block (:func:`_grow`) while
+    the block's mean stays within ``dev_max`` (m/s^2, each axis) of the stretch's first, that hold
+    TREND_BLOCK_HOLDS blocks or more (1 s at the default hold: a hand that pauses while it
+    accelerates, or the flat peaks of a smooth stroke's acceleration, hold that acceleration for a
+    moment; a body set down off g or turned stays so): (first sample, last sample, the blocks' means),
+    lazily in order."""
+    run = None
+    for i, m in blocks:
+        if (run is not None and _grow(tuple(run[:2]), i, hold) != tuple(run[:2])
+                and float(np.max(np.abs(m - run[2][0]))) <= dev_max):
+            run[1] = i + hold - 1
+            run[2].append(m)
+            continue
+        if run is not None and len(run[2]) >= TREND_BLOCK_HOLDS:
+            yield tuple(run)
+        run = [i, i + hold - 1, [m]]
+    if run is not None and len(run[2]) >= TREND_BLOCK_HOLDS:
+        yield tuple(run)
+
+
 def still_off_g(f, at_rest, rp: RestParams) -> tuple[int, int, float] | None:
     """The first stretch where the body is still (blocks of ``rp.hold`` samples within
     ``rp.dev_max`` of their mean) and not at rest because its mean |f| lies beyond the rest test's
@@ -194,21 +216,9 @@ def still_off_g(f, at_rest, rp: RestParams) -> tuple[int, int, float] | None:
     at_rest = np.asarray(at_rest, bool)
     if rp.g is None:
         return None
-    hold = max(int(rp.hold), 2)
-    runs = []                   # each stretch: [first sample, last sample, the blocks' |mean f|]
-    for i, m, off in _still_blocks(f, at_rest, rp):
-        if not off:
-            continue
-        if runs and _grow(tuple(runs[-1][:2]), i, hold) != tuple(runs[-1][:2]):
-            runs[-1][1] = i + hold - 1
-        elif runs and len(runs[-1][2]) >= TREND_BLOCK_HOLDS:
-            break
-        else:
-            runs.append([i, i + hold - 1, []])
-        runs[-1][2].append(float(np.linalg.norm(m)))
-    for a, b, norms in runs:
-        if len(norms) >= TREND_BLOCK_HOLDS:
-            return a, b, float(np.mean(norms))
+    blocks = ((i, m) for i, m, off in _still_blocks(f, at_rest, rp) if off)
+    for a, b, means in _held_stretches(blocks, max(int(rp.hold), 2), rp.dev_max):
+        return a, b, float(np.mean(np.linalg.norm(means, axis=1)))
     return None
 
 
@@ -216,24 +226,28 @@ def still_but_turned(f, at_rest, rp: RestParams) -> tuple[float, int, int] | Non
     """A stretch where the body is still but not at rest: blocks of ``rp.hold`` samples whose
     f stays within ``rp.dev_max`` of its mean with its mean |f| within ``rp.g_tol`` of g (not one
     kept from a rest by the scale, :func:`still_off_g`'s: no turn is told there), away from the
-    rest's direction by more than ``rp.ref_max``.  For a body that only translates (a rail)
-    every still stretch is a rest; such a stretch is a turn, which no accelerometer alone
-    tells from an acceleration.  Returns (its largest angle from the first rest's f, deg;
-    the first such stretch's first and last sample) or None.  ``f`` in m/s^2, (n, 3)."""
+    rest's direction by more than ``rp.ref_max``, for TREND_BLOCK_HOLDS blocks or more
+    (:func:`_held_stretches`: the flat peak of a smooth stroke's acceleration, one sine period of
+    0.785 m/s^2 over 2 s, holds still for a block or two at each of its peaks, and had been called
+    a turn of 4.5 deg).
+    For a body that only translates (a rail) every still stretch is a rest; such a stretch is a
+    turn, which no accelerometer alone tells from an acceleration held as long (a constant
+    acceleration of a second or more is taken for a turn).  Returns (its largest angle from the
+    first rest's f, deg, over such stretches; the first such stretch's first and last sample) or
+    None.  ``f`` in m/s^2, (n, 3)."""
     f = np.asarray(f, float)
     at_rest = np.asarray(at_rest, bool)
     if not at_rest.any():
         return None
     ref = f[at_rest][: max(rp.hold, 1)].mean(axis=0)
-    hold = max(int(rp.hold), 2)
+    blocks = ((i, m) for i, m, off in _still_blocks(f, at_rest, rp)
+              if not off and float(np.linalg.norm(m - ref)) > rp.ref_max)
     worst, first = 0.0, None
-    for i, m, off in _still_blocks(f, at_rest, rp):
-        if off or float(np.linalg.norm(m - ref)) <= rp.ref_max:
-            continue
-        cosang = float(np.dot(m, ref) / (np.linalg.norm(m) * np.linalg.norm(ref)))
-        ang = math.degrees(math.acos(min(1.0, max(-1.0, cosang))))
-        worst = max(worst, ang)
-        first = _grow(first, i, hold)
+    for a, b, means in _held_stretches(blocks, max(int(rp.hold), 2), rp.dev_max):
+        first = first or (a, b)
+        for m in means:
+            cosang = float(np.dot(m, ref) / (np.linalg.norm(m) * np.linalg.norm(ref)))
+            worst = max(worst, math.degrees(math.acos(min(1.0, max(-1.0, cosang)))))
     return None if first is None else (worst, first[0], first[1])
 
 
