@@ -10,7 +10,7 @@ import pytest
 
 from accelcal import estimators as E
 from accelcal.calibration import Calibration, save_calibration
-from accelcal.device import Device, default_triad, save_device
+from accelcal.device import GRAVITY_REMOVED_TEXT, Device, default_triad, save_device
 from accelcal.errors import InputError
 from accelcal.estimators.trend import trend_bound
 from accelcal.recording import recording_from_arrays, write_recording
@@ -139,14 +139,15 @@ def test_a_still_stretch_without_gravity_is_named_so_not_a_scale(tmp_path, capfd
     """A phone app's user acceleration (Sensor Logger's Accelerometer.csv: gravity taken out, |f| 0.03 g
     where the phone lies still) had been told 'the calibration's scale is off (a chip's nominal
     scale?); calibrate it first'.  No scale takes 1 g to 0.03 g: the refusal says gravity has been
-    removed and which export holds it."""
+    removed and which export holds it, in the wording convert's note and the no-rest refusal use
+    (device.GRAVITY_REMOVED_TEXT: displacement had its own sentence)."""
     d = default_triad()
     save_device(d, tmp_path / "dev.json")
     write_recording(tmp_path / "rec.csv", _scaled_still(d, 0.03))
     rc, _, err, _ = run(["displacement", "--device", tmp_path / "dev.json", "--calibration", "nominal",
                          tmp_path / "rec.csv", "-o", tmp_path / "out.csv"], capfd)
     assert rc == 2 and one_refusal(err), err
-    assert "gravity has been removed" in err and "TotalAcceleration.csv" in err, err
+    assert GRAVITY_REMOVED_TEXT in err and "TotalAcceleration.csv" in err, err
     assert "scale" not in err.split("|f| is ")[-1] and not (tmp_path / "out.csv").exists()
 
 

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from ..device import GRAVITY_REMOVED_G
+from ..device import GRAVITY_REMOVED_G, GRAVITY_REMOVED_TEXT
 from ..errors import InputError
 from .common import time_span
 from .rest import RestParams, rest_dated_back, rest_on_g
@@ -81,12 +81,10 @@ def scale_cause(cal, norm: float, g: float) -> str:
     (``cal.extra['source']``, its file, else 'the calibration given'), with its method and model and
     how far |f| is off: a model that estimates no scale (jig-free 'offset') keeps the device file's
     nominal scale; one that does was made for another device, range or temperature.  Below
-    ``GRAVITY_REMOVED_G`` of g no scale is to blame: the readings hold no gravity."""
+    ``GRAVITY_REMOVED_G`` of g no scale is to blame: the readings hold no gravity (the one wording,
+    ``device.GRAVITY_REMOVED_TEXT``)."""
     if norm < GRAVITY_REMOVED_G * g:
-        return (f"|f| is {norm / g:.2g} g where the body is still, and any sensor at rest reads 1 g: gravity has been "
-                "removed from these readings (a phone's linear or user acceleration, such as Sensor Logger's "
-                "Accelerometer.csv); record the accelerometer's own readings (TotalAcceleration.csv or "
-                "AccelerometerUncalibrated.csv, phyphox's 'Acceleration with g')")
+        return f"|f| is {norm / g:.2g} g where the body is still, and any sensor at rest reads 1 g: {GRAVITY_REMOVED_TEXT}"
     if cal is None or getattr(cal, "method", "nominal") == "nominal":
         return "the calibration's scale is off (a chip's nominal scale?); calibrate it first (accelcal calibrate) and use that calibration"
     extra = cal.extra if isinstance(cal.extra, dict) else {}
