@@ -24,7 +24,7 @@ from .motion_checks import (ERROR_BOUND_COVERS, motion_error_warnings, motion_er
                             turned_motions, turned_text, turned_warnings)
 from .rest import (REST_AT_REST, REST_QUIET, RestParams, default_rest_params, motion_window, rest_dated_back,
                    rest_detect, rest_on_g)
-from .trend import rest_without_trend
+from .trend import TREND_BLOCK_HOLDS, rest_correlation, rest_without_trend
 from ..triad import triad_forces
 
 __all__ = ["RESAMPLE_HINT", "retro_correct", "displace_offline", "displacement_from_recording"]
@@ -451,7 +451,9 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     cut, left_out, kept = _left_out(t, at, closed, long_anchors, is_open, [] if keep_turned else turns, rec,
                                     open_note)
     zps = [z for _, _, z in kept]
-    errs = motion_errors(f_host, pp, at, kept, f_sigma, dt, ax)
+    # the noise's correlation as the rests show it widens what the noise leaves of each motion
+    rho = rest_correlation(at, f_host, max(2, TREND_BLOCK_HOLDS * rp.hold), rp.hold)
+    errs = motion_errors(f_host, pp, at, kept, f_axes, dt, ax, rho)
     warnings += motion_error_warnings(t, errs, f_sigma, dt, g, rec)
     turned = still_but_turned(f_host, at, rp)
     still_turned = None
