@@ -4,6 +4,7 @@ tested per axis against that axis's noise, widened by the noise's correlation as
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
@@ -71,12 +72,17 @@ def noise_correlation(parts, maxlag: int) -> np.ndarray:
         r = x - np.polynomial.polynomial.polyval(t, np.polynomial.polynomial.polyfit(t, x, 1)).T
         c = np.full((L, 3), np.nan)
         c[:min(L, m)] = [np.einsum("ij,ij->j", r[:m - k], r[k:]) / (m - k) for k in range(min(L, m))]
+        # an axis constant over the stretch (noise below the code step) leaves only the line fit's
+        # rounding, ~1e-15 of its level and smooth (it read as correlation 0.998): no estimate
+        c[:, c[0] <= (1e-12 * max(1.0, float(np.max(np.abs(x))))) ** 2] = np.nan
         with np.errstate(divide="ignore", invalid="ignore"):
             est.append(c / c[0])
         N += m
     if not est:
         return rho
-    with np.errstate(all="ignore"):
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        # a constant axis (noise below the code step) has no estimate at any lag: white, below
+        warnings.simplefilter("ignore", RuntimeWarning)
         med = np.nanmedian(np.array(est), axis=0)          # (L, 3)
     for j in range(3):
         cj = med[:, j]
