@@ -336,12 +336,13 @@ def test_a_sample_written_twice_is_left_out_with_a_note(tmp_path, capfd):
     assert not (tmp_path / "other.out.csv").exists()
 
 
-#: the z channel's gain error of a chip read with its nominal scale (a real MPU-6050: |f| = 0.949 g)
-LOW_GAIN = 0.951
+#: the z channel's gain error of a chip read with its nominal scale (a real MPU-6050 read 0.949 g: |f|
+#: 0.50 m/s^2 below g, at the rest test's edge); here 0.54 m/s^2 below, beyond it
+LOW_GAIN = 0.945
 
 
-def _low_z(d, turn_deg, sigma=0.04, seed=3):
-    """A triad whose z channel reads LOW_GAIN of its nominal scale, still for 3 s with f along
+def _low_z(d, turn_deg, sigma=0.04, seed=3, gain=LOW_GAIN):
+    """A triad whose z channel reads ``gain`` of its nominal scale, still for 3 s with f along
     body z, then turned by ``turn_deg`` about y (2 s, smooth), still for 3 s, 2 s of travel
     (0.3 m, min-jerk, along the world's horizontal), still for 3 s; white noise of ``sigma`` m/s^2."""
     t = np.arange(int(13 * RATE)) / RATE
@@ -352,36 +353,40 @@ def _low_z(d, turn_deg, sigma=0.04, seed=3):
     c, sn = np.cos(th), np.sin(th)
     body = np.column_stack([c * acc + sn * G, np.zeros_like(t), -sn * acc + c * G])
     rng = np.random.default_rng(seed)
-    body = (body + sigma * rng.standard_normal(body.shape)) * np.array([1.0, 1.0, LOW_GAIN])
+    body = (body + sigma * rng.standard_normal(body.shape)) * np.array([1.0, 1.0, gain])
     return recording_from_arrays(t, np.round(d.zero_counts + body * d.counts_per_mps2).astype(np.int64))
 
 
 @pytest.mark.parametrize("engine, form", [("float", "offline"), ("float", "stream"), ("fixed", "stream")])
 def test_a_still_start_whose_f_is_off_g_is_said_to_be_the_scale_not_a_turn(engine, form):
-    """A real MPU-6050 read with its nominal scale (|f| = 0.949 g, at the edge of the rest test's
-    g +- 0.5 m/s^2) is still for 24 s, then turned: 'does not start at rest' named no reason and
-    the next warning called the still start 'turned from the first rest'.  Here z reads 0.951 g
-    (9.326 m/s^2, 0.48 sigma of the noise above the band's 9.307): Phi(-0.48) = 31 % of its samples
-    fall below the band (5 sigma of a share of 300 samples: +-13 %), each breaking the quiet run a
-    rest needs.  Both the warning and the no-rest error say so, with |f| and the band, and blame the
-    scale; no 'turned' warning names the start."""
+    """A chip read with its nominal scale whose z reads 0.945 g (9.267 m/s^2, 0.54 m/s^2 below g, beyond
+    the rest test's g +- 0.5 for a rest's mean) is still for 3 s, then turned: 'does not start at rest'
+    had named no reason and the next warning called the still start 'turned from the first rest'.  The
+    offline form leaves the still start out (its mean |f|) and starts at the still stretch after the
+    turn, with a warning that blames the scale; the streaming forms, whose detector took the start for
+    its first rest (each of its samples within the band widened by the noise), have no rest at |f| = g
+    after it (their reference is that start's f) and refuse, blaming the scale.  Still throughout at
+    that scale: no rest at all, and the error says why (it had blamed a body that "creeps or turns
+    slowly throughout")."""
     d = dataclasses.replace(default_triad(), noise_mps2=0.04)
     cal = Calibration.nominal(d)
-    c = E.displacement_from_recording(d, cal, _low_z(d, 90.0), engine, form=form)
-    start = [w for w in c.warnings if "does not start at rest" in w]
-    assert len(start) == 1, c.warnings
-    w = start[0]
+    if form == "offline":
+        c = E.displacement_from_recording(d, cal, _low_z(d, 90.0), engine, form=form)
+        start = [w for w in c.warnings if "does not start at rest" in w]
+        assert len(start) == 1, c.warnings
+        w = start[0]
+        assert not any("turned from the first rest" in x and "t = 0.000" in x for x in c.warnings), c.warnings
+    else:
+        with pytest.raises(InputError) as ei:
+            E.displacement_from_recording(d, cal, _low_z(d, 90.0), engine, form=form)
+        w = str(ei.value)
+        assert "turned" not in w, w
     assert "the calibration's scale is off" in w and "calibrate it first" in w, w
     t0, t1 = (float(x) for x in w.split("still at t = ")[1].split(" s")[0].split("-"))
     assert t0 == 0.0 and 2.5 <= t1 <= 3.5, w            # (the smooth turn's first 0.5 s: < 3 deg)
     norm = float(w.split("read |f| = ")[1].split(" ")[0])
     assert abs(norm - LOW_GAIN * G) < 5 * 0.04 / math.sqrt(250), w
-    share = float(w.split("m/s^2, ")[1].split(" %")[0])
-    assert 18 <= share <= 44, w
     assert f"{G:g} +- 0.5 m/s^2" in w, w
-    assert not any("turned from the first rest" in x and "t = 0.000" in x for x in c.warnings), c.warnings
-    # still throughout at that scale: no rest at all, and the error says why (it had blamed a
-    # body that "creeps or turns slowly throughout")
     with pytest.raises(InputError) as ei:
         E.displacement_from_recording(d, cal, _low_z(d, 0.0), engine, form=form)
     msg = str(ei.value)
@@ -435,3 +440,45 @@ def test_a_rest_test_wide_only_by_coarse_codes_is_no_vibration(sigma_counts, war
         dev = E.default_rest_params(d, f_sigma=f_sigma).dev_max
         assert 0.4 < dev < 8 * E.displacement_checks.rest_noise_max(q), dev
         assert abs(c["p_x"][-1] - 1.0) < 0.05, c["p_x"][-1]
+
+
+def _sine_stroke(rate, sigma, tip_deg=0.0, seed=1):
+    """A level triad (16384 counts per g, no noise stated), 2 s at rest, 0.5 m along x with one sine
+    period of acceleration (peak 0.785 m/s^2) in 2 s, 2 s at rest; with ``tip_deg``, the body then tips
+    about y by that much (0.5 s, smooth), holds still 2 s, tips back (0.5 s) and rests 2 s.  White
+    noise of ``sigma`` m/s^2."""
+    d = Device(name="triad", sample_rate_hz=rate, gravity_mps2=G, raw_min=-32768, raw_max=32767,
+               positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, 16384 / G),
+               zero_counts=np.zeros(3))
+    t = np.arange(int((6.0 if tip_deg == 0.0 else 11.0) * rate)) / rate
+    a = np.where((t >= 2.0) & (t < 4.0), 0.5 * 2 * np.pi / 4.0 * np.sin(np.pi * (t - 2.0)), 0.0)
+    up, down = np.clip((t - 6.0) / 0.5, 0.0, 1.0), np.clip((t - 8.5) / 0.5, 0.0, 1.0)
+    th = np.radians(tip_deg) * ((3 * up**2 - 2 * up**3) - (3 * down**2 - 2 * down**3))
+    body = np.column_stack([a * np.cos(th) - G * np.sin(th), np.zeros_like(t), a * np.sin(th) + G * np.cos(th)])
+    rng = np.random.default_rng(seed)
+    raw = np.round((body + sigma * rng.standard_normal(body.shape)) * d.counts_per_mps2)
+    return d, recording_from_arrays(t, raw.astype(np.int64))
+
+
+@pytest.mark.parametrize("rate, sigma", [(50.0, 0.01), (50.0, 0.05), (200.0, 0.05), (1000.0, 0.05), (100.0, 0.02)])
+def test_the_flat_peak_of_a_smooth_strokes_acceleration_is_no_turn(rate, sigma):
+    """One sine period of acceleration moves a level triad 0.5 m: its flat peak (0.785 m/s^2) holds
+    still for a block or two of the rest test, and was called a still body 'turned from the first
+    rest (by up to 4.5 deg) ... the result after it is not valid' on a right answer (a tester's grid:
+    50 Hz at 0.01 and 0.05 m/s^2 of noise, 200 and 1000 Hz at 0.05).  A turned body stays still, at
+    least TREND_BLOCK_HOLDS blocks (1 s): no warning on the stroke, in every engine and seed, and the
+    offline form's answer right; a body that tips by 10 deg and holds for 2 s is still warned of.  (At
+    0.05 m/s^2 the streaming detector, whose test is then 0.25 m/s^2 wide, finds a rest about the
+    stroke's zero crossing, which the trend test names: its answer is not held to 0.5 m here.)"""
+    for engine in ("float", "fixed"):
+        for seed in (1, 2, 3):
+            d, rec = _sine_stroke(rate, sigma, seed=seed)
+            c = E.displacement_from_recording(d, Calibration.nominal(d), rec, engine)
+            assert not any("turned" in w for w in c.warnings), (engine, seed, c.warnings)
+            assert engine == "fixed" or abs(c["p_x"][-1] - 0.5) < 0.01, (engine, seed, c["p_x"][-1])
+        d, rec = _sine_stroke(rate, sigma, tip_deg=10.0)
+        c = E.displacement_from_recording(d, Calibration.nominal(d), rec, engine)
+        turned = [w for w in c.warnings if "turned from the first rest" in w]
+        assert len(turned) == 1, (engine, c.warnings)
+        assert abs(float(turned[0].split("by up to ")[1].split(" deg")[0]) - 10.0) < 1.0, turned
+        assert 6.0 <= float(turned[0].split("still at t = ")[1].split("-")[0]) <= 7.0, turned

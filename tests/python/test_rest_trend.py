@@ -3,6 +3,8 @@ noise's correlation as the rests show it.  A rest of white noise with one noisy 
 of AR(1)-filtered noise (a low-pass chip, a hand's tremor), hold no trend: over many draws the
 blocks taken for one stay within a binomial bound at the stated false-alarm rate; a real trend is
 still found.  Every recording is built here."""
+import warnings
+
 import numpy as np
 from scipy.signal import lfilter
 from scipy.stats import binom, norm
@@ -11,7 +13,8 @@ from accelcal import estimators as E
 from accelcal.calibration import Calibration
 from accelcal.device import Device
 from accelcal.estimators.rest import RestParams
-from accelcal.estimators.trend import TREND_FALSE_ALARM, rest_widening, rest_without_trend, trend_bound, trend_widening
+from accelcal.estimators.trend import (TREND_FALSE_ALARM, noise_correlation, rest_widening, rest_without_trend,
+                                      trend_bound, trend_widening)
 from accelcal.recording import recording_from_arrays
 from estimator_devices import G
 
@@ -125,3 +128,17 @@ def test_a_trend_on_a_quiet_axis_is_not_hidden_by_a_noisy_one():
     assert len(trend) == 1, c.warnings
     rest = c["rest"].astype(bool)
     assert not rest[ramp.start + HOLD:ramp.stop - HOLD].any() and rest[:int(2.5 * RATE)].all()
+
+
+def test_a_constant_axis_reads_as_white_noise_without_a_warning():
+    """Noise below the code step leaves an axis constant at rest: its autocorrelation has no estimate
+    at any lag (0 / 0), and numpy's nanmedian printed 'RuntimeWarning: All-NaN slice encountered' to
+    the user of accelcal displacement (a 1600 Hz triad at 0.003 m/s^2 of noise); an axis constant at
+    9.8 m/s^2 left the line fit's rounding (~1e-15, smooth), read as correlation 0.998 at lag 1 (its
+    trend test widened ~20x).  White noise on such axes, no warning."""
+    rng = np.random.default_rng(0)
+    f = np.column_stack([rng.standard_normal(400), np.zeros(400), np.full(400, 9.8)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rho = noise_correlation([f[:200], f[200:]], 10)
+    assert rho[0].tolist() == [1.0, 1.0, 1.0] and np.all(rho[1:, 1:] == 0.0)

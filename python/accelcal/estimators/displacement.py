@@ -265,7 +265,6 @@ def displace_error_bound(fixed: dict, twin: dict, three_axis: bool) -> tuple[np.
     n = len(fixed["flags"])
     bv, bp = np.zeros(n), np.zeros(n)
     Ev, Ep = 0.0, 0.0
-    vmag = np.abs(twin["v"]).max(axis=1) if n else np.zeros(0)
     for i in range(n):
         fl = int(fixed["flags"][i])
         if fl & (DISP_MOVING | DISP_SEG_END):

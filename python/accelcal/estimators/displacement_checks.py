@@ -9,14 +9,15 @@ import math
 
 import numpy as np
 
-from ..device import GRAVITY_REMOVED_G
+from ..device import GRAVITY_REMOVED_G, GRAVITY_REMOVED_TEXT
+from ..errors import InputError
 from .common import time_span
-from .rest import RestParams
+from .rest import RestParams, rest_dated_back, rest_on_g
 from .trend import TREND_BLOCK_HOLDS, trend_bound
 
 __all__ = ["REST_DEV_WARN_MPS2", "REST_NOISE_MAX_MPS2", "rest_noise_max", "wide_rest_warning", "no_rest_reason",
            "scale_off", "scale_cause", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned",
-           "trend_warnings", "final_trend_note"]
+           "streamed_off_g", "trend_warnings", "final_trend_note"]
 
 
 #: the noisiest sensor at rest of issue 13's range, m/s^2 per axis (its 5 sigma: 0.25)
@@ -59,31 +60,19 @@ def wide_rest_warning(dev_max: float, q_f: float) -> list[str]:
             "file"]
 
 
-def _band_share(blk, rp: RestParams) -> float:
-    """The share of the samples ``blk`` (m, 3), m/s^2, whose |f| falls outside the rest test's band
-    g +- g_tol (0 when the |f| test is off): one such sample breaks the quiet run a rest needs."""
-    if rp.g is None:
-        return 0.0
-    lo, hi = rp.g2_bounds()
-    g2 = np.sum(np.asarray(blk, float) ** 2, axis=1)
-    return float(np.mean((g2 < lo) | (g2 > hi)))
-
-
-def scale_off(norm: float, share: float, rp: RestParams) -> bool:
-    """Whether a still stretch whose mean |f| is ``norm`` (m/s^2) and whose samples fall outside
-    the rest test's band in the ``share`` given is kept from being a rest by the scale: its mean
-    sits within half the test's width (dev_max / 2, 2.5 sigma) of the band's edge or beyond it.
-    Nearer g, the samples that leave the band are the noise's (a test nearly as wide as the band:
-    an 8-bit sensor's 0.47 m/s^2 against 0.5), not the scale's."""
-    return rp.g is not None and share > 0.0 and abs(norm - rp.g) >= rp.g_tol - 0.5 * rp.dev_max
+def scale_off(norm: float, rp: RestParams) -> bool:
+    """Whether a still stretch whose mean |f| is ``norm`` (m/s^2) is kept from being a rest by its
+    |f|: the mean lies beyond g +- g_tol (:func:`.rest.rest_on_g`'s test of a rest; False when the
+    |f| test is off).  A mean within it is no cause, whatever the noise does to single samples."""
+    return rp.g is not None and abs(norm - rp.g) > rp.g_tol
 
 
 def still_off_g_text(t, off, rp: RestParams, rec=None, cal=None) -> str:
     """The words for :func:`still_off_g`'s stretch ``off`` (``t`` in s; ``rec`` names its rows;
     ``cal`` the calibration used, :func:`scale_cause`)."""
-    a, b, norm, share = off
+    a, b, norm = off
     return (f"the body is still at {time_span(t, a, b, rec)} but that is no rest: it "
-            f"{off_g_text(norm, share, rp, cal)}")
+            f"{off_g_text(norm, rp, cal)}")
 
 
 def scale_cause(cal, norm: float, g: float) -> str:
@@ -92,12 +81,10 @@ def scale_cause(cal, norm: float, g: float) -> str:
     (``cal.extra['source']``, its file, else 'the calibration given'), with its method and model and
     how far |f| is off: a model that estimates no scale (jig-free 'offset') keeps the device file's
     nominal scale; one that does was made for another device, range or temperature.  Below
-    ``GRAVITY_REMOVED_G`` of g no scale is to blame: the readings hold no gravity."""
+    ``GRAVITY_REMOVED_G`` of g no scale is to blame: the readings hold no gravity (the one wording,
+    ``device.GRAVITY_REMOVED_TEXT``)."""
     if norm < GRAVITY_REMOVED_G * g:
-        return (f"|f| is {norm / g:.2g} g where the body is still, and any sensor at rest reads 1 g: gravity has been "
-                "removed from these readings (a phone's linear or user acceleration, such as Sensor Logger's "
-                "Accelerometer.csv); record the accelerometer's own readings (TotalAcceleration.csv or "
-                "AccelerometerUncalibrated.csv, phyphox's 'Acceleration with g')")
+        return f"|f| is {norm / g:.2g} g where the body is still, and any sensor at rest reads 1 g: {GRAVITY_REMOVED_TEXT}"
     if cal is None or getattr(cal, "method", "nominal") == "nominal":
         return "the calibration's scale is off (a chip's nominal scale?); calibrate it first (accelcal calibrate) and use that calibration"
     extra = cal.extra if isinstance(cal.extra, dict) else {}
@@ -115,20 +102,20 @@ def scale_cause(cal, norm: float, g: float) -> str:
             "as it is now")
 
 
-def off_g_text(norm: float, share: float, rp: RestParams, cal=None) -> str:
-    """Why a still stretch is no rest when its |f| strays from g: its mean |f| (``norm``, m/s^2),
-    the ``share`` of its samples outside the rest test's band g +- g_tol, and the cause
-    (:func:`scale_cause` of the calibration ``cal`` used)."""
-    return (f"read |f| = {norm:.4g} m/s^2, {100 * share:.0f} % of the samples outside the rest test's "
-            f"{rp.g:g} +- {rp.g_tol:g} m/s^2: {scale_cause(cal, norm, rp.g)}")
+def off_g_text(norm: float, rp: RestParams, cal=None) -> str:
+    """Why a still stretch is no rest when its |f| strays from g: its mean |f| (``norm``, m/s^2)
+    beyond the rest test's g +- g_tol, and the cause (:func:`scale_cause` of the calibration ``cal``
+    used)."""
+    return (f"read |f| = {norm:.4g} m/s^2 on average, beyond the rest test's {rp.g:g} +- {rp.g_tol:g} m/s^2: "
+            f"{scale_cause(cal, norm, rp.g)}")
 
 
 def no_rest_reason(f, t, rp: RestParams, cal=None) -> str:
     """Why no rest was found, for the error: the stillest block of ``rp.hold`` samples (blocks
     at a stride of half a block), how far its f strays from its mean, and, when it is still
-    enough but some of its samples' |f| fall outside the rest test's band, that |f| (a
-    calibration whose scale is off: an uncalibrated chip 7.7 % high read with its nominal scale;
-    a chip 5 % low whose mean |f| sits at the band's edge; ``cal``, the calibration used, named by
+    enough but its mean |f| lies beyond the rest test's g +- g_tol, that |f| (a calibration whose
+    scale is off: an uncalibrated chip 7.7 % high read with its nominal scale; ``cal``, the
+    calibration used, named by
     :func:`scale_cause`).  ``f`` in m/s^2, (n, 3); ``t`` in s."""
     f = np.asarray(f, float)
     hold = max(int(rp.hold), 2)
@@ -150,18 +137,17 @@ def no_rest_reason(f, t, rp: RestParams, cal=None) -> str:
     if dev > rp.dev_max:
         return (f"the stillest {hold} samples ({where}) stray {dev:.3g} m/s^2 from their mean, beyond the rest's "
                 f"{rp.dev_max:.3g}: the body never stops")
-    share = _band_share(f[i:i + hold], rp)
-    if not scale_off(norm, share, rp):
+    if not scale_off(norm, rp):
         return (f"the stillest {hold} samples ({where}) stray only {dev:.3g} m/s^2 from their own mean and read "
                 f"|f| = {norm:.4g} m/s^2, but the rest detector's running mean never settles on a still stretch "
                 "that long: the body creeps or turns slowly throughout")
-    return f"the stillest {hold} samples ({where}) are still (within {dev:.3g} m/s^2) but {off_g_text(norm, share, rp, cal)}"
+    return f"the stillest {hold} samples ({where}) are still (within {dev:.3g} m/s^2) but {off_g_text(norm, rp, cal)}"
 
 
 def _still_blocks(f, at_rest, rp: RestParams):
     """Each block of ``rp.hold`` samples (at a stride of a block) not at rest whose f stays within
-    ``rp.dev_max`` of its mean: (its first sample, its mean f in m/s^2, the share of its samples
-    outside the |f| band when that is the scale's doing (:func:`scale_off`), else 0)."""
+    ``rp.dev_max`` of its mean: (its first sample, its mean f in m/s^2, whether its mean |f| keeps
+    it from being a rest (:func:`scale_off`))."""
     hold = max(int(rp.hold), 2)
     for i in range(0, f.shape[0] - hold + 1, hold):
         blk = f[i:i + hold]
@@ -169,8 +155,7 @@ def _still_blocks(f, at_rest, rp: RestParams):
             continue
         m = blk.mean(axis=0)
         if float(np.max(np.abs(blk - m))) <= rp.dev_max:
-            share = _band_share(blk, rp)
-            yield i, m, share if scale_off(float(np.linalg.norm(m)), share, rp) else 0.0
+            yield i, m, scale_off(float(np.linalg.norm(m)), rp)
 
 
 def _grow(first, i: int, hold: int):
@@ -181,10 +166,32 @@ def _grow(first, i: int, hold: int):
     return (first[0], i + hold - 1) if first[1] >= i - 1.5 * (hold - 1) else first
 
 
-def still_off_g(f, at_rest, rp: RestParams) -> tuple[int, int, float, float] | None:
+def _held_stretches(blocks, hold: int, dev_max: float):
+    """The stretches of ``blocks`` ((first sample, mean f (3,) in m/s^2) of still blocks of ``hold``
+    samples, in order) in which the body holds one f: each grown block by block (:func:`_grow`) while
+    the block's mean stays within ``dev_max`` (m/s^2, each axis) of the stretch's first, that hold
+    TREND_BLOCK_HOLDS blocks or more (1 s at the default hold: a hand that pauses while it
+    accelerates, or the flat peaks of a smooth stroke's acceleration, hold that acceleration for a
+    moment; a body set down off g or turned stays so): (first sample, last sample, the blocks' means),
+    lazily in order."""
+    run = None
+    for i, m in blocks:
+        if (run is not None and _grow(tuple(run[:2]), i, hold) != tuple(run[:2])
+                and float(np.max(np.abs(m - run[2][0]))) <= dev_max):
+            run[1] = i + hold - 1
+            run[2].append(m)
+            continue
+        if run is not None and len(run[2]) >= TREND_BLOCK_HOLDS:
+            yield tuple(run)
+        run = [i, i + hold - 1, [m]]
+    if run is not None and len(run[2]) >= TREND_BLOCK_HOLDS:
+        yield tuple(run)
+
+
+def still_off_g(f, at_rest, rp: RestParams) -> tuple[int, int, float] | None:
     """The first stretch where the body is still (blocks of ``rp.hold`` samples within
-    ``rp.dev_max`` of their mean) and not at rest because some of its samples' |f| fall outside
-    the rest test's band g +- g_tol with a mean |f| off g (:func:`scale_off`), for TREND_BLOCK_HOLDS
+    ``rp.dev_max`` of their mean) and not at rest because its mean |f| lies beyond the rest test's
+    g +- g_tol (:func:`scale_off`), for TREND_BLOCK_HOLDS
     blocks or more (1 s at the default hold: a hand that pauses while it accelerates holds that
     acceleration for a moment, a chip read with the wrong scale for as long as it is still): a
     calibration whose scale is off (a chip's gain error read with its nominal scale), not a turn
@@ -199,58 +206,82 @@ def still_off_g(f, at_rest, rp: RestParams) -> tuple[int, int, float, float] | N
 
     Returns
     -------
-    (int, int, float, float) or None
-        The stretch's first and last sample, its mean |f| (m/s^2) and the share of its samples
-        outside the band; None when there is none (or the |f| test is off).
+    (int, int, float) or None
+        The stretch's first and last sample and its mean |f| (m/s^2); None when there is none (or
+        the |f| test is off).
     """
     f = np.asarray(f, float)
     at_rest = np.asarray(at_rest, bool)
     if rp.g is None:
         return None
-    hold = max(int(rp.hold), 2)
-    runs = []                   # each stretch: [first sample, last sample, the blocks' |mean f|, shares]
-    for i, m, share in _still_blocks(f, at_rest, rp):
-        if share == 0.0:
-            continue
-        if runs and _grow(tuple(runs[-1][:2]), i, hold) != tuple(runs[-1][:2]):
-            runs[-1][1] = i + hold - 1
-        elif runs and len(runs[-1][2]) >= TREND_BLOCK_HOLDS:
-            break
-        else:
-            runs.append([i, i + hold - 1, [], []])
-        runs[-1][2].append(float(np.linalg.norm(m)))
-        runs[-1][3].append(share)
-    for a, b, norms, shares in runs:
-        if len(norms) >= TREND_BLOCK_HOLDS:
-            return a, b, float(np.mean(norms)), float(np.mean(shares))
+    blocks = ((i, m) for i, m, off in _still_blocks(f, at_rest, rp) if off)
+    for a, b, means in _held_stretches(blocks, max(int(rp.hold), 2), rp.dev_max):
+        return a, b, float(np.mean(np.linalg.norm(means, axis=1)))
     return None
 
 
 def still_but_turned(f, at_rest, rp: RestParams) -> tuple[float, int, int] | None:
     """A stretch where the body is still but not at rest: blocks of ``rp.hold`` samples whose
-    f stays within ``rp.dev_max`` of its mean with |f| within ``rp.g_tol`` of g (not one kept
-    from a rest by the scale, :func:`still_off_g`'s: no turn is told there), away from the
-    rest's direction by more than ``rp.ref_max``.  For a body that only translates (a rail)
-    every still stretch is a rest; such a stretch is a turn, which no accelerometer alone
-    tells from an acceleration.  Returns (its largest angle from the first rest's f, deg;
-    the first such stretch's first and last sample) or None.  ``f`` in m/s^2, (n, 3)."""
+    f stays within ``rp.dev_max`` of its mean with its mean |f| within ``rp.g_tol`` of g (not one
+    kept from a rest by the scale, :func:`still_off_g`'s: no turn is told there), away from the
+    rest's direction by more than ``rp.ref_max``, for TREND_BLOCK_HOLDS blocks or more
+    (:func:`_held_stretches`: the flat peak of a smooth stroke's acceleration, one sine period of
+    0.785 m/s^2 over 2 s, holds still for a block or two at each of its peaks, and had been called
+    a turn of 4.5 deg).
+    For a body that only translates (a rail) every still stretch is a rest; such a stretch is a
+    turn, which no accelerometer alone tells from an acceleration held as long (a constant
+    acceleration of a second or more is taken for a turn).  Returns (its largest angle from the
+    first rest's f, deg, over such stretches; the first such stretch's first and last sample) or
+    None.  ``f`` in m/s^2, (n, 3)."""
     f = np.asarray(f, float)
     at_rest = np.asarray(at_rest, bool)
     if not at_rest.any():
         return None
     ref = f[at_rest][: max(rp.hold, 1)].mean(axis=0)
-    hold = max(int(rp.hold), 2)
+    blocks = ((i, m) for i, m, off in _still_blocks(f, at_rest, rp)
+              if not off and float(np.linalg.norm(m - ref)) > rp.ref_max)
     worst, first = 0.0, None
-    for i, m, share in _still_blocks(f, at_rest, rp):
-        if share > 0.0 or float(np.linalg.norm(m - ref)) <= rp.ref_max:
-            continue
-        if rp.g is not None and abs(float(np.linalg.norm(m)) - rp.g) > rp.g_tol:
-            continue
-        cosang = float(np.dot(m, ref) / (np.linalg.norm(m) * np.linalg.norm(ref)))
-        ang = math.degrees(math.acos(min(1.0, max(-1.0, cosang))))
-        worst = max(worst, ang)
-        first = _grow(first, i, hold)
+    for a, b, means in _held_stretches(blocks, max(int(rp.hold), 2), rp.dev_max):
+        first = first or (a, b)
+        for m in means:
+            cosang = float(np.dot(m, ref) / (np.linalg.norm(m) * np.linalg.norm(ref)))
+            worst = max(worst, math.degrees(math.acos(min(1.0, max(-1.0, cosang)))))
     return None if first is None else (worst, first[0], first[1])
+
+
+def streamed_off_g(t, at, quiet, f, rp: RestParams, rec=None, cal=None) -> list[str]:
+    """The streaming detector's rests whose mean |f| is off g (:func:`.rest.rest_on_g`): it tests
+    each sample (the firmware cannot look back) and takes them as rests.  The warning (one line, or
+    none) names the first; none kept: the refusal, as the offline form's (it leaves them out).
+
+    Parameters
+    ----------
+    t : ndarray (n,)
+        s.
+    at, quiet : ndarray (n,) bool
+        The detector's rests (as declared) and quiet samples.
+    f : ndarray (n, 3)
+        Specific force, m/s^2.
+    rp : RestParams
+    rec, cal : optional
+        Name the rows and the calibration used (:func:`.displacement_checks.still_off_g_text`).
+
+    Raises
+    ------
+    InputError
+        Every rest is off g.
+    """
+    kept, off = rest_on_g(rest_dated_back(at, quiet, f, rp), f, rp)
+    if not off:
+        return []
+    words = still_off_g_text(t, (off[0][0], off[0][1] - 1, off[0][2]), rp, rec, cal)
+    if not kept.any():
+        raise InputError(rec.source if rec is not None else "recording",
+                         f"displacement: no rest was detected anywhere in the recording: {words}; the stop-to-stop "
+                         "method needs a rest at both ends of each motion")
+    return [f"displacement: {words}; the streaming detector took {len(off)} such stretch(es) as rests (it tests "
+            f"each sample, whose |f| may stray by the noise's {rp.g_noise:.3g} m/s^2 more): the motions about them "
+            "are doubtful; the offline form (--form offline) leaves them out"]
 
 
 def trend_warnings(t, trends, rp: RestParams, streamed: bool, rec=None) -> list[str]:

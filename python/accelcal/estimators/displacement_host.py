@@ -19,11 +19,12 @@ from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OP
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
 from .displacement_checks import (REST_DEV_WARN_MPS2, final_trend_note, no_rest_reason, still_but_turned, still_off_g,
-                                  still_off_g_text, trend_warnings, wide_rest_warning)
+                                  still_off_g_text, streamed_off_g, trend_warnings, wide_rest_warning)
 from .motion_checks import (ERROR_BOUND_COVERS, motion_error_warnings, motion_errors, rotated_motions, rotated_text,
                             turned_motions, turned_text, turned_warnings)
-from .rest import REST_AT_REST, REST_QUIET, RestParams, default_rest_params, motion_window, rest_dated_back
-from .trend import rest_without_trend
+from .rest import (REST_AT_REST, REST_QUIET, RestParams, default_rest_params, motion_window, rest_dated_back,
+                   rest_detect, rest_on_g)
+from .trend import TREND_BLOCK_HOLDS, rest_correlation, rest_without_trend
 from ..triad import triad_forces
 
 __all__ = ["RESAMPLE_HINT", "retro_correct", "displace_offline", "displacement_from_recording"]
@@ -164,6 +165,28 @@ def displace_offline(f, p: DisplaceParams, rest_flags=None) -> dict:
         res["p"][last:] = pos
         res["p_raw"][last:] = pos_raw
     return res
+
+
+def _offline_rests(f, p: DisplaceParams):
+    """The offline form's rest decisions: the detector's flags (n,), its rests (each from where it
+    began) whose mean |f| lies within g_tol of g, and those that do not (:func:`.rest.rest_on_g`).
+    The detector takes the first rest's mean f for its reference, which every later rest must match:
+    when that first rest is off g (left out), the detector runs again from the first still stretch
+    on g (as the detector finds them without a reference), so that this one sets the reference."""
+    flags = displace_stream(f, p)["rest"]
+
+    def decided(fl):
+        return rest_on_g(rest_dated_back((fl & REST_AT_REST) != 0, (fl & REST_QUIET) != 0, f, p.rest), f, p.rest)
+
+    kept, off = decided(flags)
+    if off and (not kept.any() or off[0][0] < int(np.argmax(kept))):
+        free = rest_detect(f, p.rest)[0]
+        on_g = decided(free)[0]
+        if on_g.any():
+            s = int(np.argmax(on_g))
+            flags = np.concatenate([flags[:s], displace_stream(f[s:], p)["rest"]])
+            kept, off = decided(flags)
+    return flags, kept, off
 
 
 def at_rest_not_moving(at, corrected, v, p, p_raw) -> None:
@@ -335,22 +358,21 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         warnings += wide_rest_warning(rp.dev_max, q_f)
     checked = len(warnings)             # the warnings from here on are the recording's, said in a refusal too
     if engine == "float" and form == "offline":
-        flags = displace_stream(f, p)["rest"]
+        flags, kept, off_rests = _offline_rests(f, p)
         declared = (flags & REST_AT_REST) != 0
         # each rest tested for a trend from where it began (the detector declares it hold samples
         # later: a rocket's 0.36 s "rest" mid-flight held 12 declared samples and 36 in all)
-        kept, trends = rest_without_trend(rest_dated_back(declared, (flags & REST_QUIET) != 0, f, rp), f, rp,
-                                          f_axes)
+        kept, trends = rest_without_trend(kept, f, rp, f_axes)
         gone = declared & ~kept
         r = displace_offline(f, p, np.where(gone, flags & ~(REST_AT_REST | REST_QUIET), flags))
         tw = trend_warnings(t, trends, rp, False, rec)
         warnings += tw
         open_note = final_trend_note(t, trends, kept, rec)
         if r["no_rest"]:
-            off = still_off_g(f, np.zeros(n, bool), rp) if trends else None
+            off = still_off_g(f, np.zeros(n, bool), rp) if trends or off_rests else None
             raise InputError(rec.source, "displacement: no rest was detected anywhere in the recording "
                              f"(rest = |f - mean| <= {rp.dev_max:.3g} m/s^2 for {rp.hold} samples"
-                             + (f" with |f| within {rp.g_tol:g} of {rp.g:g} m/s^2" if rp.g is not None else "")
+                             + (f" with a mean |f| within {rp.g_tol:g} of {rp.g:g} m/s^2" if rp.g is not None else "")
                              + "): " + ("; ".join([w.removeprefix("displacement: ") for w in tw]
                                                   + ([still_off_g_text(t, off, rp, rec, cal)] if off else []))
                                         or no_rest_reason(f, t, rp, cal))
@@ -391,6 +413,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
         p_raw = np.array(pq, float) + np.cumsum(D, axis=0)
         at, quiet = (fl & DISP_REST) != 0, (r["rest"] & REST_QUIET) != 0
         f_rest = f if engine == "float" else np.asarray(f, float) / 2.0**OUT_FRAC
+        warnings += streamed_off_g(t, at, quiet, f_rest, rp, rec, cal)
         warnings += trend_warnings(t, rest_without_trend(rest_dated_back(at, quiet, f_rest, rp), f_rest, rp,
                                                          f_axes)[1], rp, True, rec)
         is_open = fin_open
@@ -428,7 +451,9 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     cut, left_out, kept = _left_out(t, at, closed, long_anchors, is_open, [] if keep_turned else turns, rec,
                                     open_note)
     zps = [z for _, _, z in kept]
-    errs = motion_errors(f_host, pp, at, kept, f_sigma, dt, ax)
+    # the noise's correlation as the rests show it widens what the noise leaves of each motion
+    rho = rest_correlation(at, f_host, max(2, TREND_BLOCK_HOLDS * rp.hold), rp.hold)
+    errs = motion_errors(f_host, pp, at, kept, f_axes, dt, ax, rho)
     warnings += motion_error_warnings(t, errs, f_sigma, dt, g, rec)
     turned = still_but_turned(f_host, at, rp)
     still_turned = None

@@ -21,7 +21,7 @@ from .common import CLIP, CLIP_LO, OUT_FRAC
 
 __all__ = ["REST_QUIET", "REST_AT_REST", "REST_ENTER", "REST_LEAVE", "REST_CLIP", "RestParams",
            "default_rest_params", "rest_cfg_fixed", "RestThresholds", "rest_params_as_stored", "RestState",
-           "rest_detect", "rest_fixed", "rest_dated_back", "REST_LEVEL_P", "motion_window", "rest_run"]
+           "rest_detect", "rest_fixed", "rest_dated_back", "REST_LEVEL_P", "motion_window", "rest_run", "rest_runs", "rest_on_g"]
 
 # flag bits, from the compiled core (include/accelcal/ac_rest.h)
 REST_QUIET, REST_AT_REST, REST_ENTER, REST_LEAVE, REST_CLIP = (
@@ -33,19 +33,30 @@ G2_SCALE = 2.0 ** (2 * OUT_FRAC)     # g2_lo, g2_hi: Q.(2 AC_OUT_FRAC) (m/s^2)^2
 @dataclass
 class RestParams:
     """Rest test (see include/accelcal/ac_rest.h).  ``g`` None switches the |f| test off;
-    ``ref_max`` bounds |f - (the first rest's mean f)| once the displacement knows it."""
+    ``ref_max`` bounds |f - (the first rest's mean f)| once the displacement knows it.
+
+    ``g_tol`` bounds a rest's mean |f| about g (the body's: a calibration's scale error, a tilt
+    within the rest), ``g_noise`` what the noise adds to one sample's |f|: the detector tests each
+    sample against g +- (g_tol + g_noise) (:meth:`g2_bounds`), and the host tests each rest's mean
+    against g +- g_tol (:func:`rest_on_g`).  With ``g_noise`` 0 a body whose mean |f| lies within
+    the noise of the band's edge has some of its samples outside it, each breaking the quiet run a
+    rest needs: its rests come and go (a still LSM303 at 0.965 g with 0.11 m/s^2 of noise: 10 %
+    of its samples out, motions of 55 s and 3.8 m)."""
     dev_max: float = 0.1            # m/s^2, max_k |f_k - mean_k|
     g: float | None = 9.80665       # m/s^2
-    g_tol: float = 0.5              # |f| within g +- g_tol
+    g_tol: float = 0.5              # a rest's mean |f| within g +- g_tol
+    g_noise: float = 0.0            # m/s^2, a sample's |f| within g +- (g_tol + g_noise)
     alpha_max: float = math.inf     # rad/s^2 (only when alpha is given)
     hold: int = 25                  # samples
     ema_shift: int = 3              # mean weight 2^-ema_shift
     ref_max: float = 0.15           # m/s^2 (only when a reference is given)
 
     def g2_bounds(self) -> tuple[float, float]:
+        """The per-sample band of |f|^2, (m/s^2)^2: (g -+ (g_tol + g_noise))^2."""
         if self.g is None:
             return 0.0, math.inf
-        return max(self.g - self.g_tol, 0.0) ** 2, (self.g + self.g_tol) ** 2
+        w = self.g_tol + self.g_noise
+        return max(self.g - w, 0.0) ** 2, (self.g + w) ** 2
 
 
 def default_rest_params(device, rate_hz: float | None = None, alpha_sigma: float | None = None,
@@ -53,13 +64,14 @@ def default_rest_params(device, rate_hz: float | None = None, alpha_sigma: float
     """dev_max = 5 sigma (sigma: ``f_sigma``, the noise of f in m/s^2 -- see
     :func:`~accelcal.estimators.common.force_noise` -- else the device's ``noise_mps2``; at least
     0.01 m/s^2), ref_max = dev_max + 0.05 m/s^2 (room for a zero-point drift between rests),
-    hold = 0.25 s, mean over ~0.1 s, |f| within 0.5 m/s^2 of g, |alpha| <= 5 sigma_alpha when
-    given."""
+    hold = 0.25 s, mean over ~0.1 s, a rest's mean |f| within 0.5 m/s^2 of g and each sample's
+    within that plus dev_max (g_noise: the noise's 5 sigma, as the deviation's test allows it),
+    |alpha| <= 5 sigma_alpha when given."""
     rate = float(rate_hz or device.sample_rate_hz)
     noise = float(f_sigma) if f_sigma is not None else float(getattr(device, "noise_mps2", 0.0) or 0.0)
     k = int(min(12, max(1, round(math.log2(max(2.0, 0.1 * rate))))))
     dev = max(5.0 * noise, 0.01)
-    return RestParams(dev_max=dev, g=float(device.gravity_mps2), g_tol=0.5,
+    return RestParams(dev_max=dev, g=float(device.gravity_mps2), g_tol=0.5, g_noise=dev,
                       alpha_max=math.inf if alpha_sigma is None else max(5.0 * alpha_sigma, 0.05),
                       hold=max(4, int(round(0.25 * rate))), ema_shift=k, ref_max=dev + 0.05)
 
@@ -241,6 +253,50 @@ def rest_dated_back(at, quiet, f, p: RestParams) -> np.ndarray:
         if np.all(np.max(np.abs(f[:s] - m), axis=1) <= p.dev_max) and np.all((g2 >= lo) & (g2 <= hi)):
             out[:s] = True
     return out
+
+
+def rest_runs(at) -> list[tuple[int, int]]:
+    """The runs [s, e) of at-rest samples (``at``, (n,) bool)."""
+    edges = np.diff(np.concatenate(([0], np.asarray(at, bool).astype(np.int8), [0])))
+    return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist()))
+
+
+def rest_on_g(at, f, p: RestParams) -> tuple[np.ndarray, list[tuple[int, int, float]]]:
+    """The rests whose mean |f| lies within ``p.g_tol`` of ``p.g``, and those that do not.
+
+    The detector tests each sample's |f| against a band widened by the noise (``p.g_noise``): a
+    decision on one sample would flicker where a still body's mean |f| sits within the noise of
+    the band's edge.  Each rest's mean over all its samples decides instead, once for the rest (its
+    noise is the samples' over sqrt(n)): a body whose mean is off g by more than ``g_tol`` (a
+    calibration's scale, a constant vertical acceleration) is at no rest, whatever its samples.
+
+    Parameters
+    ----------
+    at : array_like (n,) bool
+        At rest (each rest from where it began).
+    f : array_like (n, 3)
+        Specific force, m/s^2.
+    p : RestParams
+        g, g_tol (m/s^2); g None: every rest kept.
+
+    Returns
+    -------
+    kept : ndarray (n,) bool
+        ``at`` less the rests off g.
+    off : list of (int, int, float)
+        Each rest left out: first sample, end (exclusive), its mean |f| (m/s^2).
+    """
+    kept = np.array(at, bool)
+    off = []
+    if p.g is None:
+        return kept, off
+    f = np.asarray(f, float)
+    for s, e in rest_runs(kept):
+        norm = float(np.linalg.norm(f[s:e].mean(axis=0)))
+        if abs(norm - p.g) > p.g_tol:
+            kept[s:e] = False
+            off.append((s, e, norm))
+    return kept, off
 
 
 #: a sample within this share of the noise's spread of its rest's level (chi-square, per component

@@ -4,13 +4,14 @@ tested per axis against that axis's noise, widened by the noise's correlation as
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
 from .rest import RestParams
 
 __all__ = ["TREND_BLOCK_HOLDS", "TREND_FALSE_ALARM", "CORR_CHUNK_BLOCKS", "trend_bound", "noise_correlation",
-           "rest_widening", "trend_widening", "rest_without_trend"]
+           "rest_correlation", "rest_widening", "trend_widening", "rest_without_trend"]
 
 
 #: a rest is tested for a trend in blocks of this many hold lengths (1 s at the default 0.25 s)
@@ -71,12 +72,17 @@ def noise_correlation(parts, maxlag: int) -> np.ndarray:
         r = x - np.polynomial.polynomial.polyval(t, np.polynomial.polynomial.polyfit(t, x, 1)).T
         c = np.full((L, 3), np.nan)
         c[:min(L, m)] = [np.einsum("ij,ij->j", r[:m - k], r[k:]) / (m - k) for k in range(min(L, m))]
+        # an axis constant over the stretch (noise below the code step) leaves only the line fit's
+        # rounding, ~1e-15 of its level and smooth (it read as correlation 0.998): no estimate
+        c[:, c[0] <= (1e-12 * max(1.0, float(np.max(np.abs(x))))) ** 2] = np.nan
         with np.errstate(divide="ignore", invalid="ignore"):
             est.append(c / c[0])
         N += m
     if not est:
         return rho
-    with np.errstate(all="ignore"):
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        # a constant axis (noise below the code step) has no estimate at any lag: white, below
+        warnings.simplefilter("ignore", RuntimeWarning)
         med = np.nanmedian(np.array(est), axis=0)          # (L, 3)
     for j in range(3):
         cj = med[:, j]
@@ -88,17 +94,21 @@ def noise_correlation(parts, maxlag: int) -> np.ndarray:
     return rho
 
 
-def rest_widening(at, f, n: int, trim: int = 0) -> np.ndarray:
-    """How much more (in variance) a line fitted to ``n`` samples of the noise at rest changes than
-    one fitted to white noise of the same sigma, per axis (:func:`trend_widening`), from the rests
-    themselves: each run of at-rest samples ``at`` of f ((N, 3), m/s^2) of n samples or more, less
-    ``trim`` samples at an end next to a motion (a rest dated back from its declaration holds the
-    first samples of a slow start: a rocket's boost, whose rise read as correlation 0.2 at lag 1),
-    cut in stretches of about CORR_CHUNK_BLOCKS x n samples, their correlation
-    (:func:`noise_correlation`).  Ones when no run is n samples long.  The line fitted to each
-    stretch takes some of a slow noise with it: AR(1) noise with phi = 0.9 over blocks of 100
-    samples (20 s rests) reads 10.3-11.7 of its 13.8 (the test's sigma 0.86-0.92 x the truth).  A
-    slow motion within a rest is the correlation's only where it lies in half the stretches or more."""
+def rest_correlation(at, f, n: int, trim: int = 0) -> np.ndarray:
+    """The noise's autocorrelation as the rests show it, per axis, at lags 0 .. ``n`` - 1
+    (:func:`noise_correlation`): each run of at-rest samples ``at`` of f ((N, 3), m/s^2) of n samples
+    or more, less ``trim`` samples at an end next to a motion (a rest dated back from its declaration
+    holds the first samples of a slow start: a rocket's boost, whose rise read as correlation 0.2 at
+    lag 1), cut in stretches of about CORR_CHUNK_BLOCKS x n samples.  White noise's (1, 0, 0, ...)
+    when no run is n samples long.  The line fitted to each stretch takes some of a slow noise with
+    it: AR(1) noise with phi = 0.9 over blocks of 100 samples (20 s rests) reads a widening of
+    10.3-11.7 of its 13.8 (the test's sigma 0.86-0.92 x the truth).  A slow motion within a rest is
+    the correlation's only where it lies in half the stretches or more.
+
+    Returns
+    -------
+    ndarray (n, 3)
+    """
     at = np.asarray(at, bool)
     f = np.asarray(f, float)
     n = max(int(n), 2)
@@ -108,7 +118,14 @@ def rest_widening(at, f, n: int, trim: int = 0) -> np.ndarray:
         s, e = s + (int(trim) if s > 0 else 0), e - (int(trim) if e < at.size else 0)
         if e - s >= n:
             parts += [f[k] for k in np.array_split(np.arange(s, e), max(1, (e - s) // (CORR_CHUNK_BLOCKS * n)))]
-    return trend_widening(noise_correlation(parts, n), n) if parts else np.ones(3)
+    return noise_correlation(parts, n)
+
+
+def rest_widening(at, f, n: int, trim: int = 0) -> np.ndarray:
+    """How much more (in variance) a line fitted to ``n`` samples of the noise at rest changes than
+    one fitted to white noise of the same sigma, per axis (:func:`trend_widening`), from the rests
+    themselves (:func:`rest_correlation`).  Ones when no rest is n samples long."""
+    return trend_widening(rest_correlation(at, f, n, trim), n)
 
 
 def trend_widening(rho, n: int) -> np.ndarray:
