@@ -46,13 +46,20 @@ int main(void) {
 """
 
 
+def drawn_calibration(d, rng):
+    """Offsets (counts) and sensitivities (counts per m/s^2) of the default array as tools/bench_core.py
+    draws them: gains -0.7..+3.6 % off nominal, cross-axis terms of 1.75 % rms, offsets within 0.28 g."""
+    s = d.nominal_sensitivity() * (1 + rng.uniform(-0.007, 0.036, (6, 1))) + \
+        d.counts_per_mps2[:, None] * rng.normal(0, 0.0175, (6, 3))
+    b = d.zero_counts + rng.uniform(-0.28, 0.28, 6) * 9.80665 * d.counts_per_mps2
+    return b, s
+
+
 @pytest.fixture(scope="module")
 def case(tmp_path_factory):
     d = default_device()
     rng = np.random.default_rng(7)
-    s = d.nominal_sensitivity() * (1 + rng.uniform(-0.007, 0.036, (6, 1))) + \
-        d.counts_per_mps2[:, None] * rng.normal(0, 0.0175, (6, 3))
-    b = d.zero_counts + rng.uniform(-0.28, 0.28, 6) * 9.80665 * d.counts_per_mps2
+    b, s = drawn_calibration(d, rng)
     t = quantize(b, s, d.positions, d.name, rails=(d.raw_min, d.raw_max))
     tmp = tmp_path_factory.mktemp("hdr")
     (tmp / "cal.h").write_text(render_header(t, offset_tc=rng.normal(0, 0.5, 6),

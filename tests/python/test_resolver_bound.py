@@ -15,6 +15,7 @@ from accelcal.header import render_header
 from accelcal.native import process_batch
 from accelcal.quantize import FORMATS, QuantizeError, exact_fixed_semantics, quantize, resolver_rounding_bound
 from test_core_resolve import random_geometry
+from test_header import drawn_calibration
 
 OUT = 2.0 ** FORMATS.out_frac
 
@@ -63,10 +64,7 @@ def test_core_within_the_stated_bound_of_the_float_reference(data):
 
 def test_header_states_the_figure():
     d = default_device()
-    rng = np.random.default_rng(7)
-    s = d.nominal_sensitivity() * (1 + rng.uniform(-0.007, 0.036, (6, 1))) + \
-        d.counts_per_mps2[:, None] * rng.normal(0, 0.0175, (6, 3))
-    b = d.zero_counts + rng.uniform(-0.28, 0.28, 6) * 9.80665 * d.counts_per_mps2
+    b, s = drawn_calibration(d, np.random.default_rng(7))
     t = quantize(b, s, d.positions, d.name, rails=(d.raw_min, d.raw_max))
     lin, cen = resolver_rounding_bound(t, b, s, d.positions, d.raw_min, d.raw_max)
     text = render_header(t, rounding_lsb=(lin, cen))
