@@ -68,14 +68,17 @@ def test_clean_sub_count_noise_jig_recordings_are_none(seed):
     assert res["verdict"] == "none", [(e["name"], round(e["shrink"], 3)) for e in res["effects"][:3]]
 
 
-def _ten_bit_session(seed: int, labelled: bool):
+def _ten_bit_session(seed: int, labelled: bool, *, counts_per_g: float = 256, noise_counts: float = 0.05,
+                     step: int = 1, bits: int = 10):
     """A 10-bit triad (256 counts/g, offsets 4.6 / -3.1 / 7.7 counts, gains and axes off by a few
     0.1 %) through 26 face, edge and corner poses of 3 s at 50 Hz with 1.5 s turns between
     them, 0.002 m/s^2 of noise (0.05 counts: each pose sits on one code); the jig states f,
-    the hand-held session does not."""
+    the hand-held session does not.  Other chips: ``counts_per_g``, ``bits``, ``noise_counts``
+    and the readings' code ``step``."""
     g, rate = 9.80665, 50.0
-    k = 256 / g
-    dev = Device(name="adxl10", sample_rate_hz=rate, gravity_mps2=g, raw_min=-512, raw_max=511,
+    k = counts_per_g / g
+    lo, hi = -2 ** (bits - 1), 2 ** (bits - 1) - 1
+    dev = Device(name="triad", sample_rate_hz=rate, gravity_mps2=g, raw_min=lo, raw_max=hi,
                  positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, k), zero_counts=np.zeros(3))
     rng = np.random.default_rng(seed)
     # the 6 faces, the 12 edges, the 8 corners
@@ -96,7 +99,7 @@ def _ten_bit_session(seed: int, labelled: bool):
         pose.append(np.full(150, p))
     f, pose = np.concatenate(fs), np.concatenate(pose)
     x = f @ S.T + np.array([4.6, -3.1, 7.7])
-    raw = np.clip(np.round(x + rng.normal(0, 0.002 * k, x.shape)), -512, 511).astype(np.int64)
+    raw = np.clip(step * np.round((x + rng.normal(0, noise_counts, x.shape)) / step), lo, hi).astype(np.int64)
     t = np.arange(len(f)) / rate
     if labelled:
         return dev, recording_from_arrays(t, raw, f=np.where(pose[:, None] >= 0, f, np.nan), pose=pose)
@@ -116,3 +119,15 @@ def test_a_ten_bit_chip_whose_poses_sit_on_one_code_is_none(seed, labelled):
     res = diagnose(dev, cal, [rec])
     assert res["verdict"] == "none", [(e["name"], round(e["shrink"], 3)) for e in res["effects"][:3]]
     assert res["unexplained"] is None
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_coarse_steps_that_do_not_dither_are_named_over_a_tilt_of_each_pose(seed):
+    """A 16-bit triad read in steps of 64 counts with 0.3 counts of noise (each pose on one code),
+    its jig's f stated exactly and its own calibration: pose_error had been the verdict (shrink
+    0.73) ahead of quantization, which was not even listed as ambiguous; each pose's rounding to
+    the steps is what a tilt of each pose took."""
+    dev, rec = _ten_bit_session(seed, True, counts_per_g=16384, noise_counts=0.3, step=64, bits=16)
+    res = diagnose(dev, calibrate_recordings(dev, [rec], "full"), [rec])
+    assert res["verdict"] == "quantization", (res["verdict"], res["model"]["effects"], res["ambiguous_with"])
+    assert "pose_error" not in res["model"]["effects"]
