@@ -473,5 +473,8 @@ def noise_before_rounding(s, q):
             continue
         # q^2/12 as the series sums it (its truncation at sigma = 0), so that sigma = 0 is the root at s = 0
         whole = float(rounding_bias_var(0.0, qi))
-        out[i] = brentq(lambda x: x * x + whole - float(rounding_bias_var(x, qi)) - si * si, 0.0, si)
+        fun = lambda x: x * x + whole - float(rounding_bias_var(x, qi)) - si * si  # noqa: E731
+        # a scatter far below the step (a few flips between two coarse codes): the bias's variance at
+        # si is q^2/12 to rounding, f(si) <= 0, and the root is si itself
+        out[i] = si if fun(si) <= 0.0 else brentq(fun, 0.0, si)
     return out

@@ -459,13 +459,15 @@ def test_an_offset_and_coarse_steps_refitted_together_beat_a_per_pose_tilt():
     Refitted together, the offset and the steps leave less with 6 parameters: they are the
     model (diagnose.parsimony), and scored as the model holds them (each after the other's
     joint fit) they leave nothing beyond the noise; after the stepwise fits 9 % of the gap was
-    reported unexplained."""
+    reported unexplained.  (Since the poses' design effect, diagnose.floor.pose_design_effect, the
+    tilt's 68 parameters cost what each pose's rounding, the same in all its samples, gives them,
+    and it no longer wins the first step: the steps are the model without the parsimony's swap.)"""
     seed = 798611
     ds = im.make_jig(["quantization", "offset"], seed)
     res = _diagnose(ds, seed)
     assert set(res["model"]["effects"]) >= {"offset", "quantization"}, (res["verdict"], res["model"]["effects"])
     assert "pose_error" not in res["model"]["effects"]
-    assert any("refitted together" in n for n in res["notes"])
+    assert res["verdict"] != "pose_error"
     assert res["unexplained"] is None, res["unexplained"]
 
 
@@ -473,10 +475,12 @@ def test_mpu6050_coarse_steps_that_a_bend_outranked_are_the_verdict(real_model):
     """512-count steps injected into the MPU-6050's hand-turned poses (773720): a bend ranked
     first, the calibration terms left it nothing and the step went to the strongest term, an
     offset of shrink 0.07, although the lattice, proven from the raw values, ranked above it.
-    A candidate proven on its own evidence that ranks above the terms takes the step."""
+    A candidate proven on its own evidence that ranks above the terms takes the step.  (Since the
+    poses' design effect, diagnose.floor.pose_design_effect, the bend's penalty counts each pose's
+    rounding to the steps, the same in all its samples, and the lattice ranks first itself.)"""
     dev, rec, step, cal = real_model("mpu6050")
     seed = 773720
     rec2, params, _ = im.inject(dev, cal, rec, "quantization", seed, step=step)
     res = diagnose(dev, cal, [rec2], seed=seed)
     assert res["verdict"] == "quantization", (res["verdict"], res["model"]["effects"], params)
-    assert res["effects"][0]["contest"]["first_ranked"] == "nonlinearity"
+    assert res["effects"][0]["contest"]["first_ranked"] in ("nonlinearity", "quantization")

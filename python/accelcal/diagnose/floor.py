@@ -7,7 +7,7 @@ import numpy as np
 
 from ..effects.adc import data_lattice
 from ..effects.fitdata import FitData, tangent_basis, unit_rows3
-from ..noise import MAD_TO_STD
+from ..noise import MAD_TO_STD, noise_before_rounding, rounding_bias_var
 from .settings import MIN_NOISE_DOF
 
 
@@ -50,11 +50,68 @@ def noise_floor(D: FitData, e: np.ndarray) -> tuple[np.ndarray, str]:
     return np.maximum(sig, rounding), f"robust (MAD) fourth differences of the residual ({idx.size} samples)"
 
 
+def pose_rounding_var(D: FitData, e: np.ndarray) -> np.ndarray:
+    """(N,) variance (counts^2) of the bias the converter's rounding leaves in a static pose's
+    mean, per channel: where the noise before the rounding is below its code step q, a pose's
+    mean is off its true level by up to q/2 (on one code), the same in every sample of the pose.
+    ``rounding_bias_var(sigma, q)`` with sigma from the residual ``e``'s pooled scatter within
+    the static poses' segments (:func:`accelcal.noise.noise_before_rounding`, as the
+    calibration's pose sems); q the readings' code step (1 where they show none); 0 without
+    static poses.  0.3 counts of noise on a 1-count step leave 0.0015, one code q^2/12."""
+    st = [(a, b) for a, b in zip(D.seg_lo, D.seg_hi) if D.static[a] and D.pose[a] >= 0 and b - a >= 2]
+    if not st:
+        return np.zeros(D.N)
+    var = sum(np.var(e[a:b], axis=0, ddof=1) * (b - a - 1) for a, b in st) / sum(b - a - 1 for a, b in st)
+    q = np.maximum(data_lattice(D)[0], 1.0)
+    return np.asarray(rounding_bias_var(noise_before_rounding(np.sqrt(var), q), q), float)
+
+
+def pose_var_rows(D: FitData) -> np.ndarray:
+    """(n_static, R) the rounding bias's variance (:func:`pose_rounding_var`, D.pose_var) in the
+    scored rows of the samples of the static poses (jig-free: through each pose's projection)."""
+    on = D.pose >= 0
+    v = np.zeros(D.N) if D.pose_var is None else D.pose_var
+    if D.Qp is None:
+        return np.broadcast_to(v, (int(on.sum()), D.N))
+    return (D.Qp[D.pose[on]] ** 2) @ v
+
+
+def pose_design_effect(D: FitData) -> float:
+    """How many times the rows' chi2 overstates what the static poses tell (D.W, D.pose_var and,
+    jig-free, D.Qp set).  A pose's level error shared by all its samples (the rounding's bias,
+    :func:`pose_rounding_var`) is in every fold: an effect that changes the poses' levels fits
+    it on the training folds and keeps it on the held-out ones.  The n_p samples of pose p then
+    carry one draw, worth 1 + (n_p - 1) rho in chi2, rho = v w (v the bias's variance in the
+    row, w its weight; at most 1).  Returned: that design effect averaged over the rows (1 for
+    rows outside the poses, and where the noise dithers the rounding)."""
+    P = len(D.pose_labels)
+    on = D.pose >= 0
+    if P == 0 or not on.any():
+        return 1.0
+    n_p = np.bincount(D.pose[on], minlength=P).astype(float)
+    rho = np.minimum(pose_var_rows(D) * D.W[on], 1.0)
+    deff = 1.0 + (n_p[D.pose[on]][:, None] - 1.0) * rho
+    return float((deff.sum() + (D.n - on.sum()) * D.R) / (D.n * D.R))
+
+
+def independent_units(D: FitData) -> np.ndarray:
+    """(B,) the unit each cross-validation block belongs to: its static pose (blocks of one pose
+    share the pose's level error: the rounding's bias, a placement's tilt), else the block
+    itself."""
+    P = len(D.pose_labels)
+    pose = D.pose[D.seg_lo[D.bseg]]
+    return np.where(pose >= 0, pose, P + np.arange(D.B))
+
+
 def setup_rows(D: FitData, e: np.ndarray) -> None:
     """The data's noise floor and row weights (D.sigma, D.W, and jig-free the per-pose
-    projections D.Qp), from the residual e of the model."""
+    projections D.Qp), the rounding bias of a pose's mean D.pose_var (:func:`pose_rounding_var`),
+    the poses' design effect D.deff (:func:`pose_design_effect`) and the
+    blocks' independent units D.unit (:func:`independent_units`), from the residual e of the
+    model."""
     sig, how = noise_floor(D, e)
     D.sigma, D.noise_method = sig, how
+    D.unit = independent_units(D)
     if D.mode == "jigfree":
         P = len(D.pose_labels)
         M = D.N - 2
@@ -73,3 +130,6 @@ def setup_rows(D: FitData, e: np.ndarray) -> None:
         D.W = Wp[D.pose]
     else:
         D.W = np.broadcast_to(1.0 / sig ** 2, (D.n, D.N))
+    D.pose_var = pose_rounding_var(D, e)
+    D.deff = pose_design_effect(D)
+

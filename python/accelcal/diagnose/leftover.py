@@ -5,7 +5,10 @@ is split into noise and a systematic part:
 
 * noise: the scatter within static segments about their own means (the dof-weighted mean
   of the segment variances, so hand tremor and coloured noise at rest count as noise);
-  without static segments, the noise floor; less the power of narrow spectral lines
+  without static segments, the noise floor; plus, for the static poses' samples, the
+  rounding's bias of a pose's mean (:func:`~.floor.pose_rounding_var`: up to half a code
+  where the noise does not dither the rounding, which the scatter within a pose on one code
+  does not show); less the power of narrow spectral lines
   (:func:`spectral_lines`: a tone or a resonance is not noise however steady it is);
 * systematic: the static segments' means beyond what that scatter gives a mean
   (sum of n m^2 minus the sum of the variances), plus the moving samples' energy beyond
@@ -28,6 +31,7 @@ from scipy import signal, stats
 from scipy.ndimage import median_filter
 
 from ..effects.fitdata import FitData
+from .floor import pose_var_rows
 from .where import where_breakdown
 
 LEFT_MIN_RATIO = 0.5       # left at least this x the noise (the residual >= 1.118 x the noise)
@@ -113,6 +117,9 @@ def leftover(D: FitData, e_after: np.ndarray, before: float, after: float) -> di
     Ra = D.rows(e_after)
     floor2_rows = np.mean(D.sigma ** 2) * np.ones(Ra.shape[1])
     noise2, _, _ = _split(D, Ra, floor2_rows)
+    # a static pose's mean is off by the rounding's bias too (up to half a code where the noise does
+    # not dither it): no effect, noise of the pose's level that the scatter within it does not show
+    noise2 = noise2 + pose_var_rows(D).sum(axis=0) / D.n
     noise = math.sqrt(float(np.mean(noise2)))
     lines = spectral_lines(D, e_after)                     # channel space: where the lines are
     rows_lines = lines if D.Qp is None else spectral_lines(D, Ra)   # the scored rows: how much they weigh
@@ -122,6 +129,7 @@ def leftover(D: FitData, e_after: np.ndarray, before: float, after: float) -> di
     # a line counts on its own channel: it may stand well above that channel's noise and still be
     # a small part of the average over channels
     n2c, sys_c, mov_c = _split(D, e_after, D.sigma ** 2)
+    n2c = n2c + (0.0 if D.pose_var is None else D.pose_var * np.count_nonzero(D.pose >= 0) / D.n)
     line_ch = np.asarray(lines["rms_per_channel"]) if lines is not None else np.zeros(D.N)
     loud_line = bool(np.any(line_ch >= LEFT_MIN_RATIO * np.sqrt(np.maximum(n2c - line_ch ** 2, 1e-300))))
     if loud_line:

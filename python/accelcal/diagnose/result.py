@@ -29,7 +29,7 @@ from .scoring import rank_key, run_candidates
 from .settling import settling_ringing
 from .stepping import next_point, same_change, terms_cover
 from .settings import FORMAT, MAX_STEPS, MIN_SHRINK, PENALTY_PER_PARAM, POSE_MEAN_NOTE_RATIO, T_MIN, Z_MIN
-from .text import describe, entry, separate_by, to_json
+from .text import as_model, describe, entry, separate_by, to_json
 from .where import pose_mean_gap, where_breakdown
 from ..effects import EFFECTS
 
@@ -191,6 +191,9 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         relin_info = {"iterations": relin["iterations"], "converged": relin["converged"],
                       "heldout_rms_after": relin["path"][-1].after,
                       "heldout_rms_after_first_linearisation": steps[-1][0].after}
+    for ent in effects[:len(steps)]:
+        # the chosen effects quote the model's parameters (joint, re-linearised), not the stepwise fits
+        as_model(ent, model_params[ent["name"]], model_sigma[ent["name"]], D)
     floor = float(np.sqrt(np.mean(D.sigma ** 2)))
     rms_ch = np.sqrt(np.mean(e * e, axis=0))
     gap_rms = float(np.sqrt(np.mean(rms_ch ** 2)))

@@ -11,9 +11,17 @@ from .settings import MIN_SHRINK, PENALTY_PER_PARAM, T_MIN, Z_MIN
 
 
 def score(D: FitData, c: Cand, S0w: np.ndarray, S0u: np.ndarray) -> Cand:
+    """The held-out gain of ``c`` against the noise (``Cand``'s score fields).  Static poses'
+    level errors shared by all their samples (the rounding's bias where the noise does not
+    dither it) are fitted on the training folds and kept on the held-out ones, so the blocks
+    of a pose are one unit of the t statistic (D.unit) and the penalty and the null spread
+    of z grow by the poses' design effect D.deff (:func:`~.floor.pose_design_effect`)."""
     gb = S0w - c.Sw
     c.gain = float(gb.sum())
-    c.penalty = PENALTY_PER_PARAM * c.k
+    deff = D.deff
+    c.penalty = PENALTY_PER_PARAM * c.k * deff
+    if D.unit is not None and D.unit.size == gb.size:
+        gb = np.bincount(np.unique(D.unit, return_inverse=True)[1], weights=gb)
     nb = gb.size
     sd = float(np.std(gb, ddof=1)) if nb > 1 else 0.0
     c.t = float(np.mean(gb) / (sd / math.sqrt(nb))) if sd > 0 else (math.inf if c.gain > 0 else 0.0)
@@ -23,8 +31,10 @@ def score(D: FitData, c: Cand, S0w: np.ndarray, S0u: np.ndarray) -> Cand:
     c.shrink = float(max(0.0, 1.0 - c.after / c.before)) if c.before > 0 else 0.0
     # chi2 route: under the null (noise only) the held-out gain has mean ~ -k K/(K-1) and spread
     # ~ 2 sqrt(k K/(K-1)) in chi2 units; s2 >= 1 scales it up when the residual left is larger than
-    # the noise floor says (a low floor, correlated noise, other unmodelled effects).
-    s2 = max(1.0, float(c.Sw.sum()) / rows)
+    # the noise floor says (a low floor, correlated noise, other unmodelled effects), and by the
+    # poses' design effect: the chi2 a row left, times deff, is what a pose's level error is worth
+    # (below the floor where the model holds most of the rounding: a quantiser in it).
+    s2 = max(1.0, float(c.Sw.sum()) / rows * deff)
     kk = max(c.k, 1) * D.K / (D.K - 1)
     c.z = float(c.gain / (2.0 * s2 * math.sqrt(kk)))
     c.significant = bool(c.proof or (c.gain - c.penalty > 0 and (c.t >= T_MIN or c.z >= Z_MIN)

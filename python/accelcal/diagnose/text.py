@@ -60,6 +60,18 @@ def entry(D: FitData, c: Cand, *, step: int | None, selected: bool, baseline: st
     return e
 
 
+def as_model(e: dict, params: dict, sigma: dict, D: FitData) -> None:
+    """Make a chosen effect's entry ``e`` quote the model's parameters ``params`` / ``sigma``
+    (the chosen effects refitted jointly and re-linearised about the corrected calibration) in
+    ``params``, ``params_sigma`` and ``summary``; the stepwise fit (about the given calibration,
+    on what the earlier steps left: far from the truth part of a gain hides in the poses'
+    forces) moves to ``params_stepwise``."""
+    e["params_stepwise"] = e["params"]
+    e["params"] = to_json(params)
+    e["params_sigma"] = to_json(sigma)
+    e["summary"] = describe(e["name"], params, sigma, D)
+
+
 def describe(name: str, p: dict, s: dict, D: FitData) -> str:
     """One line in physical units for the summary: the effect's own prose
     (``Effect.describe``), or its name when its parameters do not fit the prose."""

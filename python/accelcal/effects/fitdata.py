@@ -55,6 +55,9 @@ class FitData:
     noise_method: str = ""
     lattice: tuple | None = None  # (step, phase, share, distinct) per channel: effects.adc.data_lattice's cache
     W: np.ndarray | None = None   # (n, R) row weights
+    pose_var: np.ndarray | None = None  # (N,) variance of a pose mean's rounding bias (diagnose.floor.pose_rounding_var)
+    deff: float = 1.0             # the static poses' design effect (diagnose.floor.pose_design_effect)
+    unit: np.ndarray | None = None  # (B,) independent unit of each block: its pose, else the block
     h: float = 0.0                # sample period (s)
 
     @property
