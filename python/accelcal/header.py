@@ -15,7 +15,7 @@ import numpy as np
 from . import __version__
 from .triad import TriadTable, quantize_triad, triad_rounding_bound
 from .native import FORMATS
-from .quantize import FixedTables, quantize_calibration, resolver_rounding_bound, to_fixed
+from .quantize import FixedTables, quantize_calibration, rail_counts, resolver_rounding_bound, to_fixed
 
 
 def _c_ident(text: str) -> str:
@@ -73,6 +73,32 @@ def resolver_bound_lines(rounding_lsb) -> list[str]:
             " *     |omega_a| >= 0.125 rad/s the squared rates' rounding E_j of ac_resolve.h."]
 
 
+def _c_int(v: int, signed: bool) -> str:
+    """An integer literal for a 16-bit argument that means the same with 16-bit int."""
+    if not signed:
+        return f"{v}u"
+    return "(-32767 - 1)" if v == -32768 else (f"({v})" if v < 0 else str(v))
+
+
+def rail_macros(p: str, rails, signed: bool) -> list[str]:
+    """``<p>_RAW_MIN`` / ``<p>_RAW_MAX``: the converter's rails in the chip's counts (the
+    arguments ac_trim_rails_s16 takes for a signed chip; the tables hold them as codes)."""
+    lo, hi = rail_counts(rails, signed)
+    return [f"#define {p}_RAW_MIN {_c_int(lo, signed)}", f"#define {p}_RAW_MAX {_c_int(hi, signed)}"]
+
+
+def signed_recipe(p: str, n: int, resolve_call: str, rails, out: str) -> list[str]:
+    """The header comment's per-sample recipe for a chip with signed readings: the pre-trim that
+    flags the rails (ac_trim_rails_s16), then ``resolve_call``."""
+    lo, hi = rail_counts(rails, True)
+    return [f" *     int16_t x[{n}];   (raw: int16_t[{n}], the chip's signed readings)",
+            f" *     ac_status s = ac_trim_rails_s16(raw, {p}_TRIM, {n}, {p}_RAW_MIN, {p}_RAW_MAX, x);",
+            f" *     ac_status r = {resolve_call};",
+            " *   s has the bit AC_AT_RAIL when a reading sits at the converter's rail",
+            f" *   ({lo} or {hi}, {p}_RAW_MIN/_RAW_MAX): the chip clipped it, {out} is not a measurement;",
+            " *   AC_SATURATED in s or r: a value was clipped to its range."]
+
+
 def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method: str = "",
                   temp_ref_c: float | None = None, offset_tc=None, gain_tc=None, warnings=(),
                   rounding_lsb=None, notes=()) -> str:
@@ -94,11 +120,8 @@ def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method:
         f" *     #define {p}_IMPLEMENTATION",
         " *     #include \"this header\"",
         " * then per sample:",
-    ] + ([
-        f" *     int16_t x[{n}];   (raw: int16_t[{n}], the chip's signed readings)",
-        f" *     ac_trim_s16(raw, {p}_TRIM, {n}, x);",
-        f" *     ac_resolve(&{p}_RESOLVER, x, omega_or_NULL, out);",
-    ] if t.signed else [
+    ] + (signed_recipe(p, n, f"ac_resolve(&{p}_RESOLVER, x, omega_or_NULL, out)", t.rails, "out")
+          if t.signed else [
         f" *     ac_process(&{p}_RESOLVER, {p}_TRIM, raw, omega_or_NULL, out);   (raw: uint16_t[{n}])",
         " *   its status has the bit AC_AT_RAIL when a reading sits at the converter's rail",
         f" *   ({t.rails[0]} or {t.rails[1]}, {p}_RESOLVER.raw_min/raw_max): the chip clipped it, out is not a measurement",
@@ -123,6 +146,7 @@ def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method:
         "#endif",
         "",
         f"#define {p}_N_CHANNELS {n}",
+        *rail_macros(p, t.rails, t.signed),
         f"extern const {'int16_t' if t.signed else 'uint16_t'} {p}_TRIM[{n}];",
         f"extern const ac_resolver {p}_RESOLVER;",
         f"extern const ac_channel_cal {p}_CHANNELS[{n}];",
@@ -192,9 +216,7 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
         " * then per sample (f only: a single point sensor gives no alpha):",
     ]
     if t.signed:
-        lines += [" *     int16_t x[3];   (raw: int16_t[3], the chip's signed readings)",
-                  f" *     ac_trim_s16(raw, {p}_TRIM, 3, x);",
-                  f" *     ac_triad_resolve(&{p}_TRIAD, x, f);"]
+        lines += signed_recipe(p, 3, f"ac_triad_resolve(&{p}_TRIAD, x, f)", t.rails, "f")
     else:
         lines += [f" *     ac_triad_apply(&{p}_TRIAD, raw, f);   (raw: uint16_t[3])",
                   " *   its status has the bit AC_AT_RAIL when a reading sits at the converter's rail",
@@ -215,6 +237,7 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
     lines += [
         *_opening(guard, ("OUT", f.out_frac), ("SENS", f.sens_frac), ("OFFSET", f.offset_frac)),
         "",
+        *rail_macros(p, t.rails, t.signed),
         f"extern const {tt} {p}_TRIM[3];",
         f"extern const ac_triad {p}_TRIAD;",
         f"extern const ac_channel_cal {p}_CHANNELS[3];",
