@@ -1,4 +1,4 @@
-/* accelcal -- offset pre-trim of signed (two's complement) readings.
+/* accelcal -- offset pre-trim of signed (two's complement) readings, and their rail test.
  * Its own object so that firmware for an unsigned chip does not link it (the H8
  * toolchain links whole objects). */
 #include "accelcal/ac_trim.h"
@@ -6,7 +6,14 @@
 
 ac_status ac_trim_s16(const int16_t *raw, const int16_t *trim, uint16_t n, int16_t *x)
 {
-    uint8_t sat = 0u;
+    /* the rails unknown (raw_min >= raw_max): the pre-trim alone */
+    return ac_trim_rails_s16(raw, trim, n, 0, 0, x);
+}
+
+ac_status ac_trim_rails_s16(const int16_t *raw, const int16_t *trim, uint16_t n, int16_t raw_min,
+                            int16_t raw_max, int16_t *x)
+{
+    uint8_t sat = 0u, rail = 0u;
     uint16_t i;
     if (raw == 0 || trim == 0 || x == 0) {
         return AC_ERR_NULL;
@@ -15,8 +22,12 @@ ac_status ac_trim_s16(const int16_t *raw, const int16_t *trim, uint16_t n, int16
         return AC_ERR_SIZE;
     }
     for (i = 0u; i < n; i++) {
+        int16_t r = raw[i];
         /* in 32 bits (an add on every target, no library call): |raw - trim| <= 65535 */
-        int32_t d = (int32_t)raw[i] - (int32_t)trim[i];
+        int32_t d = (int32_t)r - (int32_t)trim[i];
+        if (r <= raw_min || r >= raw_max) {
+            rail = 1u;
+        }
         if (d > 32767L) {
             d = 32767L;
             sat = 1u;
@@ -26,5 +37,9 @@ ac_status ac_trim_s16(const int16_t *raw, const int16_t *trim, uint16_t n, int16
         }
         x[i] = (int16_t)d;
     }
-    return sat ? AC_SATURATED : AC_OK;
+    /* raw_min >= raw_max (rails unknown): every reading passed a test, none counts */
+    if (raw_min >= raw_max) {
+        rail = 0u;
+    }
+    return (ac_status)((sat ? (unsigned)AC_SATURATED : 0u) | (rail ? (unsigned)AC_AT_RAIL : 0u));
 }

@@ -4,7 +4,7 @@
  * The first input byte picks a target; the rest is read as a little-endian
  * byte stream (reads past the end give 0, so every input is valid):
  *
- *   0 ac_trim                     pre-trim vs clip(raw - trim)
+ *   0 ac_trim, ac_trim_rails_s16  pre-trim vs clip(raw - trim); the signed rails
  *   1 ac_resolve                  random tables, checked and unchecked; on a
  *                                 checked table the outputs against an
  *                                 independent 128-bit computation within the
@@ -234,6 +234,41 @@ static void target_trim(rd *r)
         CHECK((st == AC_SATURATED) == (sat != 0), "ac_trim status %d, clipped %d", st, sat);
     }
     CHECK(x[n] == 0x5a5a, "ac_trim wrote past n");
+    {
+        /* the same readings as a signed chip's (code - 32768) with drawn rails in its counts:
+         * ac_trim_rails_s16 gives ac_trim's x and saturation, and AC_AT_RAIL by the written-out
+         * test on the signed values (raw_min >= raw_max: unknown, nothing flagged) */
+        int16_t *sraw = xmalloc((n + 1u) * sizeof *sraw), *strim = xmalloc((n + 1u) * sizeof *strim);
+        int16_t *sx = xmalloc((n + 1u) * sizeof *sx);
+        int16_t lo = (int16_t)((int32_t)rd_u16(r) - 32768), hi = (int16_t)((int32_t)rd_u16(r) - 32768);
+        int rail = 0;
+        ac_status ss;
+        if (rd_u8(r) & 1u) { /* a 12-bit chip's rails, often */
+            lo = -2048;
+            hi = 2047;
+        }
+        for (i = 0; i < n; i++) {
+            sraw[i] = (int16_t)((int32_t)raw[i] - 32768);
+            strim[i] = (int16_t)((int32_t)trim[i] - 32768);
+            rail |= sraw[i] <= lo || sraw[i] >= hi;
+        }
+        sx[n] = 0x5a5a;
+        ss = ac_trim_rails_s16(sraw, strim, n, lo, hi, sx);
+        CHECK_STATUS(ss);
+        if (n == 0u) {
+            CHECK(ss == AC_ERR_SIZE, "ac_trim_rails_s16 n=0 gave %d", ss);
+        } else {
+            CHECK(ss >= 0 && (ss & AC_SATURATED) == st, "ac_trim_rails_s16 status %d, ac_trim %d", ss, st);
+            CHECK(((ss & AC_AT_RAIL) != 0) == (lo < hi && rail), "ac_trim_rails_s16 status %d, rails %d %d",
+                  ss, lo, hi);
+            CHECK(memcmp(sx, x, n * sizeof *x) == 0, "ac_trim_rails_s16 x != ac_trim x");
+            CHECK(ac_trim_s16(sraw, strim, n, sx) == st, "ac_trim_s16 status != ac_trim's");
+        }
+        CHECK(sx[n] == 0x5a5a, "ac_trim_rails_s16 wrote past n");
+        free(sraw);
+        free(strim);
+        free(sx);
+    }
     free(raw);
     free(trim);
     free(x);
@@ -1713,6 +1748,9 @@ static void target_null(rd *r)
     NUL(ac_trim(NULL, u16, 6, x16));
     NUL(ac_trim(u16, NULL, 6, x16));
     NUL(ac_trim(u16, u16, 6, NULL));
+    NUL(ac_trim_rails_s16(NULL, x16, 6, -2048, 2047, x16));
+    NUL(ac_trim_rails_s16(x16, NULL, 6, -2048, 2047, x16));
+    NUL(ac_trim_rails_s16(x16, x16, 6, -2048, 2047, NULL));
     NUL(ac_resolver_check(NULL));
     NUL(ac_resolve(NULL, x16, NULL, out));
     NUL(ac_resolve(&t, NULL, NULL, out));

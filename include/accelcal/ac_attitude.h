@@ -113,8 +113,9 @@ ac_status ac_triad_check(const ac_triad *t);
  * if the pre-trim or f clipped, the bit AC_AT_RAIL if a reading sits at a rail (t->raw_min,
  * t->raw_max), AC_AT_RAIL_SATURATED for both. */
 ac_status ac_triad_apply(const ac_triad *t, const uint16_t *raw, int32_t *f);
-/* Resolve readings already pre-trimmed (x[3] = raw - trim, e.g. by ac_trim_s16 for a
- * chip with signed output) -> f[3]; t->trim and the rails are not used (no reading here). */
+/* Resolve readings already pre-trimmed (x[3] = raw - trim, e.g. by ac_trim_rails_s16 for
+ * a chip with signed output, which flags its rails) -> f[3]; t->trim and the rails are not
+ * used (no reading here: the rail test is the pre-trim's). */
 ac_status ac_triad_resolve(const ac_triad *t, const int16_t *x, int32_t *f);
 
 /* ---- the pendulum estimator ---------------------------------------------------- */

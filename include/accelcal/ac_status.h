@@ -13,8 +13,8 @@ typedef enum ac_status {
     AC_SATURATED = 1,        /* an output or intermediate hit its limit and was clipped */
     AC_AT_RAIL = 2,          /* a raw reading sat at its converter's rail (raw_min or raw_max):
                               * the outputs are computed, but from a reading the chip clipped,
-                              * so they are not a measurement (ac_trim_rails, ac_process,
-                              * ac_triad_apply; tables with raw_min < raw_max only) */
+                              * so they are not a measurement (ac_trim_rails, ac_trim_rails_s16,
+                              * ac_process, ac_triad_apply; rails with raw_min < raw_max only) */
     AC_AT_RAIL_SATURATED = 3, /* both of the above */
     AC_ERR_NULL = -1,        /* a required pointer was NULL */
     AC_ERR_SIZE = -2,        /* channel or sample count out of range */

@@ -30,8 +30,16 @@ ac_status ac_trim_rails(const uint16_t *raw, const uint16_t *trim, uint16_t n, u
 /* The same for a chip with signed (two's complement) output, such as the MPU-6050,
  * ADXL345, LSM6 or BMI families: raw and trim int16 counts, x_i = raw_i - trim_i
  * clipped to int16 (|raw_i - trim_i| can reach 65535), AC_SATURATED if any was.
- * Identical to ac_trim on the offset-binary codes raw + 32768, trim + 32768 (and so is
- * ac_trim_rails, which also flags the rails, given as codes raw_min + 32768, raw_max + 32768). */
+ * Identical to ac_trim on the offset-binary codes raw + 32768, trim + 32768. */
 ac_status ac_trim_s16(const int16_t *raw, const int16_t *trim, uint16_t n, int16_t *x);
+
+/* ac_trim_s16 and, in the same pass, the converter's rails in the chip's own signed counts
+ * (e.g. -2048, 2047 for a 12-bit chip; the generated header's <PREFIX>_RAW_MIN / _RAW_MAX):
+ * also AC_AT_RAIL if any raw_i <= raw_min or raw_i >= raw_max, as ac_trim_rails on the
+ * offset-binary codes (raw_min >= raw_max: unknown, nothing flagged).  x is as
+ * ac_trim_s16's either way.  The signed chip's per-sample path is this, then ac_resolve or
+ * ac_triad_resolve. */
+ac_status ac_trim_rails_s16(const int16_t *raw, const int16_t *trim, uint16_t n, int16_t raw_min,
+                            int16_t raw_max, int16_t *x);
 
 #endif /* AC_TRIM_H */

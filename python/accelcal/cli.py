@@ -20,7 +20,6 @@ from .calibrate import JIG_ACCURACY_DEG, JIGFREE_MODELS, calibrate_recordings
 from .calibration import load_calibration, save_calibration
 from .cli_calibrate import calibration_summary, jig_accuracy_arg, min_static_arg, record_warnings
 from .cli_paths import check_not_an_input, check_output, check_output_dir
-from .clipping import at_rails, rails_warning
 from .convert_cli import add_convert_parser
 from .demo import run_demo
 from .device import default_device, load_device
@@ -34,7 +33,7 @@ from .motions import describe_motions
 from .recording import read_recording, write_columns_csv, write_recording
 from .recording_checks import seconds
 from .report import REPORT_FILES, write_report
-from .resolve import resolve_recording
+from .resolve import clipped_samples, resolve_recording
 from .simulate import run_simulation
 from .static import MIN_POSE_S
 from .units_cli import add_units_options, scale_from_args
@@ -111,16 +110,15 @@ def cmd_resolve(a):
     if flags is not None and flags.any():
         print(f"accelcal resolve: warning: {int(np.count_nonzero(flags))} samples saturated in the "
               "fixed-point core's arithmetic (see column saturated)", file=sys.stderr)
-    clipped = at_rails(rec, dev)
-    rails = rails_warning(rec, dev)
-    if rails:
-        print(f"accelcal resolve: warning: {rails}", file=sys.stderr)
+    clipped, clip_warnings = clipped_samples(rec, dev)
+    for w in clip_warnings:
+        print(f"accelcal resolve: warning: {w}", file=sys.stderr)
     cols = [rec.t, f[:, 0], f[:, 1], f[:, 2], al[:, 0], al[:, 1], al[:, 2]]
     header = ["t", "f_x", "f_y", "f_z", "dw_x", "dw_y", "dw_z"]
     if flags is not None:
         cols.append(flags.astype(float))
         header.append("saturated")
-    if rails:
+    if clip_warnings:
         cols.append(clipped.astype(float))
         header.append("clipped")
     _write_csv(a.output, header, cols, comments)

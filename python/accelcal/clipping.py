@@ -15,7 +15,8 @@ looks the same as a clip.  On such a channel a pile is a clip only where the dev
 moves throughout its hold and the channel comes to it from far (:func:`pile_moves`: in
 a pose every channel rests, and so it does in the rest before a push across the axis of a
 channel held steady through both; a clip that the motion reaches holds while the others
-swing by hundreds of their noise).
+swing by hundreds of their noise).  A channel that reads one value throughout has no level:
+nothing came to it from elsewhere.
 """
 from __future__ import annotations
 
@@ -158,6 +159,8 @@ def clip_levels(raw: np.ndarray, device, noise: np.ndarray, window: int) -> Clip
     in_hi = np.zeros(N, bool)
     for i in range(N):
         v = raw[:, i]
+        if v.min() == v.max():
+            continue    # one value throughout (a noiseless simulation): nothing reached a level from elsewhere
         q = code_step(v)
         sig = float(noise[i])
         # coarse steps: a pose on one code looks like a pile, which is a clip only while moving
@@ -223,3 +226,27 @@ def rails_warning(rec, device) -> str | None:
             f"at row {rec.line(first)}): the chip clipped there and their f is short of the truth (see column "
             "clipped)")
 
+
+
+def pile_warning(rec, levels: ClipLevels) -> str | None:
+    """The warning for samples at a clip level inside the range (``levels``' piles, the ones
+    :func:`clip_note` names for convert and diagnose), per channel and level, or None: the
+    rails' own samples are :func:`rails_warning`'s."""
+    raw = np.asarray(rec.raw)
+    at = np.zeros(raw.shape[0], bool)
+    per = []
+    for j in range(raw.shape[1]):
+        ends = []
+        for inside, hit, level in ((levels.inside_lo[j], raw[:, j] <= levels.lo[j], levels.lo[j]),
+                                   (levels.inside_hi[j], raw[:, j] >= levels.hi[j], levels.hi[j])):
+            if inside and hit.any():
+                at |= hit
+                ends.append(f"{int(hit.sum())} at {int(level)}")
+        if ends:
+            per.append(f"raw_{j}: " + ", ".join(ends))
+    if not at.any():
+        return None
+    first = int(np.argmax(at))
+    return (f"{int(np.count_nonzero(at))} samples read a channel at a clip level inside the range, where its "
+            f"readings pile up ({'; '.join(per)}; the first at row {rec.line(first)}; convert and diagnose name the "
+            "same levels): the sensor clipped there and their f is short of the truth (see column clipped)")

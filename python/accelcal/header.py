@@ -15,7 +15,7 @@ import numpy as np
 from . import __version__
 from .triad import TriadTable, quantize_triad, triad_rounding_bound
 from .native import FORMATS
-from .quantize import FixedTables, quantize_calibration, resolver_rounding_bound, to_fixed
+from .quantize import FixedTables, quantize_calibration, rail_counts, resolver_rounding_bound, to_fixed
 
 
 def _c_ident(text: str) -> str:
@@ -73,13 +73,74 @@ def resolver_bound_lines(rounding_lsb) -> list[str]:
             " *     |omega_a| >= 0.125 rad/s the squared rates' rounding E_j of ac_resolve.h."]
 
 
+MG_MPS2 = 9.80665e-3   # one mg, m/s^2 (standard gravity)
+
+
+def _c_int(v: int, signed: bool) -> str:
+    """An integer literal for a 16-bit argument that means the same with 16-bit int."""
+    if not signed:
+        return f"{v}u"
+    return "(-32767 - 1)" if v == -32768 else (f"({v})" if v < 0 else str(v))
+
+
+def rail_macros(p: str, rails, signed: bool) -> list[str]:
+    """``<p>_RAW_MIN`` / ``<p>_RAW_MAX``: the converter's rails in the chip's counts (the
+    arguments ac_trim_rails_s16 takes for a signed chip; the tables hold them as codes)."""
+    lo, hi = rail_counts(rails, signed)
+    return [f"#define {p}_RAW_MIN {_c_int(lo, signed)}", f"#define {p}_RAW_MAX {_c_int(hi, signed)}"]
+
+
+def input_lines(rails, signed: bool, counts_per_mps2=None) -> list[str]:
+    """The header comment's statement of the input the tables expect: raw counts of the device
+    file, their range raw_min..raw_max (justification: a left-justified register is shifted first)
+    and, given the device's nominal ``counts_per_mps2`` (N,), the size of one count per channel in
+    m/s^2 and mg (a reading in mg is divided by that first)."""
+    lo, hi = rail_counts(rails, signed)
+    lines = [f" * Input: raw[i] in the device file's counts, {lo}..{hi} (raw_min..raw_max)"]
+    span = hi - lo + 1
+    bits = span.bit_length() - 1 if span > 1 and span & (span - 1) == 0 else None
+    if bits is not None and bits < 16:
+        lines += [f" *   ({bits} bits, right-justified{', sign-extended' if signed else ''}): a chip that leaves them at"
+                  f" the top of a 16-bit", f" *   register (left-justified, e.g. the LIS3DH) needs its value"
+                  f" {'(int16_t)' if signed else '(uint16_t)'} >> {16 - bits} first{' (arithmetic)' if signed else ''}."]
+    if counts_per_mps2 is None:
+        return lines + [" *   Not mg, not m/s^2: counts as the device file's counts_per_mps2 defines them."]
+    k = np.asarray(counts_per_mps2, float)
+    groups = []
+    for i, v in enumerate(k):
+        if groups and groups[-1][2] == v:
+            groups[-1][1] = i
+        else:
+            groups.append([i, i, v])
+    lines.append(" *   One count (the device file's counts_per_mps2, the nominal scale the calibration refines):")
+    for a, b, v in groups:
+        who = f"raw[{a}]" if a == b else f"raw[{a}..{b}]"
+        lines.append(f" *     {who}: {v:.6g} counts per m/s^2: one count = {1.0 / v:.6g} m/s^2 = {1.0 / v / MG_MPS2:.6g} mg")
+    mg = 1.0 / k / MG_MPS2
+    per = f"{mg[0]:.6g} mg" if np.all(mg == mg[0]) else "its channel's mg per count"
+    return lines + [f" *   Not mg, not m/s^2: a reading a driver gives in mg is divided by {per} first."]
+
+
+def signed_recipe(p: str, n: int, resolve_call: str, rails, out: str) -> list[str]:
+    """The header comment's per-sample recipe for a chip with signed readings: the pre-trim that
+    flags the rails (ac_trim_rails_s16), then ``resolve_call``."""
+    lo, hi = rail_counts(rails, True)
+    return [f" *     int16_t x[{n}];   (raw: int16_t[{n}], the chip's signed readings)",
+            f" *     ac_status s = ac_trim_rails_s16(raw, {p}_TRIM, {n}, {p}_RAW_MIN, {p}_RAW_MAX, x);",
+            f" *     ac_status r = {resolve_call};",
+            " *   s has the bit AC_AT_RAIL when a reading sits at the converter's rail",
+            f" *   ({lo} or {hi}, {p}_RAW_MIN/_RAW_MAX): the chip clipped it, {out} is not a measurement;",
+            " *   AC_SATURATED in s or r: a value was clipped to its range."]
+
+
 def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method: str = "",
                   temp_ref_c: float | None = None, offset_tc=None, gain_tc=None, warnings=(),
-                  rounding_lsb=None, notes=()) -> str:
+                  rounding_lsb=None, notes=(), counts_per_mps2=None) -> str:
     """The header text for tables t (see quantize.quantize); ``warnings`` (the calibration's,
     one line each) and ``notes`` go into its opening comment; ``rounding_lsb`` (linear (6,) LSB, centripetal
     (6,) LSB per (rad/s)^2: :func:`accelcal.quantize.resolver_rounding_bound`) the error bound
-    it states."""
+    it states; ``counts_per_mps2`` (N,) the device's nominal scale, for the size of one count
+    (:func:`input_lines`)."""
     f = FORMATS
     p = _c_ident(prefix)
     guard = f"{p}_{_c_ident(t.device or 'DEVICE')}_H"
@@ -94,15 +155,13 @@ def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method:
         f" *     #define {p}_IMPLEMENTATION",
         " *     #include \"this header\"",
         " * then per sample:",
-    ] + ([
-        f" *     int16_t x[{n}];   (raw: int16_t[{n}], the chip's signed readings)",
-        f" *     ac_trim_s16(raw, {p}_TRIM, {n}, x);",
-        f" *     ac_resolve(&{p}_RESOLVER, x, omega_or_NULL, out);",
-    ] if t.signed else [
+    ] + (signed_recipe(p, n, f"ac_resolve(&{p}_RESOLVER, x, omega_or_NULL, out)", t.rails, "out")
+          if t.signed else [
         f" *     ac_process(&{p}_RESOLVER, {p}_TRIM, raw, omega_or_NULL, out);   (raw: uint16_t[{n}])",
         " *   its status has the bit AC_AT_RAIL when a reading sits at the converter's rail",
         f" *   ({t.rails[0]} or {t.rails[1]}, {p}_RESOLVER.raw_min/raw_max): the chip clipped it, out is not a measurement",
     ]) + [
+        *input_lines(t.rails, t.signed, counts_per_mps2),
         " *",
         " * Fixed-point formats (fractional bits; the core refuses to build with others):",
         f" *   out[0..2] f   [m/s^2]   int32 Q.{f.out_frac}   (1 LSB = {2.0**-f.out_frac:.6g})",
@@ -123,6 +182,7 @@ def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method:
         "#endif",
         "",
         f"#define {p}_N_CHANNELS {n}",
+        *rail_macros(p, t.rails, t.signed),
         f"extern const {'int16_t' if t.signed else 'uint16_t'} {p}_TRIM[{n}];",
         f"extern const ac_resolver {p}_RESOLVER;",
         f"extern const ac_channel_cal {p}_CHANNELS[{n}];",
@@ -164,12 +224,13 @@ def render_header(t: FixedTables, *, prefix: str = "AC_CAL", calibration_method:
 
 
 def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", calibration_method: str = "",
-                        warnings=(), rounding_lsb=None, notes=()) -> str:
+                        warnings=(), rounding_lsb=None, notes=(), counts_per_mps2=None) -> str:
     """The header text for one 3-axis sensor's table (see estimators.triad.quantize_triad):
     f only, f = S^-1 (raw - b), by ``ac_triad_apply`` (uint16 readings) or ``ac_trim_s16``
     + ``ac_triad_resolve`` (int16 readings); ``warnings`` and ``notes`` (the calibration's) go into its
     opening comment; ``rounding_lsb`` ((3,) output LSB, :func:`accelcal.triad.triad_rounding_bound`)
-    the table's rounding over every reading the trim does not clip, stated with the bound."""
+    the table's rounding over every reading the trim does not clip, stated with the bound;
+    ``counts_per_mps2`` (3,) the device's nominal scale, for the size of one count (:func:`input_lines`)."""
     f = FORMATS
     p = _c_ident(prefix)
     guard = f"{p}_{_c_ident(device or 'DEVICE')}_H"
@@ -192,14 +253,13 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
         " * then per sample (f only: a single point sensor gives no alpha):",
     ]
     if t.signed:
-        lines += [" *     int16_t x[3];   (raw: int16_t[3], the chip's signed readings)",
-                  f" *     ac_trim_s16(raw, {p}_TRIM, 3, x);",
-                  f" *     ac_triad_resolve(&{p}_TRIAD, x, f);"]
+        lines += signed_recipe(p, 3, f"ac_triad_resolve(&{p}_TRIAD, x, f)", t.rails, "f")
     else:
         lines += [f" *     ac_triad_apply(&{p}_TRIAD, raw, f);   (raw: uint16_t[3])",
                   " *   its status has the bit AC_AT_RAIL when a reading sits at the converter's rail",
                   f" *   ({t.rails[0]} or {t.rails[1]}, {p}_TRIAD.raw_min/raw_max): the chip clipped it, f is not a measurement"]
     lines += [
+        *input_lines(t.rails, t.signed, counts_per_mps2),
         " *",
         " * Fixed-point formats (fractional bits; the core refuses to build with others):",
         f" *   f[0..2] [m/s^2] int32 Q.{f.out_frac}   (1 LSB = {2.0**-f.out_frac:.6g}), rounded half up",
@@ -215,6 +275,7 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
     lines += [
         *_opening(guard, ("OUT", f.out_frac), ("SENS", f.sens_frac), ("OFFSET", f.offset_frac)),
         "",
+        *rail_macros(p, t.rails, t.signed),
         f"extern const {tt} {p}_TRIM[3];",
         f"extern const ac_triad {p}_TRIAD;",
         f"extern const ac_channel_cal {p}_CHANNELS[3];",
@@ -254,11 +315,12 @@ def calibration_header(device, cal, *, prefix: str = "AC_CAL") -> str:
                            rails=(device.raw_min, device.raw_max))
         rounding = triad_rounding_bound(t, cal.offsets, cal.sensitivity, device.raw_min, device.raw_max)
         return render_triad_header(t, device=device.name, prefix=prefix, calibration_method=cal.method,
-                                   warnings=warnings, rounding_lsb=rounding, notes=notes)
+                                   warnings=warnings, rounding_lsb=rounding, notes=notes,
+                                   counts_per_mps2=device.counts_per_mps2)
     t = quantize_calibration(device, cal)
     pos = cal.positions_or_nominal(device)
     rounding = resolver_rounding_bound(t, cal.offsets, cal.sensitivity, pos, device.raw_min, device.raw_max)
     return render_header(t, prefix=prefix, calibration_method=cal.method,
                          temp_ref_c=getattr(cal, "temp_ref_c", None), offset_tc=getattr(cal, "offset_tc", None),
                          gain_tc=getattr(cal, "gain_tc", None), warnings=warnings, rounding_lsb=rounding,
-                         notes=notes)
+                         notes=notes, counts_per_mps2=device.counts_per_mps2)

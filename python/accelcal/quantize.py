@@ -137,6 +137,14 @@ def rail_codes(raw_min: int | None, raw_max: int | None, signed: bool) -> tuple[
     return (int(raw_min) + off, int(raw_max) + off)
 
 
+def rail_counts(codes, signed: bool) -> tuple[int, int]:
+    """The converter's (raw_min, raw_max) in the chip's own counts from the tables' uint16 codes
+    (:func:`rail_codes`' inverse: what ac_trim_rails_s16 takes for a signed chip); (0, 0) codes,
+    "unknown", stay an empty pair (raw_min >= raw_max)."""
+    off = 32768 if signed else 0
+    return int(codes[0]) - off, int(codes[1]) - off
+
+
 def quantize(offsets, sensitivity, positions, device: str = "", signed: bool = False,
              rails: tuple[int, int] | None = None) -> FixedTables:
     """Quantise a calibration (b (N,), s (N,3), r (N,3)) into the core's tables

@@ -8,7 +8,10 @@ from __future__ import annotations
 import numpy as np
 
 from . import model, native
+from .clipping import at_rails, clip_levels, pile_warning, rails_warning
 from .errors import AccelcalError, InputError
+from .noise import noise_for
+from .static import STATIC_WINDOW_S, window_len
 from .triad import triad_forces
 from .native import FORMATS
 from .quantize import omega_to_fixed, quantize_calibration
@@ -68,3 +71,29 @@ def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str
     y = out / 2.0 ** FORMATS.out_frac
     # the flags of the core's own arithmetic; its rail bit is the recording's `clipped` (at_rails)
     return y[:, :3], y[:, 3:], flags & ~np.uint8(native.lib.AC_FLAG_AT_RAIL)
+
+
+def clipped_samples(rec, device) -> tuple[np.ndarray, list[str]]:
+    """The samples whose f is not a measurement, and the warnings naming them.
+
+    Returns
+    -------
+    clipped : ndarray (n,) bool
+        A channel at the converter's rails (:func:`accelcal.clipping.at_rails`) or at a clip
+        level inside the range where its readings pile up (:func:`accelcal.clipping.clip_levels`,
+        with the window and noise convert and diagnose use: a micro:bit's +-2040 mg).
+    warnings : list of str
+        :func:`accelcal.clipping.rails_warning` and :func:`accelcal.clipping.pile_warning`, each
+        where it has samples."""
+    raw = np.asarray(rec.raw)
+    clipped = at_rails(rec, device)
+    warnings = [w for w in (rails_warning(rec, device),) if w]
+    if raw.shape[0] < 2:
+        return clipped, warnings
+    window = window_len(device, STATIC_WINDOW_S, raw.shape[0])
+    levels = clip_levels(raw, device, noise_for(device, raw, window)[0], window)
+    piles = pile_warning(rec, levels)
+    if piles:
+        clipped = clipped | np.any(levels.mask(raw), axis=1)
+        warnings.append(piles)
+    return clipped, warnings

@@ -16,7 +16,7 @@ import numpy as np
 
 from .errors import AccelcalError
 from .native import FORMATS, check, cptr, ffi, lib
-from .quantize import rail_codes, round_half_up, row_shift, to_fixed, trim_range
+from .quantize import rail_codes, rail_counts, round_half_up, row_shift, to_fixed, trim_range
 
 OUT_FRAC = FORMATS.out_frac
 I16_MIN, I16_MAX = -32768, 32767
@@ -135,7 +135,8 @@ def triad_apply_fixed(table: TriadTable, raw) -> tuple[np.ndarray, np.ndarray]:
     table : TriadTable
     raw : array_like (n, 3)
         Counts: uint16, or int16 for a ``signed`` table (then pre-trimmed with
-        ``ac_trim_s16`` and resolved with ``ac_triad_resolve``, as signed firmware does).
+        ``ac_trim_rails_s16`` and resolved with ``ac_triad_resolve``, as the header tells signed
+        firmware to).
 
     Returns
     -------
@@ -152,9 +153,10 @@ def triad_apply_fixed(table: TriadTable, raw) -> tuple[np.ndarray, np.ndarray]:
     if table.signed:
         trim = np.ascontiguousarray(table.trim, dtype=np.int16)
         x = np.zeros(3, np.int16)
+        lo, hi = rail_counts(table.rails, True)
         for n in range(raw.shape[0]):
-            s1 = check(lib.ac_trim_s16(cptr("int16_t *", raw[n]), cptr("int16_t *", trim), 3, cptr("int16_t *", x)),
-                       "ac_trim_s16")
+            s1 = check(lib.ac_trim_rails_s16(cptr("int16_t *", raw[n]), cptr("int16_t *", trim), 3, lo, hi,
+                                             cptr("int16_t *", x)), "ac_trim_rails_s16")
             s2 = check(lib.ac_triad_resolve(t, cptr("int16_t *", x), fo), "ac_triad_resolve")
             sat[n] = s1 or s2
             out[n] = (fo[0], fo[1], fo[2])

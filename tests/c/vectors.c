@@ -1332,7 +1332,7 @@ static void bench(void)
     bench_end(AC_STR("(empty)"));
 }
 
-/* ---- the converter's rails (ac_trim_rails, ac_process, ac_process_batch, ac_triad_apply) --
+/* ---- the converter's rails (ac_trim_rails, _s16, ac_process, ac_process_batch, ac_triad_apply) --
  * Rails from a few kinds (a 16-bit and a 12-bit converter, arbitrary, one code apart,
  * equal and inverted: rails unknown), readings at and around them (raw_min - 1 .. + 1,
  * raw_max - 1 .. + 1, the code range's ends) and random; the H8/300H checks them in its
@@ -1434,6 +1434,44 @@ static void vec_rails(void)
     }
     res.raw_min = 0u;
     res.raw_max = 0u;
+    /* a signed chip's pre-trim with its rails in its own counts (ac_trim_rails_s16): the
+     * same rail pairs and readings read as int16 (code - 32768: a 12-bit chip's -2048, 2047
+     * among them), compared with int16 operators */
+    for (t = 0u; t < 70u; t++) {
+        int16_t sraw[AC_MAX_CHANNELS + 2u], strim[AC_MAX_CHANNELS + 2u], slo, shi;
+        uint16_t n = (uint16_t)(1u + below(AC_MAX_CHANNELS + 2u));
+        rail_pair(t, &lo, &hi);
+        if (t % 7u == 1u) {
+            lo = (uint16_t)(32768u - 2048u); /* -2048 .. 2047 */
+            hi = (uint16_t)(32768u + 2047u);
+        }
+        slo = (int16_t)(int32_t)((long)lo - 32768L);
+        shi = (int16_t)(int32_t)((long)hi - 32768L);
+        for (k = 0u; k < n; k++) {
+            uint16_t r = rail_pick(lo, hi);
+            uint16_t tc = (t & 8u) ? (uint16_t)rnd() : (uint16_t)(r + (uint16_t)below(2000u) - 1000u);
+            sraw[k] = (int16_t)(int32_t)((long)r - 32768L);
+            strim[k] = (int16_t)(int32_t)((long)tc - 32768L);
+            x[k] = 0;
+        }
+        TAG("RLS");
+        h16(slo);
+        h16(shi);
+        st(ac_trim_rails_s16(sraw, strim, n, slo, shi, x));
+        for (k = 0u; k < n; k++) {
+            h16(x[k]);
+        }
+        nl();
+    }
+    TAG("RLS0");
+    {
+        int16_t sraw[1] = {0}, strim[1] = {0};
+        st(ac_trim_rails_s16(sraw, strim, 0u, -2048, 2047, x));
+        st(ac_trim_rails_s16(0, strim, 1u, -2048, 2047, x));
+        st(ac_trim_rails_s16(sraw, 0, 1u, -2048, 2047, x));
+        st(ac_trim_rails_s16(sraw, strim, 1u, -2048, 2047, 0));
+    }
+    nl();
     for (t = 0u; t < 28u; t++) {
         ac_triad tr;
         int32_t f[3];

@@ -1,6 +1,6 @@
 """The C core flags a reading at the converter's rails (raw_min / raw_max) as the host does.
 
-ac_trim_rails, ac_process, ac_process_batch and ac_triad_apply against the host's
+ac_trim_rails, ac_trim_rails_s16 (a signed chip's pre-trim, in its own counts), ac_process, ac_process_batch and ac_triad_apply against the host's
 :func:`accelcal.clipping.at_rails` over whole reading ranges, the boundary values raw_min,
 raw_min + 1, raw_max - 1 and raw_max drawn often; the rail test changes no number (x, the
 outputs and the saturation bits equal those of a table without rails)."""
@@ -13,7 +13,7 @@ from hypothesis import assume, given, strategies as st
 from accelcal.clipping import at_rails
 from accelcal.errors import IllConditionedError, SingularError
 from accelcal.native import at_rail, check, cptr, ffi, lib, offset_binary, process_batch
-from accelcal.quantize import QuantizeError, quantize, rail_codes
+from accelcal.quantize import QuantizeError, quantize, rail_codes, rail_counts
 from accelcal.triad import quantize_triad, triad_apply_fixed
 from test_core_resolve import random_geometry
 
@@ -54,8 +54,8 @@ def trim_rails(raw_c, trim_c, lo_c, hi_c):
     """ac_trim_rails on one sample of uint16 codes -> (status, x)."""
     n = len(raw_c)
     x = np.zeros(n, np.int16)
-    s = lib.ac_trim_rails(cptr("uint16_t *", np.ascontiguousarray(raw_c, np.uint16)),
-                          cptr("uint16_t *", np.ascontiguousarray(trim_c, np.uint16)), n, int(lo_c), int(hi_c),
+    raw_c, trim_c = np.ascontiguousarray(raw_c, np.uint16), np.ascontiguousarray(trim_c, np.uint16)
+    s = lib.ac_trim_rails(cptr("uint16_t *", raw_c), cptr("uint16_t *", trim_c), n, int(lo_c), int(hi_c),
                           cptr("int16_t *", x))
     return int(s), x
 
@@ -81,6 +81,58 @@ def test_trim_rails_flags_what_at_rails_flags(data):
     s0, x0 = trim_plain(codes(raw, signed), codes(trim, signed))
     assert bool(s & RAIL) == bool(host_rails(raw[None, :], raw_min, raw_max)[0])
     assert (s & SAT) == s0 and np.array_equal(x, x0)
+
+
+def trim_rails_s16(raw, trim, lo, hi):
+    """ac_trim_rails_s16 on one sample of int16 counts -> (status, x)."""
+    n = len(raw)
+    x = np.zeros(n, np.int16)
+    raw, trim = np.ascontiguousarray(raw, np.int16), np.ascontiguousarray(trim, np.int16)  # alive for the call
+    s = lib.ac_trim_rails_s16(cptr("int16_t *", raw), cptr("int16_t *", trim), n, int(lo), int(hi),
+                              cptr("int16_t *", x))
+    return int(s), x
+
+
+def trim_s16(raw, trim):
+    n = len(raw)
+    x = np.zeros(n, np.int16)
+    raw, trim = np.ascontiguousarray(raw, np.int16), np.ascontiguousarray(trim, np.int16)
+    s = lib.ac_trim_s16(cptr("int16_t *", raw), cptr("int16_t *", trim), n, cptr("int16_t *", x))
+    return int(s), x
+
+
+@core
+@given(st.data())
+def test_trim_rails_s16_flags_what_at_rails_flags(data):
+    """A signed chip's pre-trim with its rails in its own counts (the header's recipe for signed
+    chips, -2048 and 2047 for a 12-bit one): AC_AT_RAIL exactly where the host's at_rails is,
+    x and the saturation bit those of ac_trim_s16, the status that of ac_trim_rails on the codes."""
+    raw_min, raw_max, _ = data.draw(rails(signed=True))
+    n = data.draw(st.integers(1, 14))
+    raw = readings(data.draw, raw_min, raw_max, (n,))
+    trim = np.array(data.draw(st.lists(st.integers(-32768, 32767), min_size=n, max_size=n)), np.int64)
+    s, x = trim_rails_s16(raw, trim, raw_min, raw_max)
+    s0, x0 = trim_s16(raw, trim)
+    assert bool(s & RAIL) == bool(host_rails(raw[None, :], raw_min, raw_max)[0])
+    assert (s & SAT) == s0 and np.array_equal(x, x0)
+    lo_c, hi_c = rail_codes(raw_min, raw_max, True)
+    assert rail_counts((lo_c, hi_c), True) == (raw_min, raw_max)
+    s_c, x_c = trim_rails(codes(raw, True), codes(trim, True), lo_c, hi_c)
+    assert s == s_c and np.array_equal(x, x_c)
+
+
+@core
+@given(st.integers(-32768, 32767), st.integers(-32768, 32767), st.lists(st.integers(-32768, 32767), min_size=1,
+                                                                        max_size=14))
+def test_unknown_rails_s16_flag_nothing(a, b, raw):
+    """raw_min >= raw_max (the (0, 0) codes of a table without rails are -32768, -32768 in counts):
+    nothing flagged, -32768 and 32767 included."""
+    lo, hi = max(a, b), min(a, b)
+    raw = np.array(raw + [-32768, 32767, lo, hi], np.int16)
+    for pair in ((lo, hi), rail_counts((0, 0), True)):
+        s, x = trim_rails_s16(raw, raw[::-1].copy(), *pair)
+        s0, x0 = trim_s16(raw, raw[::-1].copy())
+        assert s == s0 and np.array_equal(x, x0)
 
 
 @core

@@ -106,3 +106,68 @@ def test_cross_compiles_warning_free(case, target):
                    "int32_t out[6];\nint run(const uint16_t *raw) {\n"
                    "    return (int)ac_process(&AC_CAL_RESOLVER, AC_CAL_TRIM, raw, 0, out);\n}\n")
     cross_compile(target, src)
+
+
+def stated_counts(text):
+    """The header's statement of its input: (raw_min, raw_max), {channel: (counts per m/s^2,
+    m/s^2 per count, mg per count)}, the right shift a left-justified register needs or None,
+    and the mg divisor."""
+    import re
+    rng = re.search(r"\* Input: raw\[i\] in the device file's counts, (-?\d+)\.\.(-?\d+) \(raw_min\.\.raw_max\)", text)
+    per = {}
+    for m in re.finditer(r"\*     raw\[(\d+)(?:\.\.(\d+))?\]: ([0-9.e+-]+) counts per m/s\^2: one count = "
+                         r"([0-9.e+-]+) m/s\^2 = ([0-9.e+-]+) mg", text):
+        for i in range(int(m.group(1)), int(m.group(2) or m.group(1)) + 1):
+            per[i] = tuple(float(m.group(k)) for k in (3, 4, 5))
+    shift = re.search(r"needs its value \((?:u?int16_t)\) >> (\d+) first", text)
+    mg = re.search(r"a reading a driver gives in mg is divided by ([0-9.e+-]+) mg first", text)
+    return ((int(rng.group(1)), int(rng.group(2))) if rng else None, per, int(shift.group(1)) if shift else None,
+            float(mg.group(1)) if mg else None)
+
+
+@pytest.mark.parametrize("chip", ["microbit", "lis3dh", "array", "mixed"])
+def test_the_header_states_the_size_of_one_count(chip):
+    """F8: the header never said what one count is (4 mg for a micro:bit, 1/1024 g for a LIS3DH's
+    12 bits), nor that a left-justified register must be shifted: a firmware author passed mg or
+    the register.  It states the input range raw_min..raw_max, one count per channel in m/s^2 and
+    mg from the device's counts_per_mps2, the divisor of a reading in mg, and the shift of a
+    left-justified 12-bit register."""
+    from accelcal.calibration import Calibration
+    from accelcal.device import Device
+    from accelcal.header import calibration_header
+    g = 9.80665
+    d0 = default_device()
+    if chip == "microbit":      # accelcal convert --units mg --lsb 4: one count = 4 mg, the default 16-bit rails
+        d = Device(name="mb", sample_rate_hz=44.0, gravity_mps2=g, raw_min=-32768, raw_max=32767,
+                   positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, 1 / (4e-3 * g)),
+                   zero_counts=np.zeros(3))
+        want = (-32768, 32767), None, 4.0
+    elif chip == "lis3dh":      # 12 bits, +-2 g: 1024 counts per g
+        d = Device(name="lis", sample_rate_hz=100.0, gravity_mps2=g, raw_min=-2048, raw_max=2047,
+                   positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, 1024 / g),
+                   zero_counts=np.zeros(3))
+        want = (-2048, 2047), 4, 1000 / 1024
+    elif chip == "array":
+        d = d0
+        want = (0, 10000), None, 1000 / (d0.counts_per_mps2[0] * g)
+    else:                       # channels of two scales, an unsigned 12-bit converter
+        k = np.array([100.0, 100.0, 100.0, 200.0, 200.0, 100.0])
+        d = Device(name="mixed", sample_rate_hz=60.0, gravity_mps2=g, raw_min=0, raw_max=4095,
+                   positions=d0.positions, axes=d0.axes, counts_per_mps2=k, zero_counts=np.full(6, 2048.0))
+        want = (0, 4095), 4, None
+    text = calibration_header(d, Calibration.nominal(d))
+    rails, per, shift, mg = stated_counts(text)
+    assert rails == want[0] and shift == want[1]
+    assert sorted(per) == list(range(d.n_channels))
+    for i, (k_i, mps2, mg_i) in per.items():
+        assert k_i == pytest.approx(d.counts_per_mps2[i], rel=1e-5)
+        assert mps2 == pytest.approx(1 / d.counts_per_mps2[i], rel=1e-5)
+        assert mg_i == pytest.approx(1000 / (d.counts_per_mps2[i] * g), rel=1e-5)
+    if want[2] is None:
+        assert mg is None and "its channel's mg per count" in text
+    else:
+        assert mg == pytest.approx(want[2], rel=1e-5)
+    # the rails are also macros in the chip's counts (what ac_trim_rails_s16 takes for a signed chip)
+    macro = {ln.split()[1]: eval(ln.split(None, 2)[2].rstrip("u")) for ln in text.splitlines()
+             if ln.startswith("#define AC_CAL_RAW_")}
+    assert (macro["AC_CAL_RAW_MIN"], macro["AC_CAL_RAW_MAX"]) == (d.raw_min, d.raw_max)

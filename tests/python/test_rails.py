@@ -82,3 +82,45 @@ def test_one_reading_is_one_sample_and_array_rows_count_from_one():
         ac.resolve(d, cal, np.array([[np.nan, 1.0, 2.0]]))
     with pytest.raises(AccelcalError, match=r"row 1, column raw_0"):
         ac.resolve(d, cal, np.array([[70000, 1, 2]]))
+
+
+def _microbit_log():
+    """A micro:bit log as `accelcal convert --units mg --lsb 4` makes it: counts of 4 mg inside the
+    device's default 16-bit rails, x swinging beyond +-2 g so that its readings pile at +-2040 mg
+    (+-510 counts), rests at either end."""
+    rng = np.random.default_rng(4)
+    n = 900
+    i = np.arange(n)
+    f = np.c_[2600 * np.sin(i / 7), 300 * np.cos(i / 5), -980 + 900 * np.sin(i / 11)]
+    f[:150] = [60, -60, -1000]
+    f[750:] = [-40, 20, -1000]
+    counts = np.clip(np.rint((f + rng.normal(0, 12, f.shape)) / 4), -510, 510).astype(np.int64)
+    d = dataclasses.replace(default_triad(), name="microbit", sample_rate_hz=44.34, raw_min=-32768, raw_max=32767,
+                            zero_counts=np.zeros(3), counts_per_mps2=np.full(3, 1 / (4e-3 * G)))
+    t = np.cumsum(rng.integers(21, 25, n)) / 1000.0
+    return d, recording_from_arrays(t - t[0], counts)
+
+
+@pytest.mark.parametrize("engine", ["float", "fixed"])
+def test_resolve_flags_the_piles_convert_and_diagnose_call_clipped(tmp_path, capfd, engine):
+    """F7: on a micro:bit log clipping at +-2040 mg (+-510 counts, inside the device's 16-bit rails)
+    convert and diagnose noted the readings piled at the clip levels, but resolve wrote f ~ +-20 m/s^2
+    there with no `clipped` column and no warning (it knew only the rails).  It flags the samples at
+    the levels clipping.clip_levels finds (the ones convert's note counts), in either engine."""
+    from accelcal.clipping import clip_note
+    d, rec = _microbit_log()
+    want = np.abs(rec.raw[:, 0]) == 510
+    assert 100 < want.sum() < 400 and not np.any(np.abs(rec.raw[:, 1:]) == 510)
+    note = clip_note(rec.raw, d, 44)
+    assert note and f"{int(want.sum())} reading(s) sit at the ends of the range" in note
+    save_device(d, tmp_path / "d.json")
+    save_calibration(Calibration.nominal(d), tmp_path / "c.json")
+    write_recording(tmp_path / "r.csv", rec)
+    rc, _, err, _ = run(["resolve", "--device", tmp_path / "d.json", "--calibration", tmp_path / "c.json",
+                         tmp_path / "r.csv", "--engine", engine, "-o", tmp_path / "out.csv"], capfd)
+    assert rc == 0 and f"{int(want.sum())} samples read a channel at a clip level inside the range" in err, err
+    assert f"raw_0: {int((rec.raw[:, 0] == -510).sum())} at -510, {int((rec.raw[:, 0] == 510).sum())} at 510" in err
+    assert "ADC's rail" not in err
+    lines = [ln for ln in (tmp_path / "out.csv").read_text().splitlines() if not ln.startswith("#")]
+    col = lines[0].split(",").index("clipped")
+    np.testing.assert_array_equal([float(ln.split(",")[col]) for ln in lines[1:]], want.astype(float))

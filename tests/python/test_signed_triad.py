@@ -183,9 +183,10 @@ int main(void) {
         int16_t raw[3], x[3];
         ac_status s2;
         for (i = 0; i < 3; i++) raw[i] = (int16_t)v[i];
-        s = ac_trim_s16(raw, AC_CAL_TRIM, 3u, x);
+        /* the header's recipe for a signed chip */
+        s = ac_trim_rails_s16(raw, AC_CAL_TRIM, 3u, AC_CAL_RAW_MIN, AC_CAL_RAW_MAX, x);
         s2 = ac_triad_resolve(&AC_CAL_TRIAD, x, f);
-        if (s2 != AC_OK) s = s2;
+        s = s2 < 0 ? s2 : (ac_status)(s | s2);
 #else
         uint16_t raw[3];
         for (i = 0; i < 3; i++) raw[i] = (uint16_t)v[i];
@@ -217,8 +218,8 @@ def test_triad_header_on_the_host_equals_resolve_fixed(tmp_path, signed):
     f, a, flags = resolve_recording(d, cal, rec, "fixed")
     assert np.array_equal(rows[:, 1:], np.round(f * 1024).astype(np.int64))
     assert np.array_equal((rows[:, 0] & 1) != 0, flags.astype(bool))     # AC_SATURATED
-    # AC_AT_RAIL: ac_triad_apply flags the host's at_rails samples (ac_trim_s16 sees no rails)
-    assert np.array_equal((rows[:, 0] & 2) != 0, at_rails(rec, d) & (not signed))
+    # AC_AT_RAIL: ac_triad_apply, or for a signed chip ac_trim_rails_s16, flags the host's at_rails samples
+    assert np.array_equal((rows[:, 0] & 2) != 0, at_rails(rec, d)) and at_rails(rec, d).sum() >= 3
     assert np.all(np.isnan(a))
     ff, _, _ = resolve_recording(d, cal, rec, "float")
     ok = flags == 0
@@ -238,13 +239,15 @@ def test_triad_and_signed_headers_cross_compile(tmp_path, target, kind):
                    positions=d0.positions, axes=d0.axes, counts_per_mps2=d0.counts_per_mps2,
                    zero_counts=d0.zero_counts - 32768)
         cal = Calibration.nominal(d)
-        call = "int16_t x[6];\n    ac_trim_s16(raw, AC_CAL_TRIM, 6u, x);\n    return (int)ac_resolve(&AC_CAL_RESOLVER, x, 0, out);"
+        call = ("int16_t x[6];\n    ac_status s = ac_trim_rails_s16(raw, AC_CAL_TRIM, 6u, AC_CAL_RAW_MIN, "
+                "AC_CAL_RAW_MAX, x);\n    return (int)s | (int)ac_resolve(&AC_CAL_RESOLVER, x, 0, out);")
         rt = "int16_t"
     else:
         d = mpu_triad(kind == "signed_triad")
         cal = a_calibration(d)
         if kind == "signed_triad":
-            call = "int16_t x[3];\n    ac_trim_s16(raw, AC_CAL_TRIM, 3u, x);\n    return (int)ac_triad_resolve(&AC_CAL_TRIAD, x, out);"
+            call = ("int16_t x[3];\n    ac_status s = ac_trim_rails_s16(raw, AC_CAL_TRIM, 3u, AC_CAL_RAW_MIN, "
+                    "AC_CAL_RAW_MAX, x);\n    return (int)s | (int)ac_triad_resolve(&AC_CAL_TRIAD, x, out);")
             rt = "int16_t"
         else:
             call = "return (int)ac_triad_apply(&AC_CAL_TRIAD, raw, out);"
@@ -321,3 +324,77 @@ def test_the_headers_rounding_figure_bounds_every_reading(drawn, u):
                  zero_counts=np.zeros(3))
     text = calibration_header(dev, Calibration(device="t", method="full", offsets=b, sensitivity=S))
     assert "the table's rounding, which is at most " + ", ".join(f"{v:.3g}" for v in bound) + " LSB" in text
+
+
+def recipe_lines(text):
+    """The C statements of a header's per-sample recipe ("then per sample:" up to its first
+    line of prose), as written in its comment."""
+    lines = text.splitlines()
+    start = next(i for i, ln in enumerate(lines) if "then per sample" in ln) + 1
+    code = []
+    for ln in lines[start:]:
+        if not ln.startswith(" *     "):
+            break
+        code.append(ln[len(" *     "):].split("   (")[0])
+    return code
+
+
+RECIPE_DRIVER = r"""
+#define AC_CAL_IMPLEMENTATION
+#include "cal.h"
+#include <stdio.h>
+int main(void) {
+    int v, i;
+    int16_t raw[NCH];
+    int32_t OUTDECL;
+    const int16_t *omega_or_NULL = 0;
+    for (;;) {
+        for (i = 0; i < NCH; i++) { if (scanf("%d", &v) != 1) return 0; raw[i] = (int16_t)v; }
+        {
+            RECIPE
+            printf("%d %d\n", (int)s, (int)r);
+        }
+    }
+}
+"""
+
+
+@pytest.mark.parametrize("kind", ["triad", "array"])
+def test_the_signed_headers_recipe_as_written_flags_the_rails(tmp_path, kind):
+    """F6: the header's recipe for a signed chip (then ac_trim_s16 + ac_triad_resolve / ac_resolve,
+    which never look at the rails: -2048 on a 12-bit chip came out as a plain f) compiled as the
+    comment writes it: its pre-trim's status has AC_AT_RAIL exactly on the samples the host's
+    at_rails names, over the whole 12-bit range, its rails and the codes next to them included."""
+    from accelcal.device import default_device
+    if kind == "triad":
+        d = Device(name="lis3dh-12bit", sample_rate_hz=100.0, gravity_mps2=G, raw_min=-2048, raw_max=2047,
+                   positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, 1024 / G),
+                   zero_counts=np.zeros(3))
+        cal, n, out = a_calibration(d), 3, "f[3]"
+    else:
+        d0 = default_device()
+        d = Device(name="signed-array-12bit", sample_rate_hz=60.0, gravity_mps2=G, raw_min=-2048, raw_max=2047,
+                   positions=d0.positions, axes=d0.axes, counts_per_mps2=np.full(6, 100.0),
+                   zero_counts=np.zeros(6))
+        cal, n, out = Calibration.nominal(d), 6, "out[6]"
+    text = calibration_header(d, cal)
+    code = recipe_lines(text)
+    assert any("ac_trim_rails_s16" in c for c in code) and not any("ac_trim_s16(" in c for c in code)
+    (tmp_path / "cal.h").write_text(text)
+    (tmp_path / "main.c").write_text(RECIPE_DRIVER.replace("RECIPE", "\n            ".join(code))
+                                     .replace("OUTDECL", out).replace("NCH", str(n)))
+    exe = tmp_path / "drv"
+    build_host(tmp_path / "main.c", exe, "-Wno-unused-variable")
+    rng = np.random.default_rng(2)
+    lo, hi = d.raw_min, d.raw_max
+    edge = np.array([lo, lo + 1, hi - 1, hi])
+    raw = np.where(rng.random((600, n)) < 0.1, rng.choice(edge, (600, n)), rng.integers(lo, hi + 1, (600, n)))
+    raw = np.vstack([raw, np.full(n, lo), np.full(n, hi), np.full(n, lo + 1), np.full(n, hi - 1)])
+    res = subprocess.run([str(exe)], input="\n".join(" ".join(map(str, r)) for r in raw) + "\n",
+                         capture_output=True, text=True)
+    assert res.returncode == 0
+    st_ = np.array([list(map(int, ln.split())) for ln in res.stdout.splitlines()])
+    assert st_.shape == (len(raw), 2) and np.all(st_ >= 0)
+    rails = at_rails(recording_from_arrays(np.arange(len(raw)) / 100.0, raw), d)
+    assert 0 < rails.sum() < len(raw)
+    assert np.array_equal((st_[:, 0] & lib.AC_AT_RAIL) != 0, rails)
