@@ -353,10 +353,10 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         A table's rows whose time stamp repeats the row before's with other readings (a watch
         that stamps two samples with one stamp: 93 of a Garmin export's 10,000 rows): refused,
         the message counting them and those after a step of two median steps
-        (:func:`convert_named.slipped_stamps`: the stamps slipped a place late and caught up;
+        (:func:`convert_stamps.slipped_stamps`: the stamps slipped a place late and caught up;
         the samples keep their grid, and ``drop`` loses one each), or left out with a note
         (``drop``); ``shift`` moves each stamp that slipped back one step
-        (:func:`convert_named.shift_slipped`: every sample kept) and leaves out the other
+        (:func:`convert_stamps.shift_slipped`: every sample kept) and leaves out the other
         repeats as ``drop`` does.  Rows that repeat the stamp and the readings are left out
         either way.
 
