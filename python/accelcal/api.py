@@ -196,9 +196,18 @@ def as_recording(recording: Any, device: Device) -> Recording:
 
 
 def _as_recordings(recordings: Any, device: Device) -> list[Recording]:
+    """Recordings from one (a Recording, a path, an array) or a sequence of them; a sequence
+    of rows of numbers (``raw.tolist()``: every item a 1-D list, tuple or array of numbers, as
+    long as each other) is one (n, N) array, as :func:`as_recording` reads it, not n
+    recordings of one sample each."""
     if isinstance(recordings, (Recording, str, Path, np.ndarray)):
         return [as_recording(recordings, device)]
-    return [as_recording(r, device) for r in recordings]
+    items = list(recordings)
+    if items and all(isinstance(r, (list, tuple, np.ndarray)) and np.ndim(r) == 1 and len(r) == len(items[0]) and
+                     all(isinstance(v, (int, float, np.number)) and not isinstance(v, bool) for v in r)
+                     for r in items):
+        return [as_recording(np.asarray(items), device)]
+    return [as_recording(r, device) for r in items]
 
 
 @options_checked()
@@ -211,7 +220,8 @@ def calibrate(device: Any, recordings: Any, method: str | None = None, *,
     ----------
     device : Device, path or "default"
     recordings : Recording, path, array or a sequence of them
-        Poses come from the ``pose`` labels when present, else from static detection.
+        Poses come from the ``pose`` labels when present, else from static detection.  A
+        list of rows of numbers (``raw.tolist()``) is one array, not a recording a row.
     method : {"full", "gain", "offset", "jigfree"}, optional
         Default: ``full`` when every pose has a reference f, ``jigfree`` when none has.
     jig_accuracy_deg : float

@@ -2,6 +2,7 @@
 numpy arrays accepted, bad arrays refused with one line, docstring examples run."""
 import doctest
 import importlib
+import json
 
 import numpy as np
 import pytest
@@ -151,3 +152,42 @@ def test_a_jig_accuracy_no_jig_has_is_refused(deg):
     with pytest.raises(ac.AccelcalError, match="small-angle"):
         ac.calibrate(ac.default_device(), ac.simulate(ac.default_device(), "static_poses", poses="24", seed=1),
                      jig_accuracy_deg=deg)
+
+
+def test_calibrate_reads_a_list_of_rows_as_one_array(setup):
+    """``ac.calibrate(dev, raw.tolist())`` had been read as n recordings of one sample each
+    (no usable static pose in any); a list of equal-length rows of numbers is one array, as
+    resolve reads it; a list of arrays stays a list of recordings."""
+    _, dev, rec = setup
+    raw = rec.raw[rec.pose >= 0]
+    want = ac.calibrate(dev, raw)
+    got = ac.calibrate(dev, raw.tolist())
+    np.testing.assert_array_equal(got.offsets, want.offsets)
+    np.testing.assert_array_equal(ac.calibrate(dev, [tuple(r) for r in raw.tolist()]).offsets, want.offsets)
+    half = raw.shape[0] // 2
+    assert ac.calibrate(dev, [raw[:half], raw[half:]]).offsets.shape == want.offsets.shape
+
+
+def test_several_recordings_without_a_pose_give_each_one_s_reason(tmp_path):
+    """Calibrate given several recordings none of which has a static pose had said one bare line
+    naming the first file and lever arms (a triad has none); now it gives each file's own
+    reason, the one-recording refusal's text, on one line."""
+    (tmp_path / "d.json").write_text(json.dumps({
+        "name": "bike", "sample_rate_hz": 208.0, "gravity_mps2": 9.80665, "raw_min": -32768, "raw_max": 32767,
+        "channels": [{"position_m": [0, 0, 0], "axis": a, "counts_per_mps2": 835.35, "zero_counts": 0}
+                     for a in ([1, 0, 0], [0, 1, 0], [0, 0, 1])]}))
+    dev = ac.load_device(tmp_path / "d.json")
+    rng = np.random.default_rng(2)
+    recs = []
+    for k in (1, 2):                           # a ride: the force swings, no still stretch
+        t = np.arange(2000) / 208.0
+        f = np.c_[3 * np.sin(2 * np.pi * 1.3 * t), 2 * np.sin(2 * np.pi * 0.7 * t), 9.8 + 4 * np.sin(2 * np.pi * 2.1 * t)]
+        raw = np.rint(f * 835.35 + rng.normal(0, 400, (t.size, 3))).astype(np.int64)
+        recs.append(ac.Recording(t=t, raw=raw, source=f"ride{k}.csv"))
+    with pytest.raises(AccelcalError) as e:
+        ac.calibrate(dev, recs)
+    msg = str(e.value)
+    assert "\n" not in msg and msg.startswith("2 recordings: no usable static pose in any recording"), msg
+    assert "lever arms" not in msg, msg
+    for k in (1, 2):
+        assert f"ride{k}.csv: no static pose found" in msg and "its noise on raw_0" in msg, msg
