@@ -1,7 +1,9 @@
 """The Python API (``import accelcal as ac``): the same results as the command line,
 numpy arrays accepted, bad arrays refused with one line, docstring examples run."""
+import argparse
 import doctest
 import importlib
+import inspect
 import json
 
 import numpy as np
@@ -9,6 +11,7 @@ import pytest
 
 import accelcal as ac
 from accelcal.cli import main
+from accelcal.convert_cli import add_convert_parser
 from accelcal.errors import AccelcalError
 
 
@@ -191,3 +194,22 @@ def test_several_recordings_without_a_pose_give_each_one_s_reason(tmp_path):
     assert "lever arms" not in msg, msg
     for k in (1, 2):
         assert f"ride{k}.csv: no static pose found" in msg and "its noise on raw_0" in msg, msg
+
+
+def test_convert_takes_every_option_of_the_command(tmp_path):
+    """ac.convert lacked time_column, time_unit, round, columns, repeated_stamps and variable
+    (each an OptionError), so the API could not convert files the command can; every option of
+    ``accelcal convert`` but its outputs is now a keyword of ac.convert, and they act alike."""
+    parser = argparse.ArgumentParser()
+    add_convert_parser(parser.add_subparsers(), lambda *a: None)
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices["convert"]
+    renamed = {"input": "path", "format": "fmt", "rate": "rate_hz", "gravity": "gravity_mps2",
+               "full_scale": "full_scale_g"}
+    dests = {renamed.get(a.dest, a.dest) for a in sub._actions if a.dest not in ("help", "output", "device_out")}
+    assert dests <= set(inspect.signature(ac.convert).parameters), dests - set(inspect.signature(ac.convert).parameters)
+    src = tmp_path / "tw.csv"
+    src.write_text("ms,ax,ay,az\n" + "".join(f"{10 * i},{0.01 * i:.2f},0.0,1.0\n" for i in range(50)))
+    c = ac.convert(src, columns="ax,ay,az", time_column="ms", time_unit="2ms", units="g", lsb=0.01, rate_hz=None)
+    assert c.recording.t[1] == pytest.approx(0.02) and c.recording.raw[5, 0] == 5
+    doc = ac.convert.__doc__
+    assert '"mmps2", "g", "mg"' in doc and '"table", "mat", "e4"' in doc
