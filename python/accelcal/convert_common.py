@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from .clipping import clip_note
-from .convert_device import check_range, nominal_triad
+from .convert_device import check_range, code_step_note, nominal_triad
 from .convert_regions import label_poses
 from .convert_rows import placeholder_lead
 from .convert_time import FLOAT_EXACT, burst_fit, exact_stamps, rate_from_t, time_in_seconds
@@ -260,6 +260,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
             distinct_hz = rate / (float(np.mean(inner)) if uneven(k, inner) else k)   # rows per reading
         if k > 1:
             notes.append(held_note(k, first, raw.shape[0], distinct_hz))
+        notes += code_step_note(raw, opts.bits)
         if device is None:
             # rows that hold each reading for k rows: the device states the sensor's rate, that of the distinct
             # readings (calibrate, diagnose take it as such: held.distinct_recordings), unless --rate states one

@@ -264,9 +264,11 @@ def time_in_seconds(t: np.ndarray, unit: str, column: str | None, source: str,
     steps_from_t0 = (t - t[0]).astype(np.float64) if exact and t.size else np.asarray(t, float) - t0
 
     def divided(k: float) -> tuple[np.ndarray, np.ndarray]:
+        # each stamp divided by k, correctly rounded (25 ms: 0.025, where t0 / k + rel gave
+        # 0.024999999999999998), but for whole numbers past FLOAT_EXACT (an epoch in ns)
         rel = steps_from_t0 / k
-        if k == 1.0 and not exact:
-            return np.asarray(t, float), rel
+        if not exact or not t.size or max(abs(int(t.min())), abs(int(t.max()))) < FLOAT_EXACT:
+            return np.asarray(t, float) / k if k != 1.0 else np.asarray(t, float), rel
         return float(t0) / k + rel, rel
 
     if unit != "auto":

@@ -213,3 +213,12 @@ def test_convert_takes_every_option_of_the_command(tmp_path):
     assert c.recording.t[1] == pytest.approx(0.02) and c.recording.raw[5, 0] == 5
     doc = ac.convert.__doc__
     assert '"mmps2", "g", "mg"' in doc and '"table", "mat", "e4"' in doc
+
+
+def test_a_misspelt_nominal_is_suggested(setup):
+    """ac.resolve(dev, "nomimal", ...) said "cannot read the file"; it now suggests 'nominal'."""
+    _, dev, rec = setup
+    with pytest.raises(AccelcalError, match=r"^nomimal: no such calibration file; did you mean 'nominal'"):
+        ac.resolve(dev, "nomimal", rec)
+    with pytest.raises(AccelcalError, match="cannot read the file"):
+        ac.resolve(dev, "cal.json", rec)

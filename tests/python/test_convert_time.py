@@ -366,3 +366,16 @@ def test_a_stated_rate_over_a_tick_clock_notes_the_gaps_the_grid_drops(tmp_path,
                          "--rate", "208", "-o", tmp_path / "r.csv"], capfd)
     assert rc == 0, err
     assert "the time column has 2 steps longer than 1.8 x its median step" in err and "--time-unit" in err, err
+
+
+def test_a_ms_column_is_written_as_the_stamps_say(tmp_path, capfd):
+    """t from a ms column had been written 0.024999999999999998 for 25 ms (the first stamp over
+    1000 plus the steps over 1000); each stamp divided by its unit is written as its shortest
+    repr (0.025)."""
+    src = tmp_path / "ms.csv"
+    src.write_text("time,x,y,z\n3,60,-64,-1000\n25,64,-60,-1004\n46,60,-64,-996\n")
+    out = tmp_path / "r.csv"
+    rc, _, err, _ = run(["convert", src, "--units", "mg", "--lsb", "4", "--rate", "45", "-o", out], capfd)
+    assert rc == 0, err
+    rows = [line.split(",")[0] for line in out.read_text().splitlines() if line[:1].isdigit()]
+    assert rows == ["0.003", "0.025", "0.046"], rows
