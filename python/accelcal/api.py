@@ -40,7 +40,7 @@ from .motions import MOTIONS, Motion
 from .recording import Recording, read_recording as _read_recording_file, write_recording
 from .convert import Converted, convert_file
 from .resolve import resolve_recording
-from .units import COUNTS_STATED, scale_from_options
+from .units import stated_scale
 from .simulate import simulate as _simulate_impl
 from .static import MIN_POSE_S
 
@@ -120,7 +120,7 @@ def read_recording(path: Any, device: Any = None, *, units: str | None = None, l
         whitespace-separated text too).
     device : Device, path or int, optional
         When given, the file must have that device's ``raw_0 .. raw_{N-1}`` (an int is N).
-    units : {"counts", "mps2", "g"}, optional
+    units : {"counts", "mps2", "mmps2", "g", "mg"}, optional
         The unit of the file's raw readings (as ``--units``); m/s^2 or g with ``lsb`` (one
         count in that unit) or ``full_scale_g`` (+-range in g at ``bits`` bits; m/s^2 with
         ``gravity_mps2``, default 9.80665).  The readings become counts exactly (a value
@@ -146,11 +146,7 @@ def read_recording(path: Any, device: Any = None, *, units: str | None = None, l
     >>> rec = ac.read_recording("phone.csv", dev, units="mps2", lsb=9.81 / 2048)   # doctest: +SKIP
     """
     n = device if isinstance(device, int) else (None if device is None else as_device(device).n_channels)
-    scale = None
-    if units is not None or lsb is not None or full_scale_g is not None:
-        scale = scale_from_options(units, lsb, full_scale_g, bits, gravity_mps2)
-        scale = COUNTS_STATED if scale is None else scale
-    return _read_recording_file(path, n, scale=scale)
+    return _read_recording_file(path, n, scale=stated_scale(units, lsb, full_scale_g, bits, gravity_mps2))
 
 
 @options_checked()
@@ -196,9 +192,18 @@ def as_recording(recording: Any, device: Device) -> Recording:
 
 
 def _as_recordings(recordings: Any, device: Device) -> list[Recording]:
+    """Recordings from one (a Recording, a path, an array) or a sequence of them; a sequence
+    of rows of numbers (``raw.tolist()``: every item a 1-D list, tuple or array of numbers, as
+    long as each other) is one (n, N) array, as :func:`as_recording` reads it, not n
+    recordings of one sample each."""
     if isinstance(recordings, (Recording, str, Path, np.ndarray)):
         return [as_recording(recordings, device)]
-    return [as_recording(r, device) for r in recordings]
+    items = list(recordings)
+    if items and all(isinstance(r, (list, tuple, np.ndarray)) and np.ndim(r) == 1 and len(r) == len(items[0]) and
+                     all(isinstance(v, (int, float, np.number)) and not isinstance(v, bool) for v in r)
+                     for r in items):
+        return [as_recording(np.asarray(items), device)]
+    return [as_recording(r, device) for r in items]
 
 
 @options_checked()
@@ -211,7 +216,8 @@ def calibrate(device: Any, recordings: Any, method: str | None = None, *,
     ----------
     device : Device, path or "default"
     recordings : Recording, path, array or a sequence of them
-        Poses come from the ``pose`` labels when present, else from static detection.
+        Poses come from the ``pose`` labels when present, else from static detection.  A
+        list of rows of numbers (``raw.tolist()``) is one array, not a recording a row.
     method : {"full", "gain", "offset", "jigfree"}, optional
         Default: ``full`` when every pose has a reference f, ``jigfree`` when none has.
     jig_accuracy_deg : float
@@ -409,32 +415,64 @@ def rate(device: Any, calibration: Any, recording: Any, engine: str = "float", *
 
 @options_checked()
 def convert(path: Any, fmt: str = "auto", *, units: str | None = None, lsb: float | None = None,
-            full_scale_g: float | None = None, bits: int = 16, rate_hz: float | None = None, regions: Any = None,
-            stated_f: bool = False, gravity_mps2: float | None = None, blocks: bool = False) -> Converted:
-    """Another tool's file as a contract recording and a nominal device (as ``accelcal convert``).
+            full_scale_g: float | None = None, bits: int = 16, round: bool = False, rate_hz: float | None = None,
+            regions: Any = None, stated_f: bool = False, gravity_mps2: float | None = None, blocks: bool = False,
+            time_unit: str = "auto", time_column: str | None = None, columns: str | None = None,
+            repeated_stamps: str = "refuse", variable: str | None = None) -> Converted:
+    """Another tool's file as a contract recording and a nominal device (as ``accelcal convert``,
+    with every option of it: ``--units`` is ``units``, ``--full-scale`` ``full_scale_g``, ``--rate``
+    ``rate_hz``, ``--gravity`` ``gravity_mps2``, ``--format`` ``fmt``, the others by their names).
 
     Parameters
     ----------
     path : str or os.PathLike
-        imu_tk's text, imucal's CSV, the MPU-6050 logger's CSV, a contract-like CSV or a
-        serial monitor's log, compressed or not (gzip, bzip2, xz, zstd, a zip of one file).
-    fmt : {"auto", "imu_tk", "imucal", "mpu6050", "csv", "log"}
-    units : {"counts", "mps2", "g"}, optional
-        The unit of the readings in the file; with ``lsb`` (one count in that unit) or
-        ``full_scale_g`` (+-range in g at ``bits`` bits).  Default: the file's ``# units:`` /
-        ``# lsb:`` comments, else counts; stated by both, they must agree (a contradiction
-        is refused, naming the comment's line).
+        imu_tk's text, imucal's CSV, the MPU-6050 logger's CSV, a contract-like CSV, a
+        serial monitor's log, a table with named accelerometer columns, a MATLAB file or an
+        Empatica E4's ACC.csv, compressed or not (gzip, bzip2, xz, zstd, a zip of one file).
+    fmt : {"auto", "imu_tk", "imucal", "mpu6050", "csv", "log", "table", "mat", "e4"}
+        ``auto`` tells it from the file.
+    units : {"counts", "mps2", "mmps2", "g", "mg"}, optional
+        The unit of the readings in the file; with ``lsb`` (float or str: one count in that
+        unit, or with a unit suffix: "1mg") or ``full_scale_g`` (float: +-range in g at ``bits``
+        bits).  Default: the file's ``# units:`` / ``# lsb:`` comments or a table's column
+        names, else counts; stated by both, they must agree (a contradiction is refused).
+    bits : int
+        The ADC's bits (default 16): the device's raw range, and the LSB of ``full_scale_g``.
+    round : bool
+        Round readings in m/s^2 or g to the nearest LSB (a calibrated logger's floats on no
+        LSB's grid), with a note of how far they were; without it such a value is refused.
     rate_hz : float, optional
-        Hz, for files without a time column; a file of pose means (every row a labelled pose of
-        its own) needs none: its t counts the rows (``table.time`` in its metadata says so).
+        Hz, for files without a time column; with a time column, the device's rate where a
+        host's time stamps do not give it (t is then put on its grid where the stamps' steps
+        disagree by more than 20 %, their long steps noted).  A file of pose means (every row a
+        labelled pose of its own) needs none: its t counts the rows (``table.time`` says so).
     regions : path, optional
-        JSON of pose regions ``{name: {"start": s, "end": e}}`` (sample numbers).
+        JSON of pose regions ``{name: {"start": s, "end": e}}`` (sample numbers, end excluded).
     stated_f : bool
         Poses named ``x_p ... z_a`` get the reference f = +-g along their axis (m/s^2).
     gravity_mps2 : float, optional
-        g of the stated f and the device (default 9.80665).
+        g of the stated f and the device, m/s^2 (default 9.80665; imu_tk 9.81744).
     blocks : bool
         log: each run of readings between the logger's text lines is a pose.
+    time_unit : str
+        The time column's unit: "s", "ms", "us", "ns", or a tick of a chip's clock, a number
+        of one ("25us").  Default "auto": the unit its name states, else seconds, but stamps
+        that would be under 2 Hz in seconds are read in the smallest of ms, us, ns that gives
+        more (a note says so).  t is written in seconds.
+    time_column : str, optional
+        table: the time column (default: of the columns named t, time, timestamp, 'Time (s)',
+        ..., those holding numbers, the first whose name states a unit, else the first; a
+        host's packet stamps give way to a column that times every sample; a note names it).
+    columns : str, optional
+        table: the accelerometer's three columns, "X,Y,Z", as the header names them (a unit in
+        () or [] at a name's end states the readings' unit).
+    repeated_stamps : {"refuse", "drop", "shift"}
+        table: rows whose time stamp repeats the row before's with other readings are refused
+        (the message counts them), left out with a note (``drop``), or, for stamps that
+        slipped a place late, moved back a step (``shift``; the other repeats left out).
+    variable : str, optional
+        mat: the array of readings (3 columns x, y, z, or 4: t, x, y, z) where the file holds
+        more than one; or "X,Y,Z" ("T,X,Y,Z"): vectors of one channel each.
 
     Returns
     -------
@@ -454,9 +492,8 @@ def convert(path: Any, fmt: str = "auto", *, units: str | None = None, lsb: floa
     ...                stated_f=True, gravity_mps2=9.81)          # doctest: +SKIP
     >>> cal = ac.calibrate(c.device, [c.recording], jig_accuracy_deg=0.5)   # doctest: +SKIP
     """
-    scale = None
-    if units is not None or lsb is not None or full_scale_g is not None:
-        scale = scale_from_options(units, lsb, full_scale_g, bits, gravity_mps2)
-        scale = COUNTS_STATED if scale is None else scale
+    scale = stated_scale(units, lsb, full_scale_g, bits, gravity_mps2, round)
     return convert_file(path, fmt, scale=scale, rate_hz=rate_hz, regions=regions, stated_f=stated_f,
-                        gravity_mps2=gravity_mps2, bits=bits, blocks=blocks)
+                        gravity_mps2=gravity_mps2, bits=bits, blocks=blocks, time_unit=time_unit,
+                        variable=variable, time_column=time_column, repeated_stamps=repeated_stamps,
+                        columns=columns)

@@ -5,6 +5,7 @@ JSON load/save per the data contract.  The estimators live in ``calibrate``.
 
 from __future__ import annotations
 
+import difflib
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -13,8 +14,8 @@ from typing import Any
 import numpy as np
 
 from .device import Device
-from .jsonfields import JsonFields, check_limits, json_number, read_json, show_json
-from .errors import atomic_write
+from .jsonfields import KEY_CUTOFF, JsonFields, check_limits, json_number, read_json, show_json
+from .errors import InputError, atomic_write
 
 __all__ = ["Calibration", "KNOWN_KEYS", "NOMINAL", "load_calibration", "save_calibration", "calibration_from_dict",
            "calibration_to_dict"]
@@ -367,5 +368,7 @@ def load_calibration(path: Any, device: Device | None = None) -> Calibration:
     a calibration to diagnose or estimate with before any exists."""
     if isinstance(path, str) and path == NOMINAL and device is not None and not Path(path).is_file():
         return Calibration.nominal(device)
+    if isinstance(path, str) and not Path(path).exists() and difflib.get_close_matches(path, [NOMINAL], 1, KEY_CUTOFF):
+        raise InputError(path, f"no such calibration file; did you mean {NOMINAL!r} (the device's datasheet values)?")
     doc, source = read_json(path)
     return calibration_from_dict(doc, source, device)

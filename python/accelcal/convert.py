@@ -307,7 +307,7 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     ----------
     path : str or os.PathLike
         The file (compressed or not: gzip, bzip2, xz, zstd, a zip of one file).
-    fmt : {"auto", "imu_tk", "imucal", "mpu6050", "csv", "log", "table"}
+    fmt : {"auto", "imu_tk", "imucal", "mpu6050", "csv", "log", "table", "mat", "e4"}
         ``auto`` tells it from the first line (:func:`detect_format`; a log from its lines).
     scale : units.Scale, optional
         The readings' unit and LSB (``--units``/``--lsb``/``--full-scale``), or the
@@ -332,8 +332,9 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         The ADC's bits: the device's range, and the readings must fit it.
     blocks : bool
         log: each block of readings between text lines is a pose (``block_1``, ...).
-    time_unit : {"auto", "s", "ms", "us", "ns"}
-        The time column's unit (csv, imu_tk, table).  ``auto``: the unit its name states, else
+    time_unit : str
+        The time column's unit (csv, imu_tk, table): s, ms, us, ns, or a tick of a chip's clock,
+        a number of one (``25us``; :func:`convert_time.time_factor`).  ``auto``: the unit its name states, else
         seconds, except time stamps whose steps in seconds would give under
         MIN_PLAUSIBLE_HZ (then the smallest of ms, us, ns that gives more; a note says so).
         Whole-number stamps past float64's 2**53 (an epoch in ns; csv, table) are read as
@@ -348,15 +349,17 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         names TIME_COLUMN_RE matches, then those with a time word among others (``unix_timestamp``,
         ``epoch``) that state a unit or hold an epoch's stamps, those whose cells are numbers (a clock time or a date
         is no time stamp), the first whose name states a unit, else the first; a note names
-        the one used and those passed over.
+        the one used and those passed over.  A host's packet stamps (most rows repeat the stamp
+        before: :func:`convert_packets.packet_size`) give way to another numeric one that times
+        every sample, its unit, where its name states none, measured against them.
     repeated_stamps : {"refuse", "drop", "shift"}
         A table's rows whose time stamp repeats the row before's with other readings (a watch
         that stamps two samples with one stamp: 93 of a Garmin export's 10,000 rows): refused,
         the message counting them and those after a step of two median steps
-        (:func:`convert_named.slipped_stamps`: the stamps slipped a place late and caught up;
+        (:func:`convert_stamps.slipped_stamps`: the stamps slipped a place late and caught up;
         the samples keep their grid, and ``drop`` loses one each), or left out with a note
         (``drop``); ``shift`` moves each stamp that slipped back one step
-        (:func:`convert_named.shift_slipped`: every sample kept) and leaves out the other
+        (:func:`convert_stamps.shift_slipped`: every sample kept) and leaves out the other
         repeats as ``drop`` does.  Rows that repeat the stamp and the readings are left out
         either way.
 

@@ -95,10 +95,12 @@ def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
     s.add_argument("--rate", metavar="HZ", help="sample rate of a file without a time column (imucal, log, a table: "
                    "required; the MPU-6050 log: its Fs line otherwise); with a time column, the device's rate "
                    "(where a host's time stamps do not give it)")
-    s.add_argument("--time-unit", choices=("auto", "s", "ms", "us", "ns"), default="auto",
-                   help="the time column's unit (default auto: the unit its name states, else seconds, but "
+    s.add_argument("--time-unit", metavar="UNIT", default="auto",
+                   help="the time column's unit: s, ms, us, ns, or a tick of a chip's clock, a number of one "
+                   "(25us) (default auto: the unit its name states, else seconds, but "
                    "time stamps that would be under 2 Hz in seconds are read in the smallest of "
-                   "ms, us, ns that gives more, with a note); t is written in seconds")
+                   "ms, us, ns that gives more, with a note; a chip's clock preferred to a host's packet stamps is "
+                   "measured against them); t is written in seconds")
     s.add_argument("--time-column", metavar="NAME", help="table: the time column (default: of the columns named "
                    "t, time, timestamp, 'Time (s)', ..., those holding numbers, not a clock time or a date, the "
                    "first whose name states a unit, else the first; a note names it)")

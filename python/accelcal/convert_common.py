@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from .clipping import clip_note
-from .convert_device import check_range, nominal_triad
+from .convert_device import check_range, code_step_note, nominal_triad
 from .convert_regions import label_poses
 from .convert_rows import placeholder_lead
 from .convert_time import FLOAT_EXACT, burst_fit, exact_stamps, rate_from_t, time_in_seconds
@@ -21,7 +21,7 @@ from .device import GRAVITY_REMOVED_G, GRAVITY_REMOVED_TEXT, Device
 from .errors import InputError, notes_on_refusal
 from .held import held_runs, held_share, held_text, inner_runs, uneven
 from .recording import Recording
-from .recording_checks import RATE_TOL
+from .recording_checks import GAP_STEPS, RATE_TOL
 from .noise import window_std
 from .static import STATIC_WINDOW_S, window_len
 from .textinput import NUMBER_RE, is_whitespace_header, split_whitespace_header, whitespace_to_commas
@@ -237,6 +237,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
                              f"{100 * RATE_TOL:.0f} % from --rate {rate:g} Hz: its clock is not the sensor's; t is "
                              f"written on the {rate:g} Hz grid from the first stamp and the time column's stamps are "
                              "kept as column t_host")
+                notes += [] if burst else grid_gaps_note(rel)
         if kept is not None:  # a contract recording without --regions keeps its labels and references
             (pose, f), names = kept, [str(k) for k in np.unique(kept[0][kept[0] >= 0])]
         else:
@@ -259,6 +260,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
             distinct_hz = rate / (float(np.mean(inner)) if uneven(k, inner) else k)   # rows per reading
         if k > 1:
             notes.append(held_note(k, first, raw.shape[0], distinct_hz))
+        notes += code_step_note(raw, opts.bits)
         if device is None:
             # rows that hold each reading for k rows: the device states the sensor's rate, that of the distinct
             # readings (calibrate, diagnose take it as such: held.distinct_recordings), unless --rate states one
@@ -273,6 +275,21 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
                             noise)
         notes += [clipped] if clipped else []
         return Converted(rec, device, fmt, names, notes, scale, order is not None, device_notes)
+
+
+def grid_gaps_note(rel: np.ndarray) -> list[str]:
+    """A note for the stamps' long steps (``rel``: s from the first; longer than GAP_STEPS x the
+    median step: a pause or samples lost) that t on --rate's grid does not keep, or none."""
+    steps = np.diff(rel)
+    long = np.flatnonzero(steps > GAP_STEPS * float(np.median(steps)))
+    if not long.size:
+        return []
+    k = steps[long] / float(np.median(steps))
+    return [f"the time column has {long.size} step{'s' if long.size > 1 else ''} longer than {GAP_STEPS:g} x its "
+            f"median step (after sample {int(long[0])}{' and others' if long.size > 1 else ''}; the longest "
+            f"{float(k.max()):.4g} median steps): a pause or samples lost, which the grid does not keep (each is one "
+            "step; t_host keeps them); where the time column is the sensor's clock in another unit, --time-unit "
+            "states it (a tick: 25us) and t keeps them"]
 
 
 def stated_rate_off(rel: np.ndarray, stated: float | None) -> float | None:

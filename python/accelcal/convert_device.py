@@ -12,11 +12,32 @@ from .recording import Recording
 from .static import STATIC_WINDOW_S, detect_static, scale_agreement, window_len
 from .units import Scale
 
-__all__ = ["adc_range", "nominal_triad", "rest_scale", "check_range"]
+__all__ = ["adc_range", "nominal_triad", "rest_scale", "check_range", "STEP_MIN_VALUES", "code_step_note"]
+#: distinct readings a file needs before every count being a multiple of a step is noted (by chance,
+#: 16 distinct values are all even with probability 2**-16)
+STEP_MIN_VALUES = 16
 
 
 def adc_range(bits: int, signed: bool) -> tuple[int, int]:
     return (-(2 ** (bits - 1)), 2 ** (bits - 1) - 1) if signed else (0, 2 ** bits - 1)
+
+
+def code_step_note(raw: np.ndarray, bits: int) -> list[str]:
+    """A note where every count of ``raw`` (n, 3) is a multiple of one step >= 2 (their gcd;
+    at least STEP_MIN_VALUES distinct values): a chip whose reading is left-justified in a
+    wider register (a LIS3DH's 12 bits in 16: every count a multiple of 16), whose resolution
+    is the step, not one count; else none."""
+    u = np.unique(np.asarray(raw, dtype=np.int64))
+    if u.size < STEP_MIN_VALUES:
+        return []
+    step = int(np.gcd.reduce(u))
+    if step < 2:
+        return []
+    shift = step.bit_length() - 1
+    left = (f" (a {bits - shift}-bit reading left-justified in {bits} bits)"
+            if step == 1 << shift and bits > shift else "")
+    return [f"every count is a multiple of {step}{left}: the chip's resolution is {step} counts, and the counts "
+            "are kept as they are"]
 
 
 def nominal_triad(name: str, rate: float, gravity: float, raw: np.ndarray, bits: int, signed: bool,

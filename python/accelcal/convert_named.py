@@ -11,20 +11,19 @@ import numpy as np
 from .convert_axes import AxisColumn, find_named, mirrored_note, names_unit, px4_export, stated_axes, table_axes
 from .convert_common import (Converted, Options, drop_note, exact_time, finish, read_columns, header_cells,
                              is_gyro, whole_counts)
+from .convert_packets import host_tick, numeric_stamps, packet_note, packet_size, steady_column
+from .convert_stamps import repeated_stamps, shift_slipped, table_time, unrepeated
 from .convert_regions import MEANS_HINT, MEANS_RATE_HZ, MEANS_TIME, means_note, rows_are_poses, table_labels
 from .convert_time import TIME_COLUMN_RE, datetime_stamps, epoch_like, is_datetime, is_time_name, unit_in_name
 from .csvtable import convert_columns, got_text, slow_float
 from .errors import InputError, notes_on_refusal
 from .convert_rows import lost_rows, trailer_note, trailer_start
-from .recording_checks import repeated_rows
 from .textinput import preamble_notes
 from .units import UNIT_TEXT, Scale, file_scale, in_file_unit
 from .units_counts import to_counts
 
-__all__ = ["stated_time_column", "choose_time_column", "slipped_runs", "slipped_stamps", "shift_slipped", "convert_named"]
+__all__ = ["stated_time_column", "choose_time_column", "convert_named"]
 #: rows whose first non-empty time cell tells a numeric time column from a clock time or a date
-DUPLICATE_MIN_SHARE = 0.5  # rows off the grid that repeat the row before are samples delivered twice only when
-DUPLICATE_RATIO = 5.0      # at least this share of them repeat, and this x the share of the rows on the grid
 TIME_PROBE_ROWS = 100
 #: names of a sample counter, not a time
 INDEX_NAME_RE = re.compile(r"(?:count|counter|index|idx|sample|samples|sample[ _]?(?:no|nr|number|index)|n|i|#)",
@@ -146,7 +145,8 @@ def comment_rate(metadata: dict[str, str]) -> tuple[float, str] | None:
 
 
 def choose_time_column(source: str, names: list[str], acc: list[str], table, rows: np.ndarray, rate_stated: bool,
-                       header_row: int, notes: list[str]) -> str | None:
+                       header_row: int, notes: list[str], readings: np.ndarray
+                       ) -> tuple[str | None, str | None]:
     """The table's time column among the names TIME_COLUMN_RE matches (``Time (s)``,
     ``timestamp_us``, ``Time(hh:mm:ss)``), then those with a time word among others
     (:func:`convert_time.is_broad_time_name`: ``unix_timestamp``, ``epoch``) whose name states a
@@ -161,6 +161,10 @@ def choose_time_column(source: str, names: list[str], acc: list[str], table, row
     ----------
     rows : ndarray of int
         The rows with readings; the first non-empty cell among them tells a column.
+    readings : ndarray (n, 3)
+        The three axis columns as written: a column chosen whose stamps are a host's packet
+        stamps (:func:`convert_packets.packet_size`) gives way to another numeric one that
+        times every sample (:func:`convert_packets.steady_column`: the chip's own clock), with a note.
 
     Raises
     ------
@@ -174,7 +178,7 @@ def choose_time_column(source: str, names: list[str], acc: list[str], table, row
     cands += [n for n in seen if n not in cands and not is_gyro(n) and
               (unit_in_name(n) is not None or seen[n] is not None and (epoch_like(seen[n][1]) or is_datetime(seen[n][1])))]
     if not cands:
-        return None
+        return None, None
     numeric = [n for n in cands if seen[n] is None or is_number(seen[n][1]) or is_datetime(seen[n][1])]
 
     def holds(n: str) -> str:
@@ -190,18 +194,27 @@ def choose_time_column(source: str, names: list[str], acc: list[str], table, row
                              "--time-column NAME", row=header_row)
         notes.append(f"no time column holds numbers ({said}: clock times or dates, not time stamps): t is from "
                      "--rate")
-        return None
+        return None, None
     # a message's own stamp (ROS header.stamp: the sensor's time) before the log's receipt time (%time)
     # (and PX4's timestamp_sample, the sample's time, before its timestamp, the publication's)
     stamp = [n for n in numeric if n.lower().endswith("header.stamp") or n.lower() == "timestamp_sample"]
     chosen = stamp[0] if stamp else next((n for n in numeric if unit_in_name(n) is not None), numeric[0])
+    plain = [n for n in numeric if seen[n] is None or not is_datetime(seen[n][1])]
+    if chosen in plain and len(plain) > 1:
+        stamps = numeric_stamps(table, names, plain, rows)
+        k = packet_size(stamps[chosen])
+        steady = None if k is None else steady_column({n: v for n, v in stamps.items() if n != chosen}, readings[rows])
+        if steady is not None:
+            notes.append(f"time column {steady!r} used: {packet_note(chosen, k)}; {steady!r} times every sample "
+                         "(--time-column NAME states another)")
+            return steady, None if unit_in_name(steady) else host_tick(source, chosen, stamps, steady, notes)
     over = [n for n in cands if n != chosen]
     if over:
         why = [f"{holds(n)}, not a number" if n not in numeric else f"{n!r}, numeric" for n in over]
         notes.append(f"time column {chosen!r} used" + (" (its name states a unit)" if unit_in_name(chosen) else
                                                        " (the message's own stamp)" if stamp else "")
                      + f"; passed over {'; '.join(why)} (--time-column NAME states it)")
-    return chosen
+    return chosen, None
 
 
 def dated_stamps(source: str, table, rows: np.ndarray, column: str, j: int, opts: Options,
@@ -223,153 +236,6 @@ def dated_stamps(source: str, table, rows: np.ndarray, column: str, j: int, opts
                                    [table.line(i) for i in rows.tolist()], column, notes)
     opts.time_unit = "ns"
     return stamps
-
-
-def repeated_stamps(stamps: np.ndarray, rows: np.ndarray, notes: list[str], how: str = "drop") -> np.ndarray:
-    """``rows`` less those whose time stamp repeats the row before's (``--repeated-stamps
-    drop``, or ``shift`` for the repeats no slip explains: the readings differ --
-    :func:`unrepeated` has left out the rows that repeat both), with a note counting them."""
-    same = np.flatnonzero(np.diff(stamps[rows]) == 0) + 1
-    if same.size:
-        why = "" if how == "drop" else ": no step of two before them shows a slip"
-        notes.append(f"{same.size} row(s) repeat the time stamp of the row before with other readings (a logger that "
-                     f"stamps two samples with one stamp): left out (--repeated-stamps {how}{why})")
-    return np.delete(rows, same)
-
-
-def table_time(source: str, stamps: np.ndarray, table, rows: np.ndarray, column: str, j: int) -> np.ndarray:
-    """The time stamps of the rows read (``rows``), as written: finite and increasing.
-
-    Raises
-    ------
-    InputError
-        An empty or unknown stamp, or one not after the stamp before, naming its line; a
-        repeated one counts the rows that repeat the stamp before and names the option that
-        leaves them out.
-    """
-    t = stamps[rows]
-    bad = np.flatnonzero(~np.isfinite(t))
-    if bad.size:
-        i = int(rows[bad[0]])
-        raise InputError(source, f"expected a time stamp, got {got_text(table.cell(i, j))}", row=table.line(i),
-                         column=column)
-    back = np.flatnonzero(np.diff(t) <= 0)
-    if back.size:
-        h, i = int(rows[back[0]]), int(rows[back[0] + 1])
-        same = int(np.sum(np.diff(t) == 0))
-        slipped = slipped_stamps(t)
-        what = ("" if t[back[0] + 1] != t[back[0]] else
-                f"; {same} row(s) repeat the stamp of the row before with other readings (a logger that stamps two "
-                "samples with one stamp)" + (f", {slipped} of them after a step of two (with steps of one between): "
-                                             "stamps that slipped a place late and caught up, the samples on their "
-                                             "grid (--repeated-stamps shift moves them back a step, every sample "
-                                             "kept)" if slipped else "") +
-                ": --repeated-stamps drop leaves them out (a sample each)")
-        raise InputError(source, f"time stamp {table.cell(i, j).strip()!r} is not after {table.cell(h, j).strip()!r} "
-                         f"(row {table.line(h)}): time stamps must increase{what}", row=table.line(i), column=column)
-    return t
-
-
-def slipped_runs(t: np.ndarray) -> list[tuple[int, int]]:
-    """The stamps ``t`` (as written, any unit) that slipped a place late: for each stamp that
-    repeats the one before and comes after a step of two median steps (1.5-2.5) with steps of
-    one (0.5-1.5) between, the indices (first, last) of the stamps from that step to the one the
-    repeat repeats -- each a step late, and the repeat catches up (a Garmin watch's export: 90 of
-    its 92 repeats, 3-27 rows after such a step); the samples keep their even spacing."""
-    steps = np.diff(t).astype(np.float64)
-    ahead = steps[steps > 0]
-    if not ahead.size:
-        return []
-    k = steps / float(np.median(ahead))
-    runs, start = [], None
-    for i, v in enumerate(k.tolist()):
-        if v == 0:
-            if start is not None:
-                runs.append((start, i))
-            start = None
-        elif 1.5 <= v <= 2.5:
-            start = i + 1
-        elif not 0.5 <= v < 1.5:
-            start = None
-    return runs
-
-
-def slipped_stamps(t: np.ndarray) -> int:
-    """How many of the stamps ``t`` that repeat the one before catch up a slip
-    (:func:`slipped_runs`)."""
-    return len(slipped_runs(t))
-
-
-def shift_slipped(stamps: np.ndarray, rows: np.ndarray, notes: list[str]) -> np.ndarray:
-    """``stamps`` with each stamp of the rows read (``rows``) that slipped a place late
-    (:func:`slipped_runs`: proved by the step of two before and the repeat after) moved back
-    one median step (``--repeated-stamps shift``): every sample kept, the steps all ones where
-    they were two, ones and a repeat; with a note counting them."""
-    t = stamps[rows]
-    runs = slipped_runs(t)
-    if not runs:
-        return stamps
-    steps = np.diff(t)
-    step = np.median(steps[steps > 0])
-    step = np.round(step).astype(t.dtype) if np.issubdtype(t.dtype, np.integer) else step
-    moved = t.copy()
-    for first, last in runs:
-        moved[first:last + 1] -= step
-    out = stamps.copy()
-    out[rows] = moved
-    notes.append(f"{sum(b - a + 1 for a, b in runs)} time stamps in {len(runs)} run(s) slipped a place late (each run "
-                 "after a step of two median steps and caught up by a repeated stamp): moved back one step "
-                 "(--repeated-stamps shift), every sample kept")
-    return out
-
-
-def unrepeated(rows: np.ndarray, stamps: np.ndarray, readings: np.ndarray, notes: list[str]) -> np.ndarray:
-    """``rows`` less the rows that repeat the row before's readings exactly, with a note for each
-    kind: with its time stamp too (a packet written twice: 1.2 % of x-io's Gait-Tracking
-    logs), or with a stamp less than half a median step after it (a sample delivered twice,
-    off the grid: 91 rows of a Samsung S6's 100 Hz log) where such repeats stand out: at least
-    DUPLICATE_MIN_SHARE of the rows off the grid, and DUPLICATE_RATIO x the share on it (readings
-    that repeat by chance -- coarse steps, a quiet sensor -- do so on and off a jittered grid
-    alike, and are samples).  A repeated reading on the grid (a
-    step or more after the row before: a quiet sensor's) is a sample and stays; a repeated
-    time stamp with other readings is left for :func:`table_time` to refuse.
-
-    Parameters
-    ----------
-    rows : ndarray of int
-        The rows with readings.
-    stamps : ndarray (n,)
-        The time column as written (float64, or int64 for an epoch in ns), any unit.
-    readings : ndarray (n, 3)
-        The three axis columns as written (NaN where empty).
-    notes : list of str
-        Appended to.
-    """
-    t, m = stamps[rows], readings[rows]
-    repeat = np.all((m[1:] == m[:-1]) | (np.isnan(m[1:]) & np.isnan(m[:-1])), axis=1)
-    steps = np.diff(t).astype(np.float64)           # exact for int64 stamps
-    same = repeated_rows([t, *m.T])[1:]            # time stamp and readings: the one home of that rule
-    ahead = steps[steps > 0]
-    step = float(np.median(ahead)) if ahead.size else 0.0
-    off = (steps > 0) & (steps < 0.5 * step)
-    again = repeat & off
-    # delivered twice only where repeats off the grid stand out: readings that repeat by chance
-    # (coarse steps, a quiet sensor) do so on and off a jittered grid alike
-    on = steps >= 0.5 * step
-    p_on = float(np.mean(repeat[on])) if on.any() else 0.0
-    p_off = float(np.mean(repeat[off])) if off.any() else 0.0
-    if not (p_off >= DUPLICATE_MIN_SHARE and p_off >= DUPLICATE_RATIO * p_on):
-        again = np.zeros_like(again)
-    if same.any():
-        notes.append(f"{int(same.sum())} row(s) repeat the row before, time stamp and readings (a packet written "
-                     "twice): left out")
-    if again.any():
-        notes.append(f"{int(again.sum())} row(s) repeat the readings of the row before with a time stamp less than "
-                     f"half a step after it (median step {step:.6g} in the time column's unit; a sample delivered "
-                     "twice, off the grid): left out")
-    if not (same.any() or again.any()):
-        return rows
-    return rows[np.concatenate([[True], ~(same | again)])]
 
 
 def convert_named(source: str, data: bytes, pre, opts: Options) -> Converted:
@@ -402,8 +268,9 @@ def named_table(source: str, data: bytes, pre, opts: Options, notes: list[str]) 
     if rows.size == 0:
         raise InputError(source, f"no row has readings in {', '.join(acc)}", row=pre.header_line)
     if opts.time_column is None:
-        time_column = choose_time_column(source, names, acc, table, rows, opts.rate_hz is not None, pre.header_line,
-                                         notes)
+        time_column, tick = choose_time_column(source, names, acc, table, rows, opts.rate_hz is not None,
+                                               pre.header_line, notes, readings)
+        opts.time_unit = tick if tick is not None and opts.time_unit == "auto" else opts.time_unit
     labelled, means = None, False
     if time_column is None and opts.rate_hz is None and comment_rate(pre.metadata) is None:
         # (no time: the rows' labels are read here; a row a pose of its own needs none)
@@ -465,7 +332,10 @@ def named_table(source: str, data: bytes, pre, opts: Options, notes: list[str]) 
 
     converts = scale is not None and scale.converts
     raw = to_counts(matrix, scale, source, locate, notes=notes) if converts else whole_counts(matrix, source, locate)
-    t = None if stamps is None else table_time(source, stamps, table, rows, time_column, jt)
+    others = [] if stamps is None else \
+        [n for n in numeric_stamps(table, names, [n for n in names if n and n not in acc and n != time_column and
+                                                 is_time_name(n) and not is_gyro(n)], rows)]
+    t = None if stamps is None else table_time(source, stamps, table, rows, time_column, jt, others)
     used = set(want)
     dropped = [c for c in names if c and c not in used and is_gyro(c)]
     free = [c for c in names if c and c not in used and c not in dropped]

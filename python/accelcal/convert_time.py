@@ -12,7 +12,7 @@ from .errors import InputError
 from .recording_checks import GAP_STEPS, even_steps, regular_step
 
 __all__ = ["TIME_FACTORS", "TIME_COLUMN_RE", "is_time_name", "is_broad_time_name", "EPOCH_MIN_S", "epoch_like", "MIN_PLAUSIBLE_HZ", "BURST_SHARE", "FLOAT_EXACT", "unit_in_name",
-           "exact_stamps", "DATETIME_RE", "is_datetime", "datetime_stamps", "time_in_seconds", "burst_fit",
+           "exact_stamps", "time_factor", "DATETIME_RE", "is_datetime", "datetime_stamps", "time_in_seconds", "burst_fit",
            "burst_starts", "burst_rate", "rate_from_t"]
 
 #: the unit of a time column: its factor to seconds
@@ -215,6 +215,22 @@ def exact_stamps(cells: list[str]) -> np.ndarray | None:
     return np.array(values, dtype=np.int64)
 
 
+#: a --time-unit: one of TIME_FACTORS's units, or a tick: a number of one (``25us``, ``0.5 ms``, ``1e-4s``)
+TIME_UNIT_RE = re.compile(r"\s*((?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:e[+-]?[0-9]+)?)?\s*(s|ms|us|\u00b5s|ns)\s*", re.I)
+
+
+def time_factor(unit: str) -> float | None:
+    """The factor that makes stamps in ``unit`` seconds' (stamps / factor = s): s, ms, us, ns
+    (TIME_FACTORS), or a tick of a number of one (``25us``: a chip's clock in 25 us ticks, factor
+    4e4); None for anything else (a tick of zero)."""
+    m = TIME_UNIT_RE.fullmatch(unit)
+    if m is None:
+        return None
+    k = TIME_FACTORS[m.group(2).lower().replace("\u00b5", "u")]
+    tick = float(m.group(1)) if m.group(1) else 1.0
+    return k / tick if tick > 0 else None
+
+
 def time_in_seconds(t: np.ndarray, unit: str, column: str | None, source: str,
                     notes: list[str]) -> tuple[np.ndarray, np.ndarray]:
     """``t`` in seconds: divided by the factor of ``unit`` (s, ms, us, ns), or with ``auto`` of
@@ -227,7 +243,9 @@ def time_in_seconds(t: np.ndarray, unit: str, column: str | None, source: str,
     t : ndarray (n,)
         The time stamps as written, in their unit: float64, or int64 when written as whole
         numbers (:func:`exact_stamps`; the differences are then taken exactly).
-    unit : {"auto", "s", "ms", "us", "ns"}
+    unit : str
+        "auto", "s", "ms", "us", "ns", or a tick: a number of one of those (``25us``: a chip's
+        clock in 25 us ticks; :func:`time_factor`).
     column : str or None
         The time column's name (its unit, ``Time (ms)``).
     source : str
@@ -246,15 +264,18 @@ def time_in_seconds(t: np.ndarray, unit: str, column: str | None, source: str,
     steps_from_t0 = (t - t[0]).astype(np.float64) if exact and t.size else np.asarray(t, float) - t0
 
     def divided(k: float) -> tuple[np.ndarray, np.ndarray]:
+        # each stamp divided by k, correctly rounded (25 ms: 0.025, where t0 / k + rel gave
+        # 0.024999999999999998), but for whole numbers past FLOAT_EXACT (an epoch in ns)
         rel = steps_from_t0 / k
-        if k == 1.0 and not exact:
-            return np.asarray(t, float), rel
+        if not exact or not t.size or max(abs(int(t.min())), abs(int(t.max()))) < FLOAT_EXACT:
+            return np.asarray(t, float) / k if k != 1.0 else np.asarray(t, float), rel
         return float(t0) / k + rel, rel
 
     if unit != "auto":
-        if unit not in TIME_FACTORS:
-            raise InputError(source, f"--time-unit {unit!r}: expected one of auto, {', '.join(TIME_FACTORS)}")
-        k = TIME_FACTORS[unit]
+        k = time_factor(unit)
+        if k is None:
+            raise InputError(source, f"--time-unit {unit!r}: expected auto, one of {', '.join(TIME_FACTORS)}, or a "
+                             "tick: a number of one (25us)")
         return divided(k)
     named = unit_in_name(column)
     if named == "s":

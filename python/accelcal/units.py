@@ -24,7 +24,7 @@ from .errors import AccelcalError, InputError
 
 __all__ = ["UNITS", "REL_TOL", "Scale", "scale_from_options", "scale_from_metadata",
            "METADATA_KEYS", "STANDARD_GRAVITY", "OPTION_NAMES",
-           "converted_metadata", "file_scale", "in_file_unit", "unstated_lsb", "COUNTS_STATED", "parse_bits", "split_lsb", "LSB_SUFFIXES"]
+           "converted_metadata", "stated_scale", "file_scale", "in_file_unit", "unstated_lsb", "COUNTS_STATED", "parse_bits", "split_lsb", "LSB_SUFFIXES"]
 
 UNITS = ("counts", "mps2", "mmps2", "g", "mg")
 REL_TOL = 1e-6
@@ -34,7 +34,7 @@ STANDARD_GRAVITY = 9.80665
 METADATA_KEYS = ("units", "lsb", "full_scale_g", "bits", "gravity_mps2")
 UNIT_TEXT = {"counts": "counts", "mps2": "m/s^2", "mmps2": "mm/s^2", "g": "g", "mg": "mg"}
 OPTION_NAMES = {"units": "--units", "lsb": "--lsb", "full_scale_g": "--full-scale", "bits": "--bits",
-                "gravity_mps2": "--gravity"}
+                "gravity_mps2": "--gravity", "round": "--round"}
 METADATA_NAMES = {k: f"'# {k}:'" for k in METADATA_KEYS}
 
 
@@ -201,6 +201,37 @@ def scale_from_options(units: str | None = None, lsb: Any = None, full_scale_g: 
     stated, units = units is not None, units or "counts"
     return Scale(units, None if units == "counts" else lsb_g / g_per(units, g), lsb_g,
                  opt("full_scale_g"), unit_stated=stated, gravity_mps2=g)
+
+
+def stated_scale(units: str | None = None, lsb: Any = None, full_scale_g: Any = None, bits: Any = 16,
+                 gravity_mps2: Any = None, rounds: bool = False) -> Scale | None:
+    """The Scale the unit options state, the command line's and the API's alike
+    (:func:`scale_from_options`), with ``rounds`` (``--round``: readings in m/s^2 or g rounded
+    to the nearest LSB); an explicit ``units="counts"`` alone is :data:`COUNTS_STATED`
+    (converts nothing, but contradicts a file whose comments say m/s^2 or g); None when
+    nothing is stated.
+
+    Raises
+    ------
+    AccelcalError
+        A bad value, options that contradict each other, or ``rounds`` without an LSB or with
+        counts (one line naming the option).
+    """
+    scale = scale_from_options(units, lsb, full_scale_g, bits, gravity_mps2)
+    if rounds:
+        # --full-scale without --units: the unit is the file's (a table's names, a '# units:' comment),
+        # weighed by file_scale, which refuses --round where it stays counts
+        r, u = OPTION_NAMES["round"], OPTION_NAMES["units"]
+        if scale is None:
+            raise AccelcalError(f"{r}: it rounds readings in m/s^2 or g to their LSB; state the LSB with "
+                                f"{OPTION_NAMES['lsb']} VALUE (and {u} mps2|g) or {OPTION_NAMES['full_scale_g']} G")
+        if units == "counts":
+            raise AccelcalError(f"{r} with {u} counts: readings in counts are integers, nothing to round "
+                                f"(readings in m/s^2 or g: {u} mps2|g)")
+        scale = dataclasses.replace(scale, rounds=True)
+    if scale is None and units == "counts":
+        return COUNTS_STATED
+    return scale
 
 
 def unstated_lsb(option: Scale) -> str:

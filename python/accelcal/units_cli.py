@@ -7,12 +7,11 @@ the readers take (:func:`accelcal.units.file_scale` then weighs it against the f
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import math
 from typing import Any
 
 from .errors import AccelcalError
-from .units import COUNTS_STATED, UNITS, Scale, scale_from_options
+from .units import UNITS, Scale, stated_scale
 
 __all__ = ["add_units_options", "scale_from_args", "device_bits"]
 
@@ -108,17 +107,4 @@ def scale_from_args(a: argparse.Namespace, device: Any = None, *, reader: bool =
                                     "(or the LSB itself with --units mps2|g --lsb VALUE)")
     bits = a.bits if a.bits is not None else device_bits(device)
     gravity = a.gravity if a.gravity is not None or device is None else device.gravity_mps2
-    scale = scale_from_options(a.units, a.lsb, a.full_scale, bits, gravity)
-    if getattr(a, "round", False):
-        # --full-scale without --units: the unit is the file's (a table's names, a '# units:' comment),
-        # weighed by units.file_scale, which refuses --round where it stays counts
-        if scale is None:
-            raise AccelcalError("--round: it rounds readings in m/s^2 or g to their LSB; state the LSB with --lsb "
-                                "VALUE (and --units mps2|g) or --full-scale G")
-        if a.units == "counts":
-            raise AccelcalError("--round with --units counts: readings in counts are integers, nothing to round "
-                                "(readings in m/s^2 or g: --units mps2|g)")
-        scale = dataclasses.replace(scale, rounds=True)
-    if scale is None and a.units == "counts":
-        return COUNTS_STATED
-    return scale
+    return stated_scale(a.units, a.lsb, a.full_scale, bits, gravity, getattr(a, "round", False))

@@ -1,13 +1,17 @@
 """The Python API (``import accelcal as ac``): the same results as the command line,
 numpy arrays accepted, bad arrays refused with one line, docstring examples run."""
+import argparse
 import doctest
 import importlib
+import inspect
+import json
 
 import numpy as np
 import pytest
 
 import accelcal as ac
 from accelcal.cli import main
+from accelcal.convert_cli import add_convert_parser
 from accelcal.errors import AccelcalError
 
 
@@ -151,3 +155,70 @@ def test_a_jig_accuracy_no_jig_has_is_refused(deg):
     with pytest.raises(ac.AccelcalError, match="small-angle"):
         ac.calibrate(ac.default_device(), ac.simulate(ac.default_device(), "static_poses", poses="24", seed=1),
                      jig_accuracy_deg=deg)
+
+
+def test_calibrate_reads_a_list_of_rows_as_one_array(setup):
+    """``ac.calibrate(dev, raw.tolist())`` had been read as n recordings of one sample each
+    (no usable static pose in any); a list of equal-length rows of numbers is one array, as
+    resolve reads it; a list of arrays stays a list of recordings."""
+    _, dev, rec = setup
+    raw = rec.raw[rec.pose >= 0]
+    want = ac.calibrate(dev, raw)
+    got = ac.calibrate(dev, raw.tolist())
+    np.testing.assert_array_equal(got.offsets, want.offsets)
+    np.testing.assert_array_equal(ac.calibrate(dev, [tuple(r) for r in raw.tolist()]).offsets, want.offsets)
+    half = raw.shape[0] // 2
+    assert ac.calibrate(dev, [raw[:half], raw[half:]]).offsets.shape == want.offsets.shape
+
+
+def test_several_recordings_without_a_pose_give_each_one_s_reason(tmp_path):
+    """Calibrate given several recordings none of which has a static pose had said one bare line
+    naming the first file and lever arms (a triad has none); now it gives each file's own
+    reason, the one-recording refusal's text, on one line."""
+    (tmp_path / "d.json").write_text(json.dumps({
+        "name": "bike", "sample_rate_hz": 208.0, "gravity_mps2": 9.80665, "raw_min": -32768, "raw_max": 32767,
+        "channels": [{"position_m": [0, 0, 0], "axis": a, "counts_per_mps2": 835.35, "zero_counts": 0}
+                     for a in ([1, 0, 0], [0, 1, 0], [0, 0, 1])]}))
+    dev = ac.load_device(tmp_path / "d.json")
+    rng = np.random.default_rng(2)
+    recs = []
+    for k in (1, 2):                           # a ride: the force swings, no still stretch
+        t = np.arange(2000) / 208.0
+        f = np.c_[3 * np.sin(2 * np.pi * 1.3 * t), 2 * np.sin(2 * np.pi * 0.7 * t), 9.8 + 4 * np.sin(2 * np.pi * 2.1 * t)]
+        raw = np.rint(f * 835.35 + rng.normal(0, 400, (t.size, 3))).astype(np.int64)
+        recs.append(ac.Recording(t=t, raw=raw, source=f"ride{k}.csv"))
+    with pytest.raises(AccelcalError) as e:
+        ac.calibrate(dev, recs)
+    msg = str(e.value)
+    assert "\n" not in msg and msg.startswith("2 recordings: no usable static pose in any recording"), msg
+    assert "lever arms" not in msg, msg
+    for k in (1, 2):
+        assert f"ride{k}.csv: no static pose found" in msg and "its noise on raw_0" in msg, msg
+
+
+def test_convert_takes_every_option_of_the_command(tmp_path):
+    """ac.convert lacked time_column, time_unit, round, columns, repeated_stamps and variable
+    (each an OptionError), so the API could not convert files the command can; every option of
+    ``accelcal convert`` but its outputs is now a keyword of ac.convert, and they act alike."""
+    parser = argparse.ArgumentParser()
+    add_convert_parser(parser.add_subparsers(), lambda *a: None)
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices["convert"]
+    renamed = {"input": "path", "format": "fmt", "rate": "rate_hz", "gravity": "gravity_mps2",
+               "full_scale": "full_scale_g"}
+    dests = {renamed.get(a.dest, a.dest) for a in sub._actions if a.dest not in ("help", "output", "device_out")}
+    assert dests <= set(inspect.signature(ac.convert).parameters), dests - set(inspect.signature(ac.convert).parameters)
+    src = tmp_path / "tw.csv"
+    src.write_text("ms,ax,ay,az\n" + "".join(f"{10 * i},{0.01 * i:.2f},0.0,1.0\n" for i in range(50)))
+    c = ac.convert(src, columns="ax,ay,az", time_column="ms", time_unit="2ms", units="g", lsb=0.01, rate_hz=None)
+    assert c.recording.t[1] == pytest.approx(0.02) and c.recording.raw[5, 0] == 5
+    doc = ac.convert.__doc__
+    assert '"mmps2", "g", "mg"' in doc and '"table", "mat", "e4"' in doc
+
+
+def test_a_misspelt_nominal_is_suggested(setup):
+    """ac.resolve(dev, "nomimal", ...) said "cannot read the file"; it now suggests 'nominal'."""
+    _, dev, rec = setup
+    with pytest.raises(AccelcalError, match=r"^nomimal: no such calibration file; did you mean 'nominal'"):
+        ac.resolve(dev, "nomimal", rec)
+    with pytest.raises(AccelcalError, match="cannot read the file"):
+        ac.resolve(dev, "cal.json", rec)

@@ -580,3 +580,20 @@ def test_readings_held_for_two_rows_give_the_device_the_sensor_s_rate(tmp_path, 
     assert dev["sample_rate_hz"] == pytest.approx(40.0, rel=1e-3)
     assert "each reading held for 2 rows" in err and "400 distinct readings come at about 40 Hz" in err, err
     assert f"the device's rate is {dev['sample_rate_hz']:.6g} Hz, the distinct readings'" in err, err
+
+
+@pytest.mark.parametrize("step, said", [(16, "(a 12-bit reading left-justified in 16 bits"), (3, "")])
+def test_counts_on_a_coarser_step_are_noted(tmp_path, step, said):
+    """A 12-bit chip left-justified in 16 bits (a LIS3DH: every count a multiple of 16) had been
+    converted without a word; a note now gives the step and that the chip's resolution is the
+    step, not one count.  Counts of every value get no note."""
+    rng = np.random.default_rng(5)
+    a = np.rint([-450, -5, 912] + rng.normal(0, 6, (400, 3))).astype(int)
+    src = tmp_path / "lj.csv"
+    src.write_text("t_ms,ax,ay,az\n" + "".join(f"{13 * i},{x * step},{y * step},{z * step}\n"
+                                                for i, (x, y, z) in enumerate(a)))
+    notes = convert_file(src).notes
+    assert any(n.startswith(f"every count is a multiple of {step} {said}".rstrip()) and
+               f"the chip's resolution is {step} counts" in n for n in notes), notes
+    src.write_text("t_ms,ax,ay,az\n" + "".join(f"{13 * i},{x},{y},{z}\n" for i, (x, y, z) in enumerate(a)))
+    assert not any("multiple of" in n for n in convert_file(src).notes)

@@ -292,3 +292,90 @@ def test_a_time_word_without_unit_or_epoch_is_no_time_column(tmp_path, capfd, na
     rc, _, err, _ = run(["convert", str(src), "-o", str(tmp_path / "o.csv")], capfd)
     assert rc == 2 and "has no time column" in err, err
     assert (f"'{name}' has a time's name" in err) == (name == "elapsed_time"), err
+
+
+def _packet_log(path, n=2400, gaps=False, tick_us=25.0, seed=1):
+    """An LSM6DSOX log of EMGesture's shape: ``timestamp`` the chip's clock in 25 us ticks (192 a
+    sample: 208.33 Hz), ``pkt_time_ns`` the host's epoch in ns shared by each packet of 12
+    samples; with ``gaps`` 9 samples lost at sample 700 and a 3.25 s pause at sample 1500."""
+    rng = np.random.default_rng(seed)
+    tick = 121313 + 192 * np.arange(n)
+    if gaps:
+        tick[700:] += 192 * 9
+        tick[1500:] += 130000
+    t_s = (tick - tick[0]) * tick_us * 1e-6
+    first = np.arange(n) // 12 * 12
+    pkt = 1745203091567360040 + np.round((t_s[np.minimum(first + 11, n - 1)] + 0.004) * 1e9).astype(np.int64)
+    acc = np.rint([0, 0, 8197] + rng.normal(0, 8, (n, 3))).astype(int)
+    gyr = np.rint(rng.normal(0, 20, (n, 3))).astype(int)
+    path.write_text("timestamp,gyr_x,gyr_y,gyr_z,acc_x,acc_y,acc_z,pkt_time_ns\n" + "".join(
+        f"{tick[i]},{gyr[i, 0]},{gyr[i, 1]},{gyr[i, 2]},{acc[i, 0]},{acc[i, 1]},{acc[i, 2]},{pkt[i]}\n"
+        for i in range(n)))
+    return tick, t_s
+
+
+@pytest.mark.parametrize("gaps", [False, True])
+def test_packet_stamps_give_way_to_the_chip_s_clock(tmp_path, capfd, gaps):
+    """A host's stamp for each packet of 12 samples (pkt_time_ns) is no sample's time: it had been
+    taken for the time column (its name states a unit) and refused, advising --repeated-stamps drop
+    (one sample in 12 kept, 17 Hz from a 208 Hz sensor).  The chip's clock, which times every
+    sample, is used; its unit (no unit in its name) is measured against the packets' stamps, so t
+    keeps the lost samples and the pause."""
+    tick, t_s = _packet_log(tmp_path / "dsox.csv", gaps=gaps, tick_us=25.4)
+    out, dev = tmp_path / "r.csv", tmp_path / "d.json"
+    rc, _, err, _ = run(["convert", tmp_path / "dsox.csv", "--full-scale", "4", "-o", out, "--device-out", dev], capfd)
+    assert rc == 0, err
+    assert "time column 'timestamp' used: 'pkt_time_ns' repeats its stamp in packets of 12 rows" in err, err
+    assert "its unit is 25.4 us" in err, err
+    rec = read_recording(out)
+    assert rec.t.size == 2400
+    np.testing.assert_allclose(rec.t - rec.t[0], t_s, rtol=2e-3)
+    assert json.loads(dev.read_text())["sample_rate_hz"] == pytest.approx(1e6 / (192 * 25.4), rel=2e-3)
+
+
+def test_packet_stamps_chosen_are_refused_naming_the_chip_s_clock(tmp_path, capfd):
+    """--time-column naming the packet stamps: refused, naming the column that times each sample,
+    not advising --repeated-stamps drop (a sample a packet kept)."""
+    _packet_log(tmp_path / "dsox.csv")
+    rc, _, err, _ = run(["convert", tmp_path / "dsox.csv", "--full-scale", "4", "--time-column", "pkt_time_ns",
+                         "-o", tmp_path / "r.csv"], capfd)
+    assert rc == 2 and not (tmp_path / "r.csv").exists()
+    line = err.strip().splitlines()[-1]
+    assert "packets of 12 rows" in line and "--time-column NAME ('timestamp')" in line and "drop" not in line, err
+
+
+@pytest.mark.parametrize("unit, factor", [("25us", 4e4), ("0.5ms", 2e3), ("1e-4s", 1e4), ("2 ns", 5e8)])
+def test_a_time_unit_may_be_a_tick(tmp_path, unit, factor):
+    """--time-unit 25us reads a chip's clock in 25 us ticks (before, only s, ms, us, ns, and a
+    clock in ticks could be read only with --rate, which put t on a grid that erased its gaps)."""
+    n = 300
+    t = 1000 + 4 * np.arange(n)
+    t[150:] += 400                                    # a pause of 100 ticks
+    src = tmp_path / "ticks.csv"
+    _write(src, [str(v) for v in t], _counts(n))
+    conv = convert_file(src, time_unit=unit)
+    np.testing.assert_allclose(conv.recording.t, t / factor, rtol=1e-12)
+
+
+def test_a_stated_rate_over_a_tick_clock_notes_the_gaps_the_grid_drops(tmp_path, capfd):
+    """--rate with a time column whose steps disagree puts t on the grid; the stamps' long steps (9
+    samples lost, a 3.25 s pause) vanished without a note.  Now a note counts them and names
+    --time-unit, which keeps them."""
+    _packet_log(tmp_path / "dsox.csv", gaps=True)
+    rc, _, err, _ = run(["convert", tmp_path / "dsox.csv", "--full-scale", "4", "--time-column", "timestamp",
+                         "--rate", "208", "-o", tmp_path / "r.csv"], capfd)
+    assert rc == 0, err
+    assert "the time column has 2 steps longer than 1.8 x its median step" in err and "--time-unit" in err, err
+
+
+def test_a_ms_column_is_written_as_the_stamps_say(tmp_path, capfd):
+    """t from a ms column had been written 0.024999999999999998 for 25 ms (the first stamp over
+    1000 plus the steps over 1000); each stamp divided by its unit is written as its shortest
+    repr (0.025)."""
+    src = tmp_path / "ms.csv"
+    src.write_text("time,x,y,z\n3,60,-64,-1000\n25,64,-60,-1004\n46,60,-64,-996\n")
+    out = tmp_path / "r.csv"
+    rc, _, err, _ = run(["convert", src, "--units", "mg", "--lsb", "4", "--rate", "45", "-o", out], capfd)
+    assert rc == 0, err
+    rows = [line.split(",")[0] for line in out.read_text().splitlines() if line[:1].isdigit()]
+    assert rows == ["0.003", "0.025", "0.046"], rows

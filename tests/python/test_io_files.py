@@ -309,7 +309,9 @@ def test_convert_mpu6050_then_jigfree(shared_data, tmp_path, capfd):
     src = shared_data / "mpu6050_tomisuarez" / "example_data_calibration.csv.gz"
     out, err, rec, cal, dev = convert_then_calibrate(src, tmp_path, capfd, ["--full-scale", "2"], "jigfree")
     assert "mpu6050: 10245 rows, 3 channels, 100 Hz" in out
-    assert err.count("\n") == 1 and "dropped gyroscope columns gx, gy, gz" in err
+    # the README: every accelerometer value is a multiple of 4 counts (its two lowest bits always 0)
+    assert err.count("\n") == 2 and "dropped gyroscope columns gx, gy, gz" in err
+    assert "every count is a multiple of 4 (a 14-bit reading left-justified in 16 bits)" in err, err
     assert dev["raw_min"] == -32768 and dev["channels"][0]["zero_counts"] == 0
     assert dev["channels"][0]["counts_per_mps2"] == pytest.approx(16384 / 9.80665)
     assert rec.metadata["mpu6050.fs"] == "100" and rec.raw.min() < 0

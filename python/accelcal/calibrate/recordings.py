@@ -90,8 +90,11 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
                 "is off by that factor, not a free fall (readings in m/s^2 read as g give 9.81 g, in mm/s^2 read as m/s^2 "
                 "1000 g: Klipper's files, --units mmps2): check --units, "
                 "--full-scale or --lsb of the conversion, or the device file" if scale is not None else "")
-        raise InputError(recordings[0].source, f"no usable static pose in any recording{why}{hint}: the offsets "
-                         "and sensitivities need static poses (lever arms alone cannot be estimated without them)")
+        levers = " (lever arms alone cannot be estimated without them)" if np.ptp(device.positions, axis=0).any() else ""
+        each = "" if poses.set_aside else no_pose_reasons(recordings, device, min_static_s)
+        raise InputError(recordings[0].source if len(recordings) == 1 else f"{len(recordings)} recordings",
+                         f"no usable static pose in any recording{why}{hint}: the offsets and sensitivities need "
+                         f"static poses{levers}{each}")
     has_f = np.all(np.isfinite(poses.f_ref), axis=1)
     if method is None:
         if has_f.all():
@@ -305,6 +308,18 @@ def hint_clause(found: tuple[str, bool] | None) -> str:
     if found is None:
         return ""
     return "; " + found[0] + (": " + POSE_MEANS_HINT if found[1] else "")
+
+
+def no_pose_reasons(recordings, device, min_s: float) -> str:
+    """Each recording's own reason for holding no static pose, the one-recording refusal's text
+    (:func:`with_detector_hint`), as ``"; FILE: reason"`` for each, or "" where none gives one."""
+    said = []
+    for rec in recordings:
+        try:
+            poses_from_recording(rec, device, required=True, min_s=min_s)
+        except InputError as e:
+            said.append(f"{rec.source}: {with_detector_hint(e.detail, device, [rec], None, min_s)}")
+    return "".join(f"; {s}" for s in said)
 
 
 def with_detector_hint(detail: str, device, recordings, poses: PoseSet | None, min_s: float = MIN_POSE_S) -> str:
