@@ -30,7 +30,6 @@ import numpy as np
 from .calibrate import calibrate_recordings
 from .calibration import Calibration, load_calibration, save_calibration
 from .cli_calibrate import record_warnings
-from .clipping import at_rails
 from .device import Device, default_device, load_device, save_device
 from .diagnose import diagnose as _diagnose_impl
 from .errors import AccelcalError, atomic_write, unknown_option
@@ -39,7 +38,7 @@ from .header import calibration_header
 from .motions import MOTIONS, Motion
 from .recording import Recording, read_recording as _read_recording_file, write_recording
 from .convert import Converted, convert_file
-from .resolve import resolve_recording
+from .resolve import clipped_samples, resolve_recording
 from .units import stated_scale
 from .simulate import simulate as _simulate_impl
 from .static import MIN_POSE_S
@@ -275,8 +274,10 @@ class ResolveResult:
         (a pre-trim beyond 16 bits), which a reading at the chip's rail sets or not by the sign
         of its trim; see ``clipped``.
     clipped : ndarray of bool, shape (n,), or None
-        Samples with a channel at the ADC's rail (the device's ``raw_min`` or ``raw_max``),
-        either engine: the chip clipped, and f there is short of the truth.
+        Samples with a channel at the ADC's rail (the device's ``raw_min`` or ``raw_max``) or at a
+        clip level inside the range where its readings pile up (:func:`accelcal.resolve.clipped_samples`,
+        as ``accelcal resolve``'s column), either engine: the chip clipped, and f there is short of
+        the truth.
     """
 
     t: np.ndarray
@@ -309,7 +310,7 @@ def resolve(device: Any, calibration: Any, recording: Any, engine: str = "float"
     cal = as_calibration(calibration, dev)
     rec = as_recording(recording, dev)
     f, alpha, flags = resolve_recording(dev, cal, rec, engine, omega)
-    return ResolveResult(t=rec.t, f=f, alpha=alpha, saturated=flags, clipped=at_rails(rec, dev))
+    return ResolveResult(t=rec.t, f=f, alpha=alpha, saturated=flags, clipped=clipped_samples(rec, dev)[0])
 
 
 @options_checked(_diagnose_impl)

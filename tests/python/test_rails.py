@@ -124,3 +124,6 @@ def test_resolve_flags_the_piles_convert_and_diagnose_call_clipped(tmp_path, cap
     lines = [ln for ln in (tmp_path / "out.csv").read_text().splitlines() if not ln.startswith("#")]
     col = lines[0].split(",").index("clipped")
     np.testing.assert_array_equal([float(ln.split(",")[col]) for ln in lines[1:]], want.astype(float))
+    # the API's ResolveResult.clipped is the command's column
+    got = ac.resolve(d, Calibration.nominal(d), rec, engine=engine).clipped
+    np.testing.assert_array_equal(got, want)
