@@ -222,12 +222,25 @@ def calibration_summary(cal, n_recordings: int, output) -> str:
     parts.append(f"{src} ({how}; {n_recordings} recording{'s' if n_recordings != 1 else ''})" if how
                  else f"{src} ({n_recordings} recording{'s' if n_recordings != 1 else ''})")
     text = " ".join(parts) + "."
+    chi2, dof, dof_r = fit.get("chi2"), fit.get("dof"), fit.get("dof_readings")
     if cal.residual_rms_per_channel is not None:
         r = np.asarray(cal.residual_rms_per_channel, dtype=float)
-        text += f" Residual rms {np.sqrt(np.mean(r ** 2)):.3g} counts (worst channel {int(np.argmax(r))}: {r.max():.3g})."
-    chi2, dof = fit.get("chi2"), fit.get("dof")
+        text += f" Residual rms {np.sqrt(np.mean(r ** 2)):.3g} counts (worst channel {int(np.argmax(r))}: {r.max():.3g})"
+        if dof_r is not None and dof_r <= 0 and poses:
+            # the pose directions are fitted too: terms + 2 angles a pose take every reading
+            par = poses * n - dof_r
+            text += (f": near zero by construction, as the pose directions are fitted too ({poses} poses x {n} "
+                     f"readings against {par - 2 * poses} terms and the poses' {2 * poses} angles), so it cannot "
+                     "judge the fit here")
+        text += "."
     if chi2 is not None and dof:
-        text += f" chi2/dof {chi2 / dof:.3g} ({dof} dof)."
+        if dof_r is not None and dof_r <= 0:
+            text += (f" chi2/dof {chi2 / dof:.3g} ({dof} dof, all of them the pose priors': the fitted pose "
+                     "directions against the stated jig accuracy).")
+        elif dof_r is not None:
+            text += f" chi2/dof {chi2 / dof:.3g} ({dof} dof, {dof - dof_r} of them the pose priors')."
+        else:
+            text += f" chi2/dof {chi2 / dof:.3g} ({dof} dof)."
     aside = cal.extra.get("set_aside", []) if isinstance(cal.extra, dict) else []
     if aside:
         n_cl = sum(int(d.get("n_clipped", 0)) for d in aside)
