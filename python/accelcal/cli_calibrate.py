@@ -72,7 +72,15 @@ def calibrate_warnings(dev, cal) -> list[str]:
                         f"below: {red_wo:.3g} without them")
         red = None
     hint = fit.get("jig_accuracy_consistent_with_scatter_deg")
-    if hint is not None and cross_axis:
+    one_row = bool(poses) and all(p.get("n_samples") == 1 for p in poses)
+    if one_row and red is not None and red > SCATTER_CHI2:
+        # a file of pose means: no noise to judge the scatter against
+        jig = (f"; a jig error of about {hint:.2g} deg would give such a scatter (--jig-accuracy states one)"
+               if hint is not None and cross_axis else "")
+        warnings.append(f"each pose is one row (a file of pose means): the poses' noise is unknown, so their scatter "
+                        f"about the fit (chi2/dof {red:.3g}) is measured against the rounding's (1/sqrt(12) count), "
+                        f"not judged against their noise; the uncertainties are scaled up by it{jig}")
+    elif hint is not None and cross_axis:
         warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}), as a jig "
                         f"error of about {hint:.2g} deg would; if the jig is that inaccurate, state it with "
                         "--jig-accuracy (else the offsets absorb it)")
@@ -80,12 +88,8 @@ def calibrate_warnings(dev, cal) -> list[str]:
         known = "" if cal.method == "jigfree" else ", stated f off the poses' real one"
         also = (f", {red_wo:.3g} without the {len(outl['poses'])} pose(s) far off the fit named below"
                 if red_wo is not None else "")
-        if poses and all(p.get("n_samples") == 1 for p in poses):
-            why = ("each pose is one row (a file of pose means), whose noise is unknown and taken as the rounding's "
-                   "(1/sqrt(12) count): the scatter is measured against that, not against the poses' own noise")
-        else:
-            why = (f"poses that move while held (a hand's tremor, a slow turn){known} or an effect the model lacks; "
-                   "'accelcal diagnose' with this calibration tests the effects it knows")
+        why = (f"poses that move while held (a hand's tremor, a slow turn){known} or an effect the model lacks; "
+               "'accelcal diagnose' with this calibration tests the effects it knows")
         warnings.append(f"the poses scatter about the fit beyond their noise (chi2/dof {red:.3g}{also}; the uncertainties "
                         f"are scaled up by it): {why}")
     elif red is not None and red > SCATTER_CHI2 and not cross_axis:
@@ -222,12 +226,25 @@ def calibration_summary(cal, n_recordings: int, output) -> str:
     parts.append(f"{src} ({how}; {n_recordings} recording{'s' if n_recordings != 1 else ''})" if how
                  else f"{src} ({n_recordings} recording{'s' if n_recordings != 1 else ''})")
     text = " ".join(parts) + "."
+    chi2, dof, dof_r = fit.get("chi2"), fit.get("dof"), fit.get("dof_readings")
     if cal.residual_rms_per_channel is not None:
         r = np.asarray(cal.residual_rms_per_channel, dtype=float)
-        text += f" Residual rms {np.sqrt(np.mean(r ** 2)):.3g} counts (worst channel {int(np.argmax(r))}: {r.max():.3g})."
-    chi2, dof = fit.get("chi2"), fit.get("dof")
+        text += f" Residual rms {np.sqrt(np.mean(r ** 2)):.3g} counts (worst channel {int(np.argmax(r))}: {r.max():.3g})"
+        if dof_r is not None and dof_r <= 0 and poses:
+            # the pose directions are fitted too: terms + 2 angles a pose take every reading
+            par = poses * n - dof_r
+            text += (f": near zero by construction, as the pose directions are fitted too ({poses} poses x {n} "
+                     f"readings against {par - 2 * poses} terms and the poses' {2 * poses} angles), so it cannot "
+                     "judge the fit here")
+        text += "."
     if chi2 is not None and dof:
-        text += f" chi2/dof {chi2 / dof:.3g} ({dof} dof)."
+        if dof_r is not None and dof_r <= 0:
+            text += (f" chi2/dof {chi2 / dof:.3g} ({dof} dof, all of them the pose priors': the fitted pose "
+                     "directions against the stated jig accuracy).")
+        elif dof_r is not None:
+            text += f" chi2/dof {chi2 / dof:.3g} ({dof} dof, {dof - dof_r} of them the pose priors')."
+        else:
+            text += f" chi2/dof {chi2 / dof:.3g} ({dof} dof)."
     aside = cal.extra.get("set_aside", []) if isinstance(cal.extra, dict) else []
     if aside:
         n_cl = sum(int(d.get("n_clipped", 0)) for d in aside)

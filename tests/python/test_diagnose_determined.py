@@ -144,3 +144,32 @@ def test_general_poses_jig_free_leave_the_common_rotation():
     res, e = _diagnose_terms(held_poses(dirs, 1, stated=False))
     assert "not_determined" not in e["gain"] and "not_determined" not in e["nonlinearity"]
     assert len(e["misalignment"]["not_determined"]["rot"]) == 6
+
+
+def _one_still_pose(n=3000):
+    """One still pose of an MPU-6050 at +-2 g (readings on a 4-count grid), 0.946 g along z with
+    a little x and y, noise 91 / 57 / 83 counts: jig-free, one pose (a sensor_noise.txt's shape)."""
+    rng = np.random.default_rng(0)
+    raw = 4 * np.round((np.array([108.0, 369.0, 15500.0]) + rng.normal(0, [91, 57, 83], (n, 3))) / 4)
+    return recording_from_arrays(np.arange(n) / RATE, raw.astype(np.int64))
+
+
+def test_an_effect_none_of_whose_values_is_determined_says_so_first():
+    """One still pose, nominal calibration: no tilt is determined (the pose's angles take them
+    all), yet misalignment's summary began "axis tilt up to 228 deg on channel 2" and said only
+    after it that none is determined; gain's "up to" named an undetermined channel.  Now a
+    summary whose values are all undetermined begins with that and gives the fit's figure as no
+    measurement; where some are determined the figure is theirs alone."""
+    d = triad()
+    res = diagnose(d, Calibration.nominal(d), [_one_still_pose()])
+    e = {ent["name"]: ent for ent in res["effects"]}
+    mis = e["misalignment"]
+    assert len(mis["not_determined"]["rot"]) == 6
+    assert mis["summary"].startswith("not determined by these data: rot on channel(s) 0, 1, 2")
+    assert "no measurement" in mis["summary"].split("axis tilt")[0]
+    for name in ("gain", "offset", "bias_drift"):
+        nd = next(iter(e[name]["not_determined"].values()))
+        assert nd == [0, 1]
+        assert not e[name]["summary"].startswith("not determined")
+        assert e[name]["summary"].split(";")[0].endswith("on channel 2"), e[name]["summary"]
+    assert e["nonlinearity"]["summary"].split(";")[0].endswith("on channel 2")

@@ -312,18 +312,24 @@ def poorly_determined(device, F, offset_sigma=None, gain_sig=None, n_samples=Non
     lsb = 1000.0 / (k[bad] * g)
     if np.any(lsb > POORLY_DETERMINED_MG):
         causes.append(f"a coarse LSB (1 count = {np.max(lsb):.3g} mg: a pose's mean rests on a few codes)")
+    one_row = n_samples is not None and len(n_samples) > 0 and bool(np.all(np.asarray(n_samples) == 1))
     if n_samples is not None and len(n_samples):
         n_med = float(np.median(n_samples))
         t_med = n_med / device.sample_rate_hz if held_s is None else float(np.median(held_s))
-        causes.append(f"few or short poses ({F.shape[0]} poses, a median {n_med:.0f} samples, "
-                      f"{t_med:.3g} s, each)")
+        if one_row:
+            # a file of pose means (its t counts rows): no durations, and each mean's noise unknown
+            causes.append(f"few poses ({F.shape[0]} poses, one row each: a table of pose means, whose noise is "
+                          "unknown)")
+        else:
+            causes.append(f"few or short poses ({F.shape[0]} poses, a median {n_med:.0f} samples, "
+                          f"{t_med:.3g} s, each)")
     scatter = chi2_dof is not None and chi2_dof > SCATTER_CHI2
     if scatter:
         causes.insert(0, f"the poses' scatter about the fit (chi2/dof {chi2_dof:.3g} scales the sigmas up "
                          f"{math.sqrt(chi2_dof):.3g} x: its cause above)")
     dirs = " and ".join(add) if len(add) < 3 else ", ".join(add[:-1]) + " and " + add[-1]
     want = "add poses" + (f" with f along {dirs}" if add else " in more orientations")
-    if not scatter and (n_samples is not None or np.any(lsb > POORLY_DETERMINED_MG)):
+    if not scatter and not one_row and (n_samples is not None or np.any(lsb > POORLY_DETERMINED_MG)):
         want += " and hold each longer (the sigmas fall as 1/sqrt of the poses and of their samples)"
     if offset_sigma is None and gain_sig is None:
         head = f"the poses hardly turn {bad.size} channel(s)"

@@ -38,6 +38,7 @@ class StaticFit:
     pose_cov: np.ndarray | None = None   # (P, 2, 2) tangent-plane covariance of estimated pose directions (rad^2)
     jig_accuracy_deg: float = 0.0        # stated jig accuracy of the references' priors (0: exact references)
     jig_hint_deg: float | None = None    # jig accuracy 0 but chi2/dof > JIG_HINT_CHI2: the one that gives chi2/dof = 1
+    n_prior: int = 0                     # prior rows in chi2 and dof (2 a pose with jig accuracy > 0)
 
     @property
     def offset_sigma(self) -> np.ndarray:
@@ -165,6 +166,10 @@ def to_calibration(device, fit: StaticFit, method: str, positions: PositionFit |
         extra["set_aside"] = [set_aside_entry(d) for d in fit.poses.set_aside]
     if not fit.jigfree:
         extra["fit"]["jig_accuracy_deg"] = float(fit.jig_accuracy_deg)
+        if fit.n_prior:
+            # the readings' own degrees of freedom: <= 0 where the poses' angles and the channel terms
+            # take every reading (six poses: 18 readings, 12 terms + 12 angles), the residual ~0 by construction
+            extra["fit"]["dof_readings"] = int(fit.dof - fit.n_prior)
         if fit.jig_hint_deg is not None:
             extra["fit"]["jig_accuracy_consistent_with_scatter_deg"] = float(fit.jig_hint_deg)
         if fit.jig_accuracy_deg > 0:

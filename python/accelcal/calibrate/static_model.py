@@ -155,7 +155,7 @@ def fit_static(device, poses: PoseSet, method: str = "full", *, jigfree: bool, t
                      chi2=chi2, dof=int(dof), poses=poses, temp_ref_c=T0,
                      offset_tc=None if beta is None else np.array(beta),
                      gain_tc=None if gamma is None else np.array(gamma), pose_cov=pose_cov,
-                     jig_accuracy_deg=math.degrees(jig))
+                     jig_accuracy_deg=math.degrees(jig), n_prior=int(cov_prob.n_prior))
 
 
 def prior_solve(device, method, m, sig, dT, F, jig, start, x_start=None):

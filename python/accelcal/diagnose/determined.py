@@ -44,6 +44,16 @@ def not_determined(D: FitData, effect, params: dict) -> dict | None:
     channel, as ``rot``) of the values of ``effect``'s fit ``params`` the data do not determine,
     or None (none, or an effect whose fit is no linear least squares).  A value the effect's form
     fixes (a tilt's part along the axis itself: a map of zeros) is no parameter and not judged."""
+    got = _judged(D, effect, params)
+    if got is None:
+        return None
+    out = {pname: bad for pname, (bad, _) in got.items() if bad}
+    return out or None
+
+
+def _judged(D: FitData, effect, params: dict) -> dict | None:
+    """{param name: (values not determined, values judged)} as :func:`not_determined` lists
+    them, or None for an effect whose fit is no linear least squares."""
     if not isinstance(effect, LinearCandidate):
         return None
     got = effect.param_columns(D, params)
@@ -56,7 +66,7 @@ def not_determined(D: FitData, effect, params: dict) -> dict | None:
     out = {}
     for pname, A in maps.items():
         A3 = A[:, :, None] if A.ndim == 2 else A                      # (N, k, m)
-        bad = []
+        bad, judged = [], []
         for i in range(D.N):
             g, lo = (i, 0) if per_channel else (0, i * k)
             Vs = V[g][:, seen[g]]
@@ -66,11 +76,12 @@ def not_determined(D: FitData, effect, params: dict) -> dict | None:
                 ww = float(w @ w)
                 if ww == 0.0:
                     continue
+                where = i if A.ndim == 2 else [i, c]
+                judged.append(where)
                 if float(np.sum((Vs.T @ w) ** 2)) < DETERMINED_SHARE * ww:
-                    bad.append(i if A.ndim == 2 else [i, c])
-        if bad:
-            out[pname] = bad
-    return out or None
+                    bad.append(where)
+        out[pname] = (bad, judged)
+    return out
 
 
 def _null(sig: list, where: list) -> list:
@@ -88,9 +99,13 @@ def _null(sig: list, where: list) -> list:
 def mark_not_determined(D: FitData, cands, entry: dict, model_sigma: dict | None = None) -> None:
     """Null the 1-sigma of the parameters of a result entry (and of the model's, ``model_sigma``:
     {effect: {param: sigma}}) that the data do not determine, name them in
-    ``entry["not_determined"]`` and say so in its summary."""
-    nd = not_determined(D, cands[entry["name"]], entry["params"])
-    if nd is None:
+    ``entry["not_determined"]`` and say so in its summary.  The summary's figure is then that of
+    the values the data determine (the others set to 0 for it); where they determine none, the
+    summary begins with that and gives the figure as what it is: the smallest change that fits
+    (min-norm), no measurement."""
+    got = _judged(D, cands[entry["name"]], entry["params"])
+    nd = None if got is None else {pname: bad for pname, (bad, _) in got.items() if bad}
+    if not nd:
         return
     entry["not_determined"] = nd
     sigmas = [entry["params_sigma"]] + ([model_sigma[entry["name"]]] if model_sigma and entry["name"] in model_sigma
@@ -98,11 +113,29 @@ def mark_not_determined(D: FitData, cands, entry: dict, model_sigma: dict | None
     for sig in sigmas:
         for pname, where in nd.items():
             sig[pname] = _null(sig[pname], where)
-    with np.errstate(invalid="ignore"):
-        said = describe(entry["name"], _floats(entry["params"]), _floats(entry["params_sigma"]), D)
     which = "; ".join(f"{p} on channel(s) {', '.join(map(str, _once(where)))}" for p, where in nd.items())
-    entry["summary"] = (re.sub(r" ?\(\+- nan\)| \+- nan", "", said) + f"; not determined by these data: {which} "
-                        "(the poses fix at most combinations there: the figure is no measurement, no sigma)")
+    none_seen = all(len(bad) == len(judged) for bad, judged in got.values())
+    params = _floats(entry["params"])
+    if not none_seen:
+        params = {k: _zeroed(v, nd[k]) if k in nd else v for k, v in params.items()}
+    with np.errstate(invalid="ignore"):
+        said = re.sub(r" ?\(\+- nan\)| \+- nan", "", describe(entry["name"], params, _floats(entry["params_sigma"]), D))
+    if none_seen:
+        entry["summary"] = (f"not determined by these data: {which} (the poses fix at most combinations there, no "
+                            f"sigma); the fit's figure, no measurement (the smallest change that fits where the data fix "
+                            f"nothing): {said}")
+    else:
+        entry["summary"] = (f"{said}; not determined by these data: {which} (the poses fix at most combinations "
+                            "there: left out of the figure, no sigma)")
+
+
+def _zeroed(v: np.ndarray, where: list) -> np.ndarray:
+    """``v`` (one value or one row of values a channel) with the values at ``where`` (channels,
+    or [channel, component]) set to 0."""
+    v = np.array(v, float)
+    for w in where:
+        v[tuple(w) if isinstance(w, list) else w] = 0.0
+    return v
 
 
 def _floats(p: dict) -> dict:

@@ -29,7 +29,7 @@ from .scoring import rank_key, run_candidates
 from .settling import settling_ringing
 from .stepping import next_point, same_change, terms_cover
 from .settings import FORMAT, MAX_STEPS, MIN_SHRINK, PENALTY_PER_PARAM, POSE_MEAN_NOTE_RATIO, T_MIN, Z_MIN
-from .text import as_model, describe, entry, separate_by, to_json
+from .text import as_alone, as_model, describe, entry, separate_by, to_json
 from .where import pose_mean_gap, where_breakdown
 from ..effects import EFFECTS
 
@@ -341,6 +341,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     result["where"] = to_json(result["where"])
     for ent in result["effects"]:
         mark_not_determined(D, cands, ent, result["model"]["params_sigma"] if ent["selected"] else None)
+        as_alone(ent)
     result["outliers"] = None
     if off_poses is not None:
         result["outliers"] = outlier_entry(D, recs, off_poses, dropped=False, without=diagnose(

@@ -72,6 +72,17 @@ def as_model(e: dict, params: dict, sigma: dict, D: FitData) -> None:
     e["summary"] = describe(e["name"], params, sigma, D)
 
 
+def as_alone(e: dict) -> None:
+    """Say in the summary of an effect the model leaves out (``e["selected"]`` false) what its
+    figure is: that effect alone fitted against the model before it, taking whatever of the
+    gap it can (a bend of -12 % had read as a finding against a nominal calibration whose error
+    it absorbed).  Not for the converter's effects (``stage`` "adc": a clip level or a code step
+    is read from the raw values, not fitted to the gap)."""
+    if not e["selected"] and EFFECTS[e["name"]].stage != "adc":
+        e["summary"] += (f" -- not in the model: this effect alone, fitted against {e['baseline']}, taking what "
+                         "it can of the gap there; no finding")
+
+
 def describe(name: str, p: dict, s: dict, D: FitData) -> str:
     """One line in physical units for the summary: the effect's own prose
     (``Effect.describe``), or its name when its parameters do not fit the prose."""
