@@ -354,13 +354,17 @@ def test_six_poses_on_a_coarse_lattice_keep_the_rounding_in_the_floor(real_model
     assert "saturation" not in res["model"]["effects"], (res["model"]["effects"], params)
 
 
-@pytest.mark.parametrize("seed", (313502, 313506))
+@pytest.mark.parametrize("seed", (313502, 313504, 313506))
 def test_hand_held_offset_on_a_lattice_is_not_a_temperature_offset(seed):
-    """The independent benchmark's two hand-held sessions (readings on a lattice of 10-16 counts,
+    """The independent benchmark's hand-held sessions (readings on a lattice of 10-16 counts,
     an offset, a temperature column the readings do not follow) where the offset and a temperature
     offset through its lag shrink the gap as far (0.516 each) and the temperature adds only each
     pose's rounding.  Ranked first the temperature had yielded to the simpler offset, ranked second
-    it displaced it: now the simpler is the verdict either way, and the pair is named."""
+    it displaced it: now the simpler is the verdict either way, and the pair is named.  313504
+    (0.465 and 0.475): since the poses' design effect neither adds anything significant after the
+    other, and the paired test that names them together (compare.separable) counted each block
+    as independent, so a pose's rounding, the same in all its blocks, told them apart (t 3.11;
+    1.28 over the poses, as each gain's own t counts them): temperature_offset, offset unnamed."""
     ds = im.make_handheld(["quantization", "offset"], seed)
     res = _diagnose(ds, seed)
     assert res["verdict"] in ("offset", "quantization"), (res["verdict"], res["model"]["effects"], ds["ratio"])

@@ -67,7 +67,7 @@ import numpy as np
 
 from ..effects.fitdata import static_repeats, time_separable
 from ..effects.fitting import Cand, block_ss
-from .scoring import score
+from .scoring import score, unit_sums
 
 OCCAM_SHRINK = 0.02        # ... and the one with fewer parameters is chosen when it shrinks the gap as far (to this)
 SEPARATE_T = 3.0           # paired block t of two candidates' held-out chi2 that tells them apart
@@ -97,11 +97,15 @@ class Contest:
     deferred: bool = False
 
 
-def separable(a: Cand, b: Cand) -> bool:
+def separable(D, a: Cand, b: Cand) -> bool:
     """Whether the held-out gains of ``a`` and ``b`` (first round, same blocks) differ beyond
-    their uncertainty: the paired block differences of their held-out chi2 have a t
-    statistic of at least SEPARATE_T."""
-    d = np.asarray(b.Sw, float) - np.asarray(a.Sw, float)
+    their uncertainty: the paired differences of their held-out chi2 have a t statistic of at
+    least SEPARATE_T, over the same independent units as each gain's own t
+    (:func:`~.scoring.unit_sums`: the blocks of one static pose summed).  Counted block by
+    block, a pose's rounding, the same in all its blocks, had made an offset and a temperature
+    offset through its lag (0.465 and 0.475, the temperature's "more" each pose's rounding)
+    separable at t 3.11 (1.28 over the poses)."""
+    d = unit_sums(D, np.asarray(b.Sw, float) - np.asarray(a.Sw, float))
     if d.size < 2:
         return False
     sd = float(np.std(d, ddof=1))
@@ -294,13 +298,13 @@ def contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Contest:
             # its lag, fitting it a little closer than the lag model)
             swap = (c.name, f"{c.name} and {best.name} describe one change (neither adds anything after the "
                             f"other); {c.name} follows the recorded {cands[c.name].covariate}, {best.name} time alone")
-        elif not c_after.significant and not b_after.significant and (b_path or not separable(best, c)):
+        elif not c_after.significant and not b_after.significant and (b_path or not separable(D, best, c)):
             # neither adds anything after the other: the same part of the gap (named together unless
             # their held-out gains differ beyond their uncertainty), and the simpler is the verdict
             # when it shrinks the gap as far; so for a path through many knots even where its gain
             # differs by a hair (a path that took an offset and a trace of the real Xsens
             # recording's own slow wander: 0.800 against 0.799)
-            if not separable(best, c):
+            if not separable(D, best, c):
                 out.ambiguous.append(c.name)
             if c.k < best.k and as_far(c, best) and swap is None:
                 swap = (c.name, f"{c.name} explains the same part of the gap with fewer parameters "

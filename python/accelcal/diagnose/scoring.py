@@ -10,6 +10,17 @@ from ..effects.fitting import Cand, block_ss
 from .settings import MIN_SHRINK, PENALTY_PER_PARAM, T_MIN, Z_MIN
 
 
+def unit_sums(D: FitData, gb: np.ndarray) -> np.ndarray:
+    """Per-block figures ``gb`` (B,) (held-out chi2 gains, or two candidates' paired
+    differences) summed over each independent unit D.unit (:func:`~.floor.independent_units`:
+    the blocks of one static pose, which share the pose's level error, are one unit); ``gb``
+    itself where the units are not set."""
+    gb = np.asarray(gb, float)
+    if D.unit is None or D.unit.size != gb.size:
+        return gb
+    return np.bincount(np.unique(D.unit, return_inverse=True)[1], weights=gb)
+
+
 def score(D: FitData, c: Cand, S0w: np.ndarray, S0u: np.ndarray) -> Cand:
     """The held-out gain of ``c`` against the noise (``Cand``'s score fields).  Static poses'
     level errors shared by all their samples (the rounding's bias where the noise does not
@@ -20,8 +31,7 @@ def score(D: FitData, c: Cand, S0w: np.ndarray, S0u: np.ndarray) -> Cand:
     c.gain = float(gb.sum())
     deff = D.deff
     c.penalty = PENALTY_PER_PARAM * c.k * deff
-    if D.unit is not None and D.unit.size == gb.size:
-        gb = np.bincount(np.unique(D.unit, return_inverse=True)[1], weights=gb)
+    gb = unit_sums(D, gb)
     nb = gb.size
     sd = float(np.std(gb, ddof=1)) if nb > 1 else 0.0
     c.t = float(np.mean(gb) / (sd / math.sqrt(nb))) if sd > 0 else (math.inf if c.gain > 0 else 0.0)

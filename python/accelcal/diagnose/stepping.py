@@ -118,7 +118,7 @@ def terms_cover(dev, cal, recs, folds, seed, m0, cands, D, Dk, steps, results, r
     if simpler:
         nxt = min(simpler, key=lambda c: (c.k, EFFECT_NAMES.index(c.name)))
         amb += [c.name for c in terms if c is not nxt and c.shrink >= nxt.shrink - OCCAM_SHRINK
-                and not separable(nxt, c) and c.name not in amb]
+                and not separable(Dk, nxt, c) and c.name not in amb]
     proven = min((c for c in results.values() if c.proof and c.significant and c.gain > 0 and c.name != best.name
                   and c.name in remaining), key=rank_key, default=None)
     if proven is not None and rank_key(proven) < rank_key(nxt):
