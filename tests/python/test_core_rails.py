@@ -50,22 +50,25 @@ def codes(a, signed):
     return offset_binary(a) if signed else np.asarray(a).astype(np.uint16)
 
 
+def call_trim(fn, ctype, raw, trim, *rails):
+    """One sample through a pre-trim of the core (``fn``: ac_trim, ac_trim_rails, ac_trim_s16 or
+    ac_trim_rails_s16, readings and trims as ``ctype``, then the rails where it takes them) ->
+    (status, x)."""
+    n = len(raw)
+    x = np.zeros(n, np.int16)
+    dt = np.uint16 if ctype == "uint16_t" else np.int16
+    raw, trim = np.ascontiguousarray(raw, dt), np.ascontiguousarray(trim, dt)  # alive for the call
+    s = fn(cptr(f"{ctype} *", raw), cptr(f"{ctype} *", trim), n, *(int(r) for r in rails), cptr("int16_t *", x))
+    return int(s), x
+
+
 def trim_rails(raw_c, trim_c, lo_c, hi_c):
     """ac_trim_rails on one sample of uint16 codes -> (status, x)."""
-    n = len(raw_c)
-    x = np.zeros(n, np.int16)
-    raw_c, trim_c = np.ascontiguousarray(raw_c, np.uint16), np.ascontiguousarray(trim_c, np.uint16)
-    s = lib.ac_trim_rails(cptr("uint16_t *", raw_c), cptr("uint16_t *", trim_c), n, int(lo_c), int(hi_c),
-                          cptr("int16_t *", x))
-    return int(s), x
+    return call_trim(lib.ac_trim_rails, "uint16_t", raw_c, trim_c, lo_c, hi_c)
 
 
 def trim_plain(raw_c, trim_c):
-    n = len(raw_c)
-    x = np.zeros(n, np.int16)
-    s = lib.ac_trim(cptr("uint16_t *", np.ascontiguousarray(raw_c, np.uint16)),
-                    cptr("uint16_t *", np.ascontiguousarray(trim_c, np.uint16)), n, cptr("int16_t *", x))
-    return int(s), x
+    return call_trim(lib.ac_trim, "uint16_t", raw_c, trim_c)
 
 
 @core
@@ -85,20 +88,11 @@ def test_trim_rails_flags_what_at_rails_flags(data):
 
 def trim_rails_s16(raw, trim, lo, hi):
     """ac_trim_rails_s16 on one sample of int16 counts -> (status, x)."""
-    n = len(raw)
-    x = np.zeros(n, np.int16)
-    raw, trim = np.ascontiguousarray(raw, np.int16), np.ascontiguousarray(trim, np.int16)  # alive for the call
-    s = lib.ac_trim_rails_s16(cptr("int16_t *", raw), cptr("int16_t *", trim), n, int(lo), int(hi),
-                              cptr("int16_t *", x))
-    return int(s), x
+    return call_trim(lib.ac_trim_rails_s16, "int16_t", raw, trim, lo, hi)
 
 
 def trim_s16(raw, trim):
-    n = len(raw)
-    x = np.zeros(n, np.int16)
-    raw, trim = np.ascontiguousarray(raw, np.int16), np.ascontiguousarray(trim, np.int16)
-    s = lib.ac_trim_s16(cptr("int16_t *", raw), cptr("int16_t *", trim), n, cptr("int16_t *", x))
-    return int(s), x
+    return call_trim(lib.ac_trim_s16, "int16_t", raw, trim)
 
 
 @core
