@@ -478,3 +478,11 @@ def noise_before_rounding(s, q):
         # si is q^2/12 to rounding, f(si) <= 0, and the root is si itself
         out[i] = si if fun(si) <= 0.0 else brentq(fun, 0.0, si)
     return out
+
+
+def mean_rounding_var(s, q):
+    """Variance (counts^2) of the bias rounding to step ``q`` leaves in a pose's mean whose readings
+    scatter by ``s`` (counts, their pooled std about the pose's level): :func:`rounding_bias_var` at
+    the noise before the rounding that gives that scatter (:func:`noise_before_rounding`).  The
+    calibration's pose sems and the diagnosis's pose level errors both take it; elementwise."""
+    return rounding_bias_var(noise_before_rounding(s, q), q)

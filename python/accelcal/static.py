@@ -18,8 +18,8 @@ import numpy as np
 from .clipping import ClipLevels, clip_levels
 from .errors import InputError
 from .no_rest import REST_NOISE_MAX, gravity_removed_clause, no_rest_clause, noise_share, tonal
-from .noise import (code_step, colour_factor, noise_before_rounding, noise_for, nyquist_tone, pose_colour,
-                    rounding_bias_var, window_std, without_nyquist_tone)
+from .noise import (code_step, colour_factor, mean_rounding_var, noise_for, nyquist_tone, pose_colour, window_std,
+                    without_nyquist_tone)
 from .recording import check_for_device
 from .steps import MOVE_PARTS, MOVE_RANGE, MOVE_STD, block_log_intervals, part_spread, step_splits
 
@@ -76,12 +76,19 @@ class PoseSet:
     def n_poses(self) -> int:
         return int(self.means.shape[0])
 
-    def channel_noise(self) -> np.ndarray:
-        """(N,) pooled within-pose std per channel (counts), floored at rounding noise."""
+    def pooled_var(self) -> np.ndarray | None:
+        """(N,) the dof-weighted within-pose variance per channel (counts^2), None where no pose
+        has two samples."""
         dof = np.maximum(self.n - 1, 0).astype(float)
         if dof.sum() <= 0:
+            return None
+        return (dof[:, None] * self.std ** 2).sum(0) / dof.sum()
+
+    def channel_noise(self) -> np.ndarray:
+        """(N,) pooled within-pose std per channel (counts), floored at rounding noise."""
+        var = self.pooled_var()
+        if var is None:
             return np.full(self.means.shape[1], math.sqrt(QUANT_VAR))
-        var = (dof[:, None] * self.std ** 2).sum(0) / dof.sum()
         return np.sqrt(np.maximum(var, QUANT_VAR))
 
     def sem_scale(self) -> np.ndarray:
@@ -100,10 +107,10 @@ class PoseSet:
         is below the code step (:func:`accelcal.noise.rounding_bias_var`; a pose on one code is
         off by up to half a step: q/sqrt(12) rms)."""
         N = self.means.shape[1]
-        dof = np.maximum(self.n - 1, 0).astype(float)
-        var = (dof[:, None] * self.std ** 2).sum(0) / dof.sum() if dof.sum() > 0 else np.zeros(N)
+        var = self.pooled_var()
+        var = np.zeros(N) if var is None else var
         q = np.ones(N) if self.step is None or not self.step.size else self.step.max(axis=0)
-        bias = rounding_bias_var(noise_before_rounding(np.sqrt(var), q), q)
+        bias = mean_rounding_var(np.sqrt(var), q)
         white = var[None, :] * self.sem_scale()[None, :] ** 2 / np.maximum(self.n, 1)[:, None]
         return np.sqrt(white + bias[None, :])
 
