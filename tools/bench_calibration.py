@@ -42,9 +42,9 @@ sys.path.insert(0, os.path.join(ROOT, "python"))
 from accelcal import model  # noqa: E402
 from accelcal.calibrate import (PoseSet, calibrate_recordings, fit_known_poses, fit_static,  # noqa: E402
                                 gauge_rotation, poses_from_recording, static_force)
-from accelcal.device import default_device  # noqa: E402
-from accelcal.recording import recording_from_arrays  # noqa: E402
-from accelcal.xsens import load_xsens  # noqa: E402
+from accelcal.io.device import default_device  # noqa: E402
+from accelcal.io.recording import recording_from_arrays  # noqa: E402
+from accelcal.convert.xsens import load_xsens  # noqa: E402
 
 sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
 from shared_data import XSENS_ACC, SHARED_DATA  # noqa: E402
@@ -402,8 +402,8 @@ def main(argv=None):
     emit("|---|---|---|---|---|")
     import subprocess
     import tempfile
-    from accelcal.device import save_device
-    from accelcal.recording import read_recording, write_recording
+    from accelcal.io.device import save_device
+    from accelcal.io.recording import read_recording, write_recording
     with tempfile.TemporaryDirectory() as tmp:
         dev_path = os.path.join(tmp, "dev.json")
         save_device(dev, dev_path)
@@ -421,7 +421,7 @@ def main(argv=None):
             read_recording(csv, dev.n_channels)
             t_read = time.perf_counter() - t0
             t0 = time.perf_counter()
-            subprocess.run([sys.executable, "-m", "accelcal.cli", "calibrate", "--device", dev_path, csv,
+            subprocess.run([sys.executable, "-m", "accelcal.cli.main", "calibrate", "--device", dev_path, csv,
                             "-o", os.path.join(tmp, "cal.json")], check=True)
             t_cli = time.perf_counter() - t0
             kind = "labelled poses + f reference (known poses)" if labelled else "no reference (detection + jig-free)"

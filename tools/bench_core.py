@@ -27,9 +27,9 @@ INC = ROOT / "include"
 
 
 def make_header():
-    from accelcal.device import default_device
-    from accelcal.header import render_header
-    from accelcal.quantize import quantize
+    from accelcal.io.device import default_device
+    from accelcal.firmware.header import render_header
+    from accelcal.firmware.quantize import quantize
     d = default_device()
     rng = np.random.default_rng(7)
     s = d.nominal_sensitivity() * (1 + rng.uniform(-0.007, 0.036, (6, 1))) + \
@@ -46,9 +46,9 @@ def make_triad_header(rng):
     """triad.h (prefix AC_TRI): a 16-bit 3-axis sensor with the same kind of errors
     (gain -0.7..+3.6 %, cross-axis 1.75 %, offsets +-28 % of g) for ac_triad_apply and
     ac_triad_build."""
-    from accelcal.device import default_triad
-    from accelcal.header import render_triad_header
-    from accelcal.triad import quantize_triad
+    from accelcal.io.device import default_triad
+    from accelcal.firmware.header import render_triad_header
+    from accelcal.firmware.triad import quantize_triad
     d = default_triad()
     s = d.nominal_sensitivity() * (1 + rng.uniform(-0.007, 0.036, (3, 1))) + \
         d.counts_per_mps2[:, None] * rng.normal(0, 0.0175, (3, 3))
@@ -344,7 +344,8 @@ def h8_sizes():
 
 
 def throughput(d, t, b, s):
-    from accelcal import model, native
+    from accelcal import model
+    from accelcal.firmware import native
     n = 1_000_000
     rng = np.random.default_rng(0)
     raw = np.clip(np.round(model.predict_counts(b, s, d.positions, rng.normal(0, 9.8, (n, 3)),

@@ -34,8 +34,8 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "python"))
-from accelcal.csvtable import classify_columns, convert_columns, make_table  # noqa: E402
-from accelcal.recording import Recording, read_recording, write_recording  # noqa: E402
+from accelcal.io.csvtable import classify_columns, convert_columns, make_table  # noqa: E402
+from accelcal.io.recording import Recording, read_recording, write_recording  # noqa: E402
 
 N_RAW = 6
 
@@ -134,7 +134,7 @@ def main(argv: list[str] | None = None) -> None:
     emit()
     emit("Import time after numpy, fresh interpreter [s]: "
          + ", ".join(f"{m} {'not installed' if s is None else f'{s:.2f}'}"
-                     for m in ("accelcal.recording", "pyarrow.csv", "pandas") for s in [import_seconds(m)]))
+                     for m in ("accelcal.io.recording", "pyarrow.csv", "pandas") for s in [import_seconds(m)]))
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     emit()
     emit(f"(machine: {os.cpu_count()} cores, load average {load:.1f} when measured; numpy {np.__version__})")

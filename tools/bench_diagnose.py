@@ -58,9 +58,9 @@ sys.path.insert(0, os.path.join(ROOT, "python"))
 sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
 
 from accelcal.calibrate import calibrate_recordings  # noqa: E402
-from accelcal.calibration import Calibration  # noqa: E402
+from accelcal.io.calibration import Calibration  # noqa: E402
 from accelcal.diagnose import diagnose  # noqa: E402
-from accelcal.xsens import load_xsens  # noqa: E402
+from accelcal.convert.xsens import load_xsens  # noqa: E402
 from diag_datasets import (LABELS, MOTIONS, RHO_HI, RHO_LO, Device, concat, drift_error, make_dataset,  # noqa: E402
                            param_error, random_array, run_simulation, seed_prototype_truth, temperature_profile)
 from shared_data import XSENS_ACC, shared_file  # noqa: E402

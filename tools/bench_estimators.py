@@ -34,11 +34,11 @@ SEEDS = range(1, 11)
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(ROOT / "python"), str(ROOT / "tests" / "python")]
 # the shared bench helpers, the package, and the devices of the estimators' tests
 from accelcal import estimators as E, model  # noqa: E402
-from accelcal.calibration import Calibration  # noqa: E402
-from accelcal.device import default_device, default_triad  # noqa: E402
+from accelcal.io.calibration import Calibration  # noqa: E402
+from accelcal.io.device import default_device, default_triad  # noqa: E402
 from accelcal.estimators.attitude import LEAK_FRAC  # noqa: E402
-from accelcal.native import FORMATS  # noqa: E402
-from accelcal.quantize import round_half_up  # noqa: E402
+from accelcal.firmware.native import FORMATS  # noqa: E402
+from accelcal.firmware.quantize import round_half_up  # noqa: E402
 from accelcal.simulate import run_simulation  # noqa: E402
 from bench_core import avr_stack_ram, parse_bench, run  # noqa: E402
 from estimator_devices import adxl_pendulum_device as adxl_triads, adxl_triad  # noqa: E402

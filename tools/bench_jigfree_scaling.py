@@ -40,8 +40,8 @@ def fib_dirs(P: int) -> np.ndarray:
 
 def one(P: int, dense: bool) -> dict:
     """Fit P poses in this process; returns time, peak RSS and the offsets."""
-    from accelcal.device import default_triad
-    from accelcal.static import PoseSet
+    from accelcal.io.device import default_triad
+    from accelcal.readings.static import PoseSet
     from accelcal import model
     problem = importlib.import_module("accelcal.calibrate.problem")
     static_model = importlib.import_module("accelcal.calibrate.static_model")

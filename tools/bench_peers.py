@@ -74,8 +74,8 @@ sys.path.insert(0, os.path.join(ROOT, "python"))
 from accelcal import model  # noqa: E402
 from accelcal.calibrate import (PoseSet, fit_known_poses, fit_static, gauge_rotation,  # noqa: E402
                                 poses_from_recording, static_force)
-from accelcal.device import Device  # noqa: E402
-from accelcal.xsens import load_xsens  # noqa: E402
+from accelcal.io.device import Device  # noqa: E402
+from accelcal.convert.xsens import load_xsens  # noqa: E402
 
 try:
     import imucal  # noqa: E402

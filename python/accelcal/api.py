@@ -1,7 +1,7 @@
 """The Python API: ``import accelcal as ac``.
 
-Each function takes the package's objects (:class:`~accelcal.device.Device`,
-:class:`~accelcal.recording.Recording`, :class:`~accelcal.calibration.Calibration`),
+Each function takes the package's objects (:class:`~accelcal.io.device.Device`,
+:class:`~accelcal.io.recording.Recording`, :class:`~accelcal.io.calibration.Calibration`),
 file paths, or numpy arrays, and does what the command of the same name does,
 without writing files unless asked::
 
@@ -28,20 +28,20 @@ from typing import Any, Callable, Iterable
 import numpy as np
 
 from .calibrate import calibrate_recordings
-from .calibration import Calibration, load_calibration, save_calibration
-from .cli_calibrate import record_warnings
-from .device import Device, default_device, load_device, save_device
+from .io.calibration import Calibration, load_calibration, save_calibration
+from .cli.calibrate_command import record_warnings
+from .io.device import Device, default_device, load_device, save_device
 from .diagnose import diagnose as _diagnose_impl
 from .errors import AccelcalError, atomic_write, unknown_option
 from .estimators import Columns, attitude_from_recording, displacement_from_recording, rate_from_recording
-from .header import calibration_header
+from .firmware.header import calibration_header
 from .motions import MOTIONS, Motion
-from .recording import Recording, read_recording as _read_recording_file, write_recording
-from .convert import Converted, convert_file
+from .io.recording import Recording, read_recording as _read_recording_file, write_recording
+from .convert.formats import Converted, convert_file
 from .resolve import clipped_samples, resolve_recording
-from .units import stated_scale
+from .io.units import stated_scale
 from .simulate import simulate as _simulate_impl
-from .static import MIN_POSE_S
+from .readings.static import MIN_POSE_S
 
 __all__ = ["Device", "Recording", "Calibration", "Columns", "ResolveResult", "AccelcalError",
            "default_device", "load_device", "save_device", "read_recording", "write_recording",

@@ -7,15 +7,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import model, native
-from .clipping import at_rails, clip_levels, pile_warning, rails_warning
+from . import model
+from .firmware import native
+from .readings.clipping import at_rails, clip_levels, pile_warning, rails_warning
 from .errors import AccelcalError, InputError
-from .noise import noise_for
-from .static import STATIC_WINDOW_S, window_len
-from .triad import triad_forces
-from .native import FORMATS
-from .quantize import omega_to_fixed, quantize_calibration
-from .recording import check_core_input, check_for_device
+from .readings.noise import noise_for
+from .readings.static import STATIC_WINDOW_S, window_len
+from .firmware.triad import triad_forces
+from .firmware.native import FORMATS
+from .firmware.quantize import omega_to_fixed, quantize_calibration
+from .io.recording import check_core_input, check_for_device
 
 
 def omega_for(rec, source: str) -> np.ndarray | None:
@@ -79,11 +80,11 @@ def clipped_samples(rec, device) -> tuple[np.ndarray, list[str]]:
     Returns
     -------
     clipped : ndarray (n,) bool
-        A channel at the converter's rails (:func:`accelcal.clipping.at_rails`) or at a clip
-        level inside the range where its readings pile up (:func:`accelcal.clipping.clip_levels`,
+        A channel at the converter's rails (:func:`accelcal.readings.clipping.at_rails`) or at a clip
+        level inside the range where its readings pile up (:func:`accelcal.readings.clipping.clip_levels`,
         with the window and noise convert and diagnose use: a micro:bit's +-2040 mg).
     warnings : list of str
-        :func:`accelcal.clipping.rails_warning` and :func:`accelcal.clipping.pile_warning`, each
+        :func:`accelcal.readings.clipping.rails_warning` and :func:`accelcal.readings.clipping.pile_warning`, each
         where it has samples."""
     raw = np.asarray(rec.raw)
     clipped = at_rails(rec, device)

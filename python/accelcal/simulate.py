@@ -40,12 +40,12 @@ from .effects import (
     params_to_json,
     parse_effect_specs,
 )
-from .calibration import Calibration
+from .io.calibration import Calibration
 from .errors import AccelcalError
 from .sensor import ChannelState, Context, evaluate, true_state
 from .spec import format_spec
 from .motions import Motion, Trajectory, get_motion, parse_motion_spec
-from .recording import Recording, recording_from_arrays
+from .io.recording import Recording, recording_from_arrays
 
 __all__ = ["simulate", "run_simulation", "Simulation", "true_state", "seed_prototype_truth", "SEED_TABLE1"]
 
@@ -196,7 +196,7 @@ def seed_prototype_truth(device: Any, rng: np.random.Generator | int | None = No
     uniform in -28.3 ... +25.4 % of g (in counts) around the nominal zero,
     positions nominal (or off by up to ``position_error_mm`` per component,
     uniform; the paper's housings: 0.1 mm).  Returns a
-    :class:`~accelcal.calibration.Calibration` (method ``truth``)."""
+    :class:`~accelcal.io.calibration.Calibration` (method ``truth``)."""
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     N = device.n_channels
     k = np.asarray(device.counts_per_mps2, float)

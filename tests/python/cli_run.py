@@ -4,8 +4,8 @@ from __future__ import annotations
 import json
 import warnings
 
-from accelcal.cli import main
-from accelcal.recording import read_recording
+from accelcal.cli.main import main
+from accelcal.io.recording import read_recording
 
 
 def run(argv, capfd):

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from accelcal.device import Device, default_device, default_triad, pendulum_device
+from accelcal.io.device import Device, default_device, default_triad, pendulum_device
 from accelcal.effects import EFFECT_NAMES, EFFECTS
 from accelcal.effects.base import as_list
 from accelcal.motions import MOTIONS, Kinematics, Trajectory, temperature_profile

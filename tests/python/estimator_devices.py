@@ -3,7 +3,7 @@ from here): ADXL202E-like triads, 1250 counts per g, zero 5000, range 0..10000, 
 0.02 m/s^2 rms noise."""
 import numpy as np
 
-from accelcal.device import Device
+from accelcal.io.device import Device
 
 G = 9.80665
 

@@ -44,10 +44,10 @@ from pathlib import Path
 import numpy as np
 from scipy import signal
 
-from accelcal.calibration import Calibration
-from accelcal.device import Device
-from accelcal.recording import recording_from_arrays
-from accelcal.xsens import load_xsens
+from accelcal.io.calibration import Calibration
+from accelcal.io.device import Device
+from accelcal.io.recording import recording_from_arrays
+from accelcal.convert.xsens import load_xsens
 
 G0 = 9.80665  # standard gravity, m/s^2
 

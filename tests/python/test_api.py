@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import accelcal as ac
-from accelcal.cli import main
-from accelcal.convert_cli import add_convert_parser
+from accelcal.cli.main import main
+from accelcal.cli.convert_command import add_convert_parser
 from accelcal.errors import AccelcalError
 
 

@@ -18,12 +18,12 @@ from accelcal.calibrate import (PoseSet, calibrate_jigfree, calibrate_known_pose
                                 detect_static, estimate_noise, fit_known_poses, fit_static, fit_temperature,
                                 gauge_rotation, pose_means, poses_from_recording, static_force)
 from accelcal.calibrate.checks import gain_sigma
-from accelcal.calibration import load_calibration
-from accelcal.device import default_device, default_triad, save_device
+from accelcal.io.calibration import load_calibration
+from accelcal.io.device import default_device, default_triad, save_device
 from accelcal.errors import InputError
-from accelcal.xsens import load_xsens
+from accelcal.convert.xsens import load_xsens
 from shared_data import XSENS_ACC
-from accelcal.recording import Recording, read_recording, recording_from_arrays, write_recording
+from accelcal.io.recording import Recording, read_recording, recording_from_arrays, write_recording
 from cli_run import run
 
 G = 9.80665
@@ -432,7 +432,7 @@ def test_xsens_jigfree_calibration(shared_data):
 
 # ----------------------------------------------------------------------------- files, CLI, bad input
 def test_csv_round_trip_and_calibration_json(tmp_path):
-    from accelcal.calibration import load_calibration, save_calibration
+    from accelcal.io.calibration import load_calibration, save_calibration
     rng = np.random.default_rng(14)
     dev = default_device()
     b, S = draw_truth(dev, rng)
@@ -644,7 +644,7 @@ def calibrate_cli(tmp_path, capfd, F, seed):
     """Poses F (P,3) of a seed-like triad held 2 s each, written to r.csv beside d.json, and
     ``accelcal calibrate`` run on them: (b, S, rec, rc, stdout, stderr)."""
     from cli_run import run
-    from accelcal.device import save_device
+    from accelcal.io.device import save_device
     d = default_triad()
     save_device(d, tmp_path / "d.json")
     rng = np.random.default_rng(seed)
@@ -713,7 +713,7 @@ def test_a_jig_free_fit_that_leaves_the_poses_beyond_their_noise_says_so(tmp_pat
     hand-held poses: 16.4) was printed without a word; it is warned of, naming what causes it.
     Here a cube the model lacks; the same poses without it give no warning."""
     from cli_run import run
-    from accelcal.device import save_device
+    from accelcal.io.device import save_device
     d = default_triad()
     save_device(d, tmp_path / "d.json")
     rng = np.random.default_rng(12)
@@ -761,7 +761,7 @@ def test_noise_coloured_within_the_poses_widens_their_sem_not_their_chi2():
     (factor 1), noise with a slow component (an AR(1) of 40-sample memory, as a hand's tremor)
     widens it, and the jig-free chi2/dof of such poses, 5-10 x with the white sem, is near 1
     (real sessions: an LSM303's 8.8 -> 4.1, the Xsens hand-held poses' 16.4 -> 7.4)."""
-    from accelcal.noise import colour_factor, pose_colour
+    from accelcal.readings.noise import colour_factor, pose_colour
     d = default_triad()
     rng = np.random.default_rng(21)
     white = np.round(1000 + 3 * rng.standard_normal((4000, 3))).astype(np.int64)

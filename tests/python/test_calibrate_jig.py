@@ -20,10 +20,10 @@ from hypothesis import strategies as st
 
 from accelcal import model
 from accelcal.calibrate import (PoseSet, calibrate_recordings, fit_known_poses, fit_static, jig_accuracy_rad)
-from accelcal.cli import main
-from accelcal.device import default_device, default_triad, save_device
+from accelcal.cli.main import main
+from accelcal.io.device import default_device, default_triad, save_device
 from accelcal.errors import InputError
-from accelcal.recording import write_recording
+from accelcal.io.recording import write_recording
 
 from test_calibrate import AXES6, G, draw_truth, fib_dirs, make_recording, poseset_from
 

@@ -16,8 +16,8 @@ import numpy as np
 
 from accelcal import model
 from accelcal.calibrate.stated_poses import MISLABEL_SLACK_DEG, allowed_deg, reading_angles
-from accelcal.device import NOMINAL_FACTOR, default_triad, save_device
-from accelcal.recording import recording_from_arrays, write_recording
+from accelcal.io.device import NOMINAL_FACTOR, default_triad, save_device
+from accelcal.io.recording import recording_from_arrays, write_recording
 
 from cli_run import run
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 import numpy as np
 
 from accelcal.calibrate import calibrate_recordings
-from accelcal.cli_calibrate import calibrate_warnings, calibration_summary
-from accelcal.recording import recording_from_arrays
+from accelcal.cli.calibrate_command import calibrate_warnings, calibration_summary
+from accelcal.io.recording import recording_from_arrays
 from test_diagnose_honest import G, K, imucal_ferraris, triad
 
 

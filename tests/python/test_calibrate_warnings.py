@@ -19,12 +19,12 @@ from accelcal import model
 from accelcal.calibrate import calibrate_recordings, static_force
 from accelcal.calibrate.checks import far_from_nominal, gain_sigma
 from accelcal.calibrate.settings import EXCITATION_MIN_SPAN_G, POORLY_DETERMINED_MG
-from accelcal.cli_calibrate import calibrate_warnings
-from accelcal.device import default_triad, save_device
-from accelcal.header import calibration_header
+from accelcal.cli.calibrate_command import calibrate_warnings
+from accelcal.io.device import default_triad, save_device
+from accelcal.firmware.header import calibration_header
 from accelcal.simulate import simulate
-from accelcal.recording import recording_from_arrays, write_recording
-from accelcal.steps import MOVE_PARTS, MOVE_RANGE, part_spread
+from accelcal.io.recording import recording_from_arrays, write_recording
+from accelcal.readings.steps import MOVE_PARTS, MOVE_RANGE, part_spread
 
 from cli_run import run
 from test_calibrate import draw_truth, fib_dirs, make_recording

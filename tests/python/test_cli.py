@@ -7,11 +7,11 @@ import sys
 import numpy as np
 import pytest
 
-from accelcal.cli import main
+from accelcal.cli.main import main
 
 
 def run(*args):
-    return subprocess.run([sys.executable, "-m", "accelcal.cli", *map(str, args)],
+    return subprocess.run([sys.executable, "-m", "accelcal.cli.main", *map(str, args)],
                           capture_output=True, text=True, timeout=300)
 
 
@@ -119,9 +119,9 @@ def test_simulate_rejects_unknown_effect(tmp_path):
 
 
 def test_attitude_command_tracks_the_pendulum(tmp_path):
-    from accelcal.calibration import Calibration, save_calibration
-    from accelcal.device import pendulum_device, save_device
-    from accelcal.recording import read_recording
+    from accelcal.io.calibration import Calibration, save_calibration
+    from accelcal.io.device import pendulum_device, save_device
+    from accelcal.io.recording import read_recording
     d = pendulum_device()
     save_device(d, tmp_path / "dev.json")
     save_calibration(Calibration.nominal(d), tmp_path / "cal.json")
@@ -146,8 +146,8 @@ def test_pendulum_with_equal_radii_is_refused(tmp_path):
              {"position_m": [0.2, 0, 0], "axis": ax, "counts_per_mps2": 1670.0, "zero_counts": 32768}
              for ax in ([1, 0, 0], [0, 1, 0], [0, 0, 1])] * 2}
     (tmp_path / "dev.json").write_text(json.dumps(d))
-    from accelcal.calibration import Calibration, save_calibration
-    from accelcal.device import load_device
+    from accelcal.io.calibration import Calibration, save_calibration
+    from accelcal.io.device import load_device
     save_calibration(Calibration.nominal(load_device(tmp_path / "dev.json")), tmp_path / "cal.json")
     rec = tmp_path / "p.csv"
     rec.write_text("t," + ",".join(f"raw_{i}" for i in range(6)) + "\n" +
@@ -185,7 +185,7 @@ def test_diagnose_command_finds_a_withheld_gain(tmp_path, demo_dir):
     fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))  # a pty starts 0 columns wide
     chunks = []
     try:
-        p = subprocess.Popen([sys.executable, "-m", "accelcal.cli", "diagnose", "--device", str(out / "device.json"),
+        p = subprocess.Popen([sys.executable, "-m", "accelcal.cli.main", "diagnose", "--device", str(out / "device.json"),
                               "--calibration", str(truth), str(rec), "--json", str(tmp_path / "d2.json"),
                               "--report", str(tmp_path / "rep2")], stdout=subprocess.DEVNULL, stderr=slave)
         os.close(slave)

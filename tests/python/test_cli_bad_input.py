@@ -28,7 +28,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from accelcal.cli import main
+from accelcal.cli.main import main
 
 # per (command, file kind): 3 kinds x 40 = ~120 runs per command; raise it to hunt
 EXAMPLES = int(os.environ.get("ACCELCAL_BAD_INPUT_EXAMPLES", "40"))
@@ -45,9 +45,9 @@ SIX = {"dev": "device.json", "cal": "calibration.json", "rec": "small.csv", "pos
 def good(tmp_path_factory):
     import io
 
-    from accelcal.calibration import Calibration, save_calibration
-    from accelcal.device import pendulum_device, save_device
-    from accelcal.recording import write_recording
+    from accelcal.io.calibration import Calibration, save_calibration
+    from accelcal.io.device import pendulum_device, save_device
+    from accelcal.io.recording import write_recording
     from accelcal.simulate import run_simulation
 
     d = tmp_path_factory.mktemp("good")

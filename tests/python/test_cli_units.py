@@ -19,10 +19,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from accelcal.calibration import Calibration, save_calibration
-from accelcal.cli import main
-from accelcal.device import pendulum_device, save_device
-from accelcal.recording import write_recording
+from accelcal.io.calibration import Calibration, save_calibration
+from accelcal.cli.main import main
+from accelcal.io.device import pendulum_device, save_device
+from accelcal.io.recording import write_recording
 from accelcal.simulate import run_simulation
 from cli_run import convert_ok, convert_refused, run, write_lines
 

@@ -6,10 +6,10 @@ import json
 import numpy as np
 import pytest
 
-from accelcal.cli import build_parser, main
-from accelcal.device import default_device
-from accelcal.recording import read_recording, write_recording
-from accelcal.recording_checks import seconds
+from accelcal.cli.main import build_parser, main
+from accelcal.io.device import default_device
+from accelcal.io.recording import read_recording, write_recording
+from accelcal.io.recording_checks import seconds
 
 
 def _subparsers(parser):

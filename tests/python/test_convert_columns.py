@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from accelcal.recording import read_recording
+from accelcal.io.recording import read_recording
 from cli_run import convert_ok, convert_refused, run, write_lines
 
 LSB_G = 1.0 / 4096                      # +-8 g at 16 bits

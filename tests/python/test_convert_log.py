@@ -1,5 +1,5 @@
 """A serial monitor's capture (``accelcal convert --format log``) and readings held for several
-rows by a logger faster than its sensor (``accelcal.held``).
+rows by a logger faster than its sensor (``accelcal.readings.held``).
 
 The captures are written here from the shape such files have (FastAhrs's calibration
 notebooks' data_sample*.csv, which carry no licence and are not used): a banner, a prompt
@@ -13,12 +13,12 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from accelcal.calibrate import calibrate_recordings
-from accelcal.convert import convert_file, detect_format
-from accelcal.device import load_device
+from accelcal.convert.formats import convert_file, detect_format
+from accelcal.io.device import load_device
 from accelcal.diagnose import diagnose
-from accelcal.held import distinct_recordings, distinct_rows, held_factor, held_runs, held_text
-from accelcal.recording import read_recording
-from accelcal.units import scale_from_options
+from accelcal.readings.held import distinct_recordings, distinct_rows, held_factor, held_runs, held_text
+from accelcal.io.recording import read_recording
+from accelcal.io.units import scale_from_options
 from cli_run import one_refusal, run
 
 G = 9.80665
@@ -156,9 +156,9 @@ def test_readings_held_for_uneven_runs_are_held(tmp_path, capfd):
     slide cut into 25 "rests".  Runs of one length (3) and chance repeats (geometric: single
     rows the most common; here also with a mean of 8 rows) keep the old verdicts."""
     import dataclasses
-    from accelcal.device import save_device, default_triad
-    from accelcal.calibration import Calibration, save_calibration
-    from accelcal.recording import recording_from_arrays, write_recording
+    from accelcal.io.device import save_device, default_triad
+    from accelcal.io.calibration import Calibration, save_calibration
+    from accelcal.io.recording import recording_from_arrays, write_recording
     rng = np.random.default_rng(11)
     lengths = rng.integers(5, 11, 60)
     vals = np.round(1000 + 30 * np.cumsum(rng.standard_normal((60, 3)), axis=0)).astype(np.int64)

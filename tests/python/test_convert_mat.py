@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import scipy.io
 
-from accelcal.recording import read_recording
+from accelcal.io.recording import read_recording
 from cli_run import run
 
 LSB_G = 1.0 / 4096                      # +-8 g at 16 bits

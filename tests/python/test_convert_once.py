@@ -11,16 +11,16 @@ import importlib
 import numpy as np
 
 import accelcal as ac
-from accelcal.convert import convert_file
-from accelcal.convert_common import gravity_removed_note, held_note
-from accelcal.device import GRAVITY_REMOVED_TEXT, default_triad
-from accelcal.held import held_runs, held_share
-from accelcal.no_rest import gravity_removed_clause
-from accelcal.units import Scale
+from accelcal.convert.formats import convert_file
+from accelcal.convert.common import gravity_removed_note, held_note
+from accelcal.io.device import GRAVITY_REMOVED_TEXT, default_triad
+from accelcal.readings.held import held_runs, held_share
+from accelcal.readings.no_rest import gravity_removed_clause
+from accelcal.io.units import Scale
 from cli_run import write_lines
 
-convert_mod = importlib.import_module("accelcal.convert")   # (ac.convert is the API's function)
-noise_mod = importlib.import_module("accelcal.noise")
+convert_mod = importlib.import_module("accelcal.convert.formats")   # (ac.convert is the API's function)
+noise_mod = importlib.import_module("accelcal.readings.noise")
 
 
 def _rest_then_turn(n=600, seed=0):

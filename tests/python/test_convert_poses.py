@@ -220,9 +220,9 @@ def test_pose_means_convert_without_a_rate_and_calibrate(tmp_path, capfd, header
     and calibrate takes the six poses -- with --stated-f, the known-pose 'full' calibration, the
     same as with --rate 1.  Rows that are samples (no labels, or a label over several rows) still
     need the rate, and the refusal says what a pose-means file needs instead."""
-    from accelcal.calibration import load_calibration
-    from accelcal.cli import main
-    from accelcal.device import load_device
+    from accelcal.io.calibration import load_calibration
+    from accelcal.cli.main import main
+    from accelcal.io.device import load_device
     m = _means()
     labels = [n for n, _ in SIX] if label == "axes" else [str(k) for k in range(6)]
     src = write_lines(tmp_path / "means.csv", [header] + [f"{n}," + r for n, r in zip(labels, _rows(m))])

@@ -12,9 +12,9 @@ import json
 import numpy as np
 import pytest
 
-from accelcal.convert import axis_column, convert_file, detect_format
+from accelcal.convert.formats import axis_column, convert_file, detect_format
 from accelcal.errors import InputError
-from accelcal.recording import read_recording
+from accelcal.io.recording import read_recording
 from cli_run import one_refusal, run
 
 G = 9.80665

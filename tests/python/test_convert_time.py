@@ -13,10 +13,10 @@ import json
 import numpy as np
 import pytest
 
-from accelcal.convert import convert_file, unit_in_name
-from accelcal.device import load_device
-from accelcal.recording import read_recording
-from accelcal.recording_checks import rate_for
+from accelcal.convert.formats import convert_file, unit_in_name
+from accelcal.io.device import load_device
+from accelcal.io.recording import read_recording
+from accelcal.io.recording_checks import rate_for
 from cli_run import run
 
 FACTOR = {"s": 1.0, "ms": 1e3, "us": 1e6, "ns": 1e9}

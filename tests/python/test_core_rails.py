@@ -1,7 +1,7 @@
 """The C core flags a reading at the converter's rails (raw_min / raw_max) as the host does.
 
 ac_trim_rails, ac_trim_rails_s16 (a signed chip's pre-trim, in its own counts), ac_process, ac_process_batch and ac_triad_apply against the host's
-:func:`accelcal.clipping.at_rails` over whole reading ranges, the boundary values raw_min,
+:func:`accelcal.readings.clipping.at_rails` over whole reading ranges, the boundary values raw_min,
 raw_min + 1, raw_max - 1 and raw_max drawn often; the rail test changes no number (x, the
 outputs and the saturation bits equal those of a table without rails)."""
 from types import SimpleNamespace
@@ -10,11 +10,11 @@ import numpy as np
 from core_settings import core
 from hypothesis import assume, given, strategies as st
 
-from accelcal.clipping import at_rails
+from accelcal.readings.clipping import at_rails
 from accelcal.errors import IllConditionedError, SingularError
-from accelcal.native import at_rail, check, cptr, ffi, lib, offset_binary, process_batch
-from accelcal.quantize import QuantizeError, quantize, rail_codes, rail_counts
-from accelcal.triad import quantize_triad, triad_apply_fixed
+from accelcal.firmware.native import at_rail, check, cptr, ffi, lib, offset_binary, process_batch
+from accelcal.firmware.quantize import QuantizeError, quantize, rail_codes, rail_counts
+from accelcal.firmware.triad import quantize_triad, triad_apply_fixed
 from test_core_resolve import random_geometry
 
 SAT, RAIL = lib.AC_SATURATED, lib.AC_AT_RAIL

@@ -7,11 +7,12 @@ import pytest
 from core_settings import core
 from hypothesis import assume, given, strategies as st
 
-from accelcal import model, native
+from accelcal import model
+from accelcal.firmware import native
 from accelcal.estimators import dt_fixed
 from accelcal._core import ffi, lib
 from accelcal.errors import IllConditionedError, SingularError
-from accelcal.quantize import (FORMATS, QuantizeError, exact_fixed_semantics, quantize,
+from accelcal.firmware.quantize import (FORMATS, QuantizeError, exact_fixed_semantics, quantize,
                                table_error_bound)
 
 OUT = 2.0 ** FORMATS.out_frac

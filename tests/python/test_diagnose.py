@@ -13,15 +13,15 @@ import pytest
 
 import diag_datasets as B
 from accelcal.calibrate import calibrate_recordings
-from accelcal.calibration import Calibration, save_calibration
-from accelcal.device import default_device, default_triad, save_device
+from accelcal.io.calibration import Calibration, save_calibration
+from accelcal.io.device import default_device, default_triad, save_device
 from accelcal.diagnose import diagnose, write_report
 from accelcal.effects import EFFECT_NAMES, EFFECTS
 from accelcal.sensor import make_context
 from accelcal.errors import AccelcalError, InputError
 from accelcal.motions import Trajectory
-from accelcal.recording import recording_from_arrays, write_recording
-from accelcal.xsens import load_xsens
+from accelcal.io.recording import recording_from_arrays, write_recording
+from accelcal.convert.xsens import load_xsens
 from shared_data import XSENS_ACC
 from accelcal.simulate import run_simulation, seed_prototype_truth
 

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from accelcal.calibration import Calibration
+from accelcal.io.calibration import Calibration
 from accelcal.diagnose import diagnose
-from accelcal.recording import recording_from_arrays
+from accelcal.io.recording import recording_from_arrays
 from test_diagnose_honest import G, K, RATE, _one_orientation, six_poses, triad
 
 

@@ -11,13 +11,13 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from accelcal.calibrate import calibrate_recordings
-from accelcal.calibration import Calibration
-from accelcal.device import Device
+from accelcal.io.calibration import Calibration
+from accelcal.io.device import Device
 from accelcal.diagnose import diagnose
 from accelcal.effects import EFFECTS
-from accelcal.recording import recording_from_arrays
+from accelcal.io.recording import recording_from_arrays
 from accelcal.report import summary_text
-from accelcal.xsens import load_xsens
+from accelcal.convert.xsens import load_xsens
 import diag_datasets as B
 
 G = 9.80665

@@ -1,4 +1,4 @@
-"""Static poses far off the calibration's terms (calibrate's outlier rule, accelcal.outliers) in the
+"""Static poses far off the calibration's terms (calibrate's outlier rule, accelcal.readings.outliers) in the
 diagnosis: a knocked pose is named, with the diagnosis of the other poses, or set aside."""
 from __future__ import annotations
 
@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from accelcal.calibration import Calibration, save_calibration
-from accelcal.device import Device, save_device
+from accelcal.io.calibration import Calibration, save_calibration
+from accelcal.io.device import Device, save_device
 from accelcal.diagnose import diagnose
-from accelcal.recording import recording_from_arrays, write_recording
+from accelcal.io.recording import recording_from_arrays, write_recording
 from cli_run import run
 
 G = 9.80665

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from accelcal.calibration import Calibration
-from accelcal.device import Device, default_device
+from accelcal.io.calibration import Calibration
+from accelcal.io.device import Device, default_device
 from accelcal.diagnose import diagnose
 from accelcal.diagnose.text import separate_by
 from accelcal.diagnose.floor import noise_floor, setup_rows
@@ -16,7 +16,7 @@ from accelcal.diagnose.settings import PENALTY_PER_PARAM, T_MIN, Z_MIN
 from accelcal.diagnose.where import where_breakdown
 from accelcal.effects import EFFECTS
 from accelcal.effects.fitting import Cand
-from accelcal.recording import recording_from_arrays
+from accelcal.io.recording import recording_from_arrays
 from accelcal.simulate import simulate
 
 DEV = default_device()
@@ -123,8 +123,8 @@ def test_one_pose_jig_free_gives_the_smallest_change_of_the_readings():
     along gravity is fixed, and the offset that fits is the smallest change of the readings -- the
     z channel's 184 counts -- where the fit had put 3.4e4 counts on x (its column nearly emptied
     by the projection) and the re-linearisation ran off to 6-7 g."""
-    from accelcal.device import default_triad
-    from accelcal.recording import recording_from_arrays
+    from accelcal.io.device import default_triad
+    from accelcal.io.recording import recording_from_arrays
     from accelcal import diagnose
     d = default_triad()
     rng = np.random.default_rng(2)

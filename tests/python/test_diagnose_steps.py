@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from accelcal.calibration import Calibration
+from accelcal.io.calibration import Calibration
 from accelcal.diagnose import MAX_STEPS, diagnose
-from accelcal.recording import recording_from_arrays
+from accelcal.io.recording import recording_from_arrays
 from accelcal.report import summary_text
 from test_diagnose_honest import six_poses, triad
 

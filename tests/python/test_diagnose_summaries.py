@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from accelcal.calibration import Calibration
+from accelcal.io.calibration import Calibration
 from accelcal.diagnose import diagnose
 from test_diagnose_honest import six_poses, triad
 

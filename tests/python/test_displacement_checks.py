@@ -10,10 +10,10 @@ import pytest
 from scipy.special import j0
 
 from accelcal import estimators as E
-from accelcal.calibration import Calibration
-from accelcal.device import Device, default_triad, save_device
+from accelcal.io.calibration import Calibration
+from accelcal.io.device import Device, default_triad, save_device
 from accelcal.errors import InputError
-from accelcal.recording import recording_from_arrays, write_recording
+from accelcal.io.recording import recording_from_arrays, write_recording
 from accelcal.simulate import run_simulation
 from cli_run import one_refusal, run
 from estimator_devices import G

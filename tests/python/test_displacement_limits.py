@@ -10,12 +10,12 @@ import pytest
 from scipy.stats import binom
 
 from accelcal import estimators as E
-from accelcal.calibration import Calibration, save_calibration
-from accelcal.device import GRAVITY_REMOVED_TEXT, Device, default_triad, save_device
+from accelcal.io.calibration import Calibration, save_calibration
+from accelcal.io.device import GRAVITY_REMOVED_TEXT, Device, default_triad, save_device
 from accelcal.errors import InputError
 from accelcal.estimators.motion_checks import ERROR_BOUND_MISS
 from accelcal.estimators.trend import trend_bound
-from accelcal.recording import recording_from_arrays, write_recording
+from accelcal.io.recording import recording_from_arrays, write_recording
 from cli_run import one_refusal, run
 from estimator_devices import G
 

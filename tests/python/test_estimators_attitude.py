@@ -10,10 +10,10 @@ import pytest
 from hypothesis import assume, given, strategies as st
 
 from accelcal import estimators as E
-from accelcal.calibration import Calibration
-from accelcal.device import default_device
+from accelcal.io.calibration import Calibration
+from accelcal.io.device import default_device
 from accelcal.errors import AccelcalError, IllConditionedError, InputError, RangeError, SingularError
-from accelcal.native import check, ffi, lib
+from accelcal.firmware.native import check, ffi, lib
 from accelcal.simulate import run_simulation
 from core_settings import estimator
 from estimator_devices import G, adxl_pendulum_device

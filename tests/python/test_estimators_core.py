@@ -12,7 +12,7 @@ from hypothesis import given, strategies as st
 
 from accelcal import estimators as E
 from accelcal.errors import AccelcalError
-from accelcal.native import FORMATS, ffi, lib
+from accelcal.firmware.native import FORMATS, ffi, lib
 from core_settings import estimator
 from estimator_devices import G
 

@@ -7,14 +7,14 @@ from hypothesis import assume, given, strategies as st
 
 from accelcal import estimators as E
 from accelcal.api import calibrate
-from accelcal.calibration import Calibration
-from accelcal.convert import convert_file
-from accelcal.device import default_device, default_triad
+from accelcal.io.calibration import Calibration
+from accelcal.convert.formats import convert_file
+from accelcal.io.device import default_device, default_triad
 from accelcal.errors import InputError
-from accelcal.native import ffi, lib
-from accelcal.recording import recording_from_arrays
+from accelcal.firmware.native import ffi, lib
+from accelcal.io.recording import recording_from_arrays
 from accelcal.simulate import run_simulation
-from accelcal.units import scale_from_options
+from accelcal.io.units import scale_from_options
 from core_settings import estimator
 from estimator_devices import G, adxl_triad
 
@@ -452,9 +452,9 @@ def test_samples_stamped_late_on_delivery_keep_their_place(engine):
 def test_the_estimator_commands_print_the_reader_s_notes(tmp_path, capfd):
     """A last line cut short is left out by the reader with a note; displacement (and attitude,
     rate) printed none of the reader's notes, so the row went silently."""
-    from accelcal.calibration import save_calibration
-    from accelcal.device import save_device
-    from accelcal.recording import write_recording
+    from accelcal.io.calibration import save_calibration
+    from accelcal.io.device import save_device
+    from accelcal.io.recording import write_recording
     from cli_run import run
     d = default_triad()
     save_device(d, tmp_path / "d.json")

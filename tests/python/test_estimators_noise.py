@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 from accelcal import estimators as E
-from accelcal.calibration import Calibration, save_calibration
-from accelcal.cli import main
-from accelcal.device import Device, default_device
+from accelcal.io.calibration import Calibration, save_calibration
+from accelcal.cli.main import main
+from accelcal.io.device import Device, default_device
 from accelcal.errors import InputError
-from accelcal.recording import recording_from_arrays, write_recording
+from accelcal.io.recording import recording_from_arrays, write_recording
 from accelcal.simulate import run_simulation
 from estimator_devices import G, adxl_pendulum_device
 

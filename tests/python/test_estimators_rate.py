@@ -10,11 +10,11 @@ import pytest
 from hypothesis import given, strategies as st
 
 from accelcal import estimators as E, model
-from accelcal.calibration import Calibration, save_calibration
-from accelcal.cli import main, run_estimator
-from accelcal.device import default_device, default_triad, save_device
+from accelcal.io.calibration import Calibration, save_calibration
+from accelcal.cli.main import main, run_estimator
+from accelcal.io.device import default_device, default_triad, save_device
 from accelcal.errors import InputError
-from accelcal.recording import write_columns_csv, write_recording
+from accelcal.io.recording import write_columns_csv, write_recording
 from accelcal.simulate import run_simulation
 from core_settings import estimator
 from estimator_devices import G, adxl_pendulum_device

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from accelcal import model
-from accelcal.clipping import at_rails
-from accelcal.device import default_device
-from accelcal.header import render_header
-from accelcal.quantize import FORMATS, exact_fixed_semantics, quantize
+from accelcal.readings.clipping import at_rails
+from accelcal.io.device import default_device
+from accelcal.firmware.header import render_header
+from accelcal.firmware.quantize import FORMATS, exact_fixed_semantics, quantize
 from toolchains import build_host, cross_compile
 
 
@@ -132,9 +132,9 @@ def test_the_header_states_the_size_of_one_count(chip):
     the register.  It states the input range raw_min..raw_max, one count per channel in m/s^2 and
     mg from the device's counts_per_mps2, the divisor of a reading in mg, and the shift of a
     left-justified 12-bit register."""
-    from accelcal.calibration import Calibration
-    from accelcal.device import Device
-    from accelcal.header import calibration_header
+    from accelcal.io.calibration import Calibration
+    from accelcal.io.device import Device
+    from accelcal.firmware.header import calibration_header
     g = 9.80665
     d0 = default_device()
     if chip == "microbit":      # accelcal convert --units mg --lsb 4: one count = 4 mg, the default 16-bit rails

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from accelcal.calibration import (
+from accelcal.io.calibration import (
     KNOWN_KEYS,
     Calibration,
     calibration_from_dict,
@@ -17,9 +17,9 @@ from accelcal.calibration import (
     load_calibration,
     save_calibration,
 )
-from accelcal.device import default_device, default_triad
+from accelcal.io.device import default_device, default_triad
 from accelcal.errors import InputError
-from accelcal.jsonfields import KEY_CUTOFF
+from accelcal.io.jsonfields import KEY_CUTOFF
 
 from json_strategies import json_paths, json_values
 
@@ -353,7 +353,7 @@ def test_property_random_bytes(tmp_path_factory, blob):
 @pytest.mark.parametrize("field, value", [("sensitivity", [1e30, 0, 0]), ("position_m", [0, 0, 1e300]),
                                           ("offset_counts", 1e300)])
 def test_values_beyond_the_limits_are_refused(tmp_path, field, value):
-    from accelcal.calibration import load_calibration
+    from accelcal.io.calibration import load_calibration
     d = {"device": "x", "method": "full", "channels": [
         {"offset_counts": 5000.0, "sensitivity": [127.0, 0, 0]} for _ in range(3)]}
     d["channels"][1][field] = value

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from accelcal.device import (
+from accelcal.io.device import (
     Device,
     default_device,
     default_triad,

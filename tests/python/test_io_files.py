@@ -21,11 +21,11 @@ import zstandard
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from accelcal.device import default_triad, save_device
+from accelcal.io.device import default_triad, save_device
 from accelcal.errors import AccelcalError, InputError
-from accelcal.recording import read_recording, recording_from_arrays, write_recording
-from accelcal.units import Scale, in_file_unit, scale_from_options
-from accelcal.units_counts import to_counts
+from accelcal.io.recording import read_recording, recording_from_arrays, write_recording
+from accelcal.io.units import Scale, in_file_unit, scale_from_options
+from accelcal.io.units_counts import to_counts
 from cli_run import one_refusal, run
 
 FAST = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
@@ -604,8 +604,8 @@ def test_a_column_on_a_shifted_grid_is_read_with_a_note(tmp_path, capfd, shift):
 
 def test_a_column_of_a_few_values_is_not_taken_for_a_shifted_grid():
     """One or two values sit on a grid of any shift: they are refused as not whole, as before."""
-    from accelcal.units import Scale
-    from accelcal.units_counts import to_counts
+    from accelcal.io.units import Scale
+    from accelcal.io.units_counts import to_counts
     vals = np.tile([[3.5, 1.0, 2.0], [7.5, 1.0, 2.0]], (20, 1)) * 0.01
     with pytest.raises(InputError, match="not a whole number"):
         to_counts(vals, Scale("g", 0.01, 0.01, "--lsb"), "f", lambda i, j: (i + 1, "c"), notes=[])

@@ -3,8 +3,8 @@ import json
 
 import pytest
 
-from accelcal.calibration import calibration_from_dict, calibration_to_dict
-from accelcal.device import default_device, device_from_dict
+from accelcal.io.calibration import calibration_from_dict, calibration_to_dict
+from accelcal.io.device import default_device, device_from_dict
 from accelcal.errors import InputError
 from accelcal.api import calibrate, simulate
 

@@ -10,9 +10,9 @@ import pytest
 from hypothesis import assume, given, settings, strategies as st
 
 from accelcal.errors import InputError
-from accelcal.csvformat import INT, REPR, csv_rows
-from accelcal.csvtable import ByteTable, CellError, ListTable, convert_column, fast_columns
-from accelcal.recording import (
+from accelcal.io.csvformat import INT, REPR, csv_rows
+from accelcal.io.csvtable import ByteTable, CellError, ListTable, convert_column, fast_columns
+from accelcal.io.recording import (
     Recording,
     read_recording,
     recording_from_arrays,
@@ -551,7 +551,7 @@ def test_property_fast_path_reads_as_the_python_path(tmp_path_factory, rec):
     write_recording(p, rec, float_format="%.17g")
     a = read_recording(p, rec.n_channels)
     with pytest.MonkeyPatch.context() as m:
-        m.setattr("accelcal.recording.fast_columns", lambda *args: None)
+        m.setattr("accelcal.io.recording.fast_columns", lambda *args: None)
         b = read_recording(p, rec.n_channels)
     assert a == b
     for name in ("t", "raw", "f", "w", "dw", "temp_c", "pose"):
@@ -634,7 +634,7 @@ def test_csv_under_a_comma_decimal_locale(tmp_path):
         "import locale, sys\n"
         "locale.setlocale(locale.LC_NUMERIC, 'de_DE.UTF-8')\n"
         "assert locale.localeconv()['decimal_point'] == ','\n"
-        "from accelcal.recording import read_recording, write_recording\n"
+        "from accelcal.io.recording import read_recording, write_recording\n"
         "r = read_recording(sys.argv[1])\n"
         "write_recording(sys.argv[2], r)\n"
     )

@@ -7,13 +7,14 @@ module imports another module's private name.
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
 
 PKG = Path(__file__).resolve().parents[2] / "python" / "accelcal"
 METHODS = ("calibrate", "diagnose", "simulate", "estimators")
-TOP = ("cli", "cli_calibrate", "demo", "__init__", "__main__", "api")
+TOP = ("cli", "__init__", "__main__", "api")
 
 
 def _modules():
@@ -118,3 +119,30 @@ def test_modules_stay_readable(limit):
     big = [f"{p.relative_to(PKG)}: {n} lines" for p, _ in _modules()
            if (n := len(p.read_text(encoding="utf-8").splitlines())) > limit]
     assert not big, f"modules over {limit} lines:\n" + "\n".join(big)
+
+
+def test_top_level_stays_small():
+    """The top level holds the API, the float model and the commands' shared steps; every other
+    module lives in the subpackage of its concern (docs/design.md's map)."""
+    top = sorted(p.stem for p in PKG.glob("*.py"))
+    assert len(top) <= 15, f"{len(top)} modules at the top of the package: {top}"
+
+
+def test_design_map_names_the_tree():
+    """docs/design.md's module map names every top-level module, every subpackage and every module in
+    a subpackage (as `name`), so the map and the tree agree."""
+    design = (PKG.parents[1] / "docs" / "design.md").read_text(encoding="utf-8")
+    start = design.index("Python (`python/accelcal/`)")
+    table = design[start:design.index("\n## ", start)]
+    named = set(re.findall(r"`([\w/]+)`", table))
+    missing = []
+    for p in sorted(PKG.glob("*.py")):
+        if p.stem not in named:
+            missing.append(p.name)
+    for d in sorted(q for q in PKG.iterdir() if (q / "__init__.py").exists()):
+        if f"{d.name}/" not in named:
+            missing.append(f"{d.name}/")
+        for p in sorted(d.glob("*.py")):
+            if p.stem not in ("__init__", "__main__") and p.stem not in named:
+                missing.append(f"{d.name}/{p.name}")
+    assert not missing, "modules docs/design.md's map does not name:\n" + "\n".join(missing)

@@ -13,15 +13,15 @@ from scipy.spatial.transform import Rotation, Slerp
 
 import accelcal as ac
 from accelcal.calibrate import calibrate_recordings
-from accelcal.clipping import clip_levels
-from accelcal.convert import convert_file
-from accelcal.device import default_device, default_triad
+from accelcal.readings.clipping import clip_levels
+from accelcal.convert.formats import convert_file
+from accelcal.io.device import default_device, default_triad
 from accelcal.errors import InputError
-from accelcal.noise import estimate_noise, noise_before_rounding, rounding_bias_var
-from accelcal.recording import Recording
-from accelcal.static import detect_static, poses_from_recording
-from accelcal.steps import logger_steps
-from accelcal.xsens import load_xsens
+from accelcal.readings.noise import estimate_noise, noise_before_rounding, rounding_bias_var
+from accelcal.io.recording import Recording
+from accelcal.readings.static import detect_static, poses_from_recording
+from accelcal.readings.steps import logger_steps
+from accelcal.convert.xsens import load_xsens
 from shared_data import XSENS_ACC
 import indep_model as im
 

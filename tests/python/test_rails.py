@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 import accelcal as ac
-from accelcal.calibration import Calibration, save_calibration
-from accelcal.cli_calibrate import clipping_warnings
-from accelcal.device import default_triad, save_device
+from accelcal.io.calibration import Calibration, save_calibration
+from accelcal.cli.calibrate_command import clipping_warnings
+from accelcal.io.device import default_triad, save_device
 from accelcal.errors import AccelcalError
-from accelcal.recording import recording_from_arrays, write_recording
+from accelcal.io.recording import recording_from_arrays, write_recording
 from cli_run import run
 
 G = 9.80665
@@ -107,7 +107,7 @@ def test_resolve_flags_the_piles_convert_and_diagnose_call_clipped(tmp_path, cap
     convert and diagnose noted the readings piled at the clip levels, but resolve wrote f ~ +-20 m/s^2
     there with no `clipped` column and no warning (it knew only the rails).  It flags the samples at
     the levels clipping.clip_levels finds (the ones convert's note counts), in either engine."""
-    from accelcal.clipping import clip_note
+    from accelcal.readings.clipping import clip_note
     d, rec = _microbit_log()
     want = np.abs(rec.raw[:, 0]) == 510
     assert 100 < want.sum() < 400 and not np.any(np.abs(rec.raw[:, 1:]) == 510)

@@ -9,11 +9,11 @@ from core_settings import core
 from hypothesis import assume, given, strategies as st
 
 from accelcal import model
-from accelcal.device import default_device
+from accelcal.io.device import default_device
 from accelcal.errors import IllConditionedError, SingularError
-from accelcal.header import render_header
-from accelcal.native import process_batch
-from accelcal.quantize import FORMATS, QuantizeError, exact_fixed_semantics, quantize, resolver_rounding_bound
+from accelcal.firmware.header import render_header
+from accelcal.firmware.native import process_batch
+from accelcal.firmware.quantize import FORMATS, QuantizeError, exact_fixed_semantics, quantize, resolver_rounding_bound
 from test_core_resolve import random_geometry
 from test_header import drawn_calibration
 

@@ -10,12 +10,12 @@ from scipy.signal import lfilter
 from scipy.stats import binom, norm
 
 from accelcal import estimators as E
-from accelcal.calibration import Calibration
-from accelcal.device import Device
+from accelcal.io.calibration import Calibration
+from accelcal.io.device import Device
 from accelcal.estimators.rest import RestParams
 from accelcal.estimators.trend import (TREND_FALSE_ALARM, noise_correlation, rest_widening, rest_without_trend,
                                       trend_bound, trend_widening)
-from accelcal.recording import recording_from_arrays
+from accelcal.io.recording import recording_from_arrays
 from estimator_devices import G
 
 RATE = 100.0

@@ -10,9 +10,9 @@ import pytest
 
 import indep_model as im
 from accelcal.calibrate import calibrate_recordings
-from accelcal.device import Device
+from accelcal.io.device import Device
 from accelcal.diagnose import diagnose
-from accelcal.recording import recording_from_arrays
+from accelcal.io.recording import recording_from_arrays
 
 prepare = importlib.import_module("accelcal.diagnose.prepare")
 

@@ -11,7 +11,7 @@ import pytest
 import indep_model as im
 from accelcal.diagnose import diagnose
 from accelcal.diagnose.settling import settling_ringing
-from accelcal.recording import recording_from_arrays
+from accelcal.io.recording import recording_from_arrays
 
 SEEDS = (0, 1, 2)
 

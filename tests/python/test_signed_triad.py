@@ -10,15 +10,15 @@ import pytest
 from hypothesis import example, given, strategies as st
 
 from accelcal import estimators as E
-from accelcal.calibration import Calibration, load_calibration
-from accelcal.clipping import at_rails
-from accelcal.cli import main
-from accelcal.device import Device
-from accelcal.header import calibration_header
-from accelcal.native import cptr, ffi, lib, offset_binary
-from accelcal.recording import recording_from_arrays, write_recording
+from accelcal.io.calibration import Calibration, load_calibration
+from accelcal.readings.clipping import at_rails
+from accelcal.cli.main import main
+from accelcal.io.device import Device
+from accelcal.firmware.header import calibration_header
+from accelcal.firmware.native import cptr, ffi, lib, offset_binary
+from accelcal.io.recording import recording_from_arrays, write_recording
 from accelcal.resolve import resolve_recording
-from accelcal.triad import build_triad_on_device, triad_rounding_bound
+from accelcal.firmware.triad import build_triad_on_device, triad_rounding_bound
 from core_settings import estimator
 from toolchains import build_host, cross_compile
 
@@ -233,7 +233,7 @@ def test_triad_header_on_the_host_equals_resolve_fixed(tmp_path, signed):
 @pytest.mark.parametrize("kind", ["signed_triad", "triad", "signed_array"])
 def test_triad_and_signed_headers_cross_compile(tmp_path, target, kind):
     if kind == "signed_array":
-        from accelcal.device import default_device
+        from accelcal.io.device import default_device
         d0 = default_device()
         d = Device(name="signed-array", sample_rate_hz=60.0, gravity_mps2=G, raw_min=-32768, raw_max=32767,
                    positions=d0.positions, axes=d0.axes, counts_per_mps2=d0.counts_per_mps2,
@@ -365,7 +365,7 @@ def test_the_signed_headers_recipe_as_written_flags_the_rails(tmp_path, kind):
     which never look at the rails: -2048 on a 12-bit chip came out as a plain f) compiled as the
     comment writes it: its pre-trim's status has AC_AT_RAIL exactly on the samples the host's
     at_rails names, over the whole 12-bit range, its rails and the codes next to them included."""
-    from accelcal.device import default_device
+    from accelcal.io.device import default_device
     if kind == "triad":
         d = Device(name="lis3dh-12bit", sample_rate_hz=100.0, gravity_mps2=G, raw_min=-2048, raw_max=2047,
                    positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, 1024 / G),

@@ -9,13 +9,13 @@ import pytest
 from hypothesis import given, strategies as st
 from scipy.signal import lsim, tf2ss
 
-from accelcal.device import GRAVITY, Device, default_device, default_triad, pendulum_device
+from accelcal.io.device import GRAVITY, Device, default_device, default_triad, pendulum_device
 from accelcal.effects import EFFECT_NAMES, EFFECTS, parse_effect_spec, parse_effect_specs
 from accelcal.sensor import lowpass_butterworth2, lowpass_first_order, make_context, rotation_matrix, true_state
 from accelcal.errors import AccelcalError
 from accelcal.model import predict_counts, specific_force_at
 from accelcal.motions import MOTION_NAMES, MOTIONS, Trajectory, parse_motion_spec, pose_directions
-from accelcal.recording import read_recording, write_recording
+from accelcal.io.recording import read_recording, write_recording
 from accelcal.simulate import SEED_TABLE1, run_simulation, seed_prototype_truth, simulate
 
 DEV = default_device()

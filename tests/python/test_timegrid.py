@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 
 from accelcal import estimators as E
-from accelcal.calibration import Calibration
-from accelcal.device import default_triad
+from accelcal.io.calibration import Calibration
+from accelcal.io.device import default_triad
 from accelcal.errors import InputError
 from accelcal.estimators.timegrid import on_uniform_grid
-from accelcal.recording import recording_from_arrays
-from accelcal.recording_checks import chance_repeats, regular_step
+from accelcal.io.recording import recording_from_arrays
+from accelcal.io.recording_checks import chance_repeats, regular_step
 from accelcal.simulate import run_simulation
 
 

@@ -86,7 +86,7 @@ w and dw (rate table), per channel linear least squares for delta_r_i with the
 static calibration held, reported per principal direction with its observability.
 
 Static poses come from a recording's ``pose`` labels, or from
-:func:`accelcal.static.detect_static` (windowed std against the channel noise).
+:func:`accelcal.readings.static.detect_static` (windowed std against the channel noise).
 See :func:`calibrate_recordings` for the entry point the command line uses.
 
 Modules: ``settings`` (constants), ``results`` (StaticFit, PositionFit), ``checks``
@@ -97,8 +97,8 @@ problem), ``static_model`` (the nonlinear fit by scipy.optimize.least_squares),
 (known poses whose readings contradict their stated f, refused before the fit),
 ``recordings`` (recordings in, a Calibration out).
 """
-from ..noise import estimate_noise
-from ..static import PoseSet, detect_static, pose_means, poses_from_recording
+from ..readings.noise import estimate_noise
+from ..readings.static import PoseSet, detect_static, pose_means, poses_from_recording
 from .checks import jig_accuracy_rad, static_force
 from .known_poses import calibrate_known_poses, fit_known_poses
 from .lever_arms import calibrate_positions

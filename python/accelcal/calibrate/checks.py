@@ -8,9 +8,9 @@ from typing import Any
 
 import numpy as np
 
-from ..device import NOMINAL_FACTOR
+from ..io.device import NOMINAL_FACTOR
 from ..errors import InputError
-from ..static import PoseSet
+from ..readings.static import PoseSet
 from .settings import (CANDIDATES, CHIP_GAIN_TOLERANCE, EXCITATION_MIN_SPAN_G, POORLY_DETERMINED_MG, SCATTER_CHI2,
                        TILTED, TILTED_AFTER_DEG)
 

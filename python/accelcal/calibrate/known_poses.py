@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import InputError
-from ..static import PoseSet, QUANT_VAR
+from ..readings.static import PoseSet, QUANT_VAR
 from .checks import as_means, bare_poses, birge_ratio, check_identifiable, design, jig_accuracy_rad, pose_label
 from .results import StaticFit, to_calibration
 from .settings import JIG_ACCURACY_DEG, JIG_HINT_CHI2, METHODS, MIN_RCOND

@@ -1,15 +1,15 @@
 """Poses far off a static fit, named with how far off they are and the fit without them, so
 that the user can see what they change and decide (``calibrate --drop-outliers`` leaves them
 out).  The rule itself (median + OUTLIER_K robust sd of the poses' residual over their noise)
-lives in :mod:`accelcal.outliers`, which ``diagnose`` uses too; here it is applied to a
+lives in :mod:`accelcal.readings.outliers`, which ``diagnose`` uses too; here it is applied to a
 StaticFit's pose residuals.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..outliers import MIN_OUTLIER_POSES, OUTLIER_K, OUTLIER_RULE, far_poses
-from ..static import PoseSet
+from ..readings.outliers import MIN_OUTLIER_POSES, OUTLIER_K, OUTLIER_RULE, far_poses
+from ..readings.static import PoseSet
 from .checks import static_force
 
 __all__ = ["OUTLIER_K", "MIN_OUTLIER_POSES", "pose_chi", "outlier_poses", "norm_error", "subset", "outlier_report"]
@@ -21,7 +21,7 @@ def pose_chi(fit) -> np.ndarray:
 
 
 def outlier_poses(fit, k: float = OUTLIER_K) -> np.ndarray:
-    """Indices of the poses far off ``fit`` (a StaticFit), worst first: :func:`accelcal.outliers.far_poses`
+    """Indices of the poses far off ``fit`` (a StaticFit), worst first: :func:`accelcal.readings.outliers.far_poses`
     of e_p = :func:`pose_chi` (none where more than a quarter of the poses would be, or the fit
     has fewer than MIN_OUTLIER_POSES)."""
     return far_poses(pose_chi(fit), k)

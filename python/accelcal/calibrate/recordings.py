@@ -7,8 +7,8 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import InputError
-from ..held import distinct_recordings
-from ..static import (MIN_POSE_S, NO_POSE, STATIC_THRESHOLD, STATIC_WINDOW_S, PoseSet, at_gravity, detect_static,
+from ..readings.held import distinct_recordings
+from ..readings.static import (MIN_POSE_S, NO_POSE, STATIC_THRESHOLD, STATIC_WINDOW_S, PoseSet, at_gravity, detect_static,
                       no_pose, one_wrong_scale, poses_from_recording, window_len)
 from .checks import jig_accuracy_rad, min_poses, pose_label, static_force
 from .known_poses import fit_known_poses
@@ -38,7 +38,7 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     Temperature coefficients are fitted when the pose temperatures span at least
     TEMP_MIN_SPAN_C; lever arms when samples rotate (|w| > ROTATION_MIN_RADPS) with
     reference f, w and dw.  Readings held for several rows by a logger faster than the
-    sensor are counted once (:func:`accelcal.held.distinct_recordings`; the calibration's
+    sensor are counted once (:func:`accelcal.readings.held.distinct_recordings`; the calibration's
     ``extra["notes"]`` says so).  Of several recordings, one without a static pose adds none
     and is named in those notes; with no pose in any, InputError.  Poses far off the fit
     (:mod:`accelcal.calibrate.outliers`) are named in ``extra["outliers"]`` with the fit's
@@ -240,7 +240,7 @@ def detector_found(device, recordings, poses: PoseSet | None, min_s: float = MIN
 
 
 def short_stretches(device, recordings, min_s: float) -> list[float]:
-    """The lengths (s) of the still stretches :func:`accelcal.static.detect_static` leaves out as
+    """The lengths (s) of the still stretches :func:`accelcal.readings.static.detect_static` leaves out as
     shorter than ``min_s`` where a motion touches them: those it finds with no minimum beyond its
     window, less those it finds with ``min_s``."""
     out: list[float] = []
@@ -283,7 +283,7 @@ def rows_turn_deg(rows: list[np.ndarray]) -> float:
 
 def rows_at_rest(device, rows: list[np.ndarray]) -> float:
     """The share of the rows (each recording's :func:`nominal_rows`) whose |f| a rest can read
-    (:func:`accelcal.static.at_gravity`: within REST_F_RANGE x g, or with three or more rows
+    (:func:`accelcal.readings.static.at_gravity`: within REST_F_RANGE x g, or with three or more rows
     agreeing on one wrong scale)."""
     ratio = np.concatenate([np.linalg.norm(v, axis=1) for v in rows]) if rows else np.zeros(0)
     ratio /= device.gravity_mps2

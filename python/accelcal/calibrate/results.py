@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..calibration import Calibration
-from ..static import PoseSet
+from ..io.calibration import Calibration
+from ..readings.static import PoseSet
 from .checks import static_force
 
 

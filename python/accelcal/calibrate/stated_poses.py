@@ -33,7 +33,7 @@ import os
 
 import numpy as np
 
-from ..device import NOMINAL_FACTOR
+from ..io.device import NOMINAL_FACTOR
 from ..errors import InputError
 from .checks import axis_name, pose_label, static_force
 

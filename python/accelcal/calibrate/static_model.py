@@ -9,7 +9,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..errors import InputError
-from ..static import PoseSet, QUANT_VAR
+from ..readings.static import PoseSet, QUANT_VAR
 from .checks import (as_means, bare_poses, birge_ratio, check_identifiable, initial_forces,
                      jig_accuracy_rad, min_poses, missing_direction, pose_label)
 from .problem import (StaticProblem, channel_cov, constrained_inverse, gauge_constraint, gauge_rotation,

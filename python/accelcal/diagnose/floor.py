@@ -7,7 +7,7 @@ import numpy as np
 
 from ..effects.adc import data_lattice
 from ..effects.fitdata import FitData, tangent_basis, unit_rows3
-from ..noise import MAD_TO_STD, mean_rounding_var
+from ..readings.noise import MAD_TO_STD, mean_rounding_var
 from .settings import MIN_NOISE_DOF
 
 
@@ -55,7 +55,7 @@ def pose_rounding_var(D: FitData, e: np.ndarray) -> np.ndarray:
     mean, per channel: where the noise before the rounding is below its code step q, a pose's
     mean is off its true level by up to q/2 (on one code), the same in every sample of the pose.
     ``mean_rounding_var(s, q)`` with s the residual ``e``'s pooled scatter within the static
-    poses' segments (:func:`accelcal.noise.mean_rounding_var`, as the calibration's pose sems);
+    poses' segments (:func:`accelcal.readings.noise.mean_rounding_var`, as the calibration's pose sems);
     q the readings' code step (1 where they show none); 0 without static poses.  0.3 counts of noise on a 1-count step leave 0.0015, one code q^2/12."""
     st = [(a, b) for a, b in zip(D.seg_lo, D.seg_hi) if D.static[a] and D.pose[a] >= 0 and b - a >= 2]
     if not st:

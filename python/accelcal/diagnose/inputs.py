@@ -6,10 +6,10 @@ from typing import Any
 
 import numpy as np
 
-from ..calibration import Calibration, load_calibration
-from ..device import Device, load_device
+from ..io.calibration import Calibration, load_calibration
+from ..io.device import Device, load_device
 from ..errors import AccelcalError, InputError
-from ..recording import Recording, check_for_device, read_recording
+from ..io.recording import Recording, check_for_device, read_recording
 
 
 def as_device(device: Any):

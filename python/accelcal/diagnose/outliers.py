@@ -1,6 +1,6 @@
 """Static poses far off the calibration's terms fitted to them: a mislabelled or knocked pose.
 
-The rule is calibrate's (:func:`accelcal.outliers.far_poses`: a pose's residual over its noise
+The rule is calibrate's (:func:`accelcal.readings.outliers.far_poses`: a pose's residual over its noise
 beyond the poses' median + OUTLIER_K robust sd), applied to what the calibration's own terms
 leave of each pose's mean residual: an offset and a free sensitivity vector a channel (its gain
 and misalignment), fitted to the pose means as the diagnosis scores them (jig-free, the rows
@@ -18,8 +18,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..effects.fitdata import FitData
-from ..noise import colour_factor
-from ..outliers import OUTLIER_RULE, far_poses
+from ..readings.noise import colour_factor
+from ..readings.outliers import OUTLIER_RULE, far_poses
 from .prepare import kept_recordings
 from .where import pose_mean_rows
 
@@ -104,7 +104,7 @@ def deleted_chi(A: np.ndarray, y: np.ndarray, keep: np.ndarray) -> np.ndarray:
 
 
 def find_outliers(D: FitData, e: np.ndarray) -> dict | None:
-    """The poses far off (:func:`pose_chi`, :func:`accelcal.outliers.far_poses`): a dict with
+    """The poses far off (:func:`pose_chi`, :func:`accelcal.readings.outliers.far_poses`): a dict with
     ``poses`` (global indices, worst first), ``chi`` (theirs) and ``others_worst`` (the largest
     chi of the rest), or None where none is."""
     poses, chi = pose_chi(D, e)

@@ -5,16 +5,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..clipping import at_rails, clip_levels
+from ..readings.clipping import at_rails, clip_levels
 from ..effects.adc import Quantization
 from ..effects.fitdata import FitData, tangent_basis
 from ..effects.settings import BLOCK_S, QUANT_DITHER_GRID
 from ..errors import InputError
 from ..motions import Trajectory
-from ..no_rest import gravity_removed_clause
-from ..noise import noise_for
+from ..readings.no_rest import gravity_removed_clause
+from ..readings.noise import noise_for
 from ..sensor import evaluate, true_state
-from ..static import STATIC_WINDOW_S, detect_static, set_aside_off_gravity, window_len
+from ..readings.static import STATIC_WINDOW_S, detect_static, set_aside_off_gravity, window_len
 
 
 def segments(t: np.ndarray, usable: np.ndarray, key: np.ndarray, h: float) -> list[tuple[int, int]]:
@@ -30,7 +30,7 @@ def segments(t: np.ndarray, usable: np.ndarray, key: np.ndarray, h: float) -> li
 
 def jigfree_poses(rec, device) -> tuple[list[np.ndarray], list[str]]:
     """Static poses of a recording without reference f: its pose labels, else detected; those
-    whose |f| is far from g (:func:`accelcal.static.set_aside_off_gravity`: a rocket's coast)
+    whose |f| is far from g (:func:`accelcal.readings.static.set_aside_off_gravity`: a rocket's coast)
     left out, each named in the list returned beside them."""
     if rec.has_pose():
         poses = [np.flatnonzero(rec.pose == lab) for lab in rec.pose_labels()]

@@ -11,11 +11,11 @@ from ..effects import EFFECT_NAMES
 from ..effects.fitdata import recording_parts
 from ..effects.fitting import Cand
 from ..effects.settings import BLOCK_S
-from ..device import NOMINAL_FACTOR
+from ..io.device import NOMINAL_FACTOR
 from ..errors import AccelcalError
-from ..held import distinct_recordings
+from ..readings.held import distinct_recordings
 from ..motions.poses import distinct_orientations
-from ..noise import code_lattice, fractional_grid, uneven_low_bits
+from ..readings.noise import code_lattice, fractional_grid, uneven_low_bits
 from .floor import setup_rows
 from .inputs import as_calibration, as_device, as_recordings
 from .prepare import prepare

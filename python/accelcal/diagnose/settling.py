@@ -38,7 +38,7 @@ import numpy as np
 from scipy import signal, stats
 from scipy.ndimage import median_filter
 
-from ..static import detect_static
+from ..readings.static import detect_static
 
 SETTLE_WINDOW_S = 0.5        # length of the settling, onset and rest windows (s) ...
 SETTLE_MIN_SAMPLES = 16      # ... and at least this many samples

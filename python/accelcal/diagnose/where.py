@@ -8,7 +8,7 @@ import numpy as np
 
 from ..effects.fitdata import FitData
 from ..effects.settings import ROTATING_RADPS, TEMP_MIN_SPAN_C
-from ..noise import colour_factor, pose_colour
+from ..readings.noise import colour_factor, pose_colour
 
 
 def bin_index(label: str, mask: np.ndarray, e: np.ndarray, sigma: np.ndarray, **extra) -> dict:
@@ -146,8 +146,8 @@ def pose_mean_rows(D: FitData, e: np.ndarray) -> tuple[np.ndarray, np.ndarray, n
         Its white-noise variance (counts^2, from the rows' weights).
     r2 : ndarray, shape (P', R)
         Each pose's own squared widening of its mean's spread beyond white noise's by the
-        noise's colour within it (:func:`accelcal.noise.pose_colour`; NaN for a short pose);
-        :func:`accelcal.noise.colour_factor` pools them as the calibration's pose sems are.
+        noise's colour within it (:func:`accelcal.readings.noise.pose_colour`; NaN for a short pose);
+        :func:`accelcal.readings.noise.colour_factor` pools them as the calibration's pose sems are.
     """
     P = len(D.pose_labels)
     Rr = D.rows(e)

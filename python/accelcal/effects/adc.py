@@ -6,7 +6,7 @@ import math
 import numpy as np
 
 from ..errors import AccelcalError
-from ..noise import QUANT_MIN_FRAC, code_lattice
+from ..readings.noise import QUANT_MIN_FRAC, code_lattice
 from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, as_float_array, channel_mask, owner, per_channel
 from .fitdata import FitData

@@ -40,7 +40,7 @@ from .rest import (REST_AT_REST, REST_CLIP, REST_ENTER, REST_LEAVE, REST_QUIET, 
                    RestThresholds, default_rest_params, rest_cfg_fixed, rest_dated_back, rest_detect, rest_fixed,
                    rest_params_as_stored)
 from .trend import rest_without_trend, trend_bound
-from ..triad import (TriadTable, quantize_triad, triad_apply_fixed, triad_apply_float, triad_exact, triad_forces,
+from ..firmware.triad import (TriadTable, quantize_triad, triad_apply_fixed, triad_apply_float, triad_exact, triad_forces,
                     triad_matrix)
 
 __all__ = [

@@ -16,13 +16,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import AccelcalError, InputError
-from ..native import FORMATS, check, cptr, ffi, lib
-from ..quantize import round_half_up
-from ..recording import check_core_input, check_for_device
+from ..firmware.native import FORMATS, check, cptr, ffi, lib
+from ..firmware.quantize import round_half_up
+from ..io.recording import check_core_input, check_for_device
 from .common import (CLIP, CLIP_LO, OMEGA_FRAC, OUT_FRAC, Columns, channel_noise, clip_i16, dt_fixed, force_noise,
                      time_span, uniform_dt)
 from .timegrid import on_uniform_grid
-from ..triad import triad_forces
+from ..firmware.triad import triad_forces
 
 __all__ = ["ATT_GATED", "ATT_W2_NEG", "ATT_UNSETTLED", "ATT_NO_GRAVITY", "ATT_SAT", "ATT_SIGN_NEG",
            "ANGLE_FRAC", "W_FRAC", "W2_FRAC", "atan2_fixed", "AttitudeParams", "AttitudeConsts",

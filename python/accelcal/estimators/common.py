@@ -8,13 +8,14 @@ from typing import Any
 
 import numpy as np
 
-from .. import model, native
+from .. import model
+from ..firmware import native
 from ..errors import AccelcalError, InputError
-from ..native import FORMATS
-from ..quantize import quantize_calibration, round_half_up
-from ..noise import noise_for
-from ..recording import check_core_input
-from ..static import STATIC_WINDOW_S, window_len
+from ..firmware.native import FORMATS
+from ..firmware.quantize import quantize_calibration, round_half_up
+from ..readings.noise import noise_for
+from ..io.recording import check_core_input
+from ..readings.static import STATIC_WINDOW_S, window_len
 
 __all__ = ["Columns", "OUT_FRAC", "OMEGA_FRAC", "CLIP", "CLIP_LO", "dt_fixed", "clip_i16", "q_out",
            "time_span", "uniform_dt", "alpha_noise", "channel_noise", "force_noise", "force_noise_axes",
@@ -135,7 +136,7 @@ def uniform_dt(rec) -> float:
 
 def channel_noise(device, rec) -> np.ndarray:
     """Noise std of each channel (counts): the device's ``noise_mps2`` when it states one,
-    else estimated from the recording itself (:func:`accelcal.noise.noise_for`)."""
+    else estimated from the recording itself (:func:`accelcal.readings.noise.noise_for`)."""
     raw = np.asarray(rec.raw)
     return noise_for(device, raw, window_len(device, STATIC_WINDOW_S, raw.shape[0]))[0]
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import AccelcalError
-from ..native import FORMATS, check, cptr, ffi, lib
+from ..firmware.native import FORMATS, check, cptr, ffi, lib
 from .common import CLIP, CLIP_LO, OUT_FRAC, clip_i16, dt_fixed
 from .rest import REST_AT_REST, REST_QUIET, RestParams, RestState, RestThresholds, rest_cfg_fixed
 

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from ..device import GRAVITY_REMOVED_G, GRAVITY_REMOVED_TEXT
+from ..io.device import GRAVITY_REMOVED_G, GRAVITY_REMOVED_TEXT
 from ..errors import InputError
 from .common import time_span
 from .rest import RestParams, rest_dated_back, rest_on_g
@@ -28,7 +28,7 @@ REST_WARN_SIGMAS = 8.0
 
 
 def rest_noise_max(q_f: float = 0.0) -> float:
-    """The largest noise (m/s^2 per axis) :func:`accelcal.noise.estimate_noise` gives for a sensor
+    """The largest noise (m/s^2 per axis) :func:`accelcal.readings.noise.estimate_noise` gives for a sensor
     at rest whose own noise is at most REST_NOISE_MAX_MPS2, read on codes a step ``q_f`` apart
     (m/s^2 per axis: the code step through the calibration).
 

@@ -10,8 +10,8 @@ import math
 import numpy as np
 
 from ..errors import AccelcalError, InputError
-from ..noise import code_step, states_noise
-from ..recording import check_core_input, check_for_device
+from ..readings.noise import code_step, states_noise
+from ..io.recording import check_core_input, check_for_device
 from .common import (CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_noise, force_noise,
                      force_noise_axes, resolve_array, time_span, uniform_dt)
 from .timegrid import RESAMPLE_BRIDGE_SAMPLES, on_uniform_grid, resampled
@@ -25,7 +25,7 @@ from .motion_checks import (ERROR_BOUND_COVERS, motion_error_warnings, motion_er
 from .rest import (REST_AT_REST, REST_QUIET, RestParams, default_rest_params, motion_window, rest_dated_back,
                    rest_detect, rest_on_g)
 from .trend import TREND_BLOCK_HOLDS, rest_correlation, rest_without_trend
-from ..triad import triad_forces
+from ..firmware.triad import triad_forces
 
 __all__ = ["RESAMPLE_HINT", "retro_correct", "displace_offline", "displacement_from_recording"]
 

@@ -12,9 +12,9 @@ import numpy as np
 from scipy.signal import lfilter
 
 from ..errors import InputError
-from ..native import check, cptr, ffi, lib
-from ..quantize import round_half_up
-from ..recording import check_core_input, check_for_device
+from ..firmware.native import check, cptr, ffi, lib
+from ..firmware.quantize import round_half_up
+from ..io.recording import check_core_input, check_for_device
 from .common import (OMEGA_FRAC, Columns, alpha_noise, channel_noise, dt_fixed, force_noise, resolve_array,
                      uniform_dt)
 from .timegrid import on_uniform_grid

@@ -5,7 +5,7 @@ does, sample by sample (with ``as_stored`` on the thresholds as the C config hol
 them), and the property tests hold :func:`rest_fixed` (the C core) to it.  The
 displacement (its reference test) and the rate's reset use the same state machine
 (:class:`RestState`).  An offline static detector for calibration and diagnosis is
-``accelcal.static``, not this one.
+``accelcal.readings.static``, not this one.
 """
 from __future__ import annotations
 
@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import chi2
 
-from ..native import check, cptr, ffi, lib
-from ..quantize import round_half_up
+from ..firmware.native import check, cptr, ffi, lib
+from ..firmware.quantize import round_half_up
 from .common import CLIP, CLIP_LO, OUT_FRAC
 
 __all__ = ["REST_QUIET", "REST_AT_REST", "REST_ENTER", "REST_LEAVE", "REST_CLIP", "RestParams",

@@ -8,8 +8,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..recording import Recording
-from ..recording_checks import CHANCE_REPEAT_P, GAP_STEPS, chance_repeats, regular_step
+from ..io.recording import Recording
+from ..io.recording_checks import CHANCE_REPEAT_P, GAP_STEPS, chance_repeats, regular_step
 from .common import time_span
 
 __all__ = ["REGRID_HINT", "RESAMPLE_BRIDGE_SAMPLES", "resampled", "MAX_FILL_SAMPLES", "MAX_FILL_SHARE", "MAX_JITTER_STEPS",
@@ -99,7 +99,7 @@ def grid_places(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
     """Each sample's place on a uniform grid, counted in steps.
 
     The step starts from the median step and from the regular steps' period
-    (:func:`~accelcal.recording_checks.regular_step`), and the grid that puts more stamps on time
+    (:func:`~accelcal.io.recording_checks.regular_step`), and the grid that puts more stamps on time
     is kept (the median first where they tie): a host clock that catches up with a short step now
     and then does not keep the median (10.24 ms for a 10.00 ms sensor, 2.4 % off: every sample had
     been pushed off its place within 40 samples), and where the rate changes part way the period is
@@ -164,7 +164,7 @@ def crowded(rec, t: np.ndarray, late: np.ndarray, pushed: np.ndarray, dt: float,
     exactly (a sample delivered twice) is named as such, and the refusal's row is the last of those,
     else e -- where the repeat is evidence of a copy: stamped within half a step of the row before,
     or rows that repeat the row before far more often than chance gives
-    (:func:`~accelcal.recording_checks.chance_repeats`); a coarse grid's chance repeat is not."""
+    (:func:`~accelcal.io.recording_checks.chance_repeats`); a coarse grid's chance repeat is not."""
     bad = np.flatnonzero(pushed & (late > LATE_ROOM))
     if not bad.size:
         return None
@@ -199,7 +199,7 @@ def crowded(rec, t: np.ndarray, late: np.ndarray, pushed: np.ndarray, dt: float,
 
 def long_gaps(rec, t: np.ndarray) -> InputError | None:
     """The refusal of a step that no filling bridges -- at least MAX_FILL_SAMPLES + 2 regular steps
-    (:func:`~accelcal.recording_checks.regular_step`), more than MAX_FILL_SAMPLES places empty
+    (:func:`~accelcal.io.recording_checks.regular_step`), more than MAX_FILL_SAMPLES places empty
     whatever the stamps' jitter or lateness -- named at the row after the first such step, with the
     samples missing in the steps beyond GAP_STEPS x the median, the longest gap, and the share of the
     span without samples (a
@@ -407,7 +407,7 @@ def resampled(rec) -> tuple[Any, str, np.ndarray]:
     whose period varies, a driver that stamps each sample as it reads it -- interpolated onto a
     uniform grid over the same span (linear interpolation of the counts, rounded to whole counts).
     Steps up to GAP_STEPS x the median step are taken as the loop's; a longer step is a gap, of
-    round(step / regular step) - 1 samples lost (:func:`~accelcal.recording_checks.regular_step`):
+    round(step / regular step) - 1 samples lost (:func:`~accelcal.io.recording_checks.regular_step`):
     gaps of up to RESAMPLE_BRIDGE_SAMPLES are bridged, with a note, the grid holding one place for
     each sample kept or lost (its step the span over them).
 

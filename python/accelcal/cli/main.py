@@ -1,0 +1,480 @@
+"""The ``accelcal`` command (forms fixed by shared/spec/data-contract.md).
+
+Every subcommand exits 0 on success; on bad input it prints one line to stderr
+(no traceback) and exits 2, leaving no partial output file (all outputs are
+written through errors.atomic_write).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from tqdm import tqdm
+
+from .. import __version__
+from ..calibrate import JIG_ACCURACY_DEG, JIGFREE_MODELS, calibrate_recordings
+from ..io.calibration import load_calibration, save_calibration
+from .calibrate_command import calibration_summary, jig_accuracy_arg, min_static_arg, record_warnings
+from .paths import check_not_an_input, check_output, check_output_dir
+from .convert_command import add_convert_parser
+from .demo import run_demo
+from ..io.device import default_device, load_device
+from ..diagnose import diagnose
+from ..effects import describe_effects, params_to_json, parse_effect_spec
+from ..errors import AccelcalError, atomic_write
+from ..estimators import attitude_from_recording, displacement_from_recording, rate_from_recording, report_plots
+from ..firmware.header import calibration_header
+from ..readings.held import held_runs, held_text, readings_rate
+from ..motions import describe_motions
+from ..io.recording import read_recording, write_columns_csv, write_recording
+from ..io.recording_checks import seconds
+from ..report import REPORT_FILES, write_report
+from ..resolve import clipped_samples, resolve_recording
+from ..simulate import run_simulation
+from ..readings.static import MIN_POSE_S
+from ..io.units_cli import add_units_options, scale_from_args
+
+EXIT_INPUT = 2
+EXIT_INTERNAL = 3
+
+
+def _load_device(path):
+    return default_device() if path in (None, "default") else load_device(path)
+
+
+def _load_cal(path, device):
+    return load_calibration(path, device)
+
+
+def _read(paths, device, command: str, a=None) -> list:
+    """Read recordings (in the units --units/--lsb/--full-scale state, with the file's
+    comments: units_cli, units.file_scale); mention once, on stderr, the columns that are
+    ignored."""
+    scale = None if a is None else scale_from_args(a, device, reader=True)
+    seen: dict[Path, str] = {}
+    for p in paths:
+        key = Path(p).resolve()
+        if key in seen:
+            raise AccelcalError(f"{p}: the same recording as {seen[key]} (given twice, its poses would count twice)")
+        seen[key] = str(p)
+    recs = [read_recording(p, device.n_channels, scale=scale) for p in paths]
+    for r in recs:
+        for line in _reader_notes(r, command):
+            print(line, file=sys.stderr)
+        _time_note(r, device, command)
+    ignored = sorted({k for r in recs for k in r.extra})
+    if ignored:
+        print(f"accelcal {command}: note: ignored column{'s' if len(ignored) > 1 else ''} "
+              f"{', '.join(ignored)} (not part of the accelerometer model)", file=sys.stderr)
+    return recs
+
+
+def _reader_notes(rec, command: str) -> list[str]:
+    """What the reader did to a recording (a last line cut short, a shifted grid, rounding), one
+    stderr line each."""
+    return [f"accelcal {command}: note: {rec.source}: {n}" for n in rec.notes]
+
+
+def _time_note(rec, device, command: str) -> None:
+    """t in milliseconds (or micro-, nanoseconds) read as such, said once on stderr."""
+    note = seconds(rec, device)
+    if note is not None:
+        print(f"accelcal {command}: note: {rec.source}: {note}", file=sys.stderr)
+
+
+def _write_csv(path, header: list[str], columns: list[np.ndarray], comments: dict):
+    write_columns_csv(path, dict(zip(header, columns)), comments)
+
+
+def _progress(desc: str, total: int | None = None, unit: str = " steps"):
+    """A progress bar on stderr for work that takes seconds on long recordings.  Off when
+    stderr is not a terminal (tqdm's disable=None): pipes, logs and scripts see only the
+    one-line messages."""
+    return tqdm(desc=desc, total=total, unit=unit, file=sys.stderr, disable=None, leave=False,
+                dynamic_ncols=True)
+
+
+# ---- subcommands -------------------------------------------------------------
+
+def cmd_resolve(a):
+    check_output(a.output)
+    dev = _load_device(a.device)
+    cal = _load_cal(a.calibration, dev)
+    rec, = _read([a.recording], dev, "resolve", a)
+    f, al, flags = resolve_recording(dev, cal, rec, a.engine, a.omega)
+    comments = {"engine": a.engine, "device": dev.name}
+    if flags is not None and flags.any():
+        print(f"accelcal resolve: warning: {int(np.count_nonzero(flags))} samples saturated in the "
+              "fixed-point core's arithmetic (see column saturated)", file=sys.stderr)
+    clipped, clip_warnings = clipped_samples(rec, dev)
+    for w in clip_warnings:
+        print(f"accelcal resolve: warning: {w}", file=sys.stderr)
+    cols = [rec.t, f[:, 0], f[:, 1], f[:, 2], al[:, 0], al[:, 1], al[:, 2]]
+    header = ["t", "f_x", "f_y", "f_z", "dw_x", "dw_y", "dw_z"]
+    if flags is not None:
+        cols.append(flags.astype(float))
+        header.append("saturated")
+    if clip_warnings:
+        cols.append(clipped.astype(float))
+        header.append("clipped")
+    _write_csv(a.output, header, cols, comments)
+    return 0
+
+
+def cmd_header(a):
+    check_output(a.output)
+    dev = _load_device(a.device)
+    cal = _load_cal(a.calibration, dev)
+    text = calibration_header(dev, cal, prefix=a.prefix)
+    atomic_write(a.output, lambda f: f.write(text))
+    return 0
+
+
+def cmd_simulate(a):
+    check_output(a.output)
+    dev = _load_device(a.device)
+    effects = [parse_effect_spec(s) for s in a.effect]
+    params = {}
+    for kv in a.param:
+        if "=" not in kv:
+            raise AccelcalError(f"--param {kv!r}: expected NAME=VALUE")
+        k, v = kv.split("=", 1)
+        try:
+            params[k] = json.loads(v)
+        except json.JSONDecodeError:
+            params[k] = v
+    cal = _load_cal(a.calibration, dev) if a.calibration else None
+    sim = run_simulation(dev, a.motion, effects=effects, seed=a.seed, calibration=cal, **params)
+    write_recording(a.output, sim.recording)
+    for name in sim.unchanged:
+        print(f"accelcal simulate: note: effect {name} changed no reading ({params_to_json(sim.effects[name])}): "
+              "the motion never reaches it; see 'accelcal simulate --help' for its parameters", file=sys.stderr)
+    return 0
+
+
+def cmd_calibrate(a):
+    check_output(a.output)
+    jig = jig_accuracy_arg(a.jig_accuracy)
+    min_static = min_static_arg(a.min_static)
+    dev = _load_device(a.device)
+    recs = _read(a.recordings, dev, "calibrate", a)
+    cal = calibrate_recordings(dev, recs, method=a.method, jig_accuracy_deg=jig, jigfree_model=a.jigfree_model,
+                               drop_outliers=a.drop_outliers, min_static_s=min_static)
+    warnings = record_warnings(dev, cal)
+    save_calibration(cal, a.output)
+    for n in cal.extra.get("notes", []) if isinstance(cal.extra, dict) else []:
+        print(f"accelcal calibrate: note: {n}", file=sys.stderr)
+    for w in warnings:
+        print(f"accelcal calibrate: warning: {w}", file=sys.stderr)
+    print(calibration_summary(cal, len(recs), a.output))
+    return 0
+
+
+ESTIMATORS = {"attitude": attitude_from_recording, "displacement": displacement_from_recording,
+              "rate": rate_from_recording}
+
+
+def run_estimator(kind: str, device_path, calibration_path, recording_path, output, *, engine: str = "float",
+                  report=None, units_args=None, **options) -> list[str]:
+    """`accelcal attitude|displacement|rate --device D --calibration C REC -o OUT [--engine] [--report DIR]`.
+
+    Load, estimate, write the CSV (atomically) and, with ``report``, the plots.
+
+    Parameters
+    ----------
+    kind : {"attitude", "displacement", "rate"}
+    device_path, calibration_path, recording_path : path
+        Inputs (device "default" or None: the seed prototype).
+    output : path
+        The result CSV.
+    engine : {"float", "fixed"}
+    report : path, optional
+        Directory for the plots.
+    units_args : argparse.Namespace, optional
+        The parsed ``--units``/``--lsb``/``--full-scale``/``--bits``/``--gravity``
+        (units_cli.add_units_options) the recording is read with.
+    **options
+        To the estimator (attitude: gain, w2_gate, leak_tau_s; displacement: form, axis, keep_turned, resample;
+        rate: leak_tau_s).
+
+    Returns
+    -------
+    list of str
+        The warnings, one line each, for the caller to print to stderr.
+
+    Raises
+    ------
+    AccelcalError
+        Bad input (one line), before anything is written.
+    """
+    fn = ESTIMATORS.get(kind)
+    if fn is None:
+        raise ValueError(f"unknown estimator {kind!r}")
+    check_output(output)
+    if report is not None:
+        check_output_dir(report, "--report")
+    dev = _load_device(device_path)
+    cal = _load_cal(calibration_path, dev)
+    if isinstance(cal.extra, dict) and cal.method != "nominal":
+        cal.extra["source"] = str(calibration_path)       # the calibration a message names
+    scale = None if units_args is None else scale_from_args(units_args, dev, reader=True)
+    # displacement leaves out a sample a logger wrote twice (with a note): its integrators need
+    # each sample once, and the copy is plainly one
+    rec = read_recording(recording_path, dev.n_channels, scale=scale, repeats=kind == "displacement")
+    notes = _reader_notes(rec, kind)            # the reader's, before t's unit adds its own
+    _time_note(rec, dev, kind)
+    cols = fn(dev, cal, rec, engine, **options)
+    warnings = held_warnings(rec) + cols.warnings
+    # the notes and warnings in the output's comments too, one line each
+    meta = {**cols.meta, **{f"note_{k}": n for k, n in enumerate(rec.notes, 1)},
+            **{f"warning_{k}": w for k, w in enumerate(warnings, 1)}}
+    write_columns_csv(output, cols, meta)
+    if report is not None:
+        report_plots(report, cols, rec, kind)
+    return notes + [f"accelcal {kind}: warning: {w}" for w in warnings]
+
+
+def held_warnings(rec) -> list[str]:
+    """A per-sample estimator's warning for readings a logger held for several rows
+    (:func:`accelcal.readings.held.held_runs`): its output repeats each reading, and the motion between
+    two readings is not seen."""
+    k, first = held_runs(rec.raw)
+    if k == 1:
+        return []
+    hz = readings_rate(rec, first)
+    rows_hz = readings_rate(rec, np.arange(rec.n_samples))         # every row taken as a reading
+    rates = f": the readings change at about {hz:.4g} Hz, the rows come at {rows_hz:.4g} Hz" if hz is not None else ""
+    return [f"each reading is held for {held_text(k, first, rec.n_samples)} (the logger read the sensor faster "
+            f"than it updates){rates}; the motion between two readings is not seen, and a held reading looks "
+            "still: a rest found within one is no rest"]
+
+
+def _estimator(a, kind):
+    options = {k: v for k, v in (("axis", getattr(a, "axis", None)), ("form", getattr(a, "form", None)))
+               if v is not None}
+    for flag in ("keep_turned", "resample"):
+        if getattr(a, flag, False):
+            options[flag] = True
+    for w in run_estimator(kind, a.device, a.calibration, a.recording, a.output, engine=a.engine,
+                           report=a.report, units_args=a, **options):
+        print(w, file=sys.stderr)
+    return 0
+
+
+def cmd_attitude(a):
+    return _estimator(a, "attitude")
+
+
+def cmd_displacement(a):
+    return _estimator(a, "displacement")
+
+
+def cmd_rate(a):
+    return _estimator(a, "rate")
+
+
+def cmd_diagnose(a):
+    check_output(a.json, "--json")
+    if a.report:
+        check_output_dir(a.report, "--report")
+    dev = _load_device(a.device)
+    cal = _load_cal(a.calibration, dev)
+    if isinstance(cal.extra, dict):
+        cal.extra["source"] = str(a.calibration)          # named so in the JSON's calibration.source
+    recs = _read(a.recordings, dev, "diagnose", a)
+    with _progress("diagnose: scoring candidates", unit=" fits") as bar:
+        def scored(name):
+            bar.set_postfix_str(name, refresh=False)
+            bar.update()
+        result = diagnose(dev, cal, recs, folds=a.folds, seed=a.seed, progress=scored,
+                          outliers="drop" if a.drop_outliers else "name")
+    # the result is the contract's JSON object; it also carries the per-sample
+    # series the report plots, so it goes to write_report as it is
+    atomic_write(a.json, lambda f: json.dump(result, f, indent=2, default=_json_default))
+    if a.report:
+        with _progress("diagnose: writing the report", total=REPORT_FILES, unit=" files") as bar:
+            write_report(result, a.report, progress=lambda path: bar.update())
+    print(f"verdict: {result.get('verdict')}")
+    return 0
+
+
+def _json_default(o):
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
+
+
+def cmd_demo(a):
+    return run_demo(out_dir=Path(a.out), seed=a.seed)
+
+
+def _simulate_epilog() -> str:
+    return "motions:\n" + describe_motions() + "\n\neffects:\n" + describe_effects()
+
+
+_DEVICE = "device description JSON (docs/data-contract.md), or 'default' for the seed's 6-channel prototype"
+_CAL = ("calibration JSON, as written by accelcal calibrate, or 'nominal': the device file's datasheet values "
+        "(zero_counts, counts_per_mps2 along each axis)")
+_REC = "recording CSV (docs/data-contract.md)"
+_RECS = "one or more recording CSVs of the same device"
+_ENGINE = "float: the float64 reference; fixed: the C core with exactly the header's constants"
+_OUT_CSV = "the CSV to write (written atomically: no partial file on error)"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="accelcal", description=__doc__.splitlines()[0])
+    p.add_argument("--version", action="version", version=f"accelcal {__version__}")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    s = sub.add_parser("demo", help="simulate, calibrate, emit the header, resolve with the C core, "
+                       "diagnose, on the seed's 6-channel r = 60 mm prototype")
+    s.add_argument("--out", default="accelcal-demo", help="directory for the demo's files")
+    s.add_argument("--seed", type=int, default=1, help="random seed of the simulated data (default %(default)s)")
+    s.set_defaults(func=cmd_demo)
+
+    s = sub.add_parser("simulate", help="simulate a recording", epilog=_simulate_epilog(),
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    s.add_argument("--device", required=True, metavar="D.json", help=_DEVICE)
+    s.add_argument("--motion", required=True, help="motion profile name")
+    s.add_argument("--effect", action="append", default=[], metavar="NAME[:k=v,...]",
+                   help="unmodelled effect to put in the data (repeatable)")
+    s.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="motion parameter (repeatable; JSON values)")
+    s.add_argument("--calibration", help="true channel parameters (default: the device's nominal)")
+    s.add_argument("--seed", type=int, default=0, help="random seed (noise, random effect values; default %(default)s)")
+    s.add_argument("-o", "--output", required=True, metavar="REC.csv", help=_OUT_CSV)
+    s.set_defaults(func=cmd_simulate)
+
+    s = sub.add_parser("calibrate", help="estimate a calibration")
+    s.add_argument("--device", required=True, metavar="D.json", help=_DEVICE)
+    s.add_argument("recordings", nargs="+", metavar="REC.csv", help=_RECS)
+    s.add_argument("--method", choices=["full", "gain", "offset", "jigfree"], default=None,
+                   help="full: offset + sensitivity vector per channel from known poses (the default when the "
+                   "recordings give reference f); gain: offset + gain along the nominal axis; offset: offset "
+                   "only; jigfree: no reference needed, static intervals found and |f| = g (the default when "
+                   "the recordings have no reference)")
+    s.add_argument("--jig-accuracy", metavar="DEG", default=f"{JIG_ACCURACY_DEG:g}",
+                   help="known poses: the jig's accuracy, as the rms angle (deg) by which a pose may be rotated "
+                   "from its reference f.  The pose directions are then estimated jointly with the channel "
+                   "parameters, each reference a prior of that accuracy (one pose error moves all of a pose's "
+                   "channels together), and the uncertainties and chi2 include the priors; the result stays in "
+                   "the jig's frame.  Default %(default)s: the references are exact (ordinary least squares, at "
+                   "the Cramer-Rao bound with honest uncertainties for a perfect jig; stating 0.5 deg there costs "
+                   "1.4x the bound in offset error).  On a jig that is really off by 0.5-2 deg, 0 gives 18-30x "
+                   "larger offset errors on +-x,+-y,+-z than stating it, and 16-61x the bound on 24 general "
+                   "poses (a warning names the accuracy the residuals imply): state your jig's accuracy.  "
+                   "Ignored by jigfree")
+    s.add_argument("--jigfree-model", choices=JIGFREE_MODELS, default="auto",
+                   help="jigfree: the channel model.  full: offset + sensitivity vector per channel (needs 9 pose "
+                   "orientations for a triad); gain: offset + gain along the nominal axis (6); offset: offset only "
+                   "(3).  auto (the default): full, or where the poses do not determine it (too few "
+                   "orientations, a degenerate spread, no convergence) the first of gain and offset they do, "
+                   "with a warning that says why")
+    s.add_argument("--drop-outliers", action="store_true",
+                   help="leave out the poses far off the fit (residual over the noise beyond the poses' median + 8 "
+                   "robust sd: a knock, a pose not held, a wrong row), which are otherwise kept and named in a "
+                   "warning with how much the fit changes without them")
+    s.add_argument("--min-static", metavar="SECONDS", default=f"{MIN_POSE_S:g}",
+                   help="recordings without 'pose' labels: the shortest still stretch the static detector takes "
+                   "for a pose where a motion touches it (default %(default)s s: a pause in a hand's movement is "
+                   "none).  A robot arm that stops 0.75 s at each pose: --min-static 0.7 (the errors and warnings "
+                   "count the stretches left out as shorter).  Below the detector's 0.5 s window it acts as the "
+                   "window; a stretch joined to its neighbours by instant steps (a logger of static blocks) needs "
+                   "one window whatever it says")
+    s.add_argument("-o", "--output", required=True, metavar="CAL.json", help="the calibration JSON to write")
+    add_units_options(s)
+    s.set_defaults(func=cmd_calibrate)
+
+    s = sub.add_parser("header", help="emit the C header for firmware")
+    s.add_argument("--device", required=True, metavar="D.json", help=_DEVICE)
+    s.add_argument("--calibration", required=True, metavar="CAL.json", help=_CAL)
+    s.add_argument("--prefix", default="AC_CAL", help="C identifier prefix (default AC_CAL)")
+    s.add_argument("-o", "--output", required=True, metavar="NAME.h", help="the C header to write")
+    s.set_defaults(func=cmd_header)
+
+    s = sub.add_parser("resolve", help="per-sample f and alpha")
+    s.add_argument("--device", required=True, metavar="D.json", help=_DEVICE)
+    s.add_argument("--calibration", required=True, metavar="CAL.json", help=_CAL)
+    s.add_argument("recording", metavar="REC.csv", help=_REC)
+    s.add_argument("--engine", choices=["float", "fixed"], default="float", help=_ENGINE)
+    s.add_argument("--omega", choices=["auto", "reference", "none"], default="auto",
+                   help="omega for the centripetal correction (auto: the w_* columns when complete)")
+    s.add_argument("-o", "--output", required=True, metavar="OUT.csv", help="t, f_x, f_y, f_z, dw_x, dw_y, dw_z")
+    add_units_options(s)
+    s.set_defaults(func=cmd_resolve)
+
+    for name, func, what in (("attitude", cmd_attitude, "pendulum attitude from two triads: t, theta_rad, w_y, dw_y"),
+                             ("displacement", cmd_displacement, "stop-to-stop displacement: t, v_*, p_*"),
+                             ("rate", cmd_rate, "angular rate from alpha, leaky integration reset on rest")):
+        s = sub.add_parser(name, help=what)
+        s.add_argument("--device", required=True, metavar="D.json", help=_DEVICE)
+        s.add_argument("--calibration", required=True, metavar="CAL.json", help=_CAL)
+        s.add_argument("recording", metavar="REC.csv", help=_REC)
+        s.add_argument("--engine", choices=["float", "fixed"], default="float", help=_ENGINE)
+        s.add_argument("--report", metavar="DIR", help="write plots into DIR")
+        s.add_argument("-o", "--output", required=True, metavar="OUT.csv", help=_OUT_CSV)
+        if name == "displacement":
+            s.add_argument("--axis", choices=["x", "y", "z"],
+                           help="1-D along this body axis (the seed's actuator; nothing removed)")
+            s.add_argument("--form", choices=["offline", "stream"],
+                           help="float engine: offline (default) or the firmware's streaming form")
+            s.add_argument("--keep-turned", action="store_true",
+                           help="write a motion during which the body turned (its zero point beyond what a "
+                           "calibration or tilt error gives), with a warning; by default it is left out, and the "
+                           "output ends at the rest before it")
+            s.add_argument("--resample", action="store_true",
+                           help="interpolate the samples from their time stamps onto a uniform grid first (stamps "
+                           "that keep no uniform grid: a sensor read on a loop whose period varies, a driver that "
+                           "stamps each sample as it reads it); a gap of one lost sample (a step beyond 1.8 x "
+                           "the median, up to 2.5 regular steps) is bridged with a note, a longer one refused")
+        add_units_options(s)
+        s.set_defaults(func=func)
+
+    s = sub.add_parser("diagnose", help="sim-to-real diagnosis: where the gap lies, which effect, how far "
+                       "it shrinks")
+    s.add_argument("--device", required=True, metavar="D.json", help=_DEVICE)
+    s.add_argument("--calibration", required=True, metavar="CAL.json", help=_CAL)
+    s.add_argument("recordings", nargs="+", metavar="REC.csv", help=_RECS)
+    s.add_argument("--json", required=True, metavar="OUT.json", help="the diagnosis (format: docs/diagnosis-json.md)")
+    s.add_argument("--report", metavar="DIR", help="plots and a written summary")
+    s.add_argument("--folds", type=int, default=5, help="blocked cross-validation folds")
+    s.add_argument("--seed", type=int, default=0, help="seed of the cross-validation folds (default %(default)s)")
+    s.add_argument("--drop-outliers", action="store_true",
+                   help="set aside the static poses far off the calibration's terms fitted to the poses (calibrate's "
+                   "rule: a knocked or mislabelled pose), which are otherwise kept, named in the JSON's 'outliers' "
+                   "with the diagnosis of the other poses, and in a note")
+    add_units_options(s)
+    s.set_defaults(func=cmd_diagnose)
+    add_convert_parser(sub, check_output)
+    return p
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    a = parser.parse_args(argv)
+    try:
+        check_not_an_input(a)
+        return int(a.func(a) or 0)
+    except AccelcalError as e:
+        print(f"accelcal {a.command}: error: {e}", file=sys.stderr)
+        return EXIT_INPUT
+    except np.linalg.LinAlgError as e:
+        # a degenerate calibration or geometry that no loader check could see
+        print(f"accelcal {a.command}: error: the inputs are numerically degenerate ({e})", file=sys.stderr)
+        return EXIT_INPUT
+    except KeyboardInterrupt:
+        print(f"accelcal {a.command}: interrupted", file=sys.stderr)
+        return 130
+    except Exception as e:  # noqa: BLE001 - one line, never a traceback
+        print(f"accelcal {a.command}: internal error: {type(e).__name__}: {e}", file=sys.stderr)
+        return EXIT_INTERNAL
+
+
+if __name__ == "__main__":
+    sys.exit(main())
