@@ -1,6 +1,6 @@
 """Float64 reference model: the truth the C core and the estimators are held to.
 
-Conventions (shared/spec/data-contract.md): body frame, SI units; specific force
+Conventions (docs/data-contract.md): body frame, SI units; specific force
 at a point r is f + alpha x r + omega x (omega x r); channel i reads
 raw_i = b_i + s_i . f(r_i).  Arrays broadcast over leading sample axes.
 """

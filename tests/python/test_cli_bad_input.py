@@ -1,6 +1,6 @@
 """Every file-reading ``accelcal`` subcommand under generated bad input.
 
-The contract (shared/spec/data-contract.md, "Command line"): on bad input a
+The contract (docs/data-contract.md, "Command line"): on bad input a
 subcommand prints ONE line to stderr (no traceback), exits non-zero, and leaves
 no output file.  Here every run must also exit 2 (an input error), never 3
 (``internal error``: an exception the library did not turn into an input

@@ -1,6 +1,6 @@
 """Calibration estimators: known poses, jig-free (unknown poses), lever arms, temperature.
 
-Model (shared/spec/data-contract.md, seed paper eqs. 16-19): at rest channel i reads
+Model (docs/data-contract.md, seed paper eqs. 16-19): at rest channel i reads
 
     m_pi = b_i + s_i . f_p (+ noise)                      pose p, specific force f_p
 

@@ -1,4 +1,4 @@
-"""The ``accelcal`` command (forms fixed by shared/spec/data-contract.md).
+"""The ``accelcal`` command (forms fixed by the data contract, docs/data-contract.md).
 
 Every subcommand exits 0 on success; on bad input it prints one line to stderr
 (no traceback) and exits 2, leaving no partial output file (all outputs are
@@ -322,13 +322,22 @@ _DEVICE = "device description JSON (docs/data-contract.md), or 'default' for the
 _CAL = ("calibration JSON, as written by accelcal calibrate, or 'nominal': the device file's datasheet values "
         "(zero_counts, counts_per_mps2 along each axis)")
 _REC = "recording CSV (docs/data-contract.md)"
+_DESCRIPTION = ("calibration, 6-DOF resolution and sim-to-real diagnosis for accelerometer-only\n"
+                "motion sensors, with an integer-only C core for MCU firmware")
+_DOCS = """documentation, in the repository:
+  docs/getting-started.md  the commands and the Python API
+  docs/data-contract.md    device, calibration and recording files, command forms
+  docs/diagnosis-json.md   the diagnosis's JSON
+the site (bash tools/build_docs.sh): build/docs/html/index.html, the same pages with
+worked examples and the API reference; data-contract.html is the data contract."""
 _RECS = "one or more recording CSVs of the same device"
 _ENGINE = "float: the float64 reference; fixed: the C core with exactly the header's constants"
 _OUT_CSV = "the CSV to write (written atomically: no partial file on error)"
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="accelcal", description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(prog="accelcal", description=_DESCRIPTION, epilog=_DOCS,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--version", action="version", version=f"accelcal {__version__}")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
 

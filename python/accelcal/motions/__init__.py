@@ -6,7 +6,7 @@ built from an analytic *evaluator* (times -> attitude, position, f, omega,
 alpha), so the sampled arrays are exactly consistent with each other and the
 same evaluator gives the motion at shifted times (``time_skew``).
 
-Conventions (shared/spec/data-contract.md)
+Conventions (docs/data-contract.md)
 -------------------------------------------
 * World frame: z up; gravity ``g_vec = (0, 0, -g)`` with ``g`` the device's
   ``gravity_mps2``.
