@@ -541,11 +541,11 @@ def test_calibrate_refuses_bad_new_forms(form, data, capfd, tmp_path_factory):
 
 
 def test_readme_convert_examples_run(shared_data, tmp_path, capfd, monkeypatch):
-    """The README's "Files from other tools" commands run as written (input names found in
-    shared/data): convert and calibrate with the summary lines it quotes, then header and
-    resolve --engine fixed (a triad header; signed readings for the MPU-6050)."""
-    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
-    section = readme.split("## Files from other tools\n", 1)[1].split("\n## ", 1)[0]
+    """The "Files from other tools" page's commands (docs/files-from-other-tools.md, once the
+    README's section) run as written (input names found in shared/data): convert and calibrate
+    with the summary lines it quotes, then header and resolve --engine fixed (a triad header;
+    signed readings for the MPU-6050)."""
+    section = (Path(__file__).resolve().parents[2] / "docs" / "files-from-other-tools.md").read_text()
     blocks = re.findall(r"```sh\n(.*?)```", section, re.S)
     assert len(blocks) == 2
     monkeypatch.chdir(tmp_path)
