@@ -5,7 +5,8 @@
 # simulator (built from Debian's gdb-source, cached) at -Os and -O2 bit for bit
 # against the host, the AVR (16-bit int) run under simavr bit for bit against the
 # host, clang-tidy, a bounded libFuzzer run, and the Python suite (the
-# core's properties at 10,000 examples each, the estimators' at 2,000).
+# core's properties at 10,000 examples each, the estimators' at 2,000), then the
+# documentation site (tools/build_docs.sh: warnings are errors, the examples run).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -26,8 +27,8 @@ if [ "$need_apt" = 1 ]; then
         clang clang-tidy libclang-rt-14-dev locales >/dev/null
 fi
 
-echo "== installing the Python package"
-python3 -m pip install -q -e ".[test]"
+echo "== installing the Python package (with the test and docs extras)"
+python3 -m pip install -q -e ".[test,docs]"
 
 echo "== C core: host builds, ctest, sanitizers, cppcheck"
 bash tools/check_c.sh
@@ -49,3 +50,6 @@ bash tools/fuzz.sh "${ACCELCAL_FUZZ_SECONDS:-45}"
 
 echo "== Python suite"
 ACCELCAL_HYPOTHESIS="${ACCELCAL_HYPOTHESIS:-ci}" python3 -m pytest -q -p no:cacheprovider --durations=25 -n "${ACCELCAL_TEST_JOBS:-2}" --dist worksteal
+
+echo "== documentation site: sphinx -W (warnings are errors), the worked examples run, into build/docs/html"
+ACCELCAL_DOCS_INSTALL=0 bash tools/build_docs.sh

@@ -2,7 +2,7 @@
  * accelcal -- attitude of a swinging body from two 3-axis accelerometers
  * (seed 3), without integrating anything for the angle.
  *
- * Geometry (shared/spec/data-contract.md, `attitude`): body origin = pivot;
+ * Geometry (docs/data-contract.md, `attitude`): body origin = pivot;
  * triad 1 at r1 x^, triad 2 at r2 x^ (r1 != r2), each measuring body x, y, z;
  * the body swings about body y; theta = rotation about y from the pose with
  * body z up, so gravity's specific force in body axes is g (-sin th, 0, cos th);

@@ -1,0 +1,39 @@
+"""The documentation site's sources (tools/build_docs.sh builds them): every docs/*.md is in
+the site (a glob toctree in the index), every C header is on the C core's page, every worked
+example is reached from the getting-started page, and the docs extra names what the build
+imports."""
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+DOCS = ROOT / "docs"
+
+
+def test_the_index_takes_every_page():
+    index = (DOCS / "index.md").read_text()
+    trees = re.findall(r"```\{toctree\}\n(.*?)```", index, re.S)
+    assert any(":glob:" in t and re.search(r"^\*$", t, re.M) for t in trees)
+
+
+def test_every_c_header_is_on_the_c_core_page():
+    page = (DOCS / "c-core.md").read_text()
+    missing = [h.name for h in sorted((ROOT / "include" / "accelcal").glob("*.h"))
+               if h.name != "accelcal.h" and f"`{h.name}`" not in page]
+    assert not missing, missing
+
+
+def test_every_example_is_linked_from_getting_started():
+    page = (DOCS / "getting-started.md").read_text()
+    missing = [p.stem for p in sorted((ROOT / "examples").glob("*.py"))
+               if f"auto_examples/{p.stem}.rst" not in page]
+    assert not missing, missing
+
+
+def test_the_docs_extra_names_what_conf_py_loads():
+    extra = re.search(r"^docs = \[(.*?)\]", (ROOT / "pyproject.toml").read_text(), re.M).group(1)
+    names = {re.split(r"[<>=!~ ]", s.strip().strip('"'))[0].replace("-", "_").lower() for s in extra.split(",")}
+    conf = (DOCS / "conf.py").read_text()
+    for ext, dist in (("myst_parser", "myst_parser"), ("numpydoc", "numpydoc"),
+                      ("sphinx_gallery.gen_gallery", "sphinx_gallery"), ("pydata_sphinx_theme", "pydata_sphinx_theme")):
+        assert ext in conf and dist in names, (ext, names)
+    assert "sphinx" in names
