@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from accelcal.cli import main
+from accelcal.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[2]
 COMMANDS = ["demo", "simulate", "calibrate", "header", "resolve", "attitude", "displacement", "rate",
