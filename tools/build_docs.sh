@@ -21,4 +21,21 @@ python3 tools/gen_api_doc.py --check
 rm -rf docs/auto_examples docs/generated docs/sg_execution_times.rst build/docs
 export MPLBACKEND=Agg
 python3 -m sphinx -W --keep-going -b html -j 1 -d build/docs/doctrees docs build/docs/html
+
+# every worked example's page shows the figures it drew
+python3 - <<'PY'
+import re, sys
+from pathlib import Path
+html = Path("build/docs/html")
+bad = []
+for ex in sorted(Path("examples").glob("*.py")):
+    page = html / "auto_examples" / (ex.stem + ".html")
+    pngs = sorted(set(re.findall(rf"sphx_glr_{ex.stem}_\d+\.png", page.read_text()))) if page.exists() else []
+    if not pngs or not all((html / "_images" / p).is_file() for p in pngs):
+        bad.append(ex.name)
+    else:
+        print(f"   {ex.name}: {len(pngs)} figure(s)")
+if bad:
+    sys.exit(f"build_docs: no figure in the page of {', '.join(bad)}")
+PY
 echo "== site: build/docs/html/index.html"
