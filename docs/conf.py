@@ -1,7 +1,13 @@
 """Sphinx configuration of the accelcal documentation site (built by tools/build_docs.sh)."""
 from __future__ import annotations
 
+import re
+from pathlib import Path
+
 import accelcal
+
+DOCS = Path(__file__).resolve().parent
+MORE_PAGES = "<!-- every other docs/*.md: conf.py puts them in a toctree here when the site is built -->"
 
 project = "accelcal"
 author = "the accelcal authors"
@@ -53,3 +59,28 @@ html_theme_options = {
     "show_toc_level": 2,
 }
 html_show_sourcelink = False
+
+
+def pages_not_listed(index_text: str, docs_dir: Path = DOCS) -> list[str]:
+    """The docs/*.md pages (docnames, sorted) that no toctree of the index lists."""
+    listed = set()
+    for block in re.findall(r"```\{toctree\}\n(.*?)```", index_text, re.S):
+        listed |= {ln.strip() for ln in block.splitlines() if ln.strip() and not ln.startswith(":")}
+    return sorted(p.stem for p in docs_dir.glob("*.md") if p.stem not in listed | {"index"})
+
+
+def index_with_every_page(index_text: str, docs_dir: Path = DOCS) -> str:
+    """The index with a toctree of the pages its own toctrees leave out, where MORE_PAGES stands:
+    a page another change adds to docs/ is in the site without an edit of the index."""
+    more = pages_not_listed(index_text, docs_dir)
+    block = "```{toctree}\n:maxdepth: 1\n:caption: More pages\n\n" + "\n".join(more) + "\n```\n" if more else ""
+    return index_text.replace(MORE_PAGES, block)
+
+
+def _more_pages(app, docname, source):
+    if docname == "index":
+        source[0] = index_with_every_page(source[0])
+
+
+def setup(app):
+    app.connect("source-read", _more_pages)

@@ -3,16 +3,29 @@ the site (a glob toctree in the index), every C header is on the C core's page, 
 example is reached from the getting-started page, and the docs extra names what the build
 imports."""
 import re
+import runpy
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
 
 
-def test_the_index_takes_every_page():
+def load_conf():
+    return runpy.run_path(str(DOCS / "conf.py"))
+
+
+def test_the_index_takes_every_page(tmp_path):
+    """A page added to docs/ is in the site without an edit of the index: conf.py puts the
+    pages the index does not list in a toctree of their own (and none twice)."""
+    conf = load_conf()
     index = (DOCS / "index.md").read_text()
-    trees = re.findall(r"```\{toctree\}\n(.*?)```", index, re.S)
-    assert any(":glob:" in t and re.search(r"^\*$", t, re.M) for t in trees)
+    assert conf["MORE_PAGES"] in index
+    built = conf["index_with_every_page"](index)
+    assert conf["pages_not_listed"](built) == []
+    for name in ("index", "getting-started", "refine"):
+        (tmp_path / f"{name}.md").write_text(f"# {name}\n")
+    listed_twice = conf["index_with_every_page"](index, tmp_path)
+    assert listed_twice.count("\nrefine\n") == 1 and listed_twice.count("\ngetting-started\n") == 1
 
 
 def test_every_c_header_is_on_the_c_core_page():
