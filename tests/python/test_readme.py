@@ -2,10 +2,14 @@
 pages), its links lead to files of the repository, and its Python examples run as written.
 (It had been 1,733 lines; the Python session of its "Python" section is also run by
 test_api.test_readme_python_session_runs.)"""
+import json
 import re
+import shlex
 from pathlib import Path
 
 import pytest
+
+from accelcal.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[2]
 README = (ROOT / "README.md").read_text()
@@ -41,3 +45,17 @@ def test_readme_python_examples_run(k, tmp_path, monkeypatch, capsys):
     if "travel" in block:                         # the displacement example prints its travel
         travel = float(re.search(r"travel ([-\d.]+) m", capsys.readouterr().out).group(1))
         assert abs(travel - 0.5) < 0.0025        # the benchmark's worst case is 0.193 %
+
+
+def test_readme_diagnosis_commands_run(tmp_path, monkeypatch):
+    """The README's diagnosis example as written: the simulated effect is the verdict, and the
+    report's figures are written."""
+    block = next(b for b in re.findall(r"```sh\n(.*?)```", README, re.S) if "accelcal diagnose" in b)
+    monkeypatch.chdir(tmp_path)
+    for line in block.strip().splitlines():
+        args = shlex.split(line.split("#")[0])
+        assert args[0] == "accelcal"
+        assert main(args[1:]) in (0, None), line
+    effect = re.search(r"--effect (\w+)", block).group(1)
+    assert json.loads((tmp_path / "diag.json").read_text())["verdict"] == effect
+    assert sorted(p.name for p in (tmp_path / "diag").glob("*.png"))
