@@ -19,11 +19,8 @@ Errors in the inputs raise :class:`~accelcal.errors.AccelcalError` (its subclass
 """
 from __future__ import annotations
 
-import functools
-import inspect
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any, Iterable
 
 import numpy as np
 
@@ -32,13 +29,13 @@ from .io.calibration import Calibration, load_calibration, save_calibration
 from .cli.calibrate_command import record_warnings
 from .io.device import Device, default_device, load_device, save_device
 from .diagnose import diagnose as _diagnose_impl
-from .errors import AccelcalError, atomic_write, unknown_option
+from .errors import AccelcalError, atomic_write, options_checked
 from .estimators import Columns, attitude_from_recording, displacement_from_recording, rate_from_recording
 from .firmware.header import calibration_header
 from .motions import MOTIONS, Motion
 from .io.recording import Recording, read_recording as _read_recording_file, write_recording
 from .convert.formats import Converted, convert_file
-from .resolve import clipped_samples, resolve_recording
+from .resolve import ResolveResult, clipped_samples, resolve_recording
 from .io.units import stated_scale
 from .simulate import simulate as _simulate_impl
 from .readings.static import MIN_POSE_S
@@ -47,31 +44,6 @@ __all__ = ["Device", "Recording", "Calibration", "Columns", "ResolveResult", "Ac
            "default_device", "load_device", "save_device", "read_recording", "write_recording",
            "load_calibration", "save_calibration", "as_recording", "calibrate", "resolve", "diagnose",
            "header", "simulate", "attitude", "displacement", "rate", "convert", "Converted"]
-
-
-def options_checked(*targets: Callable[..., Any], extra: Callable[..., Any] | None = None) -> Callable:
-    """Decorator of the public functions: a keyword argument that is none of the function's
-    parameters -- nor, for one that forwards ``**options``, a keyword-only parameter of one of
-    ``targets`` or a name ``extra(*args, **kwargs)`` lists (a motion's parameters; None: not
-    known here, the callee decides) -- raises :class:`~accelcal.errors.OptionError` before
-    anything runs, naming the public function, the option and the closest valid one."""
-    def wrap(fn: Callable[..., Any]) -> Callable[..., Any]:
-        params = [p for p in inspect.signature(fn).parameters.values() if p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
-        named = [p.name for p in params]
-        options = [p.name for p in params if p.default is not p.empty]
-        forwarded = list(dict.fromkeys(p.name for t in targets for p in inspect.signature(t).parameters.values()
-                                       if p.kind is p.KEYWORD_ONLY and p.name not in named))
-
-        @functools.wraps(fn)
-        def checked(*args: Any, **kwargs: Any) -> Any:
-            more = extra(*args, **kwargs) if extra is not None else []
-            if more is not None:
-                unknown = next((k for k in kwargs if k not in named and k not in forwarded and k not in more), None)
-                if unknown is not None:
-                    raise unknown_option(fn.__name__, unknown, named + forwarded + more, options + forwarded + more)
-            return fn(*args, **kwargs)
-        return checked
-    return wrap
 
 
 def motion_params(device: Any = None, motion: Any = None, *args: Any, **kwargs: Any) -> list[str] | None:
@@ -128,6 +100,9 @@ def read_recording(path: Any, device: Any = None, *, units: str | None = None, l
         number of LSBs is refused with its row.  Default: the
         file's ``# units:`` / ``# lsb:`` comments, else counts; stated by both, they must
         agree.
+    lsb, full_scale_g, bits, gravity_mps2
+        One count in ``units`` (float, or str with a unit: "1mg"), or the +-range in g at
+        ``bits`` bits (default 16; g in m/s^2 for m/s^2 readings, default 9.80665).
 
     Returns
     -------
@@ -257,36 +232,6 @@ def calibrate(device: Any, recordings: Any, method: str | None = None, *,
     return cal
 
 
-@dataclass
-class ResolveResult:
-    """Per-sample specific force and angular acceleration.
-
-    Attributes
-    ----------
-    t : ndarray, shape (n,)
-        Time (s).
-    f : ndarray, shape (n, 3)
-        Specific force at the body origin (m/s^2).
-    alpha : ndarray, shape (n, 3)
-        Angular acceleration (rad/s^2).
-    saturated : ndarray of uint8, shape (n,), or None
-        The C core's saturation flags (``engine="fixed"`` only): its own arithmetic saturated
-        (a pre-trim beyond 16 bits), which a reading at the chip's rail sets or not by the sign
-        of its trim; see ``clipped``.
-    clipped : ndarray of bool, shape (n,), or None
-        Samples with a channel at the ADC's rail (the device's ``raw_min`` or ``raw_max``) or at a
-        clip level inside the range where its readings pile up (:func:`accelcal.resolve.clipped_samples`,
-        as ``accelcal resolve``'s column), either engine: the chip clipped, and f there is short of
-        the truth.
-    """
-
-    t: np.ndarray
-    f: np.ndarray
-    alpha: np.ndarray
-    saturated: np.ndarray | None = None
-    clipped: np.ndarray | None = None
-
-
 @options_checked()
 def resolve(device: Any, calibration: Any, recording: Any, engine: str = "float",
             omega: str = "auto") -> ResolveResult:
@@ -396,20 +341,61 @@ def _estimate(fn, device, calibration, recording, engine, options) -> Columns:
 
 @options_checked(attitude_from_recording)
 def attitude(device: Any, calibration: Any, recording: Any, engine: str = "float", **options: Any) -> Columns:
-    """Pendulum attitude from two triads (as ``accelcal attitude``): columns t, theta_rad, w_y, dw_y."""
+    """Pendulum attitude from two triads (as ``accelcal attitude``).
+
+    Parameters
+    ----------
+    device, calibration, recording, engine
+        As for :func:`resolve`; two triads (channels 0-2, 3-5) on body x, the pivot at the origin.
+    **options
+        ``gain`` (1/rad, default 2), ``w2_gate`` ((rad/s)^2 below which ``|w|`` is not measured),
+        ``leak_tau_s`` (s, the pull to 0 while ``|w|`` is not measured; default 2).
+
+    Returns
+    -------
+    Columns
+        t (s), theta_rad (rad), w_y (rad/s), dw_y (rad/s^2), g_mps2, gated, unsettled, saturated.
+    """
     return _estimate(attitude_from_recording, device, calibration, recording, engine, options)
 
 
 @options_checked(displacement_from_recording)
 def displacement(device: Any, calibration: Any, recording: Any, engine: str = "float",
                  **options: Any) -> Columns:
-    """Stop-to-stop displacement (as ``accelcal displacement``): columns t, v_*, p_* (m/s, m)."""
+    """Stop-to-stop displacement (as ``accelcal displacement``), the velocity zero at each rest.
+
+    Parameters
+    ----------
+    device, calibration, recording, engine
+        As for :func:`resolve` (a 3-axis sensor or an array).
+    **options
+        ``form`` ("offline" or "stream"; the C core streams), ``axis`` ("x", "y", "z": 1-D along
+        it; default 3-D, gravity removed), ``keep_turned``, ``resample``.
+
+    Returns
+    -------
+    Columns
+        t (s), v_* (m/s), p_* (m), p_raw_* (m, uncorrected), rest, corrected.
+    """
     return _estimate(displacement_from_recording, device, calibration, recording, engine, options)
 
 
 @options_checked(rate_from_recording)
 def rate(device: Any, calibration: Any, recording: Any, engine: str = "float", **options: Any) -> Columns:
-    """Angular rate from alpha, reset on rest (as ``accelcal rate``)."""
+    """Angular rate from alpha, reset on rest (as ``accelcal rate``).
+
+    Parameters
+    ----------
+    device, calibration, recording, engine
+        As for :func:`resolve` (a 6-DOF array).
+    **options
+        ``leak_tau_s`` (s, the leaky integration's time constant; 0: plain; default 5).
+
+    Returns
+    -------
+    Columns
+        t (s), w_x, w_y, w_z (rad/s), rest.
+    """
     return _estimate(rate_from_recording, device, calibration, recording, engine, options)
 
 
@@ -437,6 +423,8 @@ def convert(path: Any, fmt: str = "auto", *, units: str | None = None, lsb: floa
         unit, or with a unit suffix: "1mg") or ``full_scale_g`` (float: +-range in g at ``bits``
         bits).  Default: the file's ``# units:`` / ``# lsb:`` comments or a table's column
         names, else counts; stated by both, they must agree (a contradiction is refused).
+    lsb, full_scale_g
+        As ``units`` says: one count in that unit, or the +-range in g at ``bits`` bits.
     bits : int
         The ADC's bits (default 16): the device's raw range, and the LSB of ``full_scale_g``.
     round : bool

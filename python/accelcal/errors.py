@@ -7,6 +7,8 @@ one complete line: the command line prints exactly that, with no traceback.
 from __future__ import annotations
 
 import difflib
+import functools
+import inspect
 import os
 import tempfile
 from contextlib import contextmanager
@@ -17,6 +19,7 @@ __all__ = [
     "InputError",
     "OptionError",
     "unknown_option",
+    "options_checked",
     "CoreError",
     "NullError",
     "SizeError",
@@ -253,3 +256,28 @@ def atomic_write(path: Any, write_fn: Callable[[IO[Any]], Any], mode: str = "w")
         except FileNotFoundError:
             pass
         raise
+
+
+def options_checked(*targets: Callable[..., Any], extra: Callable[..., Any] | None = None) -> Callable:
+    """Decorator of the public functions: a keyword argument that is none of the function's
+    parameters -- nor, for one that forwards ``**options``, a keyword-only parameter of one of
+    ``targets`` or a name ``extra(*args, **kwargs)`` lists (a motion's parameters; None: not
+    known here, the callee decides) -- raises :class:`~accelcal.errors.OptionError` before
+    anything runs, naming the public function, the option and the closest valid one."""
+    def wrap(fn: Callable[..., Any]) -> Callable[..., Any]:
+        params = [p for p in inspect.signature(fn).parameters.values() if p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
+        named = [p.name for p in params]
+        options = [p.name for p in params if p.default is not p.empty]
+        forwarded = list(dict.fromkeys(p.name for t in targets for p in inspect.signature(t).parameters.values()
+                                       if p.kind is p.KEYWORD_ONLY and p.name not in named))
+
+        @functools.wraps(fn)
+        def checked(*args: Any, **kwargs: Any) -> Any:
+            more = extra(*args, **kwargs) if extra is not None else []
+            if more is not None:
+                unknown = next((k for k in kwargs if k not in named and k not in forwarded and k not in more), None)
+                if unknown is not None:
+                    raise unknown_option(fn.__name__, unknown, named + forwarded + more, options + forwarded + more)
+            return fn(*args, **kwargs)
+        return checked
+    return wrap

@@ -5,6 +5,8 @@ generator emits (both come from quantize.quantize_calibration).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from . import model
@@ -98,3 +100,33 @@ def clipped_samples(rec, device) -> tuple[np.ndarray, list[str]]:
         clipped = clipped | np.any(levels.mask(raw), axis=1)
         warnings.append(piles)
     return clipped, warnings
+
+
+@dataclass
+class ResolveResult:
+    """Per-sample specific force and angular acceleration.
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+        Time (s).
+    f : ndarray, shape (n, 3)
+        Specific force at the body origin (m/s^2).
+    alpha : ndarray, shape (n, 3)
+        Angular acceleration (rad/s^2).
+    saturated : ndarray of uint8, shape (n,), or None
+        The C core's saturation flags (``engine="fixed"`` only): its own arithmetic saturated
+        (a pre-trim beyond 16 bits), which a reading at the chip's rail sets or not by the sign
+        of its trim; see ``clipped``.
+    clipped : ndarray of bool, shape (n,), or None
+        Samples with a channel at the ADC's rail (the device's ``raw_min`` or ``raw_max``) or at a
+        clip level inside the range where its readings pile up (:func:`clipped_samples`,
+        as ``accelcal resolve``'s column), either engine: the chip clipped, and f there is short of
+        the truth.
+    """
+
+    t: np.ndarray
+    f: np.ndarray
+    alpha: np.ndarray
+    saturated: np.ndarray | None = None
+    clipped: np.ndarray | None = None

@@ -232,7 +232,14 @@ def calibration_to_dict(cal: Calibration) -> dict:
 
 
 def save_calibration(cal: Calibration, path: Any) -> None:
-    """Write ``cal`` as JSON (indent 2), atomically."""
+    """Write ``cal`` as JSON (indent 2), atomically.
+
+    Parameters
+    ----------
+    cal : Calibration
+    path : str or os.PathLike
+        The file to write (written to a temporary file and renamed: no partial file).
+    """
     text = json.dumps(calibration_to_dict(cal), indent=2, allow_nan=False) + "\n"
     atomic_write(path, lambda f: f.write(text))
 
@@ -365,7 +372,20 @@ def calibration_from_dict(d: Any, source: str = "<dict>", device: Device | None 
 def load_calibration(path: Any, device: Device | None = None) -> Calibration:
     """Read and validate a calibration JSON file (see calibration_from_dict).  ``"nominal"``
     (when no file has that name) is the device's datasheet values (:meth:`Calibration.nominal`):
-    a calibration to diagnose or estimate with before any exists."""
+    a calibration to diagnose or estimate with before any exists.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The calibration file (docs/data-contract.md), or ``"nominal"``.
+    device : Device, optional
+        The device it is for: the calibration must name it and have its channels (positions
+        not estimated are filled with its nominal ones); ``"nominal"`` needs it.
+
+    Returns
+    -------
+    Calibration
+    """
     if isinstance(path, str) and path == NOMINAL and device is not None and not Path(path).is_file():
         return Calibration.nominal(device)
     if isinstance(path, str) and not Path(path).exists() and difflib.get_close_matches(path, [NOMINAL], 1, KEY_CUTOFF):

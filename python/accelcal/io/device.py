@@ -355,13 +355,35 @@ def _geometry_problem(dev: Device) -> str | None:
 
 
 def load_device(path: Any) -> Device:
-    """Read and validate a device description JSON file."""
+    """Read and validate a device description JSON file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The device file (docs/data-contract.md).
+
+    Returns
+    -------
+    Device
+
+    Raises
+    ------
+    AccelcalError
+        One line naming the file and the field (a misspelt key with the valid one).
+    """
     doc, source = read_json(path)
     return device_from_dict(doc, source)
 
 
 def save_device(device: Device, path: Any) -> None:
-    """Write ``device`` as JSON (indent 2), atomically."""
+    """Write ``device`` as JSON (indent 2), atomically.
+
+    Parameters
+    ----------
+    device : Device
+    path : str or os.PathLike
+        The file to write (written to a temporary file and renamed: no partial file).
+    """
     text = json.dumps(device.to_dict(), indent=2, allow_nan=False) + "\n"
     atomic_write(path, lambda f: f.write(text))
 
@@ -376,6 +398,12 @@ def default_device() -> Device:
 
     Chip k at phi_k = 120 k deg; channel 2k along the tangent
     (-sin phi, cos phi, 0), channel 2k+1 along +z.
+
+    Returns
+    -------
+    Device
+        ``seed-6ch-r60``: 60 Hz, raw 0..10000, 1250 counts per g about 5000 counts,
+        noise 0.02 m/s^2.
     """
     r = 0.06
     pos, axes = [], []

@@ -205,6 +205,14 @@ def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> No
     Columns: t (shortest exact repr), raw_0..raw_{N-1}, then only the
     reference columns with any known value (NaN as an empty cell), then the
     extra columns.  Metadata become ``# key: value`` comments.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write (written to a temporary file and renamed: no partial file).
+    rec : Recording
+    float_format : str
+        printf-style format of the reference columns' values (t is written exactly).
     """
     check_content(rec)
     try:
