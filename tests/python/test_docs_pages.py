@@ -50,3 +50,12 @@ def test_the_docs_extra_names_what_conf_py_loads():
                       ("sphinx_gallery.gen_gallery", "sphinx_gallery"), ("pydata_sphinx_theme", "pydata_sphinx_theme")):
         assert ext in conf and dist in names, (ext, names)
     assert "sphinx" in names
+
+
+def test_every_benchmark_section_names_the_command_that_prints_it():
+    page = (DOCS / "benchmarks.md").read_text()
+    sections = re.findall(r"^## (.*)$", page, re.M)
+    assert sections
+    for title in sections:
+        m = re.search(r"`python3 (tools/[\w./-]+\.py)[^`]*`", title)
+        assert m and (ROOT / m.group(1)).is_file(), title
