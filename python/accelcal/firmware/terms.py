@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-__all__ = ["NONLIN_ITERATIONS", "has_terms", "lag_coefficient", "lag_temperature", "temperature_correct",
+__all__ = ["NONLIN_ITERATIONS", "channel_values", "has_terms", "lag_coefficient", "lag_temperature", "temperature_correct",
            "skew_latency", "skew_delays", "skew_correct", "nonlinearity_coefficients", "nonlinearity_invert",
            "correct_readings"]
 
@@ -37,7 +37,7 @@ __all__ = ["NONLIN_ITERATIONS", "has_terms", "lag_coefficient", "lag_temperature
 NONLIN_ITERATIONS = 3
 
 
-def _channel_values(arr, n: int) -> np.ndarray:
+def channel_values(arr, n: int) -> np.ndarray:
     """(n,) float: a calibration's optional per-channel array, 0 where absent (None or NaN)."""
     if arr is None:
         return np.zeros(n)
@@ -48,7 +48,7 @@ def has_terms(cal) -> dict:
     """Which correctable terms ``cal`` carries: {"temperature", "skew", "nonlinearity"} -> bool
     (a term whose coefficients are all absent or zero is not carried)."""
     n = cal.n_channels
-    nz = lambda a: bool(np.any(_channel_values(a, n) != 0))  # noqa: E731
+    nz = lambda a: bool(np.any(channel_values(a, n) != 0))  # noqa: E731
     return {"temperature": nz(getattr(cal, "offset_tc", None)) or nz(getattr(cal, "gain_tc", None)),
             "skew": nz(getattr(cal, "time_skew_s", None)),
             "nonlinearity": nz(getattr(cal, "nonlin_k2", None)) or nz(getattr(cal, "nonlin_k3", None))}
@@ -85,7 +85,7 @@ def temperature_correct(raw, offsets, temp_ref_c, offset_tc, gain_tc, temp_offse
     raw = np.atleast_2d(np.asarray(raw, float))
     n = raw.shape[1]
     b = np.asarray(offsets, float)
-    oc, gc = _channel_values(offset_tc, n), _channel_values(gain_tc, n)
+    oc, gc = channel_values(offset_tc, n), channel_values(gain_tc, n)
     t_ref = float(temp_ref_c or 0.0)
     d_off = (np.asarray(temp_offset_c, float) - t_ref)[:, None]
     d_gain = (np.asarray(temp_gain_c, float) - t_ref)[:, None]
@@ -132,7 +132,7 @@ def nonlinearity_coefficients(sensitivity, k2, k3) -> tuple[np.ndarray, np.ndarr
     c3 = k3 / |s|^3 (1/counts^2), |s| the norm of the channel's sensitivity (counts per m/s^2)."""
     s = np.linalg.norm(np.atleast_2d(np.asarray(sensitivity, float)), axis=1)
     n = s.shape[0]
-    return _channel_values(k2, n) / s ** 2, _channel_values(k3, n) / s ** 3
+    return channel_values(k2, n) / s ** 2, channel_values(k3, n) / s ** 3
 
 
 def nonlinearity_invert(raw, offsets, sensitivity, k2, k3, iterations: int = NONLIN_ITERATIONS) -> np.ndarray:
@@ -166,9 +166,9 @@ def correct_readings(cal, raw, temp_c=None, dt_s: float | None = None) -> np.nda
     if terms["skew"]:
         if not dt_s:
             raise ValueError("the calibration has time skews: the sample period is needed")
-        m = skew_latency(_channel_values(cal.time_skew_s, cal.n_channels), dt_s)
+        m = skew_latency(channel_values(cal.time_skew_s, cal.n_channels), dt_s)
         padded = np.concatenate([y, np.repeat(y[-1:], m, axis=0)], axis=0)
-        y = skew_correct(padded, skew_delays(_channel_values(cal.time_skew_s, cal.n_channels), dt_s))[0][m:]
+        y = skew_correct(padded, skew_delays(channel_values(cal.time_skew_s, cal.n_channels), dt_s))[0][m:]
     if terms["nonlinearity"]:
         y = nonlinearity_invert(y, cal.offsets, cal.sensitivity, cal.nonlin_k2, cal.nonlin_k3)
     return y
