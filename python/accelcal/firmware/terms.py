@@ -109,8 +109,9 @@ def skew_correct(x, delays, line: np.ndarray | None = None):
     """Each channel of ``x`` (n, N) delayed by ``delays`` (N,) samples (>= 0) by linear
     interpolation between its successive samples.
 
-    Returns (out (n, N), line): ``line`` (L, N) the last L = floor(max delay) + 2 inputs, newest
-    first, to carry into the next call (None: the line starts filled with the first sample)."""
+    Returns (out (n, N), line): ``line`` (L, N) the last L inputs (newest first; L = floor(max
+    delay) + 2, or the length of the ``line`` given) to carry into the next call (None: the line
+    starts filled with the first sample)."""
     x = np.atleast_2d(np.asarray(x, float))
     j = np.asarray(delays, float)
     k = np.floor(j).astype(int)
@@ -118,6 +119,9 @@ def skew_correct(x, delays, line: np.ndarray | None = None):
     L = int(k.max()) + 2 if k.size else 2
     if line is None:
         line = np.repeat(x[:1], L, axis=0)
+    elif line.shape[0] < L:
+        raise ValueError(f"skew_correct: a line of {line.shape[0]} samples for delays up to {float(j.max()):.3g}")
+    L = line.shape[0]
     hist = np.concatenate([line[::-1], x], axis=0)  # oldest first; sample n of x at row L + n
     rows = np.arange(x.shape[0])[:, None] + L
     cols = np.arange(x.shape[1])[None, :]
