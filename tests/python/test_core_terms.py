@@ -270,3 +270,8 @@ def test_nonlin_undoes_the_forward_term():
     y = np.array([native.nonlin_invert(t, np.array([round(v)], np.int16))[0][0] for v in raw[:, 0]])
     assert np.max(np.abs(y - lin[:, 0])) <= 1.0
     assert np.max(np.abs(raw[:, 0] - lin[:, 0])) > 300      # the term itself: hundreds of counts
+
+
+def test_iteration_counts_agree():
+    """The float reference iterates as often as the core (AC_NONLIN_ITERATIONS)."""
+    assert terms.NONLIN_ITERATIONS == lib.AC_NONLIN_ITERATIONS

@@ -34,7 +34,7 @@ class TermsTables:
     """The terms' integer tables for one calibration (None where it carries none)."""
     n: int
     dt_s: float
-    temp: dict | None = None     # t_ref, oc_shift, gc_shift, oc, gc, o, lag_off (k, shift), lag_gain (k, shift)
+    temp: dict | None = None     # t_ref, oc_shift, gc_shift, oc, gc, o, lag_off/lag_gain (k, shift), tau_off/tau_gain (s)
     skew: dict | None = None     # len, whole, frac, latency
     nonlin: dict | None = None   # shift, a2, a3
 
@@ -109,7 +109,8 @@ def quantize_terms(cal, n: int, dt_s: float, offset_q) -> TermsTables:
                        oc=to_fixed(oc, oc_shift, "offset_tc_counts_per_c", -32767, 32767),
                        gc=to_fixed(gc, gc_shift, "gain_tc_per_c", -32767, 32767),
                        o=np.asarray(offset_q, np.int64),
-                       lag_off=lag_fixed(cal.temp_offset_tau_s, dt_s), lag_gain=lag_fixed(cal.temp_gain_tau_s, dt_s))
+                       lag_off=lag_fixed(cal.temp_offset_tau_s, dt_s), lag_gain=lag_fixed(cal.temp_gain_tau_s, dt_s),
+                       tau_off=cal.temp_offset_tau_s, tau_gain=cal.temp_gain_tau_s)
     if terms["skew"]:
         tau = channel_values(cal.time_skew_s, n)
         j = skew_delays(tau, dt_s)
