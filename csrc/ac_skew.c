@@ -1,6 +1,7 @@
 /* accelcal -- time skew (see ac_skew.h for the arithmetic and its bound). */
 #include "accelcal/ac_skew.h"
 #include "ac_internal.h"
+#include "ac_terms_impl.h"
 
 ac_status ac_skew_check(const ac_skew_table *t)
 {
@@ -91,12 +92,13 @@ ac_status ac_skew_step(const ac_skew_table *t, ac_skew_line *line, const int16_t
         f = (int16_t)t->frac[i];
         /* d = v1 - v0 (17 bits) = 2 h + (d & 1): one 16 x 16 product f h */
         d = (int32_t)v1 - (int32_t)v0;
-        h = (int16_t)ac_floor_shift(d, 1u);
-        p = ac_i_from_u(ac_mac16(0u, f, h) << 1);
+        h = (int16_t)((int32_t)((uint32_t)(d + 65536L) >> 1) - 32768L);
+        p = AC_MUL16(f, h) * 2L;
         if (((uint32_t)d & 1u) != 0u) {
             p += f;
         }
-        y[i] = (int16_t)((int32_t)v0 + ac_round_shift(p, AC_SKEW_FRAC));
+        /* |p| <= 2 * 32767 * 32768 + 32767 < 2^31 - 2^14 */
+        y[i] = (int16_t)((int32_t)v0 + AC_R15W(p));
     }
     return AC_OK;
 }

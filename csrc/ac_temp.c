@@ -2,6 +2,7 @@
 #include "accelcal/ac_temp.h"
 #include "accelcal/ac_fixed.h"
 #include "ac_internal.h"
+#include "ac_terms_impl.h"
 
 #define LAG_FRAC (AC_TEMP_FRAC + AC_TEMP_LAG_EXTRA)
 
@@ -23,7 +24,7 @@ ac_status ac_temp_lag_init(ac_temp_lag *f, uint16_t k, uint8_t shift)
 ac_status ac_temp_lag_step(ac_temp_lag *f, int16_t temp, int16_t *lagged)
 {
     uint8_t sat = 0u;
-    int32_t x, d, inc = 0;
+    int32_t x, inc = 0;
     if (f == 0 || lagged == 0) {
         return AC_ERR_NULL;
     }
@@ -35,38 +36,56 @@ ac_status ac_temp_lag_step(ac_temp_lag *f, int16_t temp, int16_t *lagged)
         f->y = x;
         f->started = 1u;
     } else {
-        d = ac_sat_sub(x, f->y, &sat);
-        if (ac_mul32x16_shift(d, f->k, f->shift, &inc) != AC_OK) {
+        int32_t d = ac_sat_sub(x, f->y, &sat);
+        if (f->shift >= 17u && d < 0x40000000L && d > -0x40000000L) {
+            /* round(d k 2^-shift) with d = dh 2^16 + dl: A = dh k + floor(dl k 2^-16) is
+             * floor(d k 2^-16), and (the dropped fraction being < 1) the result is
+             * floor((A + 2^(shift-17)) 2^-(shift-16)); |A| < 2^30 + 2^16: no overflow */
+            const int16_t dh = (int16_t)((int32_t)((uint32_t)(d + 0x40000000L) >> 16) - 0x4000L);
+            const uint16_t dl = (uint16_t)((uint32_t)d & 0xFFFFu);
+            const uint32_t ph = ac_mul16u((uint16_t)(dh < 0 ? -dh : dh), f->k); /* |dh| <= 2^14 */
+            int32_t a = (dh < 0) ? -(int32_t)ph : (int32_t)ph;
+            a += (int32_t)(ac_mul16u(dl, f->k) >> 16);
+            inc = ac_floor_shift(a + ((int32_t)1 << (uint8_t)(f->shift - 17u)), (uint8_t)(f->shift - 16u));
+        } else if (ac_mul32x16_shift(d, f->k, f->shift, &inc) != AC_OK) {
             sat = 1u;
         }
         f->y = ac_sat_add(f->y, inc, &sat);
     }
-    *lagged = ac_sat_to16(ac_round_shift(f->y, AC_TEMP_LAG_EXTRA), &sat);
+    /* y within x's range (|y| <= 2^31 - 2^16) unless it clipped: AC_R16 applies */
+    if (f->y >= 0x7FFF8000L) {
+        *lagged = INT16_MAX;
+    } else {
+        *lagged = AC_R16(f->y);
+    }
     return sat ? AC_SATURATED : AC_OK;
 }
 
 ac_status ac_temp_check(const ac_temp_table *t)
 {
+    uint8_t i;
     if (t == 0) {
         return AC_ERR_NULL;
     }
     if (t->n < 1u || t->n > (uint16_t)AC_MAX_CHANNELS) {
         return AC_ERR_SIZE;
     }
-    if (t->oc_shift < 0 || t->oc_shift > 31 || t->gc_shift < 11 || t->gc_shift > 31) {
-        return AC_ERR_FORMAT;
+    for (i = 0u; i < (uint8_t)t->n; i++) {
+        if (t->o[i] > 128 || t->o[i] < -128) {
+            return AC_ERR_FORMAT;
+        }
     }
     return AC_OK;
 }
 
-/* 16 x 16 -> 32 signed product */
-#define MUL16(a, b) ac_i_from_u(ac_mac16(0u, (int16_t)(a), (int16_t)(b)))
+/* the largest |gc dTg| (Q.32) that rounds to |e| <= AC_TEMP_E_MAX */
+#define E32_MAX ((int32_t)AC_TEMP_E_MAX * 8192L + 4095L)
 
 ac_status ac_temp_correct(const ac_temp_table *t, int16_t t_off, int16_t t_gain, const int16_t *x,
                           int16_t *y)
 {
     uint8_t sat = 0u;
-    uint8_t i, os, gs;
+    uint8_t i;
     int16_t dto, dtg;
     ac_status st;
     if (x == 0 || y == 0) {
@@ -78,38 +97,42 @@ ac_status ac_temp_correct(const ac_temp_table *t, int16_t t_off, int16_t t_gain,
     }
     dto = ac_sat_to16((int32_t)t_off - (int32_t)t->t_ref, &sat);
     dtg = ac_sat_to16((int32_t)t_gain - (int32_t)t->t_ref, &sat);
-    os = (uint8_t)t->oc_shift;
-    gs = (uint8_t)(t->gc_shift + AC_TEMP_FRAC - AC_TEMP_GAIN_FRAC); /* >= 0 by the check */
     for (i = 0u; i < (uint8_t)t->n; i++) {
-        int32_t c = MUL16(t->oc[i], dto);
-        int32_t e32 = MUL16(t->gc[i], dtg);
+        const int32_t o8 = (int32_t)t->o[i] * 256L; /* Q.16 */
+        int32_t e32 = AC_MUL16(t->gc[i], dtg);        /* Q.32 */
         int32_t w, g;
         int16_t e, e2, e3, r, w16;
-        if (os != 0u) {
-            c = ac_round_shift(c, os);
-        }
-        if (gs != 0u) {
-            e32 = ac_round_shift(e32, gs);
-        }
-        if (e32 > AC_TEMP_E_MAX) {
-            e32 = AC_TEMP_E_MAX;
+        /* |o 2^8 + oc dTo| <= 2^15 + 2^30: one subtraction from x 2^16, clipped only when w
+         * itself leaves int32 */
+        w = ac_sat_sub((int32_t)x[i] * 65536L, o8 + AC_MUL16(t->oc[i], dto), &sat);
+        if (e32 > E32_MAX) {
+            e = AC_TEMP_E_MAX;
             sat = 1u;
-        } else if (e32 < -AC_TEMP_E_MAX) {
-            e32 = -AC_TEMP_E_MAX;
+        } else if (e32 < -E32_MAX) {
+            e = -AC_TEMP_E_MAX;
             sat = 1u;
+        } else {
+            e = (int16_t)AC_R13(e32);
         }
-        e = (int16_t)e32;
         /* |e| <= 28672: |e2| <= 1568, |e3| <= 86, |r| <= 30326 */
-        e2 = (int16_t)ac_round_shift(MUL16(e, e), AC_TEMP_GAIN_FRAC);
-        e3 = (int16_t)ac_round_shift(MUL16(e2, e), AC_TEMP_GAIN_FRAC);
-        r = (int16_t)(-e + e2 - e3);
-        /* |x 2^8| <= 2^23, |o| <= 2^15 in a checked table's use, |c| <= 2^30 */
-        w = ac_sat_sub(ac_i_from_u((uint32_t)(int32_t)x[i] << AC_OFFSET_FRAC) - (int32_t)t->o[i], c, &sat);
-        w16 = ac_sat_to16(ac_round_shift(w, AC_OFFSET_FRAC), &sat);
-        g = ac_round_shift(MUL16(w16, r), (uint8_t)(AC_TEMP_GAIN_FRAC - AC_OFFSET_FRAC));
+        e2 = (int16_t)AC_R19(AC_MUL16(e, e));
+        e3 = (int16_t)AC_R19(AC_MUL16(e2, e));
+        r = (int16_t)(e2 - e - e3);
+        if (w >= 0x7FFF8000L) {
+            w16 = INT16_MAX;
+            sat = 1u;
+        } else {
+            w16 = AC_R16(w);
+        }
+        g = AC_R3(AC_MUL16(w16, r)); /* |w16 r| < 2^30 */
         w = ac_sat_add(w, g, &sat);
-        w = ac_sat_add(w, (int32_t)t->o[i], &sat);
-        y[i] = ac_sat_to16(ac_round_shift(w, AC_OFFSET_FRAC), &sat);
+        w = ac_sat_add(w, o8, &sat);
+        if (w >= 0x7FFF8000L) {
+            y[i] = INT16_MAX;
+            sat = 1u;
+        } else {
+            y[i] = AC_R16(w);
+        }
     }
     return sat ? AC_SATURATED : AC_OK;
 }

@@ -9,7 +9,11 @@
  *   z_{k+1} = clip16(x - C(z_k)),  y = z_K,
  *   C(z) = round(g z 2^-shift),  g = round(h z 2^-15),  h = a2 + round(a3 z 2^-15)
  * with a2[i] = c2 2^(15 + shift), a3[i] = c3 2^(30 + shift) (|a2| + |a3| <= 32767): three
- * 16 x 16 multiplies an iteration, 3 AC_NONLIN_ITERATIONS a channel.
+ * 16 x 16 multiplies an iteration, 3 AC_NONLIN_ITERATIONS a channel.  shift in 0..30; C's
+ * rounding is a word move for shift >= 16 (the nonlinearity at the full int16 scale below half
+ * the reading, |c2| 2^15 + |c3| 2^30 < 1/2: a 16-bit chip), byte moves and up to 7 one-bit
+ * shifts for 8..15 (the seed's 1250 counts per g with a cube term of 0.1 % at 1 g: 15), and
+ * the generic rounding below 8.
  * Convergence: each iteration shrinks the distance to the exact inverse by
  * L = max |2 c2 z + 3 c3 z^2| over the readings (L = 0.02 for 0.5 % of the reading at 1 g
  * on a +-2 g chip: after 3 iterations the exact inverse is within L^3 C(z)).
@@ -29,7 +33,7 @@
 
 typedef struct ac_nonlin_table {
     uint16_t n;                   /* channels, 1..AC_MAX_CHANNELS */
-    int8_t shift;                 /* 0..31 */
+    int8_t shift;                 /* 0..30 */
     int16_t a2[AC_MAX_CHANNELS];  /* c2 2^(15 + shift) */
     int16_t a3[AC_MAX_CHANNELS];  /* c3 2^(30 + shift) */
 } ac_nonlin_table;

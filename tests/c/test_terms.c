@@ -63,8 +63,7 @@ static void test_temp_correct(void)
     t.n = 0;
     CHECK_STATUS(ac_temp_check(&t), AC_ERR_SIZE);
     t.n = 1;
-    t.oc_shift = 0;
-    t.gc_shift = 10;
+    t.o[0] = -129;
     CHECK_STATUS(ac_temp_check(&t), AC_ERR_FORMAT);
     y[0] = 0x5A5A;
     x[0] = 0;
@@ -76,8 +75,6 @@ static void test_temp_correct(void)
         ac_status st;
         t.n = (uint16_t)rnd(1, AC_MAX_CHANNELS);
         t.t_ref = (int16_t)rnd(0, 40 * 256);
-        t.oc_shift = (int8_t)rnd(6, 14);
-        t.gc_shift = (int8_t)rnd(22, 31);
         for (i = 0; i < t.n; i++) {
             t.oc[i] = (int16_t)rnd(-32767, 32767);
             t.gc[i] = (int16_t)rnd(-32767, 32767);
@@ -91,7 +88,7 @@ static void test_temp_correct(void)
         }
         for (i = 0; i < t.n; i++) {
             double dto = (toff - t.t_ref) / 256.0, dtg = (tgain - t.t_ref) / 256.0;
-            double oc = ldexp(t.oc[i], -t.oc_shift), gc = ldexp(t.gc[i], -t.gc_shift), o = t.o[i] / 256.0;
+            double oc = ldexp(t.oc[i], -AC_TEMP_OC_FRAC), gc = ldexp(t.gc[i], -AC_TEMP_GC_FRAC), o = t.o[i] / 256.0;
             double e = fabs(gc * dtg);
             double ref = o + (x[i] - o - oc * dto) / (1.0 + gc * dtg);
             double bound = 0.5 + ldexp(1.0, -8) + 0.54 * e + (fabs((double)x[i]) + 1.0) * (ldexp(1.0, -18) + pow(e, 4) / (1 - e));
@@ -143,7 +140,9 @@ static void test_nonlin(void)
     int16_t x[AC_MAX_CHANNELS], y[AC_MAX_CHANNELS];
     int it, i, k;
     t.n = 1;
-    t.shift = 32;
+    t.shift = 31;
+    CHECK_STATUS(ac_nonlin_check(&t), AC_ERR_FORMAT);
+    t.shift = -1;
     CHECK_STATUS(ac_nonlin_check(&t), AC_ERR_FORMAT);
     t.shift = 20;
     t.a2[0] = 20000;
@@ -157,7 +156,7 @@ static void test_nonlin(void)
     for (it = 0; it < 20000; it++) {
         ac_status st;
         t.n = (uint16_t)rnd(1, AC_MAX_CHANNELS);
-        t.shift = (int8_t)rnd(14, 24);
+        t.shift = (int8_t)rnd(10, 26);
         for (i = 0; i < t.n; i++) {
             long a2 = rnd(-20000, 20000), room = 32767 - labs(a2);
             t.a2[i] = (int16_t)a2;

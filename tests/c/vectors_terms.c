@@ -75,17 +75,22 @@ static void vec_temp_correct(void)
         int16_t t_off, t_gain;
         vt_temp.n = (t % 29u == 3u) ? 0u : n;
         vt_temp.t_ref = vt_i16();
-        /* any shift (-1 and 10 refused) in a third of the tables, else realistic ones */
-        vt_temp.oc_shift = (int8_t)((t % 3u == 0u) ? rnd_range(-1, 31) : rnd_range(8, 16));
-        vt_temp.gc_shift = (int8_t)((t % 3u == 0u) ? rnd_range(10, 31) : rnd_range(24, 31));
         for (i = 0u; i < n; i++) {
             vt_temp.oc[i] = (t & 4u) ? vt_i16() : (int16_t)rnd_range(-3000, 3000);
-            vt_temp.gc[i] = (t & 8u) ? vt_i16() : (int16_t)rnd_range(-20000, 20000);
-            vt_temp.o[i] = (int16_t)rnd_range(-128, 127);
+            vt_temp.gc[i] = (t & 8u) ? vt_i16() : (int16_t)rnd_range(-5000, 5000);
+            vt_temp.o[i] = (int16_t)((t % 23u == 4u) ? 129 : rnd_range(-128, 128)); /* 129 refused */
             x[i] = vt_i16();
         }
-        t_off = (t & 16u) ? vt_i16() : (int16_t)(vt_temp.t_ref / 2 + (int16_t)rnd_range(-5000, 5000));
-        t_gain = (t & 32u) ? vt_i16() : (int16_t)(vt_temp.t_ref / 2 + (int16_t)rnd_range(-5000, 5000));
+        if (t & 16u) {
+            t_off = vt_i16();
+        } else {
+            t_off = (int16_t)((int32_t)vt_temp.t_ref / 2 + rnd_range(-5000, 5000));
+        }
+        if (t & 32u) {
+            t_gain = vt_i16();
+        } else {
+            t_gain = (int16_t)((int32_t)vt_temp.t_ref / 2 + rnd_range(-5000, 5000));
+        }
         TAG("VTC");
         h16(t_off);
         h16(t_gain);
@@ -160,7 +165,7 @@ static void vec_nonlin(void)
     for (t = 0u; t < 120u; t++) {
         uint16_t n = (uint16_t)(1u + below(AC_MAX_CHANNELS));
         vt_nl.n = n;
-        vt_nl.shift = (int8_t)((t % 3u == 0u) ? rnd_range(-1, 31) : rnd_range(14, 31));
+        vt_nl.shift = (int8_t)((t % 3u == 0u) ? rnd_range(-1, 31) : rnd_range(12, 30));
         for (i = 0u; i < n; i++) {
             int32_t a2 = (t & 4u) ? (int32_t)rnd_range(-32767, 32767) : (int32_t)rnd_range(-3000, 3000);
             int32_t room = 32767L - (a2 < 0 ? -a2 : a2);

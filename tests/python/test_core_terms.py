@@ -11,7 +11,7 @@ from hypothesis import assume, given, strategies as st
 from accelcal import native
 from accelcal._core import ffi, lib
 from accelcal.firmware import terms
-from accelcal.firmware.terms_fixed import E_MAX, lag_bound, lag_fixed, nonlin_bound, temp_bound
+from accelcal.firmware.terms_fixed import E_MAX, GC_FRAC, OC_FRAC, lag_bound, lag_fixed, nonlin_bound, temp_bound
 
 I16 = st.one_of(st.integers(-32768, 32767), st.sampled_from([-32768, -32767, -1, 0, 1, 32766, 32767]))
 TEMP_LSB = 2.0 ** -lib.AC_TEMP_FRAC
@@ -74,20 +74,18 @@ def test_lag_init_range():
 @st.composite
 def temp_tables(draw):
     n = draw(st.integers(1, lib.AC_MAX_CHANNELS))
-    oc_shift = draw(st.integers(0, 31))
-    gc_shift = draw(st.integers(11, 31))
     oc = draw(st.lists(I16.filter(lambda v: v > -32768), min_size=n, max_size=n))
     gc = draw(st.lists(I16.filter(lambda v: v > -32768), min_size=n, max_size=n))
-    o = draw(st.lists(st.integers(-128, 127), min_size=n, max_size=n))
+    o = draw(st.lists(st.integers(-128, 128), min_size=n, max_size=n))
     t_ref = draw(I16)
-    return n, t_ref, oc_shift, gc_shift, oc, gc, o
+    return n, t_ref, oc, gc, o
 
 
 def temp_reference(table, t_off, t_gain, x):
-    n, t_ref, oc_shift, gc_shift, oc, gc, o = table
+    n, t_ref, oc, gc, o = table
     dto = clip16(t_off - t_ref) * TEMP_LSB
     dtg = clip16(t_gain - t_ref) * TEMP_LSB
-    occ, gcc, oo = (np.asarray(oc) * 2.0 ** -oc_shift, np.asarray(gc) * 2.0 ** -gc_shift, np.asarray(o) * O_LSB)
+    occ, gcc, oo = (np.asarray(oc) * 2.0 ** -OC_FRAC, np.asarray(gc) * 2.0 ** -GC_FRAC, np.asarray(o) * O_LSB)
     e = gcc * dtg
     b = oo    # counts about the trim: the reference's offsets are o
     ref = terms.temperature_correct(np.asarray(x, float)[None, :], b, 0.0, occ, gcc, [dto], [dtg])[0]
@@ -100,15 +98,15 @@ def test_temp_correct_within_bound(table, t_off, t_gain, data):
     """ac_temp_correct against temperature_correct with the table's coefficients: within
     temp_bound wherever it does not flag a clip; and it flags one only where a value leaves
     its range (|e| beyond AC_TEMP_E_MAX, a temperature difference or a reading beyond int16)."""
-    n, t_ref, oc_shift, gc_shift, oc, gc, o = table
+    n, t_ref, oc, gc, o = table
     x = data.draw(st.lists(I16, min_size=n, max_size=n))
-    t = native.new_temp_table(t_ref, oc_shift, gc_shift, oc, gc, o)
+    t = native.new_temp_table(t_ref, oc, gc, o)
     y, sat = native.temp_correct(t, t_off, t_gain, x)
     ref, e, dt_clipped = temp_reference(table, t_off, t_gain, x)
     if not sat:
         assert np.all(np.abs(y - ref) <= temp_bound(x, e))
     else:
-        w = np.asarray(x) - np.asarray(o) * O_LSB - np.asarray(oc) * 2.0 ** -oc_shift * clip16(t_off - t_ref) * TEMP_LSB
+        w = np.asarray(x) - np.asarray(o) * O_LSB - np.asarray(oc) * 2.0 ** -OC_FRAC * clip16(t_off - t_ref) * TEMP_LSB
         assert (dt_clipped or np.any(np.abs(e) > E_MAX * 2.0 ** -19 - 2.0 ** -20)
                 or np.any(np.abs(ref) > 32767 - 1) or np.any(np.abs(w) > 32767 - 1))
 
@@ -117,16 +115,15 @@ def test_temp_correct_within_bound(table, t_off, t_gain, data):
 @given(temp_tables(), st.integers(-40 * 256, 40 * 256), st.integers(-40 * 256, 40 * 256), st.data())
 def test_temp_correct_realistic_no_clip(table, dto, dtg, data):
     """Within +-40 degC of t_ref, gain tempcos up to 1e-3/degC and offset tempcos up to 100
-    counts/degC, on readings within +-30000 counts: never a clip, and within 0.6 counts
+    counts/degC, on readings within +-26000 counts: never a clip, and within 0.6 counts
     (+ |x| 2^-17) of the float reference."""
-    n, t_ref, oc_shift, gc_shift, oc, gc, o = table
-    oc_shift, gc_shift = 8, 24
+    n, t_ref, oc, gc, o = table
     oc = data.draw(st.lists(st.integers(-100 * 256, 100 * 256), min_size=n, max_size=n))
     gc = data.draw(st.lists(st.integers(-16777, 16777), min_size=n, max_size=n))   # 1e-3 2^24
     x = data.draw(st.lists(st.integers(-26000, 26000), min_size=n, max_size=n))
     t_ref = 25 * 256
-    table = (n, t_ref, oc_shift, gc_shift, oc, gc, o)
-    t = native.new_temp_table(t_ref, oc_shift, gc_shift, oc, gc, o)
+    table = (n, t_ref, oc, gc, o)
+    t = native.new_temp_table(t_ref, oc, gc, o)
     y, sat = native.temp_correct(t, t_ref + dto, t_ref + dtg, x)
     ref, e, _ = temp_reference(table, t_ref + dto, t_ref + dtg, x)
     assert not sat
@@ -134,12 +131,12 @@ def test_temp_correct_realistic_no_clip(table, dto, dtg, data):
 
 
 def test_temp_table_checks():
-    t = native.new_temp_table(0, 0, 11, [0], [0], [0])
+    t = native.new_temp_table(0, [0], [0], [129])
     x = np.zeros(1, np.int16)
-    t.gc_shift = 10
     with pytest.raises(Exception):
-        native.temp_correct(t, 0, 0, x)
-    t.gc_shift, t.n = 11, 0
+        native.temp_correct(t, 0, 0, x)                 # |o| > 128: not a residual offset
+    assert lib.ac_temp_check(t) == lib.AC_ERR_FORMAT
+    t.o[0], t.n = 0, 0
     assert lib.ac_temp_check(t) == lib.AC_ERR_SIZE
 
 
@@ -190,7 +187,7 @@ def test_skew_checks_and_caller_buffer():
 @st.composite
 def nonlin_cases(draw):
     n = draw(st.integers(1, lib.AC_MAX_CHANNELS))
-    shift = draw(st.integers(0, 31))
+    shift = draw(st.integers(0, 30))
     a2, a3 = [], []
     for _ in range(n):
         v2 = draw(st.integers(-32767, 32767))
@@ -237,7 +234,7 @@ def test_nonlin_realistic_tight(n, data):
     c3 = np.asarray(data.draw(st.lists(st.floats(-0.025, 0.025), min_size=n, max_size=n))) / 32768 ** 2
     shift = int(math.floor(math.log2(32766 / max(float(np.max(np.abs(c2) * 2 ** 15 + np.abs(c3) * 2 ** 30)),
                                                  1e-12))))
-    shift = min(31, shift)
+    shift = min(30, shift)
     a2 = np.floor(c2 * 2.0 ** (15 + shift) + 0.5).astype(int)
     a3 = np.floor(c3 * 2.0 ** (30 + shift) + 0.5).astype(int)
     assume(np.all(np.abs(a2) + np.abs(a3) <= 32767))
@@ -265,7 +262,7 @@ def test_nonlin_undoes_the_forward_term():
     # fixed-point iteration from z_0 = raw: |z_K - lin| <= L^K |raw - lin|
     assert np.all(np.abs(ref - lin) <= L ** terms.NONLIN_ITERATIONS * np.abs(raw - lin) + 1e-9)
     assert np.max(np.abs(ref - lin)) < 0.06
-    shift = min(31, int(math.floor(math.log2(32766 / (abs(c2[0]) * 2 ** 15 + abs(c3[0]) * 2 ** 30)))))
+    shift = min(30, int(math.floor(math.log2(32766 / (abs(c2[0]) * 2 ** 15 + abs(c3[0]) * 2 ** 30)))))
     t = native.new_nonlin_table(shift, [round(c2[0] * 2 ** (15 + shift))], [round(c3[0] * 2 ** (30 + shift))])
     y = np.array([native.nonlin_invert(t, np.array([round(v)], np.int16))[0][0] for v in raw[:, 0]])
     assert np.max(np.abs(y - lin[:, 0])) <= 1.0

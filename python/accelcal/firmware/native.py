@@ -183,10 +183,11 @@ def rate_integrate(alpha_q: np.ndarray, dt_m: int, dt_shift: int,
 # --------------------------------------------------------------------------
 
 
-def new_temp_table(t_ref: int, oc_shift: int, gc_shift: int, oc, gc, o):
-    """An ``ac_temp_table`` (ac_temp.h) from its integer fields (oc, gc, o: (N,))."""
+def new_temp_table(t_ref: int, oc, gc, o):
+    """An ``ac_temp_table`` (ac_temp.h) from its integer fields (oc Q.AC_TEMP_OC_FRAC, gc
+    Q.AC_TEMP_GC_FRAC, o Q.AC_OFFSET_FRAC: (N,))."""
     t = ffi.new("ac_temp_table *")
-    t.n, t.t_ref, t.oc_shift, t.gc_shift = len(oc), int(t_ref), int(oc_shift), int(gc_shift)
+    t.n, t.t_ref = len(oc), int(t_ref)
     for i in range(len(oc)):
         t.oc[i], t.gc[i], t.o[i] = int(oc[i]), int(gc[i]), int(o[i])
     return t

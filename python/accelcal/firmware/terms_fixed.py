@@ -3,7 +3,8 @@ the header's tables and of ``resolve --engine fixed``), the chain run through th
 the error bounds that include/accelcal/ac_temp.h, ac_skew.h and ac_nonlin.h state.
 
 Formats (docs/firmware-terms.md): temperature degC int16 Q.8 (``AC_TEMP_FRAC``); offset
-tempco oc[i] 2^-oc_shift counts/degC; gain tempco gc[i] 2^-gc_shift 1/degC; the lag weight
+tempco oc[i] Q.8 counts/degC (``AC_TEMP_OC_FRAC``); gain tempco gc[i] Q.24 1/degC
+(``AC_TEMP_GC_FRAC``); the lag weight
 c = k 2^-shift (k in 32768..65535 unless c = 1); skew delay whole[i] + frac[i] 2^-15 samples;
 nonlinearity a2[i] = c2 2^(15 + shift), a3[i] = c3 2^(30 + shift).
 """
@@ -23,6 +24,8 @@ __all__ = ["TEMP_FRAC", "TermsTables", "quantize_terms", "lag_fixed", "apply_ter
            "temp_bound", "nonlin_bound", "temp_to_fixed"]
 
 TEMP_FRAC = lib.AC_TEMP_FRAC
+OC_FRAC = lib.AC_TEMP_OC_FRAC
+GC_FRAC = lib.AC_TEMP_GC_FRAC
 GAIN_FRAC = lib.AC_TEMP_GAIN_FRAC
 SKEW_FRAC = lib.AC_SKEW_FRAC
 E_MAX = lib.AC_TEMP_E_MAX
@@ -34,7 +37,7 @@ class TermsTables:
     """The terms' integer tables for one calibration (None where it carries none)."""
     n: int
     dt_s: float
-    temp: dict | None = None     # t_ref, oc_shift, gc_shift, oc, gc, o, lag_off/lag_gain (k, shift), tau_off/tau_gain (s)
+    temp: dict | None = None     # t_ref, oc, gc, o, lag_off/lag_gain (k, shift), tau_off/tau_gain (s)
     skew: dict | None = None     # len, whole, frac, latency
     nonlin: dict | None = None   # shift, a2, a3
 
@@ -48,7 +51,7 @@ class TermsTables:
     def temp_coefficients(self) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
         """(t_ref degC, oc counts/degC, gc 1/degC, o counts) of the temperature table."""
         t = self.temp
-        return (t["t_ref"] / 2.0 ** TEMP_FRAC, t["oc"] / 2.0 ** t["oc_shift"], t["gc"] / 2.0 ** t["gc_shift"],
+        return (t["t_ref"] / 2.0 ** TEMP_FRAC, t["oc"] / 2.0 ** OC_FRAC, t["gc"] / 2.0 ** GC_FRAC,
                 t["o"] / 2.0 ** native.FORMATS.offset_frac)
 
     def nonlin_coefficients(self) -> tuple[np.ndarray, np.ndarray]:
@@ -61,7 +64,7 @@ class TermsTables:
         out = {}
         if self.temp is not None:
             t = self.temp
-            out["temp"] = native.new_temp_table(t["t_ref"], t["oc_shift"], t["gc_shift"], t["oc"], t["gc"], t["o"])
+            out["temp"] = native.new_temp_table(t["t_ref"], t["oc"], t["gc"], t["o"])
         if self.skew is not None:
             out["skew"] = native.new_skew_table(self.skew["len"], self.skew["whole"], self.skew["frac"])
         if self.nonlin is not None:
@@ -102,12 +105,9 @@ def quantize_terms(cal, n: int, dt_s: float, offset_q) -> TermsTables:
     tt = TermsTables(n=n, dt_s=float(dt_s))
     if terms["temperature"]:
         oc, gc = channel_values(cal.offset_tc, n), channel_values(cal.gain_tc, n)
-        oc_shift = _shift_for(float(np.max(np.abs(oc))), 0, 31, "offset_tc_counts_per_c")
-        gc_shift = _shift_for(float(np.max(np.abs(gc))), 11, 31, "gain_tc_per_c")
         tt.temp = dict(t_ref=int(to_fixed(cal.temp_ref_c or 0.0, TEMP_FRAC, "temperature_ref_c", -32768, 32767)),
-                       oc_shift=oc_shift, gc_shift=gc_shift,
-                       oc=to_fixed(oc, oc_shift, "offset_tc_counts_per_c", -32767, 32767),
-                       gc=to_fixed(gc, gc_shift, "gain_tc_per_c", -32767, 32767),
+                       oc=to_fixed(oc, OC_FRAC, "offset_tc_counts_per_c", -32767, 32767),
+                       gc=to_fixed(gc, GC_FRAC, "gain_tc_per_c", -32767, 32767),
                        o=np.asarray(offset_q, np.int64),
                        lag_off=lag_fixed(cal.temp_offset_tau_s, dt_s), lag_gain=lag_fixed(cal.temp_gain_tau_s, dt_s),
                        tau_off=cal.temp_offset_tau_s, tau_gain=cal.temp_gain_tau_s)
@@ -125,7 +125,7 @@ def quantize_terms(cal, n: int, dt_s: float, offset_q) -> TermsTables:
     if terms["nonlinearity"]:
         c2, c3 = nonlinearity_coefficients(cal.sensitivity, cal.nonlin_k2, cal.nonlin_k3)
         u = np.abs(c2) * 2.0 ** 15 + np.abs(c3) * 2.0 ** 30
-        shift = _shift_for(float(u.max()), 0, 31, "the nonlinearity at full scale", 32766.0)
+        shift = _shift_for(float(u.max()), 0, 30, "the nonlinearity at full scale", 32766.0)
         tt.nonlin = dict(shift=shift, a2=to_fixed(c2, 15 + shift, "nonlin_k2", -32767, 32767),
                          a3=to_fixed(c3, 30 + shift, "nonlin_k3", -32767, 32767))
     return tt

@@ -74,7 +74,7 @@ def terms_header_parts(tt: TermsTables, prefix: str, reading_span: float, signed
                 f"#define {p}_TEMP_GAIN_LAG_SHIFT {int(t['lag_gain'][1])}u",
                 f"extern const ac_temp_table {p}_TEMP;"]
         dfn += [f"const ac_temp_table {p}_TEMP = {{",
-                f"    {n}u, {int(t['t_ref'])}, {int(t['oc_shift'])}, {int(t['gc_shift'])}, /* n, t_ref, oc_shift, gc_shift */",
+                f"    {n}u, {int(t['t_ref'])}, /* n, t_ref */",
                 f"    {_row(t['oc'])}, /* oc */", f"    {_row(t['gc'])}, /* gc */", f"    {_row(t['o'])} /* o */", "};"]
     if tt.skew is not None:
         s = tt.skew
