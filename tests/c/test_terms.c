@@ -75,7 +75,7 @@ static void test_temp_correct(void)
         ac_status st;
         t.n = (uint16_t)rnd(1, AC_MAX_CHANNELS);
         t.t_ref = (int16_t)rnd(0, 40 * 256);
-        for (i = 0; i < t.n; i++) {
+        for (i = 0; i < (int)t.n; i++) {
             t.oc[i] = (int16_t)rnd(-32767, 32767);
             t.gc[i] = (int16_t)rnd(-32767, 32767);
             t.o[i] = (int16_t)rnd(-128, 127);
@@ -86,7 +86,7 @@ static void test_temp_correct(void)
         if (st != AC_OK) {
             continue;
         }
-        for (i = 0; i < t.n; i++) {
+        for (i = 0; i < (int)t.n; i++) {
             double dto = (toff - t.t_ref) / 256.0, dtg = (tgain - t.t_ref) / 256.0;
             double oc = ldexp(t.oc[i], -AC_TEMP_OC_FRAC), gc = ldexp(t.gc[i], -AC_TEMP_GC_FRAC), o = t.o[i] / 256.0;
             double e = fabs(gc * dtg);
@@ -157,7 +157,7 @@ static void test_nonlin(void)
         ac_status st;
         t.n = (uint16_t)rnd(1, AC_MAX_CHANNELS);
         t.shift = (int8_t)rnd(10, 26);
-        for (i = 0; i < t.n; i++) {
+        for (i = 0; i < (int)t.n; i++) {
             long a2 = rnd(-20000, 20000), room = 32767 - labs(a2);
             t.a2[i] = (int16_t)a2;
             t.a3[i] = (int16_t)rnd(-room, room);
@@ -168,7 +168,7 @@ static void test_nonlin(void)
         if (st != AC_OK) {
             continue;
         }
-        for (i = 0; i < t.n; i++) {
+        for (i = 0; i < (int)t.n; i++) {
             double c2 = ldexp(t.a2[i], -(15 + t.shift)), c3 = ldexp(t.a3[i], -(30 + t.shift));
             double z = x[i], zk = z, zm, L, E, D = 0.0;
             for (k = 0; k < AC_NONLIN_ITERATIONS; k++) {
