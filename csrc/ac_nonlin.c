@@ -28,23 +28,30 @@ ac_status ac_nonlin_invert(const ac_nonlin_table *t, const int16_t *x, int16_t *
     uint8_t sat = 0u;
     uint8_t i, it, sh;
     int32_t bias;
-    ac_status st;
+    int32_t off;
     if (x == 0 || y == 0) {
         return AC_ERR_NULL;
     }
-    st = ac_nonlin_check(t);
-    if (st != AC_OK) {
-        return st;
+    /* per call the cheap checks (n, shift); |a2| + |a3| <= 32767 is ac_nonlin_check's, once per
+     * table: a table that breaks it gives wrong numbers, never undefined behaviour */
+    if (t == 0) {
+        return AC_ERR_NULL;
+    }
+    if (t->n < 1u || t->n > (uint16_t)AC_MAX_CHANNELS) {
+        return AC_ERR_SIZE;
+    }
+    if (t->shift < 0 || t->shift > 30) {
+        return AC_ERR_FORMAT;
     }
     /* shift >= 8: C = round(p 2^-shift) = floor((p + 2^(shift-1) + 2^30) 2^-16 2^-(shift-16))
      * - 2^(30-shift) (or 2^-8 2^-(shift-8)): the bias makes the sum non-negative (|p| <= 2^30),
      * the shift by 16 is a word move, by 8 byte moves */
     sh = (uint8_t)t->shift;
     bias = (sh >= 8u) ? (int32_t)(0x40000000UL + ((uint32_t)1u << (uint8_t)(sh - 1u))) : 0;
+    off = (sh >= 8u) ? (int32_t)((uint32_t)1u << (uint8_t)(30u - sh)) : 0;
     for (i = 0u; i < (uint8_t)t->n; i++) {
         const int16_t a2 = t->a2[i], a3 = t->a3[i];
         const int16_t x0 = x[i];
-        const int32_t off = (sh >= 8u) ? (int32_t)((uint32_t)1u << (uint8_t)(30u - sh)) : 0;
         int16_t z = x0;
         for (it = 0u; it < (uint8_t)AC_NONLIN_ITERATIONS; it++) {
             /* |h| <= |a2| + |a3| <= 32767, |g| <= |h|, |g z| <= 2^30 */

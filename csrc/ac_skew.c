@@ -44,9 +44,8 @@ ac_status ac_skew_init(ac_skew_line *line, const ac_skew_table *t, int16_t *buf,
 
 ac_status ac_skew_step(const ac_skew_table *t, ac_skew_line *line, const int16_t *x, int16_t *y)
 {
-    uint16_t n, len, pos, s;
+    uint16_t n, len, pos;
     uint8_t i;
-    int16_t *slot;
     if (t == 0 || line == 0 || x == 0 || y == 0 || line->buf == 0) {
         return AC_ERR_NULL;
     }
@@ -62,6 +61,7 @@ ac_status ac_skew_step(const ac_skew_table *t, ac_skew_line *line, const int16_t
         }
     }
     if (line->started == 0u) {
+        uint16_t s;
         for (s = 0u; s < len; s++) {
             for (i = 0u; i < (uint8_t)n; i++) {
                 line->buf[s * n + i] = x[i];
@@ -70,6 +70,7 @@ ac_status ac_skew_step(const ac_skew_table *t, ac_skew_line *line, const int16_t
         line->started = 1u;
         pos = 0u;
     } else {
+        int16_t *slot;
         pos = (uint16_t)(line->pos + 1u);
         if (pos >= len) {
             pos = 0u;

@@ -41,7 +41,10 @@ typedef struct ac_nonlin_table {
 /* AC_OK if n and shift are in range and |a2| + |a3| <= 32767, else AC_ERR_SIZE / AC_ERR_FORMAT. */
 ac_status ac_nonlin_check(const ac_nonlin_table *t);
 
-/* x[0..n-1] -> y[0..n-1] (may be the same array). */
+/* x[0..n-1] -> y[0..n-1] (may be the same array).  Per call only n and shift are checked
+ * (AC_ERR_SIZE, AC_ERR_FORMAT); check a table you did not get from a generated header once
+ * with ac_nonlin_check (one that breaks |a2| + |a3| <= 32767 gives wrong numbers, never
+ * undefined behaviour). */
 ac_status ac_nonlin_invert(const ac_nonlin_table *t, const int16_t *x, int16_t *y);
 
 #endif /* AC_NONLIN_H */

@@ -69,7 +69,9 @@ ac_status ac_temp_lag_step(ac_temp_lag *f, int16_t temp, int16_t *lagged);
 ac_status ac_temp_check(const ac_temp_table *t);
 
 /* x[0..n-1] -> y[0..n-1] (may be the same array) with t_off, t_gain the lagged temperatures
- * (Q.AC_TEMP_FRAC degC) of the offset and the gain; AC_SATURATED if a value clipped. */
+ * (Q.AC_TEMP_FRAC degC) of the offset and the gain; AC_SATURATED if a value clipped.  Per call
+ * only n is checked (AC_ERR_SIZE); check a table you did not get from a generated header once
+ * with ac_temp_check (one with |o| > 128 gives wrong numbers, never undefined behaviour). */
 ac_status ac_temp_correct(const ac_temp_table *t, int16_t t_off, int16_t t_gain, const int16_t *x,
                           int16_t *y);
 

@@ -67,8 +67,12 @@ static void test_temp_correct(void)
     CHECK_STATUS(ac_temp_check(&t), AC_ERR_FORMAT);
     y[0] = 0x5A5A;
     x[0] = 0;
-    CHECK_STATUS(ac_temp_correct(&t, 0, 0, x, y), AC_ERR_FORMAT);
+    t.n = 0;
+    CHECK_STATUS(ac_temp_correct(&t, 0, 0, x, y), AC_ERR_SIZE);
     CHECK_EQ(y[0], 0x5A5A);
+    t.n = 1;
+    t.o[0] = 0;
+    CHECK_STATUS(ac_temp_check(&t), AC_OK);
     CHECK_STATUS(ac_temp_correct(NULL, 0, 0, x, y), AC_ERR_NULL);
     for (it = 0; it < 20000; it++) {
         int16_t toff = (int16_t)rnd(-30 * 256, 60 * 256), tgain = (int16_t)rnd(-30 * 256, 60 * 256);

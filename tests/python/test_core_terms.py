@@ -132,12 +132,11 @@ def test_temp_correct_realistic_no_clip(table, dto, dtg, data):
 
 def test_temp_table_checks():
     t = native.new_temp_table(0, [0], [0], [129])
-    x = np.zeros(1, np.int16)
-    with pytest.raises(Exception):
-        native.temp_correct(t, 0, 0, x)                 # |o| > 128: not a residual offset
-    assert lib.ac_temp_check(t) == lib.AC_ERR_FORMAT
+    assert lib.ac_temp_check(t) == lib.AC_ERR_FORMAT     # |o| > 128: not a residual offset
     t.o[0], t.n = 0, 0
     assert lib.ac_temp_check(t) == lib.AC_ERR_SIZE
+    with pytest.raises(Exception):
+        native.temp_correct(t, 0, 0, np.zeros(0, np.int16))   # n = 0: refused per call
 
 
 # ---------------------------------------------------------------- the skew
