@@ -25,6 +25,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from .calibrate import calibrate_recordings
+from .calibrate.refine import RefineResult, refine
 from .io.calibration import Calibration, load_calibration, save_calibration
 from .cli.calibrate_command import record_warnings
 from .io.device import Device, default_device, load_device, save_device
@@ -42,7 +43,8 @@ from .readings.static import MIN_POSE_S
 
 __all__ = ["Device", "Recording", "Calibration", "Columns", "ResolveResult", "AccelcalError",
            "default_device", "load_device", "save_device", "read_recording", "write_recording",
-           "load_calibration", "save_calibration", "as_recording", "calibrate", "resolve", "diagnose",
+           "load_calibration", "save_calibration", "as_recording", "calibrate", "refine", "RefineResult", "resolve",
+           "diagnose",
            "header", "simulate", "attitude", "displacement", "rate", "convert", "Converted"]
 
 

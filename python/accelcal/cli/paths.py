@@ -46,7 +46,7 @@ def check_output_dir(path, option: str) -> None:
 
 
 #: the options that name files a command reads, and those it writes
-INPUT_OPTIONS = ("device", "calibration", "recordings", "recording", "input", "regions")
+INPUT_OPTIONS = ("device", "calibration", "recordings", "recording", "input", "regions", "diagnosis")
 OUTPUT_OPTIONS = (("output", "-o"), ("json", "--json"), ("device_out", "--device-out"))
 
 
