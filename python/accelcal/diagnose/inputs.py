@@ -1,6 +1,7 @@
 """Inputs of the diagnosis: devices, calibrations and recordings as objects or paths."""
 from __future__ import annotations
 
+import dataclasses
 import os
 from typing import Any
 
@@ -9,6 +10,7 @@ import numpy as np
 from ..io.calibration import Calibration, load_calibration
 from ..io.device import Device, load_device
 from ..errors import AccelcalError, InputError
+from ..firmware.terms import correct_readings, has_terms
 from ..io.recording import Recording, check_for_device, read_recording
 
 
@@ -50,3 +52,34 @@ def as_recordings(recordings: Any, device) -> list:
     if not out:
         raise InputError("<arguments>", "no recording given")
     return out
+
+
+def with_terms_applied(cal, recs: list, device) -> tuple[Any, list, list[str]]:
+    """A calibration with correctable terms beyond the model's own (a nonlinearity, a time skew,
+    a thermal lag: firmware/terms.py, as ``accelcal refine`` writes them): the readings are
+    corrected by them first, as the firmware does (float reference, rounded to whole counts; a
+    reading at the converter's rails kept there), and the diagnosis is of what they leave
+    against the calibration's linear part.  Returns (calibration, recordings, notes); unchanged
+    for a calibration without such terms."""
+    terms = has_terms(cal)
+    lag = bool(cal.temp_offset_tau_s) or bool(cal.temp_gain_tau_s)
+    if not (terms["nonlinearity"] or terms["skew"] or (terms["temperature"] and lag)):
+        return cal, recs, []
+    dt = 1.0 / float(device.sample_rate_hz)
+    out = []
+    for r in recs:
+        temp = None if r.temp_c is None else np.asarray(r.temp_c, float)
+        try:
+            y = correct_readings(cal, r.raw, temp, dt)
+        except ValueError as e:
+            raise InputError(r.source, str(e), column="temp_c") from None
+        rails = (r.raw <= device.raw_min) | (r.raw >= device.raw_max)
+        y = np.where(rails, r.raw, np.clip(np.rint(y), device.raw_min, device.raw_max)).astype(np.int64)
+        out.append(dataclasses.replace(r, raw=y))
+    linear = dataclasses.replace(cal, nonlin_k2=None, nonlin_k3=None, time_skew_s=None, offset_tc=None, gain_tc=None,
+                                 temp_offset_tau_s=None, temp_gain_tau_s=None,
+                                 temp_ref_c=None)
+    named = [k for k, v in (("nonlinearity", terms["nonlinearity"]), ("time skew", terms["skew"]),
+                            ("temperature offset and gain with their lag", terms["temperature"])) if v]
+    return linear, out, [f"the calibration's {', '.join(named)} (firmware/terms.py) applied to the readings first, "
+                         "as the firmware does (rounded to whole counts); the diagnosis is of what they leave"]

@@ -17,7 +17,7 @@ from ..readings.held import distinct_recordings
 from ..motions.poses import distinct_orientations
 from ..readings.noise import code_lattice, fractional_grid, uneven_low_bits
 from .floor import setup_rows
-from .inputs import as_calibration, as_device, as_recordings
+from .inputs import as_calibration, as_device, as_recordings, with_terms_applied
 from .prepare import prepare
 from .compare import Contest, contest, model_ambiguity, time_beside_pose, time_unmodelled
 from .determined import mark_not_determined
@@ -67,6 +67,8 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     cal, cal_src = as_calibration(calibration, dev)
     # readings held for several rows (a logger faster than the sensor) are counted once
     recs, dev, held_notes = distinct_recordings(as_recordings(recordings, dev), dev)
+    cal, recs, term_notes = with_terms_applied(cal, recs, dev)
+    held_notes = held_notes + term_notes
     cands = dict(EFFECTS)
     if candidates is None:
         names = list(EFFECT_NAMES)
