@@ -165,7 +165,7 @@ def draw_effects(case: Case, sc, rng) -> dict:
         elif name == "temperature_gain":
             unit = {"gamma": rng.choice([-1.0, 1.0], N) * rng.uniform(0.5, 1.0, N) * 1e-3,
                     "tau_s": rng.uniform(30.0, 120.0), "t_ref_c": float(sc.temp_amb[0])}
-            eff[name] = _scale(sc, name, unit, ("gamma",), target)
+            eff[name] = _scale(sc, name, unit, ("gamma",), target, cap=1e-3)   # at most 1000 ppm/degC
         elif name == "time_skew":
             h = 1.0 / sc.dev.sample_rate_hz
             unit = {"tau": rng.uniform(-0.45, 0.45, N) * h}

@@ -33,6 +33,9 @@ from .refine_input import ADDED, EXISTING, NOT_CORRECTABLE, Rows, read_diagnosis
 
 #: longest thermal lag fitted, in spans of the recordings' duration
 MAX_LAG_SPANS = 4.0
+#: the thermal lag's start where neither the calibration nor the diagnosis gives one (s; at most a
+#: quarter of the recordings' span): from 0 the fit stays at the bound, the lag's slope there being ~0
+LAG_START_S = 60.0
 
 
 class Truth:
@@ -253,7 +256,7 @@ def _start(model: Model, cal: Calibration, device, diag):
     for name, (sl, shape) in L.groups.items():
         if name in lags:
             eff, given = lags[name]
-            v = given if given is not None else float(diag.params.get(eff, {}).get("tau_s") or 0.0)
+            v = given or float(diag.params.get(eff, {}).get("tau_s") or 0.0) or min(LAG_START_S, 0.25 * span)
             x0[sl] = min(max(v, 0.0), MAX_LAG_SPANS * span)
             lo[sl], hi[sl] = 0.0, MAX_LAG_SPANS * span
             continue
@@ -310,9 +313,9 @@ def refine_calibration(device, calibration: Calibration, diagnosis, recordings) 
             "nonlinearity" if carried["nonlinearity"] else None,
             "time_skew" if carried["skew"] else None} - {None}
     terms = set(added) | held
-    # a lag is fitted for a term the diagnosis adds, or one the calibration has; else none (0 s)
-    lags = {"tau_off": None if ("temperature_offset" in added or cal.temp_offset_tau_s) else 0.0,
-            "tau_gain": None if ("temperature_gain" in added or cal.temp_gain_tau_s) else 0.0}
+    # the thermal lag of each temperature term in the model is fitted (a calibration's tempcos from
+    # calibrate have none: the lag the diagnosis then sees as a gain or an offset is fitted here)
+    lags = {"tau_off": None, "tau_gain": None}
     rows = reference_rows(recordings, device, bool(terms & {"temperature_offset", "temperature_gain"}))
     off_origin = bool(np.any(np.abs(np.asarray(device.positions, float)) > 0))
     moving = rows.use & ((np.linalg.norm(rows.w, axis=1) > 0.2) | (np.linalg.norm(rows.dw, axis=1) > 2.0))
