@@ -24,6 +24,7 @@ from ..effects.nonlinearity import Nonlinearity
 from ..effects.temperature import TemperatureGain, TemperatureOffset
 from ..effects.timing import TimeSkew
 from ..errors import AccelcalError
+from ..firmware.header import calibration_header
 from ..firmware.terms import has_terms
 from ..io.calibration import Calibration, load_calibration, save_calibration
 from ..io.device import Device, default_device, load_device
@@ -339,6 +340,10 @@ def refine_calibration(device, calibration: Calibration, diagnosis, recordings) 
     out, values = _calibration(model, whole, cal, device)
     text = paragraph({k: v for k, v in values.items() if k in added}, {k: v for k, v in values.items() if k not in added},
                      not_added, existing, before, after, float(np.sqrt(np.mean(noise ** 2))), model.fit_r)
+    try:
+        calibration_header(device, out)
+    except AccelcalError as e:    # a term beyond the firmware's fixed formats: said, the file still written
+        text += f" Warning: the firmware header cannot hold this calibration ({e})."
     return RefineResult(out, values, not_added, before, after, float(np.sqrt(np.mean(noise ** 2))), text)
 
 
