@@ -8,7 +8,7 @@ import pytest
 from core_settings import core
 from hypothesis import assume, given, strategies as st
 
-from accelcal import native
+from accelcal.firmware import native
 from accelcal._core import ffi, lib
 from accelcal.firmware import terms
 from accelcal.firmware.terms_fixed import E_MAX, GC_FRAC, OC_FRAC, lag_bound, lag_fixed, nonlin_bound, temp_bound

@@ -9,12 +9,12 @@ import subprocess
 import numpy as np
 import pytest
 
-from accelcal.calibration import Calibration
-from accelcal.device import Device, default_device
+from accelcal.io.calibration import Calibration
+from accelcal.io.device import Device, default_device
 from accelcal.firmware.terms_fixed import TEMP_FRAC
-from accelcal.header import calibration_header
-from accelcal.native import FORMATS
-from accelcal.recording import recording_from_arrays
+from accelcal.firmware.header import calibration_header
+from accelcal.firmware.native import FORMATS
+from accelcal.io.recording import recording_from_arrays
 from accelcal.resolve import resolve_recording
 from toolchains import build_host, cross_compile
 

@@ -16,8 +16,8 @@ from .. import __version__
 from .triad import TriadTable, quantize_triad, triad_rounding_bound
 from .native import FORMATS
 from .quantize import FixedTables, quantize_calibration, rail_counts, resolver_rounding_bound, to_fixed
-from .firmware.terms_fixed import quantize_terms
-from .firmware.terms_header import insert_terms, terms_header_parts
+from .terms_fixed import quantize_terms
+from .terms_header import insert_terms, terms_header_parts
 
 
 def _c_ident(text: str) -> str:

@@ -14,9 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import native
-from ..native import lib
-from ..quantize import QuantizeError, largest_shift, round_half_up, to_fixed
+from . import native
+from .native import lib
+from .quantize import QuantizeError, largest_shift, round_half_up, to_fixed
 from .terms import (channel_values, has_terms, lag_coefficient, nonlinearity_coefficients, skew_delays,
                     skew_latency)
 
