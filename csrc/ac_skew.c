@@ -64,7 +64,7 @@ ac_status ac_skew_step(const ac_skew_table *t, ac_skew_line *line, const int16_t
         uint16_t s;
         for (s = 0u; s < len; s++) {
             for (i = 0u; i < (uint8_t)n; i++) {
-                line->buf[s * n + i] = x[i];
+                line->buf[(uint16_t)(s * n) + i] = x[i];
             }
         }
         line->started = 1u;
@@ -75,7 +75,7 @@ ac_status ac_skew_step(const ac_skew_table *t, ac_skew_line *line, const int16_t
         if (pos >= len) {
             pos = 0u;
         }
-        slot = line->buf + pos * n;
+        slot = line->buf + (uint16_t)(pos * n);
         for (i = 0u; i < (uint8_t)n; i++) {
             slot[i] = x[i];
         }
@@ -88,13 +88,14 @@ ac_status ac_skew_step(const ac_skew_table *t, ac_skew_line *line, const int16_t
         int32_t d, p;
         s0 = (pos >= k) ? (uint16_t)(pos - k) : (uint16_t)(pos + len - k);
         s1 = (s0 != 0u) ? (uint16_t)(s0 - 1u) : (uint16_t)(len - 1u);
-        v0 = line->buf[s0 * n + i];
-        v1 = line->buf[s1 * n + i];
+        v0 = line->buf[(uint16_t)(s0 * n) + i];
+        v1 = line->buf[(uint16_t)(s1 * n) + i];
         f = (int16_t)t->frac[i];
         /* d = v1 - v0 (17 bits) = 2 h + (d & 1): one 16 x 16 product f h */
         d = (int32_t)v1 - (int32_t)v0;
-        h = (int16_t)((int32_t)((uint32_t)(d + 65536L) >> 1) - 32768L);
-        p = AC_MUL16(f, h) * 2L;
+        h = (int16_t)((int32_t)((uint32_t)(d + (int32_t)65536L) >> 1) - (int32_t)32768L);
+        p = AC_MUL16(f, h);
+        p += p;
         if (((uint32_t)d & 1u) != 0u) {
             p += f;
         }

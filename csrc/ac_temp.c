@@ -101,13 +101,13 @@ ac_status ac_temp_correct(const ac_temp_table *t, int16_t t_off, int16_t t_gain,
     dto = ac_sat_to16((int32_t)t_off - (int32_t)t->t_ref, &sat);
     dtg = ac_sat_to16((int32_t)t_gain - (int32_t)t->t_ref, &sat);
     for (i = 0u; i < (uint8_t)t->n; i++) {
-        const int32_t o8 = (int32_t)t->o[i] * 256L; /* Q.16 */
+        const int32_t o8 = (int32_t)t->o[i] * (int32_t)256; /* Q.16 */
         int32_t e32 = AC_MUL16(t->gc[i], dtg);        /* Q.32 */
         int32_t w, g;
         int16_t e, e2, e3, r, w16;
         /* |o 2^8 + oc dTo| <= 2^15 + 2^30: one subtraction from x 2^16, clipped only when w
          * itself leaves int32 */
-        w = ac_sat_sub((int32_t)x[i] * 65536L, o8 + AC_MUL16(t->oc[i], dto), &sat);
+        w = ac_sat_sub((int32_t)x[i] * (int32_t)65536L, o8 + AC_MUL16(t->oc[i], dto), &sat);
         if (e32 > E32_MAX) {
             e = AC_TEMP_E_MAX;
             sat = 1u;

@@ -183,3 +183,28 @@ def test_terms_take_the_independent_effect_out(effect, shape, ratio, engine):
     after = f_error(dev, dataclasses.replace(cal, **indep_terms(ds)), rec, truth, engine, rows)
     assert before > 2.0 * floor
     assert after <= 1.25 * floor + 0.002
+
+
+def test_terms_json_round_trip_and_bad_input(tmp_path):
+    """The terms' fields survive save and load; a negative lag is refused naming its key; a
+    calibration with tempcos needs temp_c on every sample to resolve (one line naming it)."""
+    from accelcal.errors import InputError
+    from accelcal.io.calibration import load_calibration, save_calibration
+    dev = default_device()
+    cal = with_terms(dev, np.random.default_rng(2))
+    path = tmp_path / "cal.json"
+    save_calibration(cal, path)
+    back = load_calibration(path, dev)
+    assert back == cal
+    for attr in ("nonlin_k2", "nonlin_k3", "time_skew_s"):
+        assert np.array_equal(getattr(back, attr), getattr(cal, attr))
+    assert (back.temp_offset_tau_s, back.temp_gain_tau_s) == (20.0, 5.0)
+    text = path.read_text().replace('"temperature_gain_tau_s": 5.0', '"temperature_gain_tau_s": -5.0')
+    path.write_text(text)
+    with pytest.raises(InputError, match="temperature_gain_tau_s"):
+        load_calibration(path, dev)
+    raw, _ = readings(dev, cal, np.random.default_rng(1), n=50)
+    rec = recording_from_arrays(np.arange(50) / dev.sample_rate_hz, raw)
+    for engine in ("float", "fixed"):
+        with pytest.raises(InputError, match="temp_c"):
+            resolve_recording(dev, cal, rec, engine, omega_source="none")
