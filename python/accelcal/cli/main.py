@@ -26,7 +26,8 @@ from ..io.device import default_device, load_device
 from ..diagnose import diagnose
 from ..effects import describe_effects, params_to_json, parse_effect_spec
 from ..errors import AccelcalError, atomic_write
-from ..estimators import attitude_from_recording, displacement_from_recording, rate_from_recording, report_plots
+from ..estimators import (OMEGA_SOURCES, attitude_from_recording, choose_omega, displacement_from_recording,
+                          omega_columns, rate_from_recording, report_plots)
 from ..firmware.header import calibration_header
 from ..readings.held import held_runs, held_text, readings_rate
 from ..motions import describe_motions
@@ -105,8 +106,9 @@ def cmd_resolve(a):
     dev = _load_device(a.device)
     cal = _load_cal(a.calibration, dev)
     rec, = _read([a.recording], dev, "resolve", a)
-    f, al, flags = resolve_recording(dev, cal, rec, a.engine, a.omega)
-    comments = {"engine": a.engine, "device": dev.name}
+    est = choose_omega(dev, cal, rec, a.omega)
+    f, al, flags = resolve_recording(dev, cal, rec, a.engine, a.omega, None if est is None else est.w)
+    comments = {"engine": a.engine, "device": dev.name, **({"omega": "array"} if est is not None else {})}
     if flags is not None and flags.any():
         print(f"accelcal resolve: warning: {int(np.count_nonzero(flags))} samples saturated in the "
               "fixed-point core's arithmetic (see column saturated)", file=sys.stderr)
@@ -115,6 +117,9 @@ def cmd_resolve(a):
         print(f"accelcal resolve: warning: {w}", file=sys.stderr)
     cols = [rec.t, f[:, 0], f[:, 1], f[:, 2], al[:, 0], al[:, 1], al[:, 2]]
     header = ["t", "f_x", "f_y", "f_z", "dw_x", "dw_y", "dw_z"]
+    if est is not None:
+        header += list(omega_columns(est))
+        cols += list(omega_columns(est).values())
     if flags is not None:
         cols.append(flags.astype(float))
         header.append("saturated")
@@ -254,8 +259,8 @@ def held_warnings(rec) -> list[str]:
 
 
 def _estimator(a, kind):
-    options = {k: v for k, v in (("axis", getattr(a, "axis", None)), ("form", getattr(a, "form", None)))
-               if v is not None}
+    options = {k: v for k, v in (("axis", getattr(a, "axis", None)), ("form", getattr(a, "form", None)),
+                                 ("omega", getattr(a, "omega", None))) if v is not None}
     for flag in ("keep_turned", "resample"):
         if getattr(a, flag, False):
             options[flag] = True
@@ -412,8 +417,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--calibration", required=True, metavar="CAL.json", help=_CAL)
     s.add_argument("recording", metavar="REC.csv", help=_REC)
     s.add_argument("--engine", choices=["float", "fixed"], default="float", help=_ENGINE)
-    s.add_argument("--omega", choices=["auto", "reference", "none"], default="auto",
-                   help="omega for the centripetal correction (auto: the w_* columns when complete)")
+    s.add_argument("--omega", choices=OMEGA_SOURCES, default="auto",
+                   help="omega for the centripetal correction: reference (the w_* columns), none, array (the "
+                   "accelerometers' own, docs/angular-rate.md: adds w_x, w_y, w_z and their 1-sigma w_*_sigma); "
+                   "auto: the w_* columns when complete, else array where the layout observes omega")
     s.add_argument("-o", "--output", required=True, metavar="OUT.csv", help="t, f_x, f_y, f_z, dw_x, dw_y, dw_z")
     add_units_options(s)
     s.set_defaults(func=cmd_resolve)
@@ -428,6 +435,10 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--engine", choices=["float", "fixed"], default="float", help=_ENGINE)
         s.add_argument("--report", metavar="DIR", help="write plots into DIR")
         s.add_argument("-o", "--output", required=True, metavar="OUT.csv", help=_OUT_CSV)
+        if name == "rate":
+            s.add_argument("--omega", choices=["alpha", "array"], default="alpha",
+                           help="alpha: leaky integration of alpha, reset on rest; array: the accelerometers' own "
+                           "omega fused with the integrated alpha, with w_*_sigma (docs/angular-rate.md)")
         if name == "displacement":
             s.add_argument("--axis", choices=["x", "y", "z"],
                            help="1-D along this body axis (the seed's actuator; nothing removed)")

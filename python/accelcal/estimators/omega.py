@@ -37,7 +37,7 @@ from ..recording import check_for_device
 from .common import channel_noise, uniform_dt
 
 __all__ = ["OMEGA_SOURCES", "OmegaObservability", "ArrayOmega", "omega_observability", "omega_ml",
-           "array_omega", "omega_from_recording", "choose_omega"]
+           "array_omega", "omega_from_recording", "choose_omega", "omega_columns", "omega_crb"]
 
 #: ``resolve --omega``: the recording's w columns, none, the array's own estimate, or auto
 OMEGA_SOURCES = ("auto", "reference", "none", "array")
@@ -339,6 +339,14 @@ def choose_omega(device, cal, rec, source: str) -> ArrayOmega | None:
     if not omega_observability(pos, cal.sensitivity).full:
         return None
     return omega_from_recording(device, cal, rec)
+
+
+def omega_columns(est: ArrayOmega) -> dict:
+    """The output columns of the array's omega: w_x, w_y, w_z and their 1-sigma w_x_sigma,
+    w_y_sigma, w_z_sigma (rad/s)."""
+    cols = {a: est.w[:, k] for k, a in enumerate(_AXES)}
+    cols.update({f"{a}_sigma": est.sigma[:, k] for k, a in enumerate(_AXES)})
+    return cols
 
 
 def omega_crb(m, omega) -> np.ndarray:
