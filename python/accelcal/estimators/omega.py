@@ -35,6 +35,7 @@ from .. import model
 from ..errors import InputError
 from ..recording import check_for_device
 from .common import channel_noise, uniform_dt
+from .omega_filter import fuse
 
 __all__ = ["OMEGA_SOURCES", "OmegaObservability", "ArrayOmega", "omega_observability", "omega_ml",
            "array_omega", "omega_from_recording", "choose_omega", "omega_columns", "omega_crb"]
@@ -43,8 +44,9 @@ __all__ = ["OMEGA_SOURCES", "OmegaObservability", "ArrayOmega", "omega_observabi
 OMEGA_SOURCES = ("auto", "reference", "none", "array")
 #: relative size below which an eigenvalue of m or of the information counts as zero
 RANK_RTOL = 1e-9
-#: the model term of the prediction: the rate's random walk beyond the alpha noise, rad/s per sqrt(s)
-MODEL_WALK = 0.05
+#: the prediction's model term: the trapezoid's error per step, snap dt^3 / 12 (rad/s), for an alpha whose
+#: second derivative reaches SNAP rad/s^4 (a 2-revolution quintic turn in 0.5 s: 1.1e5)
+SNAP = 3.0e5
 _AXES = ("w_x", "w_y", "w_z")
 _SUGGEST = ("a layout that observes omega: 12 channels as four triads on a tetrahedron "
             "(accelcal.device.tetrahedron_device) or triads at the origin and on the three axes (axes_device)")
@@ -194,37 +196,8 @@ class ArrayOmega:
     observability: OmegaObservability
 
 
-def _p1(x) -> np.ndarray:
-    """omega_products of one rate (the loop's fast form)."""
-    a, b, c = float(x[0]), float(x[1]), float(x[2])
-    return np.array([a * a, b * b, c * c, a * b, b * c, c * a])
-
-
-def _j1(x) -> np.ndarray:
-    """product_jacobian of one rate (the loop's fast form)."""
-    a, b, c = float(x[0]), float(x[1]), float(x[2])
-    return np.array([[2 * a, 0.0, 0.0], [0.0, 2 * b, 0.0], [0.0, 0.0, 2 * c], [b, a, 0.0], [0.0, c, b], [c, 0.0, a]])
-
-
-def _inv3(a) -> np.ndarray:
-    """Inverse of a 3 x 3 matrix by its adjugate (np.linalg's call costs more than the sum)."""
-    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a.tolist()
-    c00, c01, c02 = a11 * a22 - a12 * a21, a12 * a20 - a10 * a22, a10 * a21 - a11 * a20
-    det = a00 * c00 + a01 * c01 + a02 * c02
-    return np.array([[c00, a02 * a21 - a01 * a22, a01 * a12 - a02 * a11],
-                     [c01, a00 * a22 - a02 * a20, a02 * a10 - a00 * a12],
-                     [c02, a01 * a20 - a00 * a21, a00 * a11 - a01 * a10]]) / det
-
-
-def _cost(x, w_pred, lam, q, m) -> float:
-    """The posterior's cost (prior + concentrated likelihood, up to a constant)."""
-    p = _p1(x)
-    d = x - w_pred
-    return float(d @ lam @ d + p @ (m @ p - 2.0 * q))
-
-
 def array_omega(offsets, sensitivity, positions, raw, dt: float, noise_counts, *, iterations: int = 2,
-                model_walk: float = MODEL_WALK, omega0=None, sigma0: float = 0.1) -> ArrayOmega:
+                snap: float = SNAP, omega0=None, sigma0: float = 0.1, likelihood: bool = True) -> ArrayOmega:
     """The fused omega of an array (float reference), sample by sample.
 
     Parameters
@@ -243,12 +216,15 @@ def array_omega(offsets, sensitivity, positions, raw, dt: float, noise_counts, *
         Each channel's noise sd, counts (rounding included).
     iterations : int
         Gauss-Newton steps on the posterior per sample (fixed).
-    model_walk : float
-        The prediction's random walk beyond the alpha noise, rad/s per sqrt(s).
+    snap : float
+        rad/s^4: the prediction's model term beyond the alpha noise, the trapezoid's error per
+        step ``snap dt^3 / 12`` rad/s (sd).
     omega0 : array_like (3,), optional
         rad/s at the first sample (default 0: the recording starts at rest).
     sigma0 : float
         Its sd, rad/s.
+    likelihood : bool
+        False: the integration alone (the centripetal readings unused), the baseline.
 
     Returns
     -------
@@ -259,39 +235,21 @@ def array_omega(offsets, sensitivity, positions, raw, dt: float, noise_counts, *
     y = np.atleast_2d(np.asarray(raw, float)) - np.asarray(offsets, float)
     q = y @ split.qmap.T
     lin = y @ split.lin.T
-    leak_a = split.leak[3:]
-    m = split.m
-    if obs.products == 6:
+    m = split.m if likelihood else np.zeros((6, 6))
+    if not likelihood:
+        w_ml, info_ml = np.zeros((y.shape[0], 3)), np.zeros((y.shape[0], 3, 3))
+    elif obs.products == 6:
         w_ml, info_ml = omega_ml(q, m)
     else:   # the integrated alpha (no centripetal correction) as the start
         a0 = lin[:, 3:]
         w_ml, info_ml = omega_ml(q, m, np.cumsum((a0 + np.vstack([a0[:1], a0[:-1]])) * (dt / 2.0), axis=0))
-    n = y.shape[0]
-    Q = dt * dt * split.cov[3:, 3:] + model_walk ** 2 * dt * np.eye(3)
-    x = np.zeros(3) if omega0 is None else np.asarray(omega0, float).copy()
-    P = sigma0 ** 2 * np.eye(3)
-    w = np.empty((n, 3))
-    cov = np.empty((n, 3, 3))
-    a_lin = lin[:, 3:]
-    a_prev = a_lin[0] - leak_a @ _p1(x)
-    for k in range(n):
-        w_pred = x + (0.5 * dt) * (a_prev + a_lin[k] - leak_a @ _p1(x)) if k else x
-        P = P + Q if k else P
-        lam = _inv3(P)
-        qk = q[k]
-        cand = w_ml[k] if float(w_ml[k] @ w_pred) >= 0.0 else -w_ml[k]
-        x = w_pred if _cost(w_pred, w_pred, lam, qk, m) <= _cost(cand, w_pred, lam, qk, m) else cand
-        for _ in range(iterations):
-            J = _j1(x)
-            Jm = J.T @ m
-            x = x + _inv3(lam + Jm @ J) @ (lam @ (w_pred - x) + J.T @ qk - Jm @ _p1(x))
-        J = _j1(x)
-        P = _inv3(lam + J.T @ m @ J)
-        w[k], cov[k] = x, P
-        a_prev = a_lin[k] - leak_a @ _p1(x)
+    Q = dt * dt * split.cov[3:, 3:] + (snap * dt ** 3 / 12.0) ** 2 * np.eye(3)
+    x0 = np.zeros(3) if omega0 is None else np.asarray(omega0, float)
+    w, cov = fuse(q, lin[:, 3:], split.leak[3:], Q, m, w_ml, dt, x0, sigma0 ** 2 * np.eye(3), iterations)
     theta = lin - model.omega_products(w) @ split.leak.T
     # the accelerometers' ML alone on the fused estimate's branch (its sign, its mirror solution)
-    w_ml, info_ml = omega_ml(q, m, w)
+    if likelihood:
+        w_ml, info_ml = omega_ml(q, m, w)
     sigma = np.sqrt(np.diagonal(cov, axis1=1, axis2=2))
     return ArrayOmega(w, sigma, theta[:, :3], theta[:, 3:], w_ml, info_ml, obs)
 
