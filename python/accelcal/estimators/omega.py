@@ -197,7 +197,7 @@ class ArrayOmega:
 
 
 def array_omega(offsets, sensitivity, positions, raw, dt: float, noise_counts, *, iterations: int = 2,
-                snap: float = SNAP, omega0=None, sigma0: float = 0.1, likelihood: bool = True) -> ArrayOmega:
+                snap: float = SNAP, omega0=None, sigma0: float = 0.01) -> ArrayOmega:
     """The fused omega of an array (float reference), sample by sample.
 
     Parameters
@@ -222,9 +222,9 @@ def array_omega(offsets, sensitivity, positions, raw, dt: float, noise_counts, *
     omega0 : array_like (3,), optional
         rad/s at the first sample (default 0: the recording starts at rest).
     sigma0 : float
-        Its sd, rad/s.
-    likelihood : bool
-        False: the integration alone (the centripetal readings unused), the baseline.
+        Its sd, rad/s.  Small: a broad prior at rest lets the posterior's mode follow the noise
+        of the centripetal readings (their ML at rest is noise of some 0.3 rad/s); a recording
+        that starts turning is caught by the ML start (:data:`omega_filter.JUMP_CHI2`).
 
     Returns
     -------
@@ -235,10 +235,8 @@ def array_omega(offsets, sensitivity, positions, raw, dt: float, noise_counts, *
     y = np.atleast_2d(np.asarray(raw, float)) - np.asarray(offsets, float)
     q = y @ split.qmap.T
     lin = y @ split.lin.T
-    m = split.m if likelihood else np.zeros((6, 6))
-    if not likelihood:
-        w_ml, info_ml = np.zeros((y.shape[0], 3)), np.zeros((y.shape[0], 3, 3))
-    elif obs.products == 6:
+    m = split.m
+    if obs.products == 6:
         w_ml, info_ml = omega_ml(q, m)
     else:   # the integrated alpha (no centripetal correction) as the start
         a0 = lin[:, 3:]
@@ -248,8 +246,7 @@ def array_omega(offsets, sensitivity, positions, raw, dt: float, noise_counts, *
     w, cov = fuse(q, lin[:, 3:], split.leak[3:], Q, m, w_ml, dt, x0, sigma0 ** 2 * np.eye(3), iterations)
     theta = lin - model.omega_products(w) @ split.leak.T
     # the accelerometers' ML alone on the fused estimate's branch (its sign, its mirror solution)
-    if likelihood:
-        w_ml, info_ml = omega_ml(q, m, w)
+    w_ml, info_ml = omega_ml(q, m, w)
     sigma = np.sqrt(np.diagonal(cov, axis1=1, axis2=2))
     return ArrayOmega(w, sigma, theta[:, :3], theta[:, 3:], w_ml, info_ml, obs)
 

@@ -5,10 +5,15 @@ measurement is the concentrated likelihood ``q = m p(omega) + v`` (cov m) of
 
 Per sample n, with the state (x, P) of sample n-1:
 
-1. alpha[n] = lin_alpha[n] - leak_alpha p(x) (the centripetal term of the last estimate);
-   prediction w = x + dt (alpha[n-1] + alpha[n]) / 2, P += Q;
-2. start: w, or the ML estimate with the sign nearer w, whichever has the lower posterior cost
-   (w - x)^T P^-1 (w - x) + p^T m p - 2 q^T p;
+1. alpha[n] = lin_alpha[n] - leak_alpha p(w0) (its centripetal term at the first guess
+   w0 = x + dt (alpha[n-1] + lin_alpha[n] - leak_alpha p(x)) / 2);
+   prediction w = x + dt (alpha[n-1] + alpha[n]) / 2, P = F P F^T + Q with
+   F = I - dt leak_alpha J(x) (an error in omega moves the alpha it integrates: where the
+   layout's leak is large and |omega| high, the integration alone is unstable);
+2. start: w, or the ML estimate with the sign nearer w where it lowers the posterior cost
+   (w - x)^T P^-1 (w - x) + p^T m p - 2 q^T p by more than ``jump`` (chi^2 units: at rest the
+   ML estimate of noise fits it by about chi^2(6), and a jump to it would be a jump to noise;
+   a recording that starts turning, or a lost branch, gains orders of magnitude more);
 3. ``iterations`` Gauss-Newton steps on that cost (H = P^-1 + J^T m J, J = dp/domega);
 4. P = (P^-1 + J^T m J)^-1 at the result; alpha[n] again with the new omega.
 
@@ -18,7 +23,10 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["fuse"]
+__all__ = ["fuse", "JUMP_CHI2"]
+
+#: what a start at the ML estimate must save over the prediction (chi^2 units; P(chi^2(6) > 50) ~ 1e-8)
+JUMP_CHI2 = 50.0
 
 
 def _inv(a):
@@ -63,6 +71,14 @@ def _info(m, cols):
             _dot(cols[1], mj[2]), _dot(cols[2], mj[2]))
 
 
+def _propagate(P, la, cols, dt, Qs):
+    """F P F^T + Q (six entries) with F = I - dt leak_alpha J, J's columns ``cols``."""
+    F = [[(1.0 if i == j else 0.0) - dt * _dot(la[i], cols[j]) for j in range(3)] for i in range(3)]
+    FP = [_mul(P, F[i]) for i in range(3)]          # row i of F P (P symmetric)
+    return tuple(_dot3(FP[i], F[j]) + Qs[k] for k, (i, j) in enumerate(((0, 0), (0, 1), (0, 2), (1, 1), (1, 2),
+                                                                     (2, 2))))
+
+
 def _cost(x, w, lam, q, m):
     p = _products(x)
     d = (x[0] - w[0], x[1] - w[1], x[2] - w[2])
@@ -70,7 +86,7 @@ def _cost(x, w, lam, q, m):
     return _dot3(d, _mul(lam, d)) + _dot(p, [s - 2.0 * t for s, t in zip(mp, q)])
 
 
-def fuse(q, lin_alpha, leak_alpha, Q, m, w_ml, dt: float, x0, P0, iterations: int = 2
+def fuse(q, lin_alpha, leak_alpha, Q, m, w_ml, dt: float, x0, P0, iterations: int = 2, jump: float = JUMP_CHI2
          ) -> tuple[np.ndarray, np.ndarray]:
     """Run the step over every sample.
 
@@ -91,6 +107,8 @@ def fuse(q, lin_alpha, leak_alpha, Q, m, w_ml, dt: float, x0, P0, iterations: in
     x0 : array_like (3,)
         rad/s at the first sample; ``P0`` (3, 3) its covariance.
     iterations : int
+    jump : float
+        The cost a start at the ML estimate must save (chi^2 units).
 
     Returns
     -------
@@ -119,14 +137,17 @@ def fuse(q, lin_alpha, leak_alpha, Q, m, w_ml, dt: float, x0, P0, iterations: in
         qk = qs[k]
         if k:
             a = alpha(k, x)
+            P = _propagate(P, la, _columns(x), dt, Qs)
+            # alpha[n]'s centripetal term at the predicted omega[n] (at omega[n-1] it lags a step,
+            # and the lag's error dt/2 leak dp adds up over a turn)
+            a = alpha(k, tuple(x[i] + h * (a_prev[i] + a[i]) for i in range(3)))
             x = tuple(x[i] + h * (a_prev[i] + a[i]) for i in range(3))
-            P = tuple(P[i] + Qs[i] for i in range(6))
         wp = x
         lam = _inv(P)
         c = mls[k]
         if _dot3(c, wp) < 0.0:
             c = (-c[0], -c[1], -c[2])
-        if _cost(c, wp, lam, qk, m) < _cost(wp, wp, lam, qk, m):
+        if _cost(c, wp, lam, qk, m) < _cost(wp, wp, lam, qk, m) - jump:
             x = tuple(c)
         for _ in range(iterations):
             cols = _columns(x)
