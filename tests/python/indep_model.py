@@ -1143,3 +1143,26 @@ def make_spin_array(device: Device, seed=0, *, n_turns=20, max_rate=40.0, min_ra
     rec = recording_from_arrays(t, raw, w=w if with_w else None, metadata={"generator": "tests/python/indep_model.py"})
     return {"device": device, "cal": as_calibration(device, p), "recording": rec, "w": w, "dw": dw, "f": f,
             "noise_mps2": noise, "rate_hz": rate}
+
+
+def make_array_calibration(device: Device, seed=0, *, rotations=True, n_turns=12, max_rate=20.0):
+    """A 12-channel user's calibration session: the jig's 18 poses (faces and edges, each held
+    1-2 s with its stated f), then with ``rotations`` a turning part with its reference f,
+    omega and alpha (a turntable or a gyro beside the array: :func:`spin_trajectory`'s turns).
+    Returns make_jig's keys device, cal (the truth), recording."""
+    rng = np.random.default_rng(seed + 3636)
+    p = true_parameters(device, rng)
+    traj = jig_trajectory(device.gravity_mps2, FACES + EDGES, rng, hold_s=(1.0, 2.0))
+    t_motion = traj.end
+    if rotations:
+        spin = spin_trajectory(device.gravity_mps2, rng, n_turns, max_rate, 1.0, lead_s=0.5)
+        traj.move_to(spin.R0[0], 1.0)
+        for k in range(1, len(spin.t0)):
+            traj._add(traj.R_end, spin.dur[k], spin.e[k], spin.phi[k], spin.d[k], -1, np.full(3, np.nan))
+    t = _sample_times(traj, device.sample_rate_hz)
+    sc = Scene(dev=device, p=p, traj=traj, t=t, noise_mps2=device.noise_mps2,
+               noise=rng.normal(size=(t.size, device.n_channels)))
+    lab, stated = traj.labels_and_stated(t)
+    raw = adc(sc, analog(sc, {}), {})
+    rec = _recording(sc, raw, True, stated, lab, (t >= t_motion) if rotations else None)
+    return {"device": device, "cal": as_calibration(device, p), "recording": rec}

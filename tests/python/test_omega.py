@@ -12,8 +12,11 @@ import pytest
 import accelcal as ac
 import indep_model as im
 from accelcal import model
-from accelcal.calibration import save_calibration
+from accelcal.calibrate import calibrate_recordings
+from accelcal.calibrate.omega_check import lever_arm_omega_bias
+from accelcal.calibration import Calibration, save_calibration
 from accelcal.cli import main
+from accelcal.cli_calibrate import calibrate_warnings
 from accelcal.device import (Device, axes_device, default_device, default_triad, save_device,
                              tetrahedron_device)
 from accelcal.estimators import array_omega, omega_from_recording, omega_ml, omega_observability
@@ -190,3 +193,35 @@ def test_nine_channels_mirror_solutions_by_continuity():
     s = np.linalg.norm(w, axis=1) >= 3.0
     err = np.linalg.norm(est.w[s] - w[s], axis=1)
     assert np.quantile(err, 0.999) < 0.2 * np.min(np.linalg.norm(w[s], axis=1))
+
+
+def test_calibrate_says_when_the_lever_arms_limit_omega():
+    dev = tetrahedron_device()
+    poses_only = im.make_array_calibration(dev, 1, rotations=False)
+    cal = calibrate_recordings(dev, [poses_only["recording"]])
+    warn = [w for w in calibrate_warnings(dev, cal) if "omega" in w]
+    assert len(warn) == 1 and "not all calibrated" in warn[0] and "at |omega| = 10 rad/s" in warn[0]
+    turned = im.make_array_calibration(dev, 1, rotations=True)
+    cal = calibrate_recordings(dev, [turned["recording"]])
+    assert np.nanmax(np.abs(cal.positions - turned["cal"].positions)) < 1e-4       # 0.1 mm
+    assert not [w for w in calibrate_warnings(dev, cal) if "omega" in w]
+    # a six-channel array has no array omega to warn of
+    six = default_device()
+    assert not [w for w in calibrate_warnings(six, ac.Calibration.nominal(six)) if "omega" in w]
+
+
+def test_lever_arm_figure_is_the_error_it_causes(spin):
+    """The stated omega error from position_sigma matches the error positions off by that much give."""
+    dev, truth, rec, w = spin["device"], spin["cal"], spin["recording"], spin["w"]
+    rng = np.random.default_rng(7)
+    s = (np.linalg.norm(w, axis=1) > 8.0) & (np.linalg.norm(w, axis=1) < 12.0)
+    err2, stated = [], []
+    for _ in range(4):
+        off = Calibration(device=dev.name, method="truth", offsets=truth.offsets, sensitivity=truth.sensitivity,
+                          positions=truth.positions + rng.normal(0.0, 1e-3, truth.positions.shape),
+                          position_sigma=np.full(truth.positions.shape, 1e-3))
+        stated.append(lever_arm_omega_bias(dev, off)[0])
+        est = omega_from_recording(dev, off, rec)
+        err2.append(np.mean(np.sum((est.w[s] - w[s]) ** 2, axis=1) * (10.0 / np.linalg.norm(w[s], axis=1)) ** 2))
+    ratio = np.sqrt(np.mean(err2)) / np.mean(stated)
+    assert 0.5 < ratio < 2.0, ratio
