@@ -44,7 +44,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "python"), str(ROOT / "tests" / "python")]
 from accelcal import model  # noqa: E402
-from accelcal.device import axes_device, tetrahedron_device  # noqa: E402
+from accelcal.io.device import axes_device, tetrahedron_device  # noqa: E402
 from accelcal.estimators import omega_crb, omega_from_recording, rate_from_recording  # noqa: E402
 import indep_model as im  # noqa: E402
 

@@ -1123,7 +1123,7 @@ def spin_trajectory(g, rng, n_turns=20, max_rate=40.0, min_rate=0.3, lead_s=1.0)
 
 def make_spin_array(device: Device, seed=0, *, n_turns=20, max_rate=40.0, min_rate=0.3, noise=None,
                     rate=None, with_w=False):
-    """An array (any Device, e.g. accelcal.device.tetrahedron_device()) turned fast
+    """An array (any Device, e.g. accelcal.io.device.tetrahedron_device()) turned fast
     (:func:`spin_trajectory`), true channel parameters drawn about the nominal
     (:func:`true_parameters`: offsets, gains, axes off by up to 1.5 deg; positions nominal),
     white noise ``noise`` m/s^2 (default the device's), rounding and clipping.  The recording

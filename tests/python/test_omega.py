@@ -14,13 +14,13 @@ import indep_model as im
 from accelcal import model
 from accelcal.calibrate import calibrate_recordings
 from accelcal.calibrate.omega_check import lever_arm_omega_bias
-from accelcal.calibration import Calibration, save_calibration
-from accelcal.cli import main
-from accelcal.cli_calibrate import calibrate_warnings
-from accelcal.device import (Device, axes_device, default_device, default_triad, save_device,
+from accelcal.io.calibration import Calibration, save_calibration
+from accelcal.cli.main import main
+from accelcal.cli.calibrate_command import calibrate_warnings
+from accelcal.io.device import (Device, axes_device, default_device, default_triad, save_device,
                              tetrahedron_device)
 from accelcal.estimators import array_omega, omega_from_recording, omega_ml, omega_observability
-from accelcal.recording import recording_from_arrays, write_recording
+from accelcal.io.recording import recording_from_arrays, write_recording
 
 
 @pytest.fixture(scope="module")

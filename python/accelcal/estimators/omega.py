@@ -33,7 +33,7 @@ import numpy as np
 
 from .. import model
 from ..errors import InputError
-from ..recording import check_for_device
+from ..io.recording import check_for_device
 from .common import channel_noise, uniform_dt
 from .omega_filter import fuse
 
@@ -49,7 +49,7 @@ RANK_RTOL = 1e-9
 SNAP = 3.0e5
 _AXES = ("w_x", "w_y", "w_z")
 _SUGGEST = ("a layout that observes omega: 12 channels as four triads on a tetrahedron "
-            "(accelcal.device.tetrahedron_device) or triads at the origin and on the three axes (axes_device)")
+            "(accelcal.io.device.tetrahedron_device) or triads at the origin and on the three axes (axes_device)")
 
 
 @dataclass(frozen=True)
