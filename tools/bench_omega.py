@@ -45,14 +45,19 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "python"), str(ROOT / "tests" / "python")]
 from accelcal import model  # noqa: E402
 from accelcal.io.device import axes_device, tetrahedron_device  # noqa: E402
+from accelcal.calibrate import calibrate_recordings  # noqa: E402
 from accelcal.estimators import omega_crb, omega_from_recording, rate_from_recording  # noqa: E402
 import indep_model as im  # noqa: E402
 
 BANDS = ((0.0, 1.0), (1.0, 3.0), (3.0, 10.0), (10.0, 30.0), (30.0, math.inf))
 GYRO_DPS_RTHZ = 0.014
-CASES = {"tetrahedron 12 ch, r = 50 mm": lambda: tetrahedron_device(0.05),
-         "axes + origin 12 ch, r = 50 mm": lambda: axes_device(0.05),
-         "axes 9 ch, r = 50 mm": lambda: axes_device(0.05, origin=False)}
+# name -> (device, calibrated): calibrated cases give the estimators the calibration that
+# `calibrate` makes from a session of the 18 jig poses and 12 reference turns (make_array_calibration,
+# its own seed) instead of the truth; the bounds stay the truth's
+CASES = {"tetrahedron 12 ch, r = 50 mm": (lambda: tetrahedron_device(0.05), False),
+         "tetrahedron, calibrated (poses + turns)": (lambda: tetrahedron_device(0.05), True),
+         "axes + origin 12 ch, r = 50 mm": (lambda: axes_device(0.05), False),
+         "axes 9 ch, r = 50 mm": (lambda: axes_device(0.05, origin=False), False)}
 KEYS = ("n", "crb", "ml", "fused", "pcrb", "wrong", "integ", "rate", "gyro")
 
 
@@ -69,13 +74,18 @@ def posterior_bound(m, Q, w, sigma0=0.01) -> np.ndarray:
 
 def one(args) -> dict:
     name, seed, turns = args
-    dev = CASES[name]()
+    make, calibrated = CASES[name]
+    dev = make()
     d = im.make_spin_array(dev, seed, n_turns=turns)
     rec, cal, w = d["recording"], d["cal"], d["w"]
+    used = cal
+    if calibrated:    # the same true parameters (make_spin_array's seed) seen through a calibration session
+        sess = im.make_array_calibration(dev, seed, rotations=True, true_params=d["params"])
+        used = calibrate_recordings(dev, [sess["recording"]])
     t0 = time.perf_counter()
-    est = omega_from_recording(dev, cal, rec)
+    est = omega_from_recording(dev, used, rec)
     secs = time.perf_counter() - t0
-    rate = rate_from_recording(dev, cal, rec)
+    rate = rate_from_recording(dev, used, rec)
     w_rate = np.stack([rate["w_x"], rate["w_y"], rate["w_z"]], axis=1)
     noise = np.sqrt((dev.noise_mps2 * np.linalg.norm(cal.sensitivity, axis=1)) ** 2 + 1.0 / 12.0)
     split = model.centripetal_split(cal.positions_or_nominal(dev), cal.sensitivity, noise)

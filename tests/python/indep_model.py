@@ -1141,17 +1141,20 @@ def make_spin_array(device: Device, seed=0, *, n_turns=20, max_rate=40.0, min_ra
     raw = adc(sc, analog(sc, {}), {})
     f, w, dw = traj.evaluate(t)
     rec = recording_from_arrays(t, raw, w=w if with_w else None, metadata={"generator": "tests/python/indep_model.py"})
-    return {"device": device, "cal": as_calibration(device, p), "recording": rec, "w": w, "dw": dw, "f": f,
-            "noise_mps2": noise, "rate_hz": rate}
+    return {"device": device, "cal": as_calibration(device, p), "params": p, "recording": rec, "w": w, "dw": dw,
+            "f": f, "noise_mps2": noise, "rate_hz": rate}
 
 
-def make_array_calibration(device: Device, seed=0, *, rotations=True, n_turns=12, max_rate=20.0):
+def make_array_calibration(device: Device, seed=0, *, rotations=True, n_turns=12, max_rate=20.0, true_params=None):
     """A 12-channel user's calibration session: the jig's 18 poses (faces and edges, each held
     1-2 s with its stated f), then with ``rotations`` a turning part with its reference f,
     omega and alpha (a turntable or a gyro beside the array: :func:`spin_trajectory`'s turns).
+    ``true_params`` (b, S, r): the device's true channel parameters (default: drawn).
     Returns make_jig's keys device, cal (the truth), recording."""
     rng = np.random.default_rng(seed + 3636)
     p = true_parameters(device, rng)
+    if true_params is not None:
+        p = true_params
     traj = jig_trajectory(device.gravity_mps2, FACES + EDGES, rng, hold_s=(1.0, 2.0))
     t_motion = traj.end
     if rotations:
