@@ -16,8 +16,9 @@ squared, and p is even in omega: the sign of omega is not in one sample's readin
 * :func:`array_omega` -- the fused estimate, sample by sample: the prediction
   omega[n-1] + dt (alpha[n-1] + alpha[n]) / 2 (trapezoid) with its covariance (the alpha
   noise through the resolver, plus a model term), then Gauss-Newton on the posterior (prior
-  + concentrated likelihood) from the prediction or from the ML estimate with the sign
-  nearer the prediction, whichever explains both better (an iterated EKF).  At small |omega|
+  + concentrated likelihood) from the prediction, or from the ML estimate with the sign
+  nearer the prediction where that lowers the posterior's cost by more than
+  :data:`omega_filter.JUMP_CHI2` (an iterated EKF; :mod:`.omega_filter`).  At small |omega|
   the likelihood carries little information and the result is the integration; the sign
   follows by continuity.  The 1-sigma is from the posterior information.
 * :func:`omega_observability` -- what a layout observes, in one line.
@@ -237,10 +238,10 @@ def array_omega(offsets, sensitivity, positions, raw, dt: float, noise_counts, *
     lin = y @ split.lin.T
     m = split.m
     if obs.products == 6:
-        w_ml, info_ml = omega_ml(q, m)
+        w_ml, _ = omega_ml(q, m)
     else:   # the integrated alpha (no centripetal correction) as the start
         a0 = lin[:, 3:]
-        w_ml, info_ml = omega_ml(q, m, np.cumsum((a0 + np.vstack([a0[:1], a0[:-1]])) * (dt / 2.0), axis=0))
+        w_ml, _ = omega_ml(q, m, np.cumsum((a0 + np.vstack([a0[:1], a0[:-1]])) * (dt / 2.0), axis=0))
     Q = dt * dt * split.cov[3:, 3:] + (snap * dt ** 3 / 12.0) ** 2 * np.eye(3)
     x0 = np.zeros(3) if omega0 is None else np.asarray(omega0, float)
     w, cov = fuse(q, lin[:, 3:], split.leak[3:], Q, m, w_ml, dt, x0, sigma0 ** 2 * np.eye(3), iterations)

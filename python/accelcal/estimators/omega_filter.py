@@ -13,7 +13,8 @@ Per sample n, with the state (x, P) of sample n-1:
 2. start: w, or the ML estimate with the sign nearer w where it lowers the posterior cost
    (w - x)^T P^-1 (w - x) + p^T m p - 2 q^T p by more than ``jump`` (chi^2 units: at rest the
    ML estimate of noise fits it by about chi^2(6), and a jump to it would be a jump to noise;
-   a recording that starts turning, or a lost branch, gains orders of magnitude more);
+   a recording that starts turning, or a lost branch, gains orders of magnitude more; the
+   prior is then centred on the ML estimate, its width kept);
 3. ``iterations`` Gauss-Newton steps on that cost (H = P^-1 + J^T m J, J = dp/domega);
 4. P = (P^-1 + J^T m J)^-1 at the result; alpha[n] again with the new omega.
 
@@ -148,7 +149,7 @@ def fuse(q, lin_alpha, leak_alpha, Q, m, w_ml, dt: float, x0, P0, iterations: in
         if _dot3(c, wp) < 0.0:
             c = (-c[0], -c[1], -c[2])
         if _cost(c, wp, lam, qk, m) < _cost(wp, wp, lam, qk, m) - jump:
-            x = tuple(c)
+            x = wp = tuple(c)      # the prediction is refuted: its width kept, centred on the ML
         for _ in range(iterations):
             cols = _columns(x)
             info = _info(m, cols)
