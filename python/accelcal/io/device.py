@@ -486,8 +486,8 @@ def tetrahedron_device(r: float = 0.05) -> Device:
     (all six rate products).  16-bit ADC, +-16 g, 500 Hz, 0.01 m/s^2 rms noise."""
     if not (math.isfinite(r) and r > 0):
         raise ValueError(f"tetrahedron_device: need a finite r > 0, got {r}")
-    corners = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], float) / math.sqrt(3.0)
-    return _triad_array(f"tetra-12ch-r{r * 1000:g}", r * corners)
+    return _triad_array(f"tetra-12ch-r{r * 1000:g}", r / math.sqrt(3.0) * np.array([[1, 1, 1], [1, -1, -1],
+                                                                                [-1, 1, -1], [-1, -1, 1]], float))
 
 
 def axes_device(r: float = 0.05, origin: bool = True) -> Device:
@@ -495,7 +495,5 @@ def axes_device(r: float = 0.05, origin: bool = True) -> Device:
     channels, else 9); same ADC as :func:`tetrahedron_device`."""
     if not (math.isfinite(r) and r > 0):
         raise ValueError(f"axes_device: need a finite r > 0, got {r}")
-    pts = r * np.eye(3)
-    if origin:
-        pts = np.vstack([np.zeros(3), pts])
+    pts = np.vstack([np.zeros((1, 3)), r * np.eye(3)]) if origin else r * np.eye(3)
     return _triad_array(f"axes-{3 * len(pts)}ch-r{r * 1000:g}", pts)
