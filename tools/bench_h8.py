@@ -57,12 +57,19 @@ OPTS = ("Os", "O2")
 CLOCK_HZ = 16_000_000
 FRAME_HZ = 60
 RAM_BYTES = 2048
+SIZES = {}  # sizeof on the H8/300H of the terms' state, from bench_h8.c's SIZE lines
 MULXS_W_STATES = 24
 MIN_LOAD_STATES = 4  # MOV.W @ERs,Rd: one word fetched, one word read
 ALGORITHM_MULS = {"ac_process": 36, "ac_process_omega": 78, "ac_resolve_omega": 78,
-                  "ac_rate_step": 12, "ac_process_batch_omega": 78, "ac_triad_apply": 9}
+                  "ac_rate_step": 12, "ac_process_batch_omega": 78, "ac_triad_apply": 9,
+                  # the correctable terms (6 channels; their headers): a lag step 2 (32 x 16),
+                  # ac_temp_correct 5 a channel, ac_skew_step 1, ac_nonlin_invert 3 an iteration x 3
+                  "ac_temp_lag_step": 2, "ac_temp_correct": 30, "ac_skew_step": 6, "ac_nonlin_invert": 54,
+                  "terms_temp_nonlin": 2 * 2 + 30 + 54, "terms_full_path": 2 * 2 + 30 + 6 + 54 + 78}
 PER_SAMPLE = ("ac_trim", "ac_process", "ac_process_omega", "ac_resolve_omega", "ac_rate_step",
-              "ac_att_step", "ac_disp_step", "ac_process_batch_omega", "ac_triad_apply")
+              "ac_att_step", "ac_disp_step", "ac_process_batch_omega", "ac_triad_apply",
+              "ac_temp_lag_step", "ac_temp_correct", "ac_skew_step", "ac_nonlin_invert", "terms_temp_nonlin",
+              "terms_full_path")
 LABELS = {
     "ac_trim": "`ac_trim` (6 channels)",
     "ac_process": "`ac_process`, omega = NULL (pre-trim + apply)",
@@ -75,6 +82,13 @@ LABELS = {
     "ac_resolver_build": "`ac_resolver_build` (6 channels, on-device table build)",
     "ac_triad_apply": "`ac_triad_apply` (3-axis sensor: pre-trim + 3x3 apply)",
     "ac_triad_build": "`ac_triad_build` (3-axis sensor, on-device table build)",
+    "ac_temp_lag_step": "`ac_temp_lag_step` (one lag filter)",
+    "ac_temp_correct": "`ac_temp_correct` (6 channels, offset + gain)",
+    "ac_skew_step": "`ac_skew_step` (6 channels)",
+    "ac_nonlin_invert": "`ac_nonlin_invert` (6 channels, 3 iterations)",
+    "terms_temp_nonlin": "terms with nonlinearity and temperature: 2 lag steps + `ac_temp_correct` + `ac_nonlin_invert`",
+    "terms_full_path": "the whole per-sample path with every term: `ac_trim_rails` + 2 lags + temperature + "
+                       "skew + nonlinearity + `ac_resolve` with omega",
 }
 
 BRANCHES = {"bra", "brn", "bt", "bf", "bhi", "bls", "bcc", "bhs", "bcs", "blo", "bne", "beq",
@@ -189,6 +203,8 @@ def build_and_profile(opt, sim):
     regions, stack = {}, {}
     for line in out.stdout.splitlines():
         f = line.split()
+        if f[:1] == ["SIZE"]:
+            SIZES[f[1]] = int(f[2])
         if f[:1] == ["REGION"]:
             regions[int(f[1])] = (f[2], int(f[3]), int(f[4]))
         elif f[:1] == ["STACK"]:
@@ -294,9 +310,11 @@ def main():
                 f"{pair(lambda o: 100 * res[(o, 'ac_resolver_build')][0] / frame_states, '{:.0f} %')} |")
     rows.append("| share of the 60 Hz frame, the triad's on-device table build | "
                 f"{pair(lambda o: 100 * res[(o, 'ac_triad_build')][0] / frame_states, '{:.0f} %')} |")
-    for fwname, calls, label in (("sample", ("ac_trim", "ac_process_omega", "ac_rate_step"), "per-sample path (fw_sample)"),
-                                 ("full", ("ac_trim", "ac_process_omega", "ac_rate_step", "ac_resolver_build"),
-                                  "per-sample path + on-device build (fw_full)")):
+    terms_calls = ("terms_full_path",)
+    for fwname, calls, label in (("sample", ("ac_trim", "ac_process_omega", "ac_rate_step") + terms_calls,
+                                  "per-sample path with every term (fw_sample)"),
+                                 ("full", ("ac_trim", "ac_process_omega", "ac_rate_step", "ac_resolver_build")
+                                  + terms_calls, "per-sample path with every term + on-device build (fw_full)")):
         def ram(o, fwname=fwname, calls=calls):
             text, data, bss = fw[(o, f"fw_{fwname}.out")]
             stk = fw[(o, f"frame_{fwname}")] + 2 + max(res[(o, c)][3] for c in calls)
@@ -305,10 +323,14 @@ def main():
                     f"call, painted) = used; left of 2,048 B | "
                     + " / ".join(f"{s} + {k} = {s + k}; {left}" for s, k, left in (ram(o) for o in OPTS)) + " |")
         rows.append(f"| flash, {label}: text bytes | {pair(lambda o: fw[(o, f'fw_{fwname}.out')][0])} |")
+    lag, line, buf = SIZES["ac_temp_lag"], SIZES["ac_skew_line"], SIZES["skew_buf"]
+    rows.append(f"| RAM of the terms (in fw_sample's .bss above): 2 lag states x {lag} B, the skew's delay line "
+                f"(caller-owned: 3 samples x 6 channels x 2 B) {buf} B and its state {line} B; the tables are "
+                f"const (ROM) | {2 * lag + buf + line} B |")
     rows.append("| deepest stack (painted, incl. return address), " + ", ".join(
         f"`{n}` {pair(lambda o: res[(o, n)][3])}" for n in ("ac_trim", "ac_process_omega", "ac_rate_step",
                                                          "ac_att_step", "ac_disp_step", "ac_resolver_build",
-                                                         "ac_triad_apply", "ac_triad_build"))
+                                                         "ac_triad_apply", "ac_triad_build", "terms_full_path"))
                 + " | bytes |")
     table_md = "\n".join(rows) + "\n"
     (OUT / "bench_h8.md").write_text(table_md)

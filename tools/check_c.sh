@@ -188,7 +188,7 @@ step_valgrind() {
         return
     fi
     local ok=1 t
-    for t in vectors test_trim test_resolve test_rate test_invert; do
+    for t in vectors test_trim test_resolve test_rate test_invert test_terms; do
         if [ ! -x "$B/host/$t" ]; then
             echo "  $t: not built (run the build step first)" >&2
             ok=0

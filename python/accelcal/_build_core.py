@@ -17,6 +17,7 @@ CSRC = ROOT / "csrc"
 HEADERS = ["ac_status.h", "ac_fixed.h", "ac_xf.h", "ac_trim.h", "ac_resolve.h", "ac_trig.h", "ac_attitude.h",
            "ac_invert.h", "ac_rate.h"]
 HEADERS += ["ac_rest.h", "ac_displace.h"]  # motion estimators
+HEADERS += ["ac_temp.h", "ac_skew.h", "ac_nonlin.h"]  # the correctable terms
 
 
 def config_constants(include_dir: Path = INCLUDE) -> dict[str, int]:

@@ -15,9 +15,11 @@ from .readings.clipping import at_rails, clip_levels, pile_warning, rails_warnin
 from .errors import AccelcalError, InputError
 from .readings.noise import noise_for
 from .readings.static import STATIC_WINDOW_S, window_len
-from .firmware.triad import triad_forces
+from .firmware.triad import quantize_triad, triad_apply_float, triad_forces
 from .firmware.native import FORMATS
-from .firmware.quantize import omega_to_fixed, quantize_calibration
+from .firmware.quantize import QuantizeError, omega_to_fixed, quantize_calibration
+from .firmware.terms import correct_readings, has_terms
+from .firmware.terms_fixed import apply_terms_fixed, quantize_terms, temp_to_fixed
 from .io.recording import check_core_input, check_for_device
 
 
@@ -50,6 +52,8 @@ def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str
     if engine not in ("float", "fixed"):
         raise AccelcalError(f"unknown engine {engine!r}: expected float or fixed")
     check_for_device(rec, device)
+    if any(has_terms(cal).values()):
+        return _resolve_with_terms(device, cal, rec, engine, omega_source)
     if device.is_triad():
         if engine == "fixed":
             check_core_input(rec, device.raw_min < 0)
@@ -77,6 +81,69 @@ def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str
     y = out / 2.0 ** FORMATS.out_frac
     # the flags of the core's own arithmetic; its rail bit is the recording's `clipped` (at_rails)
     return y[:, :3], y[:, 3:], flags & ~np.uint8(native.lib.AC_FLAG_AT_RAIL)
+
+
+def _terms_input(device, cal, rec):
+    """The temperature column the terms need (None when the calibration has no tempcos)."""
+    if not has_terms(cal)["temperature"]:
+        return None
+    temp = np.asarray(rec.temp_c, float)
+    if not np.all(np.isfinite(temp)):
+        row = int(np.argmin(np.isfinite(temp)))
+        raise InputError(rec.source, "the calibration has temperature coefficients: temp_c is needed on every "
+                         "sample", row=rec.line(row), column="temp_c")
+    return temp
+
+
+def _resolve_with_terms(device, cal, rec, engine, omega_source):
+    """resolve_recording for a calibration with correctable terms (firmware.terms): the readings
+    corrected (float reference, or the C core's ac_temp / ac_skew / ac_nonlin as a generated
+    header's firmware runs them), then resolved as without them."""
+    temp = _terms_input(device, cal, rec)
+    dt = 1.0 / float(device.sample_rate_hz)
+    triad = device.is_triad()
+    if engine == "float":
+        y = correct_readings(cal, rec.raw, temp, dt)
+        if triad:
+            f = triad_apply_float(cal.offsets, cal.sensitivity, y)
+            return f, np.full_like(f, np.nan), None
+        omega = omega_for(rec, omega_source)
+        try:
+            f, a = model.resolve(cal.offsets, cal.sensitivity, cal.positions_or_nominal(device), y, omega)
+        except np.linalg.LinAlgError as e:
+            raise InputError(getattr(cal, "source", "calibration"),
+                             f"the calibrated sensor matrix cannot be inverted ({e})", field="channels") from None
+        return f, a, None
+    signed = device.raw_min < 0
+    check_core_input(rec, signed)
+    rails = (device.raw_min, device.raw_max)
+    try:
+        t = (quantize_triad(cal.offsets, cal.sensitivity, signed, rails) if triad
+             else quantize_calibration(device, cal))
+        tt = quantize_terms(cal, device.n_channels, dt, t.offset_q)
+        temp_q = None if temp is None else temp_to_fixed(temp)
+    except QuantizeError as e:
+        raise InputError(getattr(cal, "source", "calibration"), str(e), field="channels") from None
+    m = tt.latency()
+    raw = np.asarray(rec.raw, np.int64)
+    raw = np.concatenate([raw, np.repeat(raw[-1:], m, axis=0)])
+    if temp_q is not None:
+        temp_q = np.concatenate([temp_q, np.repeat(temp_q[-1:], m)])
+    d = raw - np.asarray(t.trim, np.int64)
+    x = np.clip(d, -32768, 32767).astype(np.int16)
+    sat = np.any(x != d, axis=1)
+    y, tsat = apply_terms_fixed(tt, x, temp_q)
+    y, sat = y[m:], (sat | tsat)[m:]
+    if triad:
+        f, fsat = native.triad_resolve_batch(t.cdata(), y)
+        return f / 2.0 ** FORMATS.out_frac, np.full(f.shape, np.nan), (sat | fsat).astype(np.uint8)
+    omega = omega_for(rec, omega_source)
+    w_q = None if omega is None else omega_to_fixed(omega)
+    r = native.new_resolver(t.m, t.m_shift, t.k, t.g, t.g_shift)     # no rails: x is corrected already
+    out, flags = native.process_batch(r, np.zeros(t.n, np.int16), y, w_q)
+    flags = flags | np.where(sat, np.uint8(native.lib.AC_FLAG_TRIM_SAT), np.uint8(0))
+    yq = out / 2.0 ** FORMATS.out_frac
+    return yq[:, :3], yq[:, 3:], flags
 
 
 def clipped_samples(rec, device) -> tuple[np.ndarray, list[str]]:

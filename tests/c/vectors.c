@@ -218,6 +218,12 @@ static union {
         int32_t out[BATCH * 6u];
         uint8_t flags[BATCH];
     } batch;
+    struct { /* tests/c/vectors_terms.c */
+        ac_temp_table temp;
+        ac_skew_table skew;
+        ac_nonlin_table nl;
+        int16_t line[AC_MAX_CHANNELS * 8u];
+    } terms;
 } mem;
 
 /* ---- fixed ----------------------------------------------------------------------- */
@@ -1499,6 +1505,8 @@ static void vec_rails(void)
     }
 }
 
+#include "vectors_terms.c"
+
 int main(void)
 {
     ac_test_platform_init();
@@ -1518,6 +1526,7 @@ int main(void)
     vec_resolve_errors();
     vec_tshift_edges();
     vec_rails();
+    vec_terms();
     framing = 0u;
     OUT_S("END accelcal-vectors ");
     out_hex(n_lines, 8u);

@@ -42,12 +42,19 @@ enum {
     R_BUILD,
     R_TRIAD,
     R_TRIAD_BUILD,
+    R_TEMP_LAG,
+    R_TEMP,
+    R_SKEW,
+    R_NONLIN,
+    R_TERMS,
+    R_TERMS_PATH,
     R_COUNT
 };
 static const char *const region_name[R_COUNT] = {
     "", "empty", "ac_trim", "ac_process", "ac_process_omega", "ac_resolve_omega",
     "ac_rate_step", "ac_att_step", "ac_disp_step", "ac_process_batch_omega", "ac_resolver_build",
-    "ac_triad_apply", "ac_triad_build"};
+    "ac_triad_apply", "ac_triad_build", "ac_temp_lag_step", "ac_temp_correct", "ac_skew_step",
+    "ac_nonlin_invert", "terms_temp_nonlin", "terms_full_path"};
 static uint16_t entries[R_COUNT], samples[R_COUNT], deepest[R_COUNT];
 
 /* ---- output through the write trap ---- */
@@ -135,6 +142,41 @@ static ac_rate rate;
 static ac_att att;
 static ac_disp disp;
 
+/* the correctable terms on the seed's 6 channels (firmware.terms_fixed's tables for tempcos of
+ * 0.2 % of g per degC and 3e-4/degC at a 20 s and 5 s lag, skews of -5..6 ms at 60 Hz, a square
+ * and a cube term of 0.5 % and 0.1 % of the reading at 1 g) */
+static const ac_temp_table terms_temp = {6u, 6400, {640, 640, 640, 640, 640, 640},
+                                         {5033, 5033, 5033, 5033, 5033, 5033}, {0, 0, 0, 0, 0, 0}};
+static const ac_skew_table terms_skew = {6u, 3u, {1, 0, 1, 1, 1, 0}, {7864u, 26870u, 3932u, 0u, 11796u, 22938u}};
+static const ac_nonlin_table terms_nl = {6u, 15, {4295, 4295, 4295, 4295, 4295, 4295},
+                                         {22518, 22518, 22518, 22518, 22518, 22518}};
+static ac_temp_lag lag_off, lag_gain;
+static int16_t skew_buf[3u * 6u];
+static ac_skew_line skew_line;
+
+/* the terms between the pre-trim and the resolve: two lags, the temperature, the nonlinearity
+ * (and with `full', the pre-trim, the skew and the resolve with omega): what firmware calls */
+static int terms_path(int16_t temp, const uint16_t *raw, const uint16_t *trim, int16_t *x,
+                            const int16_t *w, int32_t *out, uint8_t full)
+{
+    int16_t t_off, t_gain;
+    int s = 0;
+    if (full) {
+        s = (int)ac_trim_rails(raw, trim, 6u, 0u, 65535u, x);
+    }
+    s |= (int)ac_temp_lag_step(&lag_off, temp, &t_off);
+    s |= (int)ac_temp_lag_step(&lag_gain, temp, &t_gain);
+    s |= (int)ac_temp_correct(&terms_temp, t_off, t_gain, x, x);
+    if (full) {
+        s |= (int)ac_skew_step(&terms_skew, &skew_line, x, x);
+    }
+    s |= (int)ac_nonlin_invert(&terms_nl, x, x);
+    if (full) {
+        s |= (int)ac_resolve(&res, x, w, out);
+    }
+    return s;
+}
+
 #define BATCH 8u
 #define N_SAMPLES 16u
 
@@ -210,6 +252,9 @@ int main(void)
     dcfg.dt_shift = 21u;
     dcfg.axis = -1;
     (void)ac_disp_init(&disp, &dcfg);
+    (void)ac_temp_lag_init(&lag_off, 55901u, 26u);
+    (void)ac_temp_lag_init(&lag_gain, 55831u, 24u);
+    (void)ac_skew_init(&skew_line, &terms_skew, skew_buf, 18u);
 
     for (k = 0u; k < N_SAMPLES; k++) {
         for (i = 0u; i < 6u; i++) {
@@ -226,6 +271,15 @@ int main(void)
         MEASURE(R_RESOLVE_W, 1u, ac_resolve(&res, x, w, out));
         MEASURE(R_RATE, 1u, ac_rate_step(&rate, &out[3], w));
         MEASURE(R_TRIAD, 1u, ac_triad_apply(&tri, raw, f));
+        {
+            int16_t temp = (int16_t)(25 * 256 + rnd_range(-2560, 5120)), tl = 0, y[6];
+            MEASURE(R_TEMP_LAG, 1u, ac_temp_lag_step(&lag_off, temp, &tl));
+            MEASURE(R_TEMP, 1u, ac_temp_correct(&terms_temp, tl, temp, x, y));
+            MEASURE(R_SKEW, 1u, ac_skew_step(&terms_skew, &skew_line, y, y));
+            MEASURE(R_NONLIN, 1u, ac_nonlin_invert(&terms_nl, x, y));
+            MEASURE(R_TERMS, 1u, terms_path(temp, raw, trim, y, w, out, 0u));
+            MEASURE(R_TERMS_PATH, 1u, terms_path(temp, raw, trim, y, w, out, 1u));
+        }
         for (i = 0u; i < 6u; i++) {
             f[i] = (int32_t)rnd_range(-2000, 4000); /* +-2 m/s^2 */
         }
@@ -268,6 +322,15 @@ int main(void)
         put_u(deepest[id]);
         put_c('\n');
     }
+    put_s("SIZE ac_temp_lag ");
+    put_u((uint16_t)sizeof(ac_temp_lag));
+    put_c('\n');
+    put_s("SIZE ac_skew_line ");
+    put_u((uint16_t)sizeof(ac_skew_line));
+    put_c('\n');
+    put_s("SIZE skew_buf ");
+    put_u((uint16_t)sizeof(skew_buf));
+    put_c('\n');
     put_s("END bench\n");
     return 0;
 }

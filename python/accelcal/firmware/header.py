@@ -16,6 +16,8 @@ from .. import __version__
 from .triad import TriadTable, quantize_triad, triad_rounding_bound
 from .native import FORMATS
 from .quantize import FixedTables, quantize_calibration, rail_counts, resolver_rounding_bound, to_fixed
+from .terms_fixed import quantize_terms
+from .terms_header import insert_terms, terms_header_parts
 
 
 def _c_ident(text: str) -> str:
@@ -310,17 +312,27 @@ def calibration_header(device, cal, *, prefix: str = "AC_CAL") -> str:
     warnings = extra.get("warnings", [])
     fit = extra.get("fit") if isinstance(extra.get("fit"), dict) else {}
     notes = [fit["not_fitted_note"]] if fit.get("not_fitted_note") else []
+    signed = device.raw_min < 0
     if device.is_triad():
-        t = quantize_triad(cal.offsets, cal.sensitivity, signed=device.raw_min < 0,
-                           rails=(device.raw_min, device.raw_max))
+        t = quantize_triad(cal.offsets, cal.sensitivity, signed=signed, rails=(device.raw_min, device.raw_max))
         rounding = triad_rounding_bound(t, cal.offsets, cal.sensitivity, device.raw_min, device.raw_max)
-        return render_triad_header(t, device=device.name, prefix=prefix, calibration_method=cal.method,
+        text = render_triad_header(t, device=device.name, prefix=prefix, calibration_method=cal.method,
                                    warnings=warnings, rounding_lsb=rounding, notes=notes,
                                    counts_per_mps2=device.counts_per_mps2)
-    t = quantize_calibration(device, cal)
-    pos = cal.positions_or_nominal(device)
-    rounding = resolver_rounding_bound(t, cal.offsets, cal.sensitivity, pos, device.raw_min, device.raw_max)
-    return render_header(t, prefix=prefix, calibration_method=cal.method,
-                         temp_ref_c=getattr(cal, "temp_ref_c", None), offset_tc=getattr(cal, "offset_tc", None),
-                         gain_tc=getattr(cal, "gain_tc", None), warnings=warnings, rounding_lsb=rounding,
-                         notes=notes, counts_per_mps2=device.counts_per_mps2)
+        call = f"ac_triad_resolve(&{_c_ident(prefix)}_TRIAD, x, f)"
+    else:
+        t = quantize_calibration(device, cal)
+        pos = cal.positions_or_nominal(device)
+        rounding = resolver_rounding_bound(t, cal.offsets, cal.sensitivity, pos, device.raw_min, device.raw_max)
+        text = render_header(t, prefix=prefix, calibration_method=cal.method,
+                             temp_ref_c=getattr(cal, "temp_ref_c", None), offset_tc=getattr(cal, "offset_tc", None),
+                             gain_tc=getattr(cal, "gain_tc", None), warnings=warnings, rounding_lsb=rounding,
+                             notes=notes, counts_per_mps2=device.counts_per_mps2)
+        call = f"ac_resolve(&{_c_ident(prefix)}_RESOLVER, x, omega_or_NULL, out)"
+    tt = quantize_terms(cal, device.n_channels, 1.0 / float(device.sample_rate_hz), t.offset_q)
+    if not tt.any():
+        return text
+    trim = np.asarray(t.trim, np.int64)
+    span = float(np.max(np.maximum(np.abs(device.raw_max - trim), np.abs(device.raw_min - trim))))
+    p = _c_ident(prefix)
+    return insert_terms(text, p, terms_header_parts(tt, p, min(span, 32767.0), signed, call))

@@ -176,3 +176,98 @@ def rate_integrate(alpha_q: np.ndarray, dt_m: int, dt_shift: int,
         sat[n] = check(lib.ac_rate_step(st, a, w), "ac_rate_step")
         out[n] = (w[0], w[1], w[2])
     return out, sat
+
+
+# --------------------------------------------------------------------------
+# the correctable terms (ac_temp.h, ac_skew.h, ac_nonlin.h)
+# --------------------------------------------------------------------------
+
+
+def new_temp_table(t_ref: int, oc, gc, o):
+    """An ``ac_temp_table`` (ac_temp.h) from its integer fields (oc Q.AC_TEMP_OC_FRAC, gc
+    Q.AC_TEMP_GC_FRAC, o Q.AC_OFFSET_FRAC: (N,))."""
+    t = ffi.new("ac_temp_table *")
+    t.n, t.t_ref = len(oc), int(t_ref)
+    for i in range(len(oc)):
+        t.oc[i], t.gc[i], t.o[i] = int(oc[i]), int(gc[i]), int(o[i])
+    return t
+
+
+def new_skew_table(length: int, whole, frac):
+    """An ``ac_skew_table`` (ac_skew.h): delay line length, whole (N,) and frac (N,) Q.15 delays."""
+    t = ffi.new("ac_skew_table *")
+    t.n, t.len = len(whole), int(length)
+    for i in range(len(whole)):
+        t.whole[i], t.frac[i] = int(whole[i]), int(frac[i])
+    return t
+
+
+def new_nonlin_table(shift: int, a2, a3):
+    """An ``ac_nonlin_table`` (ac_nonlin.h): a2, a3 (N,) and their shared shift."""
+    t = ffi.new("ac_nonlin_table *")
+    t.n, t.shift = len(a2), int(shift)
+    for i in range(len(a2)):
+        t.a2[i], t.a3[i] = int(a2[i]), int(a3[i])
+    return t
+
+
+def temp_lag_run(k: int, shift: int, temp_q) -> tuple[np.ndarray, np.ndarray]:
+    """ac_temp_lag_step over temp_q (n,) int16 Q.AC_TEMP_FRAC from a fresh filter: the lagged
+    temperatures (n,) int16 and the per-step saturation (n,) bool."""
+    f = ffi.new("ac_temp_lag *")
+    check(lib.ac_temp_lag_init(f, int(k), int(shift)), "ac_temp_lag_init")
+    temp_q = np.asarray(temp_q, np.int64)
+    out = np.zeros(temp_q.shape[0], np.int16)
+    sat = np.zeros(temp_q.shape[0], bool)
+    y = ffi.new("int16_t *")
+    for n, v in enumerate(temp_q):
+        sat[n] = check(lib.ac_temp_lag_step(f, int(v), y), "ac_temp_lag_step")
+        out[n] = y[0]
+    return out, sat
+
+
+def temp_correct(table, t_off: int, t_gain: int, x) -> tuple[np.ndarray, bool]:
+    """ac_temp_correct on one sample x (N,) int16: (y (N,) int16, saturated)."""
+    x = np.ascontiguousarray(x, dtype=np.int16)
+    y = np.zeros_like(x)
+    sat = check(lib.ac_temp_correct(table, int(t_off), int(t_gain), cptr("int16_t *", x), cptr("int16_t *", y)),
+                "ac_temp_correct")
+    return y, sat
+
+
+def nonlin_invert(table, x) -> tuple[np.ndarray, bool]:
+    """ac_nonlin_invert on one sample x (N,) int16: (y (N,) int16, saturated)."""
+    x = np.ascontiguousarray(x, dtype=np.int16)
+    y = np.zeros_like(x)
+    sat = check(lib.ac_nonlin_invert(table, cptr("int16_t *", x), cptr("int16_t *", y)), "ac_nonlin_invert")
+    return y, sat
+
+
+class SkewLine:
+    """An ``ac_skew_line`` on a buffer this object owns (the caller's, as firmware's)."""
+
+    def __init__(self, table):
+        self.table = table
+        self.buf = np.zeros(int(table.len) * int(table.n), np.int16)
+        self.line = ffi.new("ac_skew_line *")
+        check(lib.ac_skew_init(self.line, table, cptr("int16_t *", self.buf), self.buf.size), "ac_skew_init")
+
+    def step(self, x) -> np.ndarray:
+        """ac_skew_step on one sample x (N,) int16 -> y (N,) int16."""
+        x = np.ascontiguousarray(x, dtype=np.int16)
+        y = np.zeros_like(x)
+        check(lib.ac_skew_step(self.table, self.line, cptr("int16_t *", x), cptr("int16_t *", y)), "ac_skew_step")
+        return y
+
+
+def triad_resolve_batch(table, x) -> tuple[np.ndarray, np.ndarray]:
+    """ac_triad_resolve on every sample of trimmed readings x (n, 3) int16: f (n, 3) int32
+    Q.AC_OUT_FRAC and the saturation (n,) bool."""
+    check(lib.ac_triad_check(table), "ac_triad_check")
+    x = np.ascontiguousarray(x, dtype=np.int16)
+    out = np.zeros((x.shape[0], 3), np.int32)
+    sat = np.zeros(x.shape[0], bool)
+    for n in range(x.shape[0]):
+        sat[n] = check(lib.ac_triad_resolve(table, cptr("int16_t *", x[n]), cptr("int32_t *", out[n])),
+                       "ac_triad_resolve")
+    return out, sat

@@ -33,9 +33,16 @@ _OPTIONAL_CHANNEL_FIELDS = (
     ("position_sigma", "position_sigma_m", 3),
     ("offset_tc", "offset_tc_counts_per_c", 1),
     ("gain_tc", "gain_tc_per_c", 1),
+    ("nonlin_k2", "nonlin_k2_counts_per_mps2_2", 1),
+    ("nonlin_k3", "nonlin_k3_counts_per_mps2_3", 1),
+    ("time_skew_s", "time_skew_s", 1),
 )
+# Top-level optional numbers >= 0: (Calibration attribute, JSON key): the thermal lags (s)
+_OPTIONAL_TOP_LAGS = (("temp_offset_tau_s", "temperature_offset_tau_s"),
+                      ("temp_gain_tau_s", "temperature_gain_tau_s"))
 _NONNEGATIVE = {"offset_sigma", "sensitivity_sigma", "position_sigma"}
-_KNOWN_TOP = {"device", "method", "channels", "temperature_ref_c", "residual_rms_counts", "poses_used"}
+_KNOWN_TOP = {"device", "method", "channels", "temperature_ref_c", "residual_rms_counts", "poses_used"} | {
+    key for _, key in _OPTIONAL_TOP_LAGS}
 #: every top-level key a calibration file's reader knows ("fit", "poses" and "warnings" are kept in
 #: ``extra``; "warnings": what ``accelcal calibrate`` warned of, one line each, which ``header`` carries as a
 #: comment); an unknown key close to one of these is refused as a misspelling (jsonfields.KEY_CUTOFF)
@@ -79,6 +86,16 @@ class Calibration:
         1-sigma of each (counts; counts per m/s^2; m).
     temp_ref_c, offset_tc, gain_tc : float, ndarray (N,) or None
         Temperature terms: reference degC, counts per degC, fraction per degC.
+    temp_offset_tau_s, temp_gain_tau_s : float or None
+        The first-order thermal lag (s) of the temperature the offset and the gain tempcos act
+        on (effects/temperature.py's ``tau_s``); None or 0: the recorded temperature itself.
+    nonlin_k2, nonlin_k3 : ndarray (N,) or None
+        The reading gains ``k2 a^2 + k3 a^3`` counts, a = (linear reading - b_i) / |s_i| in m/s^2
+        (effects/nonlinearity.py): counts per (m/s^2)^2 and per (m/s^2)^3.
+    time_skew_s : ndarray (N,) or None
+        Channel i's sample is taken tau_i seconds late: it reads the motion at t + tau_i
+        (effects/timing.py's ``time_skew``).
+    The correction of these terms (firmware.terms) runs before the resolve.
     residual_rms_per_channel : ndarray, shape (N,), or None
         Counts.
     residual_rms_per_pose : dict of str to float, or None
@@ -100,6 +117,11 @@ class Calibration:
     temp_ref_c: float | None = None
     offset_tc: np.ndarray | None = None  # (N,) counts per degC
     gain_tc: np.ndarray | None = None  # (N,) fraction per degC
+    nonlin_k2: np.ndarray | None = None  # (N,) counts per (m/s^2)^2
+    nonlin_k3: np.ndarray | None = None  # (N,) counts per (m/s^2)^3
+    time_skew_s: np.ndarray | None = None  # (N,) s
+    temp_offset_tau_s: float | None = None  # s
+    temp_gain_tau_s: float | None = None  # s
     residual_rms_per_channel: np.ndarray | None = None  # (N,) counts
     residual_rms_per_pose: dict[str, float] | None = None
     poses_used: list | None = None
@@ -119,6 +141,13 @@ class Calibration:
         self.residual_rms_per_channel = _opt_array(self.residual_rms_per_channel, (n,), "residual_rms_per_channel")
         if self.temp_ref_c is not None:
             self.temp_ref_c = float(self.temp_ref_c)
+        for attr, _ in _OPTIONAL_TOP_LAGS:
+            val = getattr(self, attr)
+            if val is not None:
+                val = float(val)
+                if not (np.isfinite(val) and val >= 0.0):
+                    raise ValueError(f"Calibration.{attr}: expected a finite number >= 0, got {val}")
+                setattr(self, attr, val)
         if self.residual_rms_per_pose is not None:
             self.residual_rms_per_pose = {str(k): float(v) for k, v in self.residual_rms_per_pose.items()}
         if self.poses_used is not None:
@@ -166,6 +195,7 @@ class Calibration:
             and self.method == other.method
             and all(same(getattr(self, a), getattr(other, a)) for a in arrays)
             and self.temp_ref_c == other.temp_ref_c
+            and all(getattr(self, a) == getattr(other, a) for a, _ in _OPTIONAL_TOP_LAGS)
             and self.residual_rms_per_pose == other.residual_rms_per_pose
             and self.poses_used == other.poses_used
             and self.extra == other.extra
@@ -213,6 +243,9 @@ def calibration_to_dict(cal: Calibration) -> dict:
     out: dict[str, Any] = {"device": cal.device, "method": cal.method, "channels": channels}
     if cal.temp_ref_c is not None:
         out["temperature_ref_c"] = float(cal.temp_ref_c)
+    for attr, key in _OPTIONAL_TOP_LAGS:
+        if getattr(cal, attr) is not None:
+            out[key] = float(getattr(cal, attr))
     resid: dict[str, Any] = {}
     if cal.residual_rms_per_channel is not None:
         if not np.all(np.isfinite(cal.residual_rms_per_channel)):
@@ -310,6 +343,12 @@ def calibration_from_dict(d: Any, source: str = "<dict>", device: Device | None 
     elif "offset_tc" in opt or "gain_tc" in opt:
         which = "offset_tc_counts_per_c" if "offset_tc" in opt else "gain_tc_per_c"
         raise v.fail("temperature_ref_c", f"missing (required when channels give {which})")
+    lags = {}
+    for attr, key in _OPTIONAL_TOP_LAGS:
+        if key in d:
+            lags[attr] = v.number(d[key], key)
+            if lags[attr] < 0:
+                raise v.fail(key, f"expected a time constant >= 0 s, got {show_json(d[key])}")
 
     per_channel = per_pose = None
     if "residual_rms_counts" in d:
@@ -362,6 +401,11 @@ def calibration_from_dict(d: Any, source: str = "<dict>", device: Device | None 
         temp_ref_c=temp_ref,
         offset_tc=opt.get("offset_tc"),
         gain_tc=opt.get("gain_tc"),
+        nonlin_k2=opt.get("nonlin_k2"),
+        nonlin_k3=opt.get("nonlin_k3"),
+        time_skew_s=opt.get("time_skew_s"),
+        temp_offset_tau_s=lags.get("temp_offset_tau_s"),
+        temp_gain_tau_s=lags.get("temp_gain_tau_s"),
         residual_rms_per_channel=per_channel,
         residual_rms_per_pose=per_pose,
         poses_used=poses,

@@ -1,0 +1,37 @@
+/*
+ * accelcal -- constant-shift roundings of the correctable terms (ac_temp.c, ac_skew.c,
+ * ac_nonlin.c; not installed).  Macros, so that even h8300-hms-gcc 3.4 (which does not
+ * inline the helpers of ac_internal.h) pays no call: each adds a bias that makes the value
+ * non-negative, shifts the unsigned sum by a constant (a shift by 15 or 16 is a word move
+ * on the H8/300H, not a loop) and removes the bias again.  No ">>" of a negative value, no
+ * signed overflow; every sum is taken modulo 2^32 (cast to uint32_t: unsigned long is
+ * wider on 64-bit hosts).  Each is round(v 2^-n) half up (ties towards +inf), exactly, on
+ * the range stated.
+ */
+#ifndef AC_TERMS_IMPL_H
+#define AC_TERMS_IMPL_H
+
+#include "accelcal/ac_config.h"
+
+/* round(v / 2^15), |v| <= 2^30 */
+#define AC_R15(v) ((int32_t)((uint32_t)((uint32_t)(v) + (uint32_t)0x40004000UL) >> 15) - 0x8000L)
+
+/* round(v / 2^15), -2^31 <= v < 2^31 - 2^14 */
+#define AC_R15W(v) ((int32_t)((uint32_t)((uint32_t)(v) + (uint32_t)0x80004000UL) >> 15) - 0x10000L)
+
+/* round(v / 2^16) as int16, -2^31 <= v < 2^31 - 2^15 (the result is in int16 there) */
+#define AC_R16(v) ((int16_t)((int32_t)((uint32_t)((uint32_t)(v) + (uint32_t)0x80008000UL) >> 16) - 0x8000L))
+
+/* round(v / 2^19), |v| <= 2^30 */
+#define AC_R19(v) ((int32_t)((uint16_t)((uint32_t)((uint32_t)(v) + (uint32_t)0x40040000UL) >> 16) >> 3) - 0x800L)
+
+/* round(v / 2^13), |v| < 2^28 - 2^12 */
+#define AC_R13(v) ((int32_t)((((uint32_t)((uint32_t)(v) + (uint32_t)0x10001000UL) << 3) >> 16)) - 0x8000L)
+
+/* round(v / 2^3), |v| <= 2^30 */
+#define AC_R3(v) ((int32_t)((uint32_t)((uint32_t)(v) + (uint32_t)0x40000004UL) >> 3) - 0x08000000L)
+
+/* 16 x 16 -> 32 signed product */
+#define AC_MUL16(a, b) ((int32_t)(int16_t)(a) * (int16_t)(b))
+
+#endif /* AC_TERMS_IMPL_H */

@@ -1,0 +1,207 @@
+/*
+ * accelcal -- test vectors of the correctable terms (ac_temp.h, ac_skew.h, ac_nonlin.h).
+ * Included by tests/c/vectors.c (it uses that file's output and pseudo-random helpers),
+ * so every build of the vector program (host, AVR, H8/300H) runs them unchanged.
+ */
+
+/* the tables and the delay line share vectors.c's static union (2 KB parts) */
+#define vt_temp (mem.terms.temp)
+#define vt_skew (mem.terms.skew)
+#define vt_nl (mem.terms.nl)
+#define vt_line_buf (mem.terms.line)
+
+/* an int16 that is often near an edge: the limits, zero, or small */
+static int16_t vt_i16(void)
+{
+    uint8_t kind = (uint8_t)(rnd() & 7UL);
+    if (kind == 0u) {
+        return (rnd() & 1UL) ? (int16_t)32767 : (int16_t)(-32767 - 1);
+    }
+    if (kind < 3u) {
+        return (int16_t)rnd_range(-300, 300);
+    }
+    return rnd_i16();
+}
+
+static void vec_temp_lag(void)
+{
+    uint8_t t, k;
+    for (t = 0u; t < 48u; t++) {
+        ac_temp_lag f;
+        /* weights 2^-14 .. 1 mostly (visible in 10 steps); any shift, 48 and 49 out of range */
+        uint8_t shift = (t & 4u) ? (uint8_t)below(50u) : (uint8_t)rnd_range(14, 28);
+        uint16_t kk = (uint16_t)rnd();
+        int16_t out = 0, temp = vt_i16();
+        if (shift < 16u && (t & 1u) != 0u) {
+            kk = (uint16_t)(1u << shift); /* weight 1: no lag */
+        } else if (shift >= 16u && (t & 2u) != 0u) {
+            kk = (uint16_t)(32768u + (kk >> 1)); /* the quantizer's range */
+        }
+        TAG("VTL");
+        h8(shift);
+        hu16(kk);
+        st(ac_temp_lag_init(&f, kk, shift));
+        if (shift <= 47u && (shift >= 16u || (uint32_t)kk <= ((uint32_t)1u << shift))) {
+            for (k = 0u; k < 10u; k++) {
+                if ((rnd() & 3UL) != 0UL) {
+                    temp = (int16_t)(temp + (int16_t)rnd_range(-200, 200));
+                } else {
+                    temp = vt_i16();
+                }
+                st(ac_temp_lag_step(&f, temp, &out));
+                h16(out);
+            }
+        }
+        nl();
+    }
+    TAG("VTL0");
+    {
+        ac_temp_lag f;
+        int16_t out;
+        st(ac_temp_lag_init(0, 1u, 0u));
+        st(ac_temp_lag_init(&f, 1u, 0u));
+        st(ac_temp_lag_step(&f, 0, 0));
+        st(ac_temp_lag_step(0, 0, &out));
+    }
+    nl();
+}
+
+static void vec_temp_correct(void)
+{
+    uint8_t t, i;
+    int16_t x[AC_MAX_CHANNELS], y[AC_MAX_CHANNELS];
+    for (t = 0u; t < 120u; t++) {
+        uint16_t n = (uint16_t)(1u + below(AC_MAX_CHANNELS));
+        int16_t t_off, t_gain;
+        vt_temp.n = (t % 29u == 3u) ? 0u : n;
+        vt_temp.t_ref = vt_i16();
+        for (i = 0u; i < n; i++) {
+            vt_temp.oc[i] = (t & 4u) ? vt_i16() : (int16_t)rnd_range(-3000, 3000);
+            vt_temp.gc[i] = (t & 8u) ? vt_i16() : (int16_t)rnd_range(-5000, 5000);
+            vt_temp.o[i] = (int16_t)((t % 23u == 4u) ? 129 : rnd_range(-128, 128)); /* 129 refused */
+            x[i] = vt_i16();
+        }
+        if (t & 16u) {
+            t_off = vt_i16();
+        } else {
+            t_off = (int16_t)((int32_t)vt_temp.t_ref / 2 + rnd_range(-5000, 5000));
+        }
+        if (t & 32u) {
+            t_gain = vt_i16();
+        } else {
+            t_gain = (int16_t)((int32_t)vt_temp.t_ref / 2 + rnd_range(-5000, 5000));
+        }
+        TAG("VTC");
+        h16(t_off);
+        h16(t_gain);
+        st(ac_temp_correct(&vt_temp, t_off, t_gain, x, y));
+        if ((int)ac_temp_check(&vt_temp) == 0) {
+            for (i = 0u; i < n; i++) {
+                h16(y[i]);
+            }
+        }
+        nl();
+    }
+    TAG("VTC0");
+    st(ac_temp_correct(0, 0, 0, x, y));
+    st(ac_temp_correct(&vt_temp, 0, 0, 0, y));
+    st(ac_temp_correct(&vt_temp, 0, 0, x, 0));
+    nl();
+}
+
+static void vec_skew(void)
+{
+    uint8_t t, k, i;
+    int16_t x[AC_MAX_CHANNELS], y[AC_MAX_CHANNELS];
+    for (t = 0u; t < 40u; t++) {
+        ac_skew_line line;
+        uint16_t n = (uint16_t)(1u + below(AC_MAX_CHANNELS));
+        uint16_t len = (uint16_t)(2u + below(7u));
+        vt_skew.n = n;
+        vt_skew.len = (t % 13u == 5u) ? 1u : len;
+        for (i = 0u; i < n; i++) {
+            vt_skew.whole[i] = (uint8_t)below((uint16_t)(len - 1u));
+            vt_skew.frac[i] = (t % 11u == 7u && i == 0u) ? 40000u : (uint16_t)below(32768u);
+        }
+        TAG("VSK");
+        hu16(vt_skew.len);
+        st(ac_skew_init(&line, &vt_skew, vt_line_buf, (uint16_t)(AC_MAX_CHANNELS * 8u)));
+        if ((int)ac_skew_check(&vt_skew) == 0) {
+            for (k = 0u; k < 10u; k++) {
+                for (i = 0u; i < n; i++) {
+                    x[i] = vt_i16();
+                }
+                st(ac_skew_step(&vt_skew, &line, x, y));
+                for (i = 0u; i < n; i++) {
+                    h16(y[i]);
+                }
+            }
+        }
+        nl();
+    }
+    TAG("VSK0");
+    {
+        ac_skew_line line;
+        vt_skew.n = 2u;
+        vt_skew.len = 4u;
+        vt_skew.whole[0] = 0u;
+        vt_skew.whole[1] = 2u;
+        vt_skew.frac[0] = 0u;
+        vt_skew.frac[1] = 1u;
+        st(ac_skew_init(&line, &vt_skew, vt_line_buf, 7u));
+        st(ac_skew_init(&line, &vt_skew, 0, 8u));
+        st(ac_skew_init(&line, &vt_skew, vt_line_buf, 8u));
+        st(ac_skew_step(&vt_skew, &line, 0, y));
+        vt_skew.len = 5u;
+        st(ac_skew_step(&vt_skew, &line, x, y)); /* a line made for another table */
+    }
+    nl();
+}
+
+static void vec_nonlin(void)
+{
+    uint8_t t, i;
+    int16_t x[AC_MAX_CHANNELS], y[AC_MAX_CHANNELS];
+    for (t = 0u; t < 120u; t++) {
+        uint16_t n = (uint16_t)(1u + below(AC_MAX_CHANNELS));
+        vt_nl.n = n;
+        vt_nl.shift = (int8_t)((t % 3u == 0u) ? rnd_range(-1, 31) : rnd_range(12, 30));
+        for (i = 0u; i < n; i++) {
+            int32_t a2 = (t & 4u) ? (int32_t)rnd_range(-32767, 32767) : (int32_t)rnd_range(-3000, 3000);
+            int32_t room = 32767L - (a2 < 0 ? -a2 : a2);
+            int32_t a3 = (int32_t)rnd_range(-room, room);
+            if (t % 17u == 9u && i == 0u) {
+                a3 = room + 1L; /* |a2| + |a3| = 32768: refused */
+                if (a3 > 32767L) {
+                    a3 = 32767L;
+                    a2 = 1L;
+                }
+            }
+            vt_nl.a2[i] = (int16_t)a2;
+            vt_nl.a3[i] = (int16_t)a3;
+            x[i] = vt_i16();
+        }
+        TAG("VNL");
+        h8((uint8_t)vt_nl.shift);
+        st(ac_nonlin_invert(&vt_nl, x, y));
+        if ((int)ac_nonlin_check(&vt_nl) == 0) {
+            for (i = 0u; i < n; i++) {
+                h16(y[i]);
+            }
+        }
+        nl();
+    }
+    TAG("VNL0");
+    st(ac_nonlin_invert(0, x, y));
+    st(ac_nonlin_invert(&vt_nl, 0, y));
+    st(ac_nonlin_invert(&vt_nl, x, 0));
+    nl();
+}
+
+static void vec_terms(void)
+{
+    vec_temp_lag();
+    vec_temp_correct();
+    vec_skew();
+    vec_nonlin();
+}
