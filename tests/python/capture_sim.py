@@ -69,12 +69,12 @@ class Person:
                 if self.segments and self.segments[0][0] == "move":
                     kind, dur, R0, R1, d = self.segments[0]
                     if R0 is None:
-                        R0 = self.R
+                        R0 = (self.R, logm_so3(self.R.T @ R1))
                         self.segments[0] = (kind, dur, R0, R1, d)
                     x = self.seg_t / dur
                     s = x * x * (3.0 - 2.0 * x)
                     sdd = (6.0 - 12.0 * x) / dur ** 2
-                    R = R0 @ expm_so3(logm_so3(R0.T @ R1) * s)
+                    R = R0[0] @ expm_so3(R0[1] * s)
                     acc = d * sdd
                 else:
                     R = self.R

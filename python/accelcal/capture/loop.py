@@ -14,9 +14,10 @@ from __future__ import annotations
 
 import math
 from types import SimpleNamespace
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
+from scipy.stats import chi2 as chi2_dist
 
 from ..calibrate.recordings import fit_jigfree
 from ..errors import InputError
@@ -29,6 +30,7 @@ from .plan import next_direction, pose_information, prior_information, target_si
 HOLD_S = 2.0          # a pose: still for this long (s)
 CHECK_S = 0.25        # look for a pose every this much of new samples (s)
 NOISE_EVERY_S = 2.0   # the detector's noise (the device file's, else from the data) renewed this often (s)
+CHI2_QUANTILE = 0.99  # the fit's chi2 beyond this quantile of its distribution inflates the sigmas
 BUFFER_S = 30.0       # keep at most this much of the samples since the last pose for the detector (s)
 
 
@@ -52,10 +54,13 @@ class CaptureLoop:
         None (default): every pose guided.
     hold_s : float
         Seconds of stillness that make a pose.
+    bad_lines : callable, optional
+        Gives the source's count of lines that did not parse (reported in ``progress``).
     """
 
     def __init__(self, device, events: Events, *, target_mg: float = 1.0, target_pct: float = 0.1,
-                 max_poses: int = 40, plan: Sequence | None = None, hold_s: float = HOLD_S):
+                 max_poses: int = 40, plan: Sequence | None = None, hold_s: float = HOLD_S,
+                 bad_lines: Callable[[], int] | None = None):
         self.device = device
         self.events = events
         self.target_mg = float(target_mg)
@@ -83,6 +88,7 @@ class CaptureLoop:
         self.noise: np.ndarray | None = None
         self.noise_at = 0
         self.done_reason: str | None = None
+        self.bad_lines = bad_lines or (lambda: 0)
 
     # ------------------------------------------------------------------ samples
     def start(self) -> None:
@@ -176,7 +182,8 @@ class CaptureLoop:
         self.refit()
         ratio = worst_ratio(self.offset_sigma_mg, self.gain_sigma_pct, self.target_mg, self.target_pct)
         self.events.emit("progress", poses=self.n_poses, model=self.model, offset_sigma_mg=self.offset_sigma_mg,
-                         gain_sigma_pct=self.gain_sigma_pct, worst_over_target=ratio)
+                         gain_sigma_pct=self.gain_sigma_pct, worst_over_target=ratio,
+                         bad_lines=self.bad_lines())
         self.events.say(self.progress_line(ratio))
         if self.model == "full" and ratio <= 1.0:
             self.done_reason = "target"
@@ -193,7 +200,8 @@ class CaptureLoop:
         gain = (f"{np.max(self.gain_sigma_pct):.3g} %" if np.all(np.isfinite(self.gain_sigma_pct)) else "not fitted")
         return (f"pose {self.n_poses}: worst offset sigma {np.max(self.offset_sigma_mg):.3g} mg "
                 f"(target {self.target_mg:g}), worst gain sigma {gain} (target {self.target_pct:g} %), "
-                f"model {self.model}: {min(ratio, 999):.2f} x target")
+                f"model {self.model}: {min(ratio, 999):.2f} x target"
+                + (f"; {self.bad_lines()} bad line(s) so far" if self.bad_lines() else ""))
 
     def current_model(self) -> tuple[np.ndarray, np.ndarray]:
         """(S, b): the latest fit's sensitivity and offsets, else the device's nominal ones."""
@@ -228,9 +236,22 @@ class CaptureLoop:
         self.fit = fit
         self.model = fit.method if fallback is None else fallback["to"]
         g = self.device.gravity_mps2
-        off, gain = target_sigmas(fit.cov[:, :4, :4], fit.sensitivity, g)
+        off, gain = target_sigmas(fit.cov[:, :4, :4] * self.inflation(fit), fit.sensitivity, g)
         self.offset_sigma_mg = off
         self.gain_sigma_pct = gain if self.model in ("full", "gain") else np.full(N, np.inf)
+
+    @staticmethod
+    def inflation(fit) -> float:
+        """The factor from the fit's covariance to the stated one: the fit's is inflated by chi2/dof
+        where that exceeds 1 (the Birge rule of :mod:`accelcal.calibrate`); the capture's by chi2/dof
+        only where chi2 exceeds its CHI2_QUANTILE quantile for the dof (with the few dof of ten poses,
+        chi2/dof swings from 0.1 to 3 by chance, and stating sigma from it would stop the capture
+        by chance)."""
+        if fit.dof <= 0:
+            return 1.0
+        birge = max(1.0, fit.chi2 / fit.dof)
+        keep = fit.chi2 > chi2_dist.ppf(CHI2_QUANTILE, fit.dof)
+        return (birge if keep else 1.0) / birge
 
     # ------------------------------------------------------------------ next pose
     def information(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -241,7 +262,7 @@ class CaptureLoop:
         info = prior_information(S, g)
         if self.fit is not None:
             sem = self.fit.poses.sem()
-            birge = math.sqrt(max(1.0, self.fit.chi2 / self.fit.dof)) if self.fit.dof > 0 else 1.0
+            birge = math.sqrt(max(1.0, self.fit.chi2 / self.fit.dof) * self.inflation(self.fit)) if self.fit.dof > 0 else 1.0
             for p in range(sem.shape[0]):
                 info += pose_information(S, sem[p] * birge, self.fit.f[p], g)
             sigma = np.median(sem, axis=0) * birge

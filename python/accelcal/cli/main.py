@@ -21,6 +21,7 @@ from ..io.calibration import load_calibration, save_calibration
 from .calibrate_command import calibration_summary, jig_accuracy_arg, min_static_arg, record_warnings
 from .paths import check_not_an_input, check_output, check_output_dir
 from .convert_command import add_convert_parser
+from .capture_command import add_capture_parser
 from .demo import run_demo
 from ..io.device import default_device, load_device
 from ..diagnose import diagnose
@@ -472,6 +473,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_units_options(s)
     s.set_defaults(func=cmd_diagnose)
     add_convert_parser(sub, check_output)
+    add_capture_parser(sub, check_output)
     return p
 
 
