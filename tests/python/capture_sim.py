@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 
 import numpy as np
 
@@ -122,3 +123,86 @@ def run_in_process(loop_cls, events_cls, dev, truth, rng, noise_mps2: float, pla
     while not loop.finished and person.t < max_s:
         loop.feed(None, person.samples(chunk))
     return loop, person.t
+
+
+def run_on_pty(args: list, person: Person, *, env: dict, bad_every: int = 0, interrupt_after: int | None = None,
+               close_after: int | None = None, timeout: float = 120.0, speed: float = 10.0):
+    """Run ``accelcal capture --port <pty> ... --json`` with ``person`` writing the sensor's lines to the
+    pseudo-terminal's master side from a thread and moving on the ``next_pose`` events it prints.
+    ``bad_every``: every so many lines one line that does not parse; ``interrupt_after`` /
+    ``close_after``: after that many poses, SIGINT the capture / close the master (the port lost).
+    ``speed``: the sensor runs this many times faster than real time.
+    Returns (exit status, events, stderr text, lines written, bad lines written)."""
+    import json
+    import os
+    import select
+    import signal
+    import subprocess
+    import sys
+    import tty
+
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    path = os.ttyname(slave)
+    proc = subprocess.Popen([sys.executable, "-m", "accelcal.cli", "capture", "--port", path, "--json"] + args,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    stop = threading.Event()
+    counts = {"lines": 0, "bad": 0}
+    started = threading.Event()
+
+    def write():
+        pending = b""
+        t0 = None
+        while not stop.is_set():
+            if not pending:
+                if not started.is_set():
+                    started.wait(0.05)
+                    continue
+                t0 = time.monotonic() - person.t / speed if t0 is None else t0
+                ahead = person.t / speed - (time.monotonic() - t0)
+                if ahead > 0:
+                    time.sleep(ahead)
+                lines = []
+                for row in person.samples(10):
+                    counts["lines"] += 1
+                    if bad_every and counts["lines"] % bad_every == 0:
+                        lines.append("1,2,x")
+                        counts["bad"] += 1
+                    lines.append(",".join(str(int(v)) for v in row))
+                pending = ("\n".join(lines) + "\n").encode()
+            try:
+                _, ready, _ = select.select([], [master], [], 0.1)
+                if ready:
+                    pending = pending[os.write(master, pending):]
+            except OSError:
+                return
+
+    th = threading.Thread(target=write, daemon=True)
+    th.start()
+    events = []
+    master_open = True
+    try:
+        for line in proc.stdout:
+            ev = json.loads(line)
+            events.append(ev)
+            person.on_event(ev)
+            started.set()
+            if ev["event"] == "pose_captured":
+                k = ev["index"] + 1
+                if interrupt_after is not None and k == interrupt_after:
+                    proc.send_signal(signal.SIGINT)
+                if close_after is not None and k == close_after and master_open:
+                    stop.set()
+                    th.join()
+                    os.close(master)
+                    master_open = False
+        proc.wait(timeout=timeout)
+    finally:
+        stop.set()
+        th.join()
+        if proc.poll() is None:
+            proc.kill()
+        if master_open:
+            os.close(master)
+        os.close(slave)
+    return proc.returncode, events, proc.stderr.read(), counts["lines"], counts["bad"]

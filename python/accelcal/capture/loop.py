@@ -200,7 +200,7 @@ class CaptureLoop:
         gain = (f"{np.max(self.gain_sigma_pct):.3g} %" if np.all(np.isfinite(self.gain_sigma_pct)) else "not fitted")
         return (f"pose {self.n_poses}: worst offset sigma {np.max(self.offset_sigma_mg):.3g} mg "
                 f"(target {self.target_mg:g}), worst gain sigma {gain} (target {self.target_pct:g} %), "
-                f"model {self.model}: {min(ratio, 999):.2f} x target"
+                f"model {self.model}" + (f": {ratio:.2f} x target" if math.isfinite(ratio) else "")
                 + (f"; {self.bad_lines()} bad line(s) so far" if self.bad_lines() else ""))
 
     def current_model(self) -> tuple[np.ndarray, np.ndarray]:
