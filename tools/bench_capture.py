@@ -62,7 +62,7 @@ def main() -> int:
         by.setdefault(j[:2], {}).setdefault(j[3], []).append(r)
     print(f"poses and simulated time to the default target (1 mg, 0.1 %), {a.seeds} seeds each "
           "(mean, [min-max]); guided vs fixed (six faces + six random, repeated)\n")
-    print("| device | noise (m/s^2 rms) | guided poses | fixed poses | guided time (s) | fixed time (s) | reached (g/f) |")
+    print("| device | noise (m/s^2 rms) | guided poses | fixed poses | guided time (s) | fixed time (s) | reached (guided / fixed) |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     zs = []
     for (d, n), plans in by.items():
@@ -72,7 +72,7 @@ def main() -> int:
                 v = [r[key] for r in plans[plan]]
                 cells.append(f"{np.mean(v):.1f} [{min(v):.0f}-{max(v):.0f}]")
         cells = [cells[0], cells[1], cells[2], cells[3]]
-        reached = "/".join(f"{sum(r[2] for r in plans[p])}/{len(plans[p])}" for p in ("guided", "fixed"))
+        reached = " / ".join(f"{sum(r[2] for r in plans[p])} of {len(plans[p])}" for p in ("guided", "fixed"))
         print(f"| {d} | {n:g} | " + " | ".join(cells) + f" | {reached} |")
         zs += [z for plan in plans.values() for r in plan for z in r[3]]
     zs = np.array(zs)

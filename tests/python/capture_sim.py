@@ -4,7 +4,7 @@ The sensor: the independent generator's devices and true parameters (tests/pytho
 offsets +-2 % of full scale, gains +-3 %, axes off by up to 1.5 deg), white noise before the ADC,
 rounding, clipping.  The person: told where gravity should point in the sensor frame (the
 capture's ``next_pose`` event), reacts after 0.3-0.8 s, turns there in 1-2 s with the hand
-moving the sensor by 5-15 cm (smooth), and lands 2-5 deg off the requested orientation (a tilt
+moving the sensor by 5-15 cm (a minimum-jerk profile), and lands 2-5 deg off the requested orientation (a tilt
 about a random horizontal axis) at a random heading; still in between (sensor noise only).
 """
 from __future__ import annotations
@@ -73,8 +73,8 @@ class Person:
                         R0 = (self.R, logm_so3(self.R.T @ R1))
                         self.segments[0] = (kind, dur, R0, R1, d)
                     x = self.seg_t / dur
-                    s = x * x * (3.0 - 2.0 * x)
-                    sdd = (6.0 - 12.0 * x) / dur ** 2
+                    s = x ** 3 * (10.0 - 15.0 * x + 6.0 * x * x)          # minimum jerk
+                    sdd = (60.0 * x - 180.0 * x ** 2 + 120.0 * x ** 3) / dur ** 2
                     R = R0[0] @ expm_so3(R0[1] * s)
                     acc = d * sdd
                 else:

@@ -13,6 +13,7 @@ channel) is determined.
 from __future__ import annotations
 
 import math
+import re
 from types import SimpleNamespace
 from typing import Callable, Sequence
 
@@ -27,7 +28,10 @@ from ..readings.static import detect_static, pose_means, poses_from_recording, w
 from .events import Events
 from .plan import next_direction, pose_information, prior_information, target_sigmas, words, worst_ratio
 
+#: the refit's refusal of a labelled pose that moves (readings.static.pose_means)
+MOVES = re.compile(r"pose (\d+) \(.*is labelled static but moves")
 HOLD_S = 2.0          # a pose: still for this long (s)
+SETTLE_S = 0.25       # the first this much of a still stretch after a motion is left out (the hand settles)
 CHECK_S = 0.25        # look for a pose every this much of new samples (s)
 NOISE_EVERY_S = 2.0   # the detector's noise (the device file's, else from the data) renewed this often (s)
 CHI2_QUANTILE = 0.99  # the fit's chi2 beyond this quantile of its distribution inflates the sigmas
@@ -69,6 +73,7 @@ class CaptureLoop:
         self.plan = [np.asarray(d, float) / np.linalg.norm(d) for d in plan] if plan is not None else None
         self.hold_n = max(3, int(round(hold_s * device.sample_rate_hz)))
         self.check_n = max(1, int(round(CHECK_S * device.sample_rate_hz)))
+        self.settle_n = int(round(SETTLE_S * device.sample_rate_hz))
         self.max_buf = max(4 * self.hold_n, int(BUFFER_S * device.sample_rate_hz))
         self.w = window_len(device, STATIC_WINDOW_S, 10 ** 9)
         N = device.n_channels
@@ -78,7 +83,8 @@ class CaptureLoop:
         self.n = 0
         self.buf_start = 0
         self.checked = 0
-        self.n_poses = 0
+        self.n_poses = 0          # poses held (labelled)
+        self.next_label = 0       # the next pose's label (a pose dropped keeps its number unused)
         self.dropped_stamps = 0
         self.fit = None
         self.model = None
@@ -144,11 +150,10 @@ class CaptureLoop:
             self.noise_at = upto
         for a, b in detect_static(SimpleNamespace(raw=raw), self.device, noise=self.noise,
                                   min_s=self.hold_n / self.device.sample_rate_hz):
-            if b - a < self.hold_n:
-                continue
-            if self.n_poses and a < self.w:
+            if self.next_label and a < self.w:
                 continue    # no motion seen before it: still the last pose (or the buffer's start)
-            if self.moves(self.buf_start + a, self.buf_start + b):
+            a += self.settle_n if a > 0 else 0      # a motion's end settles
+            if b - a < self.hold_n or self.moves(self.buf_start + a, self.buf_start + b):
                 continue
             self.capture(self.buf_start + a, self.buf_start + b)
             return
@@ -166,7 +171,8 @@ class CaptureLoop:
     # ------------------------------------------------------------------ poses
     def capture(self, a: int, b: int) -> None:
         """Label samples [a, b) as the next pose, refit, and stop or ask for the next."""
-        k = self.n_poses
+        k = self.next_label
+        self.next_label += 1
         self.pose[a:b] = k
         self.buf_start = b
         mean = self.raw[a:b].mean(axis=0)
@@ -180,6 +186,9 @@ class CaptureLoop:
                          t_start=float(self.t[a]), t_stop=float(self.t[b - 1]),
                          gravity_in_sensor=grav, off_request_deg=angle)
         self.refit()
+        if self.n_poses == 0 and self.next_label:
+            self.ask()
+            return
         ratio = worst_ratio(self.offset_sigma_mg, self.gain_sigma_pct, self.target_mg, self.target_pct)
         self.events.emit("progress", poses=self.n_poses, model=self.model, offset_sigma_mg=self.offset_sigma_mg,
                          gain_sigma_pct=self.gain_sigma_pct, worst_over_target=ratio,
@@ -222,23 +231,38 @@ class CaptureLoop:
 
     def refit(self) -> None:
         """The jig-free fit of the poses so far and its sigmas (the full model's only count)."""
-        rec = self.recording()
         N = self.device.n_channels
-        try:
-            poses = poses_from_recording(rec, self.device, use_labels=True)
-            fit, fallback = fit_jigfree(self.device, poses, "auto", False)
-        except InputError as e:
-            if e.source not in ("<poses>", rec.source):
-                raise
-            self.model = None
-            self.events.say(f"  (no fit yet: {e.detail[:120]})")
-            return
+        while True:
+            rec = self.recording()
+            try:
+                poses = poses_from_recording(rec, self.device, use_labels=True)
+                fit, fallback = fit_jigfree(self.device, poses, "auto", False)
+                break
+            except InputError as e:
+                if e.source not in ("<poses>", rec.source):
+                    raise
+                moved = MOVES.match(e.detail)
+                if moved:
+                    self.drop(int(moved.group(1)), e.detail)
+                    if self.n_poses:
+                        continue
+                self.model = None
+                if not moved:
+                    self.events.say(f"  (no fit yet: {e.detail[:120]})")
+                return
         self.fit = fit
         self.model = fit.method if fallback is None else fallback["to"]
         g = self.device.gravity_mps2
         off, gain = target_sigmas(fit.cov[:, :4, :4] * self.inflation(fit), fit.sensitivity, g)
         self.offset_sigma_mg = off
         self.gain_sigma_pct = gain if self.model in ("full", "gain") else np.full(N, np.inf)
+
+    def drop(self, label: int, why: str) -> None:
+        """Unlabel pose ``label`` (its samples moved, by the rule the refit holds every pose to)."""
+        self.pose[:self.n][self.pose[:self.n] == label] = -1
+        self.n_poses -= 1
+        self.events.emit("pose_dropped", index=label, reason=why)
+        self.events.say(f"  pose {label + 1} dropped: it moved ({why.split(': ', 1)[-1][:100]}); {self.n_poses} poses kept")
 
     @staticmethod
     def inflation(fit) -> float:
@@ -269,14 +293,14 @@ class CaptureLoop:
         else:
             sd = self.device.noise_mps2 * np.linalg.norm(S, axis=1) if self.device.noise_mps2 > 0 else np.ones(len(S))
             sigma = np.sqrt(sd ** 2 + 1.0 / 12.0) / math.sqrt(self.hold_n)
-            for k in range(self.n_poses):
+            for k in np.unique(self.pose[:self.n][self.pose[:self.n] >= 0]):
                 m = self.raw[:self.n][self.pose[:self.n] == k].mean(axis=0)
                 info += pose_information(S, sigma, np.linalg.lstsq(S, m - off, rcond=None)[0], g)
         return info, S, sigma
 
     def ask(self) -> None:
         """Choose the next orientation and tell the person."""
-        k = self.n_poses
+        k = self.next_label
         if self.plan is not None and k < len(self.plan):
             grav = self.plan[k]
             expect = None
