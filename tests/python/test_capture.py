@@ -202,3 +202,24 @@ def test_bad_input_is_one_line_exit_2(tmp_path, capsys, args, what):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and what in err[0]
     assert not (tmp_path / "p.csv").exists()
+
+
+def test_a_pose_that_moves_is_dropped():
+    """A stretch taken for a pose that the refit's rule finds moving (the detector's noise was
+    estimated from motion) is unlabelled, said in a pose_dropped event, and the capture goes on."""
+    dev, truth, rng = make_setup("triad16", 2)
+    person = Person(dev, truth, 0.02, rng)
+    loop = CaptureLoop(dev, Events(quiet=True), hold_s=1000.0)      # no pose found by itself
+    loop.start()
+    person.on_event({"event": "next_pose", "gravity_in_sensor": [0.0, 0.0, -1.0]})
+    loop.feed(None, person.samples(500))                             # still, a turn, still from about 2.8 s
+    person.on_event({"event": "next_pose", "gravity_in_sensor": [1.0, 0.0, 0.0]})
+    loop.feed(None, person.samples(500))
+    for a, b in ((300, 400), (400, 500), (750, 875), (875, 1000)):  # still
+        loop.capture(a, b)
+    assert loop.n_poses == 4 and not any(e["event"] == "pose_dropped" for e in loop.events.log)
+    loop.capture(500, 750)                                           # the turn to +x
+    dropped = [e for e in loop.events.log if e["event"] == "pose_dropped"]
+    assert [e["index"] for e in dropped] == [4] and "moves" in dropped[0]["reason"]
+    assert loop.n_poses == 4 and set(loop.recording().pose_labels()) == {0, 1, 2, 3}
+    assert loop.events.log[-1]["event"] == "next_pose" and loop.events.log[-1]["index"] == 5
