@@ -199,8 +199,9 @@ def finish(a: argparse.Namespace, loop: CaptureLoop, src: LineSource, events: Ev
                 wrote.append(a.calibration_out)
             except AccelcalError as e:
                 events.say(f"capture: no calibration written: {e}")
-    worst = (f"worst offset sigma {np.max(loop.offset_sigma_mg):.3g} mg, worst gain sigma "
-             f"{np.max(loop.gain_sigma_pct):.3g} %" if np.all(np.isfinite(loop.offset_sigma_mg)) else "no full fit")
+    gain = (f"{np.max(loop.gain_sigma_pct):.3g} %" if np.all(np.isfinite(loop.gain_sigma_pct)) else "not fitted")
+    worst = (f"worst offset sigma {np.max(loop.offset_sigma_mg):.3g} mg, worst gain sigma {gain}, model {loop.model}"
+             if np.all(np.isfinite(loop.offset_sigma_mg)) else "no fit")
     how = {"target": "target reached", "max_poses": f"stopped at --max-poses {loop.max_poses}, target not reached",
            "interrupted": "interrupted (Ctrl-C), target not reached", "port_lost": "the port was lost, target not reached",
            "end_of_input": "the input ended, target not reached"}[reason]
