@@ -223,3 +223,15 @@ def test_a_pose_that_moves_is_dropped():
     assert [e["index"] for e in dropped] == [4] and "moves" in dropped[0]["reason"]
     assert loop.n_poses == 4 and set(loop.recording().pose_labels()) == {0, 1, 2, 3}
     assert loop.events.log[-1]["event"] == "next_pose" and loop.events.log[-1]["index"] == 5
+
+
+def test_input_that_ends_before_the_target_writes_and_exits_1(tmp_path, capsys):
+    dev, truth, rng = make_setup("triad16", 7)
+    save_device(dev, tmp_path / "dev.json")
+    (tmp_path / "s.txt").write_text("\n".join(replay_lines(dev, truth, rng, 0.02, n_poses=3)) + "\n")
+    rc = main(["capture", "--port", str(tmp_path / "s.txt"), "--device", str(tmp_path / "dev.json"),
+               "-o", str(tmp_path / "p.csv")])
+    err = capsys.readouterr().err
+    # the 3 s held at the start are a pose too (the first needs no motion before it)
+    assert rc == 1 and "the input ended, target not reached after 4 poses" in err, err
+    assert len(read_recording(tmp_path / "p.csv", dev.n_channels).pose_labels()) == 4
