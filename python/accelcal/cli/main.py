@@ -1,8 +1,7 @@
 """The ``accelcal`` command (forms fixed by the data contract, docs/data-contract.md).
 
-Every subcommand exits 0 on success; on bad input it prints one line to stderr
-(no traceback) and exits 2, leaving no partial output file (all outputs are
-written through errors.atomic_write).
+Every subcommand exits 0 on success; on bad input it prints one line to stderr (no traceback) and
+exits 2, leaving no partial output file (all outputs are written through errors.atomic_write).
 """
 from __future__ import annotations
 
@@ -12,7 +11,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-
 from tqdm import tqdm
 
 from .. import __version__
