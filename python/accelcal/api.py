@@ -31,7 +31,7 @@ from .cli.calibrate_command import record_warnings
 from .io.device import Device, default_device, load_device, save_device
 from .diagnose import diagnose as _diagnose_impl
 from .errors import AccelcalError, atomic_write, options_checked
-from .estimators import Columns, attitude_from_recording, displacement_from_recording, rate_from_recording
+from .estimators import Columns, attitude_from_recording, choose_omega, displacement_from_recording, rate_from_recording
 from .firmware.header import calibration_header
 from .motions import MOTIONS, Motion
 from .io.recording import Recording, read_recording as _read_recording_file, write_recording
@@ -246,8 +246,9 @@ def resolve(device: Any, calibration: Any, recording: Any, engine: str = "float"
     recording : Recording, path or (n, N) array of raw counts
     engine : {"float", "fixed"}
         ``fixed`` runs the C core with exactly the header's constants.
-    omega : {"auto", "reference", "none"}
-        Angular rate for the centripetal correction (auto: the recording's w_* when complete).
+    omega : {"auto", "reference", "none", "array"}
+        Angular rate for the centripetal correction: the recording's w_*, none, the accelerometers'
+        own (array); auto: w_* when complete, else array where the layout observes omega.
 
     Returns
     -------
@@ -256,8 +257,10 @@ def resolve(device: Any, calibration: Any, recording: Any, engine: str = "float"
     dev = as_device(device)
     cal = as_calibration(calibration, dev)
     rec = as_recording(recording, dev)
-    f, alpha, flags = resolve_recording(dev, cal, rec, engine, omega)
-    return ResolveResult(t=rec.t, f=f, alpha=alpha, saturated=flags, clipped=clipped_samples(rec, dev)[0])
+    est = choose_omega(dev, cal, rec, omega)
+    f, alpha, flags = resolve_recording(dev, cal, rec, engine, omega, None if est is None else est.w)
+    return ResolveResult(t=rec.t, f=f, alpha=alpha, saturated=flags, clipped=clipped_samples(rec, dev)[0],
+                         w=None if est is None else est.w, w_sigma=None if est is None else est.sigma)
 
 
 @options_checked(_diagnose_impl)
@@ -399,7 +402,6 @@ def rate(device: Any, calibration: Any, recording: Any, engine: str = "float", *
         t (s), w_x, w_y, w_z (rad/s), rest.
     """
     return _estimate(rate_from_recording, device, calibration, recording, engine, options)
-
 
 
 @options_checked()

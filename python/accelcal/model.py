@@ -6,6 +6,8 @@ raw_i = b_i + s_i . f(r_i).  Arrays broadcast over leading sample axes.
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 # Order of the squared-rate products used by the centripetal table (and the C core).
@@ -62,6 +64,52 @@ def predict_counts(offsets: np.ndarray, sensitivity: np.ndarray, positions: np.n
     if omega is not None:
         out = out + omega_products(np.atleast_2d(omega)) @ centripetal_matrix(positions, sensitivity).T
     return out
+
+
+def product_jacobian(omega: np.ndarray) -> np.ndarray:
+    """d omega_products / d omega, (..., 6, 3), in the order of OMEGA_PRODUCTS."""
+    w = np.asarray(omega, float)
+    x, y, z = w[..., 0], w[..., 1], w[..., 2]
+    o = np.zeros_like(x)
+    rows = [(2 * x, o, o), (o, 2 * y, o), (o, o, 2 * z), (y, x, o), (o, z, y), (z, o, x)]
+    return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
+
+
+class CentripetalSplit(NamedTuple):
+    """The readings of an array split, with each channel weighted by its noise, into the part
+    that resolves [f; alpha] and the part only the centripetal term can explain.
+
+    ``[f; alpha] = lin @ (raw - b) - leak @ p(omega)`` (the weighted least squares for a given
+    omega, ``cov`` its covariance from the noise); ``q = qmap @ (raw - b) = m p(omega) + v``
+    with v of covariance ``m``: the centripetal readings left over once [f; alpha] is fitted
+    (independent of the [f; alpha] estimate's noise).  The Fisher information of omega is
+    ``J(omega)^T m J(omega)`` (J = :func:`product_jacobian`); m = 0 for six channels."""
+
+    lin: np.ndarray    # (6, N) per count
+    leak: np.ndarray   # (6, 6)
+    cov: np.ndarray    # (6, 6) (m/s^2, rad/s^2)^2
+    qmap: np.ndarray   # (6, N)
+    m: np.ndarray      # (6, 6) per (rad/s)^4
+
+
+def centripetal_split(positions: np.ndarray, sensitivity: np.ndarray, noise_counts: np.ndarray) -> CentripetalSplit:
+    """:class:`CentripetalSplit` of a layout (positions m, sensitivity counts per m/s^2, each
+    channel's noise sd in counts); LinAlgError when the sensor matrix has rank < 6."""
+    k = np.asarray(noise_counts, float)
+    R = sensor_matrix(positions, sensitivity) / k[:, None]
+    C = centripetal_matrix(positions, sensitivity) / k[:, None]
+    if R.shape[0] < 6 or np.linalg.matrix_rank(R) < 6:
+        raise np.linalg.LinAlgError("sensor matrix has rank < 6")
+    Rp = np.linalg.pinv(R)
+    A = C - R @ (Rp @ C)
+    return CentripetalSplit(Rp / k[None, :], Rp @ C, Rp @ Rp.T, A.T / k[None, :], A.T @ A)
+
+
+def omega_information(m: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """Fisher information (..., 3, 3) of omega (per (rad/s)^2) from one sample's readings,
+    [f; alpha] unknown: J^T m J with m from :func:`centripetal_split`."""
+    J = product_jacobian(omega)
+    return np.swapaxes(J, -1, -2) @ m @ J
 
 
 def resolve_matrix(positions: np.ndarray, sensitivity: np.ndarray) -> np.ndarray:

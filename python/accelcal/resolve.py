@@ -40,8 +40,11 @@ def omega_for(rec, source: str) -> np.ndarray | None:
     raise ValueError(f"unknown omega source {source!r}")
 
 
-def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str = "auto"):
+def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str = "auto", omega=None):
     """Returns (f (n,3) m/s^2, alpha (n,3) rad/s^2, flags (n,) uint8 or None).
+
+    ``omega`` (n, 3) rad/s, when given, is the centripetal term's rate (the array's own
+    estimate, ``accelcal.estimators.omega``) in place of ``omega_source``.
 
     A 3-axis sensor (``device.is_triad()``) gives f = S^-1 (raw - b) at its point and no
     alpha (NaN): the float reference, or the C core's ``ac_triad_apply`` (``ac_trim_s16`` +
@@ -61,7 +64,7 @@ def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str
         if engine == "fixed":
             f = f / 2.0 ** FORMATS.out_frac
         return f, np.full_like(f, np.nan, dtype=float), None if sat is None else sat.astype(np.uint8)
-    omega = omega_for(rec, omega_source)
+    omega = omega_for(rec, omega_source) if omega is None else np.asarray(omega, float)
     pos = cal.positions_or_nominal(device)
     if engine == "float":
         try:
@@ -190,6 +193,9 @@ class ResolveResult:
         clip level inside the range where its readings pile up (:func:`clipped_samples`,
         as ``accelcal resolve``'s column), either engine: the chip clipped, and f there is short of
         the truth.
+    w, w_sigma : ndarray, shape (n, 3), or None
+        The array's own angular rate and its 1-sigma (rad/s) with ``omega="array"`` (or "auto" where
+        it applies: docs/angular-rate.md), the centripetal term's rate.
     """
 
     t: np.ndarray
@@ -197,3 +203,5 @@ class ResolveResult:
     alpha: np.ndarray
     saturated: np.ndarray | None = None
     clipped: np.ndarray | None = None
+    w: np.ndarray | None = None
+    w_sigma: np.ndarray | None = None

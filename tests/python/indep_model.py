@@ -1099,3 +1099,73 @@ __all__ = ["IN_TABLE", "OUT_OF_TABLE", "PAIRS", "MOVING_ONLY", "DEVICES", "triad
            "true_parameters", "as_calibration", "make_jig", "make_handheld", "make_six_pose", "load_real",
            "load_imucal", "load_mpu6050", "inject", "real_model", "as_posed", "static_mask", "real_noise", "Trajectory",
            "contribution"]
+
+
+# =============================================================================== arrays that turn fast
+def spin_trajectory(g, rng, n_turns=20, max_rate=40.0, min_rate=0.3, lead_s=1.0):
+    """Back-to-back quintic turns about random axes, each of peak rate drawn log-uniformly in
+    [min_rate, max_rate] rad/s over 0.3-1.5 s (so up to several revolutions: the angle
+    phi = peak * dur / 1.875), the origin moving 2-10 cm in each; a rest of ``lead_s`` first
+    and 0.5 s last.  Every |omega| from 0 to the peak is crossed in each turn."""
+    tr = Trajectory(g=g)
+    tr.hold(random_rotation(rng), lead_s)
+    for _ in range(n_turns):
+        ax = rng.normal(size=3)
+        peak = math.exp(rng.uniform(math.log(min_rate), math.log(max_rate)))
+        dur = rng.uniform(0.3, 1.5)
+        dvec = rng.normal(size=3)
+        # not move_to: a turn of more than pi is meant (move_to takes the shortest rotation)
+        tr._add(tr.R_end, dur, ax / np.linalg.norm(ax), peak * dur / 1.875,
+                dvec / np.linalg.norm(dvec) * rng.uniform(0.02, 0.1), -1, np.full(3, np.nan))
+    tr.hold(tr.R_end, 0.5)
+    return tr
+
+
+def make_spin_array(device: Device, seed=0, *, n_turns=20, max_rate=40.0, min_rate=0.3, noise=None,
+                    rate=None, with_w=False):
+    """An array (any Device, e.g. accelcal.io.device.tetrahedron_device()) turned fast
+    (:func:`spin_trajectory`), true channel parameters drawn about the nominal
+    (:func:`true_parameters`: offsets, gains, axes off by up to 1.5 deg; positions nominal),
+    white noise ``noise`` m/s^2 (default the device's), rounding and clipping.  The recording
+    has no w columns unless ``with_w``.
+
+    Returns a dict: device, cal (the true Calibration), recording, w, dw, f (the true body
+    omega rad/s, alpha rad/s^2, f m/s^2 per sample), noise_mps2, rate_hz."""
+    rng = np.random.default_rng(seed + 36)
+    rate = float(rate or device.sample_rate_hz)
+    noise = float(device.noise_mps2 if noise is None else noise)
+    p = true_parameters(device, rng)
+    traj = spin_trajectory(device.gravity_mps2, rng, n_turns, max_rate, min_rate)
+    t = _sample_times(traj, rate)
+    sc = Scene(dev=device, p=p, traj=traj, t=t, noise_mps2=noise, noise=rng.normal(size=(t.size, device.n_channels)))
+    raw = adc(sc, analog(sc, {}), {})
+    f, w, dw = traj.evaluate(t)
+    rec = recording_from_arrays(t, raw, w=w if with_w else None, metadata={"generator": "tests/python/indep_model.py"})
+    return {"device": device, "cal": as_calibration(device, p), "params": p, "recording": rec, "w": w, "dw": dw,
+            "f": f, "noise_mps2": noise, "rate_hz": rate}
+
+
+def make_array_calibration(device: Device, seed=0, *, rotations=True, n_turns=12, max_rate=20.0, true_params=None):
+    """A 12-channel user's calibration session: the jig's 18 poses (faces and edges, each held
+    1-2 s with its stated f), then with ``rotations`` a turning part with its reference f,
+    omega and alpha (a turntable or a gyro beside the array: :func:`spin_trajectory`'s turns).
+    ``true_params`` (b, S, r): the device's true channel parameters (default: drawn).
+    Returns make_jig's keys device, cal (the truth), recording."""
+    rng = np.random.default_rng(seed + 3636)
+    p = true_parameters(device, rng)
+    if true_params is not None:
+        p = true_params
+    traj = jig_trajectory(device.gravity_mps2, FACES + EDGES, rng, hold_s=(1.0, 2.0))
+    t_motion = traj.end
+    if rotations:
+        spin = spin_trajectory(device.gravity_mps2, rng, n_turns, max_rate, 1.0, lead_s=0.5)
+        traj.move_to(spin.R0[0], 1.0)
+        for k in range(1, len(spin.t0)):
+            traj._add(traj.R_end, spin.dur[k], spin.e[k], spin.phi[k], spin.d[k], -1, np.full(3, np.nan))
+    t = _sample_times(traj, device.sample_rate_hz)
+    sc = Scene(dev=device, p=p, traj=traj, t=t, noise_mps2=device.noise_mps2,
+               noise=rng.normal(size=(t.size, device.n_channels)))
+    lab, stated = traj.labels_and_stated(t)
+    raw = adc(sc, analog(sc, {}), {})
+    rec = _recording(sc, raw, True, stated, lab, (t >= t_motion) if rotations else None)
+    return {"device": device, "cal": as_calibration(device, p), "recording": rec}

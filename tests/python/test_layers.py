@@ -14,7 +14,7 @@ import pytest
 
 PKG = Path(__file__).resolve().parents[2] / "python" / "accelcal"
 METHODS = ("calibrate", "diagnose", "simulate", "estimators")
-TOP = ("cli", "__init__", "__main__", "api")
+TOP = ("cli", "capture", "__init__", "__main__", "api")
 
 
 def _modules():

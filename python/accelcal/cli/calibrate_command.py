@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..calibrate.checks import far_from_nominal, gain_sigma, poorly_determined
+from ..calibrate.omega_check import lever_arm_omega_warning
 from ..calibrate.settings import SCATTER_CHI2
 from ..errors import AccelcalError
 
@@ -115,7 +116,8 @@ def calibrate_warnings(dev, cal) -> list[str]:
     if scale:
         warnings.append(scale)
     warnings += clipping_warnings(dev, cal)
-    return warnings
+    levers = lever_arm_omega_warning(dev, cal)
+    return warnings + ([levers] if levers else [])
 
 
 def clipping_warnings(dev, cal) -> list[str]:

@@ -1,8 +1,7 @@
 """The ``accelcal`` command (forms fixed by the data contract, docs/data-contract.md).
 
-Every subcommand exits 0 on success; on bad input it prints one line to stderr
-(no traceback) and exits 2, leaving no partial output file (all outputs are
-written through errors.atomic_write).
+Every subcommand exits 0 on success; on bad input it prints one line to stderr (no traceback) and
+exits 2, leaving no partial output file (all outputs are written through errors.atomic_write).
 """
 from __future__ import annotations
 
@@ -12,7 +11,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-
 from tqdm import tqdm
 
 from .. import __version__
@@ -21,13 +19,15 @@ from ..io.calibration import load_calibration, save_calibration
 from .calibrate_command import calibration_summary, jig_accuracy_arg, min_static_arg, record_warnings
 from .paths import check_not_an_input, check_output, check_output_dir
 from .convert_command import add_convert_parser
+from .capture_command import add_capture_parser
 from .refine_command import add_refine_parser
 from .demo import run_demo
 from ..io.device import default_device, load_device
 from ..diagnose import diagnose
 from ..effects import describe_effects, params_to_json, parse_effect_spec
 from ..errors import AccelcalError, atomic_write
-from ..estimators import attitude_from_recording, displacement_from_recording, rate_from_recording, report_plots
+from ..estimators import (OMEGA_SOURCES, attitude_from_recording, choose_omega, displacement_from_recording,
+                          omega_columns, rate_from_recording, report_plots)
 from ..firmware.header import calibration_header
 from ..readings.held import held_runs, held_text, readings_rate
 from ..motions import describe_motions
@@ -45,10 +45,6 @@ EXIT_INTERNAL = 3
 
 def _load_device(path):
     return default_device() if path in (None, "default") else load_device(path)
-
-
-def _load_cal(path, device):
-    return load_calibration(path, device)
 
 
 def _read(paths, device, command: str, a=None) -> list:
@@ -104,10 +100,11 @@ def _progress(desc: str, total: int | None = None, unit: str = " steps"):
 def cmd_resolve(a):
     check_output(a.output)
     dev = _load_device(a.device)
-    cal = _load_cal(a.calibration, dev)
+    cal = load_calibration(a.calibration, dev)
     rec, = _read([a.recording], dev, "resolve", a)
-    f, al, flags = resolve_recording(dev, cal, rec, a.engine, a.omega)
-    comments = {"engine": a.engine, "device": dev.name}
+    est = choose_omega(dev, cal, rec, a.omega)
+    f, al, flags = resolve_recording(dev, cal, rec, a.engine, a.omega, None if est is None else est.w)
+    comments = {"engine": a.engine, "device": dev.name, **({"omega": "array"} if est is not None else {})}
     if flags is not None and flags.any():
         print(f"accelcal resolve: warning: {int(np.count_nonzero(flags))} samples saturated in the "
               "fixed-point core's arithmetic (see column saturated)", file=sys.stderr)
@@ -116,6 +113,9 @@ def cmd_resolve(a):
         print(f"accelcal resolve: warning: {w}", file=sys.stderr)
     cols = [rec.t, f[:, 0], f[:, 1], f[:, 2], al[:, 0], al[:, 1], al[:, 2]]
     header = ["t", "f_x", "f_y", "f_z", "dw_x", "dw_y", "dw_z"]
+    if est is not None:
+        header += list(omega_columns(est))
+        cols += list(omega_columns(est).values())
     if flags is not None:
         cols.append(flags.astype(float))
         header.append("saturated")
@@ -129,7 +129,7 @@ def cmd_resolve(a):
 def cmd_header(a):
     check_output(a.output)
     dev = _load_device(a.device)
-    cal = _load_cal(a.calibration, dev)
+    cal = load_calibration(a.calibration, dev)
     text = calibration_header(dev, cal, prefix=a.prefix)
     atomic_write(a.output, lambda f: f.write(text))
     return 0
@@ -148,7 +148,7 @@ def cmd_simulate(a):
             params[k] = json.loads(v)
         except json.JSONDecodeError:
             params[k] = v
-    cal = _load_cal(a.calibration, dev) if a.calibration else None
+    cal = load_calibration(a.calibration, dev) if a.calibration else None
     sim = run_simulation(dev, a.motion, effects=effects, seed=a.seed, calibration=cal, **params)
     write_recording(a.output, sim.recording)
     for name in sim.unchanged:
@@ -219,7 +219,7 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
     if report is not None:
         check_output_dir(report, "--report")
     dev = _load_device(device_path)
-    cal = _load_cal(calibration_path, dev)
+    cal = load_calibration(calibration_path, dev)
     if isinstance(cal.extra, dict) and cal.method != "nominal":
         cal.extra["source"] = str(calibration_path)       # the calibration a message names
     scale = None if units_args is None else scale_from_args(units_args, dev, reader=True)
@@ -255,8 +255,8 @@ def held_warnings(rec) -> list[str]:
 
 
 def _estimator(a, kind):
-    options = {k: v for k, v in (("axis", getattr(a, "axis", None)), ("form", getattr(a, "form", None)))
-               if v is not None}
+    options = {k: v for k, v in (("axis", getattr(a, "axis", None)), ("form", getattr(a, "form", None)),
+                                 ("omega", getattr(a, "omega", None))) if v is not None}
     for flag in ("keep_turned", "resample"):
         if getattr(a, flag, False):
             options[flag] = True
@@ -283,7 +283,7 @@ def cmd_diagnose(a):
     if a.report:
         check_output_dir(a.report, "--report")
     dev = _load_device(a.device)
-    cal = _load_cal(a.calibration, dev)
+    cal = load_calibration(a.calibration, dev)
     if isinstance(cal.extra, dict):
         cal.extra["source"] = str(a.calibration)          # named so in the JSON's calibration.source
     recs = _read(a.recordings, dev, "diagnose", a)
@@ -413,8 +413,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--calibration", required=True, metavar="CAL.json", help=_CAL)
     s.add_argument("recording", metavar="REC.csv", help=_REC)
     s.add_argument("--engine", choices=["float", "fixed"], default="float", help=_ENGINE)
-    s.add_argument("--omega", choices=["auto", "reference", "none"], default="auto",
-                   help="omega for the centripetal correction (auto: the w_* columns when complete)")
+    s.add_argument("--omega", choices=OMEGA_SOURCES, default="auto",
+                   help="omega for the centripetal correction: reference (the w_* columns), none, array (the "
+                   "accelerometers' own, docs/angular-rate.md: adds w_x, w_y, w_z and their 1-sigma w_*_sigma); "
+                   "auto: the w_* columns when complete, else array where the layout observes omega")
     s.add_argument("-o", "--output", required=True, metavar="OUT.csv", help="t, f_x, f_y, f_z, dw_x, dw_y, dw_z")
     add_units_options(s)
     s.set_defaults(func=cmd_resolve)
@@ -429,6 +431,10 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--engine", choices=["float", "fixed"], default="float", help=_ENGINE)
         s.add_argument("--report", metavar="DIR", help="write plots into DIR")
         s.add_argument("-o", "--output", required=True, metavar="OUT.csv", help=_OUT_CSV)
+        if name == "rate":
+            s.add_argument("--omega", choices=["alpha", "array"], default="alpha",
+                           help="alpha: leaky integration of alpha, reset on rest; array: the accelerometers' own "
+                           "omega fused with the integrated alpha, with w_*_sigma (docs/angular-rate.md)")
         if name == "displacement":
             s.add_argument("--axis", choices=["x", "y", "z"],
                            help="1-D along this body axis (the seed's actuator; nothing removed)")
@@ -462,6 +468,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_units_options(s)
     s.set_defaults(func=cmd_diagnose)
     add_convert_parser(sub, check_output)
+    add_capture_parser(sub, check_output)
     add_refine_parser(sub)
     return p
 

@@ -17,7 +17,8 @@ Modules: :mod:`.common` (Columns, input conventions), :mod:`.triad`, :mod:`.rest
 :mod:`.trend` (the rests' trend test), :mod:`.attitude`, :mod:`.displacement` (streaming, the firmware's form),
 :mod:`.displacement_host` (offline form, path correction, recordings), :mod:`.displacement_checks`
 and :mod:`.motion_checks` (its warnings: of the rests, of the motions), :mod:`.rate`,
-:mod:`.plots`.  Q formats come from the compiled core (``native.FORMATS``).
+:mod:`.omega` (the array's own omega from the centripetal term, fused with the integrated
+alpha), :mod:`.plots`.  Q formats come from the compiled core (``native.FORMATS``).
 Conventions follow docs/data-contract.md.
 """
 from __future__ import annotations
@@ -34,6 +35,8 @@ from .displacement import (A_FRAC, DISP_BAD_REF, DISP_LONG, DISP_MOVING, DISP_NO
                            displace_fixed, displace_stream, displace_twin, tilt_frame)
 from .motion_checks import ZP_TURN_MPS2, turned_motions, zp_limit
 from .displacement_host import displace_offline, displacement_from_recording, retro_correct
+from .omega import (OMEGA_SOURCES, ArrayOmega, OmegaObservability, array_omega, choose_omega, omega_columns,
+                    omega_crb, omega_from_recording, omega_ml, omega_observability)
 from .plots import report_plots
 from .rate import rate_from_recording, rate_rest_fixed, rate_rest_float
 from .rest import (REST_AT_REST, REST_CLIP, REST_ENTER, REST_LEAVE, REST_QUIET, RestParams, RestState,
@@ -51,5 +54,6 @@ __all__ = [
     "tilt_frame", "displace_stream", "displace_fixed", "displace_twin", "displace_offline",
     "displace_error_bound", "rate_rest_float", "rate_rest_fixed",
     "attitude_from_recording", "displacement_from_recording", "rate_from_recording",
-    "report_plots",
+    "report_plots", "OMEGA_SOURCES", "ArrayOmega", "OmegaObservability", "array_omega", "choose_omega",
+    "omega_columns", "omega_crb", "omega_from_recording", "omega_ml", "omega_observability",
 ]

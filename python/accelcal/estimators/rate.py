@@ -15,6 +15,7 @@ from ..errors import InputError
 from ..firmware.native import check, cptr, ffi, lib
 from ..firmware.quantize import round_half_up
 from ..io.recording import check_core_input, check_for_device
+from .omega import omega_columns, omega_from_recording
 from .common import (OMEGA_FRAC, Columns, alpha_noise, channel_noise, dt_fixed, force_noise, resolve_array,
                      uniform_dt)
 from .timegrid import on_uniform_grid
@@ -107,16 +108,18 @@ def rate_rest_fixed(alpha_q, f_q, dt: float, leak_q16: int, rest: RestParams
 
 
 def rate_from_recording(device, cal, rec, engine: str = "float", *, leak_tau_s: float = 5.0,
-                        rest: RestParams | None = None) -> Columns:
+                        rest: RestParams | None = None, omega: str = "alpha") -> Columns:
     """`accelcal rate`: angular rate from the resolved alpha of a 6-DOF array.
 
-    Leaky integration (a high-pass of time constant ``leak_tau_s``, s; 0 = none), reset
-    to 0 on detected rest (f quiet, |f| ~ g, |alpha| within 5 sigma of its noise).
+    ``omega="alpha"``: leaky integration (a high-pass of time constant ``leak_tau_s``, s;
+    0 = none), reset to 0 on detected rest (f quiet, |f| ~ g, |alpha| within 5 sigma of its
+    noise).  ``omega="array"``: the accelerometers' own omega fused with the integrated alpha
+    (:func:`accelcal.estimators.omega.omega_from_recording`; float engine only).
 
     Returns
     -------
     Columns
-        t (s), w_x, w_y, w_z (rad/s), rest (1 at rest).
+        t (s), w_x, w_y, w_z (rad/s), rest (1 at rest); with "array" w_*_sigma (rad/s) for rest.
 
     Raises
     ------
@@ -126,6 +129,16 @@ def rate_from_recording(device, cal, rec, engine: str = "float", *, leak_tau_s: 
     """
     if not device.is_array():
         raise InputError(device.name, "rate needs a 6-DOF array (alpha from the resolver)")
+    if omega not in ("alpha", "array"):
+        raise ValueError(f"unknown omega {omega!r}: expected alpha or array")
+    if omega == "array":
+        if engine != "float":
+            raise InputError(device.name, "rate --omega array runs on the float engine only (no C core yet)")
+        rec, filled, fill_note = on_uniform_grid(rec)
+        est = omega_from_recording(device, cal, rec)
+        return Columns(t=np.asarray(rec.t, float), **omega_columns(est),
+                       **({"filled": filled.astype(float)} if filled.any() else {}),
+                       warnings=[f"rate: {fill_note}"] if fill_note else [], meta={"engine": engine, "omega": "array"})
     check_for_device(rec, device, min_samples=2)
     if engine == "fixed":
         check_core_input(rec, device.raw_min < 0)

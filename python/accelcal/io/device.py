@@ -22,6 +22,8 @@ __all__ = [
     "default_device",
     "default_triad",
     "pendulum_device",
+    "tetrahedron_device",
+    "axes_device",
     "GRAVITY",
 ]
 
@@ -464,3 +466,34 @@ def pendulum_device(r1: float = 0.1, r2: float = 0.3) -> Device:
         zero_counts=np.full(6, 32768.0),
         noise_mps2=0.005,
     )
+
+
+# 16-bit ADC, +-16 g full scale (2048 counts per g): a centripetal 30^2 rad^2/s^2 x 50 mm is 4.6 g.
+_ARRAY_K = 2048.0 / GRAVITY
+
+
+def _triad_array(name: str, points: np.ndarray) -> Device:
+    """Triads (x, y, z channels) at ``points`` (K, 3) m: 16-bit, +-16 g, 500 Hz, 0.01 m/s^2 rms."""
+    n = 3 * len(points)
+    return Device(name=name, sample_rate_hz=500.0, gravity_mps2=GRAVITY, raw_min=0, raw_max=65535,
+                  positions=np.repeat(np.asarray(points, float), 3, axis=0), axes=np.tile(np.eye(3), (len(points), 1)),
+                  counts_per_mps2=np.full(n, _ARRAY_K), zero_counts=np.full(n, 32768.0), noise_mps2=0.01)
+
+
+def tetrahedron_device(r: float = 0.05) -> Device:
+    """Four triads at the corners of a regular tetrahedron, r (m) from the body origin (12
+    channels; 3k..3k+2 along x, y, z): a layout from which the accelerometers observe omega
+    (all six rate products).  16-bit ADC, +-16 g, 500 Hz, 0.01 m/s^2 rms noise."""
+    if not (math.isfinite(r) and r > 0):
+        raise ValueError(f"tetrahedron_device: need a finite r > 0, got {r}")
+    return _triad_array(f"tetra-12ch-r{r * 1000:g}", r / math.sqrt(3.0) * np.array([[1, 1, 1], [1, -1, -1],
+                                                                                [-1, 1, -1], [-1, -1, 1]], float))
+
+
+def axes_device(r: float = 0.05, origin: bool = True) -> Device:
+    """Triads on the body x, y and z axes at r (m), and with ``origin`` one at the origin (12
+    channels, else 9); same ADC as :func:`tetrahedron_device`."""
+    if not (math.isfinite(r) and r > 0):
+        raise ValueError(f"axes_device: need a finite r > 0, got {r}")
+    pts = np.vstack([np.zeros((1, 3)), r * np.eye(3)]) if origin else r * np.eye(3)
+    return _triad_array(f"axes-{3 * len(pts)}ch-r{r * 1000:g}", pts)
