@@ -47,9 +47,10 @@ from .static_model import fit_static
 TEST_LEVEL = 0.05
 #: the profile-likelihood interval's coverage
 INTERVAL_LEVEL = 0.95
-#: the grid the maximiser starts from (deg, log-spaced up to MAX_JIG_ACCURACY_DEG)
-GRID_MIN_DEG = 1e-3
-GRID_POINTS = 61
+#: the grid the maximiser starts from (deg, log-spaced up to MAX_JIG_ACCURACY_DEG; a 6-channel array of
+#: 34 poses with 0.01-count noise already tells 1e-3 deg from 0)
+GRID_MIN_DEG = 1e-5
+GRID_POINTS = 41
 
 
 @dataclass
@@ -149,10 +150,10 @@ def estimate_from_linear(y: np.ndarray, X: np.ndarray, J: np.ndarray) -> JigEsti
     def excess(d):
         return 2.0 * (lmax - ll(d)) - cut
 
-    lower = 0.0 if mle == 0.0 or excess(0.0) <= 0 else brentq(excess, 0.0, mle, xtol=1e-6)
+    lower = 0.0 if mle == 0.0 or excess(0.0) <= 0 else brentq(excess, 0.0, mle, xtol=1e-9)
     upper = None
     if excess(MAX_JIG_ACCURACY_DEG) > 0:
-        upper = brentq(excess, max(mle, GRID_MIN_DEG), MAX_JIG_ACCURACY_DEG, xtol=1e-6)
+        upper = brentq(excess, mle, MAX_JIG_ACCURACY_DEG, xtol=1e-9)
     at_edge = mle >= 0.999 * MAX_JIG_ACCURACY_DEG
     used = p < TEST_LEVEL and not at_edge
     if at_edge:
