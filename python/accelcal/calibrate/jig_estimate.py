@@ -250,5 +250,6 @@ def fit_estimating_jig(device, poses: PoseSet, method: str = "full", *, temperat
     est = estimate_jig_accuracy(device, method, poses.means, sig, poses.f_ref,
                                 (plain.offsets, plain.sensitivity, plain.offset_tc, plain.gain_tc), dT)
     out = fit(est.deg) if est.used else plain
+    out.jig_accuracy_deg = est.deg         # as estimated (the fit's own is through radians and back)
     out.jig_estimate = est.to_json()
     return out
