@@ -195,10 +195,7 @@ def calibrate(device: Any, recordings: Any, method: str | None = None, *,
     method : {"full", "gain", "offset", "jigfree"}, optional
         Default: ``full`` when every pose has a reference f, ``jigfree`` when none has.
     jig_accuracy_deg : float or "auto"
-        Known poses: the rms angle (deg) by which the jig's poses may be off; 0: the references
-        are exact.  Default ``"auto"``: estimated from the poses' scatter about the fit and used
-        where a perfect jig is rejected (``extra["fit"]["jig_accuracy_estimate"]``;
-        docs/calibration-jig.md).
+        Known poses: the rms angle (deg) the jig's poses may be off; "auto": estimated (docs/calibration-jig.md).
     jigfree_model : {"auto", "full", "gain", "offset"}
         Jig-free: the channel model; ``auto`` is ``full``, or, where the poses do not
         determine it, the first of ``gain`` and ``offset`` they do (the reason in
