@@ -105,6 +105,12 @@ def calibrate_warnings(dev, cal) -> list[str]:
         warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}): the "
                         f"'{fit.get('model', cal.method)}' model has no cross-axis terms, which a real sensor "
                         f"has, and the poses may move while held; {use}")
+    elif not cross_axis and (fit.get("jig_accuracy_estimate") or {}).get("used"):
+        # the estimated jig accuracy took up the scatter, and with it what the model lacks
+        warnings.append(f"the poses scatter about the fit beyond their noise, taken up by the jig accuracy "
+                        f"estimated ({fit['jig_accuracy_estimate']['deg']:.3g} deg); the '{fit.get('model', cal.method)}' "
+                        "model has no cross-axis terms, which a real sensor has and which look like pose tilts, so "
+                        "part of that may be theirs: use --method full if the poses determine it")
     gs = None if cal.sensitivity_sigma is None else gain_sigma(cal.sensitivity, cal.sensitivity_sigma)
     if poses:
         # first to last sample, and one sample's step more: the time n samples take
