@@ -184,7 +184,7 @@ def _as_recordings(recordings: Any, device: Device) -> list[Recording]:
 
 @options_checked()
 def calibrate(device: Any, recordings: Any, method: str | None = None, *,
-              jig_accuracy_deg: float = 0.0, jigfree_model: str = "auto", drop_outliers: bool = False,
+              jig_accuracy_deg: float | str = "auto", jigfree_model: str = "auto", drop_outliers: bool = False,
               min_static_s: float = MIN_POSE_S) -> Calibration:
     """Estimate a calibration from static poses (as ``accelcal calibrate``).
 
@@ -196,8 +196,8 @@ def calibrate(device: Any, recordings: Any, method: str | None = None, *,
         list of rows of numbers (``raw.tolist()``) is one array, not a recording a row.
     method : {"full", "gain", "offset", "jigfree"}, optional
         Default: ``full`` when every pose has a reference f, ``jigfree`` when none has.
-    jig_accuracy_deg : float
-        Known poses: the rms angle (deg) by which the jig's poses may be off.
+    jig_accuracy_deg : float or "auto"
+        Known poses: the rms angle (deg) the jig's poses may be off; "auto": estimated (docs/calibration-jig.md).
     jigfree_model : {"auto", "full", "gain", "offset"}
         Jig-free: the channel model; ``auto`` is ``full``, or, where the poses do not
         determine it, the first of ``gain`` and ``offset`` they do (the reason in

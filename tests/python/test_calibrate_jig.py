@@ -257,13 +257,19 @@ def test_temperature_path_takes_the_jig_accuracy():
     gamma = rng.uniform(-2e-4, 2e-4, 3)
     rec = make_recording(dev, b, S, rotate(F_ref, 1.0, rng), rng, f_ref=F_ref, temps=temps, beta=beta,
                          gamma=gamma, hold=100)
-    plain = calibrate_recordings(dev, [rec])
+    plain = calibrate_recordings(dev, [rec], jig_accuracy_deg=0.0)
     jig = calibrate_recordings(dev, [rec], jig_accuracy_deg=1.0)
-    assert plain.offset_tc is not None and jig.offset_tc is not None
+    auto = calibrate_recordings(dev, [rec])
+    assert plain.offset_tc is not None and jig.offset_tc is not None and auto.offset_tc is not None
     assert jig.extra["fit"]["jig_accuracy_deg"] == 1.0
     err_plain = np.sqrt(np.mean((plain.offsets - b) ** 2))
     err_jig = np.sqrt(np.mean((jig.offsets - b) ** 2))
     assert err_jig < 0.3 * err_plain, (err_jig, err_plain)
+    # the default estimates it with the temperature terms in the linearisation
+    est = auto.extra["fit"]["jig_accuracy_estimate"]
+    assert est["used"] and 0.5 < est["deg"] < 2.0, est
+    err_auto = np.sqrt(np.mean((auto.offsets - b) ** 2))
+    assert err_auto < 0.3 * err_plain, (err_auto, err_plain)
 
 
 def test_calibration_json_reports_the_jig_accuracy_and_the_hint():
@@ -272,12 +278,23 @@ def test_calibration_json_reports_the_jig_accuracy_and_the_hint():
     b, S = draw_truth(dev, rng)
     F_ref = G * AXES6
     rec = make_recording(dev, b, S, rotate(F_ref, 1.0, rng), rng, f_ref=F_ref, hold=100)
-    plain = calibrate_recordings(dev, [rec])
+    plain = calibrate_recordings(dev, [rec], jig_accuracy_deg=0.0)
     assert plain.extra["fit"]["jig_accuracy_deg"] == 0.0
     assert plain.extra["fit"]["jig_accuracy_consistent_with_scatter_deg"] > 0.2
+    assert "jig_accuracy_estimate" not in plain.extra["fit"]
     stated = calibrate_recordings(dev, [rec], jig_accuracy_deg=1.0)
     assert "jig_accuracy_consistent_with_scatter_deg" not in stated.extra["fit"]
+    assert "jig_accuracy_estimate" not in stated.extra["fit"]
     assert "jig accuracy 1 deg" in stated.extra["fit"]["uncertainty"]
+    # the default: estimated, recorded with its interval and test, used, no hint (the estimate replaces it)
+    auto = calibrate_recordings(dev, [rec])
+    fit = auto.extra["fit"]
+    est = fit["jig_accuracy_estimate"]
+    assert est["used"] and fit["jig_accuracy_deg"] == est["deg"] > 0
+    lo, hi = est["interval_deg"]
+    assert lo < est["deg"] < hi and est["p_value"] < est["test_level"]
+    assert "jig_accuracy_consistent_with_scatter_deg" not in fit
+    assert fit["jig_accuracy_note"].startswith(f"jig accuracy estimated from the poses' scatter: {est['deg']:.3g} deg")
 
 
 @pytest.mark.parametrize("bad", [-0.1, float("nan"), float("inf"), "abc", None])
@@ -325,7 +342,8 @@ def test_cli_bad_jig_accuracy_exits_2_with_one_line(jig_files, capfd, tmp_path, 
 
 def test_cli_jig_accuracy_and_warning(jig_files, capfd, tmp_path):
     d, b = jig_files
-    rc, err = _cli(["calibrate", "--device", d / "dev.json", d / "poses.csv", "-o", tmp_path / "plain.json"], capfd)
+    rc, err = _cli(["calibrate", "--device", d / "dev.json", d / "poses.csv", "--jig-accuracy", "0",
+                    "-o", tmp_path / "plain.json"], capfd)
     assert rc == 0
     # the jig's 1 deg errors, absorbed, scale the sigmas up by the scatter: channel 2's gain to +-0.74 %
     lines = err.splitlines()
@@ -340,3 +358,32 @@ def test_cli_jig_accuracy_and_warning(jig_files, capfd, tmp_path):
     e_plain = np.abs(np.array([c["offset_counts"] for c in plain["channels"]]) - b)
     e_jig = np.abs(np.array([c["offset_counts"] for c in jig["channels"]]) - b)
     assert np.max(e_jig) < 0.2 * np.max(e_plain)
+
+
+def test_cli_default_estimates_the_jig_accuracy_and_says_so(jig_files, capfd, tmp_path):
+    """Without --jig-accuracy the 1 deg pose errors are estimated (no warning to state them), the
+    summary gives the value and interval, the JSON records it, and the header's opening comment
+    carries the note; --jig-accuracy auto is the same."""
+    d, b = jig_files
+    capfd.readouterr()
+    rc = main(["calibrate", "--device", str(d / "dev.json"), str(d / "poses.csv"), "-o", str(tmp_path / "auto.json")])
+    out = capfd.readouterr()
+    assert rc == 0 and out.err == "", out.err
+    cal = json.loads((tmp_path / "auto.json").read_text())
+    est = cal["fit"]["jig_accuracy_estimate"]
+    assert est["used"] and 0.5 < est["deg"] < 2.0, est
+    assert f"Jig accuracy estimated from the poses' scatter: {est['deg']:.3g} deg rms (95 % interval" in out.out
+    e_auto = np.abs(np.array([c["offset_counts"] for c in cal["channels"]]) - b)
+    rc, _ = _cli(["calibrate", "--device", d / "dev.json", d / "poses.csv", "--jig-accuracy", "0",
+                  "-o", tmp_path / "plain.json"], capfd)
+    plain = json.loads((tmp_path / "plain.json").read_text())
+    e_plain = np.abs(np.array([c["offset_counts"] for c in plain["channels"]]) - b)
+    assert np.max(e_auto) < 0.2 * np.max(e_plain)
+    rc, _ = _cli(["calibrate", "--device", d / "dev.json", d / "poses.csv", "--jig-accuracy", "auto",
+                  "-o", tmp_path / "auto2.json"], capfd)
+    assert json.loads((tmp_path / "auto2.json").read_text())["fit"] == cal["fit"]
+    rc, _ = _cli(["header", "--device", d / "dev.json", "--calibration", tmp_path / "auto.json",
+                  "-o", tmp_path / "cal.h"], capfd)
+    assert rc == 0
+    head = (tmp_path / "cal.h").read_text().split("*/")[0]
+    assert "NOTE (accelcal calibrate): jig accuracy estimated from the poses' scatter" in head, head

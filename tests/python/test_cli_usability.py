@@ -88,20 +88,30 @@ def test_ignored_columns_are_named_once(poses, tmp_path, capsys):
 
 
 def test_jig_warning_only_with_cross_axis_terms(tmp_path, capsys):
-    # a jig off by 2 deg: the full model is told to state the jig accuracy; the gain
-    # model (no cross-axis terms) is told what it lacks instead
+    # a jig off by 2 deg: with the references stated exact (--jig-accuracy 0) the full model is
+    # told to state the jig accuracy; the gain model (no cross-axis terms) is told what it lacks
+    # instead.  The default estimates it: no warning for full, the gain model still told
     rec = tmp_path / "tilted.csv"
     assert main(["simulate", "--device", "default", "--motion", "static_poses", "--param", 'poses="24"',
                  "--effect", "pose_error:angle_deg=2", "--seed", "5", "-o", str(rec)]) == 0
     capsys.readouterr()
-    assert main(["calibrate", "--device", "default", str(rec), "-o", str(tmp_path / "f.json")]) == 0
+    assert main(["calibrate", "--device", "default", str(rec), "--jig-accuracy", "0",
+                 "-o", str(tmp_path / "f.json")]) == 0
     err = capsys.readouterr().err
     assert "--jig-accuracy" in err
-    assert main(["calibrate", "--device", "default", "--method", "gain", str(rec),
+    assert main(["calibrate", "--device", "default", "--method", "gain", str(rec), "--jig-accuracy", "0",
                  "-o", str(tmp_path / "g.json")]) == 0
     err = capsys.readouterr().err
     assert "--jig-accuracy" not in err
     assert "no cross-axis terms" in err
+    assert main(["calibrate", "--device", "default", str(rec), "-o", str(tmp_path / "fa.json")]) == 0
+    out = capsys.readouterr()
+    assert "--jig-accuracy" not in out.err and "scatter" not in out.err, out.err
+    assert "Jig accuracy estimated from the poses' scatter" in out.out, out.out
+    assert main(["calibrate", "--device", "default", "--method", "gain", str(rec),
+                 "-o", str(tmp_path / "ga.json")]) == 0
+    err = capsys.readouterr().err
+    assert "no cross-axis terms" in err and "jig accuracy estimated" in err, err
 
 
 @pytest.mark.parametrize("factor,unit", [(1e3, "milliseconds"), (1e6, "microseconds")])

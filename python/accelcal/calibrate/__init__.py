@@ -47,11 +47,21 @@ parameters need what they need with the poses fixed).  The
 covariance is the inverse of J^T J over the reading and prior rows, chi^2 sums
 both, and dof = P N - (channel parameters) as for fixed poses (2 rows and 2
 parameters a pose).  As theta -> 0 the fit tends to the known-pose fit; theta =
-0 (the default) is that fit exactly: ordinary weighted least squares, efficient
-(at the Cramer-Rao bound) when the references are exact.  With theta = 0 and
+0 is that fit exactly: ordinary weighted least squares, efficient (at the
+Cramer-Rao bound) when the references are exact.  With theta = 0 stated and
 chi^2/dof > JIG_HINT_CHI2 the fit reports the theta at which the prior model's
 chi^2/dof is 1 (StaticFit.jig_hint_deg; the CLI warns with it).  Jig-free fits
 ignore theta (they use no reference).
+
+Jig accuracy estimated (the default of :func:`calibrate_recordings`, theta = "auto";
+:mod:`.jig_estimate`): theta is the hyperparameter of the pose priors, estimated by
+empirical Bayes: the restricted (REML) marginal likelihood of the pose means, with the
+pose errors and the channel parameters integrated out (linearised about the fit with
+exact references), maximised over theta with scipy.  A perfect jig is kept (theta = 0,
+ordinary least squares) unless the likelihood-ratio test of theta = 0 (null: 1/2 chi2_0
++ 1/2 chi2_1, theta = 0 on the boundary) rejects it at 5 %; else the prior fit above runs
+at theta-hat.  The calibration's ``extra["fit"]["jig_accuracy_estimate"]`` holds the
+estimate, its 95 % profile-likelihood interval, the test's statistic and p-value.
 
 Jig-free (f_p unknown, ``|f_p| = g``): one nonlinear least-squares problem over
 the channel parameters and two tangent-plane angles per pose (``scipy.optimize.least_squares``
@@ -92,7 +102,8 @@ See :func:`calibrate_recordings` for the entry point the command line uses.
 Modules: ``settings`` (constants), ``results`` (StaticFit, PositionFit), ``checks``
 (shared checks of pose sets), ``problem`` (the static model as a least-squares
 problem), ``static_model`` (the nonlinear fit by scipy.optimize.least_squares),
-``known_poses`` (linear known-pose fits and the jig-accuracy joint fit),
+``known_poses`` (linear known-pose fits and the jig-accuracy joint fit), ``jig_estimate`` (the jig
+accuracy estimated from the poses' scatter),
 ``lever_arms``, ``outliers`` (poses far off a fit, named with the fit without them), ``stated_poses``
 (known poses whose readings contradict their stated f, refused before the fit),
 ``recordings`` (recordings in, a Calibration out).
@@ -101,16 +112,17 @@ from ..readings.noise import estimate_noise
 from ..readings.static import PoseSet, detect_static, pose_means, poses_from_recording
 from .checks import jig_accuracy_rad, static_force
 from .known_poses import calibrate_known_poses, fit_known_poses
+from .jig_estimate import JigEstimate, estimate_jig_accuracy, fit_estimating_jig
 from .lever_arms import calibrate_positions
 from .problem import gauge_rotation
 from .recordings import calibrate_recordings, to_calibration
 from .results import PositionFit, StaticFit
-from .settings import JIG_ACCURACY_DEG, JIGFREE_MODELS, METHODS, TEMP_MIN_SPAN_C
+from .settings import JIG_ACCURACY_AUTO, JIG_ACCURACY_DEG, JIGFREE_MODELS, METHODS, TEMP_MIN_SPAN_C
 from .static_model import calibrate_jigfree, fit_static, fit_temperature
 
 __all__ = [
-    "METHODS", "JIGFREE_MODELS", "JIG_ACCURACY_DEG", "TEMP_MIN_SPAN_C",
-    "PoseSet", "StaticFit", "PositionFit",
+    "METHODS", "JIGFREE_MODELS", "JIG_ACCURACY_AUTO", "JIG_ACCURACY_DEG", "TEMP_MIN_SPAN_C",
+    "PoseSet", "StaticFit", "PositionFit", "JigEstimate", "estimate_jig_accuracy", "fit_estimating_jig",
     "detect_static", "estimate_noise", "pose_means", "poses_from_recording",
     "calibrate_known_poses", "calibrate_jigfree", "fit_known_poses", "fit_static", "fit_temperature",
     "calibrate_positions", "calibrate_recordings", "gauge_rotation", "jig_accuracy_rad", "static_force",

@@ -36,7 +36,7 @@ def calibrate_known_poses(device, means, f_ref=None, method: str = "full", sigma
 
 def fit_known_poses(device, means, f_ref, method: str = "full", sigma=None, *,
                     poses: PoseSet | None = None, min_rcond: float = MIN_RCOND,
-                    jig_accuracy_deg: float = JIG_ACCURACY_DEG) -> StaticFit:
+                    jig_accuracy_deg: float = JIG_ACCURACY_DEG, hint: bool = True) -> StaticFit:
     """Per-channel weighted least squares for b_i (and k_i or s_i) from P known poses.
 
     means (P,N) counts, f_ref (P,3) m/s^2, sigma (P,N) 1-sigma of each mean (counts;
@@ -47,9 +47,11 @@ def fit_known_poses(device, means, f_ref, method: str = "full", sigma=None, *,
     channel's parameters, each with its reference as a prior of that accuracy
     (:func:`fit_static`; module notes), and ``StaticFit.f`` holds the estimated pose
     forces.  Without sigma the noise is then the rounding floor 1/12 count^2 and
-    the covariance is inflated by chi2/dof when > 1.  Raises InputError (which pose
-    to add) when the poses cannot determine a free parameter.  Returns a
-    :class:`StaticFit`.
+    the covariance is inflated by chi2/dof when > 1.  ``hint`` (jig accuracy 0):
+    with chi2/dof > JIG_HINT_CHI2, find the jig accuracy that brings it to 1
+    (``StaticFit.jig_hint_deg``; False where the caller estimates the accuracy itself,
+    :mod:`accelcal.calibrate.jig_estimate`).  Raises InputError (which pose to add)
+    when the poses cannot determine a free parameter.  Returns a :class:`StaticFit`.
     """
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
@@ -117,11 +119,11 @@ def fit_known_poses(device, means, f_ref, method: str = "full", sigma=None, *,
             cov[i, :4, :4] = C
         resid[:, i] = r
     ps = poses if poses is not None else bare_poses(m, F)
-    hint = None
-    if sigma_known and dof_tot > 0 and chi2_tot / dof_tot > JIG_HINT_CHI2:
-        hint = implied_jig_deg(device, method, m, F, sig, (offsets, sens, None, None))
+    implied = None
+    if hint and sigma_known and dof_tot > 0 and chi2_tot / dof_tot > JIG_HINT_CHI2:
+        implied = implied_jig_deg(device, method, m, F, sig, (offsets, sens, None, None))
     return StaticFit(method=method, jigfree=False, offsets=offsets, sensitivity=sens, f=F.copy(), cov=cov,
-                     residual=resid, chi2=chi2_tot, dof=dof_tot, poses=ps, jig_accuracy_deg=0.0, jig_hint_deg=hint)
+                     residual=resid, chi2=chi2_tot, dof=dof_tot, poses=ps, jig_accuracy_deg=0.0, jig_hint_deg=implied)
 
 
 def implied_jig_deg(device, method, m, F, sig, start) -> float | None:

@@ -11,17 +11,18 @@ from ..readings.held import distinct_recordings
 from ..readings.static import (MIN_POSE_S, NO_POSE, STATIC_THRESHOLD, STATIC_WINDOW_S, PoseSet, at_gravity, detect_static,
                       no_pose, one_wrong_scale, poses_from_recording, window_len)
 from .checks import jig_accuracy_rad, min_poses, pose_label, static_force
+from .jig_estimate import fit_estimating_jig
 from .known_poses import fit_known_poses
 from .outliers import outlier_poses, outlier_report, subset
 from .lever_arms import calibrate_positions
 from .results import pose_names, set_aside_entry, to_calibration
 from .stated_poses import check_stated_poses, pose_titles
-from .settings import ADD_POSES, JIG_ACCURACY_DEG, JIGFREE_MODELS, METHODS, ROTATION_MIN_RADPS, TEMP_MIN_SPAN_C
+from .settings import ADD_POSES, JIG_ACCURACY_AUTO, JIGFREE_MODELS, METHODS, ROTATION_MIN_RADPS, TEMP_MIN_SPAN_C
 from .static_model import fit_static
 
 
 def calibrate_recordings(device, recordings: Sequence[Any], method: str | None = None, *,
-                         jig_accuracy_deg: float = JIG_ACCURACY_DEG, jigfree_model: str = "auto",
+                         jig_accuracy_deg: float | str = JIG_ACCURACY_AUTO, jigfree_model: str = "auto",
                          drop_outliers: bool = False, min_static_s: float = MIN_POSE_S):
     """Calibrate ``device`` from recordings and return a Calibration.
 
@@ -30,7 +31,10 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     (known poses); ``jigfree`` ignores any reference.  Default: ``full`` when every
     pose has a reference, ``jigfree`` when none has.  ``jig_accuracy_deg``: rms
     rotation angle by which the jig's poses may differ from their references
-    (known poses only; see the module notes; default 0 = exact references).
+    (known poses only; see the module notes; 0 = exact references); the default,
+    ``"auto"``, estimates it from the poses' scatter about the fit and uses it where a
+    perfect jig is rejected (:mod:`accelcal.calibrate.jig_estimate`; the calibration's
+    ``extra["fit"]["jig_accuracy_estimate"]``).
     ``jigfree_model`` (jig-free only): the channel model, ``full``, ``gain`` or ``offset``;
     ``auto`` (the default) is ``full``, or, where the poses do not determine it (too few
     orientations, a degenerate spread, no convergence), the first of ``gain`` and ``offset``
@@ -50,7 +54,9 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     their stated f are refused before the fit, naming the pose (mislabelled) or, where most do or
     one reversed axis explains them, the device file (:mod:`accelcal.calibrate.stated_poses`).
     """
-    jig_accuracy_rad(jig_accuracy_deg)
+    auto = isinstance(jig_accuracy_deg, str) and jig_accuracy_deg == JIG_ACCURACY_AUTO
+    if not auto:
+        jig_accuracy_rad(jig_accuracy_deg)
     if not (np.isfinite(min_static_s) and min_static_s >= 0):
         raise InputError("<arguments>", f"minimum static stretch {min_static_s!r}: expected a finite number of "
                          "seconds >= 0", field="min_static_s")
@@ -116,13 +122,15 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
                          f"every static pose, but {where} has none (use --method jigfree for unknown poses)",
                          column="f_x")
     if not jigfree:
-        check_stated_poses(device, poses, pose_titles(poses.info, recordings), jig_accuracy_deg)
+        check_stated_poses(device, poses, pose_titles(poses.info, recordings), 0.0 if auto else jig_accuracy_deg)
     temps = poses.temp
     temperature = bool(np.all(np.isfinite(temps)) and np.ptp(temps) >= TEMP_MIN_SPAN_C)
 
     def solve(ps):
         if jigfree:
             return fit_jigfree(device, ps, jigfree_model, temperature)
+        if auto:
+            return fit_estimating_jig(device, ps, method, temperature=temperature), None
         if temperature:
             return fit_static(device, ps, method, jigfree=False, temperature=True,
                               jig_accuracy_deg=jig_accuracy_deg), None

@@ -39,6 +39,7 @@ class StaticFit:
     jig_accuracy_deg: float = 0.0        # stated jig accuracy of the references' priors (0: exact references)
     jig_hint_deg: float | None = None    # jig accuracy 0 but chi2/dof > JIG_HINT_CHI2: the one that gives chi2/dof = 1
     n_prior: int = 0                     # prior rows in chi2 and dof (2 a pose with jig accuracy > 0)
+    jig_estimate: dict | None = None     # the jig accuracy estimated from the poses' scatter (jig_estimate.py)
 
     @property
     def offset_sigma(self) -> np.ndarray:
@@ -141,7 +142,8 @@ def to_calibration(device, fit: StaticFit, method: str, positions: PositionFit |
         "fit": {
             "model": fit.method,
             "poses": "estimated (jig-free, |f| = g)" if fit.jigfree else (
-                f"estimated, the reference f as a prior (rms rotation {fit.jig_accuracy_deg:g} deg, |f| = |f_ref|)"
+                f"estimated, the reference f as a prior (rms rotation {fit.jig_accuracy_deg:.3g} deg"
+                f"{', estimated from their scatter' if fit.jig_estimate else ''}, |f| = |f_ref|)"
                 if fit.jig_accuracy_deg > 0 else "reference f"),
             "gauge": ("sum_i u_i x s_i/|s_i| = 0 (Procrustes: estimated axes rotated as little as possible "
                       "from the nominal ones)") if (fit.jigfree and fit.method == "full") else (
@@ -172,10 +174,15 @@ def to_calibration(device, fit: StaticFit, method: str, positions: PositionFit |
             extra["fit"]["dof_readings"] = int(fit.dof - fit.n_prior)
         if fit.jig_hint_deg is not None:
             extra["fit"]["jig_accuracy_consistent_with_scatter_deg"] = float(fit.jig_hint_deg)
+        if fit.jig_estimate is not None:
+            extra["fit"]["jig_accuracy_estimate"] = dict(fit.jig_estimate)
+            note = jig_note(fit.jig_estimate)
+            if note:
+                extra["fit"]["jig_accuracy_note"] = note
         if fit.jig_accuracy_deg > 0:
             extra["fit"]["uncertainty"] = (
                 "1-sigma from the Fisher information of the readings and of the pose priors (each pose "
-                f"direction within jig accuracy {fit.jig_accuracy_deg:g} deg rms of its reference; chi2 and dof "
+                f"direction within jig accuracy {fit.jig_accuracy_deg:.3g} deg rms of its reference; chi2 and dof "
                 "include the prior terms), inflated by chi2/dof when > 1")
     if fit.jigfree:
         g = device.gravity_mps2
@@ -220,6 +227,30 @@ def to_calibration(device, fit: StaticFit, method: str, positions: PositionFit |
         poses_used=names,
         extra=extra,
     )
+
+
+def interval_text(est: dict) -> str:
+    """An estimate's interval in words: "95 % interval 0.19-0.6 deg" ("... 0.19 deg and above" when
+    its upper end is beyond the priors' range), or "" when it has none."""
+    iv = est.get("interval_deg")
+    if not iv:
+        return ""
+    lo, hi = iv
+    level = f"{100 * est.get('interval_level', 0.95):g} % interval"
+    return f"{level} {lo:.2g}-{hi:.2g} deg" if hi is not None else f"{level} {lo:.2g} deg and above"
+
+
+def jig_note(est: dict) -> str | None:
+    """The calibration's ``extra["fit"]["jig_accuracy_note"]`` (the header's opening comment carries
+    it): the jig accuracy estimated from the poses' scatter and used as their priors; None where the
+    estimate is not used (the references exact)."""
+    if not est.get("used"):
+        return None
+    iv = interval_text(est)
+    return (f"jig accuracy estimated from the poses' scatter: {est['deg']:.3g} deg rms"
+            + (f" ({iv})" if iv else "")
+            + "; the pose directions were fitted with their references as priors of that accuracy "
+              "(accelcal calibrate --jig-accuracy states one instead)")
 
 
 def not_fitted(device, fit: StaticFit) -> dict:

@@ -33,7 +33,12 @@ POSITION_TOL_M = 1e-3      # a lever-arm direction is "observable" when its 1-si
 
 JIG_ACCURACY_DEG = 0.0     # stated jig accuracy of known poses (rms rotation angle of a pose error, deg):
                            # 0 = the references are exact (ordinary weighted least squares); > 0: the
-                           # references are priors of that accuracy (module notes)
+                           # references are priors of that accuracy (module notes).  The default of the
+                           # fits that take it stated (fit_known_poses, fit_static)
+
+
+JIG_ACCURACY_AUTO = "auto"  # the default of calibrate_recordings (and of the command's --jig-accuracy): the jig
+                            # accuracy estimated from the poses' scatter about the fit (jig_estimate.py)
 
 
 JIG_HINT_CHI2 = 4.0        # known poses with jig accuracy 0: above this chi2/dof, report the jig accuracy

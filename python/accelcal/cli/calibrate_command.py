@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..calibrate.checks import far_from_nominal, gain_sigma, poorly_determined
+from ..calibrate.jig_estimate import p_text
 from ..calibrate.omega_check import lever_arm_omega_warning
-from ..calibrate.settings import SCATTER_CHI2
+from ..calibrate.results import interval_text
+from ..calibrate.settings import JIG_ACCURACY_AUTO, SCATTER_CHI2
 from ..errors import AccelcalError
 
 
@@ -22,10 +24,13 @@ def non_negative(text, option: str, what: str) -> float:
     return v
 
 
-def jig_accuracy_arg(text) -> float:
-    """--jig-accuracy DEG: a finite angle >= 0 (one-line error naming the option otherwise)."""
+def jig_accuracy_arg(text) -> float | str:
+    """--jig-accuracy DEG: a finite angle >= 0, or "auto" (estimated from the poses' scatter; one-line
+    error naming the option otherwise)."""
+    if str(text).strip().lower() == JIG_ACCURACY_AUTO:
+        return JIG_ACCURACY_AUTO
     return non_negative(text, "--jig-accuracy", "a finite angle in degrees >= 0 (the rms rotation angle of the "
-                        "jig's pose errors; 0 = exact references)")
+                        "jig's pose errors; 0 = exact references) or 'auto' (estimated from the poses' scatter)")
 
 
 def min_static_arg(text) -> float:
@@ -100,6 +105,12 @@ def calibrate_warnings(dev, cal) -> list[str]:
         warnings.append(f"the poses scatter about the fit far beyond their noise (chi2/dof {red:.3g}): the "
                         f"'{fit.get('model', cal.method)}' model has no cross-axis terms, which a real sensor "
                         f"has, and the poses may move while held; {use}")
+    elif not cross_axis and (fit.get("jig_accuracy_estimate") or {}).get("used"):
+        # the estimated jig accuracy took up the scatter, and with it what the model lacks
+        warnings.append(f"the poses scatter about the fit beyond their noise, taken up by the jig accuracy "
+                        f"estimated ({fit['jig_accuracy_estimate']['deg']:.3g} deg); the '{fit.get('model', cal.method)}' "
+                        "model has no cross-axis terms, which a real sensor has and which look like pose tilts, so "
+                        "part of that may be theirs: use --method full if the poses determine it")
     gs = None if cal.sensitivity_sigma is None else gain_sigma(cal.sensitivity, cal.sensitivity_sigma)
     if poses:
         # first to last sample, and one sample's step more: the time n samples take
@@ -242,7 +253,7 @@ def calibration_summary(cal, n_recordings: int, output) -> str:
     if chi2 is not None and dof:
         if dof_r is not None and dof_r <= 0:
             text += (f" chi2/dof {chi2 / dof:.3g} ({dof} dof, all of them the pose priors': the fitted pose "
-                     "directions against the stated jig accuracy).")
+                     "directions against the jig accuracy).")
         elif dof_r is not None:
             text += f" chi2/dof {chi2 / dof:.3g} ({dof} dof, {dof - dof_r} of them the pose priors')."
         else:
@@ -268,7 +279,18 @@ def calibration_summary(cal, n_recordings: int, output) -> str:
     if "sensitivity_direction" in held:
         text += (" Sensitivity directions held along the device file's nominal axes (not fitted: no sigma for the "
                  "components held at 0).")
-    if fit.get("jig_accuracy_deg"):
+    est = fit.get("jig_accuracy_estimate")
+    if est and est.get("used"):
+        iv = interval_text(est)
+        text += (f" Jig accuracy estimated from the poses' scatter: {est['deg']:.3g} deg rms"
+                 + (f" ({iv}; likelihood-ratio test of a perfect jig: {p_text(est['p_value'])})" if iv else "")
+                 + ", used as the poses' priors (--jig-accuracy states one instead).")
+    elif est and "p_value" in est:
+        text += (f" Jig accuracy estimated: the poses' scatter is within their noise ({p_text(est['p_value'])}), "
+                 "so the references are taken as exact (ordinary least squares).")
+    elif est:
+        text += " Jig accuracy not estimated: one row a pose, the noise unknown; the references are taken as exact."
+    elif fit.get("jig_accuracy_deg"):
         text += f" Jig accuracy stated: {fit['jig_accuracy_deg']:g} deg."
     if cal.positions is not None:
         text += " Lever arms estimated."

@@ -14,7 +14,7 @@ import numpy as np
 from tqdm import tqdm
 
 from .. import __version__
-from ..calibrate import JIG_ACCURACY_DEG, JIGFREE_MODELS, calibrate_recordings
+from ..calibrate import JIG_ACCURACY_AUTO, JIGFREE_MODELS, calibrate_recordings
 from ..io.calibration import load_calibration, save_calibration
 from .calibrate_command import calibration_summary, jig_accuracy_arg, min_static_arg, record_warnings
 from .paths import check_not_an_input, check_output, check_output_dir
@@ -369,17 +369,17 @@ def build_parser() -> argparse.ArgumentParser:
                    "recordings give reference f); gain: offset + gain along the nominal axis; offset: offset "
                    "only; jigfree: no reference needed, static intervals found and |f| = g (the default when "
                    "the recordings have no reference)")
-    s.add_argument("--jig-accuracy", metavar="DEG", default=f"{JIG_ACCURACY_DEG:g}",
+    s.add_argument("--jig-accuracy", metavar="DEG", default=JIG_ACCURACY_AUTO,
                    help="known poses: the jig's accuracy, as the rms angle (deg) by which a pose may be rotated "
                    "from its reference f.  The pose directions are then estimated jointly with the channel "
                    "parameters, each reference a prior of that accuracy (one pose error moves all of a pose's "
                    "channels together), and the uncertainties and chi2 include the priors; the result stays in "
-                   "the jig's frame.  Default %(default)s: the references are exact (ordinary least squares, at "
-                   "the Cramer-Rao bound with honest uncertainties for a perfect jig; stating 0.5 deg there costs "
-                   "1.4x the bound in offset error).  On a jig that is really off by 0.5-2 deg, 0 gives 18-30x "
-                   "larger offset errors on +-x,+-y,+-z than stating it, and 16-61x the bound on 24 general "
-                   "poses (a warning names the accuracy the residuals imply): state your jig's accuracy.  "
-                   "Ignored by jigfree")
+                   "the jig's frame.  0: the references are exact (ordinary least squares, at the Cramer-Rao "
+                   "bound for a perfect jig).  Default %(default)s: estimated from the poses' scatter about the "
+                   "fit (empirical Bayes: the marginal likelihood of the pose means over the jig accuracy) and "
+                   "used where the likelihood-ratio test rejects a perfect jig at 5 %%, else 0; the summary "
+                   "says which, with the value and its 95 %% interval (docs/calibration-jig.md).  Ignored by "
+                   "jigfree")
     s.add_argument("--jigfree-model", choices=JIGFREE_MODELS, default="auto",
                    help="jigfree: the channel model.  full: offset + sensitivity vector per channel (needs 9 pose "
                    "orientations for a triad); gain: offset + gain along the nominal axis (6); offset: offset only "

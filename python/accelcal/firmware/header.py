@@ -306,12 +306,13 @@ def render_triad_header(t: TriadTable, *, device: str, prefix: str = "AC_CAL", c
 def calibration_header(device, cal, *, prefix: str = "AC_CAL") -> str:
     """The firmware header for a device and its calibration: the 6-DOF resolver's tables for
     an array (N >= 6), the triad table for a 3-axis sensor; uint16 or int16 (raw_min < 0)
-    readings.  The calibration's warnings (``extra["warnings"]``) and what its method did not fit
-    (``extra["fit"]["not_fitted_note"]``) go into the opening comment."""
+    readings.  The calibration's warnings (``extra["warnings"]``), what its method did not fit
+    (``extra["fit"]["not_fitted_note"]``) and the jig accuracy it estimated and used
+    (``extra["fit"]["jig_accuracy_note"]``) go into the opening comment."""
     extra = cal.extra if isinstance(getattr(cal, "extra", None), dict) else {}
     warnings = extra.get("warnings", [])
     fit = extra.get("fit") if isinstance(extra.get("fit"), dict) else {}
-    notes = [fit["not_fitted_note"]] if fit.get("not_fitted_note") else []
+    notes = [fit[k] for k in ("not_fitted_note", "jig_accuracy_note") if fit.get(k)]
     signed = device.raw_min < 0
     if device.is_triad():
         t = quantize_triad(cal.offsets, cal.sensitivity, signed=signed, rails=(device.raw_min, device.raw_max))
