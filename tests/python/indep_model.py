@@ -1139,7 +1139,7 @@ def make_temperature_lag(seed=0, *, lag=None, device=None, noise=None, ratio=Non
 
 
 def make_lowpass(order: int, seed=0, *, fc_hz=None, temperature=False, device=None, noise=None, rate=None,
-                 ratio=None) -> dict:
+                 ratio=None, n_poses=None) -> dict:
     """A jig recording with a moving part (reference f, w, dw) whose every channel responds through
     a Butterworth low-pass of ``order`` (1 or 2; the contract's bandwidth is first order) of cut-off
     ``fc_hz`` (default: drawn so that its contribution is 3-30 x the floor), with ``temperature``
@@ -1148,7 +1148,8 @@ def make_lowpass(order: int, seed=0, *, fc_hz=None, temperature=False, device=No
     rng = np.random.default_rng(seed + 4241)
     if rate is None:
         rate = 200.0 if fc_hz is not None else float(rng.choice([100.0, 200.0, 500.0]))
-    ds = make_jig([], seed, device=device, noise=noise, rate=rate, temperature=bool(temperature), motion=True)
+    ds = make_jig([], seed, device=device, noise=noise, rate=rate, temperature=bool(temperature), motion=True,
+                  n_poses=n_poses)
     sc = ds["scene"]
     N = sc.dev.n_channels
     eff = {}
@@ -1164,8 +1165,8 @@ def make_lowpass(order: int, seed=0, *, fc_hz=None, temperature=False, device=No
 
 #: the six-pose twins: one face pose held at each of these times from the middle of the recording
 #: (s; each axis's two faces at -T and +T), holds of TWIN_HOLD_S, an unlabelled rest in the middle
-TWIN_T_S = (16.0, 19.5, 23.0)
-TWIN_HOLD_S = 1.5
+TWIN_T_S = (32.0, 39.0, 46.0)
+TWIN_HOLD_S = 1.0
 
 
 def make_six_pose_twin(kind: str, seed=0, *, tilt_deg=0.3, noise=0.006, device="triad16") -> dict:
