@@ -1114,17 +1114,20 @@ def _with_raw(ds: dict, eff: dict, layout: str) -> dict:
                 layout=ds["layout"] + "; " + layout)
 
 
-def make_temperature_lag(seed=0, *, lag=None, device=None, noise=None, ratio=None) -> dict:
+def make_temperature_lag(seed=0, *, lag=None, lag_spans=None, device=None, noise=None, ratio=None) -> dict:
     """A jig recording with a temperature column (the ambient's smoothed step of 10-25 degC in the
     first third) and an offset that follows the sensor's temperature through a first-order lag.
     ``lag``: seconds (a number) or a multiple of the recording's length (a string such as '10x');
-    default drawn log-uniformly from 5 s to 10 x the recording.  The temperature effect's
+    with ``lag_spans`` (lo, hi) drawn log-uniformly between those multiples of the recording's length
+    (at least 5 s); default drawn log-uniformly from 5 s to 10 x the recording.  The temperature effect's
     ``tau_s`` and ``span_s`` (the recording's length) are in ``effects``.  Same dict as make_jig."""
     rng = np.random.default_rng(seed + 613)
     ds = make_jig([], seed, device=device, noise=noise, temperature=True, motion=False)
     sc = ds["scene"]
     span = float(sc.t[-1] - sc.t[0])
-    if lag is None:
+    if lag_spans is not None:
+        tau = max(5.0, span * math.exp(rng.uniform(math.log(lag_spans[0]), math.log(lag_spans[1]))))
+    elif lag is None:
         tau = math.exp(rng.uniform(math.log(5.0), math.log(10.0 * span)))
     elif isinstance(lag, str) and lag.endswith("x"):
         tau = float(lag[:-1]) * span
