@@ -27,7 +27,8 @@ import math
 
 import numpy as np
 
-from ..effects.fitting import Cand
+from ..effects.fitting import Cand, LinearCandidate
+from ..effects.settings import BACKFIT_PASSES
 from .compare import RIVAL_GAIN_SHARE, SEPARATE_T
 from .relinearise import joint_fit
 
@@ -105,23 +106,30 @@ def prediction_twins(D, cands, chosen: list[str], pools: list[dict], e: np.ndarr
         rivals = sorted((c for nm, c in pool.items() if nm not in chosen and c.significant and c.gain > 0
                          and c.gain >= floor_gain), key=lambda c: -c.gain)[:MAX_TWIN_RIVALS]
         for c in rivals:
-            swap = [c.name if nm == m else nm for nm in fitted]
-            # the rival in the member's place, and with the levels it reaches since the calibration
-            # (``Effect.reaches_level_of``: a drift's level when the recording began reads as an offset)
-            alts = [swap]
-            more = [nm for nm in cands[c.name].reaches_level_of if nm in cands and nm not in swap]
-            if more:
-                alts.append(swap + more)
-            best = None
-            for names in alts:
-                alt, alt_pred = backfit(D, cands, names, e, joint, unit)
-                # the parameters the two models do not share fit the noise each its own way
-                k = (sum(joint[nm].k for nm in fitted if nm not in names)
-                     + sum(alt[nm].k for nm in names if nm not in fitted))
-                sep = _chi2(D, pred - alt_pred) / unit - k
-                if best is None or sep < best[0]:
-                    best = (sep, names)
-            sep, names = best
+            # first the two fits on the residual the member was chosen on (no refit): where they
+            # already predict alike, so do the models
+            tries = []
+            if own is not None:
+                tries.append((_chi2(D, own.delta - c.delta) / unit - own.k - c.k, [c.name]))
+            if j == 0 and (not tries or tries[0][0] >= needed):
+                # the verdict: the model with the rival in its place, refitted together, and with the
+                # levels the rival reaches since the calibration (``Effect.reaches_level_of``: a
+                # ramp's level when the recording began is an offset; not the member itself, which
+                # would nest the model)
+                swap = [c.name if nm == m else nm for nm in fitted]
+                alts = [swap] if len(swap) > 1 else []
+                more = [nm for nm in cands[c.name].reaches_level_of if nm in cands and nm not in swap and nm != m]
+                if more:
+                    alts.append(swap + more)
+                for names in alts:
+                    alt, alt_pred = backfit(D, cands, names, e, joint, unit)
+                    # the parameters the two models do not share fit the noise each its own way
+                    k = (sum(joint[nm].k for nm in fitted if nm not in names)
+                         + sum(alt[nm].k for nm in names if nm not in fitted))
+                    tries.append((_chi2(D, pred - alt_pred) / unit - k, names))
+            if not tries:
+                continue
+            sep, names = min(tries, key=lambda x: x[0])
             out.append({"effect": m, "with": c.name, "model": names, "separation": float(sep), "needed": needed,
                         "ambiguous": bool(sep < needed)})
     return out
@@ -130,13 +138,17 @@ def prediction_twins(D, cands, chosen: list[str], pools: list[dict], e: np.ndarr
 def backfit(D, cands, names: list[str], e: np.ndarray, start: dict[str, Cand], unit: float):
     """All-data fits of ``names`` together on ``e`` (backfitting, as :func:`~.relinearise.joint_fit`;
     the members also in ``start`` start from their fits there) until a pass changes the prediction
-    by less than TWIN_TOL chi2 in noise units, at most TWIN_PASSES passes: effects that take each
-    other's parts (a ramp, an offset and a gain on six poses) converge slowly, the others in two.
+    by less than TWIN_TOL chi2 in noise units, at most TWIN_PASSES passes where every member is
+    linear in its parameters (a ramp, an offset and a gain on six poses take each other's parts and
+    converge slowly), else BACKFIT_PASSES (the model's own joint fit's).
     Returns (fits, prediction)."""
     fits = {nm: start[nm] for nm in names if nm in start}
+    # a member fitted by a search (a lag, a delay, per-pose angles) is dear: as many passes as the
+    # model's own joint fit takes
+    passes = TWIN_PASSES if all(isinstance(cands[nm], LinearCandidate) for nm in names) else BACKFIT_PASSES
     deltas = {nm: (fits[nm].delta if nm in fits else np.zeros_like(e)) for nm in names}
     pred = sum(deltas.values(), np.zeros_like(e))
-    for _ in range(TWIN_PASSES):
+    for _ in range(passes):
         old = pred
         for nm in names:
             others = pred - deltas[nm]
@@ -144,7 +156,7 @@ def backfit(D, cands, names: list[str], e: np.ndarray, start: dict[str, Cand], u
             deltas[nm] = one.delta
             fits[nm] = one
             pred = others + one.delta
-        if _chi2(D, pred - old) / unit < TWIN_TOL:
+        if len(names) == 1 or _chi2(D, pred - old) / unit < TWIN_TOL:
             break
     return fits, pred
 
