@@ -111,6 +111,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     chosen: list[str] = []
     duel = None
     pools: list[dict] = []     # the round each chosen effect was picked from (shapes.prediction_twins)
+    step_amb: dict[str, list[str]] = {}    # a later step's contest: the rivals it cannot be told from
     Dk = D                     # the data as linearised for the current step
     while True:
         sig = [c for c in results.values() if c.significant]
@@ -135,7 +136,11 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
                 remaining.remove(nm)
         if not chosen:
             duel = step_duel
-        elif step_duel.swapped_from or step_duel.ambiguous:
+        else:
+            # a later step's own rivals the data cannot tell from it (a common lag of every channel is
+            # also a low-pass's group delay): stated with the model, not only in the step's notes
+            step_amb[best.name] = [nm for nm in step_duel.ambiguous if nm != best.name]
+        if chosen and (step_duel.swapped_from or step_duel.ambiguous):
             best.notes = list(best.notes) + [f"step {len(chosen) + 1}: {step_duel.why or 'ranked first'}"
                                              + (f"; cannot be told from {', '.join(step_duel.ambiguous)}"
                                                 if step_duel.ambiguous else "")]
@@ -230,7 +235,10 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
                 ambiguous.append(t["with"])
         notes += twin_notes(twins, verdict)
         for ent in effects[1:len(steps)]:
-            ent["ambiguous_with"] = [t["with"] for t in twins if t["ambiguous"] and t["effect"] == ent["name"]]
+            ent["ambiguous_with"] = list(dict.fromkeys(
+                [nm for nm in step_amb.get(ent["name"], []) if nm not in chosen]
+                + [t["with"] for t in twins if t["ambiguous"] and t["effect"] == ent["name"]]))
+            ambiguous += [nm for nm in ent["ambiguous_with"] if nm not in ambiguous and nm != verdict]
         mark_shapes(effects[:len(steps)], joint, twins)
         effects[0]["ambiguous_with"] = ambiguous
         effects[0]["contest"] = {"first_ranked": duel.swapped_from or verdict, "rivals": duel.tests}
