@@ -361,7 +361,8 @@ SHAPES = "indep-shapes"
 make_lowpass, make_six_pose_twin), each kind its own row: a thermal lag from 5 s to a quarter of
 the recording, from a quarter to once its length, and from once to 10 x its length; a first- and a
 second-order low-pass (corner drawn for 3-30 x the floor); the issue's first-order 40 Hz low-pass
-beside a temperature offset (200 Hz); six face poses where a 0.3 deg table tilt and a bias ramp
+beside a temperature offset (at 200 Hz, and at 100 Hz where the digital filter is a pure delay of
+1.6 ms to within what the contract's first-order shape fits); six face poses where a 0.3 deg table tilt and a bias ramp
 give the same pose means (each of the two).  Scored: named right (the verdict is the effect; the
 low-pass with a temperature offset: both in the model), ambiguity stated (the truth in the verdict,
 the model or ambiguous_with; the twins: both twins), wrong name with shrink > 0.2 (of which with
@@ -374,6 +375,7 @@ SHAPE_KINDS = {
     "lowpass order 1": ("bandwidth",),
     "lowpass order 2": ("bandwidth",),
     "lowpass 1 40 Hz + temp": ("bandwidth", "temperature_offset"),
+    "lowpass 1 40 Hz + temp, 100 Hz": ("bandwidth", "temperature_offset"),
     "twin tilt": ("pose_error",),
     "twin ramp": ("bias_drift",),
 }
@@ -390,6 +392,8 @@ def build_shape(kind: str, seed: int) -> dict:
         return im.make_lowpass(2, seed)
     if kind == "lowpass 1 40 Hz + temp":
         return im.make_lowpass(1, seed, fc_hz=40.0, temperature=True, n_poses=12)
+    if kind == "lowpass 1 40 Hz + temp, 100 Hz":
+        return im.make_lowpass(1, seed, fc_hz=40.0, temperature=True, n_poses=12, rate=100.0)
     return im.make_six_pose_twin("pose_error" if kind == "twin tilt" else "bias_drift", seed)
 
 

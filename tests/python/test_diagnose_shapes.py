@@ -96,3 +96,17 @@ def test_lowpass_above_its_corner_is_still_bandwidth():
     fc = float(np.min(ent["params"]["fc_hz"]))
     assert 30.0 < fc < 60.0
     assert math.isfinite(fc)
+
+
+def test_lowpass_named_by_its_delay_states_bandwidth():
+    """The issue's case: a first-order 40 Hz low-pass (a digital one, at 100 Hz) beside a temperature
+    offset.  Every channel reads 1.65 ms late; the diagnosis names temperature_offset + time_skew
+    (the contract's continuous first-order shape fits this filter worse than a pure delay), and the
+    low-pass must be stated: the old code had bandwidth neither in the model nor in ambiguous_with."""
+    ds = im.make_lowpass(1, 0, fc_hz=40.0, temperature=True, n_poses=12, rate=100.0)
+    res = _run(ds)
+    assert "temperature_offset" in res["model"]["effects"]
+    assert "bandwidth" in set(res["model"]["effects"]) | set(res["ambiguous_with"])
+    if "time_skew" in res["model"]["effects"]:
+        ent = next(e for e in res["effects"] if e["name"] == "time_skew")
+        assert "bandwidth" in ent["ambiguous_with"]
