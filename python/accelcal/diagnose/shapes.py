@@ -122,6 +122,10 @@ def prediction_twins(D, cands, chosen: list[str], pools: list[dict], e: np.ndarr
                 if more:
                     alts.append(swap + more)
                 for names in alts:
+                    if not all(isinstance(cands[nm], LinearCandidate) for nm in names):
+                        # a member fitted by a search (a lag, a delay, per-pose angles) is refitted
+                        # at every pass: on 100,000 samples that had taken minutes
+                        continue
                     alt, alt_pred = backfit(D, cands, names, e, joint, unit)
                     # the parameters the two models do not share fit the noise each its own way
                     k = (sum(joint[nm].k for nm in fitted if nm not in names)

@@ -16,7 +16,6 @@ T_LAG_MAX_SPANS = 2.0   # ... up to this many times the span of the samples the 
 #: within T_LAG_INSIDE x the longest recording; else the nested form (no lag) is fitted and reported
 T_LAG_CRIT_CHI2 = 3.84
 T_LAG_INSIDE = 1.0
-T_LAG_PROBE_SPANS = 20.0   # ... the interval's upper end is looked for up to this many recordings' lengths
 T_REF_SPANS = 2.0          # a fitted reference temperature stays within this many spans of temp_c
 MISALIGN_MAX_RAD = 0.35     # relinearised misalignment fits stay below ~20 deg
 POSITION_TOL_M = 1e-3      # position_error reports dr along directions with 1-sigma below this

@@ -13,7 +13,7 @@ from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_list, channe
 from .fitdata import FitData, t_ref_known, temp_skip
 from .fitting import Cand, Candidate, jig_rows, joint_stats, sep_stats, solve_groups
 from .settings import (PENALTY_PER_PARAM, T_LAG_CRIT_CHI2, T_LAG_GRID_S, T_LAG_INSIDE, T_LAG_MAX_SPANS,
-                       T_LAG_PROBE_SPANS, T_REF_SPANS)
+                       T_REF_SPANS)
 
 
 def lagged(T: np.ndarray, t: np.ndarray, tau_s: float, runs: np.ndarray | None = None) -> np.ndarray:
@@ -145,8 +145,8 @@ class TemperatureFit(Candidate):
     def _lag_interval(self, D, lag_fit, best, S0w) -> dict:
         """The lags whose profile objective (penalty left out) lies within T_LAG_CRIT_CHI2 (x the
         residual's excess over the floor and the poses' design effect) of the best one's: the
-        interval's ends (0 where no lag fits as well, inf where none up to T_LAG_PROBE_SPANS
-        recordings does worse), and whether that pins the lag: the interval excludes 0 and ends
+        interval's ends in steps of 2 (0 where no lag fits as well, inf where none up to the first step
+        beyond T_LAG_INSIDE x the recording does worse), and whether that pins the lag: the interval excludes 0 and ends
         within T_LAG_INSIDE x the longest recording (D.rec's runs)."""
         tau0 = float(best[1])
         obj0 = best[0] - PENALTY_PER_PARAM
@@ -158,19 +158,20 @@ class TemperatureFit(Candidate):
         def worse(tau):
             return (lag_fit(tau)[0] - (PENALTY_PER_PARAM if tau else 0.0)) - obj0 > crit
 
+        # upwards in steps of 2 up to the first lag beyond T_LAG_INSIDE x the recording (no crossing
+        # there: the interval runs beyond what the recording can pin, reported as inf)
         hi = math.inf
         tau = tau0
-        while tau < T_LAG_PROBE_SPANS * max(span, 1e-9):
-            tau *= math.sqrt(2.0)
+        while tau <= T_LAG_INSIDE * span:
+            tau *= 2.0
             if worse(tau):
                 hi = tau
                 break
         lo = 0.0
         if worse(0.0):
             tau = tau0
-            lo = 0.0
             while tau > 0.05 * tau0:
-                tau /= math.sqrt(2.0)
+                tau /= 2.0
                 lo = tau
                 if worse(tau):
                     break
