@@ -410,7 +410,7 @@ def analog(sc: Scene, eff: dict) -> np.ndarray:
         u = u + nl["k3"][None, :] * u ** 3 + nl["k2"][None, :] * u ** 2
     if "bandwidth" in eff:
         bw = eff["bandwidth"]
-        sos = signal.butter(2, bw["fc_hz"], fs=sc.dev.sample_rate_hz, output="sos")
+        sos = signal.butter(int(bw.get("order", 2)), bw["fc_hz"], fs=sc.dev.sample_rate_hz, output="sos")
         zi = signal.sosfilt_zi(sos)
         for i in bw["channels"]:
             u[:, i], _ = signal.sosfilt(sos, u[:, i], zi=zi * u[0, i])
@@ -1095,10 +1095,186 @@ def shared_paths():
     return {k: v[0] for k, v in REAL.items()}
 
 
+# =============================================================================== shapes (issue 33)
+# Shape parameters the data may or may not pin: a thermal lag from 5 s to 10 x the recording, first-
+# and second-order low-passes (with a temperature offset beside them: the issue's case), and two six-pose
+# datasets built to give the same pose means (a table tilt with per-pose headings, and a bias ramp).
+
+def _with_raw(ds: dict, eff: dict, layout: str) -> dict:
+    """``ds`` (make_jig's dict, effect-free) re-simulated with the effects ``eff`` (name -> the
+    parameters of :func:`analog` / :func:`adc`): its scene's noise draws, trajectory and reference."""
+    sc = ds["scene"]
+    sc.eff = dict(eff)
+    raw = adc(sc, analog(sc, eff), eff)
+    rec = ds["recording"]
+    out = recording_from_arrays(rec.t, raw, f=rec.f, w=rec.w, dw=rec.dw, temp_c=rec.temp_c, pose=rec.pose,
+                                metadata={"generator": "tests/python/indep_model.py"})
+    ratio = {nm: contribution(sc, nm, p) / sc.floor for nm, p in eff.items()}
+    return dict(ds, recordings=[out], recording=out, effects=dict(eff), ratio=ratio,
+                layout=ds["layout"] + "; " + layout)
+
+
+def make_temperature_lag(seed=0, *, lag=None, lag_spans=None, device=None, noise=None, ratio=None) -> dict:
+    """A jig recording with a temperature column (the ambient's smoothed step of 10-25 degC in the
+    first third) and an offset that follows the sensor's temperature through a first-order lag.
+    ``lag``: seconds (a number) or a multiple of the recording's length (a string such as '10x');
+    with ``lag_spans`` (lo, hi) drawn log-uniformly between those multiples of the recording's length
+    (at least 5 s); default drawn log-uniformly from 5 s to 10 x the recording.  The temperature effect's
+    ``tau_s`` and ``span_s`` (the recording's length) are in ``effects``.  Same dict as make_jig."""
+    rng = np.random.default_rng(seed + 613)
+    ds = make_jig([], seed, device=device, noise=noise, temperature=True, motion=False)
+    sc = ds["scene"]
+    span = float(sc.t[-1] - sc.t[0])
+    if lag_spans is not None:
+        tau = max(5.0, span * math.exp(rng.uniform(math.log(lag_spans[0]), math.log(lag_spans[1]))))
+    elif lag is None:
+        tau = math.exp(rng.uniform(math.log(5.0), math.log(10.0 * span)))
+    elif isinstance(lag, str) and lag.endswith("x"):
+        tau = float(lag[:-1]) * span
+    else:
+        tau = float(lag)
+    target = (ratio or math.exp(rng.uniform(math.log(RATIO_LO), math.log(RATIO_HI)))) * sc.floor
+    beta = rng.choice([-1.0, 1.0], sc.dev.n_channels) * rng.uniform(0.5, 1.0, sc.dev.n_channels)
+    te = _scaled(sc, "temperature_offset", {"beta": beta, "tau_s": tau, "t_ref_c": float(sc.temp_amb[0])},
+                 ["beta"], target)
+    te["span_s"] = span
+    return _with_raw(ds, {"temperature_offset": te}, f"thermal lag {tau:.0f} s ({tau / span:.2f} x the recording)")
+
+
+def make_lowpass(order: int, seed=0, *, fc_hz=None, temperature=False, device=None, noise=None, rate=None,
+                 ratio=None, n_poses=None) -> dict:
+    """A jig recording with a moving part (reference f, w, dw) whose every channel responds through
+    a Butterworth low-pass of ``order`` (1 or 2; the contract's bandwidth is first order) of cut-off
+    ``fc_hz`` (default: drawn so that its contribution is 3-30 x the floor), with ``temperature``
+    also a temperature offset through a lag of 30-120 s (the issue's case: a first-order 40 Hz
+    low-pass and a temperature offset, at 200 Hz).  Same dict as make_jig."""
+    rng = np.random.default_rng(seed + 4241)
+    if rate is None:
+        rate = 200.0 if fc_hz is not None else float(rng.choice([100.0, 200.0, 500.0]))
+    ds = make_jig([], seed, device=device, noise=noise, rate=rate, temperature=bool(temperature), motion=True,
+                  n_poses=n_poses)
+    sc = ds["scene"]
+    N = sc.dev.n_channels
+    eff = {}
+    target = (ratio or math.exp(rng.uniform(math.log(RATIO_LO), math.log(RATIO_HI)))) * sc.floor
+    if fc_hz is None:
+        fc_hz = _bisect(lambda f: contribution(sc, "bandwidth", {"fc_hz": f, "channels": range(N), "order": order}),
+                        0.2, 0.45 * rate, target, increasing=False)
+    eff["bandwidth"] = {"fc_hz": float(fc_hz), "channels": list(range(N)), "order": int(order)}
+    if temperature:
+        eff["temperature_offset"] = draw_effect(sc, "temperature_offset", target, rng)
+    return _with_raw(ds, eff, f"order-{order} low-pass {fc_hz:.3g} Hz" + (" + temperature offset" if temperature else ""))
+
+
+#: the six-pose twins: one face pose held at each of these times from the middle of the recording
+#: (s; each axis's two faces at -T and +T), holds of TWIN_HOLD_S, an unlabelled rest in the middle
+TWIN_T_S = (32.0, 39.0, 46.0)
+TWIN_HOLD_S = 1.0
+
+
+def make_six_pose_twin(kind: str, seed=0, *, tilt_deg=0.3, noise=0.006, device="triad16") -> dict:
+    """Six face poses of a triad, each held once, built so that a table tilt of ``tilt_deg`` and a
+    bias ramp give the same pose means.
+
+    Each axis's two faces are held TWIN_T_S seconds before and after the middle of the recording.
+    The ramp ``r (t - t_mid)`` (m/s^2 per s in the body frame, read through S) moves pose p's mean
+    by ``r tau_p``: across the pose's up direction that is a vector of one length at every pose
+    (r is chosen so), which the tilt gives through the pose's heading (the yaw that turns the tilt
+    into that vector, solved numerically); along it, ``r_k tau_p`` makes |f| of both faces of axis
+    k larger by the same amount: a gain change of channel k, which the tilt dataset carries too.
+    ``kind`` 'pose_error': the tilted table (+ those gains); 'bias_drift': the ramp, poses as
+    stated.  The pose means of the two agree to second order in the tilt (checked by the tests);
+    within a pose the ramp moves by r x TWIN_HOLD_S, below the noise at the default noise.
+    Same dict as make_jig, plus ``twin`` (the other kind's name)."""
+    from scipy.optimize import minimize_scalar
+    if kind not in ("pose_error", "bias_drift"):
+        raise ValueError(kind)
+    rng = np.random.default_rng(seed + 31337)
+    dev = DEVICES[device](100.0)
+    p = true_parameters(dev, rng)
+    g = dev.gravity_mps2
+    th = math.radians(tilt_deg)
+    ax = rng.normal(size=3)
+    ax[2] = 0.0
+    tilt = ax / np.linalg.norm(ax) * th
+    T = expm_so3(tilt)
+    z = np.array([0.0, 0.0, 1.0])
+    size = float(np.linalg.norm(T.T @ z * g - z * g - ((T.T @ z * g - z * g) @ z) * z))  # |df| across up
+    Tk = np.array(TWIN_T_S)
+    axes = rng.permutation(3)                   # axis held at +-Tk[j]
+    Tax = np.empty(3)
+    Tax[axes] = Tk
+    C = size ** 2
+    r2 = 0.5 * C * np.sum(1.0 / Tax ** 2)
+    rk = np.sqrt(np.maximum(r2 - C / Tax ** 2, 0.0)) * rng.choice([-1.0, 1.0], 3)
+    sign = rng.choice([-1.0, 1.0], 3)           # face +e_k at tau = sign_k T_k
+    poses = []
+    for k in range(3):
+        for s_face in (1.0, -1.0):
+            u = np.zeros(3)
+            u[k] = s_face
+            poses.append((s_face * sign[k] * Tax[k], u))
+    poses.sort(key=lambda q: q[0])
+    tr = Trajectory(g=g)
+    t_mid = None
+    for j, (tau, u) in enumerate(poses):
+        want = rk * tau - (rk * tau @ u) * u    # the ramp's change across the pose's up direction
+
+        def miss(yaw, u=u, want=want):
+            R = rotation_for_direction(u, yaw)
+            df = (T @ R).T @ z * g - g * u if kind == "pose_error" else np.zeros(3)
+            return float(np.sum((df - (df @ u) * u - want) ** 2))
+        yaws = np.linspace(0, 2 * math.pi, 73)
+        y0 = yaws[int(np.argmin([miss(y) for y in yaws]))]
+        yaw = minimize_scalar(miss, bounds=(y0 - 0.1, y0 + 0.1), method="bounded", options={"xatol": 1e-10}).x
+        R = rotation_for_direction(u, yaw)
+        Rt = T @ R if kind == "pose_error" else R
+        if j == 0:
+            tr.hold(Rt, 1.0)
+        elif j == 3:                            # the middle: an unlabelled rest between the two halves
+            gap = (tau - poses[2][0]) - TWIN_HOLD_S - 2.0
+            tr.move_to(R if kind == "bias_drift" else Rt, 1.0)
+            tr.hold(tr.R_end, gap)
+            tr.move_to(Rt, 1.0)
+        else:
+            tr.move_to(Rt, (tau - poses[j - 1][0]) - TWIN_HOLD_S)
+        tr.hold(Rt, TWIN_HOLD_S, label=j, stated=g * u)
+        if j == 2:
+            t_mid = tr.end + 0.5 * ((poses[3][0] - poses[2][0]) - TWIN_HOLD_S)
+    rate = dev.sample_rate_hz
+    t = _sample_times(tr, rate)
+    # pose j's middle sits at tau_j from t_mid: the holds are placed so
+    sc = Scene(dev=dev, p=p, traj=tr, t=t, noise_mps2=noise, noise=rng.normal(size=(t.size, dev.n_channels)))
+    lab, stated = tr.labels_and_stated(t)
+    eff = {}
+    if kind == "bias_drift":
+        path = np.outer(t - t_mid, p["S"] @ rk)
+        eff["bias_drift"] = {"path": path, "shape": "ramp", "rate_mps2_per_s": rk}
+    else:
+        # |f| along each axis grows by r_k tau at both faces: a gain of channel k (triad: channel k, axis k)
+        gam = np.array([rk[k] * sign[k] * Tax[k] / g for k in range(3)])
+        eff["gain"] = {"delta": gam}
+    x = analog(sc, eff)
+    raw = adc(sc, x, eff)
+    rec = recording_from_arrays(t, raw, f=stated, temp_c=None, pose=lab,
+                                metadata={"generator": "tests/python/indep_model.py"})
+    ratio = {nm: contribution(sc, nm, pp) / sc.floor for nm, pp in eff.items()}
+    if kind == "pose_error":
+        m = lab >= 0
+        F, _, _ = tr.evaluate(t)
+        c = float(np.sqrt(np.sum(((F[m] - stated[m]) @ p["S"].T) ** 2) / (t.size * dev.n_channels)))
+        eff["pose_error"] = {"angle_deg": tilt_deg, "kind": "tilt", "contribution": c}
+        ratio["pose_error"] = c / sc.floor
+    return {"device": dev, "cal": as_calibration(dev, p), "params": p, "recordings": [rec], "recording": rec,
+            "effects": eff, "ratio": ratio, "noise_mps2": noise, "rate_hz": rate, "floor_counts": sc.floor,
+            "layout": f"six-pose twin ({kind})", "scene": sc, "t_mid": t_mid,
+            "twin": "bias_drift" if kind == "pose_error" else "pose_error"}
+
+
 __all__ = ["IN_TABLE", "OUT_OF_TABLE", "PAIRS", "MOVING_ONLY", "DEVICES", "triad16", "adxl12", "seed6",
            "true_parameters", "as_calibration", "make_jig", "make_handheld", "make_six_pose", "load_real",
            "load_imucal", "load_mpu6050", "inject", "real_model", "as_posed", "static_mask", "real_noise", "Trajectory",
-           "contribution"]
+           "contribution", "make_temperature_lag", "make_lowpass", "make_six_pose_twin"]
 
 
 # =============================================================================== arrays that turn fast

@@ -27,6 +27,7 @@ from .relinearise import heldout_path, joint_fit, relinearise
 from .leftover import leftover, with_settling
 from .scoring import rank_key, run_candidates
 from .settling import settling_ringing
+from .shapes import corner_unpinned, prediction_twins, shape_hints, twin_notes, unpinned
 from .stepping import next_point, same_change, terms_cover
 from .settings import FORMAT, MAX_STEPS, MIN_SHRINK, PENALTY_PER_PARAM, POSE_MEAN_NOTE_RATIO, T_MIN, Z_MIN
 from .text import as_alone, as_model, describe, entry, separate_by, to_json
@@ -111,6 +112,8 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     remaining = list(active)
     chosen: list[str] = []
     duel = None
+    pools: list[dict] = []     # the round each chosen effect was picked from (shapes.prediction_twins)
+    step_amb: dict[str, list[str]] = {}    # a later step's contest: the rivals it cannot be told from
     Dk = D                     # the data as linearised for the current step
     while True:
         sig = [c for c in results.values() if c.significant]
@@ -135,12 +138,17 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
                 remaining.remove(nm)
         if not chosen:
             duel = step_duel
-        elif step_duel.swapped_from or step_duel.ambiguous:
+        else:
+            # a later step's own rivals the data cannot tell from it (a common lag of every channel is
+            # also a low-pass's group delay): stated with the model, not only in the step's notes
+            step_amb[best.name] = [nm for nm in step_duel.ambiguous if nm != best.name]
+        if chosen and (step_duel.swapped_from or step_duel.ambiguous):
             best.notes = list(best.notes) + [f"step {len(chosen) + 1}: {step_duel.why or 'ranked first'}"
                                              + (f"; cannot be told from {', '.join(step_duel.ambiguous)}"
                                                 if step_duel.ambiguous else "")]
         baseline = "the calibrated model" + ("" if not chosen else " + " + " + ".join(chosen))
         steps.append((best, baseline))
+        pools.append(results)
         chosen.append(best.name)
         remaining.remove(best.name)
         if best.gain > 0:
@@ -162,6 +170,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
                  for k, c in enumerate(path)]
         duel = Contest(best=path[0], swapped_from=chosen[0], why=why)
         chosen = list(alt)
+        pools = [first]
 
     # --- joint refit of the chosen effects (backfitting), re-linearised about the corrected calibration
     fitted = [c.name for c, _ in steps if c.gain > 0]
@@ -208,6 +217,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
                      "fits subtracted); 'model' gives the joint refit")
     ambiguous = list(duel.ambiguous) if duel is not None and steps else []
     reached = []
+    shape_named, twins = [], []
     if steps:
         more, reached, why = model_ambiguity(cands, chosen, duel, ambiguous)
         ambiguous += more
@@ -218,6 +228,20 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         more, why = time_beside_pose(D, cands, chosen, ambiguous)
         ambiguous += more
         notes += why
+        shape_named, why = unpinned(pools, chosen, ambiguous)
+        ambiguous += shape_named
+        notes += why
+        twins = prediction_twins(D, cands, chosen, pools, e, joint)
+        for t in twins:
+            if t["ambiguous"] and t["with"] not in ambiguous and t["with"] not in chosen:
+                ambiguous.append(t["with"])
+        notes += twin_notes(twins, verdict)
+        for ent in effects[1:len(steps)]:
+            ent["ambiguous_with"] = list(dict.fromkeys(
+                [nm for nm in step_amb.get(ent["name"], []) if nm not in chosen]
+                + [t["with"] for t in twins if t["ambiguous"] and t["effect"] == ent["name"]]))
+            ambiguous += [nm for nm in ent["ambiguous_with"] if nm not in ambiguous and nm != verdict]
+        mark_shapes(effects[:len(steps)], joint, twins)
         effects[0]["ambiguous_with"] = ambiguous
         effects[0]["contest"] = {"first_ranked": duel.swapped_from or verdict, "rivals": duel.tests}
     if duel is not None and duel.swapped_from:
@@ -326,7 +350,9 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
             "relinearised": relin_info,
         },
         "ambiguous_with": ambiguous,
-        "separate_by": separate_by(cands, verdict, ambiguous, tuple(reached)) if steps else "",
+        "separate_by": with_shape_hints(separate_by(cands, verdict, ambiguous, tuple(reached)) if steps else "",
+                                        effects[:len(steps)], shape_named, twins),
+        "ambiguity_by_prediction": twins,
         "unexplained": left,
         "skipped": skipped,
         "where": to_json(where_breakdown(D, e)),
@@ -364,3 +390,35 @@ def pose_orientations(D) -> int:
     F = [D.f[D.pose == p].mean(axis=0) for p in range(len(D.pose_labels)) if np.any(D.pose == p)]
     F = [f for f in F if np.linalg.norm(f) > 0]
     return distinct_orientations(np.asarray(F)) if F else 0
+
+
+def mark_shapes(selected: list[dict], joint: dict[str, Cand], twins: list[dict]) -> None:
+    """Each chosen effect's ``shape`` (its shape parameters and whether the data pin them:
+    :mod:`.shapes`): a temperature term's lag from its fit, a low-pass's corner not pinned where a
+    time skew's predictions cannot be told from it (only its delay is)."""
+    for ent in selected:
+        c = joint.get(ent["name"])
+        if c is not None and c.shape is not None:
+            ent["shape"] = to_json(c.shape)
+        if ent["name"] == "bandwidth":
+            ent["shape"] = {"fc_hz": {"determined": not corner_unpinned(twins),
+                                      "why": "the motion does not reach the corner: a low-pass and a time skew "
+                                             "predict the same readings here (only the delay is determined)"
+                                      if corner_unpinned(twins) else "the amplitude loss above the corner tells it "
+                                      "from a time skew"}}
+
+
+def with_shape_hints(text: str, selected: list[dict], shape_named: list[str], twins: list[dict]) -> str:
+    """``separate_by`` with what would pin the shapes the data leave open (:data:`.shapes.SHAPE_HINTS`):
+    of effects stated only in a shape not pinned, of chosen effects whose shape is not determined, and
+    of a low-pass that cannot be told from a time skew."""
+    names = list(shape_named)
+    for ent in selected:
+        if any(not v.get("determined", True) for v in (ent.get("shape") or {}).values()) and ent["name"] not in names:
+            names.append(ent["name"])
+    if corner_unpinned(twins) and "bandwidth" not in names:
+        names.append("bandwidth")
+    hints = shape_hints(names)
+    if not hints:
+        return text
+    return (text + " " if text else "") + "To pin the shapes these data leave open, record " + "; or ".join(hints) + "."

@@ -59,6 +59,9 @@ def run_candidates(D, cands, names, y, pcur, progress):
     for nm in names:
         c = cands[nm].cv(D, y, pcur, S0w, S0u)
         out[nm] = score(D, c, S0w, S0u)
+        if c.shaped is not None:
+            # a shape the data do not pin: the shaped fit is scored beside the nested one (diagnose.shapes)
+            score(D, c.shaped, S0w, S0u)
         if progress is not None:
             progress(nm)
     return out, S0w, S0u

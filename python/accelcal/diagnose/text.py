@@ -55,6 +55,8 @@ def entry(D: FitData, c: Cand, *, step: int | None, selected: bool, baseline: st
     }
     if c.notes:
         e["notes"] = list(c.notes)
+    if c.shape is not None:
+        e["shape"] = to_json(c.shape)
     a = alone if alone is not None else c
     e["alone"] = {"shrink": a.shrink, "heldout_rms_before": a.before, "heldout_rms_after": a.after}
     return e

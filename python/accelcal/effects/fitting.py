@@ -36,6 +36,13 @@ class Cand:
     after: float = 0.0
     shrink: float = 0.0
     significant: bool = False
+    #: shape parameters (a thermal lag) and whether the data pin them: {param: {"value", "interval",
+    #: "determined", ...}}; None for an effect without one
+    shape: dict | None = None
+    #: where a shape parameter is not pinned, this candidate is fitted in the nested form (no lag) and
+    #: ``shaped`` holds the fit with the shape the data preferred (scored beside it, reported only as
+    #: an alternative the data cannot tell from the nested one)
+    shaped: "Cand | None" = None
 
 
 def block_ss(D: FitData, Rr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

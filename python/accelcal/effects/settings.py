@@ -10,6 +10,12 @@ TEMP_TIME_BINS = 20        # temp_c follows time when the medians of this many s
 TEMP_MONOTONE = 0.9        # ... go one way: their net change at least this share of their total variation
 T_LAG_GRID_S = (0.0, 10.0, 30.0, 60.0, 120.0, 300.0)   # thermal lags (s) the temperature fits try
 T_LAG_MAX_SPANS = 2.0   # ... up to this many times the span of the samples the diagnosis uses
+#: the thermal lag is a finding only where the data pin it: the lags whose profile objective lies within
+#: T_LAG_CRIT_CHI2 (the 95 % point of chi2 with one degree of freedom, 3.84; times the residual's excess
+#: over the floor and the poses' design effect) of the best form an interval that excludes 0 and ends
+#: within T_LAG_INSIDE x the longest recording; else the nested form (no lag) is fitted and reported
+T_LAG_CRIT_CHI2 = 3.84
+T_LAG_INSIDE = 1.0
 T_REF_SPANS = 2.0          # a fitted reference temperature stays within this many spans of temp_c
 MISALIGN_MAX_RAD = 0.35     # relinearised misalignment fits stay below ~20 deg
 POSITION_TOL_M = 1e-3      # position_error reports dr along directions with 1-sigma below this

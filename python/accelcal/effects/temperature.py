@@ -12,7 +12,8 @@ from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_list, channel_mask, per_channel, strongest, temperature_of
 from .fitdata import FitData, t_ref_known, temp_skip
 from .fitting import Cand, Candidate, jig_rows, joint_stats, sep_stats, solve_groups
-from .settings import PENALTY_PER_PARAM, T_LAG_GRID_S, T_LAG_MAX_SPANS, T_REF_SPANS
+from .settings import (PENALTY_PER_PARAM, T_LAG_CRIT_CHI2, T_LAG_GRID_S, T_LAG_INSIDE, T_LAG_MAX_SPANS,
+                       T_REF_SPANS)
 
 
 def lagged(T: np.ndarray, t: np.ndarray, tau_s: float, runs: np.ndarray | None = None) -> np.ndarray:
@@ -122,6 +123,66 @@ class TemperatureFit(Candidate):
                                   method="bounded", options={"xatol": 0.02})
             if res.fun < best[0]:
                 best = lag_fit(math.exp(res.x))
+        shape = None
+        if best[1] > 0:
+            shape = self._lag_interval(D, lag_fit, best, S0w)
+        if shape is not None and not shape["determined"]:
+            shaped = self._finish(D, best, S0w, S0u, z, fixed)
+            out = self._finish(D, lag_fit(0.0), S0w, S0u, z, fixed)
+            shaped.shape = {"tau_s": shape}
+            out.shape = {"tau_s": dict(shape, used=0.0)}
+            out.shaped = shaped
+            out.notes = list(out.notes) + [
+                f"the thermal lag is not determined by these data (best {shape['value']:.3g} s, interval "
+                f"{_interval(shape)} against the longest recording's {shape['span_s']:.3g} s): fitted without a lag "
+                "(the nested form); the lagged form is reported only as an alternative"]
+            return out
+        out = self._finish(D, best, S0w, S0u, z, fixed)
+        if shape is not None:
+            out.shape = {"tau_s": shape}
+        return out
+
+    def _lag_interval(self, D, lag_fit, best, S0w) -> dict:
+        """The lags whose profile objective (penalty left out) lies within T_LAG_CRIT_CHI2 (x the
+        residual's excess over the floor and the poses' design effect) of the best one's: the
+        interval's ends in steps of 2 (0 where no lag fits as well, inf where none up to the first step
+        beyond T_LAG_INSIDE x the recording does worse), and whether that pins the lag: the interval excludes 0 and ends
+        within T_LAG_INSIDE x the longest recording (D.rec's runs)."""
+        tau0 = float(best[1])
+        obj0 = best[0] - PENALTY_PER_PARAM
+        rows = max(D.n * D.R, 1)
+        s2 = max(1.0, float(S0w.sum() + obj0) / rows)
+        crit = T_LAG_CRIT_CHI2 * s2 * float(getattr(D, "deff", 1.0) or 1.0)
+        span = max((float(np.ptp(D.tg[D.rec == r])) for r in np.unique(D.rec)), default=0.0)
+
+        def worse(tau):
+            return (lag_fit(tau)[0] - (PENALTY_PER_PARAM if tau else 0.0)) - obj0 > crit
+
+        # upwards in steps of 2 up to the first lag beyond T_LAG_INSIDE x the recording (no crossing
+        # there: the interval runs beyond what the recording can pin, reported as inf)
+        hi = math.inf
+        tau = tau0
+        while tau <= T_LAG_INSIDE * span:
+            tau *= 2.0
+            if worse(tau):
+                hi = tau
+                break
+        lo = 0.0
+        if worse(0.0):
+            tau = tau0
+            while tau > 0.05 * tau0:
+                tau /= 2.0
+                lo = tau
+                if worse(tau):
+                    break
+        determined = bool(lo > 0.0 and hi <= T_LAG_INSIDE * span)
+        return {"value": tau0, "interval_s": [lo, hi], "determined": determined, "span_s": span,
+                "crit_chi2": crit}
+
+    def _finish(self, D, best, S0w, S0u, z, fixed):
+        """The candidate at the lag of ``best`` (lag_fit's tuple): the reference temperature per
+        fold, the held-out scores, the all-data fit."""
+        N = D.N
         _, tau, T, (Gw2, hw2, Gu2, hu2) = best
         Tlo, Thi = float(T.min()), float(T.max())
         span = max(Thi - Tlo, 1e-9)
@@ -191,6 +252,14 @@ class TemperatureFit(Candidate):
             curv = (op + om - 2 * o0) / hstep ** 2
             sigma["t_ref"] = float(math.sqrt(2.0 * scale / curv)) if curv > 0 else math.inf
         return Cand(self.name, npar, Sw, Su, delta, params, sigma, notes)
+
+
+def _interval(shape: dict) -> str:
+    """A lag interval as prose: "12-48 s", "0-30 s", "of at least 200 s"."""
+    lo, hi = shape["interval_s"]
+    if not math.isfinite(hi):
+        return f"of at least {lo:.3g} s"
+    return f"{lo:.3g}-{hi:.3g} s"
 
 
 class TemperatureOffset(TemperatureFit, Effect):
