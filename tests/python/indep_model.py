@@ -1103,6 +1103,9 @@ SESSION_KINDS = ("session_offset", "session_gain", "session_gain+bias_drift", "t
 SESSION_TEMPS = ("varying", "constant")
 #: the independent model's effect that makes each session kind's change in the diagnosed session
 SESSION_AS = {"session_offset": "offset", "session_gain": "gain"}
+#: the control: a true temperature effect (an offset through a 30-120 s lag, zero at the calibration's
+#: temperature), which must still be named where the temperature varies within the diagnosed session
+SESSION_CONTROLS = ("temperature_offset",)
 
 
 def _shift_params(sc: Scene, name: str, target: float, rng) -> dict:
@@ -1127,12 +1130,14 @@ def make_sessions(kind: str, seed=0, *, temperature: str = "varying", device=Non
     18-42 degC ("constant").  The session kind's change (``SESSION_KINDS``: a shift of every
     channel's offset, or of every channel's gain, constant in time; with a drift path or a
     per-channel time skew and jitter of session 2) acts in session 2 only; no effect follows
-    the temperature.
+    the temperature, except in the control kind ``temperature_offset`` (``SESSION_CONTROLS``: an
+    offset through the sensor's 30-120 s thermal lag, zero at ``cal_temp_c``).
 
     Returns make_jig's dict with ``recordings`` [session 1, session 2] and ``cal`` the true
     calibration with ``temp_ref_c`` = ``cal_temp_c`` (what a calibration of session 1 states)."""
     names = kind.split("+")
-    if temperature not in SESSION_TEMPS or not set(names) <= set(SESSION_AS) | {"bias_drift", "time_skew"}:
+    if temperature not in SESSION_TEMPS or not set(names) <= set(SESSION_AS) | {"bias_drift", "time_skew",
+                                                                                 *SESSION_CONTROLS}:
         raise ValueError(f"unknown session kind {kind!r} / temperature {temperature!r}")
     rng = np.random.default_rng([int(seed), 0x5E55])
     name = device or str(rng.choice(list(DEVICES)))
@@ -1171,6 +1176,11 @@ def make_sessions(kind: str, seed=0, *, temperature: str = "varying", device=Non
         target = ratio.get(nm) or math.exp(rng.uniform(math.log(RATIO_LO), math.log(RATIO_HI)))
         eff[key] = _shift_params(sc2, key, target * sc2.floor, rng) if nm in SESSION_AS else \
             draw_effect(sc2, key, target * sc2.floor, rng)
+        if key == "temperature_offset":
+            # zero at the calibration's temperature (session 1 reads none of it), resized to the target
+            eff[key]["t_ref_c"] = float(cal_temp_c)
+            c = contribution(sc2, key, eff[key])
+            eff[key]["beta"] = eff[key]["beta"] * (target * sc2.floor / c if c > 0 else 1.0)
         measured[nm] = contribution(sc2, key, eff[key]) / sc2.floor
     sc2.eff = eff
     raw2 = adc(sc2, analog(sc2, eff), eff)
@@ -1188,7 +1198,7 @@ def make_sessions(kind: str, seed=0, *, temperature: str = "varying", device=Non
 __all__ = ["IN_TABLE", "OUT_OF_TABLE", "PAIRS", "MOVING_ONLY", "DEVICES", "triad16", "adxl12", "seed6",
            "true_parameters", "as_calibration", "make_jig", "make_handheld", "make_six_pose", "load_real",
            "load_imucal", "load_mpu6050", "inject", "real_model", "as_posed", "static_mask", "real_noise", "Trajectory",
-           "contribution", "SESSION_KINDS", "SESSION_TEMPS", "make_sessions"]
+           "contribution", "SESSION_KINDS", "SESSION_TEMPS", "SESSION_CONTROLS", "make_sessions"]
 
 
 # =============================================================================== arrays that turn fast
