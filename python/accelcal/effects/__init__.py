@@ -104,12 +104,12 @@ ALL_EFFECTS: tuple[Effect, ...] = (
     Nonlinearity(),
     TemperatureOffset(),
     TemperatureGain(),
-    SessionOffset(),
-    SessionGain(),
     BiasDrift(),
     Saturation(),
     Quantization(),
     PoseError(),
+    SessionOffset(),   # project extensions beyond the contract's table (docs/data-contract.md)
+    SessionGain(),
 )
 
 
