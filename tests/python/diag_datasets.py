@@ -260,6 +260,11 @@ def _quantization_step(clean, sigma, target):
     return hi
 
 
+def _split_at(rec) -> int:
+    """The first sample of the split layout's second recording (after the last gap)."""
+    return int(np.flatnonzero(np.diff(rec.t) > 0.5 * GAP_S)[-1]) + 1
+
+
 def make_dataset(effect: str, seed: int, rho: float | None = None, walk: bool | None = None) -> dict:
     """One benchmark dataset: device, truth calibration, recording, effect truth and figures.
     bias_drift is a random walk for odd seeds and a ramp for even ones (``walk`` overrides)."""
@@ -296,7 +301,10 @@ def make_dataset(effect: str, seed: int, rho: float | None = None, walk: bool | 
         if effect == "pose_error":
             c_ref = np.sqrt(np.mean((sim1.clean_counts - _pred_base(dev, cal, sim1.recording)) ** 2))
         else:
-            c_ref = np.sqrt(np.mean((sim1.clean_counts - sim0.clean_counts) ** 2))
+            dc = sim1.clean_counts - sim0.clean_counts
+            if effect in SESSION_EFFECTS:      # the change is in the second recording only
+                dc[:_split_at(sim0.recording)] = 0.0
+            c_ref = np.sqrt(np.mean(dc ** 2))
         if c_ref <= 0:
             m = m_ref
         else:
@@ -314,14 +322,15 @@ def make_dataset(effect: str, seed: int, rho: float | None = None, walk: bool | 
     raw = rec.raw.astype(float)
     recs = [rec]
     if layout == "split":
-        cut = int(np.flatnonzero(np.diff(rec.t) > 0.5 * GAP_S)[-1]) + 1
+        cut = _split_at(rec)
         recs = [rec.select(np.arange(cut)), rec.select(np.arange(cut, rec.n_samples))]
         if effect in SESSION_EFFECTS:
             # the jig is the calibration's session, without the change: the same simulation (same
             # noise) without the effect
             recs[0] = sim0.recording.select(np.arange(cut))
-            pt = pt.copy()
+            pt, raw = pt.copy(), raw.copy()
             pt[:cut] = pb[:cut]
+            raw[:cut] = sim0.recording.raw[:cut]
         for k, r in enumerate(recs):
             r.source = f"bench-{effect}-{seed}-{'jig' if k == 0 else 'motion'}"
     contrib = float(np.sqrt(np.mean((pt - pb) ** 2)))
