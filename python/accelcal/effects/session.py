@@ -42,7 +42,12 @@ def per_recording_columns(D: FitData, z: np.ndarray) -> np.ndarray:
 
 
 def source_names(D: FitData) -> list[str]:
-    return [str(ri.get("source", f"recording {k}")) for k, ri in enumerate(D.rec_info)]
+    """"recording k" for each recording given, with its file where it has one."""
+    out = []
+    for k, ri in enumerate(D.rec_info):
+        src = str(ri.get("source") or "")
+        out.append(f"recording {k}" + (f" ({src})" if src and not src.startswith("<") else ""))
+    return out
 
 
 class SessionFit(LinearCandidate):
@@ -104,8 +109,8 @@ class SessionFit(LinearCandidate):
                     f"{unit} on channel {i}")
         d = np.ptp(v, axis=0)
         i = int(np.argmax(d))
-        names = source_names(D) if D is not None else [f"recording {k}" for k in range(v.shape[0])]
-        per = "; ".join(f"{names[k] if k < len(names) else k}: {v[k, i]:{fmt}} +- {sd[k, i]:.2g}"
+        names = source_names(D) if D is not None else []
+        per = "; ".join(f"{names[k] if k < len(names) else f'recording {k}'}: {v[k, i]:{fmt}} +- {sd[k, i]:.2g}"
                         for k in range(v.shape[0]))
         return (f"{self.what} changed between recordings by up to {d[i]:.4g} {unit} on channel {i} "
                 f"(against the calibration, {unit}: {per})")
