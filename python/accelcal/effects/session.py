@@ -76,10 +76,9 @@ class SessionFit(LinearCandidate):
         return {self.pname: theta.T.copy()}, {self.pname: sd.T.copy()}
 
     def param_columns(self, D, params):
-        X = self.columns(D)
-        R = X.shape[2]
-        A = np.broadcast_to(np.eye(R)[None, :, :], (D.N, R, R)).copy()   # value (i, r) = theta_i[r]
-        return X, {self.pname: A}
+        """None: the values are (recording, channel), not the (channel, component) the diagnosis's
+        not-determined marking indexes (:mod:`accelcal.diagnose.determined`); they are not judged there."""
+        return None
 
     def modify_state(self, state, p, ctx):
         v = np.asarray(p[self.pname], float)
