@@ -44,15 +44,20 @@ def shift_contest(D, cands, best: Cand, first: dict[str, Cand], y, pcur) -> Cont
     if not shifts or not temps or not (between_recordings(eb) or follows_covariate(eb)):
         return contest(D, cands, best, first, y, pcur)
     shift = best if between_recordings(eb) else shifts[0]
-    if follows_covariate(eb) and not as_far(shift, best):
-        # the shift alone explains clearly less than the temperature effect: the general rules decide
+    if follows_covariate(eb) and not any(as_far(c, best) for c in shifts):
+        # every shift alone explains clearly less than the temperature effect: the general rules decide
         return contest(D, cands, best, first, y, pcur)
     tests, held, within = {}, [], []
     for tc in temps:
-        after = conditional(D, cands, tc.name, shift, y, pcur)
-        tests[tc.name] = {"after_shift": {"shift": shift.name, "significant": after.significant,
+        # after each significant shift (an offset shift may take a drift's level, not a gain's change):
+        # the temperature explains change within the recordings only where significant after all of them
+        afters = [(sh, conditional(D, cands, tc.name, sh, y, pcur)) for sh in shifts]
+        sh, after = min(afters, key=lambda a: (a[1].significant, a[1].gain))
+        tests[tc.name] = {"after_shift": {"shift": sh.name, "significant": after.significant,
                                           "shrink": after.shrink, "gain_chi2": after.gain}}
         (within if after.significant else held).append(tc)
+        if tc is best:
+            shift = sh      # the shift that holds the temperature verdict's change
     if within:
         # a temperature effect explains change within the recordings beyond the shift: it is preferred
         # (the verdict if it ranked first, else the strongest such), the shifts are tested after it
