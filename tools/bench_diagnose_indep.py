@@ -9,6 +9,11 @@ a real recording with an effect injected into its raw counts.  Sources:
   reference); the model is the true calibration.
 * ``indep-handheld``: a hand-held jig-free session (random orientations held 2-4 s); the
   model is the true calibration.
+* ``indep-sessions``: two sessions of one sensor (indep_model.make_sessions, issue 33): the
+  calibration's (a jig at a constant 25 degC, nothing but noise) and a diagnosed one with motion
+  whose offset or gain moved, alone or with a drift or a time skew, its temperature rising 18-42
+  degC or constant; cells "KIND / varying T" and "KIND / constant T"; the truth of a shift is
+  ``session_offset`` / ``session_gain``; control cell: a true temperature offset through a lag.
 * ``xsens-semi``, ``imucal-semi``, ``mpu6050-semi``: the real recordings of ../shared/data;
   the model is the recording's own calibration (jig-free; imucal: the known-pose fit of
   its six labelled poses, the jig-free fit does not converge on six orientations, with
@@ -69,7 +74,12 @@ from accelcal.diagnose import diagnose  # noqa: E402
 import indep_model as im  # noqa: E402
 from shared_data import SHARED_DATA, shared_file  # noqa: E402
 
-SOURCES = ("indep-jig", "indep-handheld", "xsens-semi", "imucal-semi", "mpu6050-semi", "indep-shapes")
+SOURCES = ("indep-jig", "indep-handheld", "xsens-semi", "imucal-semi", "mpu6050-semi", "indep-shapes", "indep-sessions")
+#: indep-sessions (issue 33): a calibration session at constant 25 degC and a diagnosed session with motion
+#: whose offset or gain moved (im.make_sessions), the temperature varying 18-42 degC or constant there;
+#: each kind at each temperature is a cell "KIND / TEMP T"; the control: a true temperature offset
+SESSION_CELLS = tuple(f"{k} / {t} T" for k in im.SESSION_KINDS for t in im.SESSION_TEMPS) + \
+    tuple(f"{k} / varying T" for k in im.SESSION_CONTROLS)
 SIX = ("six-pose tilt", "six-pose drift")
 REAL_TILT = "real tilt"
 """imucal only: the clean recording with the nominal stated f (+-g along an axis): the hand-placed
@@ -82,6 +92,8 @@ def cells(source: str) -> list[str]:
     """The effects run on a source (the ones it cannot show are left out, see na())."""
     if source == SHAPES:
         return list(SHAPE_KINDS)
+    if source == "indep-sessions":
+        return list(SESSION_CELLS)
     out = [e for e in im.IN_TABLE if na(source, e) is None]
     out += ["none"] + list(im.OUT_OF_TABLE) + list(PAIR_NAMES)
     if source == "indep-jig":
@@ -93,7 +105,7 @@ def cells(source: str) -> list[str]:
 
 def na(source: str, effect: str) -> str | None:
     """Why an effect is not run on a source (None: it is run)."""
-    if source == "indep-jig":
+    if source in ("indep-jig", "indep-sessions"):
         return None
     if effect in im.MOVING_ONLY:
         return "no reference motion (jig-free static poses only)"
@@ -113,6 +125,7 @@ def real(name: str):
 
 
 def truth_of(effect: str) -> tuple[str, ...]:
+    effect = effect.split(" / ")[0]
     if effect in ("six-pose tilt", REAL_TILT):
         return ("pose_error",)
     if effect == "six-pose drift":
@@ -125,6 +138,12 @@ def truth_of(effect: str) -> tuple[str, ...]:
 def build(source: str, effect: str, seed: int):
     """(device, calibration, recordings, ratio dict, description)."""
     names = list(truth_of(effect))
+    if source == "indep-sessions":
+        kind, temp = effect.split(" / ")
+        ds = im.make_sessions(kind, seed, temperature=temp.split()[0])
+        return ds["device"], ds["cal"], ds["recordings"], ds["ratio"], \
+            f"{ds['device'].name} {ds['rate_hz']:.0f} Hz noise {ds['noise_mps2']:.3f} m/s^2, {ds['layout']}; " \
+            + brief(ds["effects"])
     if source == "indep-jig":
         if effect == "six-pose tilt":
             ds = im.make_six_pose("pose_error", seed)

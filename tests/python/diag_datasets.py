@@ -22,7 +22,10 @@ from accelcal.sensor import evaluate, rotation_matrix, true_state
 from accelcal.simulate import run_simulation, seed_prototype_truth
 from accelcal.spec import format_spec
 
-LABELS = tuple(EFFECT_NAMES) + ("none",)
+#: the effects and none; the changes between recordings (issue 33) last, so that every other label keeps
+#: its index (each dataset's random stream is keyed by it)
+LABELS = tuple(n for n in EFFECT_NAMES if not n.startswith("session_")) + ("none",) + \
+    tuple(n for n in EFFECT_NAMES if n.startswith("session_"))
 RHO_LO, RHO_HI = 0.05, 30.0
 GAP_S = 1.0
 
@@ -135,6 +138,7 @@ def concat(trajs: list[Trajectory], gap_s: float, g: float) -> Trajectory:
 
 MOTION_EFFECTS = ("position_error", "centripetal", "time_skew", "bandwidth")   # show only while moving
 ROTATION_EFFECTS = ("position_error", "centripetal")                             # need rotation
+SESSION_EFFECTS = ("session_offset", "session_gain")     # act in the second recording only (issue 33)
 
 
 def random_motion(dev: Device, rng: np.random.Generator, effect: str) -> tuple[Trajectory, str]:
@@ -146,6 +150,8 @@ def random_motion(dev: Device, rng: np.random.Generator, effect: str) -> tuple[T
     layout = "jig+motion" if u < 0.5 else "split" if u < 0.7 else "motion" if u < 0.85 else "jig"
     if layout == "jig" and effect in MOTION_EFFECTS:
         layout = "jig+motion"
+    if effect in SESSION_EFFECTS:
+        layout = "split"        # a change between recordings needs two: the jig (the calibration's) and the motion
     kinds = ["rate_table", "pendulum", "random_6dof", "handheld", "lane_change", "linear_actuator"]
     if effect in ROTATION_EFFECTS:
         kinds = ["rate_table", "pendulum", "random_6dof", "handheld"]
@@ -254,6 +260,11 @@ def _quantization_step(clean, sigma, target):
     return hi
 
 
+def _split_at(rec) -> int:
+    """The first sample of the split layout's second recording (after the last gap)."""
+    return int(np.flatnonzero(np.diff(rec.t) > 0.5 * GAP_S)[-1]) + 1
+
+
 def make_dataset(effect: str, seed: int, rho: float | None = None, walk: bool | None = None) -> dict:
     """One benchmark dataset: device, truth calibration, recording, effect truth and figures.
     bias_drift is a random walk for odd seeds and a ramp for even ones (``walk`` overrides)."""
@@ -290,7 +301,10 @@ def make_dataset(effect: str, seed: int, rho: float | None = None, walk: bool | 
         if effect == "pose_error":
             c_ref = np.sqrt(np.mean((sim1.clean_counts - _pred_base(dev, cal, sim1.recording)) ** 2))
         else:
-            c_ref = np.sqrt(np.mean((sim1.clean_counts - sim0.clean_counts) ** 2))
+            dc = sim1.clean_counts - sim0.clean_counts
+            if effect in SESSION_EFFECTS:      # the change is in the second recording only
+                dc[:_split_at(sim0.recording)] = 0.0
+            c_ref = np.sqrt(np.mean(dc ** 2))
         if c_ref <= 0:
             m = m_ref
         else:
@@ -308,8 +322,15 @@ def make_dataset(effect: str, seed: int, rho: float | None = None, walk: bool | 
     raw = rec.raw.astype(float)
     recs = [rec]
     if layout == "split":
-        cut = int(np.flatnonzero(np.diff(rec.t) > 0.5 * GAP_S)[-1]) + 1
+        cut = _split_at(rec)
         recs = [rec.select(np.arange(cut)), rec.select(np.arange(cut, rec.n_samples))]
+        if effect in SESSION_EFFECTS:
+            # the jig is the calibration's session, without the change: the same simulation (same
+            # noise) without the effect
+            recs[0] = sim0.recording.select(np.arange(cut))
+            pt, raw = pt.copy(), raw.copy()
+            pt[:cut] = pb[:cut]
+            raw[:cut] = sim0.recording.raw[:cut]
         for k, r in enumerate(recs):
             r.source = f"bench-{effect}-{seed}-{'jig' if k == 0 else 'motion'}"
     contrib = float(np.sqrt(np.mean((pt - pb) ** 2)))

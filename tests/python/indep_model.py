@@ -1269,12 +1269,111 @@ def make_six_pose_twin(kind: str, seed=0, *, tilt_deg=0.3, noise=0.006, device="
             "effects": eff, "ratio": ratio, "noise_mps2": noise, "rate_hz": rate, "floor_counts": sc.floor,
             "layout": f"six-pose twin ({kind})", "scene": sc, "t_mid": t_mid,
             "twin": "bias_drift" if kind == "pose_error" else "pose_error"}
+# =============================================================================== shifts between sessions
+#: kinds of make_sessions (issue 33): an offset or a gain of the diagnosed session that differs from the
+#: calibration session's, constant in time, alone and beside a drift or a time skew of that session;
+#: with the temperature column varying in the diagnosed session ("varying") or constant there ("constant")
+SESSION_KINDS = ("session_offset", "session_gain", "session_gain+bias_drift", "time_skew+session_offset")
+SESSION_TEMPS = ("varying", "constant")
+#: the independent model's effect that makes each session kind's change in the diagnosed session
+SESSION_AS = {"session_offset": "offset", "session_gain": "gain"}
+#: the control: a true temperature effect (an offset through a 30-120 s lag, zero at the calibration's
+#: temperature), which must still be named where the temperature varies within the diagnosed session
+SESSION_CONTROLS = ("temperature_offset",)
+
+
+def _shift_params(sc: Scene, name: str, target: float, rng) -> dict:
+    """An offset shift on every channel, all one sign (9-17 counts in the proportions of a
+    turn-on repeatability), or a gain shift of random signs on every channel, sized to
+    ``target`` counts RMS in the session ``sc``."""
+    N = sc.dev.n_channels
+    if name == "offset":
+        return _scaled(sc, name, {"delta": rng.choice([-1.0, 1.0]) * rng.uniform(9.0, 17.0, N)}, ["delta"], target)
+    return draw_effect(sc, name, target, rng)
+
+
+def make_sessions(kind: str, seed=0, *, temperature: str = "varying", device=None, rate=None, noise=None,
+                  ratio=None, cal_temp_c: float = 25.0):
+    """Two sessions of one sensor: the calibration's and the diagnosed one (issue 33).
+
+    Session 1: a jig of 12-20 stated poses (faces, edges, corners) held 2-4 s, at a constant
+    ``cal_temp_c`` degC, nothing but noise: the true calibration fits it.  Session 2:
+    ordinary motion with its reference, 8-14 stated poses held 2-4 s and 15-25 s of turns and
+    shaking between them and at the end; its temperature column rises from 18 to 42 degC
+    through the recording (``temperature`` "varying") or stays at one value drawn from
+    18-42 degC ("constant").  The session kind's change (``SESSION_KINDS``: a shift of every
+    channel's offset, or of every channel's gain, constant in time; with a drift path or a
+    per-channel time skew and jitter of session 2) acts in session 2 only; no effect follows
+    the temperature, except in the control kind ``temperature_offset`` (``SESSION_CONTROLS``: an
+    offset through the sensor's 30-120 s thermal lag, zero at ``cal_temp_c``).
+
+    Returns make_jig's dict with ``recordings`` [session 1, session 2] and ``cal`` the true
+    calibration with ``temp_ref_c`` = ``cal_temp_c`` (what a calibration of session 1 states)."""
+    names = kind.split("+")
+    if temperature not in SESSION_TEMPS or not set(names) <= set(SESSION_AS) | {"bias_drift", "time_skew",
+                                                                                 *SESSION_CONTROLS}:
+        raise ValueError(f"unknown session kind {kind!r} / temperature {temperature!r}")
+    rng = np.random.default_rng([int(seed), 0x5E55])
+    name = device or str(rng.choice(list(DEVICES)))
+    rate = float(rate or rng.choice([50.0, 100.0, 200.0]))
+    noise = noise or math.exp(rng.uniform(math.log(0.002), math.log(0.05)))
+    dev = DEVICES[name](rate)
+    p = true_parameters(dev, rng)
+    g = dev.gravity_mps2
+    allp = FACES + EDGES + CORNERS
+    # session 1: the calibration's jig, constant temperature, no effect
+    dirs = [allp[k] for k in rng.permutation(len(allp))[:int(rng.integers(12, 21))]]
+    tr1 = jig_trajectory(g, FACES + [d for d in dirs if not any(np.allclose(d, f) for f in FACES)], rng)
+    t1 = _sample_times(tr1, rate)
+    sc1 = Scene(dev=dev, p=p, traj=tr1, t=t1, noise_mps2=noise, noise=rng.normal(size=(t1.size, dev.n_channels)),
+                temp_amb=np.full(t1.size, float(cal_temp_c)))
+    lab1, st1 = tr1.labels_and_stated(t1)
+    raw1 = adc(sc1, analog(sc1, {}), {})
+    rec1 = _recording(sc1, raw1, True, st1, lab1, None)
+    # session 2: poses with motion between and after them, the reference throughout
+    tr2 = jig_trajectory(g, [allp[k] for k in rng.permutation(len(allp))[:int(rng.integers(8, 15))]], rng)
+    t_motion = tr2.end
+    tr2.move_to(tr2.R_end, 1.0)
+    append_motion(tr2, rng.uniform(15.0, 25.0), rng)
+    t2 = _sample_times(tr2, rate)
+    if temperature == "varying":
+        s = (t2 - t2[0]) / max(t2[-1] - t2[0], 1e-9)
+        T2 = 18.0 + 24.0 * (0.5 - 0.5 * np.cos(math.pi * s))
+    else:
+        T2 = np.full(t2.size, float(rng.uniform(18.0, 42.0)))
+    sc2 = Scene(dev=dev, p=p, traj=tr2, t=t2, noise_mps2=noise, noise=rng.normal(size=(t2.size, dev.n_channels)),
+                temp_amb=T2)
+    ratio = dict(ratio or {})
+    eff, measured = {}, {}
+    for nm in names:
+        key = SESSION_AS.get(nm, nm)
+        target = ratio.get(nm) or math.exp(rng.uniform(math.log(RATIO_LO), math.log(RATIO_HI)))
+        eff[key] = _shift_params(sc2, key, target * sc2.floor, rng) if nm in SESSION_AS else \
+            draw_effect(sc2, key, target * sc2.floor, rng)
+        if key == "temperature_offset":
+            # zero at the calibration's temperature (session 1 reads none of it), resized to the target
+            eff[key]["t_ref_c"] = float(cal_temp_c)
+            c = contribution(sc2, key, eff[key])
+            eff[key]["beta"] = eff[key]["beta"] * (target * sc2.floor / c if c > 0 else 1.0)
+        measured[nm] = contribution(sc2, key, eff[key]) / sc2.floor
+    sc2.eff = eff
+    raw2 = adc(sc2, analog(sc2, eff), eff)
+    lab2, st2 = tr2.labels_and_stated(t2)
+    rec2 = _recording(sc2, raw2, True, st2, lab2, t2 >= t_motion)
+    cal = as_calibration(dev, p)
+    cal.temp_ref_c = float(cal_temp_c)
+    return {"device": dev, "cal": cal, "params": p, "recordings": [rec1, rec2], "recording": rec2,
+            "effects": eff, "ratio": measured, "noise_mps2": noise, "rate_hz": rate, "floor_counts": sc2.floor,
+            "layout": f"calibration jig {len(tr1.t0)} segments at {cal_temp_c:g} degC + session of "
+                      f"{t2[-1]:.0f} s with motion, temperature {temperature} "
+                      f"{float(T2.min()):.1f}-{float(T2.max()):.1f} degC", "scenes": (sc1, sc2)}
 
 
 __all__ = ["IN_TABLE", "OUT_OF_TABLE", "PAIRS", "MOVING_ONLY", "DEVICES", "triad16", "adxl12", "seed6",
            "true_parameters", "as_calibration", "make_jig", "make_handheld", "make_six_pose", "load_real",
            "load_imucal", "load_mpu6050", "inject", "real_model", "as_posed", "static_mask", "real_noise", "Trajectory",
-           "contribution", "make_temperature_lag", "make_lowpass", "make_six_pose_twin"]
+           "contribution", "make_temperature_lag", "make_lowpass", "make_six_pose_twin",
+           "SESSION_KINDS", "SESSION_TEMPS", "SESSION_CONTROLS", "make_sessions"]
 
 
 # =============================================================================== arrays that turn fast

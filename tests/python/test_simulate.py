@@ -653,7 +653,8 @@ def test_parse_effect_spec_values():
     assert parse_effect_spec(("gain", {"scale": 0.02})).params == {"scale": 0.02}
     assert str(parse_effect_spec("bias_drift:rw=2,random=1")) == "bias_drift:rw=2,random=1"
     assert set(EFFECTS) == {"offset", "gain", "misalignment", "position_error", "centripetal", "time_skew",
-                            "bandwidth", "nonlinearity", "temperature_offset", "temperature_gain", "bias_drift",
+                            "bandwidth", "nonlinearity", "temperature_offset", "temperature_gain", "session_offset",
+                            "session_gain", "bias_drift",
                             "saturation", "quantization", "pose_error"}
 
 

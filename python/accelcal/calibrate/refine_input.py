@@ -27,6 +27,8 @@ NOT_CORRECTABLE = {
     "saturation": "in the converter (clipped readings carry no value to correct)",
     "quantization": "in the converter (the code step is lost before the firmware)",
     "pose_error": "the jig's poses, not the sensor: no calibration term",
+    "session_offset": "a change of the offset between recordings: re-zero at rest, or recalibrate, in each session",
+    "session_gain": "a change of the gain between recordings: recalibrate in the new session",
 }
 
 

@@ -19,7 +19,7 @@ from ..readings.noise import code_lattice, fractional_grid, uneven_low_bits
 from .floor import setup_rows
 from .inputs import as_calibration, as_device, as_recordings, with_terms_applied
 from .prepare import prepare
-from .compare import Contest, contest, model_ambiguity, time_beside_pose, time_unmodelled
+from .compare import Contest, model_ambiguity, time_beside_pose, time_unmodelled
 from .determined import mark_not_determined
 from .outliers import OUTLIER_MODES, find_outliers, outlier_entry, outlier_note, without_poses
 from .parsimony import simpler_model
@@ -28,6 +28,7 @@ from .leftover import leftover, with_settling
 from .scoring import rank_key, run_candidates
 from .settling import settling_ringing
 from .shapes import corner_unpinned, prediction_twins, shape_hints, twin_notes, unpinned
+from .shifts import shift_contest
 from .stepping import next_point, same_change, terms_cover
 from .settings import FORMAT, MAX_STEPS, MIN_SHRINK, PENALTY_PER_PARAM, POSE_MEAN_NOTE_RATIO, T_MIN, Z_MIN
 from .text import as_alone, as_model, describe, entry, separate_by, to_json
@@ -125,7 +126,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         # order (the simplest) is the verdict, the others are listed with it
         alike = [best] + same_change(Dk, best, sig)
         best = min(alike, key=lambda c: EFFECT_NAMES.index(c.name))
-        step_duel = contest(Dk, cands, best, first if not chosen else results, y, pcur)
+        step_duel = shift_contest(Dk, cands, best, first if not chosen else results, y, pcur)
         best = step_duel.best
         if best.name in {c.name for c in alike}:
             step_duel.ambiguous += [c.name for c in alike if c.name != best.name and c.name not in step_duel.ambiguous]

@@ -8,7 +8,7 @@ is fitted to a residual (the diagnosis: ``skip``, ``cv``, with the fitting toolk
 report (``describe``) and how the benchmark sizes it and scores its estimate
 (``bench_spec``, ``param_error``).  Adding an effect is adding one class (in a module
 of its family: ``channel``, ``geometry``, ``timing``, ``nonlinearity``, ``temperature``,
-``drift``, ``adc``, ``pose``) to ``ALL_EFFECTS`` below, and its tests.
+``session``, ``drift``, ``adc``, ``pose``) to ``ALL_EFFECTS`` below, and its tests.
 
 Two levels of parameters
 ------------------------
@@ -42,7 +42,7 @@ per-channel time skews (s), ``bias`` a time-varying extra offset (counts) and
 Stages (the simulator's pipeline, in this order)
 ------------------------------------------------
 1. ``state``  -- offset, gain, misalignment, position_error, centripetal,
-   time_skew, temperature_offset, temperature_gain, bias_drift: they change the
+   time_skew, temperature_offset, temperature_gain, session_offset, session_gain, bias_drift: they change the
    channel state; the readings are then evaluated exactly from the truth.
 2. ``signal`` -- nonlinearity, then bandwidth: they act on the noise-free
    readings (n, N).
@@ -88,6 +88,7 @@ from .drift import BiasDrift, random_walk
 from .geometry import Centripetal, PositionError
 from .nonlinearity import Nonlinearity
 from .pose import PoseError
+from .session import SessionGain, SessionOffset
 from .temperature import TemperatureGain, TemperatureOffset
 from .timing import Bandwidth, TimeSkew
 
@@ -107,6 +108,8 @@ ALL_EFFECTS: tuple[Effect, ...] = (
     Saturation(),
     Quantization(),
     PoseError(),
+    SessionOffset(),   # project extensions beyond the contract's table (docs/data-contract.md)
+    SessionGain(),
 )
 
 
@@ -121,7 +124,7 @@ EFFECT_NAMES: tuple[str, ...] = tuple(EFFECTS)
 #: Order in which the simulator applies effects within and across stages.
 PIPELINE_ORDER: tuple[str, ...] = (
     "offset", "gain", "misalignment", "position_error", "centripetal", "time_skew",
-    "temperature_offset", "temperature_gain", "bias_drift",  # state
+    "temperature_offset", "temperature_gain", "session_offset", "session_gain", "bias_drift",  # state
     "nonlinearity", "bandwidth",  # signal
     "quantization", "saturation",  # adc (after noise)
     "pose_error",  # reference

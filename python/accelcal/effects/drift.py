@@ -45,7 +45,7 @@ class BiasDrift(LinearCandidate, Effect):
     time_dependent = True
     tell_apart = "a pose repeated at the end of the recording (a drift changes its reading, a fixed error does not)"
     tells_from = ("offset", "pose_error", "gain", "misalignment", "nonlinearity")
-    reaches_level_of = ("offset",)
+    reaches_level_of = ("offset", "session_offset")   # a drift since the calibration reads as a shift
     summary = "b_i changes with time (ramp or random walk)"
     doc = ("bias_i(t) += rate_i (t - t0) + rw_i W(t) + path_i(t): a ramp (counts/s) plus a random walk of "
            "rw_i counts per sqrt(s) (W standard Brownian, from a fixed seed; W(t0) = 0); t0 is the first "
