@@ -35,9 +35,8 @@ from ..io.recording import read_recording, write_columns_csv, write_recording
 from ..io.recording_checks import seconds
 from ..report import REPORT_FILES, write_report
 from ..resolve import clipped_samples, resolve_recording
-from ..firmware.terms import has_terms
-from ..estimators.omega import omega_observability
-from ..resolve_stream import progress_factory, resolve_stream, resolve_warnings, result_names
+from ..resolve_stream import resolve_warnings, result_names
+from .resolve_command import stream_resolve
 from ..simulate import run_simulation
 from ..readings.static import MIN_POSE_S
 from ..io.units_cli import add_units_options, scale_from_args
@@ -104,16 +103,8 @@ def cmd_resolve(a):
     check_output(a.output)
     dev = _load_device(a.device)
     cal = load_calibration(a.calibration, dev)
-    if not a.whole_file and not any(has_terms(cal).values()) and (a.omega in ("none", "reference") or (
-            a.omega == "auto" and (dev.is_triad() or not omega_observability(cal.positions_or_nominal(dev),
-                                                                              cal.sensitivity).full))):
-        scale = scale_from_args(a, dev, reader=True)
-        res = resolve_stream(dev, cal, a.recording, a.output, engine=a.engine, omega_source=a.omega, scale=scale,
-                             progress=None if a.quiet else progress_factory("resolve"))
-        if res is not None:
-            for w in resolve_warnings(res.saturated, res.clip_warnings, res.extra):
-                print(w, file=sys.stderr)
-            return 0
+    if not a.whole_file and stream_resolve(a, dev, cal):
+        return 0
     rec, = _read([a.recording], dev, "resolve", a)
     est = choose_omega(dev, cal, rec, a.omega)
     f, al, flags = resolve_recording(dev, cal, rec, a.engine, a.omega, None if est is None else est.w)
@@ -425,8 +416,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="omega for the centripetal correction: reference (the w_* columns), none, array (the "
                    "accelerometers' own, docs/angular-rate.md: adds w_x, w_y, w_z and their 1-sigma w_*_sigma); "
                    "auto: the w_* columns when complete, else array where the layout observes omega")
-    s.add_argument("-o", "--output", required=True, metavar="OUT.csv",
-                   help="t, f_x, f_y, f_z, dw_x, dw_y, dw_z (Parquet when the name ends in .parquet)")
+    s.add_argument("-o", "--output", required=True, metavar="OUT.csv", help="t, f_*, dw_* (.parquet: Parquet)")
     s.add_argument("--whole-file", action="store_true", help="read the whole recording first (docs/streaming.md)")
     s.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
     add_units_options(s)
