@@ -6,6 +6,8 @@ generator emits (both come from quantize.quantize_calibration).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from types import SimpleNamespace
+from typing import Any
 
 import numpy as np
 
@@ -40,6 +42,88 @@ def omega_for(rec, source: str) -> np.ndarray | None:
     raise ValueError(f"unknown omega source {source!r}")
 
 
+@dataclass
+class Resolver:
+    """What resolving needs of a device and a calibration, computed once per recording and
+    used on every chunk of its readings (:func:`resolve_chunk`): the whole-file
+    :func:`resolve_recording` and the streaming command (:mod:`accelcal.resolve_stream`) share it.
+
+    Attributes
+    ----------
+    device, cal : Device, Calibration
+    engine : {"float", "fixed"}
+    signed : bool
+        int16 readings (the device's raw_min < 0).
+    tables : quantize.FixedTables or None
+        The header's tables (engine "fixed", 6-channel array).
+    positions : ndarray (N, 3) or None
+        m (engine "float", 6-channel array).
+    """
+
+    device: Any
+    cal: Any
+    engine: str
+    signed: bool
+    tables: Any = None
+    positions: Any = None
+
+
+def resolver_for(device, cal, engine: str) -> Resolver:
+    """The :class:`Resolver` of a device, calibration and engine (the engine is checked)."""
+    if engine not in ("float", "fixed"):
+        raise AccelcalError(f"unknown engine {engine!r}: expected float or fixed")
+    r = Resolver(device, cal, engine, device.raw_min < 0)
+    if device.is_triad():
+        return r
+    if engine == "float":
+        r.positions = cal.positions_or_nominal(device)
+    else:
+        r.tables = quantize_calibration(device, cal)
+    return r
+
+
+def resolve_chunk(r: Resolver, raw: np.ndarray, omega: np.ndarray | None):
+    """Resolve a chunk of readings: the per-sample part of :func:`resolve_recording`, the
+    same numbers whether the recording comes whole or in chunks (no state between samples).
+
+    Parameters
+    ----------
+    r : Resolver
+    raw : ndarray (n, N) int
+        Counts, checked against the device (and the core's input range for "fixed").
+    omega : ndarray (n, 3) or None
+        rad/s for the centripetal correction.
+
+    Returns
+    -------
+    f : ndarray (n, 3) m/s^2
+    alpha : ndarray (n, 3) rad/s^2 (NaN for a 3-axis sensor)
+    flags : ndarray (n,) uint8 or None
+    """
+    if r.device.is_triad():
+        holder = SimpleNamespace(raw=raw)
+        try:
+            f, sat = triad_forces(r.cal, holder, (0, 1, 2), r.engine, r.signed)
+        except AccelcalError as e:
+            raise InputError(getattr(r.cal, "source", "calibration"), str(e), field="channels") from None
+        if r.engine == "fixed":
+            f = f / 2.0 ** FORMATS.out_frac
+        return f, np.full_like(f, np.nan, dtype=float), None if sat is None else sat.astype(np.uint8)
+    if r.engine == "float":
+        try:
+            f, a = model.resolve(r.cal.offsets, r.cal.sensitivity, r.positions, raw, omega)
+        except np.linalg.LinAlgError as e:
+            raise InputError(getattr(r.cal, "source", "calibration"),
+                             f"the calibrated sensor matrix cannot be inverted ({e})",
+                             field="channels") from None
+        return f, a, None
+    w_q = None if omega is None else omega_to_fixed(omega)
+    out, flags = native.process_batch(r.tables.resolver(), r.tables.trim, raw, w_q)
+    y = out / 2.0 ** FORMATS.out_frac
+    # the flags of the core's own arithmetic; its rail bit is the recording's `clipped` (at_rails)
+    return y[:, :3], y[:, 3:], flags & ~np.uint8(native.lib.AC_FLAG_AT_RAIL)
+
+
 def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str = "auto", omega=None):
     """Returns (f (n,3) m/s^2, alpha (n,3) rad/s^2, flags (n,) uint8 or None).
 
@@ -57,30 +141,11 @@ def resolve_recording(device, cal, rec, engine: str = "float", omega_source: str
     if device.is_triad():
         if engine == "fixed":
             check_core_input(rec, device.raw_min < 0)
-        try:
-            f, sat = triad_forces(cal, rec, (0, 1, 2), engine, device.raw_min < 0)
-        except AccelcalError as e:
-            raise InputError(getattr(cal, "source", "calibration"), str(e), field="channels") from None
-        if engine == "fixed":
-            f = f / 2.0 ** FORMATS.out_frac
-        return f, np.full_like(f, np.nan, dtype=float), None if sat is None else sat.astype(np.uint8)
+        return resolve_chunk(resolver_for(device, cal, engine), rec.raw, None)
     omega = omega_for(rec, omega_source) if omega is None else np.asarray(omega, float)
-    pos = cal.positions_or_nominal(device)
-    if engine == "float":
-        try:
-            f, a = model.resolve(cal.offsets, cal.sensitivity, pos, rec.raw, omega)
-        except np.linalg.LinAlgError as e:
-            raise InputError(getattr(cal, "source", "calibration"),
-                             f"the calibrated sensor matrix cannot be inverted ({e})",
-                             field="channels") from None
-        return f, a, None
-    check_core_input(rec, device.raw_min < 0)
-    t = quantize_calibration(device, cal)
-    w_q = None if omega is None else omega_to_fixed(omega)
-    out, flags = native.process_batch(t.resolver(), t.trim, rec.raw, w_q)
-    y = out / 2.0 ** FORMATS.out_frac
-    # the flags of the core's own arithmetic; its rail bit is the recording's `clipped` (at_rails)
-    return y[:, :3], y[:, 3:], flags & ~np.uint8(native.lib.AC_FLAG_AT_RAIL)
+    if engine == "fixed":
+        check_core_input(rec, device.raw_min < 0)
+    return resolve_chunk(resolver_for(device, cal, engine), rec.raw, omega)
 
 
 def _terms_input(device, cal, rec):

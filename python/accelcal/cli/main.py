@@ -35,6 +35,8 @@ from ..io.recording import read_recording, write_columns_csv, write_recording
 from ..io.recording_checks import seconds
 from ..report import REPORT_FILES, write_report
 from ..resolve import clipped_samples, resolve_recording
+from ..resolve_stream import resolve_warnings, result_names
+from .resolve_command import stream_resolve
 from ..simulate import run_simulation
 from ..readings.static import MIN_POSE_S
 from ..io.units_cli import add_units_options, scale_from_args
@@ -87,11 +89,11 @@ def _write_csv(path, header: list[str], columns: list[np.ndarray], comments: dic
     write_columns_csv(path, dict(zip(header, columns)), comments)
 
 
-def _progress(desc: str, total: int | None = None, unit: str = " steps"):
+def _progress(desc: str, total: int | None = None, unit: str = " steps", quiet: bool = False):
     """A progress bar on stderr for work that takes seconds on long recordings.  Off when
     stderr is not a terminal (tqdm's disable=None): pipes, logs and scripts see only the
     one-line messages."""
-    return tqdm(desc=desc, total=total, unit=unit, file=sys.stderr, disable=None, leave=False,
+    return tqdm(desc=desc, total=total, unit=unit, file=sys.stderr, disable=True if quiet else None, leave=False,
                 dynamic_ncols=True)
 
 
@@ -101,28 +103,25 @@ def cmd_resolve(a):
     check_output(a.output)
     dev = _load_device(a.device)
     cal = load_calibration(a.calibration, dev)
+    if not a.whole_file and stream_resolve(a, dev, cal):
+        return 0
     rec, = _read([a.recording], dev, "resolve", a)
     est = choose_omega(dev, cal, rec, a.omega)
     f, al, flags = resolve_recording(dev, cal, rec, a.engine, a.omega, None if est is None else est.w)
     comments = {"engine": a.engine, "device": dev.name, **({"omega": "array"} if est is not None else {})}
-    if flags is not None and flags.any():
-        print(f"accelcal resolve: warning: {int(np.count_nonzero(flags))} samples saturated in the "
-              "fixed-point core's arithmetic (see column saturated)", file=sys.stderr)
     clipped, clip_warnings = clipped_samples(rec, dev)
-    for w in clip_warnings:
-        print(f"accelcal resolve: warning: {w}", file=sys.stderr)
+    for w in resolve_warnings(0 if flags is None else int(np.count_nonzero(flags)), clip_warnings):
+        print(w, file=sys.stderr)
     cols = [rec.t, f[:, 0], f[:, 1], f[:, 2], al[:, 0], al[:, 1], al[:, 2]]
-    header = ["t", "f_x", "f_y", "f_z", "dw_x", "dw_y", "dw_z"]
+    names = result_names(flags is not None, bool(clip_warnings))
     if est is not None:
-        header += list(omega_columns(est))
+        names[7:7] = list(omega_columns(est))
         cols += list(omega_columns(est).values())
     if flags is not None:
         cols.append(flags.astype(float))
-        header.append("saturated")
     if clip_warnings:
         cols.append(clipped.astype(float))
-        header.append("clipped")
-    _write_csv(a.output, header, cols, comments)
+    _write_csv(a.output, names, cols, comments)
     return 0
 
 
@@ -287,7 +286,7 @@ def cmd_diagnose(a):
     if isinstance(cal.extra, dict):
         cal.extra["source"] = str(a.calibration)          # named so in the JSON's calibration.source
     recs = _read(a.recordings, dev, "diagnose", a)
-    with _progress("diagnose: scoring candidates", unit=" fits") as bar:
+    with _progress("diagnose: scoring candidates", unit=" fits", quiet=a.quiet) as bar:
         def scored(name):
             bar.set_postfix_str(name, refresh=False)
             bar.update()
@@ -297,7 +296,7 @@ def cmd_diagnose(a):
     # series the report plots, so it goes to write_report as it is
     atomic_write(a.json, lambda f: json.dump(result, f, indent=2, default=_json_default))
     if a.report:
-        with _progress("diagnose: writing the report", total=REPORT_FILES, unit=" files") as bar:
+        with _progress("diagnose: writing the report", total=REPORT_FILES, unit=" files", quiet=a.quiet) as bar:
             write_report(result, a.report, progress=lambda path: bar.update())
     print(f"verdict: {result.get('verdict')}")
     return 0
@@ -417,7 +416,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="omega for the centripetal correction: reference (the w_* columns), none, array (the "
                    "accelerometers' own, docs/angular-rate.md: adds w_x, w_y, w_z and their 1-sigma w_*_sigma); "
                    "auto: the w_* columns when complete, else array where the layout observes omega")
-    s.add_argument("-o", "--output", required=True, metavar="OUT.csv", help="t, f_x, f_y, f_z, dw_x, dw_y, dw_z")
+    s.add_argument("-o", "--output", required=True, metavar="OUT.csv", help="t, f_*, dw_* (.parquet: Parquet)")
+    s.add_argument("--whole-file", action="store_true", help="read the whole recording first (docs/streaming.md)")
+    s.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
     add_units_options(s)
     s.set_defaults(func=cmd_resolve)
 
@@ -465,6 +466,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="set aside the static poses far off the calibration's terms fitted to the poses (calibrate's "
                    "rule: a knocked or mislabelled pose), which are otherwise kept, named in the JSON's 'outliers' "
                    "with the diagnosis of the other poses, and in a note")
+    s.add_argument("--quiet", action="store_true", help="no progress bars on stderr")
     add_units_options(s)
     s.set_defaults(func=cmd_diagnose)
     add_convert_parser(sub, check_output)

@@ -69,6 +69,7 @@ from .time import is_datetime, is_time_name, unit_in_name
 from ..errors import InputError, notes_on_refusal
 from ..readings.held import held_runs, held_share
 from ..io.recording import read_recording
+from ..io.parquet import is_parquet
 from ..io.textinput import (CELL_NUMBER_RE, is_whitespace_header, preamble_notes, read_preamble, read_text_bytes,
                         table_preamble)
 from ..io.units import Scale, file_scale, in_file_unit
@@ -387,6 +388,9 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
                          "or 'MATLAB 7.3 MAT-file')")
     if variable is not None:
         raise InputError(str(path), "--variable names an array of a MATLAB file")
+    if is_parquet(path):
+        raise InputError(str(path), "a .parquet file is read as a contract recording, which every command takes as it "
+                         "is: convert reads other tools' files (its output may be .parquet)")
     source, data = read_text_bytes(path)
     pre = table_preamble(data)
     timed = cache(partial(timed_rows, data, pre))     # (detection and a table's reading: computed once)

@@ -1,2 +1,3 @@
 """The data contract's files and what one count is: devices, calibrations and recordings
-(CSV and the other containers), the strict JSON and text readers they share, and units."""
+(CSV and the other containers, Parquet: parquet), the strict JSON and text readers they share, and units;
+recordings read in chunks (chunks)."""

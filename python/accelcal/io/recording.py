@@ -23,6 +23,8 @@ from .csvformat import INT, REPR, TEXT, csv_cell, csv_rows
 from .csvtable import (FLOAT_RE, META_KEY_RE, RAW_RE, VECTOR_COLUMNS, ByteTable, ListTable, classify_columns,
                        convert_columns, cut_short_end, fast_columns, make_table, quote_cell, split_header)
 from ..errors import InputError, atomic_write, notes_on_refusal
+from .chunks import Fallback, read_chunked, reader_checks
+from .parquet import is_parquet, read_parquet_recording, write_parquet_columns, write_parquet_recording
 from .recording_checks import check_core_input, check_for_device, repeated_rows, repeats_note
 from .recording_type import Recording, check_content, recording_from_arrays
 from .textinput import is_whitespace_header, read_preamble, read_text_bytes, split_whitespace_header, whitespace_to_commas
@@ -39,7 +41,7 @@ __all__ = ["Recording", "check_for_device", "check_core_input", "read_recording"
 
 
 def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | None = None,
-                   columns: list[str] | None = None, repeats: bool = False) -> Recording:
+                   columns: list[str] | None = None, repeats: bool = False, whole: bool = False) -> Recording:
     """Read a recording (see the data contract and its extensions).
 
     Parameters
@@ -61,12 +63,26 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
     repeats : bool
         Leave out the rows that repeat the row before exactly, time stamp and readings
         (:func:`.recording_checks.repeated_rows`), with a note; else they are refused (t increases).
+    whole : bool
+        Read the file's text whole first.  By default a plain CSV is read in chunks into its
+        arrays (:func:`accelcal.io.chunks.read_chunked`: the same Recording, the same errors, a
+        third of the memory); ``whole`` is the reference it is tested against.
 
     Raises
     ------
     InputError
         Any violation, naming the file, the line (of the decompressed text) and the column.
     """
+    if is_parquet(path):       # by its name: Parquet, or refused (io.parquet)
+        if columns is not None or (scale is not None and scale.converts):
+            raise InputError(str(path), "a Parquet recording holds counts under the contract's column names "
+                             "(no --units conversion, no header-less columns)")
+        return read_parquet_recording(path, n_channels, reader_checks)
+    if not whole and columns is None and not repeats:
+        try:
+            return read_chunked(path, n_channels, scale)
+        except Fallback:
+            pass
     source, data = read_text_bytes(path)
     pre = read_preamble(data)
     metadata, header, pos = pre.metadata, pre.header, pre.pos
@@ -204,7 +220,8 @@ def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> No
 
     Columns: t (shortest exact repr), raw_0..raw_{N-1}, then only the
     reference columns with any known value (NaN as an empty cell), then the
-    extra columns.  Metadata become ``# key: value`` comments.
+    extra columns.  Metadata become ``# key: value`` comments.  A path ending in .parquet
+    is written as Parquet (:func:`accelcal.io.parquet.write_parquet_recording`).
 
     Parameters
     ----------
@@ -215,6 +232,9 @@ def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> No
         printf-style format of the reference columns' values (t is written exactly).
     """
     check_content(rec)
+    if is_parquet(path):
+        write_parquet_recording(path, rec)
+        return
     try:
         probe = float(float_format % 0.1)
     except (TypeError, ValueError):
@@ -282,7 +302,13 @@ def write_columns_csv(path: Any, columns: Any, meta: dict | None = None) -> None
         digits).
     meta : dict, optional
         Written first, one ``# key: value`` comment line per item.
+
+    A path ending in .parquet is written as Parquet, the comments as its key-value metadata
+    (:func:`accelcal.io.parquet.write_parquet_columns`).
     """
+    if is_parquet(path):
+        write_parquet_columns(path, columns, meta)
+        return
     names = list(columns)
     arrays = [np.asarray(columns[k], float) for k in names]
 

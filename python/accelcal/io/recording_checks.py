@@ -12,7 +12,7 @@ from scipy.stats import poisson
 
 from ..errors import InputError
 
-__all__ = ["GAP_STEPS", "regular_step", "check_for_device", "check_core_input", "seconds", "even_steps", "rate_for", "TIME_UNITS", "TIME_UNIT_TOL",
+__all__ = ["GAP_STEPS", "regular_step", "check_for_device", "check_raw_range", "check_core_input", "seconds", "even_steps", "rate_for", "TIME_UNITS", "TIME_UNIT_TOL",
            "RATE_TOL", "repeated_rows", "repeats_note", "CHANCE_REPEAT_P", "chance_repeats"]
 
 #: time stamps in these units are read as such (a logger's millis() or micros()) ...
@@ -136,6 +136,12 @@ def check_for_device(rec: Any, device, *, min_samples: int = 1) -> None:
         raise InputError(rec.source, f"t must be strictly increasing: t = {float(rec.t[i]):.6g} s follows "
                          f"t = {float(rec.t[i - 1]):.6g} s", row=rec.line(i), column="t")
     seconds(rec, device)
+    check_raw_range(rec, device)
+
+
+def check_raw_range(rec: Any, device) -> None:
+    """:func:`check_for_device`'s range check alone: every raw reading inside the device's
+    [raw_min, raw_max] (``rec``: anything with raw, source and line(i), such as a chunk)."""
     out = (rec.raw < device.raw_min) | (rec.raw > device.raw_max)
     if out.any():
         i, c = (int(v) for v in np.argwhere(out)[0])

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .noise import code_step, noise_for
+from .noise import code_lattice_counts, code_step, noise_for
 
 
 CLIP_MIN_COUNT = 10        # readings at one extreme value before it can be a clip level
@@ -90,6 +90,24 @@ def pile_level(v: np.ndarray, side: int, sigma: float, step: int) -> float | Non
     band = max(CLIP_BAND_SIGMA * sigma, 2.0 * step)
     away = side * (ext - v)
     near = int(np.count_nonzero((away > 0) & (away <= band)))
+    return pile_verdict(ext, c, near, band, step)
+
+
+def pile_level_counts(u: np.ndarray, cnt: np.ndarray, side: int, sigma: float, step: int) -> float | None:
+    """:func:`pile_level` from the distinct readings ``u`` (int64, ascending) and their counts."""
+    ext = u[-1] if side > 0 else u[0]
+    c = int(cnt[-1] if side > 0 else cnt[0])
+    if c < CLIP_MIN_COUNT:
+        return None
+    band = max(CLIP_BAND_SIGMA * sigma, 2.0 * step)
+    away = side * (ext - u)
+    near = int(cnt[(away > 0) & (away <= band)].sum())
+    return pile_verdict(ext, c, near, band, step)
+
+
+def pile_verdict(ext, c: int, near: int, band: float, step: int) -> float | None:
+    """Whether ``c`` readings at the extreme ``ext`` pile up over the ``near`` readings within
+    ``band`` of it: ext, else None."""
     per_code = near / max(band / step, 1.0)
     if c < CLIP_PILE_RATIO * per_code + CLIP_MIN_COUNT:
         return None
@@ -174,6 +192,38 @@ def clip_levels(raw: np.ndarray, device, noise: np.ndarray, window: int) -> Clip
     return ClipLevels(lo=lo, hi=hi, inside_lo=in_lo, inside_hi=in_hi)
 
 
+def code_step_counts(u: np.ndarray, cnt: np.ndarray) -> int:
+    """:func:`accelcal.readings.noise.code_step` from the distinct readings ``u`` (int64,
+    ascending) and their counts."""
+    if u.size < 2:
+        return 1
+    g = int(np.gcd.reduce(np.diff(u)))
+    return g if g >= 2 else code_lattice_counts(u, cnt)[0]
+
+
+def clip_levels_counts(hists: list[tuple[np.ndarray, np.ndarray]], device, noise: np.ndarray) -> ClipLevels | None:
+    """:func:`clip_levels` from each channel's distinct readings and their counts, or None where
+    a channel quieter than a code has a pile (:func:`pile_moves` needs the readings in order)."""
+    N = len(hists)
+    lo, hi = np.full(N, float(device.raw_min)), np.full(N, float(device.raw_max))
+    in_lo, in_hi = np.zeros(N, bool), np.zeros(N, bool)
+    for i, (u, cnt) in enumerate(hists):
+        if u[0] == u[-1]:
+            continue
+        q = code_step_counts(u, cnt)
+        sig = float(noise[i])
+        top, bot = pile_level_counts(u, cnt, 1, sig, q), pile_level_counts(u, cnt, -1, sig, q)
+        top = top if top is not None and top < device.raw_max else None
+        bot = bot if bot is not None and bot > device.raw_min else None
+        if sig < q and (top is not None or bot is not None):
+            return None
+        if top is not None:
+            hi[i], in_hi[i] = top, True
+        if bot is not None:
+            lo[i], in_lo[i] = bot, True
+    return ClipLevels(lo=lo, hi=hi, inside_lo=in_lo, inside_hi=in_hi)
+
+
 def clip_note(raw: np.ndarray, device, window: int, name=lambda i: f"raw_{i}",
               noise: np.ndarray | None = None) -> str | None:
     """A note counting the clipped readings (:func:`clip_levels`, the noise ``noise``, counts per
@@ -219,11 +269,18 @@ def rails_warning(rec, device) -> str | None:
     clipped = np.any(low | high, axis=1)
     if not clipped.any():
         return None
-    per = [f"raw_{j}: {int(low[:, j].sum())} at {device.raw_min}, {int(high[:, j].sum())} at {device.raw_max}"
-           for j in range(raw.shape[1]) if low[:, j].any() or high[:, j].any()]
-    first = int(np.argmax(clipped))
-    return (f"{int(np.count_nonzero(clipped))} samples read a channel at the ADC's rail ({'; '.join(per)}; the first "
-            f"at row {rec.line(first)}): the chip clipped there and their f is short of the truth (see column "
+    return rails_text(low.sum(axis=0), high.sum(axis=0), int(np.count_nonzero(clipped)),
+                      rec.line(int(np.argmax(clipped))), device)
+
+
+def rails_text(low, high, count: int, first_line: int, device) -> str:
+    """:func:`rails_warning`'s text from its counts: per channel the readings at raw_min (``low``)
+    and raw_max (``high``), the samples with any (``count``) and the first one's line (a reader
+    that goes through a recording in chunks adds them up)."""
+    per = [f"raw_{j}: {int(low[j])} at {device.raw_min}, {int(high[j])} at {device.raw_max}"
+           for j in range(len(low)) if low[j] or high[j]]
+    return (f"{count} samples read a channel at the ADC's rail ({'; '.join(per)}; the first "
+            f"at row {first_line}): the chip clipped there and their f is short of the truth (see column "
             "clipped)")
 
 
@@ -234,19 +291,30 @@ def pile_warning(rec, levels: ClipLevels) -> str | None:
     rails' own samples are :func:`rails_warning`'s."""
     raw = np.asarray(rec.raw)
     at = np.zeros(raw.shape[0], bool)
-    per = []
+    hits = np.zeros((raw.shape[1], 2), np.int64)
     for j in range(raw.shape[1]):
-        ends = []
-        for inside, hit, level in ((levels.inside_lo[j], raw[:, j] <= levels.lo[j], levels.lo[j]),
-                                   (levels.inside_hi[j], raw[:, j] >= levels.hi[j], levels.hi[j])):
-            if inside and hit.any():
+        for side, (inside, hit) in enumerate(((levels.inside_lo[j], raw[:, j] <= levels.lo[j]),
+                                              (levels.inside_hi[j], raw[:, j] >= levels.hi[j]))):
+            if inside:
                 at |= hit
-                ends.append(f"{int(hit.sum())} at {int(level)}")
-        if ends:
-            per.append(f"raw_{j}: " + ", ".join(ends))
+                hits[j, side] = int(hit.sum())
     if not at.any():
         return None
-    first = int(np.argmax(at))
-    return (f"{int(np.count_nonzero(at))} samples read a channel at a clip level inside the range, where its "
-            f"readings pile up ({'; '.join(per)}; the first at row {rec.line(first)}; convert and diagnose name the "
+    return pile_text(levels, hits, int(np.count_nonzero(at)), rec.line(int(np.argmax(at))))
+
+
+def pile_text(levels: ClipLevels, hits: np.ndarray, count: int, first_line: int) -> str:
+    """:func:`pile_warning`'s text from its counts: ``hits`` (N, 2) the readings at or beyond each
+    channel's low and high level inside the range, ``count`` the samples with any, the first
+    one's line."""
+    per = []
+    for j in range(hits.shape[0]):
+        ends = [f"{int(hits[j, side])} at {int(level)}"
+                for side, (inside, level) in enumerate(((levels.inside_lo[j], levels.lo[j]),
+                                                        (levels.inside_hi[j], levels.hi[j])))
+                if inside and hits[j, side]]
+        if ends:
+            per.append(f"raw_{j}: " + ", ".join(ends))
+    return (f"{count} samples read a channel at a clip level inside the range, where its "
+            f"readings pile up ({'; '.join(per)}; the first at row {first_line}; convert and diagnose name the "
             "same levels): the sensor clipped there and their f is short of the truth (see column clipped)")

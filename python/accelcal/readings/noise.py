@@ -119,6 +119,12 @@ def code_lattice(v: np.ndarray) -> tuple[int, float, float, int]:
         Distinct values on the lattice.
     """
     u, cnt = np.unique(np.asarray(v).astype(np.int64), return_counts=True)
+    return code_lattice_counts(u, cnt)
+
+
+def code_lattice_counts(u: np.ndarray, cnt: np.ndarray) -> tuple[int, float, float, int]:
+    """:func:`code_lattice` from the distinct readings ``u`` (int64, ascending) and their counts
+    (a reader that goes through a recording in chunks keeps these)."""
     tot = float(cnt.sum())
     best = (1, 0.0, 1.0, int(u.size))
     if u.size < 6:
@@ -203,6 +209,7 @@ def code_step(v: np.ndarray) -> int:
         return 1
     g = int(np.gcd.reduce(np.diff(u)))
     return g if g >= 2 else code_lattice(v)[0]
+
 
 
 def window_std(x: np.ndarray, w: int) -> tuple[np.ndarray, int, int]:

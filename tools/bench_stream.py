@@ -1,0 +1,234 @@
+#!/usr/bin/env python3
+"""Time and peak memory of ``accelcal resolve`` against the recording's length (docs/streaming.md).
+
+For each length (``--lengths``, samples of the seed's 6-channel array, default device at 60 Hz:
+a hand-held simulation tiled to the length, t = k / 60 s), three cases, each resolved with
+``--engine fixed --calibration nominal --quiet`` in a fresh subprocess:
+
+* ``csv->csv``, ``csv->parquet``, ``parquet->parquet`` (the Parquet input in row groups of
+  io.parquet.BATCH_ROWS rows, as accelcal writes a recording: a reader holds a row group);
+
+and, in the same run, the I/O anchor of each: pyarrow reading the input (pyarrow.csv.open_csv, or
+ParquetFile.read_row_group one row group at a time: iter_batches holds on to memory batch after
+batch) and writing a table of the output's shape (t and 7
+float64 columns: f, dw, saturated) with pyarrow's CSV or Parquet writer.  Each figure is the
+subprocess's own wall time for the work (imports excluded) and its peak RSS (VmHWM of
+/proc/self/status: the process's own high-water mark, which ru_maxrss is not after a fork
+from a large parent).  The input files are generated once into
+``--dir`` (default a temporary directory) and deleted at the end (``--keep`` keeps them).
+Writes build/bench_stream.md and prints it.
+
+``--calibrate-diagnose N``: instead, the wall time and peak RSS (VmHWM polled from /proc) of
+``calibrate`` and ``diagnose`` on a static-pose recording of about N samples (24 jig poses of
+10^6 / 24 samples each with reference f, w, dw, temp_c and pose, repeated with t shifted and the
+poses relabelled).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.csv as pa_csv
+import pyarrow.parquet as pq
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "python"))
+from accelcal.io.device import default_device  # noqa: E402
+from accelcal.io.parquet import BATCH_ROWS  # noqa: E402
+from accelcal.io.recording import Recording, write_recording  # noqa: E402
+from accelcal.simulate import run_simulation  # noqa: E402
+
+ROWS = 1 << 20
+
+CASE = r"""
+import json, sys, time
+sys.path.insert(0, {python!r})
+kind, src, out = sys.argv[1:4]
+if kind == "resolve":
+    from accelcal.cli.main import main
+    t0 = time.perf_counter()
+    rc = main(["resolve", "--device", "default", "--calibration", "nominal", "--engine", "fixed", "--quiet",
+               src, "-o", out])
+    assert rc == 0
+else:
+    import numpy as np, pyarrow as pa, pyarrow.csv as pa_csv, pyarrow.parquet as pq
+    t0 = time.perf_counter()
+    names = ["t", "f_x", "f_y", "f_z", "dw_x", "dw_y", "dw_z", "saturated"]
+    schema = pa.schema([(n, pa.float64()) for n in names])
+    if src.endswith(".parquet"):
+        pf = pq.ParquetFile(src)
+        batches = (b for i in range(pf.metadata.num_row_groups)
+                   for b in pf.read_row_group(i, use_threads=False).to_batches(max_chunksize={rows}))
+    else:
+        batches = pa_csv.open_csv(src, read_options=pa_csv.ReadOptions(block_size=1 << 24, skip_rows=1),
+                                  parse_options=pa_csv.ParseOptions(),
+                                  convert_options=pa_csv.ConvertOptions())
+    writer = pq.ParquetWriter(out, schema) if out.endswith(".parquet") else pa_csv.CSVWriter(out, schema)
+    for b in batches:
+        t = b.column(0).to_numpy()
+        cols = [pa.array(t)] + [pa.array(b.column(k % 6 + 1).to_numpy().astype(np.float64)) for k in range(7)]
+        writer.write_table(pa.Table.from_arrays(cols, schema=schema))
+    writer.close()
+hwm = [l for l in open("/proc/self/status") if l.startswith("VmHWM:")][0].split()[1]
+print(json.dumps({{"s": time.perf_counter() - t0, "mb": int(hwm) / 1024.0}}))
+"""
+
+
+def base_block(n: int = 1 << 16) -> np.ndarray:
+    """n samples of the default device's raw readings: a hand-held session (rests and moves)."""
+    dev = default_device()
+    sim = run_simulation(dev, "handheld", seed=1, n_poses=60, hold_s=4.0, move_s=2.0, initial_rest_s=5.0)
+    raw = sim.recording.raw
+    return np.resize(raw, (n, raw.shape[1])) if raw.shape[0] < n else raw[:n]
+
+
+def generate(n: int, d: Path, raw0: np.ndarray) -> tuple[Path, Path]:
+    """A CSV and a Parquet recording of n samples (t = k / 60 s, raw tiled from raw0), both written by
+    pyarrow (t in its shortest round-trip text)."""
+    csv_path, pq_path = d / f"rec_{n}.csv", d / f"rec_{n}.parquet"
+    names = ["t"] + [f"raw_{k}" for k in range(6)]
+    schema = pa.schema([("t", pa.float64())] + [(c, pa.int64()) for c in names[1:]],
+                       metadata={b"device": b"seed-6ch-r60"})
+    with open(csv_path, "w") as fh:
+        fh.write("# device: seed-6ch-r60\n" + ",".join(names) + "\n")
+    pw = pq.ParquetWriter(pq_path, schema)
+    with open(csv_path, "ab") as fh:
+        for s in range(0, n, ROWS):
+            k = np.arange(s, min(s + ROWS, n))
+            raw = raw0[k % raw0.shape[0]]
+            t = k / 60.0
+            pw.write_table(pa.Table.from_arrays([pa.array(t)] + [pa.array(raw[:, j]) for j in range(6)], schema=schema),
+                           row_group_size=BATCH_ROWS)
+            buf = pa.BufferOutputStream()
+            pa_csv.write_csv(pa.Table.from_arrays([pa.array(t)] + [pa.array(raw[:, j]) for j in range(6)], names=names),
+                             buf, pa_csv.WriteOptions(include_header=False))
+            fh.write(buf.getvalue().to_pybytes())
+    pw.close()
+    return csv_path, pq_path
+
+
+def run_case(kind: str, src: Path, out: Path) -> dict:
+    code = CASE.format(python=str(ROOT / "python"), rows=ROWS)
+    r = subprocess.run([sys.executable, "-c", code, kind, str(src), str(out)], capture_output=True, text=True)
+    if r.returncode != 0:
+        raise RuntimeError(f"{kind} {src} -> {out}: {r.stderr.strip()[-2000:]}")
+    res = json.loads(r.stdout.strip().splitlines()[-1])
+    out.unlink(missing_ok=True)
+    return res
+
+
+def write_table(rows: list) -> str:
+    """build/bench_stream.md from the rows so far; returns its text."""
+    lines = ["| samples | case | input MB | resolve s | resolve peak MB | pyarrow I/O s | I/O peak MB | time / I/O |",
+             "| ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    for n, name, sizes, res, io in rows:
+        size = sizes[1] if name.startswith("parquet") else sizes[0]
+        lines.append(f"| {n:.0e} | {name} | {size:.0f} | {res['s']:.2f} | {res['mb']:.0f} | {io['s']:.2f} | "
+                     f"{io['mb']:.0f} | {res['s'] / io['s']:.2f} |")
+    text = "\n".join(lines) + "\n"
+    out = ROOT / "build" / "bench_stream.md"
+    out.parent.mkdir(exist_ok=True)
+    out.write_text(text)
+    return text
+
+
+def poses_recording(n: int, path: Path) -> None:
+    """A static-pose recording of about n samples: 24 jig poses of the default device with reference
+    f, w, dw, temp_c and pose (10^6 samples), repeated with t shifted and the poses relabelled."""
+    dev = default_device()
+    per = 41667
+    rec = run_simulation(dev, "static_poses", seed=1, poses="24", samples_per_pose=per).recording
+    k = max(1, round(n / rec.n_samples))
+    span = rec.t[-1] - rec.t[0] + 2.0
+    tiled = Recording(t=np.concatenate([rec.t + i * span for i in range(k)]), raw=np.tile(rec.raw, (k, 1)),
+                      f=np.tile(rec.f, (k, 1)), w=np.tile(rec.w, (k, 1)), dw=np.tile(rec.dw, (k, 1)),
+                      temp_c=np.tile(rec.temp_c, k),
+                      pose=np.concatenate([np.where(rec.pose >= 0, rec.pose + 24 * i, -1) for i in range(k)]),
+                      metadata=rec.metadata)
+    write_recording(path, tiled)
+
+
+def peak_of(argv: list[str]) -> tuple[float, float]:
+    """Wall time (s) and peak RSS (MB, VmHWM polled from /proc) of a command."""
+    t0 = time.perf_counter()
+    p = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    peak = 0
+    while p.poll() is None:
+        try:
+            with open(f"/proc/{p.pid}/status") as fh:
+                peak = max(peak, next(int(x.split()[1]) for x in fh if x.startswith("VmHWM")))
+        except (OSError, StopIteration):
+            pass
+        time.sleep(0.2)
+    if p.returncode:
+        raise RuntimeError(f"{' '.join(argv)}: {p.stderr.read()[-2000:]}")
+    return time.perf_counter() - t0, peak / 1024.0
+
+
+def calibrate_diagnose(n: int, d: Path) -> None:
+    """Peak memory of calibrate and diagnose on a static-pose recording of n samples."""
+    rec, cal = d / f"poses_{n}.csv", d / f"cal_{n}.json"
+    poses_recording(n, rec)
+    cli = [sys.executable, "-c", "import sys; sys.path.insert(0, %r); from accelcal.cli.main import main; "
+           "sys.exit(main(sys.argv[1:]))" % str(ROOT / "python")]
+    for name, argv in (("calibrate", ["calibrate", "--device", "default", str(rec), "-o", str(cal)]),
+                       ("diagnose", ["diagnose", "--device", "default", "--calibration", str(cal), str(rec),
+                                     "--json", str(d / "diag.json"), "--quiet"])):
+        s, mb = peak_of(cli + argv)
+        print(f"{name} {n:.0e} samples: {s:.0f} s, peak {mb:.0f} MB", flush=True)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--lengths", default="1e5,1e6,1e7,1e8", help="samples, comma-separated")
+    ap.add_argument("--dir", help="where the recordings are generated (default: a temporary directory)")
+    ap.add_argument("--keep", action="store_true", help="keep the generated recordings")
+    ap.add_argument("--cases", default="csv->csv,csv->parquet,parquet->parquet",
+                    help="which cases, in this order (comma-separated)")
+    ap.add_argument("--calibrate-diagnose", metavar="N", type=float,
+                    help="instead: peak memory of calibrate and diagnose on a static-pose recording of N samples")
+    a = ap.parse_args()
+    d = Path(a.dir or tempfile.mkdtemp(prefix="bench_stream_"))
+    d.mkdir(parents=True, exist_ok=True)
+    if a.calibrate_diagnose:
+        calibrate_diagnose(int(a.calibrate_diagnose), d)
+        return
+    raw0 = base_block()
+    rows = []
+    try:
+        for n in (int(float(x)) for x in a.lengths.split(",")):
+            t0 = time.perf_counter()
+            csv_path, pq_path = generate(n, d, raw0)
+            gen = time.perf_counter() - t0
+            sizes = (csv_path.stat().st_size / 1e6, pq_path.stat().st_size / 1e6)
+            cases = {"csv->csv": (csv_path, d / "o.csv"), "csv->parquet": (csv_path, d / "o.parquet"),
+                     "parquet->parquet": (pq_path, d / "o.parquet")}
+            for name in a.cases.split(","):
+                src, out = cases[name]
+                io = run_case("anchor", src, out)
+                res = run_case("resolve", src, out)
+                rows.append((n, name, sizes, res, io))
+                print(f"{n:>11,d} {name:<17} resolve {res['s']:8.2f} s {res['mb']:7.0f} MB | pyarrow I/O "
+                      f"{io['s']:7.2f} s {io['mb']:7.0f} MB | x{res['s'] / io['s']:.2f}  (inputs {sizes[0]:.0f} / "
+                      f"{sizes[1]:.0f} MB, made in {gen:.0f} s)", flush=True)
+                write_table(rows)
+            if not a.keep:
+                csv_path.unlink()
+                pq_path.unlink()
+    finally:
+        if not a.keep and not a.dir:
+            shutil.rmtree(d, ignore_errors=True)
+    print(write_table(rows))
+
+
+if __name__ == "__main__":
+    main()
