@@ -73,12 +73,24 @@ def test_shift_beside_a_time_skew():
 
 
 def test_true_temperature_effect_with_a_varying_temperature_is_still_named():
+    """A true thermal offset (lag 61 s in a 67 s session) is never hidden behind a shift: where its
+    lag is pinned it is the verdict and stays significant after the shift; where the lag's interval
+    runs past the recording (diagnose/shapes.py) it is stated in ambiguous_with, with what
+    recording would pin it, and no lag is quoted as a finding."""
     ds, res = _run("temperature_offset", 3, own_cal=False)
-    assert res["verdict"] == "temperature_offset"
-    # the temperature explains change within the session beyond one shift per recording
-    after = res["effects"][0]["contest"]["rivals"]["session_offset"]["verdict_after_rival"]
-    assert after["significant"]
-    assert "session_offset" not in res["ambiguous_with"]
+    if res["verdict"] == "temperature_offset":
+        # the temperature explains change within the session beyond one shift per recording
+        after = res["effects"][0]["contest"]["rivals"]["session_offset"]["verdict_after_rival"]
+        assert after["significant"]
+        assert "session_offset" not in res["ambiguous_with"]
+    else:
+        assert "temperature_offset" in res["ambiguous_with"]
+        assert "temperature changes slowly" in res["separate_by"]
+        assert res["verdict"] != "session_offset"
+    for e in res["effects"]:
+        shape = e.get("shape") or {}
+        if e["name"].startswith("temperature") and "tau_s" in shape and e["name"] in res["model"]["effects"]:
+            assert shape["tau_s"].get("determined"), "a lag the data do not pin quoted as a finding"
 
 
 def test_an_offset_of_every_recording_stays_an_offset():
