@@ -26,7 +26,7 @@
  *     e2 = round(e e 2^-19), e3 = round(e2 e 2^-19),  r = -e + e2 - e3   (Q.19, 1/(1+e) - 1)
  *     y  = round((w + round(round(w 2^-16) r 2^-3) + o 2^8) 2^-16), clipped to int16
  *   Error bound against the float y with the table's coefficients, the same x, dTo, dTg:
- *     |y - y_ref| <= 0.5 + 2^-8 + 0.54 |e| + (|x| + 1) (2^-18 + |e|^4 / (1 - |e|))   counts
+ *     |y - y_ref| <= 0.5 + 2^-8 + 0.54 |e| + (max(|x|, |y_ref|) + 1) (2^-18 + |e|^4 / (1 - |e|))   counts
  *   (0.5 the final rounding; the series' truncation e^4; the roundings of e, e2, e3, w r).
  *   |e| is held to AC_TEMP_E_MAX 2^-19 = 5.47 % (a larger gain change clips, AC_SATURATED).
  */

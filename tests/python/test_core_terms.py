@@ -104,7 +104,7 @@ def test_temp_correct_within_bound(table, t_off, t_gain, data):
     y, sat = native.temp_correct(t, t_off, t_gain, x)
     ref, e, dt_clipped = temp_reference(table, t_off, t_gain, x)
     if not sat:
-        assert np.all(np.abs(y - ref) <= temp_bound(x, e))
+        assert np.all(np.abs(y - ref) <= temp_bound(np.maximum(np.abs(x), np.abs(ref)), e))
     else:
         w = np.asarray(x) - np.asarray(o) * O_LSB - np.asarray(oc) * 2.0 ** -OC_FRAC * clip16(t_off - t_ref) * TEMP_LSB
         assert (dt_clipped or np.any(np.abs(e) > E_MAX * 2.0 ** -19 - 2.0 ** -20)
