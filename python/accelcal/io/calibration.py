@@ -90,7 +90,7 @@ class Calibration:
         The first-order thermal lag (s) of the temperature the offset and the gain tempcos act
         on (effects/temperature.py's ``tau_s``); None or 0: the recorded temperature itself.
     nonlin_k2, nonlin_k3 : ndarray (N,) or None
-        The reading gains ``k2 a^2 + k3 a^3`` counts, a = (linear reading - b_i) / |s_i| in m/s^2
+        The reading gains ``k2 a^2 + k3 a^3`` counts, ``a = (linear reading - b_i) / |s_i|`` in m/s^2
         (effects/nonlinearity.py): counts per (m/s^2)^2 and per (m/s^2)^3.
     time_skew_s : ndarray (N,) or None
         Channel i's sample is taken tau_i seconds late: it reads the motion at t + tau_i
