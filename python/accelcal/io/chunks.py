@@ -25,7 +25,7 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from .csvtable import (FLOAT_RE, RAW_RE, VECTOR_COLUMNS, ByteTable, classify_columns, convert_columns,
-                        cut_short_end, fast_columns, make_table, quote_cell, split_header)
+                        cut_short_end, data_end, fast_columns, make_table, quote_cell, split_header)
 from ..errors import InputError
 from .recording_type import Recording
 from .textinput import COMPRESSIONS, is_whitespace_header, read_preamble
@@ -172,12 +172,7 @@ def _cut_short(path: Any, m: int) -> bool:
         fh.seek(max(size - (1 << 16), 0))
         tail = fh.read()
     start = tail.find(b"\n") + 1 if size > (1 << 16) else 0
-    end = len(tail)
-    while end > start:
-        cut = tail.rfind(b"\n", start, end)
-        if tail[cut + 1 if cut >= 0 else start:end].strip():
-            break
-        end = max(cut, start)
+    end = data_end(tail, start, len(tail))
     return end > start and cut_short_end(tail, start, end, m, 1)[1] is not None
 
 
@@ -276,11 +271,7 @@ def csv_chunks(path: Any, head: Head, block_bytes: int = BLOCK_BYTES,
         end = len(data)
         notes: list[str] = []
         if last:  # trailing blank lines are not rows; a last line cut short is left out (read_recording)
-            while end > 0:
-                cut = data.rfind(b"\n", 0, end)
-                if data[cut + 1 if cut >= 0 else 0:end].strip():
-                    break
-                end = max(cut, 0)
+            end = data_end(data, 0, end)
             if end <= 0:
                 if not any_rows:
                     raise Fallback("no data rows")

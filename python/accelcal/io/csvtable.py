@@ -279,6 +279,17 @@ def convert_column(table: Any, j: int, kind: str) -> np.ndarray:
     return slow_float(table.strings(j), allow_unknown)
 
 
+def data_end(data: bytes, pos: int, end: int) -> int:
+    """The end of ``data[pos:end]``'s last line that is not blank (trailing blank lines are not
+    rows); ``pos`` where every line is blank.  Offsets, not slices: the data may be hundreds of MB."""
+    while end > pos:
+        cut = data.rfind(b"\n", pos, end)
+        if data[cut + 1 if cut >= 0 else pos:end].strip():
+            break
+        end = max(cut, pos)
+    return end
+
+
 def cut_short_end(data: bytes, pos: int, end: int, m: int, first: int) -> tuple[int, str | None]:
     """Where the data rows ``data[pos:end]`` end when the file's last line was cut short: a
     last line with no line end after it and fewer than ``m`` cells (split at commas, or at

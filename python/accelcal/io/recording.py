@@ -21,7 +21,7 @@ import numpy as np
 
 from .csvformat import INT, REPR, TEXT, csv_cell, csv_rows
 from .csvtable import (FLOAT_RE, META_KEY_RE, RAW_RE, VECTOR_COLUMNS, ByteTable, ListTable, classify_columns,
-                       convert_columns, cut_short_end, fast_columns, make_table, quote_cell, split_header)
+                       convert_columns, cut_short_end, data_end, fast_columns, make_table, quote_cell, split_header)
 from ..errors import InputError, atomic_write, notes_on_refusal
 from .chunks import Fallback, read_chunked, reader_checks
 from .parquet import is_parquet, read_parquet_recording, write_parquet_columns, write_parquet_recording
@@ -112,12 +112,7 @@ def read_recording(path: Any, n_channels: int | None = None, *, scale: Scale | N
 
     # Trailing blank lines are not rows; blank lines inside the data are errors.
     # (Offsets, not slices: the data may be hundreds of MB.)
-    end = len(data)
-    while end > pos:
-        cut = data.rfind(b"\n", pos, end)
-        if data[cut + 1 if cut >= 0 else pos : end].strip():
-            break
-        end = max(cut, pos)
+    end = data_end(data, pos, len(data))
     if end <= pos:
         raise InputError(source, "no data rows after the header", row=header_line)
     end, cut_note = cut_short_end(data, pos, end, len(names), header_line + 1)
