@@ -362,8 +362,6 @@ def test_a_gain_beyond_any_chip_is_said_to_be_a_wrong_scale(factor, said):
         assert "channel(s) 0, 1, 2" in note[0] and "+42 %" in note[0]
 
 
-@pytest.mark.xfail(strict=True, reason="known regression of this session's merge (docs/limitations.md): with "
-                   "session_offset among the levels bias_drift reaches, the drift is stated beside nonlinearity")
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_a_drift_the_repeated_pose_rules_out_is_no_rival(seed):
     """An offset and a gain error on six poses with the first repeated at the end (a real tumble

@@ -194,8 +194,10 @@ def test_xsens_with_mains_pickup_is_unexplained_at_50_hz(xsens, seed):
 
 
 @pytest.mark.parametrize("seed", [pytest.param(0, marks=pytest.mark.xfail(strict=True, reason=(
-    "known regression of this session's merge (docs/limitations.md): the thermal lag's likelihood interval runs "
-    "past the recording here, so the lag-free form is fitted and bias_drift named"))), 1, 2])
+    "known failure (docs/limitations.md): jig-free, a 363 counts/degC offset (a 4,600-count change) leaves the "
+    "relinearised model (temperature_offset + nonlinearity + misalignment, not converged after 1 iteration, "
+    "held-out residual 142 of 1,632 counts) refitting the lag to 48 s against the true 77 s; the effect alone "
+    "fits 95 s (interval 91-99 s)"))), 1, 2])
 def test_an_offset_through_a_thermal_lag_is_temperature_offset(seed):
     """The sensor's own temperature follows the recorded one through a 30-120 s lag (the
     independent model's shape): named temperature_offset, not a drift, with the lag of the
@@ -221,8 +223,6 @@ def test_on_the_jig_a_lagged_temperature_takes_the_first_step_over_a_drift_path(
 
 
 # ------------------------------------------------------------------ the other real recordings
-@pytest.mark.xfail(strict=True, reason="known regression of this session's merge (docs/limitations.md): the thermal "
-                   "lag's likelihood interval runs past the recording here, so the lag-free form is fitted and bias_drift named")
 @pytest.mark.parametrize("seed", [872050, 872051, 872053])
 def test_imucal_an_offset_through_a_thermal_lag_is_temperature_offset(real_model, seed):
     """imucal's six poses (the model holding their real tilt) with an offset through a 30-120 s

@@ -93,6 +93,20 @@ def test_true_temperature_effect_with_a_varying_temperature_is_still_named():
             assert shape["tau_s"].get("determined"), "a lag the data do not pin quoted as a finding"
 
 
+@pytest.mark.parametrize("seed", [412681, 412682, 412683])
+def test_a_drift_while_the_temperature_only_rises_is_stated_beside_the_temperature(seed):
+    """A gain shift and a random-walk drift in a session whose temperature rises from 18 to 42 degC
+    (the calibration's session at a constant 25 degC beside it): the temperature through its lag
+    follows the drift's trend, and the data cannot say which it is.  The old code judged "the
+    temperature follows time" over both recordings together, where the calibration's constant
+    25 degC broke the rise, and named temperature_offset with the drift in neither the verdict nor
+    ambiguous_with (seeds 412681 and 412683 had it only as the model's second member, 412682 nowhere).
+    Now the drift is the verdict, in ambiguous_with, or the temperature effect is not named."""
+    ds, res = _run("session_gain+bias_drift", seed, own_cal=False)
+    named_temp = res["verdict"].startswith("temperature")
+    assert not named_temp or "bias_drift" in res["ambiguous_with"], (res["verdict"], res["ambiguous_with"])
+
+
 def test_an_offset_of_every_recording_stays_an_offset():
     """One shift for all recordings (a jig recording given in two parts): the plain offset, fewer
     parameters, is the verdict; session_offset adds nothing after it."""

@@ -204,7 +204,8 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
         gain_t = None if state.gain is None else np.asarray(state.gain, float)
         parts.append(dict(ri=ri, rec=rec, usable=usable, pred=pred, off=off, gain=gain_t, f=f, w=w, dw=dw,
                           T=T, key=key, stated=stated, pose_lab=pose_lab))
-        rec_info.append({"source": rec.source, "n_samples": int(n), "n_used": int(usable.sum()), "reference": how,
+        rec_info.append({"source": rec.source, "n_samples": int(n), "n_used": int(usable.sum()),
+                         "duration_s": float(np.ptp(np.asarray(rec.t, float))) if n else 0.0, "reference": how,
                          "clipping": {"levels_lo": levels.lo.tolist(), "levels_hi": levels.hi.tolist(),
                                       "inside_range": (levels.inside_lo | levels.inside_hi).tolist(),
                                       "clipped_per_channel": clipped.sum(axis=0).astype(int).tolist(),

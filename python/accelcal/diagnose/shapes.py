@@ -29,7 +29,7 @@ import numpy as np
 
 from ..effects.fitting import Cand, LinearCandidate
 from ..effects.settings import BACKFIT_PASSES
-from .compare import RIVAL_GAIN_SHARE, SEPARATE_T
+from .compare import HOLDS_LEFT, RIVAL_GAIN_SHARE, SEPARATE_T
 from .relinearise import joint_fit
 
 MAX_TWIN_MEMBERS = 3       # the model's first members whose rivals are compared by their predictions ...
@@ -118,7 +118,10 @@ def prediction_twins(D, cands, chosen: list[str], pools: list[dict], e: np.ndarr
                 # would nest the model)
                 swap = [c.name if nm == m else nm for nm in fitted]
                 alts = [swap] if len(swap) > 1 else []
-                more = [nm for nm in cands[c.name].reaches_level_of if nm in cands and nm not in swap and nm != m]
+                # (nor a level that cannot be fitted here, or that holds the member's change: a shift
+                # per recording holds an offset, and would nest the model just as well)
+                more = [nm for nm in cands[c.name].reaches_level_of if nm in cands and nm not in swap and nm != m
+                        and not cands[nm].skip(D) and not _holds_change(D, cands, nm, joint[m].delta)]
                 if more:
                     alts.append(swap + more)
                 for names in alts:
@@ -137,6 +140,16 @@ def prediction_twins(D, cands, chosen: list[str], pools: list[dict], e: np.ndarr
             out.append({"effect": m, "with": c.name, "model": names, "separation": float(sep), "needed": needed,
                         "ambiguous": bool(sep < needed)})
     return out
+
+
+def _holds_change(D, cands, name: str, change: np.ndarray) -> bool:
+    """Whether ``name``'s form, fitted to ``change`` alone (no noise), leaves at most HOLDS_LEFT of
+    its weighted energy (:func:`~.compare.holds` for a change that is no candidate's fit)."""
+    total = _chi2(D, change)
+    if total <= 0.0:
+        return True
+    fit = joint_fit(D, cands, [name], change, passes=1)[name]
+    return _chi2(D, change - fit.delta) <= HOLDS_LEFT * total
 
 
 def backfit(D, cands, names: list[str], e: np.ndarray, start: dict[str, Cand], unit: float):

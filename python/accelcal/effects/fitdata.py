@@ -127,17 +127,27 @@ def force_at(D: FitData) -> np.ndarray:
 
 
 def temp_follows_time(D: FitData) -> bool:
-    """Whether the recorded temperature is a monotone function of time (it rises, or falls,
-    and never comes back: the medians of TEMP_TIME_BINS stretches of time change by at least
-    TEMP_MONOTONE of their total variation from first to last).  An effect of such a
-    temperature is also an effect of time: a drift can change the readings as it does, and
-    only a temperature that returns to a value at a later time tells the two apart."""
+    """Whether the recorded temperature is a monotone function of time within each recording in
+    which it varies (it rises, or falls, and never comes back: the medians of TEMP_TIME_BINS
+    stretches of that recording's time change by at least TEMP_MONOTONE of their total variation
+    from first to last; a recording at one temperature, such as a calibration's session at 25
+    degC beside a warming one, tells nothing either way).  An effect of such a temperature is
+    also an effect of time: a drift can change the readings as it does, and only a temperature
+    that returns to a value at a later time of one recording tells the two apart."""
     if temp_skip(D) is not None:
         return False
-    T = D.temp[np.argsort(D.tg, kind="stable")]
-    m = np.array([np.median(b) for b in np.array_split(T, min(TEMP_TIME_BINS, T.size))])
-    tv = float(np.abs(np.diff(m)).sum())
-    return tv > 0 and abs(float(m[-1] - m[0])) >= TEMP_MONOTONE * tv
+    seen = False
+    for r in np.unique(D.rec):
+        m_r = D.rec == r
+        T = D.temp[m_r][np.argsort(D.tg[m_r], kind="stable")]
+        if T.size < 2 or float(np.ptp(T)) < TEMP_MIN_SPAN_C:
+            continue
+        m = np.array([np.median(b) for b in np.array_split(T, min(TEMP_TIME_BINS, T.size))])
+        tv = float(np.abs(np.diff(m)).sum())
+        if not (tv > 0 and abs(float(m[-1] - m[0])) >= TEMP_MONOTONE * tv):
+            return False
+        seen = True
+    return seen
 
 
 def temp_skip(D: FitData) -> str | None:

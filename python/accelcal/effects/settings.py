@@ -16,6 +16,7 @@ T_LAG_MAX_SPANS = 2.0   # ... up to this many times the span of the samples the 
 #: within T_LAG_INSIDE x the longest recording; else the nested form (no lag) is fitted and reported
 T_LAG_CRIT_CHI2 = 3.84
 T_LAG_INSIDE = 1.0
+T_LAG_BISECT = 4            # ... its ends refined by this many bisections of a step of 2 (to 2^(1/16))
 T_REF_SPANS = 2.0          # a fitted reference temperature stays within this many spans of temp_c
 MISALIGN_MAX_RAD = 0.35     # relinearised misalignment fits stay below ~20 deg
 POSITION_TOL_M = 1e-3      # position_error reports dr along directions with 1-sigma below this

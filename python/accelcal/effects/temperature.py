@@ -12,7 +12,7 @@ from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_list, channel_mask, per_channel, strongest, temperature_of
 from .fitdata import FitData, t_ref_known, temp_skip
 from .fitting import Cand, Candidate, jig_rows, joint_stats, sep_stats, solve_groups
-from .settings import (PENALTY_PER_PARAM, T_LAG_CRIT_CHI2, T_LAG_GRID_S, T_LAG_INSIDE, T_LAG_MAX_SPANS,
+from .settings import (PENALTY_PER_PARAM, T_LAG_BISECT, T_LAG_CRIT_CHI2, T_LAG_GRID_S, T_LAG_INSIDE, T_LAG_MAX_SPANS,
                        T_REF_SPANS)
 
 
@@ -145,27 +145,40 @@ class TemperatureFit(Candidate):
     def _lag_interval(self, D, lag_fit, best, S0w) -> dict:
         """The lags whose profile objective (penalty left out) lies within T_LAG_CRIT_CHI2 (x the
         residual's excess over the floor and the poses' design effect) of the best one's: the
-        interval's ends in steps of 2 (0 where no lag fits as well, inf where none up to the first step
-        beyond T_LAG_INSIDE x the recording does worse), and whether that pins the lag: the interval excludes 0 and ends
-        within T_LAG_INSIDE x the longest recording (D.rec's runs)."""
+        interval's ends found in steps of 2 and refined by bisection (0 where no lag fits as well, inf
+        where none up to the first step beyond T_LAG_MAX_SPANS x the recording does worse), and
+        whether that pins the lag: the interval excludes 0 and ends within T_LAG_INSIDE x the longest
+        recording (:func:`recording_span`)."""
         tau0 = float(best[1])
         obj0 = best[0] - PENALTY_PER_PARAM
         rows = max(D.n * D.R, 1)
         s2 = max(1.0, float(S0w.sum() + obj0) / rows)
         crit = T_LAG_CRIT_CHI2 * s2 * float(getattr(D, "deff", 1.0) or 1.0)
-        span = max((float(np.ptp(D.tg[D.rec == r])) for r in np.unique(D.rec)), default=0.0)
+        span = recording_span(D)
 
         def worse(tau):
             return (lag_fit(tau)[0] - (PENALTY_PER_PARAM if tau else 0.0)) - obj0 > crit
 
-        # upwards in steps of 2 up to the first lag beyond T_LAG_INSIDE x the recording (no crossing
+        def crossing(ok, bad):
+            # the interval's end between a lag that fits as well (ok) and one that does worse (bad), by
+            # bisection in log tau to a ratio of 2^(1/16) (the steps of 2 alone had overstated the interval
+            # by up to 2x: a lag of 77 s in a 158 s recording read as "up to 263 s", past the recording)
+            for _ in range(T_LAG_BISECT):
+                mid = math.sqrt(ok * bad)
+                if worse(mid):
+                    bad = mid
+                else:
+                    ok = mid
+            return bad
+
+        # upwards in steps of 2 up to the first lag beyond T_LAG_MAX_SPANS x the recording (no crossing
         # there: the interval runs beyond what the recording can pin, reported as inf)
         hi = math.inf
         tau = tau0
-        while tau <= T_LAG_INSIDE * span:
+        while tau <= T_LAG_MAX_SPANS * span:
             tau *= 2.0
             if worse(tau):
-                hi = tau
+                hi = crossing(tau / 2.0, tau)
                 break
         lo = 0.0
         if worse(0.0):
@@ -174,6 +187,7 @@ class TemperatureFit(Candidate):
                 tau /= 2.0
                 lo = tau
                 if worse(tau):
+                    lo = crossing(2.0 * tau, tau)
                     break
         determined = bool(lo > 0.0 and hi <= T_LAG_INSIDE * span)
         return {"value": tau0, "interval_s": [lo, hi], "determined": determined, "span_s": span,
@@ -252,6 +266,15 @@ class TemperatureFit(Candidate):
             curv = (op + om - 2 * o0) / hstep ** 2
             sigma["t_ref"] = float(math.sqrt(2.0 * scale / curv)) if curv > 0 else math.inf
         return Cand(self.name, npar, Sw, Su, delta, params, sigma, notes)
+
+
+def recording_span(D) -> float:
+    """The longest recording's length (s), first to last sample (``D.rec_info[].duration_s``: the
+    temperature is recorded throughout, also where the diagnosis scores no sample), else the span
+    of the samples used per recording."""
+    spans = [float(ri.get("duration_s", 0.0)) for ri in D.rec_info]
+    used = [float(np.ptp(D.tg[D.rec == r])) for r in np.unique(D.rec)]
+    return max(spans + used, default=0.0)
 
 
 def _interval(shape: dict) -> str:
