@@ -139,6 +139,30 @@ def test_random_walk_drift_is_fitted_as_a_path(monkeypatch):
     assert path["alone"]["shrink"] > ramp["alone"]["shrink"] + 0.05
 
 
+def test_a_path_or_a_cube_is_quoted_only_where_the_data_determine_it():
+    """A drift's path through knots and a bend's cube are shapes beyond a nested form (the ramp, the
+    square): each is fitted only where the chi2 its extra parameters gain passes the 95 % point
+    (times the residual's excess and the poses' design effect; effects.fitting.shape_pinned), and
+    the entry says so in ``shape`` (before, an AIC-like 2 per parameter decided and nothing was
+    said).  The random walk's path (rho 10) passes by far; a ramp's own fit has no path."""
+    walk = B.make_dataset("bias_drift", 39, rho=10.0, walk=True)
+    e = diagnose(walk["device"], walk["cal"], walk["recordings"], seed=39, candidates=["bias_drift"])["effects"][0]
+    sh = e["shape"]["path"]
+    assert sh["determined"] and sh["chi2_gain"] > sh["crit_chi2"] > 0 and sh["knots"] == len(e["params"]["path_t"])
+    ramp = B.make_dataset("bias_drift", 2, rho=6.0, walk=False)
+    e = diagnose(ramp["device"], ramp["cal"], ramp["recordings"], seed=2, candidates=["bias_drift"])["effects"][0]
+    assert len(e["params"]["path_t"]) == 0
+    if "shape" in e:                                    # a path was tried and not determined
+        assert not e["shape"]["path"]["determined"] and e["shape"]["path"]["used"] == 0.0
+    bend = B.make_dataset("nonlinearity", 3, rho=6.0)
+    e = diagnose(bend["device"], bend["cal"], bend["recordings"], seed=3, candidates=["nonlinearity"])["effects"][0]
+    k3 = np.asarray(e["params"]["k3"], float)
+    if np.any(k3 != 0):
+        assert e["shape"]["k3"]["determined"] and e["shape"]["k3"]["chi2_gain"] > e["shape"]["k3"]["crit_chi2"]
+    elif "shape" in e:
+        assert not e["shape"]["k3"]["determined"] and any("the cube is not determined" in n for n in e["notes"])
+
+
 # ---------------------------------------------------------------- skipping, modes
 def test_static_only_skips_motion_effects():
     dev = default_device()

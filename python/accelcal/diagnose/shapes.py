@@ -46,6 +46,10 @@ SHAPE_HINTS = {
                         "lag; or a recording at the calibration's temperature",
     "bandwidth": "motion above the corner frequency (fast turns, a shake or a tap: a low-pass loses "
                  "amplitude there, a time skew only delays)",
+    "nonlinearity": "poses between the axes and at several tilts between -g and +g on each axis (a cube bends "
+                    "the reading there unlike a square; at +-g along an axis it is a gain)",
+    "bias_drift": "a pose repeated several times through the recording (a path's turns show between the "
+                  "repeats; a ramp changes them evenly)",
 }
 
 

@@ -10,7 +10,7 @@ from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_float_array, as_list, channel_mask, per_channel, start_time, strongest
 from .channel import Misalignment
 from .fitdata import FitData, force_at, temp_follows_time, temp_skip
-from .fitting import Cand, LinearCandidate, block_ss, linear_fit
+from .fitting import Cand, LinearCandidate, block_ss, linear_fit, shape_pinned
 from .settings import BLOCK_S, DRIFT_KNOT_FRACTIONS, DRIFT_MIN_BLOCKS, PENALTY_PER_PARAM
 
 
@@ -188,6 +188,18 @@ class BiasDrift(LinearCandidate, Effect):
             Z = self._nuisance(D)
             if pgain_of(np.concatenate([best_X, Z], axis=2)) <= pgain_of(np.concatenate([self.columns(D), Z], axis=2)):
                 return ramp
+            # and the data must determine it beyond the ramp (effects.fitting.shape_pinned), else the ramp
+            # is fitted and the path's test is the candidate's ``shape``
+            test = shape_pinned(D, ramp.Sw, best.Sw, best.k - ramp.k)
+            knots = int(np.size(best.params["path_t"]))
+            if not test["determined"]:
+                ramp.shape = {"path": dict(test, knots=knots, used=0.0)}
+                ramp.notes = list(ramp.notes) + [
+                    f"a path through {knots} knots is not determined by these data beyond the ramp (its chi2 gain "
+                    f"{test['chi2_gain']:.3g} against {test['crit_chi2']:.3g} for {test['extra_params']} more "
+                    "parameters): the ramp is fitted"]
+                return ramp
+            best.shape = {"path": dict(test, knots=knots)}
         return best
 
     def takes_pose_levels(self, fit):
@@ -200,7 +212,9 @@ class BiasDrift(LinearCandidate, Effect):
         S0w, S0u = block_ss(D, D.rows(y))
         X = self._path_columns(D, float(knots[0]), float(knots[1] - knots[0]), knots.size - 1)
         Sw, Su, theta, cov, k, delta = linear_fit(D, X, y, S0w, S0u)
-        return Cand(self.name, k, Sw, Su, delta, dict(like.params), dict(like.sigma))
+        out = Cand(self.name, k, Sw, Su, delta, dict(like.params), dict(like.sigma))
+        out.shape = like.shape
+        return out
 
     # -- the benchmark --------------------------------------------------------
 

@@ -8,9 +8,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.interpolate import CubicSpline
+from scipy.stats import chi2 as chi2_dist
 
 from .fitdata import FitData, is_moving
-from .settings import SEARCH_GROW, SEARCH_MAX_S, SEEN_MIN, SKEW_GRID
+from .settings import SEARCH_GROW, SEARCH_MAX_S, SEEN_MIN, SHAPE_LEVEL, SKEW_GRID
 
 
 @dataclass
@@ -48,6 +49,22 @@ class Cand:
 def block_ss(D: FitData, Rr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     sq = Rr * Rr
     return D.bsum(np.sum(sq * D.W, axis=1)), D.bsum(sq.sum(axis=1))
+
+
+def shape_pinned(D: FitData, Sw_nested: np.ndarray, Sw_shaped: np.ndarray, extra_k: int) -> dict:
+    """Whether the data determine a shape beyond its nested form (a bend's cube beyond the square, a
+    drift's path through knots beyond the ramp): the all-data chi2 the shape's ``extra_k`` more
+    parameters gain must exceed the SHAPE_LEVEL point of chi2 with ``extra_k`` degrees of freedom,
+    times the residual's excess over the floor and the poses' design effect (the lag's rule,
+    :meth:`accelcal.effects.temperature.TemperatureFit._lag_interval`).  An AIC-like penalty of 2
+    per parameter alone had let a shape in on a gain of 2.1 chi2 per parameter.  Returns the
+    ``shape`` entry's fields: ``determined``, ``chi2_gain``, ``crit_chi2``, ``extra_params``."""
+    rows = max(D.n * D.R, 1)
+    s2 = max(1.0, float(np.sum(Sw_shaped)) / rows)
+    gain = float(np.sum(Sw_nested) - np.sum(Sw_shaped))
+    k = max(int(extra_k), 1)
+    crit = float(chi2_dist.ppf(SHAPE_LEVEL, k)) * s2 * float(getattr(D, "deff", 1.0) or 1.0)
+    return {"determined": bool(gain > crit), "chi2_gain": gain, "crit_chi2": crit, "extra_params": k}
 
 
 def kept_space(G: np.ndarray, d: np.ndarray, rtol: float):

@@ -14,7 +14,7 @@ import numpy as np
 from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_list, channel_mask, per_channel, strongest
 from .fitdata import FitData
-from .fitting import Cand, LinearCandidate, linear_fit
+from .fitting import Cand, LinearCandidate, linear_fit, shape_pinned
 from .settings import PENALTY_PER_PARAM
 
 #: the cube is fitted on a channel only where the data can tell it from a gain: the part of
@@ -94,23 +94,35 @@ class Nonlinearity(LinearCandidate, Effect):
 
     def cv(self, D, y, pcur, S0w, S0u, folds=True):
         # the square alone, or the square and the cube: the one with the larger penalised held-out
-        # gain (a bend of one parity does not pay for the other's parameters)
+        # gain (a bend of one parity does not pay for the other's parameters); the cube only where the
+        # data determine it beyond the square (shape_pinned), else the square is fitted and the cube's
+        # test is the candidate's ``shape``
         X = self.columns(D)
-        best, best_pg = None, -np.inf
+        fits = []
         for cols in (X[:, :, :1], X):
             Sw, Su, theta, cov, k, delta = linear_fit(D, cols, y, S0w, S0u)
-            pg = float((S0w - Sw).sum()) - PENALTY_PER_PARAM * k
-            if best is None or pg > best_pg:
-                th = np.zeros((theta.shape[0], 2))
-                cv2 = np.zeros((theta.shape[0], 2, 2))
-                m = cols.shape[2]
-                th[:, :m] = theta
-                cv2[:, :m, :m] = cov
-                p, s = self.to_params(D, th, cv2)
-                best, best_pg = Cand(self.name, k, Sw, Su, delta, p, s), pg
+            th = np.zeros((theta.shape[0], 2))
+            cv2 = np.zeros((theta.shape[0], 2, 2))
+            m = cols.shape[2]
+            th[:, :m] = theta
+            cv2[:, :m, :m] = cov
+            p, s = self.to_params(D, th, cv2)
+            fits.append((Cand(self.name, k, Sw, Su, delta, p, s), float((S0w - Sw).sum()) - PENALTY_PER_PARAM * k))
             if not np.any(X[:, :, 1]):
                 break                                   # no channel tells a cube from a gain
-        return best
+        (square, pg_sq), full = fits[0], (fits[1] if len(fits) > 1 else None)
+        if full is None or full[1] <= pg_sq:
+            return square
+        cube = full[0]
+        test = shape_pinned(D, square.Sw, cube.Sw, cube.k - square.k)
+        if test["determined"]:
+            cube.shape = {"k3": test}
+            return cube
+        square.shape = {"k3": dict(test, used=0.0)}
+        square.notes = list(square.notes) + [
+            f"the cube is not determined by these data beyond the square (its chi2 gain {test['chi2_gain']:.3g} "
+            f"against {test['crit_chi2']:.3g} for {test['extra_params']} more parameter(s)): the square alone is fitted"]
+        return square
 
     def to_params(self, D, theta, cov):
         sd = np.sqrt(np.maximum(np.einsum("nkk->nk", cov), 0.0))

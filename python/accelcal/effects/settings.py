@@ -15,6 +15,9 @@ T_LAG_MAX_SPANS = 2.0   # ... up to this many times the span of the samples the 
 #: over the floor and the poses' design effect) of the best form an interval that excludes 0 and ends
 #: within T_LAG_INSIDE x the longest recording; else the nested form (no lag) is fitted and reported
 T_LAG_CRIT_CHI2 = 3.84
+#: a bend's cube and a drift's path through knots are shapes beyond a nested form (the square; the ramp):
+#: the chi2 their extra parameters gain must pass this point of chi2 (effects.fitting.shape_pinned)
+SHAPE_LEVEL = 0.95
 T_LAG_INSIDE = 1.0
 T_LAG_BISECT = 4            # ... its ends refined by this many bisections of a step of 2 (to 2^(1/16))
 T_REF_SPANS = 2.0          # a fitted reference temperature stays within this many spans of temp_c
