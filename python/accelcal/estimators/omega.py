@@ -134,7 +134,7 @@ def _products_matrix(p: np.ndarray) -> np.ndarray:
     return np.stack([np.stack([xx, xy, zx], -1), np.stack([xy, yy, yz], -1), np.stack([zx, yz, zz], -1)], -2)
 
 
-def omega_ml(q, m, start=None, iterations: int = 4) -> tuple[np.ndarray, np.ndarray]:
+def omega_ml(q, m, start=None, iterations: int = 4, ridge: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Per-sample maximum-likelihood omega (up to its sign) from the centripetal readings.
 
     Parameters
@@ -147,6 +147,8 @@ def omega_ml(q, m, start=None, iterations: int = 4) -> tuple[np.ndarray, np.ndar
         of the symmetric matrix of products ``m^-1 q``), which needs all six products.
     iterations : int
         Gauss-Newton steps (fixed).
+    ridge : float, optional
+        Added to the normal matrix's diagonal, per (rad/s)^2 (default ``RANK_RTOL trace(m)``).
 
     Returns
     -------
@@ -162,7 +164,7 @@ def omega_ml(q, m, start=None, iterations: int = 4) -> tuple[np.ndarray, np.ndar
         w = V[..., :, -1] * np.sqrt(np.maximum(lam[..., -1], 0.0))[..., None]
     else:
         w = np.array(start, float)
-    ridge = RANK_RTOL * max(float(np.trace(m)), 1e-300) * np.eye(3)
+    ridge = (RANK_RTOL * max(float(np.trace(m)), 1e-300) if ridge is None else float(ridge)) * np.eye(3)
     for _ in range(iterations):
         J = model.product_jacobian(w)
         Jt = np.swapaxes(J, -1, -2)
