@@ -344,10 +344,12 @@ ac_status ac_omega_check(const ac_omega_table *t)
         if (t->shift[j] < -31 || t->shift[j] > 31) {
             return AC_ERR_FORMAT;
         }
+        uint32_t suml = 0u;
         for (i = 0u; i < (uint8_t)t->n; i++) {
             sum += ac_abs_u((int32_t)t->t[j][i]);
+            suml += ac_abs_u((int32_t)t->tl[j][i]);
         }
-        if (sum > 65535UL) {
+        if (sum > 65535UL || suml > 65535UL) {
             return AC_ERR_FORMAT;
         }
     }
@@ -446,9 +448,12 @@ ac_status ac_omega_step(ac_omega_state *st, const ac_omega_table *t, const int16
     copy_state(&s, st);
     /* the readings through the table's rows */
     for (i = 0u; i < 9u; i++) {
-        ac_xf v;
+        ac_xf v, vl;
         int32_t acc = ac_i_from_u(ac_dot16(0u, t->t[i], x, (uint8_t)t->n));
+        int32_t accl = ac_i_from_u(ac_dot16(0u, t->tl[i], x, (uint8_t)t->n));
         ac_xfp_from_fixed(&v, acc, (int16_t)t->shift[i]);
+        ac_xfp_from_fixed(&vl, accl, (int16_t)(t->shift[i] + AC_OMEGA_LO_BITS));
+        ac_xfp_add(&v, &v, &vl);
         ac_xfp_sub((i < 6u) ? &w.q[i] : &w.lin[i - 6u], &v, &t->k[i]);
     }
     /* 1. prediction */

@@ -24,9 +24,12 @@
  *   4. P = (P^-1 + J^T m J)^-1; alpha[n] at the new w.
  *
  * Arithmetic and scaling:
- *   - q and the uncorrected alpha: sum_i t[j][i] x_i, int16 x int16 into an
- *     int32 accumulator, exact (table invariant sum_i |t[j][i]| <= 65535);
- *     then  row_j = acc * 2^-shift[j] - k[j]  as an ac_xf (rounded once).
+ *   - q and the uncorrected alpha: each row's coefficients in two int16 parts,
+ *     t + tl 2^-AC_OMEGA_LO_BITS (about 25 significant bits: whitened q needs
+ *     some 1e-5 relative at readings of 3e4 counts, one int16 gives 2e-4);
+ *     sum_i t[j][i] x_i and sum_i tl[j][i] x_i, int16 x int16 into int32
+ *     accumulators, exact (table invariant sum_i |t| <= 65535, the same for tl);
+ *     then  row_j = acc 2^-shift[j] + acc_lo 2^-(shift[j]+12) - k[j]  in ac_xf.
  *     Units: q in whitened counts (counts / noise sd), alpha in rad/s^2.
  *   - everything after is ac_xf (30-bit mantissa, 16-bit exponent, each
  *     operation rounded to nearest): no fixed Q format spans q (up to 1e5),
@@ -67,6 +70,7 @@
 #include "ac_xf.h"
 
 #define AC_OMEGA_Q16_FRAC 16
+#define AC_OMEGA_LO_BITS 12   /* the rows' low parts: 2^-12 of t's LSB */
 #define AC_OMEGA_ITER 2      /* Gauss-Newton steps on the posterior (estimators.omega: iterations) */
 #define AC_OMEGA_ML_ITER 4   /* Gauss-Newton steps of the per-sample ML (estimators.omega_ml) */
 #define AC_OMEGA_SQRT_ITER 6 /* Newton steps of the square root */
@@ -80,8 +84,9 @@
  * upper triangle row by row (21 entries: 00 01 .. 05 11 .. 15 22 .. 55). */
 typedef struct ac_omega_table {
     uint16_t n;                         /* channels, 6..AC_MAX_CHANNELS */
-    int8_t shift[9];                    /* rows 0..5 q, 6..8 alpha: value = acc 2^-shift - k */
+    int8_t shift[9];                    /* rows 0..5 q, 6..8 alpha: value = (t + tl 2^-AC_OMEGA_LO_BITS) 2^-shift */
     int16_t t[9][AC_MAX_CHANNELS];      /* each row: sum |t| <= 65535 */
+    int16_t tl[9][AC_MAX_CHANNELS];     /* the rows' low parts: sum |tl| <= 65535 */
     ac_xf k[9];                         /* the residual offsets through the rows */
     ac_xf m[21];                        /* m (whitened counts per (rad/s)^2 ... 6x6) */
     ac_xf minv[21];                     /* m^-1 */

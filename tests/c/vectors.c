@@ -224,6 +224,10 @@ static union {
         ac_nonlin_table nl;
         int16_t line[AC_MAX_CHANNELS * 8u];
     } terms;
+    struct { /* tests/c/vectors_omega.c */
+        ac_omega_table tab;
+        ac_omega_state st;
+    } omega;
 } mem;
 
 /* ---- fixed ----------------------------------------------------------------------- */
@@ -1506,6 +1510,7 @@ static void vec_rails(void)
 }
 
 #include "vectors_terms.c"
+#include "vectors_omega.c"
 
 int main(void)
 {
@@ -1527,6 +1532,7 @@ int main(void)
     vec_tshift_edges();
     vec_rails();
     vec_terms();
+    vec_omega();
     framing = 0u;
     OUT_S("END accelcal-vectors ");
     out_hex(n_lines, 8u);

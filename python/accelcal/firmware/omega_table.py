@@ -32,6 +32,8 @@ OMEGA_SIGMA0 = 0.01
 #: the six entries (00 01 02 11 12 22) of a symmetric 3x3 and the upper triangle of a 6x6
 _SYM3 = ([0, 0, 0, 1, 1, 2], [0, 1, 2, 1, 2, 2])
 _SYM6 = np.triu_indices(6)
+#: ac_omega.h's AC_OMEGA_LO_BITS
+LO_BITS = lib.AC_OMEGA_LO_BITS
 
 
 def to_xf(v: float) -> tuple[int, int]:
@@ -69,9 +71,9 @@ class OmegaTable:
     Attributes
     ----------
     shift : ndarray (9,) int
-    t : ndarray (9, N) int16
+    t, tl : ndarray (9, N) int16
         Rows 0..5: q (whitened counts per count); 6..8: alpha (rad/s^2 per count), each
-        ``t 2^-shift``.
+        ``(t + tl 2^-LO_BITS) 2^-shift``.
     k : ndarray (9,)
         The residual offsets through the rows (exact ac_xf values).
     m, minv : ndarray (6, 6)
@@ -85,6 +87,7 @@ class OmegaTable:
 
     shift: np.ndarray
     t: np.ndarray
+    tl: np.ndarray
     k: np.ndarray
     m: np.ndarray
     minv: np.ndarray
@@ -101,7 +104,7 @@ class OmegaTable:
 
     def rows(self) -> np.ndarray:
         """(9, N) the rows' exact values."""
-        return self.t.astype(float) * 2.0 ** (-self.shift.astype(float))[:, None]
+        return (self.t + self.tl * 2.0 ** -LO_BITS) * 2.0 ** (-self.shift.astype(float))[:, None]
 
     def cdata(self):
         """A new ``ac_omega_table *`` with these entries."""
@@ -111,6 +114,7 @@ class OmegaTable:
             c.shift[j] = int(self.shift[j])
             for i in range(self.n):
                 c.t[j][i] = int(self.t[j, i])
+                c.tl[j][i] = int(self.tl[j, i])
             c.k[j].m, c.k[j].e = to_xf(self.k[j])
         for idx, (i, j) in enumerate(zip(*_SYM6)):
             c.m[idx].m, c.m[idx].e = to_xf(self.m[i, j])
@@ -127,12 +131,14 @@ class OmegaTable:
         return c
 
 
-def _rows_int16(rows: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray]:
+def _rows_int16(rows: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     shifts = np.array([row_shift(rows[j], f"{what} row {j}") for j in range(rows.shape[0])])
-    t = round_half_up(rows * 2.0 ** shifts[:, None])
-    if np.any(np.abs(t) > COEF_MAX):
+    scaled = rows * 2.0 ** shifts[:, None]
+    t = round_half_up(scaled)
+    tl = round_half_up((scaled - t) * 2.0 ** LO_BITS)      # |tl| <= 2^(LO_BITS-1)
+    if np.any(np.abs(t) > COEF_MAX) or np.any(np.abs(tl).sum(axis=1) > 65535):
         raise QuantizeError(f"{what}: a coefficient beyond int16")
-    return t.astype(np.int16), shifts
+    return t.astype(np.int16), tl.astype(np.int16), shifts
 
 
 def omega_table(tables: FixedTables, noise_counts, dt: float, *, snap: float = OMEGA_SNAP,
@@ -155,15 +161,15 @@ def omega_table(tables: FixedTables, noise_counts, dt: float, *, snap: float = O
         raise QuantizeError("the fixed omega needs a layout whose channels fix all six rate products "
                             "(m invertible: 12 channels as four triads on a tetrahedron, or triads at the "
                             "origin and on the axes); this one fixes fewer")
-    t, shifts = _rows_int16(np.vstack([split.qmap, split.lin[3:]]), "omega")
-    exact_rows = t.astype(float) * 2.0 ** (-shifts.astype(float))[:, None]
+    t, tl, shifts = _rows_int16(np.vstack([split.qmap, split.lin[3:]]), "omega")
+    exact_rows = (t + tl * 2.0 ** -LO_BITS) * 2.0 ** (-shifts.astype(float))[:, None]
     m = _xf_round(split.m)
     m = np.triu(m) + np.triu(m, 1).T
     minv = np.linalg.inv(m)
     minv = _xf_round((minv + minv.T) / 2.0)
     Q = dt * dt * split.cov[3:, 3:] + (snap * dt ** 3 / 12.0) ** 2 * np.eye(3)
     Q = _xf_round((Q + Q.T) / 2.0)
-    return OmegaTable(shift=shifts.astype(np.int8), t=t, k=_xf_round(exact_rows @ o), m=m, minv=minv,
+    return OmegaTable(shift=shifts.astype(np.int8), t=t, tl=tl, k=_xf_round(exact_rows @ o), m=m, minv=minv,
                       leak=_xf_round(split.leak[3:]), qn=Q, p0=_xf_round(sigma0 ** 2 * np.eye(3)),
                       dt=xf_value(to_xf(dt)), jump=xf_value(to_xf(jump)),
                       ridge=xf_value(to_xf(OMEGA_RANK_RTOL * float(np.trace(m)))))
@@ -215,10 +221,12 @@ def omega_header_lines(table: OmegaTable, prefix: str) -> list[str]:
     header's implementation section."""
     p = prefix.lower()
     out = [f"const ac_omega_table {p}_omega = {{", f"    {table.n},",
-           "    {" + ", ".join(str(int(v)) for v in table.shift) + "},", "    {"]
-    for j in range(9):
-        out.append("        {" + ", ".join(str(int(v)) for v in table.t[j]) + "},")
-    out.append("    },")
+           "    {" + ", ".join(str(int(v)) for v in table.shift) + "},"]
+    for part in (table.t, table.tl):
+        out.append("    {")
+        for j in range(9):
+            out.append("        {" + ", ".join(str(int(v)) for v in part[j]) + "},")
+        out.append("    },")
     xs = lambda vals: "    {" + ", ".join(_xf_init(v) for v in vals) + "},"  # noqa: E731
     out.append(xs(table.k))
     out.append(xs(table.m[_SYM6]))
