@@ -224,10 +224,6 @@ static union {
         ac_nonlin_table nl;
         int16_t line[AC_MAX_CHANNELS * 8u];
     } terms;
-    struct { /* tests/c/vectors_omega.c */
-        ac_omega_table tab;
-        ac_omega_state st;
-    } omega;
 } mem;
 
 /* ---- fixed ----------------------------------------------------------------------- */
