@@ -43,7 +43,7 @@ def column_start(q, minv) -> np.ndarray:
     return np.where((d > 0)[:, None], w, 0.0)
 
 
-def omega_reference(table: OmegaTable, x) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def omega_reference(table: OmegaTable, x, margins: list | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The core's ``ac_omega_step`` in float64 on the table's exact values.
 
     Parameters
@@ -51,6 +51,8 @@ def omega_reference(table: OmegaTable, x) -> tuple[np.ndarray, np.ndarray, np.nd
     table : OmegaTable
     x : array_like (n, N)
         The pre-trimmed readings (int16 values), counts.
+    margins : list, optional
+        Appended per sample: the jump test's margin (:func:`omega_filter.fuse`).
 
     Returns
     -------
@@ -65,7 +67,7 @@ def omega_reference(table: OmegaTable, x) -> tuple[np.ndarray, np.ndarray, np.nd
     q, lin = y[:, :6], y[:, 6:]
     w_ml, _ = omega_ml(q, table.m, column_start(q, table.minv), ML_ITERATIONS, table.ridge)
     w, cov = fuse(q, lin, table.leak, table.qn, table.m, w_ml, table.dt, np.zeros(3), table.p0,
-                  FUSE_ITERATIONS, table.jump)
+                  FUSE_ITERATIONS, table.jump, margins)
     return w, cov, w_ml
 
 
