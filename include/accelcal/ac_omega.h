@@ -18,8 +18,11 @@
  *      entry, then AC_OMEGA_ML_ITER Gauss-Newton steps with a ridge), its sign
  *      the one nearer w; when cost(c) < cost(w) - jump the prior is centred
  *      on c (flag AC_OMEGA_FLAG_JUMP).  cost(x) = (x-w)^T P^-1 (x-w) +
- *      p^T m p - 2 q^T p.  The ML is skipped when no c can pass the test
- *      (cost(w) - jump <= -q^T m^-1 q, the cost's lower bound): same result;
+ *      p^T m p - 2 q^T p, the difference taken as (c-w)^T P^-1 (c-w) +
+ *      (p(c) - p(w))^T (m (p(c) + p(w)) - 2 q) (the costs are some q^T m^-1 q,
+ *      up to 1e11, their difference a few units).  The ML is skipped when no c
+ *      can pass the test: (p(w) - m^-1 q)^T m (p(w) - m^-1 q) <= jump (the
+ *      cost's lower bound -q^T m^-1 q): the same result;
  *   3. AC_OMEGA_ITER Gauss-Newton steps on the cost;
  *   4. P = (P^-1 + J^T m J)^-1; alpha[n] at the new w.
  *

@@ -13,15 +13,16 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from ..firmware.omega_table import OmegaTable, omega_run, omega_table
-from ..firmware.quantize import QuantizeError, quantize_calibration
+from ..firmware.native import FORMATS
+from ..firmware.omega_table import OmegaTable, device_omega_table, omega_run
+from ..firmware.quantize import quantize_calibration
 from ..io.recording import check_for_device
 from .common import channel_noise, uniform_dt
-from .omega import ArrayOmega, omega_ml, omega_observability
+from .omega import ArrayOmega, omega_from_recording, omega_ml, omega_observability, wants_array_omega
 from .omega_filter import fuse
 
 __all__ = ["ML_ITERATIONS", "FUSE_ITERATIONS", "column_start", "omega_reference", "pretrim",
-           "table_for_recording", "omega_fixed_from_recording"]
+           "table_for_recording", "omega_fixed_from_recording", "choose_omega_engine"]
 
 #: ac_omega.h's AC_OMEGA_ML_ITER and AC_OMEGA_ITER
 ML_ITERATIONS = 4
@@ -79,14 +80,27 @@ def pretrim(tables, raw) -> tuple[np.ndarray, np.ndarray]:
 
 
 def table_for_recording(device, cal, rec) -> tuple[object, OmegaTable]:
-    """The quantised calibration and the omega table of a recording (the device's noise or the
-    recording's own, with the rounding's 1/12 count^2; dt from the time column)."""
-    tables = quantize_calibration(device, cal)
-    noise = np.sqrt(np.asarray(channel_noise(device, rec), float) ** 2 + 1.0 / 12.0)
-    try:
-        return tables, omega_table(tables, noise, uniform_dt(rec))
-    except QuantizeError as e:
-        raise InputError(device.name, str(e)) from None
+    """The quantised calibration and the omega table for a recording: the table ``accelcal
+    header`` writes (:func:`device_omega_table`: the device's noise and sample rate); on a
+    device that states no ``noise_mps2``, the recording's own noise (the header then has no
+    omega table).
+
+    Raises
+    ------
+    InputError
+        A layout that does not fix all six rate products, or a recording whose sample
+        interval is off the device's rate by more than 1 % (the table's dt is the device's).
+    """
+    dt = uniform_dt(rec)
+    if abs(dt * float(device.sample_rate_hz) - 1.0) > 0.01:
+        raise InputError(getattr(rec, "source", "recording"), f"its sample interval {dt:.6g} s is not the device's 1/{device.sample_rate_hz:g} s: "
+                         "the fixed omega's table is made for the device's rate", field="t")
+    noise = None if device.noise_mps2 > 0 else channel_noise(device, rec)
+    table = device_omega_table(device, cal, noise)
+    if table is None:
+        raise InputError(device.name, "the fixed omega needs a layout whose channels fix all six rate products "
+                         "(12 channels as four triads on a tetrahedron, or triads at the origin and on the axes)")
+    return quantize_calibration(device, cal), table
 
 
 def omega_fixed_from_recording(device, cal, rec) -> ArrayOmega:
@@ -108,9 +122,21 @@ def omega_fixed_from_recording(device, cal, rec) -> ArrayOmega:
         raise InputError(device.name, obs.line)
     tables, table = table_for_recording(device, cal, rec)
     x, _ = pretrim(tables, rec.raw)
-    w16, _, sig, _, _ = omega_run(table, x)
+    w16, w10, sig, _, _ = omega_run(table, x)
     n = x.shape[0]
     nan = np.full((n, 3), np.nan)
     scale = 2.0 ** -16
-    return ArrayOmega(w16 * scale, sig * scale, nan, nan.copy(), nan.copy(), np.full((n, 3, 3), np.nan), obs)
+    return ArrayOmega(w16 * scale, sig * scale, nan, nan.copy(), nan.copy(), np.full((n, 3, 3), np.nan), obs,
+                      w10 * 2.0 ** -FORMATS.omega_frac)
 
+
+
+def choose_omega_engine(device, cal, rec, source: str, engine: str = "float") -> ArrayOmega | None:
+    """``resolve --omega SOURCE --engine ENGINE``: the array's own omega where
+    :func:`accelcal.estimators.omega.wants_array_omega`, from the float estimator or (engine
+    "fixed") the C core on the header's table; else None."""
+    if engine not in ("float", "fixed"):
+        raise ValueError(f"unknown engine {engine!r}")
+    if not wants_array_omega(device, cal, rec, source):
+        return None
+    return omega_fixed_from_recording(device, cal, rec) if engine == "fixed" else omega_from_recording(device, cal, rec)

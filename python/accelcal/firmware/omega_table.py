@@ -18,9 +18,9 @@ import numpy as np
 
 from .. import model
 from .native import check, cptr, ffi, lib
-from .quantize import COEF_MAX, QuantizeError, FixedTables, round_half_up, row_shift
+from .quantize import COEF_MAX, QuantizeError, FixedTables, quantize_calibration, round_half_up, row_shift
 
-__all__ = ["OmegaTable", "to_xf", "xf_value", "omega_table", "omega_run", "omega_header_lines",
+__all__ = ["OmegaTable", "to_xf", "xf_value", "omega_table", "omega_run", "omega_header_lines", "insert_omega", "device_omega_table",
            "OMEGA_JUMP_CHI2", "OMEGA_RANK_RTOL", "OMEGA_SNAP", "OMEGA_SIGMA0"]
 
 #: the float estimator's constants (estimators.omega / omega_filter), repeated here because
@@ -216,11 +216,29 @@ def _xf_init(v: float) -> str:
     return f"{{{m}L, {e}}}"
 
 
+def device_omega_table(device, cal, noise_counts=None) -> OmegaTable | None:
+    """The omega table ``accelcal header`` writes for an array: the quantised calibration
+    (:func:`quantize_calibration`), each channel's noise (default the device's ``noise_mps2``)
+    with the rounding's 1/12 count^2, dt = 1 / the device's sample rate.  None when the
+    layout does not fix all six rate products or the noise is unknown (``noise_mps2`` 0 and no
+    ``noise_counts``)."""
+    if device.is_triad():
+        return None
+    k = device.noise_counts() if noise_counts is None else np.asarray(noise_counts, float)
+    if not np.all(np.asarray(k) > 0):
+        return None
+    try:
+        return omega_table(quantize_calibration(device, cal), np.sqrt(np.asarray(k, float) ** 2 + 1.0 / 12.0),
+                           1.0 / float(device.sample_rate_hz))
+    except (QuantizeError, np.linalg.LinAlgError):
+        return None
+
+
 def omega_header_lines(table: OmegaTable, prefix: str) -> list[str]:
-    """The C definition of the table (``const ac_omega_table {prefix}_omega``), for the
+    """The C definition of the table (``const ac_omega_table {prefix}_OMEGA``), for the
     header's implementation section."""
-    p = prefix.lower()
-    out = [f"const ac_omega_table {p}_omega = {{", f"    {table.n},",
+    p = prefix
+    out = [f"const ac_omega_table {p}_OMEGA = {{", f"    {table.n}u,",
            "    {" + ", ".join(str(int(v)) for v in table.shift) + "},"]
     for part in (table.t, table.tl):
         out.append("    {")
@@ -237,3 +255,21 @@ def omega_header_lines(table: OmegaTable, prefix: str) -> list[str]:
     out += [f"    {_xf_init(table.dt)},", f"    {_xf_init(table.dt / 2.0)},", f"    {_xf_init(table.jump)},",
             f"    {_xf_init(table.ridge)}", "};"]
     return out
+
+
+def insert_omega(text: str, prefix: str, table: OmegaTable) -> str:
+    """The calibration header with the omega table: its use in the opening comment, its
+    declaration after the resolver's, its definition in the implementation section."""
+    p = prefix
+    use = [" * The array's own omega (ac_omega.h; docs/angular-rate.md), per sample after ac_trim:",
+           f" *     ac_omega_init(&st, &{p}_OMEGA);   once, at rest",
+           f" *     ac_omega_step(&st, &{p}_OMEGA, x, w_q16, w_q10, &flags);   w_q10: ac_resolve's omega",
+           f" *   made for {table.n} channels at dt = {table.dt:.9g} s and the device's noise; its error",
+           " *   against the float reference: ac_omega.h.",
+           " *"]
+    head, sep, rest = text.partition(" * Fixed-point formats")
+    text = head + "\n".join(use) + "\n" + sep + rest
+    decl = f"extern const ac_resolver {p}_RESOLVER;"
+    text = text.replace(decl, decl + f"\nextern const ac_omega_table {p}_OMEGA;", 1)
+    end = f"#endif /* {p}_IMPLEMENTATION */"
+    return text.replace(end, "\n".join(omega_header_lines(table, p)) + "\n" + end, 1)
