@@ -9,6 +9,19 @@ static const uint8_t sym6[6][6] = {{0u, 1u, 2u, 3u, 4u, 5u},      {1u, 6u, 7u, 8
                                    {4u, 9u, 13u, 16u, 18u, 19u},  {5u, 10u, 14u, 17u, 19u, 20u}};
 /* index of the six entries (00 01 02 11 12 22) of a symmetric 3x3 */
 static const uint8_t sym3[3][3] = {{0u, 1u, 2u}, {1u, 3u, 4u}, {2u, 4u, 5u}};
+/* the nonzero entries of J's columns (in increasing order): products terms skip the zeros,
+ * which leaves every sum as it was (a zero term adds nothing) */
+static const uint8_t nz[3][3] = {{0u, 3u, 5u}, {1u, 3u, 4u}, {2u, 4u, 5u}};
+
+/* r = sum over column c's nonzeros of col[k] v[k] */
+static void dot_col(ac_xf *r, uint8_t c, const ac_xf *col, const ac_xf *v)
+{
+    ac_xf s;
+    ac_xfp_mul(&s, &col[nz[c][0]], &v[nz[c][0]]);
+    ac_xfp_mac(&s, &col[nz[c][1]], &v[nz[c][1]]);
+    ac_xfp_mac(&s, &col[nz[c][2]], &v[nz[c][2]]);
+    *r = s;
+}
 
 typedef struct work {
     ac_xf q[6];      /* centripetal readings */
@@ -189,11 +202,18 @@ static void information(work *w, const ac_omega_table *t, ac_xf *info)
 {
     uint8_t i, j;
     for (i = 0u; i < 3u; i++) {
-        mul6(w->mj[i], t->m, w->cols[i]);
+        uint8_t r;
+        for (r = 0u; r < 6u; r++) { /* row r of m times column i (its nonzeros) */
+            ac_xf s;
+            ac_xfp_mul(&s, &t->m[sym6[r][nz[i][0]]], &w->cols[i][nz[i][0]]);
+            ac_xfp_mac(&s, &t->m[sym6[r][nz[i][1]]], &w->cols[i][nz[i][1]]);
+            ac_xfp_mac(&s, &t->m[sym6[r][nz[i][2]]], &w->cols[i][nz[i][2]]);
+            w->mj[i][r] = s;
+        }
     }
     for (i = 0u; i < 3u; i++) {
         for (j = i; j < 3u; j++) {
-            dot6(&info[sym3[i][j]], w->cols[i], w->mj[j]);
+            dot_col(&info[sym3[i][j]], i, w->cols[i], w->mj[j]);
         }
     }
 }
@@ -273,7 +293,7 @@ static void gauss_newton(work *w, const ac_omega_table *t, ac_xf *x, const ac_xf
     }
     for (i = 0u; i < 3u; i++) {
         ac_xf s;
-        dot6(&s, w->cols[i], w->v6);
+        dot_col(&s, i, w->cols[i], w->v6);
         ac_xfp_add(&w->g[i], &w->g[i], &s);
     }
     inv3(w->hi, w->h);
@@ -400,7 +420,7 @@ static void propagate(work *w, const ac_omega_table *t, ac_xf *p)
     for (i = 0u; i < 3u; i++) {
         for (j = 0u; j < 3u; j++) {
             ac_xf d;
-            dot6(&d, t->leak[i], w->cols[j]);
+            dot_col(&d, j, w->cols[j], t->leak[i]);
             ac_xfp_mul(&d, &d, &t->dt);
             if (i == j) {
                 ac_xfp_from_fixed(&f[i][j], 1, 0);
