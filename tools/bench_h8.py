@@ -70,6 +70,9 @@ PER_SAMPLE = ("ac_trim", "ac_process", "ac_process_omega", "ac_resolve_omega", "
               "ac_att_step", "ac_disp_step", "ac_process_batch_omega", "ac_triad_apply",
               "ac_temp_lag_step", "ac_temp_correct", "ac_skew_step", "ac_nonlin_invert", "terms_temp_nonlin",
               "terms_full_path")
+# the array's own omega (ac_omega.h, 12 channels; docs/angular-rate.md): its multiply floor is the
+# MULXS.W/MULXU.W it executes (ac_xf's partial products and the 2 x 9 x 12 of its rows)
+PER_SAMPLE += ("ac_omega_step_rest", "ac_omega_step_turn")
 LABELS = {
     "ac_trim": "`ac_trim` (6 channels)",
     "ac_process": "`ac_process`, omega = NULL (pre-trim + apply)",
@@ -87,6 +90,8 @@ LABELS = {
     "ac_skew_step": "`ac_skew_step` (6 channels)",
     "ac_nonlin_invert": "`ac_nonlin_invert` (6 channels, 3 iterations)",
     "terms_temp_nonlin": "terms with nonlinearity and temperature: 2 lag steps + `ac_temp_correct` + `ac_nonlin_invert`",
+    "ac_omega_step_rest": "`ac_omega_step` (12 channels, at rest: the ML skipped)",
+    "ac_omega_step_turn": "`ac_omega_step` (12 channels, turning: the ML each sample)",
     "terms_full_path": "the whole per-sample path with every term: `ac_trim_rails` + 2 lags + temperature + "
                        "skew + nonlinearity + `ac_resolve` with omega",
 }
@@ -332,6 +337,9 @@ def main():
                                                          "ac_att_step", "ac_disp_step", "ac_resolver_build",
                                                          "ac_triad_apply", "ac_triad_build", "terms_full_path"))
                 + " | bytes |")
+    rows.append(f"| RAM of the array's omega: `ac_omega_table` {SIZES['ac_omega_table']} B (const: ROM from a header), "
+                f"`ac_omega_state` {SIZES['ac_omega_state']} B; deepest stack of `ac_omega_step` | "
+                f"{pair(lambda o: res[(o, 'ac_omega_step_turn')][3])} B |")
     table_md = "\n".join(rows) + "\n"
     (OUT / "bench_h8.md").write_text(table_md)
     print(table_md)

@@ -18,6 +18,9 @@ Per band of the true |omega| (rad/s):
   J[n] = ((J[n-1])^-1 + dt^2 Sigma_alpha)^-1 + I(omega[n]) at the true omega: the bound for an
   estimator that also has the integrated alpha);
 * wrong sign: share of samples whose fused omega points away from the truth (omega . truth < 0);
+* fixed: ``resolve --engine fixed --omega array``, the integer C core (ac_omega.h) on the table
+  ``accelcal header`` writes (layouts that fix all six rate products; "-" otherwise), its RMS,
+  ratio to the CRB and wrong sign;
 * integration: the trapezoid integration of alpha from rest, each alpha resolved with the
   centripetal term of the TRUE omega (an oracle: the best the integration can do; with its own
   integrated omega in the centripetal term instead the integration diverges on these layouts
@@ -46,7 +49,8 @@ sys.path[:0] = [str(ROOT / "python"), str(ROOT / "tests" / "python")]
 from accelcal import model  # noqa: E402
 from accelcal.io.device import axes_device, tetrahedron_device  # noqa: E402
 from accelcal.calibrate import calibrate_recordings  # noqa: E402
-from accelcal.estimators import omega_crb, omega_from_recording, rate_from_recording  # noqa: E402
+from accelcal.errors import InputError  # noqa: E402
+from accelcal.estimators import omega_crb, omega_fixed_from_recording, omega_from_recording, rate_from_recording  # noqa: E402
 import indep_model as im  # noqa: E402
 
 BANDS = ((0.0, 1.0), (1.0, 3.0), (3.0, 10.0), (10.0, 30.0), (30.0, math.inf))
@@ -58,7 +62,7 @@ CASES = {"tetrahedron 12 ch, r = 50 mm": (lambda: tetrahedron_device(0.05), Fals
          "tetrahedron, calibrated (poses + turns)": (lambda: tetrahedron_device(0.05), True),
          "axes + origin 12 ch, r = 50 mm": (lambda: axes_device(0.05), False),
          "axes 9 ch, r = 50 mm": (lambda: axes_device(0.05, origin=False), False)}
-KEYS = ("n", "crb", "ml", "fused", "pcrb", "wrong", "integ", "rate", "gyro")
+KEYS = ("n", "crb", "ml", "fused", "pcrb", "wrong", "integ", "rate", "gyro", "fixed", "fwrong")
 
 
 def posterior_bound(m, Q, w, sigma0=0.01) -> np.ndarray:
@@ -85,6 +89,10 @@ def one(args) -> dict:
     t0 = time.perf_counter()
     est = omega_from_recording(dev, used, rec)
     secs = time.perf_counter() - t0
+    try:    # the C core on the header's table (layouts that fix all six rate products)
+        w_fix = omega_fixed_from_recording(dev, used, rec).w
+    except InputError:
+        w_fix = np.full_like(w, np.nan)
     rate = rate_from_recording(dev, used, rec)
     w_rate = np.stack([rate["w_x"], rate["w_y"], rate["w_z"]], axis=1)
     noise = np.sqrt((dev.noise_mps2 * np.linalg.norm(cal.sensitivity, axis=1)) ** 2 + 1.0 / 12.0)
@@ -102,7 +110,8 @@ def one(args) -> dict:
         out[b] = {"n": int(s.sum()), "crb": float(np.sum(crb[s])),
                   "ml": float(np.sum((est.w_ml[s] - w[s]) ** 2)), "fused": float(np.sum((est.w[s] - w[s]) ** 2)),
                   "pcrb": float(np.sum(pcrb[s])), "wrong": int(np.sum(np.sum(est.w[s] * w[s], axis=1) < 0.0)),
-                  "integ": float(np.sum((integ[s] - w[s]) ** 2)), "rate": float(np.sum((w_rate[s] - w[s]) ** 2)), "gyro": gyro * float(s.sum())}
+                  "integ": float(np.sum((integ[s] - w[s]) ** 2)), "rate": float(np.sum((w_rate[s] - w[s]) ** 2)), "gyro": gyro * float(s.sum()),
+                  "fixed": float(np.sum((w_fix[s] - w[s]) ** 2)), "fwrong": int(np.sum(np.sum(w_fix[s] * w[s], axis=1) < 0.0))}
     return out
 
 
@@ -119,22 +128,25 @@ def main(argv=None) -> int:
              f"({a.seeds} recordings of {a.turns} turns per case, 500 Hz, 0.01 m/s^2 rms per channel). RMS of the "
              "vector error, rad/s.", "",
              "| case | abs(omega) rad/s | samples | CRB | ML | ML / CRB | fused | fused / CRB | fused / posterior CRB "
-             "| wrong sign | integration | accelcal rate | gyro 0.014 deg/s/rtHz |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+             "| wrong sign | fixed (C core) | fixed / CRB | fixed wrong sign | integration | accelcal rate "
+             "| gyro 0.014 deg/s/rtHz |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for name in CASES:
         mine = [r for (nm, _, _), r in zip(jobs, results) if nm == name]
         secs = sum(r["secs"] for r in mine) / sum(r["samples"] for r in mine)
         for b, (lo, hi) in enumerate(BANDS):
             tot = {k: sum(r[b][k] for r in mine) for k in KEYS}
             n = max(tot["n"], 1)
-            rm = {k: math.sqrt(tot[k] / n) for k in ("crb", "ml", "fused", "pcrb", "integ", "rate", "gyro")}
+            rm = {k: math.sqrt(tot[k] / n) for k in ("crb", "ml", "fused", "pcrb", "integ", "rate", "gyro", "fixed")}
             band = f"{lo:g}-{hi:g}" if math.isfinite(hi) else f">= {lo:g}"
             ratio = (lambda x: f"{x / rm['crb']:.3g}") if math.isfinite(rm["crb"]) and b else (lambda x: "-")
             crb = f"{rm['crb']:.3g}" if math.isfinite(rm["crb"]) and b else "inf"
+            fixed = (f"{rm['fixed']:.3g} | {ratio(rm['fixed'])} | {100.0 * tot['fwrong'] / n:.3g} %"
+                     if math.isfinite(rm["fixed"]) else "- | - | -")
             lines.append(f"| {name} | {band} | {tot['n']} | {crb} | {rm['ml']:.3g} | {ratio(rm['ml'])} | "
                          f"{rm['fused']:.3g} | {ratio(rm['fused'])} | {rm['fused'] / rm['pcrb']:.3g} | "
-                         f"{100.0 * tot['wrong'] / n:.3g} % | {rm['integ']:.3g} | {rm['rate']:.3g} | {rm['gyro']:.3g} |")
-        lines.append(f"| {name} | float time | | | | | {1e6 * secs:.0f} us per sample | | | | | | |")
+                         f"{100.0 * tot['wrong'] / n:.3g} % | {fixed} | {rm['integ']:.3g} | {rm['rate']:.3g} | {rm['gyro']:.3g} |")
+        lines.append(f"| {name} | float time | | | | | {1e6 * secs:.0f} us per sample | | | | | | | | | |")
     text = "\n".join(lines) + "\n"
     (ROOT / "build").mkdir(exist_ok=True)
     (ROOT / "build" / "bench_omega.md").write_text(text, encoding="utf-8")

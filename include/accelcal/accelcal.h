@@ -19,5 +19,6 @@
 #include "ac_rest.h"
 #include "ac_attitude.h"
 #include "ac_displace.h"
+#include "ac_omega.h"
 
 #endif /* ACCELCAL_H */

@@ -18,6 +18,7 @@ HEADERS = ["ac_status.h", "ac_fixed.h", "ac_xf.h", "ac_trim.h", "ac_resolve.h", 
            "ac_invert.h", "ac_rate.h"]
 HEADERS += ["ac_rest.h", "ac_displace.h"]  # motion estimators
 HEADERS += ["ac_temp.h", "ac_skew.h", "ac_nonlin.h"]  # the correctable terms
+HEADERS += ["ac_omega.h"]  # the array's own omega (issue 36)
 
 
 def config_constants(include_dir: Path = INCLUDE) -> dict[str, int]:

@@ -31,7 +31,7 @@ from .cli.calibrate_command import record_warnings
 from .io.device import Device, default_device, load_device, save_device
 from .diagnose import diagnose as _diagnose_impl
 from .errors import AccelcalError, atomic_write, options_checked
-from .estimators import Columns, attitude_from_recording, choose_omega, displacement_from_recording, rate_from_recording
+from .estimators import Columns, attitude_from_recording, choose_omega_engine, displacement_from_recording, rate_from_recording
 from .firmware.header import calibration_header
 from .motions import MOTIONS, Motion
 from .io.recording import Recording, read_recording as _read_recording_file, write_recording
@@ -257,8 +257,8 @@ def resolve(device: Any, calibration: Any, recording: Any, engine: str = "float"
     dev = as_device(device)
     cal = as_calibration(calibration, dev)
     rec = as_recording(recording, dev)
-    est = choose_omega(dev, cal, rec, omega)
-    f, alpha, flags = resolve_recording(dev, cal, rec, engine, omega, None if est is None else est.w)
+    est = choose_omega_engine(dev, cal, rec, omega, engine)
+    f, alpha, flags = resolve_recording(dev, cal, rec, engine, omega, None if est is None else est.for_resolver())
     return ResolveResult(t=rec.t, f=f, alpha=alpha, saturated=flags, clipped=clipped_samples(rec, dev)[0],
                          w=None if est is None else est.w, w_sigma=None if est is None else est.sigma)
 

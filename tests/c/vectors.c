@@ -1506,6 +1506,7 @@ static void vec_rails(void)
 }
 
 #include "vectors_terms.c"
+#include "vectors_omega.c"
 
 int main(void)
 {
@@ -1527,6 +1528,7 @@ int main(void)
     vec_tshift_edges();
     vec_rails();
     vec_terms();
+    vec_omega();
     framing = 0u;
     OUT_S("END accelcal-vectors ");
     out_hex(n_lines, 8u);

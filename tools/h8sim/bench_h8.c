@@ -48,13 +48,15 @@ enum {
     R_NONLIN,
     R_TERMS,
     R_TERMS_PATH,
+    R_OMEGA_REST,
+    R_OMEGA_TURN,
     R_COUNT
 };
 static const char *const region_name[R_COUNT] = {
     "", "empty", "ac_trim", "ac_process", "ac_process_omega", "ac_resolve_omega",
     "ac_rate_step", "ac_att_step", "ac_disp_step", "ac_process_batch_omega", "ac_resolver_build",
     "ac_triad_apply", "ac_triad_build", "ac_temp_lag_step", "ac_temp_correct", "ac_skew_step",
-    "ac_nonlin_invert", "terms_temp_nonlin", "terms_full_path"};
+    "ac_nonlin_invert", "terms_temp_nonlin", "terms_full_path", "ac_omega_step_rest", "ac_omega_step_turn"};
 static uint16_t entries[R_COUNT], samples[R_COUNT], deepest[R_COUNT];
 
 /* ---- output through the write trap ---- */
@@ -204,6 +206,53 @@ static int terms_path(int16_t temp, const uint16_t *raw, const uint16_t *trim, i
         samples[id] = (nsamp);                                              \
     } while (0)
 
+/* the array's own omega (ac_omega.h): the tetrahedron's table and readings of the vector
+ * program (tests/c/vectors_omega_data.h) */
+#define AC_ROM
+#include "../../tests/c/vectors_omega_data.h"
+static ac_omega_table om_tab;
+static ac_omega_state om_st;
+
+static void omega_load(void)
+{
+    uint16_t i, j, k = 0u;
+    ac_xf *dst[VO_NXF];
+    om_tab.n = (uint16_t)VO_N;
+    for (j = 0u; j < 9u; j++) {
+        om_tab.shift[j] = vo_shift[j];
+        for (i = 0u; i < VO_N; i++) {
+            om_tab.t[j][i] = vo_t[j * VO_N + i];
+            om_tab.tl[j][i] = vo_tl[j * VO_N + i];
+        }
+    }
+    for (i = 0u; i < 9u; i++) {
+        dst[k++] = &om_tab.k[i];
+    }
+    for (i = 0u; i < 21u; i++) {
+        dst[k++] = &om_tab.m[i];
+    }
+    for (i = 0u; i < 21u; i++) {
+        dst[k++] = &om_tab.minv[i];
+    }
+    for (i = 0u; i < 18u; i++) {
+        dst[k++] = &om_tab.leak[i / 6u][i % 6u];
+    }
+    for (i = 0u; i < 6u; i++) {
+        dst[k++] = &om_tab.qn[i];
+    }
+    for (i = 0u; i < 6u; i++) {
+        dst[k++] = &om_tab.p0[i];
+    }
+    dst[k++] = &om_tab.dt;
+    dst[k++] = &om_tab.half_dt;
+    dst[k++] = &om_tab.jump;
+    dst[k++] = &om_tab.ridge;
+    for (i = 0u; i < k; i++) {
+        dst[i]->m = vo_xm[i];
+        dst[i]->e = vo_xe[i];
+    }
+}
+
 int main(void)
 {
     static uint16_t trim[6], raw[BATCH * 6u];
@@ -305,6 +354,28 @@ int main(void)
         }
         MEASURE(R_BATCH_W, BATCH, ac_process_batch(&res, trim, raw, BATCH, w, out, 0));
     }
+
+    /* omega: the 12 samples at rest (the ML skipped), then from mid-turn (the ML each sample) */
+    omega_load();
+    {
+        static int32_t ow[3];
+        static int16_t ow10[3];
+        uint8_t ofl, len0 = vo_len[0], len1 = vo_len[1];
+        (void)ac_omega_init(&om_st, &om_tab);
+        for (k = 0u; k < len0; k++) {
+            MEASURE(R_OMEGA_REST, 1u, ac_omega_step(&om_st, &om_tab, &vo_x[k * VO_N], ow, ow10, &ofl));
+        }
+        (void)ac_omega_init(&om_st, &om_tab);
+        for (k = 0u; k < len1; k++) {
+            MEASURE(R_OMEGA_TURN, 1u, ac_omega_step(&om_st, &om_tab, &vo_x[(len0 + k) * VO_N], ow, ow10, &ofl));
+        }
+    }
+    put_s("SIZE ac_omega_table ");
+    put_u((uint16_t)sizeof(ac_omega_table));
+    put_c('\n');
+    put_s("SIZE ac_omega_state ");
+    put_u((uint16_t)sizeof(ac_omega_state));
+    put_c('\n');
 
     for (id = 1u; id < R_COUNT; id++) {
         put_s("REGION ");

@@ -26,7 +26,7 @@ from ..io.device import default_device, load_device
 from ..diagnose import diagnose
 from ..effects import describe_effects, params_to_json, parse_effect_spec
 from ..errors import AccelcalError, atomic_write
-from ..estimators import (OMEGA_SOURCES, attitude_from_recording, choose_omega, displacement_from_recording,
+from ..estimators import (OMEGA_SOURCES, attitude_from_recording, choose_omega_engine, displacement_from_recording,
                           omega_columns, rate_from_recording, report_plots)
 from ..firmware.header import calibration_header
 from ..readings.held import held_runs, held_text, readings_rate
@@ -106,8 +106,8 @@ def cmd_resolve(a):
     if not a.whole_file and stream_resolve(a, dev, cal):
         return 0
     rec, = _read([a.recording], dev, "resolve", a)
-    est = choose_omega(dev, cal, rec, a.omega)
-    f, al, flags = resolve_recording(dev, cal, rec, a.engine, a.omega, None if est is None else est.w)
+    est = choose_omega_engine(dev, cal, rec, a.omega, a.engine)
+    f, al, flags = resolve_recording(dev, cal, rec, a.engine, a.omega, None if est is None else est.for_resolver())
     comments = {"engine": a.engine, "device": dev.name, **({"omega": "array"} if est is not None else {})}
     clipped, clip_warnings = clipped_samples(rec, dev)
     for w in resolve_warnings(0 if flags is None else int(np.count_nonzero(flags)), clip_warnings):

@@ -18,7 +18,7 @@ Modules: :mod:`.common` (Columns, input conventions), :mod:`.triad`, :mod:`.rest
 :mod:`.displacement_host` (offline form, path correction, recordings), :mod:`.displacement_checks`
 and :mod:`.motion_checks` (its warnings: of the rests, of the motions), :mod:`.rate`,
 :mod:`.omega` (the array's own omega from the centripetal term, fused with the integrated
-alpha), :mod:`.plots`.  Q formats come from the compiled core (``native.FORMATS``).
+alpha; :mod:`.omega_fixed` its C core and float twin), :mod:`.plots`.  Q formats come from the compiled core (``native.FORMATS``).
 Conventions follow docs/data-contract.md.
 """
 from __future__ import annotations
@@ -37,6 +37,7 @@ from .motion_checks import ZP_TURN_MPS2, turned_motions, zp_limit
 from .displacement_host import displace_offline, displacement_from_recording, retro_correct
 from .omega import (OMEGA_SOURCES, ArrayOmega, OmegaObservability, array_omega, choose_omega, omega_columns,
                     omega_crb, omega_from_recording, omega_ml, omega_observability)
+from .omega_fixed import choose_omega_engine, omega_fixed_from_recording
 from .plots import report_plots
 from .rate import rate_from_recording, rate_rest_fixed, rate_rest_float
 from .rest import (REST_AT_REST, REST_CLIP, REST_ENTER, REST_LEAVE, REST_QUIET, RestParams, RestState,
@@ -56,4 +57,5 @@ __all__ = [
     "attitude_from_recording", "displacement_from_recording", "rate_from_recording",
     "report_plots", "OMEGA_SOURCES", "ArrayOmega", "OmegaObservability", "array_omega", "choose_omega",
     "omega_columns", "omega_crb", "omega_from_recording", "omega_ml", "omega_observability",
+    "choose_omega_engine", "omega_fixed_from_recording",
 ]

@@ -39,7 +39,7 @@ from .common import channel_noise, uniform_dt
 from .omega_filter import fuse
 
 __all__ = ["OMEGA_SOURCES", "OmegaObservability", "ArrayOmega", "omega_observability", "omega_ml",
-           "array_omega", "omega_from_recording", "choose_omega", "omega_columns", "omega_crb"]
+           "array_omega", "omega_from_recording", "choose_omega", "wants_array_omega", "omega_columns", "omega_crb"]
 
 #: ``resolve --omega``: the recording's w columns, none, the array's own estimate, or auto
 OMEGA_SOURCES = ("auto", "reference", "none", "array")
@@ -134,7 +134,7 @@ def _products_matrix(p: np.ndarray) -> np.ndarray:
     return np.stack([np.stack([xx, xy, zx], -1), np.stack([xy, yy, yz], -1), np.stack([zx, yz, zz], -1)], -2)
 
 
-def omega_ml(q, m, start=None, iterations: int = 4) -> tuple[np.ndarray, np.ndarray]:
+def omega_ml(q, m, start=None, iterations: int = 4, ridge: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Per-sample maximum-likelihood omega (up to its sign) from the centripetal readings.
 
     Parameters
@@ -147,6 +147,8 @@ def omega_ml(q, m, start=None, iterations: int = 4) -> tuple[np.ndarray, np.ndar
         of the symmetric matrix of products ``m^-1 q``), which needs all six products.
     iterations : int
         Gauss-Newton steps (fixed).
+    ridge : float, optional
+        Added to the normal matrix's diagonal, per (rad/s)^2 (default ``RANK_RTOL trace(m)``).
 
     Returns
     -------
@@ -162,7 +164,7 @@ def omega_ml(q, m, start=None, iterations: int = 4) -> tuple[np.ndarray, np.ndar
         w = V[..., :, -1] * np.sqrt(np.maximum(lam[..., -1], 0.0))[..., None]
     else:
         w = np.array(start, float)
-    ridge = RANK_RTOL * max(float(np.trace(m)), 1e-300) * np.eye(3)
+    ridge = (RANK_RTOL * max(float(np.trace(m)), 1e-300) if ridge is None else float(ridge)) * np.eye(3)
     for _ in range(iterations):
         J = model.product_jacobian(w)
         Jt = np.swapaxes(J, -1, -2)
@@ -186,6 +188,9 @@ class ArrayOmega:
     info_ml : ndarray (n, 3, 3)
         Its Fisher information, per (rad/s)^2.
     observability : OmegaObservability
+    w_core : ndarray (n, 3) or None
+        The C core's Q5.10 rate for its resolver (rad/s, clipped to +-32 rad/s; ``engine="fixed"``
+        only): what firmware passes from ``ac_omega_step`` to ``ac_resolve``.
     """
 
     w: np.ndarray
@@ -195,6 +200,12 @@ class ArrayOmega:
     w_ml: np.ndarray
     info_ml: np.ndarray
     observability: OmegaObservability
+    w_core: np.ndarray | None = None
+
+    def for_resolver(self) -> np.ndarray:
+        """The rate the resolver's centripetal term takes: the core's Q5.10 output where there is
+        one (engine "fixed"), else w."""
+        return self.w if self.w_core is None else self.w_core
 
 
 def array_omega(offsets, sensitivity, positions, raw, dt: float, noise_counts, *, iterations: int = 2,
@@ -273,28 +284,36 @@ def omega_from_recording(device, cal, rec, **options) -> ArrayOmega:
     return array_omega(cal.offsets, cal.sensitivity, pos, rec.raw, dt, noise, **options)
 
 
+def wants_array_omega(device, cal, rec, source: str) -> bool:
+    """``resolve --omega``: whether the array's own omega is used: for "array", and for "auto"
+    when the recording has no complete w columns and the layout observes omega on every axis.
+
+    Raises
+    ------
+    ValueError
+        An unknown source.
+    """
+    if source not in OMEGA_SOURCES:
+        raise ValueError(f"unknown omega source {source!r}")
+    if source == "array":
+        return True
+    if source != "auto" or device.is_triad() or rec.n_samples < 2:
+        return False
+    if rec.w is not None and np.all(np.isfinite(rec.w)):
+        return False
+    return omega_observability(cal.positions_or_nominal(device), cal.sensitivity).full
+
+
 def choose_omega(device, cal, rec, source: str) -> ArrayOmega | None:
-    """``resolve --omega``: the array's own omega for "array", and for "auto" when the recording
-    has no complete w columns and the layout observes omega on every axis; else None (the
-    caller takes the w columns or none).
+    """``resolve --omega``: the array's own omega (float) where :func:`wants_array_omega`, else
+    None (the caller takes the w columns or none).
 
     Raises
     ------
     InputError
         "array" on a layout that does not observe omega (the observability line).
     """
-    if source not in OMEGA_SOURCES:
-        raise ValueError(f"unknown omega source {source!r}")
-    if source == "array":
-        return omega_from_recording(device, cal, rec)
-    if source != "auto" or device.is_triad() or rec.n_samples < 2:
-        return None
-    if rec.w is not None and np.all(np.isfinite(rec.w)):
-        return None
-    pos = cal.positions_or_nominal(device)
-    if not omega_observability(pos, cal.sensitivity).full:
-        return None
-    return omega_from_recording(device, cal, rec)
+    return omega_from_recording(device, cal, rec) if wants_array_omega(device, cal, rec, source) else None
 
 
 def omega_columns(est: ArrayOmega) -> dict:

@@ -87,8 +87,8 @@ def _cost(x, w, lam, q, m):
     return _dot3(d, _mul(lam, d)) + _dot(p, [s - 2.0 * t for s, t in zip(mp, q)])
 
 
-def fuse(q, lin_alpha, leak_alpha, Q, m, w_ml, dt: float, x0, P0, iterations: int = 2, jump: float = JUMP_CHI2
-         ) -> tuple[np.ndarray, np.ndarray]:
+def fuse(q, lin_alpha, leak_alpha, Q, m, w_ml, dt: float, x0, P0, iterations: int = 2, jump: float = JUMP_CHI2,
+         margins: list | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Run the step over every sample.
 
     Parameters
@@ -110,6 +110,9 @@ def fuse(q, lin_alpha, leak_alpha, Q, m, w_ml, dt: float, x0, P0, iterations: in
     iterations : int
     jump : float
         The cost a start at the ML estimate must save (chi^2 units).
+    margins : list, optional
+        Appended per sample: cost(ML) - (cost(prediction) - jump), the jump test's margin
+        (negative: the start moved to the ML estimate).
 
     Returns
     -------
@@ -148,7 +151,10 @@ def fuse(q, lin_alpha, leak_alpha, Q, m, w_ml, dt: float, x0, P0, iterations: in
         c = mls[k]
         if _dot3(c, wp) < 0.0:
             c = (-c[0], -c[1], -c[2])
-        if _cost(c, wp, lam, qk, m) < _cost(wp, wp, lam, qk, m) - jump:
+        margin = _cost(c, wp, lam, qk, m) - (_cost(wp, wp, lam, qk, m) - jump)
+        if margins is not None:
+            margins.append(margin)
+        if margin < 0.0:
             x = wp = tuple(c)      # the prediction is refuted: its width kept, centred on the ML
         for _ in range(iterations):
             cols = _columns(x)

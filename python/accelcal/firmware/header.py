@@ -15,6 +15,7 @@ import numpy as np
 from .. import __version__
 from .triad import TriadTable, quantize_triad, triad_rounding_bound
 from .native import FORMATS
+from .omega_table import device_omega_table, insert_omega
 from .quantize import FixedTables, quantize_calibration, rail_counts, resolver_rounding_bound, to_fixed
 from .terms_fixed import quantize_terms
 from .terms_header import insert_terms, terms_header_parts
@@ -330,6 +331,9 @@ def calibration_header(device, cal, *, prefix: str = "AC_CAL") -> str:
                              gain_tc=getattr(cal, "gain_tc", None), warnings=warnings, rounding_lsb=rounding,
                              notes=notes, counts_per_mps2=device.counts_per_mps2)
         call = f"ac_resolve(&{_c_ident(prefix)}_RESOLVER, x, omega_or_NULL, out)"
+        omega = device_omega_table(device, cal)
+        if omega is not None:
+            text = insert_omega(text, _c_ident(prefix), omega)
     tt = quantize_terms(cal, device.n_channels, 1.0 / float(device.sample_rate_hz), t.offset_q)
     if not tt.any():
         return text
