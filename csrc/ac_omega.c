@@ -154,7 +154,7 @@ static void xsqrt(ac_xf *r, const ac_xf *a)
         return;
     }
     s = (int16_t)(a->e + 30); /* a < 2^s */
-    half = (s >= 0) ? (int16_t)((s + 1) / 2) : (int16_t)(-((-s) / 2));
+    half = (int16_t)((s >= 0) ? ((s + 1) / 2) : -((-s) / 2));
     y.m = 0x20000000L; /* 2^29 */
     y.e = (int16_t)(half - 29);
     for (k = 0u; k < AC_OMEGA_SQRT_ITER; k++) {
