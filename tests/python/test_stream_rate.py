@@ -1,0 +1,137 @@
+"""rate in chunks (accelcal.estimators.rate_stream, stream_scan; docs/streaming.md): the whole-file
+output byte for byte with chunk boundaries inside rests and inside motions, both engines; the
+whole-file command where only the whole recording tells (stamps off the grid, held readings, bad
+rows), with its output and its message."""
+from __future__ import annotations
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+from accelcal.io.calibration import Calibration
+from accelcal.io.device import default_device
+from accelcal.io.chunks import csv_chunks, csv_head
+from accelcal.io.recording import read_recording, write_recording
+from accelcal.io.recording_type import Recording
+from accelcal.estimators.rate_stream import rate_stream
+from accelcal.estimators.stream_scan import median_of_counts
+from accelcal.readings.held import held_runs
+from accelcal.simulate import run_simulation
+
+from cli_run import run
+
+DEV = default_device()
+NOMINAL = Calibration.nominal(DEV)
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """A hand-held recording of the default device (rests and moves)."""
+    d = tmp_path_factory.mktemp("stream_rate")
+    sim = run_simulation(DEV, "handheld", seed=3, n_poses=3, hold_s=2.0, move_s=1.0, initial_rest_s=2.0)
+    write_recording(d / "rec.csv", sim.recording)
+    return {"dir": d, "rec": sim.recording, "csv": d / "rec.csv"}
+
+
+def rate_cli(capfd, rec, out, *args):
+    rc, _, err, _ = run(["rate", "--device", "default", "--calibration", "nominal", rec, "-o", out, "--quiet",
+                         *args], capfd)
+    return rc, err
+
+
+def columns(path):
+    text = path.read_text().splitlines()
+    head = next(i for i, s in enumerate(text) if not s.startswith("#"))
+    names = text[head].split(",")
+    vals = np.array([[float(c) for c in s.split(",")] for s in text[head + 1:]])
+    return {k: vals[:, j] for j, k in enumerate(names)}
+
+
+@pytest.mark.parametrize("engine", ["float", "fixed"])
+@pytest.mark.parametrize("block", [120, 997, 4099])
+def test_chunks_give_the_whole_file_bytes(files, capfd, engine, block):
+    d = files["dir"]
+    ref = d / f"whole_{engine}.csv"
+    assert rate_cli(capfd, files["csv"], ref, "--engine", engine, "--whole-file")[0] == 0
+    out = d / f"s_{engine}_{block}.csv"
+    assert rate_stream(DEV, NOMINAL, files["csv"], out, engine=engine, block_bytes=block) == []   # it streamed
+    starts = [c.start for c in csv_chunks(files["csv"], csv_head(files["csv"], 6, None), block)]
+    assert len(starts) > 3
+    cols = columns(ref)
+    rest, moving = cols["rest"], np.abs(cols["w_x"]) + np.abs(cols["w_y"]) + np.abs(cols["w_z"]) > 0
+    # boundaries inside a rest and inside a motion (the integrator's state carried over)
+    assert any(rest[s] == 1 and rest[s - 1] == 1 for s in starts[1:])
+    assert any(rest[s] == 0 and rest[s - 1] == 0 and moving[s] and moving[s - 1] for s in starts[1:])
+    assert out.read_bytes() == ref.read_bytes()
+
+
+def test_cli_streams_without_reading_the_whole_file(files, capfd, monkeypatch):
+    d = files["dir"]
+    ref, out = d / "cw.csv", d / "cs.csv"
+    assert rate_cli(capfd, files["csv"], ref, "--whole-file")[0] == 0
+
+    def whole(*a, **k):
+        raise AssertionError("read whole")
+    monkeypatch.setattr("accelcal.cli.estimator_command.read_recording", whole)
+    rc, err = rate_cli(capfd, files["csv"], out)
+    assert rc == 0, err
+    assert out.read_bytes() == ref.read_bytes()
+
+
+def test_parquet_in_and_out_stream_the_whole_file_values(files, capfd):
+    d = files["dir"]
+    rec_pq = d / "rec.parquet"
+    write_recording(rec_pq, files["rec"])
+    ref, out = d / "pw.parquet", d / "ps.parquet"
+    assert rate_cli(capfd, rec_pq, ref, "--engine", "fixed", "--whole-file")[0] == 0
+    assert rate_stream(DEV, NOMINAL, rec_pq, out, engine="fixed", batch_rows=100) == []
+    a, b = pq.read_table(ref), pq.read_table(out)
+    assert a.schema == b.schema and a.equals(b)
+
+
+def edited(files, name, edit):
+    rec = read_recording(files["csv"], 6)
+    t, raw = edit(rec.t.copy(), rec.raw.copy())
+    path = files["dir"] / name
+    write_recording(path, Recording(t=t, raw=raw))
+    return path
+
+
+def drop_sample(t, raw):
+    keep = np.ones(t.size, bool)
+    keep[300] = False
+    return t[keep], raw[keep]
+
+
+def hold_rows(t, raw):
+    return t, np.repeat(raw[::2], 2, axis=0)[:t.size]
+
+
+def bad_range(t, raw):
+    raw[400, 2] = 20000
+    return t, raw
+
+
+@pytest.mark.parametrize("case, edit", [("lost", drop_sample), ("held", hold_rows), ("range", bad_range)])
+def test_what_the_whole_recording_tells_goes_the_whole_file_way(files, capfd, case, edit):
+    path = edited(files, f"{case}.csv", edit)
+    out = files["dir"] / f"{case}_s.csv"
+    assert rate_stream(DEV, NOMINAL, path, out, block_bytes=997) is None
+    assert not out.exists()                                   # nothing written
+    ref = files["dir"] / f"{case}_w.csv"
+    rc_w, err_w = rate_cli(capfd, path, ref, "--whole-file")
+    rc, err = rate_cli(capfd, path, out)
+    assert (rc, err) == (rc_w, err_w)
+    if rc == 0:
+        assert out.read_bytes() == ref.read_bytes()
+        assert "warning" in err                               # the lost sample filled, the held readings
+    else:
+        assert rc == 2 and not out.exists()
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_median_of_counts_is_the_median(seed):
+    rng = np.random.default_rng(seed)
+    x = rng.choice(rng.normal(size=7), size=int(rng.integers(1, 60)))
+    vals, counts = np.unique(x, return_counts=True)
+    assert median_of_counts(dict(zip(vals.tolist(), counts.tolist()))) == float(np.median(x))
