@@ -7,6 +7,7 @@ import sys
 import numpy as np
 
 from ..estimators import attitude_from_recording, displacement_from_recording, rate_from_recording, report_plots
+from ..estimators.attitude_stream import attitude_stream
 from ..estimators.rate_stream import rate_stream
 from ..io.calibration import load_calibration
 from ..io.device import default_device, load_device
@@ -18,7 +19,7 @@ from ..resolve_stream import progress_factory
 from .paths import check_output, check_output_dir
 
 __all__ = ["ESTIMATORS", "run_estimator", "held_warnings", "estimator_command", "reader_notes", "time_note",
-           "load_device_arg"]
+           "load_device_arg", "STREAMED"]
 
 
 def reader_notes(rec, command: str) -> list[str]:
@@ -43,6 +44,10 @@ ESTIMATORS = {"attitude": attitude_from_recording, "displacement": displacement_
               "rate": rate_from_recording}
 
 
+#: the estimators that read a recording in chunks where they may
+STREAMED = {"attitude": attitude_stream, "rate": rate_stream}
+
+
 def run_estimator(kind: str, device_path, calibration_path, recording_path, output, *, engine: str = "float",
                   report=None, units_args=None, stream: bool = False, quiet: bool = True,
                   **options) -> list[str]:
@@ -61,8 +66,8 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
     report : path, optional
         Directory for the plots.
     stream : bool
-        rate (``omega`` alpha, no ``report``): read the recording in chunks where it may
-        (:func:`accelcal.estimators.rate_stream.rate_stream`, docs/streaming.md), the same output.
+        rate (``omega`` alpha) and attitude, without ``report``: read the recording in chunks where
+        it may (:data:`STREAMED`, docs/streaming.md), the same output.
     quiet : bool
         No progress bar (the streamed form's; off anyway when stderr is not a terminal).
     units_args : argparse.Namespace, optional
@@ -93,10 +98,10 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
     if isinstance(cal.extra, dict) and cal.method != "nominal":
         cal.extra["source"] = str(calibration_path)       # the calibration a message names
     scale = None if units_args is None else scale_from_args(units_args, dev, reader=True)
-    if kind == "rate" and stream and report is None and options.get("omega", "alpha") == "alpha" \
-            and set(options) <= {"omega"}:
-        warnings = rate_stream(dev, cal, recording_path, output, engine=engine, scale=scale,
-                               progress=None if quiet else progress_factory(kind))
+    streamed = STREAMED.get(kind) if stream and report is None else None
+    if streamed is not None and options.get("omega", "alpha") == "alpha" and set(options) <= {"omega"}:
+        warnings = streamed(dev, cal, recording_path, output, engine=engine, scale=scale,
+                            progress=None if quiet else progress_factory(kind))
         if warnings is not None:
             return [f"accelcal {kind}: warning: {w}" for w in warnings]
     # displacement leaves out a sample a logger wrote twice (with a note): its integrators need

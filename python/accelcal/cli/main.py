@@ -326,9 +326,10 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--engine", choices=["float", "fixed"], default="float", help=_ENGINE)
         s.add_argument("--report", metavar="DIR", help="write plots into DIR")
         s.add_argument("-o", "--output", required=True, metavar="OUT.csv", help=_OUT_CSV)
-        if name == "rate":
+        if name in ("rate", "attitude"):
             s.add_argument("--whole-file", action="store_true", help="read the whole recording first (docs/streaming.md)")
             s.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
+        if name == "rate":
             s.add_argument("--omega", choices=["alpha", "array"], default="alpha",
                            help="alpha: leaky integration of alpha, reset on rest; array: the accelerometers' own "
                            "omega fused with the integrated alpha, with w_*_sigma (docs/angular-rate.md)")

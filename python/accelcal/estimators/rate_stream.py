@@ -22,39 +22,14 @@ from ..firmware.native import check, cptr, ffi, lib
 from ..firmware.quantize import quantize_calibration, round_half_up
 from ..io.chunk_source import open_chunks
 from ..io.chunks import BLOCK_BYTES, Fallback
-from ..io.csvformat import REPR, csv_rows
-from ..io.parquet import BATCH_ROWS, ParquetSink, is_parquet
+from ..io.parquet import BATCH_ROWS, is_parquet
+from ..io.result_sink import ColumnSink
 from .common import CLIP, CLIP_LO, OMEGA_FRAC, alpha_noise, dt_fixed, force_noise
 from .rate import LEAK_FRAC
 from .rest import REST_AT_REST, RestState, RestThresholds, default_rest_params, rest_cfg_fixed
 from .stream_scan import on_grid, scan
 
-__all__ = ["rate_stream", "ColumnSink"]
-
-
-class ColumnSink:
-    """Result columns written chunk by chunk as :func:`accelcal.io.recording.write_columns_csv`
-    writes them whole (CSV: ``repr`` for t, ``'%.9g'`` for the rest; Parquet by the name)."""
-
-    def __init__(self, f: Any, names: list[str], meta: dict, parquet: bool) -> None:
-        self.sink = ParquetSink(f, names, meta) if parquet else None
-        if self.sink is None:
-            for k, v in meta.items():
-                f.write(f"# {k}: {v}\n")
-            f.write(",".join(names) + "\n")
-        self.f = f
-        self.formats = [REPR if k == "t" else "%.9g" for k in names]
-
-    def write(self, columns: list[np.ndarray]) -> None:
-        if self.sink is not None:
-            self.sink.write(columns)
-            return
-        for text in csv_rows([np.asarray(c, float) for c in columns], self.formats):
-            self.f.write(text)
-
-    def close(self) -> None:
-        if self.sink is not None:
-            self.sink.close()
+__all__ = ["rate_stream"]
 
 
 class _FloatRate:
