@@ -16,6 +16,8 @@ from accelcal.io.recording_type import Recording
 from accelcal.estimators.rate_stream import rate_stream
 from accelcal.estimators.stream_scan import median_of_counts
 from accelcal.readings.held import held_runs
+from accelcal.cli.main import main
+from accelcal.resolve_stream import progress_factory
 from accelcal.simulate import run_simulation
 
 from cli_run import run
@@ -135,3 +137,30 @@ def test_median_of_counts_is_the_median(seed):
     x = rng.choice(rng.normal(size=7), size=int(rng.integers(1, 60)))
     vals, counts = np.unique(x, return_counts=True)
     assert median_of_counts(dict(zip(vals.tolist(), counts.tolist()))) == float(np.median(x))
+
+
+class _Tty:
+    """A text stream that says whether it is a terminal (tqdm draws only on one)."""
+
+    def __init__(self, tty: bool) -> None:
+        self.text, self.tty = [], tty
+
+    def write(self, s):
+        self.text.append(s)
+
+    def flush(self):
+        pass
+
+    def isatty(self):
+        return self.tty
+
+
+@pytest.mark.parametrize("tty, quiet", [(True, False), (False, False), (True, True)])
+def test_progress_bar_on_a_terminal_unless_quiet(files, monkeypatch, tty, quiet):
+    monkeypatch.setattr("accelcal.cli.estimator_command.progress_factory", lambda kind: progress_factory(kind, 0.0))
+    err = _Tty(tty)
+    monkeypatch.setattr("sys.stderr", err)
+    out = files["dir"] / f"bar{tty}{quiet}.csv"
+    assert main(["rate", "--device", "default", "--calibration", "nominal", str(files["csv"]), "-o", str(out)]
+                + (["--quiet"] if quiet else [])) == 0
+    assert ("rate" in "".join(err.text)) == (tty and not quiet)
