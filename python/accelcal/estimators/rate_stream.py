@@ -16,7 +16,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from .. import model
-from ..errors import atomic_write
+from ..errors import InputError, atomic_write
 from ..firmware import native
 from ..firmware.native import check, cptr, ffi, lib
 from ..firmware.quantize import quantize_calibration, round_half_up
@@ -148,6 +148,6 @@ def rate_stream(device, cal, path: Any, output: Any, *, engine: str = "float", l
             sink.close()
 
         atomic_write(output, write, mode="wb" if is_parquet(output) else "w")
-    except Fallback:
-        return None
+    except (Fallback, InputError):
+        return None                          # the whole-file command words it, in its order
     return []
