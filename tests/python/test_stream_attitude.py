@@ -91,3 +91,26 @@ def test_cli_streams_without_reading_the_whole_file(files, capfd, monkeypatch):
     monkeypatch.setattr("accelcal.cli.estimator_command.read_recording", whole)
     assert att_cli(capfd, files, files["csv"], out) == (rc_w, err_w)
     assert out.read_bytes() == ref.read_bytes()
+
+
+@pytest.mark.parametrize("case", ["range", "lost"])
+def test_bad_or_irregular_recordings_go_the_whole_file_way(files, capfd, case):
+    d = files["dir"]
+    rec = run_simulation(DEV, "pendulum", seed=2, duration_s=10.0).recording
+    t, raw = rec.t, rec.raw.copy()
+    if case == "range":
+        raw[500, 4] = DEV.raw_max + 1
+    else:                                           # a lost sample: filled by the whole-file command, with a warning
+        t, raw = np.delete(t, 300), np.delete(raw, 300, axis=0)
+    path = d / f"{case}.csv"
+    write_recording(path, Recording(t=t, raw=raw))
+    out = d / f"{case}_s.csv"
+    assert attitude_stream(DEV, NOMINAL, path, out, block_bytes=997) is None and not out.exists()
+    ref = d / f"{case}_w.csv"
+    rc_w, err_w = att_cli(capfd, files, path, ref, "--whole-file")
+    assert att_cli(capfd, files, path, out) == (rc_w, err_w)
+    assert rc_w == (2 if case == "range" else 0)
+    if rc_w == 0:
+        assert out.read_bytes() == ref.read_bytes() and "warning" in err_w
+    else:
+        assert not out.exists()
