@@ -164,3 +164,33 @@ def test_progress_bar_on_a_terminal_unless_quiet(files, monkeypatch, tty, quiet)
     assert main(["rate", "--device", "default", "--calibration", "nominal", str(files["csv"]), "-o", str(out)]
                 + (["--quiet"] if quiet else [])) == 0
     assert ("rate" in "".join(err.text)) == (tty and not quiet)
+
+
+def held_patterns(rng):
+    noisy = rng.integers(4990, 5010, (400, 6))
+    yield noisy
+    yield np.repeat(noisy, 2, axis=0)                                   # held 2 rows
+    yield np.repeat(noisy, 3, axis=0)[:1000]
+    yield np.repeat(noisy, rng.integers(2, 5, 400), axis=0)             # uneven holds
+    one = noisy.copy()
+    one[:, 1:] = 5000                                                   # one channel moves
+    yield np.repeat(one, rng.integers(1, 4, 400), axis=0)
+    yield np.repeat(noisy[:30], rng.integers(1, 40, 30), axis=0)        # long runs
+    yield np.full((50, 6), 5000)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_run_counts_over_chunks_are_held_runs(seed):
+    from accelcal.estimators.stream_scan import RunCounts
+    rng = np.random.default_rng(seed)
+    ks = []
+    for raw in held_patterns(rng):
+        k, _ = held_runs(raw)
+        ks.append(k)
+        cuts = np.sort(rng.choice(np.arange(1, raw.shape[0]), size=5, replace=False))
+        runs = RunCounts()
+        for part in np.split(raw, cuts):
+            runs.add(part)
+        got = runs.held(raw.shape[1])
+        assert got == k or (got is None and k > 1)          # None: the whole-file command decides
+    assert 1 in ks and any(k > 1 for k in ks)

@@ -81,16 +81,18 @@ class _FixedRate:
         f_q = np.ascontiguousarray(out[:, :3], dtype=np.int32)
         a_q = np.ascontiguousarray(out[:, 3:], dtype=np.int32)
         n = raw.shape[0]
-        w = ffi.new("int16_t[3]")
-        fl = ffi.new("uint8_t *")
-        om = np.zeros((n, 3), np.int64)
-        flags = np.zeros(n, np.int64)
+        om = np.zeros((n, 3), np.int16)
+        flags = np.zeros(n, np.uint8)
+        # pointers into the chunk's arrays, stepped per sample (cffi's arithmetic: no array per call)
+        fp, ap = cptr("int32_t *", f_q), cptr("int32_t *", a_q)
+        wp, flp = cptr("int16_t *", om), cptr("uint8_t *", flags)
+        step, rs, rt = lib.ac_rest_rate_step, self.rs, self.rt
         for i in range(n):
-            check(lib.ac_rest_rate_step(self.rs, self.rt, cptr("int32_t *", f_q[i]), cptr("int32_t *", a_q[i]),
-                                        w, fl), "ac_rest_rate_step")
-            om[i] = (w[0], w[1], w[2])
-            flags[i] = fl[0]
-        return om / 2.0**OMEGA_FRAC, flags
+            k = 3 * i
+            status = step(rs, rt, fp + k, ap + k, wp + k, flp + i)
+            if status < 0:
+                check(status, "ac_rest_rate_step")
+        return om.astype(np.int64) / 2.0**OMEGA_FRAC, flags.astype(np.int64)
 
 
 def rate_stream(device, cal, path: Any, output: Any, *, engine: str = "float", leak_tau_s: float = 5.0,

@@ -31,7 +31,7 @@ from ..readings.held import (HELD_CHANGED_SHARE, HELD_MAX, HELD_MIN_RUNS, HELD_M
                              HELD_SINGLE_SHARE)
 from ..readings.noise import noise_for, states_noise
 
-__all__ = ["MAX_STEP_VALUES", "GRID_MARGIN", "Scan", "scan", "median_of_counts", "on_grid"]
+__all__ = ["MAX_STEP_VALUES", "GRID_MARGIN", "RunCounts", "Scan", "scan", "median_of_counts", "on_grid"]
 
 #: distinct time steps kept for the exact median (more: the whole-file command)
 MAX_STEP_VALUES = 1 << 16
@@ -40,7 +40,7 @@ GRID_MARGIN = 0.005
 
 
 @dataclass
-class _Runs:
+class RunCounts:
     """Runs of identical rows, as :func:`accelcal.readings.held.held_runs` counts them."""
 
     hist: dict = field(default_factory=dict)     # run length -> runs
@@ -66,8 +66,12 @@ class _Runs:
                 self._close(self.open_len)
             elif self.last is not None:
                 self._close(self.open_len + int(starts[0]))
-            for length in np.diff(starts).tolist():
-                self._close(length)
+            lengths = np.diff(starts)
+            if lengths.size:
+                if self.first_len is None:
+                    self.first_len = int(lengths[0])
+                for length, c in zip(*np.unique(lengths, return_counts=True)):
+                    self.hist[int(length)] = self.hist.get(int(length), 0) + int(c)
             self.open_len = raw.shape[0] - int(starts[-1])
         self.last = raw[-1].copy()
 
@@ -163,7 +167,7 @@ def scan(device, source: ChunkSource, *, fixed: bool, progress: Callable[[int], 
     if head.n_raw != device.n_channels:
         raise Fallback("channels")
     steps: dict = {}
-    runs = _Runs()
+    runs = RunCounts()
     prev = None
     n, t0, t1 = 0, math.nan, math.nan
     signed = device.raw_min < 0
