@@ -209,6 +209,7 @@ def main() -> None:
                     "(no I/O anchor); attitude on the two-triad pendulum device (io.device.pendulum_device), its "
                     "readings a pendulum simulation tiled")
     ap.add_argument("--engine", choices=["float", "fixed"], default="fixed", help="rate's or attitude's engine")
+    ap.add_argument("--no-whole", action="store_true", help="rate, attitude: the streamed runs only")
     a = ap.parse_args()
     d = Path(a.dir or tempfile.mkdtemp(prefix="bench_stream_"))
     d.mkdir(parents=True, exist_ok=True)
@@ -236,7 +237,7 @@ def main() -> None:
             for name in a.cases.split(","):
                 src, out = cases[name]
                 if a.command != "resolve":
-                    for kind in (a.command, a.command + "-whole"):
+                    for kind in (a.command,) + (() if a.no_whole else (a.command + "-whole",)):
                         res = run_case(kind, src, out, a.engine, device)
                         print(f"| {n:.0e} | {name} | {kind} --engine {a.engine} | {res['s']:.2f} | {res['mb']:.0f} |",
                               flush=True)
