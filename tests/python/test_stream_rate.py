@@ -194,3 +194,12 @@ def test_run_counts_over_chunks_are_held_runs(seed):
         got = runs.held(raw.shape[1])
         assert got == k or (got is None and k > 1)          # None: the whole-file command decides
     assert 1 in ks and any(k > 1 for k in ks)
+
+
+def test_units_stated_for_a_parquet_recording_are_the_whole_file_error(files, capfd):
+    d = files["dir"]
+    rec_pq = d / "units.parquet"
+    write_recording(rec_pq, files["rec"])
+    rc_w, err_w = rate_cli(capfd, rec_pq, d / "uw.csv", "--whole-file", "--units", "g", "--lsb", "0.001")
+    rc, err = rate_cli(capfd, rec_pq, d / "us.csv", "--units", "g", "--lsb", "0.001")
+    assert rc_w == 2 and (rc, err) == (rc_w, err_w) and not (d / "us.csv").exists()

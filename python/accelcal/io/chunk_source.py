@@ -6,7 +6,7 @@ import os
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator
 
-from .chunks import BLOCK_BYTES, Chunk, Head, csv_chunks, csv_head
+from .chunks import BLOCK_BYTES, Chunk, Fallback, Head, csv_chunks, csv_head
 from .parquet import BATCH_ROWS, is_parquet, parquet_chunks, parquet_head
 from .units import Scale
 
@@ -49,6 +49,8 @@ def open_chunks(path: Any, n_channels: int | None, scale: Scale | None, block_by
         A CSV the chunked reader leaves to the whole-file reader.
     """
     if is_parquet(path):
+        if scale is not None and scale.converts:
+            raise Fallback("units stated for a Parquet recording")   # refused by the whole-file reader
         head, pf = parquet_head(path, n_channels)
         return ChunkSource(head, pf.metadata.num_rows, " rows", lambda tick: parquet_chunks(pf, head, batch_rows, tick))
     head = csv_head(path, n_channels, scale)
