@@ -203,3 +203,16 @@ def test_units_stated_for_a_parquet_recording_are_the_whole_file_error(files, ca
     rc_w, err_w = rate_cli(capfd, rec_pq, d / "uw.csv", "--whole-file", "--units", "g", "--lsb", "0.001")
     rc, err = rate_cli(capfd, rec_pq, d / "us.csv", "--units", "g", "--lsb", "0.001")
     assert rc_w == 2 and (rc, err) == (rc_w, err_w) and not (d / "us.csv").exists()
+
+
+def test_resolve_refuses_units_stated_for_a_parquet_recording_as_the_whole_file_command(files, capfd):
+    d = files["dir"]
+    rec_pq = d / "units_r.parquet"
+    write_recording(rec_pq, files["rec"])
+    outs = []
+    for out, extra in ((d / "rw.csv", ["--whole-file"]), (d / "rs.csv", [])):
+        rc, _, err, _ = run(["resolve", "--device", "default", "--calibration", "nominal", rec_pq, "-o", out,
+                             "--units", "g", "--lsb", "0.001", *extra], capfd)
+        outs.append((rc, err.replace("--whole-file", "")))
+        assert not out.exists()
+    assert outs[0][0] == 2 and outs[0] == outs[1]            # before: resolved in chunks, the units ignored
