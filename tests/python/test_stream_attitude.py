@@ -8,6 +8,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
+from accelcal.errors import InputError
 from accelcal.io.calibration import Calibration
 from accelcal.io.chunks import csv_chunks, csv_head
 from accelcal.io.device import save_device
@@ -105,7 +106,12 @@ def test_bad_or_irregular_recordings_go_the_whole_file_way(files, capfd, case):
     path = d / f"{case}.csv"
     write_recording(path, Recording(t=t, raw=raw))
     out = d / f"{case}_s.csv"
-    assert attitude_stream(DEV, NOMINAL, path, out, block_bytes=997) is None and not out.exists()
+    if case == "range":                                       # the whole-file command's error, from the scan
+        with pytest.raises(InputError, match="outside device"):
+            attitude_stream(DEV, NOMINAL, path, out, block_bytes=997)
+    else:
+        assert attitude_stream(DEV, NOMINAL, path, out, block_bytes=997) is None
+    assert not out.exists()
     ref = d / f"{case}_w.csv"
     rc_w, err_w = att_cli(capfd, files, path, ref, "--whole-file")
     assert att_cli(capfd, files, path, out) == (rc_w, err_w)

@@ -8,6 +8,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
+from accelcal.errors import InputError
 from accelcal.io.calibration import Calibration
 from accelcal.io.device import default_device
 from accelcal.io.chunks import csv_chunks, csv_head
@@ -118,7 +119,11 @@ def bad_range(t, raw):
 def test_what_the_whole_recording_tells_goes_the_whole_file_way(files, capfd, case, edit):
     path = edited(files, f"{case}.csv", edit)
     out = files["dir"] / f"{case}_s.csv"
-    assert rate_stream(DEV, NOMINAL, path, out, block_bytes=997) is None
+    if case == "range":                                       # the whole-file command's error, from the scan
+        with pytest.raises(InputError, match="outside device"):
+            rate_stream(DEV, NOMINAL, path, out, block_bytes=997)
+    else:
+        assert rate_stream(DEV, NOMINAL, path, out, block_bytes=997) is None
     assert not out.exists()                                   # nothing written
     ref = files["dir"] / f"{case}_w.csv"
     rc_w, err_w = rate_cli(capfd, path, ref, "--whole-file")
@@ -216,3 +221,25 @@ def test_resolve_refuses_units_stated_for_a_parquet_recording_as_the_whole_file_
         outs.append((rc, err.replace("--whole-file", "")))
         assert not out.exists()
     assert outs[0][0] == 2 and outs[0] == outs[1]            # before: resolved in chunks, the units ignored
+
+
+@pytest.mark.parametrize("engine", ["float", "fixed"])
+def test_bad_rows_are_the_whole_file_error_without_reading_it_whole(files, capfd, monkeypatch, engine):
+    rec = read_recording(files["csv"], 6)
+    t, raw = rec.t.copy(), rec.raw.copy()
+    raw[-20, 3] = 20000                                       # out of the device's range, near the end
+    path = files["dir"] / f"bad_{engine}.csv"
+    write_recording(path, Recording(t=t, raw=raw))
+    lines = path.read_text().splitlines(keepends=True)
+    a, b = lines[-41].split(",", 1), lines[-40].split(",", 1)
+    lines[-40] = a[0] + "," + b[1]                            # and t not increasing before it: the reader's first
+    path.write_text("".join(lines))
+    rc_w, err_w = rate_cli(capfd, path, files["dir"] / "bw.csv", "--whole-file", "--engine", engine)
+    assert rc_w == 2 and "strictly increasing" in err_w
+
+    def whole(*a, **k):
+        raise AssertionError("read whole")
+    monkeypatch.setattr("accelcal.cli.estimator_command.read_recording", whole)
+    out = files["dir"] / "bs.csv"
+    assert rate_cli(capfd, path, out, "--engine", engine) == (rc_w, err_w)
+    assert not out.exists()

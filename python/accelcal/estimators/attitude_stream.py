@@ -57,23 +57,32 @@ def attitude_stream(device, cal, path: Any, output: Any, *, engine: str = "float
     list of str or None
         The warnings (the whole-file command's); None where the whole-file command must run
         (nothing written).
+
+    Raises
+    ------
+    InputError
+        Bad rows, as the whole-file command words them (nothing written).
     """
     if engine not in ("float", "fixed"):
         return None
     try:
         r1, r2 = triad_geometry(device, cal)
+    except InputError:
+        return None                         # the whole-file command checks the recording first
+    try:
         src = open_chunks(path, device.n_channels, scale, block_bytes, batch_rows)
         bar = progress(src.total, src.unit) if progress is not None else None
         sc = scan(device, src, fixed=engine == "fixed", progress=None if bar is None else bar.update)
         if bar is not None:
             bar.close()
+    except Fallback:
+        return None
+    try:
         p = AttitudeParams(r1=r1, r2=r2, dt=sc.dt, gain=gain, w2_gate=w2_gate,
                            noise_mps2=max(force_noise(device, cal, sc.noise, (0, 1, 2)), 1e-4), leak_tau_s=leak_tau_s)
         p.check()
-    except (InputError, AccelcalError):
+    except AccelcalError:
         return None                         # the whole-file command words it, in its order
-    except Fallback:
-        return None
     signed = device.raw_min < 0
     g0 = float(device.gravity_mps2)
     fixed = att_init_fixed(p) if engine == "fixed" else None

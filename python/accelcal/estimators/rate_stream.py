@@ -16,7 +16,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from .. import model
-from ..errors import InputError, atomic_write
+from ..errors import atomic_write
 from ..firmware import native
 from ..firmware.native import check, cptr, ffi, lib
 from ..firmware.quantize import quantize_calibration, round_half_up
@@ -121,6 +121,11 @@ def rate_stream(device, cal, path: Any, output: Any, *, engine: str = "float", l
     list of str or None
         The warnings (none: what warns goes the whole-file way); None where the whole-file
         command must run (nothing written).
+
+    Raises
+    ------
+    InputError
+        Bad rows, as the whole-file command words them (nothing written).
     """
     if not device.is_array() or engine not in ("float", "fixed"):
         return None
@@ -150,6 +155,6 @@ def rate_stream(device, cal, path: Any, output: Any, *, engine: str = "float", l
             sink.close()
 
         atomic_write(output, write, mode="wb" if is_parquet(output) else "w")
-    except (Fallback, InputError):
-        return None                          # the whole-file command words it, in its order
+    except Fallback:
+        return None
     return []

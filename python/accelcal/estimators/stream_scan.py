@@ -6,9 +6,10 @@ it on its uniform time grid (:func:`accelcal.estimators.timegrid.on_uniform_grid
 median step as dt (:func:`accelcal.estimators.common.uniform_dt`), the channels' noise
 (:func:`accelcal.estimators.common.channel_noise`) and warns of readings held for several rows
 (:func:`accelcal.readings.held.held_runs`).  :func:`scan` gives dt exactly (the median from the
-counts of the distinct steps) and proves the rest needs nothing of the samples: it raises
-:class:`~accelcal.io.chunks.Fallback` -- the whole-file command then runs and words what it
-finds -- for any bad input, t in another unit than seconds, a device that states no noise
+counts of the distinct steps), raises the whole-file command's error for bad rows (ranked as
+:mod:`accelcal.resolve_stream` ranks them) and proves the rest needs nothing of the samples: it
+raises :class:`~accelcal.io.chunks.Fallback` -- the whole-file command then runs and words what it
+finds -- for a non-finite t, t in another unit than seconds, a device that states no noise
 (estimated from the data), readings held for several rows, more than :data:`MAX_STEP_VALUES`
 distinct steps; and :func:`on_grid` (the second pass, chunk by chunk) for any sample more than
 :data:`GRID_MARGIN` of a step off the straight line through the first and the last stamps (far
@@ -30,6 +31,9 @@ from ..io.recording_checks import TIME_UNIT_TOL, TIME_UNITS, check_core_input, c
 from ..readings.held import (HELD_CHANGED_SHARE, HELD_MAX, HELD_MIN_RUNS, HELD_MIN_RUNS_UNEVEN, HELD_MODAL_SHARE,
                              HELD_SINGLE_SHARE)
 from ..readings.noise import noise_for, states_noise
+
+#: ranks of the checks after the reader's (1-4: io.chunks.reader_checks), as in the whole-file command
+RANK_RANGE, RANK_CORE = 10, 12
 
 __all__ = ["MAX_STEP_VALUES", "GRID_MARGIN", "RunCounts", "Scan", "scan", "median_of_counts", "on_grid"]
 
@@ -158,6 +162,10 @@ def scan(device, source: ChunkSource, *, fixed: bool, progress: Callable[[int], 
 
     Raises
     ------
+    InputError
+        The whole-file command's error (the reader's, a reading outside the device's range or,
+        ``fixed``, the C core's input), as it words it: the first of the lowest rank, once the
+        whole file has been read (a bad cell at once: it is the file's first).
     Fallback
         Where the whole-file command must run.
     """
@@ -171,14 +179,23 @@ def scan(device, source: ChunkSource, *, fixed: bool, progress: Callable[[int], 
     prev = None
     n, t0, t1 = 0, math.nan, math.nan
     signed = device.raw_min < 0
-    try:
-        for ch in source.chunks(progress):
-            if reader_checks(head, ch, prev) or not np.all(np.isfinite(ch.t)):
-                raise Fallback("bad rows")
-            rec = SimpleNamespace(raw=ch.raw, source=head.source, line=ch.line)
-            check_raw_range(rec, device)
-            if fixed:
-                check_core_input(rec, signed)
+    pending: tuple[int, InputError] | None = None
+    for ch in source.chunks(progress):           # a bad cell: the file's first, the whole-file reader's error
+        if not np.all(np.isfinite(ch.t)):
+            raise Fallback("t not finite")
+        errs = reader_checks(head, ch, prev)
+        rec = SimpleNamespace(raw=ch.raw, source=head.source, line=ch.line)
+        for rank, check in ((RANK_RANGE, lambda: check_raw_range(rec, device)),
+                            (RANK_CORE, lambda: check_core_input(rec, signed) if fixed else None)):
+            try:
+                check()
+            except InputError as e:
+                errs.append((rank, e))
+        for rank, e in errs:                      # the whole-file command's order: rank, then row
+            if pending is None or rank < pending[0]:
+                pending = (rank, e)
+        n += ch.n
+        if pending is None:
             d = np.diff(ch.t) if prev is None else np.diff(np.concatenate(([prev.t[-1]], ch.t)))
             for v, c in zip(*np.unique(d, return_counts=True)):
                 steps[v] = steps.get(v, 0) + int(c)
@@ -189,12 +206,11 @@ def scan(device, source: ChunkSource, *, fixed: bool, progress: Callable[[int], 
                 t0 = float(ch.t[0])
             if ch.n:
                 t1 = float(ch.t[-1])
-            n += ch.n
-            prev = ch
-    except InputError:
-        raise Fallback("bad input") from None
+        prev = ch
     if n < 3:
         raise Fallback("too few samples")
+    if pending is not None:
+        raise pending[1]
     dt = median_of_counts(steps)
     ratio = dt * float(device.sample_rate_hz)
     if any(abs(ratio / k - 1.0) <= TIME_UNIT_TOL for k, _ in TIME_UNITS):
