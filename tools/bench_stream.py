@@ -17,6 +17,8 @@ subprocess's own wall time for the work (imports excluded) and its peak RSS (VmH
 from a large parent).  The input files are generated once into
 ``--dir`` (default a temporary directory) and deleted at the end (``--keep`` keeps them).
 Writes build/bench_stream.md and prints it.
+``--command rate|attitude --engine E``: instead, ``accelcal rate|attitude --engine E`` streamed and with ``--whole-file``,
+wall time and peak RSS of each (a table row per run, printed).
 
 ``--calibrate-diagnose N``: instead, the wall time and peak RSS (VmHWM polled from /proc) of
 ``calibrate`` and ``diagnose`` on a static-pose recording of about N samples (24 jig poses of
@@ -42,7 +44,7 @@ import pyarrow.parquet as pq
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "python"))
-from accelcal.io.device import default_device  # noqa: E402
+from accelcal.io.device import default_device, pendulum_device, save_device  # noqa: E402
 from accelcal.io.parquet import BATCH_ROWS  # noqa: E402
 from accelcal.io.recording import Recording, write_recording  # noqa: E402
 from accelcal.simulate import run_simulation  # noqa: E402
@@ -58,6 +60,12 @@ if kind == "resolve":
     t0 = time.perf_counter()
     rc = main(["resolve", "--device", "default", "--calibration", "nominal", "--engine", "fixed", "--quiet",
                src, "-o", out])
+    assert rc == 0
+elif kind.startswith(("rate", "attitude")):
+    from accelcal.cli.main import main
+    t0 = time.perf_counter()
+    rc = main([kind.split("-")[0], "--device", {device!r}, "--calibration", "nominal", "--engine", {engine!r},
+               "--quiet", src, "-o", out] + (["--whole-file"] if kind.endswith("-whole") else []))
     assert rc == 0
 else:
     import numpy as np, pyarrow as pa, pyarrow.csv as pa_csv, pyarrow.parquet as pq
@@ -116,8 +124,8 @@ def generate(n: int, d: Path, raw0: np.ndarray) -> tuple[Path, Path]:
     return csv_path, pq_path
 
 
-def run_case(kind: str, src: Path, out: Path) -> dict:
-    code = CASE.format(python=str(ROOT / "python"), rows=ROWS)
+def run_case(kind: str, src: Path, out: Path, engine: str = "fixed", device: str = "default") -> dict:
+    code = CASE.format(python=str(ROOT / "python"), rows=ROWS, engine=engine, device=device)
     r = subprocess.run([sys.executable, "-c", code, kind, str(src), str(out)], capture_output=True, text=True)
     if r.returncode != 0:
         raise RuntimeError(f"{kind} {src} -> {out}: {r.stderr.strip()[-2000:]}")
@@ -196,13 +204,27 @@ def main() -> None:
                     help="which cases, in this order (comma-separated)")
     ap.add_argument("--calibrate-diagnose", metavar="N", type=float,
                     help="instead: peak memory of calibrate and diagnose on a static-pose recording of N samples")
+    ap.add_argument("--command", choices=["resolve", "rate", "attitude"], default="resolve",
+                    help="rate, attitude: `accelcal rate|attitude --engine ENGINE` streamed, and with --whole-file "
+                    "(no I/O anchor); attitude on the two-triad pendulum device (io.device.pendulum_device), its "
+                    "readings a pendulum simulation tiled")
+    ap.add_argument("--engine", choices=["float", "fixed"], default="fixed", help="rate's or attitude's engine")
+    ap.add_argument("--no-whole", action="store_true", help="rate, attitude: the streamed runs only")
     a = ap.parse_args()
     d = Path(a.dir or tempfile.mkdtemp(prefix="bench_stream_"))
     d.mkdir(parents=True, exist_ok=True)
     if a.calibrate_diagnose:
         calibrate_diagnose(int(a.calibrate_diagnose), d)
         return
-    raw0 = base_block()
+    device = "default"
+    if a.command == "attitude":
+        pend = pendulum_device()
+        device = str(d / "pendulum.json")
+        save_device(pend, device)
+        raw = run_simulation(pend, "pendulum", seed=1, duration_s=600.0).recording.raw
+        raw0 = np.resize(raw, (1 << 16, 6))
+    else:
+        raw0 = base_block()
     rows = []
     try:
         for n in (int(float(x)) for x in a.lengths.split(",")):
@@ -214,6 +236,12 @@ def main() -> None:
                      "parquet->parquet": (pq_path, d / "o.parquet")}
             for name in a.cases.split(","):
                 src, out = cases[name]
+                if a.command != "resolve":
+                    for kind in (a.command,) + (() if a.no_whole else (a.command + "-whole",)):
+                        res = run_case(kind, src, out, a.engine, device)
+                        print(f"| {n:.0e} | {name} | {kind} --engine {a.engine} | {res['s']:.2f} | {res['mb']:.0f} |",
+                              flush=True)
+                    continue
                 io = run_case("anchor", src, out)
                 res = run_case("resolve", src, out)
                 rows.append((n, name, sizes, res, io))
@@ -227,7 +255,8 @@ def main() -> None:
     finally:
         if not a.keep and not a.dir:
             shutil.rmtree(d, ignore_errors=True)
-    print(write_table(rows))
+    if rows:
+        print(write_table(rows))
 
 
 if __name__ == "__main__":

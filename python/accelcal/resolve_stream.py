@@ -264,6 +264,8 @@ def resolve_stream(device, cal, path: Any, output: Any, *, engine: str = "float"
 def _stream(device, cal, path, output, engine, scale, block_bytes, batch_rows, progress, *, clipped: bool,
             omega_source: str, levels: Any) -> StreamResult:
     if is_parquet(path):
+        if scale is not None and scale.converts:
+            raise Fallback("units stated for a Parquet recording")   # refused by the whole-file reader
         head, pf = parquet_head(path, device.n_channels)
         total, unit = pf.metadata.num_rows, " rows"
         total_rows = total

@@ -26,17 +26,15 @@ from ..io.device import default_device, load_device
 from ..diagnose import diagnose
 from ..effects import describe_effects, params_to_json, parse_effect_spec
 from ..errors import AccelcalError, atomic_write
-from ..estimators import (OMEGA_SOURCES, attitude_from_recording, choose_omega_engine, displacement_from_recording,
-                          omega_columns, rate_from_recording, report_plots)
+from ..estimators import OMEGA_SOURCES, choose_omega_engine, omega_columns
 from ..firmware.header import calibration_header
-from ..readings.held import held_runs, held_text, readings_rate
 from ..motions import describe_motions
 from ..io.recording import read_recording, write_columns_csv, write_recording
-from ..io.recording_checks import seconds
 from ..report import REPORT_FILES, write_report
 from ..resolve import clipped_samples, resolve_recording
 from ..resolve_stream import resolve_warnings, result_names
 from .resolve_command import stream_resolve
+from .estimator_command import estimator_command, reader_notes, run_estimator, time_note  # noqa: F401
 from ..simulate import run_simulation
 from ..readings.static import MIN_POSE_S
 from ..io.units_cli import add_units_options, scale_from_args
@@ -62,27 +60,14 @@ def _read(paths, device, command: str, a=None) -> list:
         seen[key] = str(p)
     recs = [read_recording(p, device.n_channels, scale=scale) for p in paths]
     for r in recs:
-        for line in _reader_notes(r, command):
+        for line in reader_notes(r, command):
             print(line, file=sys.stderr)
-        _time_note(r, device, command)
+        time_note(r, device, command)
     ignored = sorted({k for r in recs for k in r.extra})
     if ignored:
         print(f"accelcal {command}: note: ignored column{'s' if len(ignored) > 1 else ''} "
               f"{', '.join(ignored)} (not part of the accelerometer model)", file=sys.stderr)
     return recs
-
-
-def _reader_notes(rec, command: str) -> list[str]:
-    """What the reader did to a recording (a last line cut short, a shifted grid, rounding), one
-    stderr line each."""
-    return [f"accelcal {command}: note: {rec.source}: {n}" for n in rec.notes]
-
-
-def _time_note(rec, device, command: str) -> None:
-    """t in milliseconds (or micro-, nanoseconds) read as such, said once on stderr."""
-    note = seconds(rec, device)
-    if note is not None:
-        print(f"accelcal {command}: note: {rec.source}: {note}", file=sys.stderr)
 
 
 def _write_csv(path, header: list[str], columns: list[np.ndarray], comments: dict):
@@ -174,107 +159,16 @@ def cmd_calibrate(a):
     return 0
 
 
-ESTIMATORS = {"attitude": attitude_from_recording, "displacement": displacement_from_recording,
-              "rate": rate_from_recording}
-
-
-def run_estimator(kind: str, device_path, calibration_path, recording_path, output, *, engine: str = "float",
-                  report=None, units_args=None, **options) -> list[str]:
-    """`accelcal attitude|displacement|rate --device D --calibration C REC -o OUT [--engine] [--report DIR]`.
-
-    Load, estimate, write the CSV (atomically) and, with ``report``, the plots.
-
-    Parameters
-    ----------
-    kind : {"attitude", "displacement", "rate"}
-    device_path, calibration_path, recording_path : path
-        Inputs (device "default" or None: the seed prototype).
-    output : path
-        The result CSV.
-    engine : {"float", "fixed"}
-    report : path, optional
-        Directory for the plots.
-    units_args : argparse.Namespace, optional
-        The parsed ``--units``/``--lsb``/``--full-scale``/``--bits``/``--gravity``
-        (units_cli.add_units_options) the recording is read with.
-    **options
-        To the estimator (attitude: gain, w2_gate, leak_tau_s; displacement: form, axis, keep_turned, resample;
-        rate: leak_tau_s).
-
-    Returns
-    -------
-    list of str
-        The warnings, one line each, for the caller to print to stderr.
-
-    Raises
-    ------
-    AccelcalError
-        Bad input (one line), before anything is written.
-    """
-    fn = ESTIMATORS.get(kind)
-    if fn is None:
-        raise ValueError(f"unknown estimator {kind!r}")
-    check_output(output)
-    if report is not None:
-        check_output_dir(report, "--report")
-    dev = _load_device(device_path)
-    cal = load_calibration(calibration_path, dev)
-    if isinstance(cal.extra, dict) and cal.method != "nominal":
-        cal.extra["source"] = str(calibration_path)       # the calibration a message names
-    scale = None if units_args is None else scale_from_args(units_args, dev, reader=True)
-    # displacement leaves out a sample a logger wrote twice (with a note): its integrators need
-    # each sample once, and the copy is plainly one
-    rec = read_recording(recording_path, dev.n_channels, scale=scale, repeats=kind == "displacement")
-    notes = _reader_notes(rec, kind)            # the reader's, before t's unit adds its own
-    _time_note(rec, dev, kind)
-    cols = fn(dev, cal, rec, engine, **options)
-    warnings = held_warnings(rec) + cols.warnings
-    # the notes and warnings in the output's comments too, one line each
-    meta = {**cols.meta, **{f"note_{k}": n for k, n in enumerate(rec.notes, 1)},
-            **{f"warning_{k}": w for k, w in enumerate(warnings, 1)}}
-    write_columns_csv(output, cols, meta)
-    if report is not None:
-        report_plots(report, cols, rec, kind)
-    return notes + [f"accelcal {kind}: warning: {w}" for w in warnings]
-
-
-def held_warnings(rec) -> list[str]:
-    """A per-sample estimator's warning for readings a logger held for several rows
-    (:func:`accelcal.readings.held.held_runs`): its output repeats each reading, and the motion between
-    two readings is not seen."""
-    k, first = held_runs(rec.raw)
-    if k == 1:
-        return []
-    hz = readings_rate(rec, first)
-    rows_hz = readings_rate(rec, np.arange(rec.n_samples))         # every row taken as a reading
-    rates = f": the readings change at about {hz:.4g} Hz, the rows come at {rows_hz:.4g} Hz" if hz is not None else ""
-    return [f"each reading is held for {held_text(k, first, rec.n_samples)} (the logger read the sensor faster "
-            f"than it updates){rates}; the motion between two readings is not seen, and a held reading looks "
-            "still: a rest found within one is no rest"]
-
-
-def _estimator(a, kind):
-    options = {k: v for k, v in (("axis", getattr(a, "axis", None)), ("form", getattr(a, "form", None)),
-                                 ("omega", getattr(a, "omega", None))) if v is not None}
-    for flag in ("keep_turned", "resample"):
-        if getattr(a, flag, False):
-            options[flag] = True
-    for w in run_estimator(kind, a.device, a.calibration, a.recording, a.output, engine=a.engine,
-                           report=a.report, units_args=a, **options):
-        print(w, file=sys.stderr)
-    return 0
-
-
 def cmd_attitude(a):
-    return _estimator(a, "attitude")
+    return estimator_command(a, "attitude")
 
 
 def cmd_displacement(a):
-    return _estimator(a, "displacement")
+    return estimator_command(a, "displacement")
 
 
 def cmd_rate(a):
-    return _estimator(a, "rate")
+    return estimator_command(a, "rate")
 
 
 def cmd_diagnose(a):
@@ -432,6 +326,9 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--engine", choices=["float", "fixed"], default="float", help=_ENGINE)
         s.add_argument("--report", metavar="DIR", help="write plots into DIR")
         s.add_argument("-o", "--output", required=True, metavar="OUT.csv", help=_OUT_CSV)
+        if name in ("rate", "attitude"):
+            s.add_argument("--whole-file", action="store_true", help="read the whole recording first (docs/streaming.md)")
+            s.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
         if name == "rate":
             s.add_argument("--omega", choices=["alpha", "array"], default="alpha",
                            help="alpha: leaky integration of alpha, reset on rest; array: the accelerometers' own "

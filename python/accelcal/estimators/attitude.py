@@ -112,12 +112,14 @@ class AttitudeConsts:
                    gs=rmax / abs(p.r1 - p.r2), dt=p.dt, kdt=p.gain * p.dt, leak=p.leak(), gate=p.gate())
 
 
-def attitude_core(f1, f2, C: AttitudeConsts, gated=None, sign_neg=None):
+def attitude_core(f1, f2, C: AttitudeConsts, gated=None, sign_neg=None, state: dict | None = None):
     """The algorithm of ac_att_step in float64 (see include/accelcal/ac_attitude.h).
 
     f1, f2 (n,3) m/s^2 (clipped to +-32 like the core).  ``gated``/``sign_neg`` (n,) bool
     override the decisions (twin mode).  Returns a dict of (n,) arrays: theta, w, dw, w2,
-    gmag, gated, sign_neg, settled, and the internals wp, wm, K, m (for the bounds)."""
+    gmag, gated, sign_neg, settled, and the internals wp, wm, K, m (for the bounds).  ``state``
+    (a dict, empty at the recording's first sample) carries the loop's state from one chunk of a
+    recording to the next (accelcal.estimators.attitude_stream)."""
     f1 = np.clip(np.asarray(f1, float), CLIP_LO, CLIP)
     f2 = np.clip(np.asarray(f2, float), CLIP_LO, CLIP)
     n = f1.shape[0]
@@ -132,25 +134,27 @@ def attitude_core(f1, f2, C: AttitudeConsts, gated=None, sign_neg=None):
     s_out = np.zeros(n, bool)
     settled_out = np.zeros(n, bool)
     wp_a, wm_a, K_a, m_a = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
-    w, a_prev, settled = 0.0, 0.0, 0
+    st = {} if state is None else state
+    w, a_prev, settled, first = st.get("w", 0.0), st.get("a_prev", 0.0), st.get("settled", 0), not st
     reacq = np.zeros(n, bool)
     dwl, w2l = dw.tolist(), w2.tolist()
     half_dt = 0.5 * C.dt
     for i in range(n):
-        wp = 0.0 if i == 0 else w + half_dt * (a_prev + dwl[i])
+        start = first and i == 0
+        wp = 0.0 if start else w + half_dt * (a_prev + dwl[i])
         g = (w2l[i] < C.gate) if gated is None else bool(gated[i])
         wp_a[i] = wp
         if g:
             w = wp * (1.0 - C.leak)
-            settled = 2 if (i == 0 or settled == 2) else 1
+            settled = 2 if (start or settled == 2) else 1
         else:
             m = math.sqrt(max(w2l[i], 0.0))
             neg = (wp < 0.0) if sign_neg is None else bool(sign_neg[i])
             wm = -m if neg else m
-            if i == 0 or settled == 1:
+            if start or settled == 1:
                 K = 1.0
                 reacq[i] = True
-                if i > 0:
+                if not start:
                     settled = 2
             else:
                 K = min(1.0, C.kdt * m)
@@ -161,6 +165,8 @@ def attitude_core(f1, f2, C: AttitudeConsts, gated=None, sign_neg=None):
         settled_out[i] = settled == 2
         out_w[i] = w
         a_prev = dwl[i]
+    if state is not None and n:
+        state.update(w=w, a_prev=a_prev, settled=settled)
     return dict(theta=theta, w=out_w, dw=dw, w2=w2, gmag=gmag, gated=g_out, sign_neg=s_out,
                 settled=settled_out, wp=wp_a, wm=wm_a, K=K_a, m=m_a, y=y, x=x, reacq=reacq)
 
@@ -192,12 +198,13 @@ def att_init_fixed(p: AttitudeParams):
     return st, C
 
 
-def attitude_fixed(f1_q, f2_q, p: AttitudeParams) -> dict:
+def attitude_fixed(f1_q, f2_q, p: AttitudeParams, state=None) -> dict:
     """ac_att_batch on int32 Q.AC_OUT_FRAC inputs (m/s^2).  Returns int arrays theta
     (Q.AC_ANGLE_FRAC rad), w (Q.AC_OMEGA_FRAC rad/s), dw (Q.AC_OUT_FRAC rad/s^2), w2
     (Q.AC_ATT_W2_FRAC (rad/s)^2), gmag (Q.AC_OUT_FRAC m/s^2), flags (ATT_*), plus 'consts'
-    (AttitudeConsts as stored) and 'cfg' (an owned copy of the C ac_att_cfg)."""
-    st, C = att_init_fixed(p)
+    (AttitudeConsts as stored) and 'cfg' (an owned copy of the C ac_att_cfg).  ``state``: an
+    :func:`att_init_fixed` pair (ac_att, constants) carried from one chunk of a recording to the next."""
+    st, C = att_init_fixed(p) if state is None else state
     f = np.ascontiguousarray(np.hstack([np.asarray(f1_q, np.int32), np.asarray(f2_q, np.int32)]), dtype=np.int32)
     n = f.shape[0]
     out = ffi.new("ac_att_out[]", max(n, 1))

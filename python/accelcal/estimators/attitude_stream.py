@@ -1,0 +1,163 @@
+"""``accelcal attitude`` in chunks (docs/streaming.md): memory that does not grow with the
+recording, the whole-file output byte for byte.
+
+The first pass is :func:`accelcal.estimators.stream_scan.scan` (dt, the noise); the second takes
+each chunk through the triads' f (float reference or the C core) and the estimator with its state
+carried over (:func:`~accelcal.estimators.attitude.attitude_core`'s ``state``, the C core's
+``ac_att``), counting what the warnings say (samples unsettled, |g| off, saturated).  The warnings
+are comments above the rows, so the rows go to a temporary file first
+(:func:`accelcal.io.result_sink.write_deferred`).
+"""
+from __future__ import annotations
+
+from types import SimpleNamespace
+from typing import Any, Callable
+
+import numpy as np
+
+from ..errors import AccelcalError, InputError
+from ..firmware.triad import triad_forces
+from ..io.chunk_source import open_chunks
+from ..io.chunks import BLOCK_BYTES, Fallback
+from ..io.parquet import BATCH_ROWS
+from ..io.result_sink import write_deferred
+from .attitude import (ANGLE_FRAC, ATT_GATED, ATT_SAT, ATT_UNSETTLED, AttitudeConsts, AttitudeParams,
+                       att_init_fixed, attitude_core, attitude_fixed, triad_geometry)
+from .common import OMEGA_FRAC, OUT_FRAC, force_noise, time_span
+from .stream_scan import on_grid, scan
+
+__all__ = ["attitude_stream"]
+
+NAMES = ["t", "theta_rad", "w_y", "dw_y", "g_mps2", "gated", "unsettled", "saturated"]
+
+
+def attitude_stream(device, cal, path: Any, output: Any, *, engine: str = "float", gain: float = 2.0,
+                    w2_gate: float | None = None, leak_tau_s: float = 2.0, scale: Any = None,
+                    block_bytes: int = BLOCK_BYTES, batch_rows: int = BATCH_ROWS,
+                    progress: Callable[[Any, str], Any] | None = None) -> list[str] | None:
+    """`accelcal attitude` from ``path`` into ``output`` chunk by chunk.
+
+    Parameters
+    ----------
+    device, cal : Device, Calibration
+        Two triads on body x (:func:`~accelcal.estimators.attitude.attitude_from_recording`).
+    path, output : str or os.PathLike
+        The recording and the result (Parquet by the name .parquet, else CSV).
+    engine : {"float", "fixed"}
+    gain, w2_gate, leak_tau_s : float
+        As :func:`~accelcal.estimators.attitude.attitude_from_recording` (1/rad, (rad/s)^2, s).
+    scale : units.Scale, optional
+    block_bytes, batch_rows : int
+        Chunk size: bytes of CSV text, rows of Parquet.
+    progress : callable, optional
+        ``progress(total, unit)`` -> a bar (one per pass).
+
+    Returns
+    -------
+    list of str or None
+        The warnings (the whole-file command's); None where the whole-file command must run
+        (nothing written).
+
+    Raises
+    ------
+    InputError
+        Bad rows, as the whole-file command words them (nothing written).
+    """
+    if engine not in ("float", "fixed"):
+        return None
+    try:
+        r1, r2 = triad_geometry(device, cal)
+    except InputError:
+        return None                         # the whole-file command checks the recording first
+    try:
+        src = open_chunks(path, device.n_channels, scale, block_bytes, batch_rows)
+        bar = progress(src.total, src.unit) if progress is not None else None
+        sc = scan(device, src, fixed=engine == "fixed", progress=None if bar is None else bar.update)
+        if bar is not None:
+            bar.close()
+    except Fallback:
+        return None
+    try:
+        p = AttitudeParams(r1=r1, r2=r2, dt=sc.dt, gain=gain, w2_gate=w2_gate,
+                           noise_mps2=max(force_noise(device, cal, sc.noise, (0, 1, 2)), 1e-4), leak_tau_s=leak_tau_s)
+        p.check()
+    except AccelcalError:
+        return None                         # the whole-file command words it, in its order
+    signed = device.raw_min < 0
+    g0 = float(device.gravity_mps2)
+    fixed = att_init_fixed(p) if engine == "fixed" else None
+    consts = AttitudeConsts.exact(p) if engine == "float" else None
+    state: dict = {}
+    tally = SimpleNamespace(unsettled=0, off=0, sat=0, t0=sc.t0, at=None)
+
+    def produce(sink: Any) -> dict:
+        bar = progress(src.total, src.unit) if progress is not None else None
+        for ch in src.chunks(None if bar is None else bar.update):
+            on_grid(sc, ch.start, ch.t)
+            rec = SimpleNamespace(raw=ch.raw)
+            if engine == "float":
+                f1, _ = triad_forces(cal, rec, (0, 1, 2), "float")
+                f2, _ = triad_forces(cal, rec, (3, 4, 5), "float")
+                r = attitude_core(f1, f2, consts, state=state)
+                theta, w, dw, gmag = r["theta"], r["w"], r["dw"], r["gmag"]
+                gated, unsettled = r["gated"], ~r["settled"]
+                sat = np.zeros(ch.n, bool)
+            else:
+                f1, s1 = triad_forces(cal, rec, (0, 1, 2), "fixed", signed)
+                f2, s2 = triad_forces(cal, rec, (3, 4, 5), "fixed", signed)
+                r = attitude_fixed(f1, f2, p, state=fixed)
+                theta = r["theta"] / 2.0**ANGLE_FRAC
+                w = r["w"] / 2.0**OMEGA_FRAC
+                dw = r["dw"] / 2.0**OUT_FRAC
+                gmag = r["gmag"] / 2.0**OUT_FRAC
+                fl = r["flags"]
+                gated, unsettled = (fl & ATT_GATED) != 0, (fl & ATT_UNSETTLED) != 0
+                sat = ((fl & ATT_SAT) != 0) | s1 | s2
+            k = tally.unsettled + int(np.count_nonzero(unsettled))
+            if (k > tally.unsettled and tally.unsettled < ch.start) or np.any(unsettled[1:] & ~unsettled[:-1]):
+                raise Fallback("unsettled samples that are not the first")   # the warning names sample k
+            # the warning names sample min(k, n - 1): k once the first k are unsettled
+            if tally.at is None and ch.start <= k < ch.start + ch.n:
+                tally.at = (float(ch.t[k - ch.start]), ch.line(k - ch.start))
+            tally.unsettled = k
+            tally.off += int(np.count_nonzero(np.abs(gmag - g0) > 0.2 * g0))
+            tally.sat += int(np.count_nonzero(sat))
+            if ch.n and ch.start + ch.n == sc.n and tally.at is None:
+                tally.at = (float(ch.t[-1]), ch.line(ch.n - 1))
+            sink.write([ch.t, theta, w, dw, gmag, gated.astype(float), unsettled.astype(float), sat.astype(float)])
+        if bar is not None:
+            bar.close()
+        warnings = warnings_of(tally)
+        meta = {"engine": engine, "device": device.name, "r1_m": f"{r1:.6g}", "r2_m": f"{r2:.6g}",
+                "w2_gate": f"{p.gate():.6g}", "gain": f"{gain:g}", "leak_tau_s": f"{leak_tau_s:g}"}
+        return {**meta, **{f"warning_{k}": w for k, w in enumerate(warnings, 1)}}
+
+    result: list[str] = []
+    try:
+        write_deferred(output, NAMES, lambda sink: _keep(result, produce(sink)))
+    except Fallback:
+        return None
+    return result
+
+
+def _keep(result: list, meta: dict) -> dict:
+    result.extend(v for k, v in meta.items() if k.startswith("warning_"))
+    return meta
+
+
+def warnings_of(tally: Any) -> list[str]:
+    """attitude's warnings from the counts (the whole-file command's words)."""
+    out = []
+    if tally.unsettled:
+        k = tally.unsettled
+        t_at, row = tally.at
+        until = time_span(np.array([tally.t0, t_at]), 1, rec=SimpleNamespace(lines=1, line=lambda i: row))
+        out.append(f"attitude: the sign of w_y is not yet established for the first {k} samples "
+                   f"(until {until}: no pass through low rate yet); column unsettled = 1")
+    if tally.off:
+        out.append(f"attitude: on {tally.off} samples the two triads see |g| more than 20 % "
+                   "off gravity (pivot moving, wrong r1/r2, or clipping): theta there is doubtful; "
+                   "column g_mps2")
+    if tally.sat:
+        out.append(f"attitude: {tally.sat} samples clipped in the fixed-point core (column saturated)")
+    return out

@@ -1,0 +1,234 @@
+"""The first pass of a per-sample estimator in chunks (``rate``; docs/streaming.md): what the
+whole-file command takes from the whole recording, reduced to sums while the chunks go by.
+
+The whole-file command checks the recording against the device (:func:`check_for_device`), puts
+it on its uniform time grid (:func:`accelcal.estimators.timegrid.on_uniform_grid`), takes the
+median step as dt (:func:`accelcal.estimators.common.uniform_dt`), the channels' noise
+(:func:`accelcal.estimators.common.channel_noise`) and warns of readings held for several rows
+(:func:`accelcal.readings.held.held_runs`).  :func:`scan` gives dt exactly (the median from the
+counts of the distinct steps), raises the whole-file command's error for bad rows (ranked as
+:mod:`accelcal.resolve_stream` ranks them) and proves the rest needs nothing of the samples: it
+raises :class:`~accelcal.io.chunks.Fallback` -- the whole-file command then runs and words what it
+finds -- for a non-finite t, t in another unit than seconds, a device that states no noise
+(estimated from the data), readings held for several rows, more than :data:`MAX_STEP_VALUES`
+distinct steps; and :func:`on_grid` (the second pass, chunk by chunk) for any sample more than
+:data:`GRID_MARGIN` of a step off the straight line through the first and the last stamps (far
+inside what :func:`on_uniform_grid` leaves alone: jitter 0.05 of a step, nothing late or lost).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from types import SimpleNamespace
+from typing import Any, Callable
+
+import numpy as np
+
+from ..errors import InputError
+from ..io.chunk_source import ChunkSource
+from ..io.chunks import Fallback, reader_checks
+from ..io.recording_checks import TIME_UNIT_TOL, TIME_UNITS, check_core_input, check_raw_range
+from ..readings.held import (HELD_CHANGED_SHARE, HELD_MAX, HELD_MIN_RUNS, HELD_MIN_RUNS_UNEVEN, HELD_MODAL_SHARE,
+                             HELD_SINGLE_SHARE)
+from ..readings.noise import noise_for, states_noise
+
+#: ranks of the checks after the reader's (1-4: io.chunks.reader_checks), as in the whole-file command
+RANK_RANGE, RANK_CORE = 10, 12
+
+__all__ = ["MAX_STEP_VALUES", "GRID_MARGIN", "RunCounts", "Scan", "scan", "median_of_counts", "on_grid"]
+
+#: distinct time steps kept for the exact median (more: the whole-file command)
+MAX_STEP_VALUES = 1 << 16
+#: a sample this far (steps) off the line through the first and the last stamps: the whole-file command
+GRID_MARGIN = 0.005
+
+
+@dataclass
+class RunCounts:
+    """Runs of identical rows, as :func:`accelcal.readings.held.held_runs` counts them."""
+
+    hist: dict = field(default_factory=dict)     # run length -> runs
+    first_len: int | None = None                 # the first run's length, once it has ended
+    open_len: int = 0                            # the run still going on
+    changed: int = 0                             # channels changed where a run ends (summed)
+    last: Any = None                             # the last row seen
+
+    def add(self, raw: np.ndarray) -> None:
+        if raw.shape[0] == 0:
+            return
+        new = np.ones(raw.shape[0], bool)
+        new[1:] = np.any(raw[1:] != raw[:-1], axis=1)
+        if self.last is not None:
+            new[0] = bool(np.any(raw[0] != self.last))
+            self.changed += int(np.count_nonzero(raw[0] != self.last))
+        self.changed += int(np.count_nonzero(raw[1:][new[1:]] != raw[:-1][new[1:]]))
+        starts = np.flatnonzero(new)
+        if starts.size == 0:
+            self.open_len += raw.shape[0]
+        else:
+            if self.last is not None and starts[0] == 0:
+                self._close(self.open_len)
+            elif self.last is not None:
+                self._close(self.open_len + int(starts[0]))
+            lengths = np.diff(starts)
+            if lengths.size:
+                if self.first_len is None:
+                    self.first_len = int(lengths[0])
+                for length, c in zip(*np.unique(lengths, return_counts=True)):
+                    self.hist[int(length)] = self.hist.get(int(length), 0) + int(c)
+            self.open_len = raw.shape[0] - int(starts[-1])
+        self.last = raw[-1].copy()
+
+    def _close(self, length: int) -> None:
+        if self.first_len is None:
+            self.first_len = length
+        self.hist[length] = self.hist.get(length, 0) + 1
+
+    def held(self, n_channels: int) -> int | None:
+        """held_runs' k, or None where only the samples tell (the 90th percentile at HELD_MAX)."""
+        hist = dict(self.hist)
+        hist[self.open_len] = hist.get(self.open_len, 0) + 1
+        runs = sum(hist.values())
+        top = max(hist.values())
+        k = min(length for length, c in hist.items() if c == top)      # np.argmax of the bincount: the first
+        if 2 <= k <= HELD_MAX and runs >= HELD_MIN_RUNS and top >= HELD_MODAL_SHARE * runs:
+            return k
+        if runs < 3:
+            return 1
+        inner = dict(hist)
+        for length in (self.first_len, self.open_len):
+            inner[length] -= 1
+        m = sum(inner.values())
+        if not (m >= HELD_MIN_RUNS_UNEVEN and inner.get(1, 0) / m <= HELD_SINGLE_SHARE):
+            return 1
+        idx = 0.9 * (m - 1)
+        lo, hi = _order_stat(inner, math.floor(idx)), _order_stat(inner, math.ceil(idx))
+        if lo > HELD_MAX:
+            return 1
+        if hi > HELD_MAX:
+            return None
+        boundaries = runs - 1
+        if self.changed / (boundaries * n_channels) >= HELD_CHANGED_SHARE:
+            return None                                                   # held: the whole-file command warns
+        return 1
+
+
+def _order_stat(hist: dict, i: int) -> int:
+    seen = 0
+    for length in sorted(hist):
+        seen += hist[length]
+        if seen > i:
+            return length
+    raise IndexError(i)  # pragma: no cover
+
+
+def median_of_counts(counts: dict) -> float:
+    """``np.median`` of the values ``counts`` holds (value -> how many times), from the counts."""
+    n = sum(counts.values())
+    values = sorted(counts)
+    cum = np.cumsum([counts[v] for v in values])
+    a = values[int(np.searchsorted(cum, (n - 1) // 2, side="right"))]
+    if n % 2:
+        return float(a)
+    b = values[int(np.searchsorted(cum, n // 2, side="right"))]
+    return float(np.mean(np.array([a, b])))
+
+
+@dataclass
+class Scan:
+    """What the whole-file command takes from the whole recording.
+
+    Attributes
+    ----------
+    n : int
+        Samples.
+    t0, t1 : float
+        The first and the last stamps, s.
+    dt : float
+        The median step, s (:func:`accelcal.estimators.common.uniform_dt`'s).
+    noise : ndarray (N,)
+        The channels' noise, counts (:func:`accelcal.estimators.common.channel_noise`'s).
+    """
+
+    n: int
+    t0: float
+    t1: float
+    dt: float
+    noise: np.ndarray
+
+
+def scan(device, source: ChunkSource, *, fixed: bool, progress: Callable[[int], None] | None = None) -> Scan:
+    """The first pass (see the module doc).
+
+    Raises
+    ------
+    InputError
+        The whole-file command's error (the reader's, a reading outside the device's range or,
+        ``fixed``, the C core's input), as it words it: the first of the lowest rank, once the
+        whole file has been read (a bad cell at once: it is the file's first).
+    Fallback
+        Where the whole-file command must run.
+    """
+    if not states_noise(device):
+        raise Fallback("the noise is estimated from the data")
+    head = source.head
+    if head.n_raw != device.n_channels:
+        raise Fallback("channels")
+    steps: dict = {}
+    runs = RunCounts()
+    prev = None
+    n, t0, t1 = 0, math.nan, math.nan
+    signed = device.raw_min < 0
+    pending: tuple[int, InputError] | None = None
+    for ch in source.chunks(progress):           # a bad cell: the file's first, the whole-file reader's error
+        if not np.all(np.isfinite(ch.t)):
+            raise Fallback("t not finite")
+        errs = reader_checks(head, ch, prev)
+        rec = SimpleNamespace(raw=ch.raw, source=head.source, line=ch.line)
+        for rank, check in ((RANK_RANGE, lambda: check_raw_range(rec, device)),
+                            (RANK_CORE, lambda: check_core_input(rec, signed) if fixed else None)):
+            try:
+                check()
+            except InputError as e:
+                errs.append((rank, e))
+        for rank, e in errs:                      # the whole-file command's order: rank, then row
+            if pending is None or rank < pending[0]:
+                pending = (rank, e)
+        n += ch.n
+        if pending is None:
+            d = np.diff(ch.t) if prev is None else np.diff(np.concatenate(([prev.t[-1]], ch.t)))
+            for v, c in zip(*np.unique(d, return_counts=True)):
+                steps[v] = steps.get(v, 0) + int(c)
+            if len(steps) > MAX_STEP_VALUES:
+                raise Fallback("steps of too many values")
+            runs.add(ch.raw)
+            if prev is None and ch.n:
+                t0 = float(ch.t[0])
+            if ch.n:
+                t1 = float(ch.t[-1])
+        prev = ch
+    if n < 3:
+        raise Fallback("too few samples")
+    if pending is not None:
+        raise pending[1]
+    dt = median_of_counts(steps)
+    ratio = dt * float(device.sample_rate_hz)
+    if any(abs(ratio / k - 1.0) <= TIME_UNIT_TOL for k, _ in TIME_UNITS):
+        raise Fallback("t in another unit")
+    if runs.held(device.n_channels) != 1:
+        raise Fallback("held readings")
+    return Scan(n=n, t0=t0, t1=t1, dt=dt, noise=noise_for(device, np.zeros((0, device.n_channels), np.int64), 1)[0])
+
+
+def on_grid(sc: Scan, start: int, t: np.ndarray) -> None:
+    """The second pass's time check of a chunk (samples ``start``.. of the recording).
+
+    Raises
+    ------
+    Fallback
+        A stamp more than GRID_MARGIN of a step off the line through the first and the last.
+    """
+    step = (sc.t1 - sc.t0) / (sc.n - 1)
+    i = np.arange(start, start + t.size, dtype=float)
+    if t.size and float(np.max(np.abs(t - sc.t0 - i * step))) > GRID_MARGIN * step:
+        raise Fallback("stamps off the uniform grid")
