@@ -47,6 +47,11 @@ ac_status ac_nonlin_invert(const ac_nonlin_table *t, const int16_t *x, int16_t *
      * - 2^(30-shift) (or 2^-8 2^-(shift-8)): the bias makes the sum non-negative (|p| <= 2^30),
      * the shift by 16 is a word move, by 8 byte moves */
     sh = (uint8_t)t->shift;
+#if AC_H8_RESOLVE_ASM
+    if (sh >= 15u) {
+        return ac_h8_nonlin(t, x, y) ? AC_SATURATED : AC_OK;
+    }
+#endif
     bias = (sh >= 8u) ? (int32_t)(0x40000000UL + ((uint32_t)1u << (uint8_t)(sh - 1u))) : 0;
     off = (sh >= 8u) ? (int32_t)((uint32_t)1u << (uint8_t)(30u - sh)) : 0;
     for (i = 0u; i < (uint8_t)t->n; i++) {

@@ -12,6 +12,7 @@
 #define AC_TERMS_IMPL_H
 
 #include "accelcal/ac_config.h"
+#include "ac_internal.h"
 
 /* round(v / 2^15), |v| <= 2^30 */
 #define AC_R15(v) ((int32_t)((uint32_t)((uint32_t)(v) + (uint32_t)0x40004000UL) >> 15) - 0x8000L)
@@ -30,6 +31,13 @@
 
 /* round(v / 2^3), |v| <= 2^30 */
 #define AC_R3(v) ((int32_t)((uint32_t)((uint32_t)(v) + (uint32_t)0x40000004UL) >> 3) - 0x08000000L)
+
+/* the H8/300H assembly kernels (ac_terms_h8.c; AC_H8_RESOLVE_ASM of ac_internal.h) */
+#if AC_H8_RESOLVE_ASM
+#include "accelcal/ac_nonlin.h"
+/* ac_nonlin_invert's iterations for a checked n and 15 <= shift <= 30: 1 if a z_k clipped */
+uint8_t ac_h8_nonlin(const ac_nonlin_table *t, const int16_t *x, int16_t *y);
+#endif
 
 /* 16 x 16 -> 32 signed product */
 #define AC_MUL16(a, b) ((int32_t)(int16_t)(a) * (int16_t)(b))
