@@ -37,6 +37,17 @@
 #include "accelcal/ac_nonlin.h"
 /* ac_nonlin_invert's iterations for a checked n and 15 <= shift <= 30: 1 if a z_k clipped */
 uint8_t ac_h8_nonlin(const ac_nonlin_table *t, const int16_t *x, int16_t *y);
+#include "accelcal/ac_temp.h"
+/* on the H8/300H ac_temp_correct and ac_temp_lag_step are assembly (ac_terms_h8.c) that jumps to
+ * these, the C, for what it does not take (NULL, a bad n, a first step, a shift below 17 ...) */
+ac_status ac_temp_correct_c(const ac_temp_table *t, int16_t t_off, int16_t t_gain, const int16_t *x,
+                            int16_t *y);
+ac_status ac_temp_lag_step_c(ac_temp_lag *f, int16_t temp, int16_t *lagged);
+#define AC_TEMP_CORRECT_C ac_temp_correct_c
+#define AC_TEMP_LAG_STEP_C ac_temp_lag_step_c
+#else
+#define AC_TEMP_CORRECT_C ac_temp_correct
+#define AC_TEMP_LAG_STEP_C ac_temp_lag_step
 #endif
 
 /* 16 x 16 -> 32 signed product */
