@@ -23,7 +23,7 @@ ac_status ac_nonlin_check(const ac_nonlin_table *t)
     return AC_OK;
 }
 
-ac_status ac_nonlin_invert(const ac_nonlin_table *t, const int16_t *x, int16_t *y)
+ac_status AC_NONLIN_INVERT_C(const ac_nonlin_table *t, const int16_t *x, int16_t *y)
 {
     uint8_t sat = 0u;
     uint8_t i, it, sh;
@@ -47,11 +47,6 @@ ac_status ac_nonlin_invert(const ac_nonlin_table *t, const int16_t *x, int16_t *
      * - 2^(30-shift) (or 2^-8 2^-(shift-8)): the bias makes the sum non-negative (|p| <= 2^30),
      * the shift by 16 is a word move, by 8 byte moves */
     sh = (uint8_t)t->shift;
-#if AC_H8_RESOLVE_ASM
-    if (sh >= 15u) {
-        return ac_h8_nonlin(t, x, y) ? AC_SATURATED : AC_OK;
-    }
-#endif
     bias = (sh >= 8u) ? (int32_t)(0x40000000UL + ((uint32_t)1u << (uint8_t)(sh - 1u))) : 0;
     off = (sh >= 8u) ? (int32_t)((uint32_t)1u << (uint8_t)(30u - sh)) : 0;
     for (i = 0u; i < (uint8_t)t->n; i++) {

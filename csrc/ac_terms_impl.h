@@ -35,8 +35,10 @@
 /* the H8/300H assembly kernels (ac_terms_h8.c; AC_H8_RESOLVE_ASM of ac_internal.h) */
 #if AC_H8_RESOLVE_ASM
 #include "accelcal/ac_nonlin.h"
-/* ac_nonlin_invert's iterations for a checked n and 15 <= shift <= 30: 1 if a z_k clipped */
-uint8_t ac_h8_nonlin(const ac_nonlin_table *t, const int16_t *x, int16_t *y);
+/* on the H8/300H ac_nonlin_invert is assembly (ac_terms_h8.c) that jumps to this, the C, for what
+ * it does not take (NULL, a bad n, a shift below 15 or above 30) */
+ac_status ac_nonlin_invert_c(const ac_nonlin_table *t, const int16_t *x, int16_t *y);
+#define AC_NONLIN_INVERT_C ac_nonlin_invert_c
 #include "accelcal/ac_temp.h"
 /* on the H8/300H ac_temp_correct and ac_temp_lag_step are assembly (ac_terms_h8.c) that jumps to
  * these, the C, for what it does not take (NULL, a bad n, a first step, a shift below 17 ...) */
@@ -46,6 +48,7 @@ ac_status ac_temp_lag_step_c(ac_temp_lag *f, int16_t temp, int16_t *lagged);
 #define AC_TEMP_CORRECT_C ac_temp_correct_c
 #define AC_TEMP_LAG_STEP_C ac_temp_lag_step_c
 #else
+#define AC_NONLIN_INVERT_C ac_nonlin_invert
 #define AC_TEMP_CORRECT_C ac_temp_correct
 #define AC_TEMP_LAG_STEP_C ac_temp_lag_step
 #endif
