@@ -108,13 +108,10 @@ __asm__(
     "\tbne\t.Lnl_a_ch:16\n"
     "\tbra\t.Lnl_done:16\n"
     "\tNLAS\t.Lnl_e3, .Lnl_c3, .Lnl_n3\n"
-    /* g z = 2^30 at shift 15 (a subroutine): C = 2^15, z = x0 - 2^15 (clipped for x0 < 0) */
+    /* g z = 2^30 at shift 15 (a subroutine): C = 2^15.  z = -32768 there, and z reaches -32768 only
+     * as x0 or as a clip below, both with x0 < 0: z = x0 - 2^15 clips to -32768, flagged */
     ".Lnl_a_edge:\n"
-    "\tmov.w\te1,r1\n"
-    "\tbmi\t1f\n"
-    "\tadd.w\t#0x8000,r1\n"
-    "\trts\n"
-    "1:\tmov.w\t#0x8000,r1\n"
+    "\tmov.w\t#0x8000,r1\n"
     "\tbra\t2f\n"
     /* z = x0 - C overflowed (V, a subroutine): 0x7FFF if the wrapped result is negative, else
      * 0x8000; the flag (bit 0 of the byte at the caller's @er7) */
@@ -452,10 +449,13 @@ __asm__(
     "\tmov.l\t@er0,er1\n"
     "\tsub.l\ter1,er3\n"
     "\tbvs\t.Ltl_cp\n"
-    "\tcmp.l\t#0x40000000,er3\n"
-    "\tbge\t.Ltl_cp\n"
-    "\tcmp.l\t#-0x40000000,er3\n"
-    "\tble\t.Ltl_cp\n"
+    /* |d| < 2^30: dh = d's high word in -2^14..2^14-1 (dh + 2^14 not negative), and not
+     * d = -2^30 (dh = -2^14 with dl = 0, out of line) */
+    "\tmov.w\te3,r1\n"
+    "\tadd.w\t#0x4000,r1\n"
+    "\tbmi\t.Ltl_cp\n"
+    "\tbeq\t.Ltl_lo\n"
+    ".Ltl_in:\n"
     /* a = sign(dh) |dh| k + floor(dl k 2^-16) in er1, d = dh 2^16 + dl in er3 */
     "\tmov.w\t@(4,er0),e2\n"
     "\tmov.w\te3,r1\n"
@@ -505,6 +505,10 @@ __asm__(
     "\tmov.w\t#0x7fff,r1\n"
     "\tmov.w\tr1,@er2\n"
     "\tbra\t.Ltl_ret\n"
+    ".Ltl_lo:\n"
+    "\tmov.w\tr3,r3\n"
+    "\tbne\t.Ltl_in\n"
+    "\tbra\t.Ltl_cp:16\n"
     ".Ltl_sat:\n"
     "\tbmi\t1f\n"
     "\tmov.l\t#0x80000000,er3\n"
