@@ -86,8 +86,8 @@ def test_corpus_present_and_small():
     files = [p for p in CORPUS.iterdir() if p.is_file()]
     assert len(files) >= 100
     assert sum(p.stat().st_size for p in files) < 200_000
-    # every harness target has seeds (the first byte selects it, mod 14)
-    assert {p.read_bytes()[0] % 14 for p in files if p.stat().st_size} == set(range(14))
+    # every harness target has seeds (the first byte selects it, mod 15)
+    assert {p.read_bytes()[0] % 15 for p in files if p.stat().st_size} == set(range(15))
 
 
 def test_corpus_matches_its_generator(tmp_path):
