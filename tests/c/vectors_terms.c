@@ -216,7 +216,7 @@ static void vec_terms_edges(void)
             h8(j);
             st(ac_temp_lag_init(&f, (uint16_t)(40000u + 977u * i), j));
             f.started = 1u;
-            f.y = (int32_t)((uint32_t)(int32_t)temp * 65536UL - (uint32_t)dl[i]);
+            f.y = (int32_t)((int32_t)temp * (int32_t)65536 - dl[i]); /* |temp| = 100: no overflow */
             st(ac_temp_lag_step(&f, temp, &out));
             h16(out);
             h32(f.y);
