@@ -130,6 +130,8 @@ def test_harness_catches_a_violation(build, tmp_path):
                       "int32_t e = d > 32766 ? 32766 : (d < -32768 ? -32768 : d);")
     assert bad != src
     (tmp_path / "fuzz_bad.c").write_text(bad)
+    # fuzz_core.c includes its terms target from its own directory
+    (tmp_path / "fuzz_terms.c").write_text((ROOT / "fuzz" / "fuzz_terms.c").read_text())
     _compile_all(build["cc"], [(tmp_path / "fuzz_bad.c", tmp_path / "fuzz_bad.o", "-O0")])
     exe = tmp_path / "replay_bad"
     _link(build["cc"], [tmp_path / "fuzz_bad.o", build["main"], *build["core"]], exe)
