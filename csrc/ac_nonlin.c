@@ -23,7 +23,7 @@ ac_status ac_nonlin_check(const ac_nonlin_table *t)
     return AC_OK;
 }
 
-ac_status ac_nonlin_invert(const ac_nonlin_table *t, const int16_t *x, int16_t *y)
+ac_status AC_NONLIN_INVERT_C(const ac_nonlin_table *t, const int16_t *x, int16_t *y)
 {
     uint8_t sat = 0u;
     uint8_t i, it, sh;

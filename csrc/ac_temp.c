@@ -21,7 +21,7 @@ ac_status ac_temp_lag_init(ac_temp_lag *f, uint16_t k, uint8_t shift)
     return AC_OK;
 }
 
-ac_status ac_temp_lag_step(ac_temp_lag *f, int16_t temp, int16_t *lagged)
+ac_status AC_TEMP_LAG_STEP_C(ac_temp_lag *f, int16_t temp, int16_t *lagged)
 {
     uint8_t sat = 0u;
     int32_t x, inc = 0;
@@ -81,7 +81,7 @@ ac_status ac_temp_check(const ac_temp_table *t)
 /* the largest |gc dTg| (Q.32) that rounds to |e| <= AC_TEMP_E_MAX */
 #define E32_MAX ((int32_t)AC_TEMP_E_MAX * 8192L + 4095L)
 
-ac_status ac_temp_correct(const ac_temp_table *t, int16_t t_off, int16_t t_gain, const int16_t *x,
+ac_status AC_TEMP_CORRECT_C(const ac_temp_table *t, int16_t t_off, int16_t t_gain, const int16_t *x,
                           int16_t *y)
 {
     uint8_t sat = 0u;

@@ -12,6 +12,7 @@
 #define AC_TERMS_IMPL_H
 
 #include "accelcal/ac_config.h"
+#include "ac_internal.h"
 
 /* round(v / 2^15), |v| <= 2^30 */
 #define AC_R15(v) ((int32_t)((uint32_t)((uint32_t)(v) + (uint32_t)0x40004000UL) >> 15) - 0x8000L)
@@ -30,6 +31,27 @@
 
 /* round(v / 2^3), |v| <= 2^30 */
 #define AC_R3(v) ((int32_t)((uint32_t)((uint32_t)(v) + (uint32_t)0x40000004UL) >> 3) - 0x08000000L)
+
+/* the H8/300H assembly kernels (ac_terms_h8.c; AC_H8_RESOLVE_ASM of ac_internal.h) */
+#if AC_H8_RESOLVE_ASM
+#include "accelcal/ac_nonlin.h"
+/* on the H8/300H ac_nonlin_invert is assembly (ac_terms_h8.c) that jumps to this, the C, for what
+ * it does not take (NULL, a bad n, a shift below 15 or above 30) */
+ac_status ac_nonlin_invert_c(const ac_nonlin_table *t, const int16_t *x, int16_t *y);
+#define AC_NONLIN_INVERT_C ac_nonlin_invert_c
+#include "accelcal/ac_temp.h"
+/* on the H8/300H ac_temp_correct and ac_temp_lag_step are assembly (ac_terms_h8.c) that jumps to
+ * these, the C, for what it does not take (NULL, a bad n, a first step, a shift below 17 ...) */
+ac_status ac_temp_correct_c(const ac_temp_table *t, int16_t t_off, int16_t t_gain, const int16_t *x,
+                            int16_t *y);
+ac_status ac_temp_lag_step_c(ac_temp_lag *f, int16_t temp, int16_t *lagged);
+#define AC_TEMP_CORRECT_C ac_temp_correct_c
+#define AC_TEMP_LAG_STEP_C ac_temp_lag_step_c
+#else
+#define AC_NONLIN_INVERT_C ac_nonlin_invert
+#define AC_TEMP_CORRECT_C ac_temp_correct
+#define AC_TEMP_LAG_STEP_C ac_temp_lag_step
+#endif
 
 /* 16 x 16 -> 32 signed product */
 #define AC_MUL16(a, b) ((int32_t)(int16_t)(a) * (int16_t)(b))

@@ -33,7 +33,13 @@
  *                                 first rest, v = 0 at rest, 1-D components);
  *                                 batch == steps; the frame within 2 LSB
  *
- * (the first byte is taken mod 14)
+ *  14 ac_temp_*, ac_skew_*, ac_nonlin_*   each against its header's integer recurrence
+ *                                 written out in 64-bit (every rounding, clip and the
+ *                                 flag); in place == separate; the temperature and the
+ *                                 nonlinearity within their headers' bounds against the
+ *                                 float formula (fuzz/fuzz_terms.c)
+ *
+ * (the first byte is taken mod 15)
  * Everywhere: the status is one of the ac_status values, and a negative status
  * leaves the outputs unwritten (ac_status.h).  A violated property prints what
  * failed and aborts, which libFuzzer reports as a crash.
@@ -2505,6 +2511,10 @@ static void target_displace(rd *r)
 
 /* ========================================================================= */
 
+#include "fuzz_terms.c"
+
+/* ========================================================================= */
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     rd r;
@@ -2515,7 +2525,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     sel = data[0];
     r.p = data + 1;
     r.n = size - 1u;
-    switch (sel % 14u) {
+    switch (sel % 15u) {
     case 0:
         target_trim(&r);
         break;
@@ -2555,8 +2565,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     case 12:
         target_attitude(&r);
         break;
-    default:
+    case 13:
         target_displace(&r);
+        break;
+    default:
+        target_terms(&r);
         break;
     }
     return 0;

@@ -19,7 +19,7 @@ import random
 from pathlib import Path
 
 # target selectors (fuzz_core.c)
-TRIM, RESOLVE, PROCESS, BUILD, INVERT, XF, FIXED, RATE, NULLS, ROWS, TRIG, REST, ATT, DISP = range(14)
+TRIM, RESOLVE, PROCESS, BUILD, INVERT, XF, FIXED, RATE, NULLS, ROWS, TRIG, REST, ATT, DISP, TERMS = range(15)
 
 
 def seeds(rng: random.Random):
@@ -77,6 +77,10 @@ def seeds(rng: random.Random):
             cfg = bytes([DISP, 0, 63, 10, 40, 2, ema, axis_sel])
             move = b"".join(bytes([1] + [rng.randrange(256) for _ in range(3)]) for _ in range(12))
             yield f"disp_stream{axis_sel}_e{ema}", cfg + bytes(4) * 10 + move + bytes(4) * 41
+    # the correctable terms: mode bits 0-1 lag / temperature / skew / nonlinearity, 4 arbitrary table,
+    # 8 in place
+    for mode in range(16):
+        yield f"terms_m{mode:02d}", bytes([TERMS, mode]) + payload(400)
 
 
 def main() -> int:

@@ -22,6 +22,8 @@
  *   E = 0.5 + (|z|^2 2^-16 + |z| / 2) 2^-shift   counts (C's rounding; h's and g's),
  * |z| the largest reading involved (python: accelcal.firmware.terms_fixed.nonlin_bound).
  * AC_SATURATED if a z_k clipped to int16.
+ * On the H8/300H (normal mode) the function is assembly for shifts 15..30 (csrc/ac_terms_h8.c),
+ * the same arithmetic bit for bit; the C of ac_nonlin.c everywhere else.
  */
 #ifndef AC_NONLIN_H
 #define AC_NONLIN_H

@@ -29,6 +29,8 @@
  *     |y - y_ref| <= 0.5 + 2^-8 + 0.54 |e| + (max(|x|, |y_ref|) + 1) (2^-18 + |e|^4 / (1 - |e|))   counts
  *   (0.5 the final rounding; the series' truncation e^4; the roundings of e, e2, e3, w r).
  *   |e| is held to AC_TEMP_E_MAX 2^-19 = 5.47 % (a larger gain change clips, AC_SATURATED).
+ * On the H8/300H (normal mode) ac_temp_correct and ac_temp_lag_step are assembly
+ * (csrc/ac_terms_h8.c), the same arithmetic bit for bit; the C of ac_temp.c everywhere else.
  */
 #ifndef AC_TEMP_H
 #define AC_TEMP_H

@@ -198,10 +198,79 @@ static void vec_nonlin(void)
     nl();
 }
 
+/* the edges of the H8/300H assembly (csrc/ac_terms_h8.c) that random inputs seldom reach: the lag's
+ * difference at +-2^30 (its fast path's bound), the gain term's clip at exactly +-E32, the
+ * nonlinearity's one product g z = 2^30 (a table |a2| + |a3| > 32767 makes it: y printed anyway,
+ * host and targets must agree) and its clips */
+static void vec_terms_edges(void)
+{
+    static const int32_t dl[] = {-0x40000000L, -0x3FFFFFFFL, -0x3FFF0000L, 0x3FFFFFFFL, 0x40000000L,
+                                 -0x40010000L, 0x3FFF0000L, 0x3FFF8000L, -0x3FFF8000L};
+    static const int16_t gl[] = {-32768, 32767, 28672, -28672, 1, -1};
+    uint8_t i, j;
+    for (i = 0u; i < (uint8_t)(sizeof dl / sizeof dl[0]); i++) {
+        for (j = 17u; j <= 47u; j = (uint8_t)(j + 10u)) {
+            ac_temp_lag f;
+            int16_t out = 0, temp = (int16_t)((i & 1u) ? 100 : -100);
+            TAG("VTE_L");
+            h8(j);
+            st(ac_temp_lag_init(&f, (uint16_t)(40000u + 977u * i), j));
+            f.started = 1u;
+            f.y = (int32_t)((int32_t)temp * (int32_t)65536 - dl[i]); /* |temp| = 100: no overflow */
+            st(ac_temp_lag_step(&f, temp, &out));
+            h16(out);
+            h32(f.y);
+            nl();
+        }
+    }
+    /* e32 = gc dTg at E32 = 28672 * 8192 + 4095 = 22657 * 10367 and at E32 + 1 = 30720 * 7646, both
+     * signs (the largest unclipped and the smallest clipped gain term) */
+    for (i = 0u; i < 8u; i++) {
+        int16_t x[2] = {1000, -32768}, y[2];
+        int16_t gc = (i & 1u) ? (int16_t)30720 : (int16_t)22657;
+        int16_t tg = (i & 1u) ? (int16_t)7646 : (int16_t)10367;
+        vt_temp.n = 2u;
+        vt_temp.t_ref = 0;
+        vt_temp.oc[0] = vt_temp.oc[1] = 0;
+        vt_temp.o[0] = vt_temp.o[1] = 0;
+        vt_temp.gc[0] = vt_temp.gc[1] = (i & 2u) ? (int16_t)-gc : gc;
+        if (i & 4u) {
+            tg = (int16_t)-tg;
+        }
+        TAG("VTE_T");
+        h16(vt_temp.gc[0]);
+        h16(tg);
+        st(ac_temp_correct(&vt_temp, 0, tg, x, y));
+        h16(y[0]);
+        h16(y[1]);
+        nl();
+    }
+    for (i = 0u; i < (uint8_t)(sizeof gl / sizeof gl[0]); i++) {
+        int16_t x[4] = {0, -32768, 32767, -1}, y[4];
+        vt_nl.n = 4u;
+        for (j = 0u; j < 4u; j++) {
+            vt_nl.a2[j] = gl[i];
+            vt_nl.a3[j] = (int16_t)((j & 1u) ? 0 : gl[(i + 1u) % 6u]);
+        }
+        for (j = 14u; j <= 30u; j = (uint8_t)(j + 4u)) {
+            uint8_t k;
+            vt_nl.shift = (int8_t)((j == 14u) ? 15 : j);
+            TAG("VTE_N");
+            h8((uint8_t)vt_nl.shift);
+            st(ac_nonlin_invert(&vt_nl, x, y));
+            for (k = 0u; k < 4u; k++) {
+                h16(y[k]);
+            }
+            nl();
+        }
+    }
+}
+
 static void vec_terms(void)
 {
     vec_temp_lag();
     vec_temp_correct();
     vec_skew();
     vec_nonlin();
+    vec_terms_edges();
 }

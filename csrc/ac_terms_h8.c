@@ -1,0 +1,523 @@
+/*
+ * accelcal -- the correctable terms' per-sample kernels for the H8/300H in normal mode, in
+ * assembly (selected by AC_H8_RESOLVE_ASM, ac_internal.h: __H8300H__ with __NORMAL_MODE__ and
+ * no AC_NO_ASM, as ac_resolve_h8.c; the C of ac_nonlin.c is the reference and the code on every
+ * other target and for the shifts the kernel does not take).  Same results bit for bit, status
+ * and saturation flag included (tools/run_h8_tests.sh: tests/c/vectors.c at -Os and -O2
+ * against the host).
+ *
+ * Why assembly: h8300-hms-gcc 3.4 keeps the nonlinearity's iteration state on the stack and
+ * shifts the rounding one bit a loop pass: ac_nonlin_invert took 6,212 states (-Os) for six
+ * channels and three iterations, 4.1x its 54 multiplies x 28 states (tools/bench_h8.py).
+ *
+ * ac_h8_nonlin (r0 = t, r1 = x, r2 = y; returns 1 in r0 if a z_k clipped, else 0): the
+ * iterations of ac_nonlin.h for a table with 15 <= shift <= 30 (the C wrapper checks n,
+ * shift and the pointers and calls it only then).  Per channel x0 in e1, z in r1, a2 in r2,
+ * a3 in e2; the iteration count in r3l (r3h its start), shift - 16 in e3, the channel count
+ * in e4, the flag in e5; a2 through er4 (post-increment, a3 at a fixed distance), x through
+ * er5, y through r6.  One iteration:
+ *   h = a2 + round(a3 z 2^-15):  MULXS.W, ADD.L #0x4000, SHLL.L: the high word is
+ *       floor((a3 z + 2^14) 2^-15) mod 2^16, which is the C's (int16_t)AC_R15 (|a3 z| <= 2^30);
+ *   g = round(h z 2^-15) the same way;
+ *   C = round(g z 2^-shift): shift 15: the same with SHAL.L, whose V flags the one product
+ *       that leaves the high word (g = z = -32768: g z = 2^30, C = 2^15, out of line);
+ *       shift 16..30: floor(g z 2^-15) (SHAL.L, the same case out of line: C = 2^(30 -
+ *       shift)) then shift - 16 SHAR.W and one more whose carry is added
+ *       (floor((w + 2^(m-1)) 2^-m) = floor((floor(w 2^-(m-1)) + 1) / 2), m = shift - 15);
+ *       for shift >= 15 |C| <= 2^15 and C fits int16 but for that one case;
+ *   z = x0 - C: SUB.W, its V the clip (to 0x7FFF if the wrapped result is negative, else
+ *       0x8000, and the flag), out of line.
+ * Addresses: normal mode uses the low 16 bits of a register, so e1..e5 hold data while
+ * r4, r5, r6 point (no array reaches 0x10000: a post-increment never carries into them).
+ */
+#include "ac_internal.h"
+#include "ac_terms_impl.h"
+#include "accelcal/ac_temp.h"
+
+#if AC_H8_RESOLVE_ASM
+#include <stddef.h>
+
+#define AC_H8T_STR(x) #x
+#define AC_H8T_XSTR(x) AC_H8T_STR(x)
+
+AC_STATIC_ASSERT(h8t_nl_shift, offsetof(ac_nonlin_table, shift) == 2);
+AC_STATIC_ASSERT(h8t_nl_a2, offsetof(ac_nonlin_table, a2) == 4);
+AC_STATIC_ASSERT(h8t_nl_a3, offsetof(ac_nonlin_table, a3) == 4 + 2 * AC_MAX_CHANNELS);
+AC_STATIC_ASSERT(h8t_nl_it, AC_NONLIN_ITERATIONS >= 1 && AC_NONLIN_ITERATIONS <= 32767);
+
+AC_STATIC_ASSERT(h8t_st, AC_OK == 0 && AC_SATURATED == 1);
+
+__asm__(
+    "\t.equ\tNL_MAXCH, " AC_H8T_XSTR(AC_MAX_CHANNELS) "\n"
+    "\t.equ\tNL_A3D, 2*NL_MAXCH-2\n"
+    "\t.equ\tNL_IT, " AC_H8T_XSTR(AC_NONLIN_ITERATIONS) "\n"
+    /* one iteration at shift 15 (z r1, x0 e1, a2 r2, a3 e2, 0x4000 in er6); \e, \c the out-of-line
+     * stubs of the product 2^30 and of the clip, \n the label after it */
+    "\t.macro\tNLA e, c, n\n"
+    "\tmov.w\te2,r0\n"
+    "\tmulxs.w\tr1,er0\n"
+    "\tadd.l\ter6,er0\n"
+    "\tshll.l\ter0\n"
+    "\tmov.w\te0,r0\n"
+    "\tadd.w\tr2,r0\n"
+    "\tmulxs.w\tr1,er0\n"
+    "\tadd.l\ter6,er0\n"
+    "\tshll.l\ter0\n"
+    "\tmov.w\te0,r0\n"
+    "\tmulxs.w\tr1,er0\n"
+    "\tadd.l\ter6,er0\n"
+    "\tshal.l\ter0\n"
+    "\tbvs\t\\e\n"
+    "\tmov.w\te1,r1\n"
+    "\tsub.w\te0,r1\n"
+    "\tbvs\t\\c\n"
+    "\\n:\n"
+    "\t.endm\n"
+    /* the stubs of one NLA */
+    "\t.macro\tNLAS e, c, n\n"
+    "\\e:\tbsr\t.Lnl_a_edge:16\n"
+    "\tbra\t\\n\n"
+    "\\c:\tbsr\t.Lnl_clip:16\n"
+    "\tbra\t\\n\n"
+    "\t.endm\n"
+    "\t.section .text\n"
+    "\t.align 1\n"
+    /* ---- shift 15, the iterations unrolled (ac_h8_nonlin: a symbol for the profiles) */
+    "ac_h8_nonlin:\n"
+    "\tNLAS\t.Lnl_e1, .Lnl_c1, .Lnl_n1\n"
+    "\tNLAS\t.Lnl_e2, .Lnl_c2, .Lnl_n2\n"
+    ".Lnl_a_ch:\n"
+    "\tmov.w\t@er5+,e1\n"
+    "\tmov.w\te1,r1\n"
+    "\tmov.w\t@er4+,r2\n"
+    "\tmov.w\t@(NL_A3D,er4),e2\n"
+    "\t.if\tNL_IT == 3\n"
+    "\tNLA\t.Lnl_e1, .Lnl_c1, .Lnl_n1\n"
+    "\tNLA\t.Lnl_e2, .Lnl_c2, .Lnl_n2\n"
+    "\tNLA\t.Lnl_e3, .Lnl_c3, .Lnl_n3\n"
+    "\t.else\n"
+    "\tmov.w\t#NL_IT,e3\n"
+    ".Lnl_a_it:\n"
+    "\tNLA\t.Lnl_e3, .Lnl_c3, .Lnl_n3\n"
+    "\tdec.w\t#1,e3\n"
+    "\tbne\t.Lnl_a_it:16\n"
+    "\t.endif\n"
+    "\tmov.w\tr1,@er3\n"
+    "\tadds\t#2,er3\n"
+    "\tdec.w\t#1,e4\n"
+    "\tbne\t.Lnl_a_ch:16\n"
+    "\tbra\t.Lnl_done:16\n"
+    "\tNLAS\t.Lnl_e3, .Lnl_c3, .Lnl_n3\n"
+    /* g z = 2^30 at shift 15 (a subroutine): C = 2^15.  z = -32768 there, and z reaches -32768 only
+     * as x0 or as a clip below, both with x0 < 0: z = x0 - 2^15 clips to -32768, flagged */
+    ".Lnl_a_edge:\n"
+    "\tmov.w\t#0x8000,r1\n"
+    "\tbra\t2f\n"
+    /* z = x0 - C overflowed (V, a subroutine): 0x7FFF if the wrapped result is negative, else
+     * 0x8000; the flag (bit 0 of the byte at the caller's @er7) */
+    ".Lnl_clip:\n"
+    "\tbmi\t1f\n"
+    "\tmov.w\t#0x8000,r1\n"
+    "\tbra\t2f\n"
+    "1:\tmov.w\t#0x7fff,r1\n"
+    "2:\tmov.w\t@(2,er7),r0\n"
+    "\tor.w\t#0x100,r0\n"
+    "\tmov.w\tr0,@(2,er7)\n"
+    "\trts\n"
+    /* ---- shift 16..30 (a loop over the iterations) */
+    ".Lnl_b_ch:\n"
+    "\tmov.w\t@er5+,e1\n"
+    "\tmov.w\te1,r1\n"
+    "\tmov.w\t@er4+,r2\n"
+    "\tmov.w\t@(NL_A3D,er4),e2\n"
+    "\tmov.w\t#NL_IT,e3\n"
+    ".Lnl_b_it:\n"
+    "\tmov.w\te2,r0\n"
+    "\tmulxs.w\tr1,er0\n"
+    "\tadd.l\ter6,er0\n"
+    "\tshll.l\ter0\n"
+    "\tmov.w\te0,r0\n"
+    "\tadd.w\tr2,r0\n"
+    "\tmulxs.w\tr1,er0\n"
+    "\tadd.l\ter6,er0\n"
+    "\tshll.l\ter0\n"
+    "\tmov.w\te0,r0\n"
+    "\tmulxs.w\tr1,er0\n"
+    "\tshal.l\ter0\n"
+    "\tbvs\t.Lnl_b_edge\n"
+    "\tmov.w\te0,r0\n"
+    "\tmov.w\te5,e0\n"
+    "\tbeq\t2f\n"
+    "1:\tshar.w\tr0\n"
+    "\tdec.w\t#1,e0\n"
+    "\tbne\t1b\n"
+    "2:\tshar.w\tr0\n"
+    "\tbcc\t.Lnl_b_v\n"
+    "\tinc.w\t#1,r0\n"
+    ".Lnl_b_v:\n"
+    "\tmov.w\te1,r1\n"
+    "\tsub.w\tr0,r1\n"
+    "\tbvs\t.Lnl_b_clip\n"
+    ".Lnl_b_next:\n"
+    "\tdec.w\t#1,e3\n"
+    "\tbne\t.Lnl_b_it\n"
+    "\tmov.w\tr1,@er3\n"
+    "\tadds\t#2,er3\n"
+    "\tdec.w\t#1,e4\n"
+    "\tbne\t.Lnl_b_ch\n"
+    /* the exit: the status (0 or 1) from the flag word */
+    ".Lnl_done:\n"
+    "\tmov.w\t@er7+,r0\n"
+    "\tmov.b\tr0h,r0l\n"
+    "\tsub.b\tr0h,r0h\n"
+    "\tmov.l\t@er7+,er6\n"
+    "\tmov.l\t@er7+,er5\n"
+    "\tmov.l\t@er7+,er4\n"
+    "\trts\n"
+    ".Lnl_b_clip:\n"
+    "\tbsr\t.Lnl_clip:16\n"
+    "\tbra\t.Lnl_b_next\n"
+    /* g z = 2^30: C = 2^(30 - shift) = 2^14 >> (shift - 16) */
+    ".Lnl_b_edge:\n"
+    "\tmov.w\t#0x4000,r0\n"
+    "\tmov.w\te5,e0\n"
+    "\tbeq\t.Lnl_b_v\n"
+    "1:\tshlr.w\tr0\n"
+    "\tdec.w\t#1,e0\n"
+    "\tbne\t1b\n"
+    "\tbra\t.Lnl_b_v\n"
+    ".Lnl_c:\n"
+    "\tjmp\t@_ac_nonlin_invert_c\n"
+    /* ---- ac_nonlin_invert: r0 = t, r1 = x, r2 = y; the C for NULL, a bad n, a shift below 15 or
+     * above 30 (the C's checks and error codes) */
+    "\t.global\t_ac_nonlin_invert\n"
+    "_ac_nonlin_invert:\n"
+    "\tmov.w\tr1,r1\n"
+    "\tbeq\t.Lnl_c\n"
+    "\tmov.w\tr2,r2\n"
+    "\tbeq\t.Lnl_c\n"
+    "\tmov.w\tr0,r0\n"
+    "\tbeq\t.Lnl_c\n"
+    "\tmov.w\t@er0,r3\n"
+    "\tbeq\t.Lnl_c\n"
+    "\tcmp.w\t#NL_MAXCH,r3\n"
+    "\tbhi\t.Lnl_c\n"
+    "\tmov.w\tr3,e3\n"
+    "\tmov.b\t@(2,er0),r3l\n"
+    "\tcmp.b\t#15,r3l\n"
+    "\tblt\t.Lnl_c\n"
+    "\tcmp.b\t#30,r3l\n"
+    "\tbgt\t.Lnl_c\n"
+    "\tmov.l\ter4,@-er7\n"
+    "\tmov.l\ter5,@-er7\n"
+    "\tmov.l\ter6,@-er7\n"
+    "\tmov.w\te3,e4\n"
+    "\textu.w\tr3\n"
+    "\tadd.w\t#-16,r3\n"
+    "\tmov.w\tr3,e5\n"
+    "\tmov.w\tr2,r3\n"
+    "\tmov.w\tr1,r5\n"
+    "\tmov.w\tr0,r4\n"
+    "\tadds\t#4,er4\n"
+    "\tmov.l\t#0x4000,er6\n"
+    "\tsub.w\tr0,r0\n"
+    "\tmov.w\tr0,@-er7\n"
+    "\tmov.w\te5,e5\n"
+    "\tbpl\t.Lnl_b_ch:16\n"
+    "\tbra\t.Lnl_a_ch:16\n");
+
+/* the structure offsets and limits the temperature kernels use */
+AC_STATIC_ASSERT(h8t_tl_y, offsetof(ac_temp_lag, y) == 0);
+AC_STATIC_ASSERT(h8t_tl_k, offsetof(ac_temp_lag, k) == 4);
+AC_STATIC_ASSERT(h8t_tl_sh, offsetof(ac_temp_lag, shift) == 6);
+AC_STATIC_ASSERT(h8t_tl_st, offsetof(ac_temp_lag, started) == 7);
+AC_STATIC_ASSERT(h8t_tc_ref, offsetof(ac_temp_table, t_ref) == 2);
+AC_STATIC_ASSERT(h8t_tc_oc, offsetof(ac_temp_table, oc) == 4);
+AC_STATIC_ASSERT(h8t_tc_gc, offsetof(ac_temp_table, gc) == 4 + 2 * AC_MAX_CHANNELS);
+AC_STATIC_ASSERT(h8t_tc_o, offsetof(ac_temp_table, o) == 4 + 4 * AC_MAX_CHANNELS);
+AC_STATIC_ASSERT(h8t_tc_e, AC_TEMP_E_MAX == 28672 && AC_TEMP_LAG_EXTRA == 16);
+
+__asm__(
+    "\t.equ\tTC_MAXCH, " AC_H8T_XSTR(AC_MAX_CHANNELS) "\n"
+    "\t.equ\tTC_OD, 4*TC_MAXCH\n"
+    "\t.equ\tTC_GD, 2*TC_MAXCH-2\n"
+    "\t.equ\tTC_E32, 28672*8192+4095\n"
+    "\t.section .text\n"
+    "\t.align 1\n"
+    "ac_h8_temp:\n"
+    /* clips of ac_temp_correct, out of line (the flag: bit 0 of the byte at @er7) */
+    ".Ltc_w:\n"
+    "\tbsr\t.Ltc_clip1:16\n"
+    "\tbra\t.Ltc_w_ok:16\n"
+    /* t > 2 E32: gc dTg > E32 (t < 2^31) or < -E32 (t negative) */
+    ".Ltc_eclip:\n"
+    "\tmov.w\t#28672,r3\n"
+    "\tmov.l\ter0,er0\n"
+    "\tbpl\t1f\n"
+    "\tmov.w\t#-28672,r3\n"
+    "1:\n"
+    "\tbset\t#0,@er7\n"
+    "\tbra\t.Ltc_e_ok:16\n"
+    ".Ltc_ch:\n"
+    /* o 2^8 in er2 */
+    "\tmov.w\t@(TC_OD,er4),r2\n"
+    "\tmov.w\tr2,r0\n"
+    "\tmov.b\tr0h,r0l\n"
+    "\texts.w\tr0\n"
+    "\tmov.w\tr0,e2\n"
+    "\tmov.b\tr2l,r2h\n"
+    "\tsub.b\tr2l,r2l\n"
+    /* w = x 2^16 - (o 2^8 + oc dTo) in er1 */
+    "\tmov.w\t@er4+,r0\n"
+    "\tmulxs.w\te4,er0\n"
+    "\tadd.l\ter2,er0\n"
+    "\tmov.w\t@er5+,e1\n"
+    "\tsub.w\tr1,r1\n"
+    "\tsub.l\ter0,er1\n"
+    "\tbvs\t.Ltc_w\n"
+    ".Ltc_w_ok:\n"
+    /* e = round(gc dTg 2^-13) in r3, clipped */
+    "\tmov.w\t@(TC_GD,er4),r0\n"
+    "\tmulxs.w\te5,er0\n"
+    /* t = gc dTg + E32 in 0..2 E32 (unsigned) iff no clip; then e = floor((t + 1) 2^-13) - 28672 */
+    "\tadd.l\t#TC_E32,er0\n"
+    "\tcmp.l\t#2*TC_E32,er0\n"
+    "\tbhi\t.Ltc_eclip\n"
+    "\tadds\t#1,er0\n"
+    "\tshll.l\ter0\n"
+    "\tshll.l\ter0\n"
+    "\tshll.l\ter0\n"
+    "\tmov.w\te0,r3\n"
+    "\tadd.w\t#-28672,r3\n"
+    ".Ltc_e_ok:\n"
+    /* e2 = round(e e 2^-19) in e3, e3 = round(e2 e 2^-19) in r0, r = e2 - e - e3 in e3 */
+    "\tmov.w\tr3,r0\n"
+    "\tmulxs.w\tr3,er0\n"
+    "\tmov.w\te0,r0\n"
+    "\tadds\t#4,er0\n"
+    "\tshar.w\tr0\n"
+    "\tshar.w\tr0\n"
+    "\tshar.w\tr0\n"
+    "\tmov.w\tr0,e3\n"
+    "\tmulxs.w\tr3,er0\n"
+    "\tmov.w\te0,r0\n"
+    "\tadds\t#4,er0\n"
+    "\tshar.w\tr0\n"
+    "\tshar.w\tr0\n"
+    "\tshar.w\tr0\n"
+    "\tsub.w\tr3,e3\n"
+    "\tsub.w\tr0,e3\n"
+    /* w16 = round(w 2^-16) (0x7FFF, flagged, for w >= 0x7FFF8000) */
+    "\tmov.l\ter1,er0\n"
+    "\tadd.l\t#0x8000,er0\n"
+    "\tbvs\t.Ltc_w16\n"
+    "\tmov.w\te0,r0\n"
+    ".Ltc_w16_ok:\n"
+    /* w += round(w16 r 2^-3); w += o 2^8; y = round(w 2^-16) */
+    "\tmulxs.w\te3,er0\n"
+    "\tadds\t#4,er0\n"
+    "\tshar.l\ter0\n"
+    "\tshar.l\ter0\n"
+    "\tshar.l\ter0\n"
+    "\tadd.l\ter0,er1\n"
+    "\tbvs\t.Ltc_g\n"
+    ".Ltc_g_ok:\n"
+    "\tadd.l\ter2,er1\n"
+    "\tbvs\t.Ltc_o\n"
+    ".Ltc_o_ok:\n"
+    "\tadd.l\t#0x8000,er1\n"
+    "\tbvs\t.Ltc_y\n"
+    "\tmov.w\te1,@er6\n"
+    ".Ltc_y_ok:\n"
+    "\tadds\t#2,er6\n"
+    "\tdec.w\t#1,e6\n"
+    "\tbne\t.Ltc_ch:16\n"
+    "\tmov.w\t@er7+,r0\n"
+    "\tmov.b\tr0h,r0l\n"
+    "\tsub.b\tr0h,r0h\n"
+    "\tmov.l\t@er7+,er6\n"
+    "\tmov.l\t@er7+,er5\n"
+    "\tmov.l\t@er7+,er4\n"
+    "\trts\n"
+    /* clips (the flag: bit 0 of the byte at @er7) */
+    ".Ltc_w16:\n"
+    "\tmov.w\t#0x7fff,r0\n"
+    "\tbset\t#0,@er7\n"
+    "\tbra\t.Ltc_w16_ok\n"
+    ".Ltc_y:\n"
+    "\tmov.w\t#0x7fff,r0\n"
+    "\tmov.w\tr0,@er6\n"
+    "\tbset\t#0,@er7\n"
+    "\tbra\t.Ltc_y_ok\n"
+    ".Ltc_g:\n"
+    "\tbsr\t.Ltc_clip1:16\n"
+    "\tbra\t.Ltc_g_ok:16\n"
+    ".Ltc_o:\n"
+    "\tbsr\t.Ltc_clip1:16\n"
+    "\tbra\t.Ltc_o_ok:16\n"
+    ".Ltc_dto:\n"
+    "\tbmi\t1f\n"
+    "\tmov.w\t#0x8000,r1\n"
+    "\tbra\t2f\n"
+    "1:\tmov.w\t#0x7fff,r1\n"
+    "2:\tbset\t#0,@er7\n"
+    "\tbra\t.Ltc_dto_ok:16\n"
+    ".Ltc_dtg:\n"
+    "\tbmi\t1f\n"
+    "\tmov.w\t#0x8000,r2\n"
+    "\tbra\t2f\n"
+    "1:\tmov.w\t#0x7fff,r2\n"
+    "2:\tbset\t#0,@er7\n"
+    "\tbra\t.Ltc_dtg_ok:16\n"
+    /* er1 overflowed (V): the true result's direction is the wrapped sign inverted; the flag is
+     * in the caller's frame, 2 bytes up (the return address) */
+    ".Ltc_clip1:\n"
+    "\tbmi\t1f\n"
+    "\tmov.l\t#0x80000000,er1\n"
+    "\tbra\t2f\n"
+    "1:\tmov.l\t#0x7fffffff,er1\n"
+    "2:\tmov.w\t@(2,er7),r0\n"
+    "\tor.w\t#0x100,r0\n"
+    "\tmov.w\tr0,@(2,er7)\n"
+    "\trts\n"
+    /* ---- ac_temp_lag_step: r0 = f, r1 = temp, r2 = lagged; the C for a first step, a shift
+     * below 17 or above 47, a difference |d| >= 2^30, NULL */
+    ".Ltc_c:\n"
+    "\tjmp\t@_ac_temp_correct_c\n"
+    /* ---- ac_temp_correct: r0 = t, r1 = t_off, r2 = t_gain, x @(4,sp), y @(8,sp) */
+    "\t.global\t_ac_temp_correct\n"
+    "_ac_temp_correct:\n"
+    "\tmov.w\t@(4,er7),r3\n"
+    "\tbeq\t.Ltc_c\n"
+    "\tmov.w\t@(8,er7),r3\n"
+    "\tbeq\t.Ltc_c\n"
+    "\tmov.w\tr0,r0\n"
+    "\tbeq\t.Ltc_c\n"
+    "\tmov.w\t@er0,r3\n"
+    "\tbeq\t.Ltc_c\n"
+    "\tcmp.w\t#TC_MAXCH,r3\n"
+    "\tbhi\t.Ltc_c\n"
+    "\tmov.l\ter4,@-er7\n"
+    "\tmov.l\ter5,@-er7\n"
+    "\tmov.l\ter6,@-er7\n"
+    "\tmov.w\tr3,e6\n"
+    "\tsub.w\tr3,r3\n"
+    "\tmov.w\tr3,@-er7\n"
+    "\tmov.w\t@(2,er0),r3\n"
+    "\tsub.w\tr3,r1\n"
+    "\tbvs\t.Ltc_dto:16\n"
+    ".Ltc_dto_ok:\n"
+    "\tmov.w\tr1,e4\n"
+    "\tsub.w\tr3,r2\n"
+    "\tbvs\t.Ltc_dtg:16\n"
+    ".Ltc_dtg_ok:\n"
+    "\tmov.w\tr2,e5\n"
+    "\tmov.w\t@(18,er7),r5\n"
+    "\tmov.w\t@(22,er7),r6\n"
+    "\tmov.w\tr0,r4\n"
+    "\tadds\t#4,er4\n"
+    "\tbra\t.Ltc_ch:16\n"
+    /* the C for what the assembly does not take; temp is rebuilt from d + y (er1 held y) */
+    ".Ltl_cp:\n"
+    "\tmov.l\t@er0,er1\n"
+    "\tadd.l\ter3,er1\n"
+    "\tmov.w\te1,r1\n"
+    ".Ltl_c:\n"
+    "\tjmp\t@_ac_temp_lag_step_c\n"
+    /* ---- ac_temp_lag_step: r0 = f, r1 = temp, r2 = lagged; the C for NULL, a first step, a
+     * shift below 17 or above 47, a difference that clips or has |d| >= 2^30.  No register saved:
+     * shift - 17 in e0, y then a in er1, d in er3, k in e2 (then the flag) */
+    "\t.global\t_ac_temp_lag_step\n"
+    "_ac_temp_lag_step:\n"
+    "\tmov.w\tr0,r0\n"
+    "\tbeq\t.Ltl_c\n"
+    "\tmov.w\tr2,r2\n"
+    "\tbeq\t.Ltl_c\n"
+    "\tmov.w\t@(6,er0),r3\n"
+    "\tmov.b\tr3l,r3l\n"
+    "\tbeq\t.Ltl_c\n"
+    "\tcmp.b\t#17,r3h\n"
+    "\tblo\t.Ltl_c\n"
+    "\tcmp.b\t#47,r3h\n"
+    "\tbhi\t.Ltl_c\n"
+    "\tmov.b\tr3h,r3l\n"
+    "\textu.w\tr3\n"
+    "\tadd.w\t#-17,r3\n"
+    "\tmov.w\tr3,e0\n"
+    "\tmov.w\tr1,e3\n"
+    "\tsub.w\tr3,r3\n"
+    "\tmov.l\t@er0,er1\n"
+    "\tsub.l\ter1,er3\n"
+    "\tbvs\t.Ltl_cp\n"
+    /* |d| < 2^30: dh = d's high word in -2^14..2^14-1 (dh + 2^14 not negative), and not
+     * d = -2^30 (dh = -2^14 with dl = 0, out of line) */
+    "\tmov.w\te3,r1\n"
+    "\tadd.w\t#0x4000,r1\n"
+    "\tbmi\t.Ltl_cp\n"
+    "\tbeq\t.Ltl_lo\n"
+    ".Ltl_in:\n"
+    /* a = sign(dh) |dh| k + floor(dl k 2^-16) in er1, d = dh 2^16 + dl in er3 */
+    "\tmov.w\t@(4,er0),e2\n"
+    "\tmov.w\te3,r1\n"
+    "\tbpl\t1f\n"
+    "\tneg.w\tr1\n"
+    "1:\tmulxu.w\te2,er1\n"
+    "\tmov.w\te3,e3\n"
+    "\tbpl\t2f\n"
+    "\tneg.l\ter1\n"
+    "2:\tmulxu.w\te2,er3\n"
+    "\tmov.w\te3,r3\n"
+    "\textu.l\ter3\n"
+    "\tadd.l\ter3,er1\n"
+    /* inc = round(a 2^-(shift - 16)): shift - 17 arithmetic shifts (16 of them a word move, the
+     * rest a jump into a chain), then one whose carry is added */
+    "\tmov.w\te0,r3\n"
+    "\tcmp.b\t#16,r3l\n"
+    "\tblo\t3f\n"
+    "\tmov.w\te1,r1\n"
+    "\texts.l\ter1\n"
+    "\tadd.b\t#-16,r3l\n"
+    "3:\tshll.b\tr3l\n"
+    "\tmov.w\tr3,e3\n"
+    "\tmov.w\t#.Ltl_end,r3\n"
+    "\tsub.w\te3,r3\n"
+    "\tjmp\t@er3\n"
+    "\t.rept\t15\n"
+    "\tshar.l\ter1\n"
+    "\t.endr\n"
+    ".Ltl_end:\n"
+    "\tshar.l\ter1\n"
+    "\tbcc\t4f\n"
+    "\tadds\t#1,er1\n"
+    "4:\tsub.w\te2,e2\n"
+    "\tmov.l\t@er0,er3\n"
+    "\tadd.l\ter1,er3\n"
+    "\tbvs\t.Ltl_sat\n"
+    ".Ltl_st:\n"
+    "\tmov.l\ter3,@er0\n"
+    "\tadd.l\t#0x8000,er3\n"
+    "\tbvs\t.Ltl_max\n"
+    "\tmov.w\te3,@er2\n"
+    ".Ltl_ret:\n"
+    "\tmov.w\te2,r0\n"
+    "\trts\n"
+    ".Ltl_max:\n"
+    "\tmov.w\t#0x7fff,r1\n"
+    "\tmov.w\tr1,@er2\n"
+    "\tbra\t.Ltl_ret\n"
+    ".Ltl_lo:\n"
+    "\tmov.w\tr3,r3\n"
+    "\tbne\t.Ltl_in\n"
+    "\tbra\t.Ltl_cp:16\n"
+    ".Ltl_sat:\n"
+    "\tbmi\t1f\n"
+    "\tmov.l\t#0x80000000,er3\n"
+    "\tbra\t2f\n"
+    "1:\tmov.l\t#0x7fffffff,er3\n"
+    "2:\tmov.w\t#1,e2\n"
+    "\tbra\t.Ltl_st\n");
+
+#else
+/* ISO C forbids an empty translation unit */
+typedef int ac_terms_h8_unused;
+#endif /* AC_H8_RESOLVE_ASM */
