@@ -46,7 +46,13 @@ static void xzero(ac_xf *r)
 
 static int8_t xsign(const ac_xf *a)
 {
-    return (a->m > 0) ? (int8_t)1 : ((a->m < 0) ? (int8_t)-1 : (int8_t)0);
+    int8_t s = 0;
+    if (a->m > 0) {
+        s = 1;
+    } else if (a->m < 0) {
+        s = -1;
+    }
+    return s;
 }
 
 static void xneg(ac_xf *r, const ac_xf *a)
