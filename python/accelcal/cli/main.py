@@ -21,6 +21,7 @@ from .paths import check_not_an_input, check_output, check_output_dir
 from .convert_command import add_convert_parser
 from .capture_command import add_capture_parser
 from .refine_command import add_refine_parser
+from .resolve_command import add_estimator_options
 from .demo import run_demo
 from ..io.device import default_device, load_device
 from ..diagnose import diagnose
@@ -347,7 +348,7 @@ def build_parser() -> argparse.ArgumentParser:
                            "that keep no uniform grid: a sensor read on a loop whose period varies, a driver that "
                            "stamps each sample as it reads it); a gap of one lost sample (a step beyond 1.8 x "
                            "the median, up to 2.5 regular steps) is bridged with a note, a longer one refused")
-        add_units_options(s)
+        add_estimator_options(s, name)
         s.set_defaults(func=func)
 
     s = sub.add_parser("diagnose", help="sim-to-real diagnosis: where the gap lies, which effect, how far "

@@ -1,11 +1,13 @@
-"""``accelcal resolve`` in chunks where it may (:mod:`accelcal.resolve_stream`, docs/streaming.md)."""
+"""``accelcal resolve`` in chunks where it may (:mod:`accelcal.resolve_stream`, docs/streaming.md); the
+``--omega`` of ``attitude`` and ``displacement`` (the array's own omega, as ``resolve`` chooses it)."""
 from __future__ import annotations
 
 import sys
 
 from ..estimators.omega import omega_observability
+from ..estimators.omega_fixed import ESTIMATOR_OMEGA
 from ..firmware.terms import has_terms
-from ..io.units_cli import scale_from_args
+from ..io.units_cli import add_units_options, scale_from_args
 from ..resolve_stream import progress_factory, resolve_stream, resolve_warnings
 
 
@@ -27,3 +29,14 @@ def stream_resolve(a, dev, cal) -> bool:
     for w in resolve_warnings(res.saturated, res.clip_warnings, res.extra):
         print(w, file=sys.stderr)
     return True
+
+
+def add_estimator_options(s, name: str) -> None:
+    """The options of ``accelcal attitude|displacement|rate`` after their own: ``--omega`` for attitude
+    and displacement (not passed unless given: the estimator's default "auto"), the units' options."""
+    if name in ("attitude", "displacement"):
+        s.add_argument("--omega", choices=ESTIMATOR_OMEGA,
+                       help="auto (default): the array's own omega where the layout observes it and the recording "
+                       "has no complete w columns, else none; array: always (refused, with the layout that would, "
+                       "where omega is not observable); none: no array omega (docs/angular-rate.md)")
+    add_units_options(s)

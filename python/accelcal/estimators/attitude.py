@@ -20,7 +20,9 @@ from ..firmware.native import FORMATS, check, cptr, ffi, lib
 from ..firmware.quantize import round_half_up
 from ..io.recording import check_core_input, check_for_device
 from .common import (CLIP, CLIP_LO, OMEGA_FRAC, OUT_FRAC, Columns, channel_noise, clip_i16, dt_fixed, force_noise,
-                     time_span, uniform_dt)
+                     resolve_array, time_span, uniform_dt)
+from .omega import wants_array_omega
+from .omega_fixed import ESTIMATOR_OMEGA, estimator_omega
 from .timegrid import on_uniform_grid
 from ..firmware.triad import triad_forces
 
@@ -296,7 +298,7 @@ def triad_geometry(device, cal) -> tuple[float, float]:
 
 
 def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: float = 2.0,
-                            w2_gate: float | None = None, leak_tau_s: float = 2.0) -> Columns:
+                            w2_gate: float | None = None, leak_tau_s: float = 2.0, omega: str = "auto") -> Columns:
     """`accelcal attitude`: the pendulum's angle, rate and angular acceleration.
 
     Parameters
@@ -314,6 +316,14 @@ def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: fl
         (rad/s)^2 below which |w| is not measured (default: 3 sigma of w^2 from the noise).
     leak_tau_s : float
         Time constant (s) of the pull to 0 while gated.
+    omega : {"auto", "array", "none"}
+        "array": a device whose layout observes omega (12 channels: four triads on a tetrahedron,
+        triads at the origin and on the axes; docs/angular-rate.md) swinging about body y, the
+        pivot at its origin: theta from the resolved f at the origin, w_y the array's own omega
+        (fused with the integrated alpha; engine "fixed": ``ac_omega``), dw_y its alpha (gain,
+        w2_gate, leak_tau_s unused).  "auto": "array" where the layout observes omega and the
+        recording has no complete w columns, else the two-triad estimator.  "none": the
+        two-triad estimator.
 
     Returns
     -------
@@ -326,11 +336,16 @@ def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: fl
     Raises
     ------
     InputError
-        Not two triads on x, r1 = r2, non-uniform time, counts outside uint16 (fixed).
+        Not two triads on x, r1 = r2, non-uniform time, counts outside uint16 (fixed); omega
+        "array" on a layout that does not observe it (the observability line).
     """
     if engine not in ("float", "fixed"):
         raise ValueError(f"unknown engine {engine!r}")
+    if omega not in ESTIMATOR_OMEGA:
+        raise ValueError(f"unknown omega {omega!r}: expected one of {', '.join(ESTIMATOR_OMEGA)}")
     check_for_device(rec, device, min_samples=2)
+    if omega == "array" or (omega == "auto" and wants_array_omega(device, cal, rec, "auto")):
+        return _array_attitude(device, cal, rec, engine, omega)
     r1, r2 = triad_geometry(device, cal)
     if engine == "fixed":
         check_core_input(rec, device.raw_min < 0)
@@ -384,3 +399,39 @@ def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: fl
                    meta={"engine": engine, "device": device.name, "r1_m": f"{r1:.6g}", "r2_m": f"{r2:.6g}",
                          "w2_gate": f"{p.gate():.6g}", "gain": f"{gain:g}", "leak_tau_s": f"{leak_tau_s:g}"})
     return cols
+
+
+def _array_attitude(device, cal, rec, engine: str, omega: str) -> Columns:
+    """attitude_from_recording with the array's own omega: the pendulum's angle from f at the
+    pivot (the origin), f(0) = (-g sin theta, ., g cos theta) as ac_attitude.h's pair sees it, w_y
+    and dw_y from the array (docs/angular-rate.md)."""
+    if engine == "fixed":
+        check_core_input(rec, device.raw_min < 0)
+    rec, filled, fill_note = on_uniform_grid(rec)
+    est = estimator_omega(device, cal, rec, "array", engine)
+    f, a, sat = resolve_array(device, cal, rec, engine, est.for_resolver(), with_flags=True)
+    if engine == "float":
+        theta = np.arctan2(-f[:, 0], f[:, 2])
+        gmag = np.hypot(f[:, 0], f[:, 2])
+        dw = a[:, 1]
+    else:       # the core's atan2 on the resolver's Q.AC_OUT_FRAC f
+        ang, mag = atan2_fixed(-np.asarray(f[:, 0], np.int64), f[:, 2])
+        theta = ang / 2.0**ANGLE_FRAC
+        gmag = np.hypot(f[:, 0], f[:, 2]) / 2.0**OUT_FRAC
+        dw = a[:, 1] / 2.0**OUT_FRAC
+    warnings = [f"attitude: {fill_note}"] if fill_note else []
+    g0 = float(device.gravity_mps2)
+    off = np.abs(gmag - g0) > 0.2 * g0
+    if off.any():
+        warnings.append(f"attitude: on {int(np.count_nonzero(off))} samples f at the pivot is more than 20 % off "
+                        "gravity in the swing's plane (pivot moving, turning about another axis, or clipping): "
+                        "theta there is doubtful; column g_mps2")
+    if sat.any():
+        warnings.append(f"attitude: {int(np.count_nonzero(sat))} samples clipped in the fixed-point core "
+                        "(column saturated)")
+    n = rec.n_samples
+    return Columns(t=np.asarray(rec.t, float), theta_rad=np.asarray(theta, float), w_y=np.asarray(est.w[:, 1], float),
+                   dw_y=np.asarray(dw, float), g_mps2=np.asarray(gmag, float), w_y_sigma=est.sigma[:, 1],
+                   gated=np.zeros(n), unsettled=np.zeros(n), saturated=sat.astype(float),
+                   **({"filled": filled.astype(float)} if filled.any() else {}),
+                   warnings=warnings, meta={"engine": engine, "device": device.name, "omega": "array"})

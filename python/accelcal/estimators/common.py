@@ -12,7 +12,7 @@ from .. import model
 from ..firmware import native
 from ..errors import AccelcalError, InputError
 from ..firmware.native import FORMATS
-from ..firmware.quantize import quantize_calibration, round_half_up
+from ..firmware.quantize import omega_to_fixed, quantize_calibration, round_half_up
 from ..readings.noise import noise_for
 from ..io.recording import check_core_input
 from ..readings.static import STATIC_WINDOW_S, window_len
@@ -177,20 +177,27 @@ def force_noise(device, cal, noise_counts, channels=None) -> float:
     return float(np.max(force_noise_axes(device, cal, noise_counts, channels)))
 
 
-def resolve_array(device, cal, rec, engine: str) -> tuple[np.ndarray, np.ndarray]:
-    """f and alpha of a 6-DOF array at the body origin, without the centripetal term.
+def resolve_array(device, cal, rec, engine: str, omega=None, *, with_flags: bool = False) -> tuple:
+    """f and alpha of a 6-DOF array at the body origin, without the centripetal term, or with
+    that of ``omega`` ((n, 3) rad/s: the array's own, :class:`accelcal.estimators.omega.ArrayOmega`'s
+    ``for_resolver()``).
 
     Returns
     -------
     f, alpha : ndarray (n, 3)
         engine "float": m/s^2 and rad/s^2 (float reference); engine "fixed": int32
         Q.AC_OUT_FRAC from the C core with the header's tables.
+    saturated : ndarray (n,) bool
+        With ``with_flags``: the core's arithmetic saturated (never for "float").
     """
     if engine == "float":
-        return model.resolve(cal.offsets, cal.sensitivity, cal.positions_or_nominal(device), rec.raw, None)
+        f, a = model.resolve(cal.offsets, cal.sensitivity, cal.positions_or_nominal(device), rec.raw, omega)
+        return (f, a, np.zeros(len(f), bool)) if with_flags else (f, a)
     if engine != "fixed":
         raise ValueError(f"unknown engine {engine!r}")
     check_core_input(rec, device.raw_min < 0)
     t = quantize_calibration(device, cal)
-    out, _ = native.process_batch(t.resolver(), t.trim, rec.raw, None)
-    return out[:, :3].astype(np.int32), out[:, 3:].astype(np.int32)
+    out, flags = native.process_batch(t.resolver(), t.trim, rec.raw, None if omega is None else omega_to_fixed(omega))
+    f, a = out[:, :3].astype(np.int32), out[:, 3:].astype(np.int32)
+    # with_flags: the core's own saturation (its rail bit is the recording's, not the arithmetic's)
+    return (f, a, (flags & ~np.uint8(native.lib.AC_FLAG_AT_RAIL)) != 0) if with_flags else (f, a)

@@ -14,6 +14,7 @@ from ..readings.noise import code_step, states_noise
 from ..io.recording import check_core_input, check_for_device
 from .common import (CLIP, CLIP_LO, OUT_FRAC, Columns, alpha_noise, channel_noise, force_noise,
                      force_noise_axes, resolve_array, time_span, uniform_dt)
+from .omega_fixed import estimator_omega
 from .timegrid import RESAMPLE_BRIDGE_SAMPLES, on_uniform_grid, resampled
 from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OPEN, DISP_REST, DISP_SAT,
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
@@ -214,12 +215,14 @@ def at_rest_not_moving(at, corrected, v, p, p_raw) -> None:
         corrected[a:b] = False
 
 
-def _body_forces(device, cal, rec, engine):
-    """f at the origin (6-DOF array, no rotation assumed) or at the first triad: (n,3) float
-    m/s^2 (float) or int32 Q.10 (fixed), and a note for the metadata."""
+def _body_forces(device, cal, rec, engine, est=None):
+    """f at the origin (6-DOF array: no rotation assumed, or the centripetal term of ``est``, the
+    array's own omega) or at the first triad: (n,3) float m/s^2 (float) or int32 Q.10 (fixed), and
+    a note for the metadata."""
     if device.is_array():
-        f, _ = resolve_array(device, cal, rec, engine)
-        return f, "resolved f at the body origin" + (" (C core)" if engine == "fixed" else "")
+        f, _ = resolve_array(device, cal, rec, engine, None if est is None else est.for_resolver())
+        return f, ("resolved f at the body origin" + (" (C core)" if engine == "fixed" else "")
+                   + ("" if est is None else ", the centripetal term of the array's own omega"))
     tri = device.triads()
     if tri:
         f, _ = triad_forces(cal, rec, tri[0], engine, device.raw_min < 0)
@@ -303,7 +306,7 @@ def _left_out(t, at, closed, long_anchors, is_open, turns, rec, open_note=""):
 
 def displacement_from_recording(device, cal, rec, engine: str = "float", *, form: str | None = None,
                                 axis=None, rest: RestParams | None = None, keep_turned: bool = False,
-                                resample: bool = False) -> Columns:
+                                resample: bool = False, omega: str = "auto") -> Columns:
     """`accelcal displacement`: columns t, v_x, v_y, v_z, p_x, p_y, p_z (frame of the first rest,
     z up, gravity removed; corrected between rests) plus p_raw_* (the same without the zero-point
     correction), rest (1 at rest: each rest from where it began, :func:`.rest.rest_dated_back`, not
@@ -325,7 +328,11 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     Samples a logger dropped are filled first (:func:`~.timegrid.on_uniform_grid`: warning and
     column ``filled``); ``resample``: the samples are first interpolated from their stamps onto a
     uniform grid (:func:`~.timegrid.resampled`: stamps that keep no grid; a gap of one lost sample
-    bridged, with a warning and column ``filled``)."""
+    bridged, with a warning and column ``filled``).  ``omega`` (an array's f): "array" resolves f with the
+    centripetal term of the array's own omega (:func:`~.omega_fixed.estimator_omega`; engine "fixed": the
+    C core's), refused with the observability line on a layout that does not observe it; "auto" does so
+    where the layout observes omega and the recording has no complete w columns; "none": no centripetal
+    term (the default before)."""
     if engine not in ("float", "fixed"):
         raise ValueError(f"unknown engine {engine!r}")
     form = form or ("offline" if engine == "float" else "stream")
@@ -342,7 +349,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     if bridged is not None and bridged.size == filled.size:
         filled = filled | bridged
     dt = uniform_dt(rec)
-    f, note = _body_forces(device, cal, rec, engine)
+    est = estimator_omega(device, cal, rec, omega, engine)
+    f, note = _body_forces(device, cal, rec, engine, est)
     noise = channel_noise(device, rec)
     channels = None if device.is_array() else device.triads()[0]
     f_axes = force_noise_axes(device, cal, noise, channels)       # per body axis, m/s^2
@@ -445,7 +453,8 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
     turns = [(x[0], turned_text(t, x, g, rec)) for x in turned_motions(f_host, at, closed, f_sigma, rp, ax)]
     if device.is_array():
         turns += [(x[0], rotated_text(t, x, rec)) for x in rotated_motions(
-            resolve_array(device, cal, rec, "float")[1], np.asarray(at, bool), closed, dt, alpha_noise(device, cal, noise))]
+            resolve_array(device, cal, rec, "float", None if est is None else est.w)[1], np.asarray(at, bool), closed,
+            dt, alpha_noise(device, cal, noise))]
     if keep_turned:
         warnings += turned_warnings(sorted(turns))
     cut, left_out, kept = _left_out(t, at, closed, long_anchors, is_open, [] if keep_turned else turns, rec,

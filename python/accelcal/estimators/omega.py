@@ -99,7 +99,7 @@ def omega_observability(positions, axes) -> OmegaObservability:
     size = float(np.max(np.linalg.norm(pos, axis=1), initial=0.0))
     if n < 6 or size == 0.0 or np.linalg.matrix_rank(model.sensor_matrix(pos / size, ax), 1e-9) < 6:
         return OmegaObservability((False,) * 3, 0, f"omega is not observable: this layout's {n} channels do not "
-                                  "resolve alpha (its sensor matrix has rank < 6)")
+                                  f"resolve alpha (its sensor matrix has rank < 6); {_SUGGEST}")
     split = model.centripetal_split(pos / size, ax, np.ones(n))
     scale = float(np.sum(model.centripetal_matrix(pos / size, ax) ** 2))
     lam = np.linalg.eigvalsh(split.m)

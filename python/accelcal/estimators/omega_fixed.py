@@ -140,3 +140,26 @@ def choose_omega_engine(device, cal, rec, source: str, engine: str = "float") ->
     if not wants_array_omega(device, cal, rec, source):
         return None
     return omega_fixed_from_recording(device, cal, rec) if engine == "fixed" else omega_from_recording(device, cal, rec)
+
+
+#: ``attitude --omega`` / ``displacement --omega``: "auto" (the array's omega where the layout
+#: observes it and the recording has no complete w columns, else none), "array", "none"
+ESTIMATOR_OMEGA = ("auto", "array", "none")
+
+
+def estimator_omega(device, cal, rec, source: str, engine: str = "float") -> ArrayOmega | None:
+    """The array's own omega for ``attitude`` and ``displacement`` (``omega`` ``source``, one of
+    :data:`ESTIMATOR_OMEGA`), as ``resolve --omega`` chooses it, or None ("none"; "auto" where the
+    layout does not observe omega or the recording has complete w columns).
+
+    Raises
+    ------
+    InputError
+        "array" on a layout that does not observe omega (the observability line, naming what layout
+        would), or (engine "fixed") one whose channels do not fix all six rate products.
+    ValueError
+        An unknown source.
+    """
+    if source not in ESTIMATOR_OMEGA:
+        raise ValueError(f"unknown omega {source!r}: expected one of {', '.join(ESTIMATOR_OMEGA)}")
+    return None if source == "none" else choose_omega_engine(device, cal, rec, source, engine)
