@@ -21,7 +21,6 @@ from .paths import check_not_an_input, check_output, check_output_dir
 from .convert_command import add_convert_parser
 from .capture_command import add_capture_parser
 from .refine_command import add_refine_parser
-from .resolve_command import add_estimator_options
 from .demo import run_demo
 from ..io.device import default_device, load_device
 from ..diagnose import diagnose
@@ -34,7 +33,7 @@ from ..io.recording import read_recording, write_columns_csv, write_recording
 from ..report import REPORT_FILES, write_report
 from ..resolve import clipped_samples, resolve_recording
 from ..resolve_stream import resolve_warnings, result_names
-from .resolve_command import stream_resolve
+from .resolve_command import add_estimator_options, stream_resolve
 from .estimator_command import estimator_command, reader_notes, run_estimator, time_note  # noqa: F401
 from ..simulate import run_simulation
 from ..readings.static import MIN_POSE_S
