@@ -354,12 +354,16 @@ def attitude(device: Any, calibration: Any, recording: Any, engine: str = "float
         As for :func:`resolve`; two triads (channels 0-2, 3-5) on body x, the pivot at the origin.
     **options
         ``gain`` (1/rad, default 2), ``w2_gate`` ((rad/s)^2 below which ``|w|`` is not measured),
-        ``leak_tau_s`` (s, the pull to 0 while ``|w|`` is not measured; default 2).
+        ``leak_tau_s`` (s, the pull to 0 while ``|w|`` is not measured; default 2), ``omega``
+        ("auto", "array", "none": on a 12-channel array that observes omega, theta from f at the
+        pivot and w_y the array's own omega, docs/angular-rate.md; "auto" where the layout observes
+        it and the recording has no complete w columns).
 
     Returns
     -------
     Columns
-        t (s), theta_rad (rad), w_y (rad/s), dw_y (rad/s^2), g_mps2, gated, unsettled, saturated.
+        t (s), theta_rad (rad), w_y (rad/s), dw_y (rad/s^2), g_mps2, gated, unsettled, saturated
+        (with the array's omega also w_y_sigma, rad/s).
     """
     return _estimate(attitude_from_recording, device, calibration, recording, engine, options)
 
@@ -375,7 +379,9 @@ def displacement(device: Any, calibration: Any, recording: Any, engine: str = "f
         As for :func:`resolve` (a 3-axis sensor or an array).
     **options
         ``form`` ("offline" or "stream"; the C core streams), ``axis`` ("x", "y", "z": 1-D along
-        it; default 3-D, gravity removed), ``keep_turned``, ``resample``.
+        it; default 3-D, gravity removed), ``keep_turned``, ``resample``, ``omega`` ("auto", "array",
+        "none": f resolved with the centripetal term of the array's own omega; "auto" where the layout
+        observes it and the recording has no complete w columns).
 
     Returns
     -------

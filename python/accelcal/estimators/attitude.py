@@ -330,8 +330,8 @@ def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: fl
     Columns
         t (s), theta_rad (rad), w_y (rad/s), dw_y (rad/s^2) (the contract's), g_mps2 (|g| the
         pair sees, m/s^2), gated (|w| not measured: integrated), unsettled (sign of w not yet
-        established), saturated; warnings for unsettled samples, |g| more than 20 % off
-        gravity, saturation.
+        established), saturated; with the array's omega also w_y_sigma (rad/s); warnings for
+        unsettled samples, |g| more than 20 % off gravity, saturation.
 
     Raises
     ------
