@@ -38,8 +38,13 @@
  *                                 flag); in place == separate; the temperature and the
  *                                 nonlinearity within their headers' bounds against the
  *                                 float formula (fuzz/fuzz_terms.c)
+ *  15 ac_omega_*                  the vectors' table (perturbed or not) and random
+ *                                 tables: check == its rules; errors write nothing;
+ *                                 the state normalised; q10 == q16 / 64 within 1 LSB;
+ *                                 the saturation flags; step == replayed step
+ *                                 (fuzz/fuzz_omega.c)
  *
- * (the first byte is taken mod 15)
+ * (the first byte is taken mod 16)
  * Everywhere: the status is one of the ac_status values, and a negative status
  * leaves the outputs unwritten (ac_status.h).  A violated property prints what
  * failed and aborts, which libFuzzer reports as a crash.
@@ -2515,6 +2520,10 @@ static void target_displace(rd *r)
 
 /* ========================================================================= */
 
+#include "fuzz_omega.c"
+
+/* ========================================================================= */
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     rd r;
@@ -2525,7 +2534,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     sel = data[0];
     r.p = data + 1;
     r.n = size - 1u;
-    switch (sel % 15u) {
+    switch (sel % 16u) {
     case 0:
         target_trim(&r);
         break;
@@ -2568,8 +2577,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     case 13:
         target_displace(&r);
         break;
-    default:
+    case 14:
         target_terms(&r);
+        break;
+    default:
+        target_omega(&r);
         break;
     }
     return 0;

@@ -19,7 +19,7 @@ import random
 from pathlib import Path
 
 # target selectors (fuzz_core.c)
-TRIM, RESOLVE, PROCESS, BUILD, INVERT, XF, FIXED, RATE, NULLS, ROWS, TRIG, REST, ATT, DISP, TERMS = range(15)
+TRIM, RESOLVE, PROCESS, BUILD, INVERT, XF, FIXED, RATE, NULLS, ROWS, TRIG, REST, ATT, DISP, TERMS, OMEGA = range(16)
 
 
 def seeds(rng: random.Random):
@@ -81,6 +81,12 @@ def seeds(rng: random.Random):
     # 8 in place
     for mode in range(16):
         yield f"terms_m{mode:02d}", bytes([TERMS, mode]) + payload(400)
+    # ac_omega: mode bits 1 the vectors' table, 2 perturbed, 4 the vectors' readings (+ offsets), 8 NULL
+    # q10 / flags, high nibble steps - 1; the vectors' readings unchanged (zero offsets) from rest and mid-turn
+    for mode in (0x05 | 0xB0, 0x0D | 0x70):
+        yield f"omega_m{mode:02x}_plain", bytes([OMEGA, mode]) + bytes(64)
+    for mode in (0x05 | 0xF0, 0x01 | 0x30, 0x03 | 0x30, 0x07 | 0x70, 0x0B | 0x10, 0x00, 0x04 | 0x10, 0x08):
+        yield f"omega_m{mode:02x}", bytes([OMEGA, mode]) + payload(1000)
 
 
 def main() -> int:

@@ -86,8 +86,8 @@ def test_corpus_present_and_small():
     files = [p for p in CORPUS.iterdir() if p.is_file()]
     assert len(files) >= 100
     assert sum(p.stat().st_size for p in files) < 200_000
-    # every harness target has seeds (the first byte selects it, mod 15)
-    assert {p.read_bytes()[0] % 15 for p in files if p.stat().st_size} == set(range(15))
+    # every harness target has seeds (the first byte selects it, mod 16)
+    assert {p.read_bytes()[0] % 16 for p in files if p.stat().st_size} == set(range(16))
 
 
 def test_corpus_matches_its_generator(tmp_path):
@@ -130,8 +130,9 @@ def test_harness_catches_a_violation(build, tmp_path):
                       "int32_t e = d > 32766 ? 32766 : (d < -32768 ? -32768 : d);")
     assert bad != src
     (tmp_path / "fuzz_bad.c").write_text(bad)
-    # fuzz_core.c includes its terms target from its own directory
-    (tmp_path / "fuzz_terms.c").write_text((ROOT / "fuzz" / "fuzz_terms.c").read_text())
+    # fuzz_core.c includes its terms and omega targets from its own directory
+    for name in ("fuzz_terms.c", "fuzz_omega.c"):
+        (tmp_path / name).write_text((ROOT / "fuzz" / name).read_text())
     _compile_all(build["cc"], [(tmp_path / "fuzz_bad.c", tmp_path / "fuzz_bad.o", "-O0")])
     exe = tmp_path / "replay_bad"
     _link(build["cc"], [tmp_path / "fuzz_bad.o", build["main"], *build["core"]], exe)
@@ -140,3 +141,22 @@ def test_harness_catches_a_violation(build, tmp_path):
     r = subprocess.run([str(exe), str(tmp_path / "in")], capture_output=True, text=True, timeout=60, env=_env())
     assert r.returncode != 0
     assert "property failed" in r.stderr
+
+
+def test_omega_target_checks_its_properties(build, tmp_path):
+    """Target 15 (ac_omega, fuzz/fuzz_omega.c) runs its checks: with its q16 -> q10 rescaling
+    deliberately wrong (/ 32 for / 64) the vectors' table and readings abort the replay."""
+    src = (ROOT / "fuzz" / "fuzz_omega.c").read_text()
+    bad = src.replace("floor_div_p2((i128)w2[i] + 32, 6)", "floor_div_p2((i128)w2[i] + 32, 5)")
+    assert bad != src
+    core = (ROOT / "fuzz" / "fuzz_core.c").read_text().replace('#include "fuzz_omega.c"', '#include "fuzz_omega_bad.c"')
+    (tmp_path / "fuzz_omega_bad.c").write_text(bad)
+    (tmp_path / "fuzz_bad.c").write_text(core)
+    for name in ("fuzz_terms.c",):
+        (tmp_path / name).write_text((ROOT / "fuzz" / name).read_text())
+    _compile_all(build["cc"], [(tmp_path / "fuzz_bad.c", tmp_path / "fuzz_bad.o", "-O0")])
+    exe = tmp_path / "replay_bad"
+    _link(build["cc"], [tmp_path / "fuzz_bad.o", build["main"], *build["core"]], exe)
+    seed = next(CORPUS.glob("seed_omega_mb5_plain_*"))     # the vectors' rest and mid-turn readings
+    r = subprocess.run([str(exe), str(seed)], capture_output=True, text=True, timeout=60, env=_env())
+    assert r.returncode != 0 and "omega_q10" in r.stderr, r.stderr[-2000:]
