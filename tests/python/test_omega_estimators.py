@@ -102,6 +102,10 @@ def test_attitude_array_omega_from_the_api_and_the_cli(swing, tmp_path):
     assert got.dtype.names[:4] == ("t", "theta_rad", "w_y", "dw_y")
     np.testing.assert_allclose(got["w_y"], c["w_y"], atol=1e-6)
     np.testing.assert_allclose(got["theta_rad"], c["theta_rad"], atol=1e-6)
+    # without --omega ("auto"): the same, the whole-file way (the chunked attitude knows two triads only)
+    assert main(["attitude", "--device", paths[0], "--calibration", paths[1], paths[2], "-o", str(tmp_path / "a.csv")]) == 0
+    lines = [ln for ln in open(tmp_path / "a.csv", encoding="utf-8") if not ln.startswith("#")]
+    np.testing.assert_array_equal(np.genfromtxt(lines, delimiter=",", names=True), got)
 
 
 def test_array_omega_refused_on_two_triads(tmp_path, capsys):
