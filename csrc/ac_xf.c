@@ -34,11 +34,11 @@ static void pack(ac_xf *r, int neg, ac_u64 mag, int32_t e)
     len = (mag.hi != 0u) ? (uint8_t)(32u + ac_bitlen_u(mag.hi)) : ac_bitlen_u(mag.lo);
     if (len > 30u) {
         uint8_t k = (uint8_t)(len - 30u);
-        ac_u64 half;
-        half.hi = 0u;
-        half.lo = 1u;
-        mag = ac_u64_add(mag, ac_u64_shl(half, (uint8_t)(k - 1u))); /* ties away from zero */
-        mag = ac_u64_shr(mag, k);
+        /* ties away from zero: floor((mag + 2^(k-1)) / 2^k) = floor((floor(mag / 2^(k-1)) + 1) / 2),
+         * the shifted value < 2^31 (one 64-bit shift and no 64-bit add) */
+        uint32_t t = (k > 1u) ? ac_u64_shr(mag, (uint8_t)(k - 1u)).lo : mag.lo;
+        mag.hi = 0u;
+        mag.lo = (t >> 1) + (t & 1u);
         e += (int32_t)k;
         if (mag.lo >= XF_HI) { /* rounding carried into a new bit */
             mag.lo >>= 1;
