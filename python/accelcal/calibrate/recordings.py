@@ -13,6 +13,7 @@ from ..readings.static import (MIN_POSE_S, NO_POSE, STATIC_THRESHOLD, STATIC_WIN
 from .checks import jig_accuracy_rad, min_poses, pose_label, static_force
 from .jig_estimate import fit_estimating_jig
 from .known_poses import fit_known_poses
+from .pose_stream import Reduced
 from .outliers import outlier_poses, outlier_report, subset
 from .lever_arms import calibrate_positions
 from .results import pose_names, set_aside_entry, to_calibration
@@ -68,12 +69,17 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
                          f"{', '.join(METHODS + ('jigfree',))}", field="method")
     if not recordings:
         raise InputError("<arguments>", "no recording given")
-    recordings, device, notes = distinct_recordings(list(recordings), device)
-    rotating = [rotating_samples(rec) for rec in recordings]
+    recordings = list(recordings)
+    if all(isinstance(rec, Reduced) for rec in recordings):   # reduced while read: no held rows, the device's rate
+        notes: list[str] = []
+    else:
+        recordings, device, notes = distinct_recordings(recordings, device)
+    rotating = [np.zeros(1, bool) if isinstance(rec, Reduced) else rotating_samples(rec) for rec in recordings]
     # with several recordings, one without a static pose (a motion, a sweep) adds none and is named
     several = len(recordings) > 1
     try:
-        sets = [poses_from_recording(rec, device, required=not (rot.any() or several), min_s=min_static_s)
+        sets = [rec.poses if isinstance(rec, Reduced) else
+                poses_from_recording(rec, device, required=not (rot.any() or several), min_s=min_static_s)
                 for rec, rot in zip(recordings, rotating)]
     except InputError as e:
         if not e.detail.startswith(NO_POSE):
