@@ -13,6 +13,8 @@ import pytest
 
 from accelcal.calibrate import calibrate_recordings
 from accelcal.calibrate.pose_stream import reduce_labelled
+from accelcal.cli import main as cli_main
+from accelcal.io.device import save_device
 from accelcal.io.recording import read_recording, recording_from_arrays, write_recording
 from accelcal.readings.static import poses_from_recording
 
@@ -109,3 +111,39 @@ def test_unlabelled_or_moving_goes_the_whole_file_way(tmp_path):
     path = tmp_path / "u.csv"
     write_recording(path, rec2)
     assert reduce_labelled(path, dev) is None
+
+
+def run_cli(args, capsys):
+    code = cli_main.main(args)
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_cli_json_equals_the_whole_file_one(tmp_path, capsys, monkeypatch):
+    """accelcal calibrate on two labelled recordings (CSV and Parquet): the reduced path is taken
+    (its reader is called and returns poses) and the written calibration, stdout and stderr equal
+    the whole-file command's (reduced path disabled) byte for byte."""
+    dev = device()
+    dpath = tmp_path / "dev.json"
+    save_device(dev, dpath)
+    paths = []
+    for k, name in enumerate(("a.csv", "b.parquet")):
+        p = tmp_path / name
+        write_recording(p, labelled(dev, np.random.default_rng(20 + k), temps=False))
+        paths.append(str(p))
+    calls = []
+    real = cli_main.reduced_recordings
+
+    def spy(*args):
+        out = real(*args)
+        calls.append(out)
+        return out
+
+    monkeypatch.setattr(cli_main, "reduced_recordings", spy)
+    got = run_cli(["calibrate", "--device", str(dpath), *paths, "-o", str(tmp_path / "r.json")], capsys)
+    assert calls and calls[0] is not None and len(calls[0]) == 2
+    monkeypatch.setattr(cli_main, "reduced_recordings", lambda *args: None)
+    whole = run_cli(["calibrate", "--device", str(dpath), *paths, "-o", str(tmp_path / "w.json")], capsys)
+    assert got[0] == whole[0] == 0
+    assert got[1].replace("r.json", "w.json") == whole[1] and got[2] == whole[2]
+    assert (tmp_path / "r.json").read_bytes() == (tmp_path / "w.json").read_bytes()

@@ -2,14 +2,19 @@
 calibration calls for and the summary paragraph."""
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 
 from ..calibrate.checks import far_from_nominal, gain_sigma, poorly_determined
 from ..calibrate.jig_estimate import p_text
 from ..calibrate.omega_check import lever_arm_omega_warning
+from ..calibrate.pose_stream import Reduced, reduce_labelled
 from ..calibrate.results import interval_text
 from ..calibrate.settings import JIG_ACCURACY_AUTO, SCATTER_CHI2
 from ..errors import AccelcalError
+from ..io.units_cli import scale_from_args
 
 
 def non_negative(text, option: str, what: str) -> float:
@@ -298,3 +303,24 @@ def calibration_summary(cal, n_recordings: int, output) -> str:
         text += " Temperature coefficients fitted."
     return text + f" Written to {output}."
 
+
+
+def reduced_recordings(paths, dev, a) -> list[Reduced] | None:
+    """Each recording reduced to its poses while read in chunks
+    (:func:`accelcal.calibrate.pose_stream.reduce_labelled`), or None where one of them is not
+    (the caller then reads them whole; the same paths given twice: None, the whole-file reader
+    refuses them).  The note on ignored columns as the whole-file reader gives it, on stderr."""
+    if len({Path(p).resolve() for p in paths}) != len(paths):
+        return None
+    scale = scale_from_args(a, dev, reader=True)
+    out = []
+    for p in paths:
+        r = reduce_labelled(p, dev, scale)
+        if r is None:
+            return None
+        out.append(r)
+    ignored = sorted({k for r in out for k in r.extra})
+    if ignored:
+        print(f"accelcal calibrate: note: ignored column{'s' if len(ignored) > 1 else ''} "
+              f"{', '.join(ignored)} (not part of the accelerometer model)", file=sys.stderr)
+    return out

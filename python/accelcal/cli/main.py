@@ -16,7 +16,7 @@ from tqdm import tqdm
 from .. import __version__
 from ..calibrate import JIG_ACCURACY_AUTO, JIGFREE_MODELS, calibrate_recordings
 from ..io.calibration import load_calibration, save_calibration
-from .calibrate_command import calibration_summary, jig_accuracy_arg, min_static_arg, record_warnings
+from .calibrate_command import calibration_summary, jig_accuracy_arg, min_static_arg, record_warnings, reduced_recordings
 from .paths import check_not_an_input, check_output, check_output_dir
 from .convert_command import add_convert_parser
 from .capture_command import add_capture_parser
@@ -146,7 +146,7 @@ def cmd_calibrate(a):
     jig = jig_accuracy_arg(a.jig_accuracy)
     min_static = min_static_arg(a.min_static)
     dev = _load_device(a.device)
-    recs = _read(a.recordings, dev, "calibrate", a)
+    recs = reduced_recordings(a.recordings, dev, a) or _read(a.recordings, dev, "calibrate", a)
     cal = calibrate_recordings(dev, recs, method=a.method, jig_accuracy_deg=jig, jigfree_model=a.jigfree_model,
                                drop_outliers=a.drop_outliers, min_static_s=min_static)
     warnings = record_warnings(dev, cal)
