@@ -147,3 +147,18 @@ def test_cli_json_equals_the_whole_file_one(tmp_path, capsys, monkeypatch):
     assert got[0] == whole[0] == 0
     assert got[1].replace("r.json", "w.json") == whole[1] and got[2] == whole[2]
     assert (tmp_path / "r.json").read_bytes() == (tmp_path / "w.json").read_bytes()
+
+
+def test_held_readings_go_the_whole_file_way(tmp_path):
+    """Each reading held for two rows (a logger faster than the sensor): the whole-file path counts
+    them once (readings.held), so the reduced reader leaves them to it; the same recording not held
+    reduces."""
+    dev = device()
+    rec = labelled(dev, np.random.default_rng(4))
+    n = rec.n_samples // 2 * 2
+    held = recording_from_arrays(rec.t[:n], np.repeat(rec.raw[:n:2], 2, axis=0), pose=rec.pose[:n], f=rec.f[:n])
+    path = tmp_path / "h.csv"
+    write_recording(path, held)
+    assert reduce_labelled(path, dev) is None
+    write_recording(path, recording_from_arrays(rec.t[:n], rec.raw[:n], pose=rec.pose[:n], f=rec.f[:n]))
+    assert reduce_labelled(path, dev) is not None

@@ -6,8 +6,8 @@ pose's readings; :func:`reduce_labelled` reads the file twice in chunks
 (:mod:`accelcal.io.chunk_source`) and keeps per pose only sums:
 
 1. per chunk the reader's checks and the device's range; every time step within RATE_TOL / 2 of
-   the device's (t in seconds, the device's rate stands) and no row equal to the one before (no
-   held readings); per label its sample count, each channel's histogram of readings (the clip levels,
+   the device's (t in seconds, the device's rate stands) and the runs of identical rows
+   (:class:`accelcal.readings.held.RunCounts`: no readings held for several rows); per label its sample count, each channel's histogram of readings (the clip levels,
    :func:`accelcal.readings.clipping.clip_levels_counts`, and the code step) and where f is given;
 2. per pose the integer sums of its readings and of their squares about one reference reading
    (exact: the whole-file :func:`~accelcal.readings.static.pose_means` sums the same integers),
@@ -20,7 +20,7 @@ and f_ref, temp differ by rounding only (float sums in another order).  Where th
 tell what the whole-file path would do it returns None and the caller reads the file whole:
 no ``pose`` labels (the static detector needs the samples), a device without ``noise_mps2``,
 a pose with a clipped reading, rotating samples (the lever arms need them), f given on part of a
-pose, a step more than RATE_TOL / 2 off the device's, a row repeated, any reader fallback or input error (the
+pose, a step more than RATE_TOL / 2 off the device's, readings held for several rows, any reader fallback or input error (the
 whole-file reader words it).
 """
 from __future__ import annotations
@@ -34,6 +34,7 @@ from ..errors import InputError
 from ..io.chunk_source import open_chunks
 from ..io.chunks import BLOCK_BYTES, Fallback, reader_checks
 from ..io.recording_checks import RATE_TOL, check_raw_range
+from ..readings.held import RunCounts
 from ..readings.clipping import clip_levels_counts, code_step_counts
 from ..readings.noise import COLOUR_BATCHES, noise_for, states_noise
 from ..readings.static import PoseSet, at_gravity
@@ -115,6 +116,7 @@ def _reduce(path: Any, device, scale, block_bytes: int) -> Reduced | None:
     f_seen: dict[int, list] = {}          # label -> [any f given, any f missing]
     prev = None
     n_rows = 0
+    runs = RunCounts()
     for ch in src.chunks():
         # the reader's checks and the range: any error is the whole-file path's to word
         if reader_checks(head, ch, prev):
@@ -123,10 +125,9 @@ def _reduce(path: Any, device, scale, block_bytes: int) -> Reduced | None:
         # every step within RATE_TOL / 2 of the device's: t in seconds, the device's rate stands
         # (io.recording_checks.rate_for); no row repeating the one before (readings.held)
         t = ch.t if prev is None else np.concatenate(([prev.t[-1]], ch.t))
-        raw = ch.raw if prev is None else np.vstack((prev.raw[-1:], ch.raw))
-        if (not np.all(np.isfinite(t)) or np.any(np.abs(np.diff(t) * device.sample_rate_hz - 1.0) > RATE_TOL / 2)
-                or np.any(np.all(raw[1:] == raw[:-1], axis=1))):
+        if not np.all(np.isfinite(t)) or np.any(np.abs(np.diff(t) * device.sample_rate_hz - 1.0) > RATE_TOL / 2):
             return None
+        runs.add(ch.raw)
         prev = ch
         n_rows += ch.n
         pose = ch.other["pose"]
@@ -147,7 +148,7 @@ def _reduce(path: Any, device, scale, block_bytes: int) -> Reduced | None:
                 seen = f_seen.setdefault(v, [False, False])
                 seen[0] |= bool(fin[m].any())
                 seen[1] |= bool((~fin[m]).any())
-    if not counts or any(a and b for a, b in f_seen.values()):
+    if not counts or runs.held(N) != 1 or any(a and b for a, b in f_seen.values()):
         return None
     labels = sorted(counts)
     P = len(labels)

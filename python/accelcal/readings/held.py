@@ -17,13 +17,16 @@ attitude, displacement, rate) keep every row: their output is one line per input
 from __future__ import annotations
 
 import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from ..io.recording import Recording
 from ..io.recording_checks import RATE_TOL, rate_for
 
-__all__ = ["HELD_MODAL_SHARE", "HELD_MAX", "HELD_MIN_RUNS", "HELD_SINGLE_SHARE", "HELD_MIN_RUNS_UNEVEN",
+__all__ = ["RunCounts", "order_stat", "HELD_MODAL_SHARE", "HELD_MAX", "HELD_MIN_RUNS", "HELD_SINGLE_SHARE", "HELD_MIN_RUNS_UNEVEN",
            "HELD_CHANGED_SHARE", "held_runs", "held_factor", "held_share", "held_text", "readings_rate", "distinct_rows",
            "distinct_recordings"]
 
@@ -168,3 +171,83 @@ def _rows_rate(recordings: list[Recording]) -> float | None:
     steps = np.concatenate([np.diff(np.asarray(r.t, float)) for r in recordings]) if recordings else np.zeros(0)
     steps = steps[steps > 0]
     return 1.0 / float(np.median(steps)) if steps.size else None
+
+
+@dataclass
+class RunCounts:
+    """Runs of identical rows, as :func:`accelcal.readings.held.held_runs` counts them."""
+
+    hist: dict = field(default_factory=dict)     # run length -> runs
+    first_len: int | None = None                 # the first run's length, once it has ended
+    open_len: int = 0                            # the run still going on
+    changed: int = 0                             # channels changed where a run ends (summed)
+    last: Any = None                             # the last row seen
+
+    def add(self, raw: np.ndarray) -> None:
+        if raw.shape[0] == 0:
+            return
+        new = np.ones(raw.shape[0], bool)
+        new[1:] = np.any(raw[1:] != raw[:-1], axis=1)
+        if self.last is not None:
+            new[0] = bool(np.any(raw[0] != self.last))
+            self.changed += int(np.count_nonzero(raw[0] != self.last))
+        self.changed += int(np.count_nonzero(raw[1:][new[1:]] != raw[:-1][new[1:]]))
+        starts = np.flatnonzero(new)
+        if starts.size == 0:
+            self.open_len += raw.shape[0]
+        else:
+            if self.last is not None and starts[0] == 0:
+                self._close(self.open_len)
+            elif self.last is not None:
+                self._close(self.open_len + int(starts[0]))
+            lengths = np.diff(starts)
+            if lengths.size:
+                if self.first_len is None:
+                    self.first_len = int(lengths[0])
+                for length, c in zip(*np.unique(lengths, return_counts=True)):
+                    self.hist[int(length)] = self.hist.get(int(length), 0) + int(c)
+            self.open_len = raw.shape[0] - int(starts[-1])
+        self.last = raw[-1].copy()
+
+    def _close(self, length: int) -> None:
+        if self.first_len is None:
+            self.first_len = length
+        self.hist[length] = self.hist.get(length, 0) + 1
+
+    def held(self, n_channels: int) -> int | None:
+        """held_runs' k, or None where only the samples tell (the 90th percentile at HELD_MAX)."""
+        hist = dict(self.hist)
+        hist[self.open_len] = hist.get(self.open_len, 0) + 1
+        runs = sum(hist.values())
+        top = max(hist.values())
+        k = min(length for length, c in hist.items() if c == top)      # np.argmax of the bincount: the first
+        if 2 <= k <= HELD_MAX and runs >= HELD_MIN_RUNS and top >= HELD_MODAL_SHARE * runs:
+            return k
+        if runs < 3:
+            return 1
+        inner = dict(hist)
+        for length in (self.first_len, self.open_len):
+            inner[length] -= 1
+        m = sum(inner.values())
+        if not (m >= HELD_MIN_RUNS_UNEVEN and inner.get(1, 0) / m <= HELD_SINGLE_SHARE):
+            return 1
+        idx = 0.9 * (m - 1)
+        lo, hi = order_stat(inner, math.floor(idx)), order_stat(inner, math.ceil(idx))
+        if lo > HELD_MAX:
+            return 1
+        if hi > HELD_MAX:
+            return None
+        boundaries = runs - 1
+        if self.changed / (boundaries * n_channels) >= HELD_CHANGED_SHARE:
+            return None                                                   # held: the whole-file command warns
+        return 1
+
+
+def order_stat(hist: dict, i: int) -> int:
+    """The i-th smallest (0-based) of values counted in ``hist`` (value -> count)."""
+    seen = 0
+    for length in sorted(hist):
+        seen += hist[length]
+        if seen > i:
+            return length
+    raise IndexError(i)  # pragma: no cover
