@@ -20,6 +20,10 @@ Writes build/bench_stream.md and prints it.
 ``--command rate|attitude --engine E``: instead, ``accelcal rate|attitude --engine E`` streamed and with ``--whole-file``,
 wall time and peak RSS of each (a table row per run, printed).
 
+``--command calibrate``: instead, ``accelcal calibrate`` on the static-pose recording below (about
+N samples for each of ``--lengths``, CSV and Parquet), reduced while read and (unless ``--no-whole``)
+the whole-file path; wall time and peak RSS of each (a table row per run, printed).
+
 ``--calibrate-diagnose N``: instead, the wall time and peak RSS (VmHWM polled from /proc) of
 ``calibrate`` and ``diagnose`` on a static-pose recording of about N samples (24 jig poses of
 10^6 / 24 samples each with reference f, w, dw, temp_c and pose, repeated with t shifted and the
@@ -46,7 +50,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "python"))
 from accelcal.io.device import default_device, pendulum_device, save_device  # noqa: E402
 from accelcal.io.parquet import BATCH_ROWS  # noqa: E402
-from accelcal.io.recording import Recording, write_recording  # noqa: E402
+from accelcal.io.recording import Recording, read_recording, write_recording  # noqa: E402
 from accelcal.simulate import run_simulation  # noqa: E402
 
 ROWS = 1 << 20
@@ -195,6 +199,25 @@ def calibrate_diagnose(n: int, d: Path) -> None:
         print(f"{name} {n:.0e} samples: {s:.0f} s, peak {mb:.0f} MB", flush=True)
 
 
+def calibrate_runs(n: int, d: Path, whole: bool) -> None:
+    """Wall time and peak RSS of ``accelcal calibrate`` on poses_recording(n) (CSV and Parquet), the
+    labelled recording reduced while read (calibrate.pose_stream) and, with ``whole``, the
+    whole-file path (the reduced reader disabled in that process); one table row each, printed."""
+    csv_path, pq_path = d / f"poses_{n}.csv", d / f"poses_{n}.parquet"
+    poses_recording(n, csv_path)
+    write_recording(pq_path, read_recording(csv_path, 6))
+    run = ("import sys; sys.path.insert(0, %r); import accelcal.cli.main as m; "
+           "m.reduced_recordings = (lambda *a: None) if sys.argv[1] == 'whole' else m.reduced_recordings; "
+           "sys.exit(m.main(sys.argv[2:]))" % str(ROOT / "python"))
+    for src in (csv_path, pq_path):
+        for kind in ("reduced",) + (("whole",) if whole else ()):
+            s, mb = peak_of([sys.executable, "-c", run, kind, "calibrate", "--device", "default", str(src),
+                             "-o", str(d / f"cal_{kind}.json")])
+            print(f"| {n:.0e} | {src.suffix[1:]} | {src.stat().st_size / 1e6:.0f} | calibrate {kind} | {s:.1f} | "
+                  f"{mb:.0f} |", flush=True)
+        src.unlink()
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--lengths", default="1e5,1e6,1e7,1e8", help="samples, comma-separated")
@@ -204,17 +227,27 @@ def main() -> None:
                     help="which cases, in this order (comma-separated)")
     ap.add_argument("--calibrate-diagnose", metavar="N", type=float,
                     help="instead: peak memory of calibrate and diagnose on a static-pose recording of N samples")
-    ap.add_argument("--command", choices=["resolve", "rate", "attitude"], default="resolve",
+    ap.add_argument("--command", choices=["resolve", "rate", "attitude", "calibrate"], default="resolve",
                     help="rate, attitude: `accelcal rate|attitude --engine ENGINE` streamed, and with --whole-file "
                     "(no I/O anchor); attitude on the two-triad pendulum device (io.device.pendulum_device), its "
-                    "readings a pendulum simulation tiled")
+                    "readings a pendulum simulation tiled; calibrate: `accelcal calibrate` on poses_recording(N) "
+                    "(CSV and Parquet), reduced while read and (unless --no-whole) whole-file")
     ap.add_argument("--engine", choices=["float", "fixed"], default="fixed", help="rate's or attitude's engine")
-    ap.add_argument("--no-whole", action="store_true", help="rate, attitude: the streamed runs only")
+    ap.add_argument("--no-whole", action="store_true", help="rate, attitude, calibrate: the streamed runs only")
     a = ap.parse_args()
     d = Path(a.dir or tempfile.mkdtemp(prefix="bench_stream_"))
     d.mkdir(parents=True, exist_ok=True)
     if a.calibrate_diagnose:
         calibrate_diagnose(int(a.calibrate_diagnose), d)
+        return
+    if a.command == "calibrate":
+        print("| samples | input | MB | run | s | peak MB |\n| ---: | --- | ---: | --- | ---: | ---: |", flush=True)
+        try:
+            for n in (int(float(x)) for x in a.lengths.split(",")):
+                calibrate_runs(n, d, not a.no_whole)
+        finally:
+            if not a.keep and not a.dir:
+                shutil.rmtree(d, ignore_errors=True)
         return
     device = "default"
     if a.command == "attitude":

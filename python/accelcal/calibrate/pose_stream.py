@@ -5,9 +5,10 @@ on long recordings; docs/streaming.md, issue 37).
 pose's readings; :func:`reduce_labelled` reads the file twice in chunks
 (:mod:`accelcal.io.chunk_source`) and keeps per pose only sums:
 
-1. per chunk the reader's checks and the device's range; every time step within RATE_TOL / 2 of
-   the device's (t in seconds, the device's rate stands) and the runs of identical rows
-   (:class:`accelcal.readings.held.RunCounts`: no readings held for several rows); per label its sample count, each channel's histogram of readings (the clip levels,
+1. per chunk the reader's checks and the device's range; more than half the time steps within
+   RATE_TOL / 2 of the device's (t in seconds, the device's rate stands) and the runs of
+   identical rows (:class:`accelcal.readings.held.RunCounts`: no readings held for several
+   rows); per label its sample count, each channel's histogram of readings (the clip levels,
    :func:`accelcal.readings.clipping.clip_levels_counts`, and the code step) and where f is given;
 2. per pose the integer sums of its readings and of their squares about one reference reading
    (exact: the whole-file :func:`~accelcal.readings.static.pose_means` sums the same integers),
@@ -19,9 +20,10 @@ The means, counts and std equal the whole-file ones bit for bit; the parts' and 
 and f_ref, temp differ by rounding only (float sums in another order).  Where this path cannot
 tell what the whole-file path would do it returns None and the caller reads the file whole:
 no ``pose`` labels (the static detector needs the samples), a device without ``noise_mps2``,
-a pose with a clipped reading, rotating samples (the lever arms need them), f given on part of a
-pose, a step more than RATE_TOL / 2 off the device's, readings held for several rows, any reader fallback or input error (the
-whole-file reader words it).
+a pose with a clipped reading or that moves, rotating samples (the lever arms need them), f
+given on part of a pose, a pose off gravity without f, a pose before the lowest label's first
+sample, half the steps or more off the device's by more than RATE_TOL / 2, readings held for
+several rows, any reader fallback or input error (the whole-file reader words it).
 """
 from __future__ import annotations
 
@@ -117,16 +119,18 @@ def _reduce(path: Any, device, scale, block_bytes: int) -> Reduced | None:
     prev = None
     n_rows = 0
     runs = RunCounts()
+    near = 0
     for ch in src.chunks():
         # the reader's checks and the range: any error is the whole-file path's to word
         if reader_checks(head, ch, prev):
             return None
         check_raw_range(ch, device)
-        # every step within RATE_TOL / 2 of the device's: t in seconds, the device's rate stands
-        # (io.recording_checks.rate_for); no row repeating the one before (readings.held)
+        # most steps within RATE_TOL / 2 of the device's: the median is, so t is in seconds and the
+        # device's rate stands (io.recording_checks.rate_for)
         t = ch.t if prev is None else np.concatenate(([prev.t[-1]], ch.t))
-        if not np.all(np.isfinite(t)) or np.any(np.abs(np.diff(t) * device.sample_rate_hz - 1.0) > RATE_TOL / 2):
+        if not np.all(np.isfinite(t)):
             return None
+        near += int(np.count_nonzero(np.abs(np.diff(t) * device.sample_rate_hz - 1.0) <= RATE_TOL / 2))
         runs.add(ch.raw)
         prev = ch
         n_rows += ch.n
@@ -148,7 +152,7 @@ def _reduce(path: Any, device, scale, block_bytes: int) -> Reduced | None:
                 seen = f_seen.setdefault(v, [False, False])
                 seen[0] |= bool(fin[m].any())
                 seen[1] |= bool((~fin[m]).any())
-    if not counts or runs.held(N) != 1 or any(a and b for a, b in f_seen.values()):
+    if not counts or 2 * near <= n_rows - 1 or runs.held(N) != 1 or any(a and b for a, b in f_seen.values()):
         return None
     labels = sorted(counts)
     P = len(labels)

@@ -26,7 +26,8 @@ import numpy as np
 from ..io.recording import Recording
 from ..io.recording_checks import RATE_TOL, rate_for
 
-__all__ = ["RunCounts", "order_stat", "HELD_MODAL_SHARE", "HELD_MAX", "HELD_MIN_RUNS", "HELD_SINGLE_SHARE", "HELD_MIN_RUNS_UNEVEN",
+__all__ = ["RunCounts", "order_stat",
+           "HELD_MODAL_SHARE", "HELD_MAX", "HELD_MIN_RUNS", "HELD_SINGLE_SHARE", "HELD_MIN_RUNS_UNEVEN",
            "HELD_CHANGED_SHARE", "held_runs", "held_factor", "held_share", "held_text", "readings_rate", "distinct_rows",
            "distinct_recordings"]
 
