@@ -162,3 +162,15 @@ def test_held_readings_go_the_whole_file_way(tmp_path):
     assert reduce_labelled(path, dev) is None
     write_recording(path, recording_from_arrays(rec.t[:n], rec.raw[:n], pose=rec.pose[:n], f=rec.f[:n]))
     assert reduce_labelled(path, dev) is not None
+
+
+def test_a_reading_outside_the_range_goes_the_whole_file_way(tmp_path):
+    """A reading outside the device's range: None (the whole-file reader words the error), not an
+    internal error."""
+    dev = device()
+    rec = labelled(dev, np.random.default_rng(6))
+    raw = rec.raw.copy()
+    raw[50, 2] = dev.raw_max + 5
+    path = tmp_path / "o.csv"
+    write_recording(path, recording_from_arrays(rec.t, raw, pose=rec.pose, f=rec.f))
+    assert reduce_labelled(path, dev, block_bytes=1000) is None

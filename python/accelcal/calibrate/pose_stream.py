@@ -28,6 +28,7 @@ several rows, any reader fallback or input error (the whole-file reader words it
 from __future__ import annotations
 
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -124,7 +125,7 @@ def _reduce(path: Any, device, scale, block_bytes: int) -> Reduced | None:
         # the reader's checks and the range: any error is the whole-file path's to word
         if reader_checks(head, ch, prev):
             return None
-        check_raw_range(ch, device)
+        check_raw_range(SimpleNamespace(raw=ch.raw, source=head.source, line=ch.line), device)
         # most steps within RATE_TOL / 2 of the device's: the median is, so t is in seconds and the
         # device's rate stands (io.recording_checks.rate_for)
         t = ch.t if prev is None else np.concatenate(([prev.t[-1]], ch.t))
