@@ -174,3 +174,17 @@ def test_a_reading_outside_the_range_goes_the_whole_file_way(tmp_path):
     path = tmp_path / "o.csv"
     write_recording(path, recording_from_arrays(rec.t, raw, pose=rec.pose, f=rec.f))
     assert reduce_labelled(path, dev, block_bytes=1000) is None
+
+
+def test_rotating_samples_go_the_whole_file_way(tmp_path):
+    """Samples with f, w, dw given and |w| above ROTATION_MIN_RADPS (the lever arms take them): None;
+    the same recording with w = 0 reduces."""
+    dev = device()
+    rec = labelled(dev, np.random.default_rng(8))
+    f = np.where(np.isfinite(rec.f), rec.f, 0.0)
+    w = np.zeros_like(f)
+    for spin, want_none in ((0.0, False), (0.3, True)):
+        w[rec.pose < 0, 2] = spin
+        path = tmp_path / f"w{spin}.csv"
+        write_recording(path, recording_from_arrays(rec.t, rec.raw, pose=rec.pose, f=f, w=w, dw=np.zeros_like(f)))
+        assert (reduce_labelled(path, dev, block_bytes=1500) is None) == want_none
