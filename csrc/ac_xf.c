@@ -37,8 +37,7 @@ static void pack(ac_xf *r, int neg, ac_u64 mag, int32_t e)
         /* ties away from zero: floor((mag + 2^(k-1)) / 2^k) = floor((floor(mag / 2^(k-1)) + 1) / 2),
          * the shifted value < 2^31 (one 64-bit shift and no 64-bit add) */
         uint32_t t = (k > 1u) ? ac_u64_shr(mag, (uint8_t)(k - 1u)).lo : mag.lo;
-        mag.hi = 0u;
-        mag.lo = (t >> 1) + (t & 1u);
+        mag.lo = (t >> 1) + (t & 1u); /* (mag.hi is not read again) */
         e += (int32_t)k;
         if (mag.lo >= XF_HI) { /* rounding carried into a new bit */
             mag.lo >>= 1;
