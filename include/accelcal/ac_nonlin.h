@@ -28,7 +28,7 @@
  * AC_SATURATED if a z_k clipped to int16.
  * On the H8/300H (normal mode) the function is assembly for shifts 15..30 and K = 3
  * (csrc/ac_terms_h8.c), the same arithmetic bit for bit; the C of ac_nonlin.c everywhere else
- * (other K included: 3 K multiplies a channel, about 1,000 states an iteration for 6 channels).
+ * (other K included: about 2,070 H8/300H states an iteration for 6 channels in C).
  */
 #ifndef AC_NONLIN_H
 #define AC_NONLIN_H
