@@ -12,7 +12,7 @@ ac_status ac_nonlin_check(const ac_nonlin_table *t)
     if (t->n < 1u || t->n > (uint16_t)AC_MAX_CHANNELS) {
         return AC_ERR_SIZE;
     }
-    if (t->shift < 0 || t->shift > 30) {
+    if (t->shift < 0 || t->shift > 30 || t->iterations > (uint8_t)AC_NONLIN_MAX_ITERATIONS) {
         return AC_ERR_FORMAT;
     }
     for (i = 0u; i < (uint8_t)t->n; i++) {
@@ -26,7 +26,7 @@ ac_status ac_nonlin_check(const ac_nonlin_table *t)
 ac_status AC_NONLIN_INVERT_C(const ac_nonlin_table *t, const int16_t *x, int16_t *y)
 {
     uint8_t sat = 0u;
-    uint8_t i, it, sh;
+    uint8_t i, it, sh, nit;
     int32_t bias;
     int32_t off;
     if (x == 0 || y == 0) {
@@ -40,9 +40,10 @@ ac_status AC_NONLIN_INVERT_C(const ac_nonlin_table *t, const int16_t *x, int16_t
     if (t->n < 1u || t->n > (uint16_t)AC_MAX_CHANNELS) {
         return AC_ERR_SIZE;
     }
-    if (t->shift < 0 || t->shift > 30) {
+    if (t->shift < 0 || t->shift > 30 || t->iterations > (uint8_t)AC_NONLIN_MAX_ITERATIONS) {
         return AC_ERR_FORMAT;
     }
+    nit = (t->iterations == 0u) ? (uint8_t)AC_NONLIN_ITERATIONS : t->iterations;
     /* shift >= 8: C = round(p 2^-shift) = floor((p + 2^(shift-1) + 2^30) 2^-16 2^-(shift-16))
      * - 2^(30-shift) (or 2^-8 2^-(shift-8)): the bias makes the sum non-negative (|p| <= 2^30),
      * the shift by 16 is a word move, by 8 byte moves */
@@ -53,7 +54,7 @@ ac_status AC_NONLIN_INVERT_C(const ac_nonlin_table *t, const int16_t *x, int16_t
         const int16_t a2 = t->a2[i], a3 = t->a3[i];
         const int16_t x0 = x[i];
         int16_t z = x0;
-        for (it = 0u; it < (uint8_t)AC_NONLIN_ITERATIONS; it++) {
+        for (it = 0u; it < nit; it++) {
             /* |h| <= |a2| + |a3| <= 32767, |g| <= |h|, |g z| <= 2^30 */
             int16_t h = (int16_t)(a2 + (int16_t)AC_R15(AC_MUL16(a3, z)));
             int16_t g = (int16_t)AC_R15(AC_MUL16(h, z));

@@ -44,12 +44,14 @@ AC_STATIC_ASSERT(h8t_nl_shift, offsetof(ac_nonlin_table, shift) == 2);
 AC_STATIC_ASSERT(h8t_nl_a2, offsetof(ac_nonlin_table, a2) == 4);
 AC_STATIC_ASSERT(h8t_nl_a3, offsetof(ac_nonlin_table, a3) == 4 + 2 * AC_MAX_CHANNELS);
 AC_STATIC_ASSERT(h8t_nl_it, AC_NONLIN_ITERATIONS >= 1 && AC_NONLIN_ITERATIONS <= 32767);
+AC_STATIC_ASSERT(h8t_nl_k, offsetof(ac_nonlin_table, iterations) == 4 + 4 * AC_MAX_CHANNELS);
 
 AC_STATIC_ASSERT(h8t_st, AC_OK == 0 && AC_SATURATED == 1);
 
 __asm__(
     "\t.equ\tNL_MAXCH, " AC_H8T_XSTR(AC_MAX_CHANNELS) "\n"
     "\t.equ\tNL_A3D, 2*NL_MAXCH-2\n"
+    "\t.equ\tNL_KOFF, 4+4*NL_MAXCH\n"
     "\t.equ\tNL_IT, " AC_H8T_XSTR(AC_NONLIN_ITERATIONS) "\n"
     /* one iteration at shift 15 (z r1, x0 e1, a2 r2, a3 e2, 0x4000 in er6); \e, \c the out-of-line
      * stubs of the product 2^30 and of the clip, \n the label after it */
@@ -188,8 +190,9 @@ __asm__(
     "\tbra\t.Lnl_b_v\n"
     ".Lnl_c:\n"
     "\tjmp\t@_ac_nonlin_invert_c\n"
-    /* ---- ac_nonlin_invert: r0 = t, r1 = x, r2 = y; the C for NULL, a bad n, a shift below 15 or
-     * above 30 (the C's checks and error codes) */
+    /* ---- ac_nonlin_invert: r0 = t, r1 = x, r2 = y; the C for NULL, a bad n, a table's iteration
+     * count other than 0 or AC_NONLIN_ITERATIONS, a shift below 15 or above 30 (the C's checks and
+     * error codes) */
     "\t.global\t_ac_nonlin_invert\n"
     "_ac_nonlin_invert:\n"
     "\tmov.w\tr1,r1\n"
@@ -203,7 +206,11 @@ __asm__(
     "\tcmp.w\t#NL_MAXCH,r3\n"
     "\tbhi\t.Lnl_c\n"
     "\tmov.w\tr3,e3\n"
-    "\tmov.b\t@(2,er0),r3l\n"
+    "\tmov.b\t@(NL_KOFF:16,er0),r3l\n"
+    "\tbeq\t3f\n"
+    "\tcmp.b\t#NL_IT,r3l\n"
+    "\tbne\t.Lnl_c\n"
+    "3:\tmov.b\t@(2,er0),r3l\n"
     "\tcmp.b\t#15,r3l\n"
     "\tblt\t.Lnl_c\n"
     "\tcmp.b\t#30,r3l\n"

@@ -168,7 +168,7 @@ def _resolve_with_terms(device, cal, rec, engine, omega_source):
     dt = 1.0 / float(device.sample_rate_hz)
     triad = device.is_triad()
     if engine == "float":
-        y = correct_readings(cal, rec.raw, temp, dt)
+        y = correct_readings(cal, rec.raw, temp, dt, (device.raw_min, device.raw_max))
         if triad:
             f = triad_apply_float(cal.offsets, cal.sensitivity, y)
             return f, np.full_like(f, np.nan), None
@@ -185,7 +185,7 @@ def _resolve_with_terms(device, cal, rec, engine, omega_source):
     try:
         t = (quantize_triad(cal.offsets, cal.sensitivity, signed, rails) if triad
              else quantize_calibration(device, cal))
-        tt = quantize_terms(cal, device.n_channels, dt, t.offset_q)
+        tt = quantize_terms(cal, device.n_channels, dt, t.offset_q, (device.raw_min, device.raw_max))
         temp_q = None if temp is None else temp_to_fixed(temp)
     except QuantizeError as e:
         raise InputError(getattr(cal, "source", "calibration"), str(e), field="channels") from None

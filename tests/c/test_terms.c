@@ -142,8 +142,9 @@ static void test_nonlin(void)
 {
     ac_nonlin_table t;
     int16_t x[AC_MAX_CHANNELS], y[AC_MAX_CHANNELS];
-    int it, i, k;
+    int it, i, k, nit;
     t.n = 1;
+    t.iterations = 0u;
     t.shift = 31;
     CHECK_STATUS(ac_nonlin_check(&t), AC_ERR_FORMAT);
     t.shift = -1;
@@ -157,8 +158,15 @@ static void test_nonlin(void)
     x[0] = 1234;
     CHECK_STATUS(ac_nonlin_invert(&t, x, y), AC_OK);
     CHECK_EQ(y[0], 1234);
+    t.iterations = (uint8_t)(AC_NONLIN_MAX_ITERATIONS + 1);
+    CHECK_STATUS(ac_nonlin_check(&t), AC_ERR_FORMAT);
+    CHECK_STATUS(ac_nonlin_invert(&t, x, y), AC_ERR_FORMAT);
+    t.iterations = (uint8_t)AC_NONLIN_MAX_ITERATIONS;
+    CHECK_STATUS(ac_nonlin_check(&t), AC_OK);
     for (it = 0; it < 20000; it++) {
         ac_status st;
+        t.iterations = (uint8_t)((it & 1) ? rnd(0, AC_NONLIN_MAX_ITERATIONS) : 0);
+        nit = t.iterations ? (int)t.iterations : AC_NONLIN_ITERATIONS;
         t.n = (uint16_t)rnd(1, AC_MAX_CHANNELS);
         t.shift = (int8_t)rnd(10, 26);
         for (i = 0; i < (int)t.n; i++) {
@@ -175,13 +183,13 @@ static void test_nonlin(void)
         for (i = 0; i < (int)t.n; i++) {
             double c2 = ldexp(t.a2[i], -(15 + t.shift)), c3 = ldexp(t.a3[i], -(30 + t.shift));
             double z = x[i], zk = z, zm, L, E, D = 0.0;
-            for (k = 0; k < AC_NONLIN_ITERATIONS; k++) {
+            for (k = 0; k < nit; k++) {
                 zk = z - (c2 + c3 * zk) * zk * zk;
             }
             zm = fmax(fabs(z), fabs(zk)) + 1.0;
             L = 2 * fabs(c2) * zm + 3 * fabs(c3) * zm * zm;
             E = 0.5 + (zm * zm * ldexp(1.0, -16) + 0.5 * zm) * ldexp(1.0, -t.shift);
-            for (k = 0; k < AC_NONLIN_ITERATIONS; k++) {
+            for (k = 0; k < nit; k++) {
                 D = E + L * D; /* D_0 = 0: the reference starts at x itself here */
             }
             ac_test_context("nonlin case", it);

@@ -165,6 +165,7 @@ static void vec_nonlin(void)
     for (t = 0u; t < 120u; t++) {
         uint16_t n = (uint16_t)(1u + below(AC_MAX_CHANNELS));
         vt_nl.n = n;
+        vt_nl.iterations = 0u; /* the default, AC_NONLIN_ITERATIONS (the union's other tables share it) */
         vt_nl.shift = (int8_t)((t % 3u == 0u) ? rnd_range(-1, 31) : rnd_range(12, 30));
         for (i = 0u; i < n; i++) {
             int32_t a2 = (t & 4u) ? (int32_t)rnd_range(-32767, 32767) : (int32_t)rnd_range(-3000, 3000);
@@ -248,6 +249,7 @@ static void vec_terms_edges(void)
     for (i = 0u; i < (uint8_t)(sizeof gl / sizeof gl[0]); i++) {
         int16_t x[4] = {0, -32768, 32767, -1}, y[4];
         vt_nl.n = 4u;
+        vt_nl.iterations = 0u;
         for (j = 0u; j < 4u; j++) {
             vt_nl.a2[j] = gl[i];
             vt_nl.a3[j] = (int16_t)((j & 1u) ? 0 : gl[(i + 1u) % 6u]);
@@ -266,6 +268,41 @@ static void vec_terms_edges(void)
     }
 }
 
+/* the nonlinearity with a table's own iteration count (0: the default 3; 1..AC_NONLIN_MAX_ITERATIONS;
+ * one beyond it refused), strong bends included (|a2| + |a3| near 32767 at shifts 15..30: the
+ * H8/300H runs the C for a count other than 0 and 3, the assembly for those) */
+static void vec_nonlin_iterations(void)
+{
+    uint8_t t, i;
+    int16_t x[AC_MAX_CHANNELS], y[AC_MAX_CHANNELS];
+    const uint32_t saved = rng; /* the later vectors keep their inputs */
+    for (t = 0u; t < 60u; t++) {
+        uint16_t n = (uint16_t)(1u + below(AC_MAX_CHANNELS));
+        vt_nl.n = n;
+        vt_nl.iterations = (uint8_t)below(AC_NONLIN_MAX_ITERATIONS + 2u);
+        vt_nl.shift = (int8_t)rnd_range(14, 30);
+        for (i = 0u; i < n; i++) {
+            int32_t a2 = (int32_t)rnd_range(-32767, 32767);
+            int32_t room = 32767L - (a2 < 0 ? -a2 : a2);
+            vt_nl.a2[i] = (int16_t)a2;
+            vt_nl.a3[i] = (int16_t)rnd_range(-room, room);
+            x[i] = vt_i16();
+        }
+        TAG("VNLK");
+        h8(vt_nl.iterations);
+        h8((uint8_t)vt_nl.shift);
+        st(ac_nonlin_check(&vt_nl));
+        st(ac_nonlin_invert(&vt_nl, x, y));
+        if ((int)ac_nonlin_check(&vt_nl) == 0) {
+            for (i = 0u; i < n; i++) {
+                h16(y[i]);
+            }
+        }
+        nl();
+    }
+    rng = saved;
+}
+
 static void vec_terms(void)
 {
     vec_temp_lag();
@@ -273,4 +310,5 @@ static void vec_terms(void)
     vec_skew();
     vec_nonlin();
     vec_terms_edges();
+    vec_nonlin_iterations();
 }

@@ -28,7 +28,7 @@ static const ac_temp_table fw_temp_table = {6u, 6400, {640, 640, 640, 640, 640, 
                                             {5033, 5033, 5033, 5033, 5033, 5033}, {0, 0, 0, 0, 0, 0}};
 static const ac_skew_table fw_skew = {6u, 3u, {1, 0, 1, 1, 1, 0}, {7864u, 26870u, 3932u, 0u, 11796u, 22938u}};
 static const ac_nonlin_table fw_nl = {6u, 15, {4295, 4295, 4295, 4295, 4295, 4295},
-                                      {22518, 22518, 22518, 22518, 22518, 22518}};
+                                      {22518, 22518, 22518, 22518, 22518, 22518}, 0u};
 static ac_temp_lag fw_lag_off, fw_lag_gain;
 static int16_t fw_line_buf[3u * 6u];
 static ac_skew_line fw_line;

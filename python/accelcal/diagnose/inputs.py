@@ -70,7 +70,7 @@ def with_terms_applied(cal, recs: list, device) -> tuple[Any, list, list[str]]:
     for r in recs:
         temp = None if r.temp_c is None else np.asarray(r.temp_c, float)
         try:
-            y = correct_readings(cal, r.raw, temp, dt)
+            y = correct_readings(cal, r.raw, temp, dt, (device.raw_min, device.raw_max))
         except ValueError as e:
             raise InputError(r.source, str(e), column="temp_c") from None
         rails = (r.raw <= device.raw_min) | (r.raw >= device.raw_max)

@@ -334,7 +334,8 @@ def calibration_header(device, cal, *, prefix: str = "AC_CAL") -> str:
         omega = device_omega_table(device, cal)
         if omega is not None:
             text = insert_omega(text, _c_ident(prefix), omega)
-    tt = quantize_terms(cal, device.n_channels, 1.0 / float(device.sample_rate_hz), t.offset_q)
+    tt = quantize_terms(cal, device.n_channels, 1.0 / float(device.sample_rate_hz), t.offset_q,
+                        (device.raw_min, device.raw_max))
     if not tt.any():
         return text
     trim = np.asarray(t.trim, np.int64)

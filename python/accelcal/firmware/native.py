@@ -202,10 +202,11 @@ def new_skew_table(length: int, whole, frac):
     return t
 
 
-def new_nonlin_table(shift: int, a2, a3):
-    """An ``ac_nonlin_table`` (ac_nonlin.h): a2, a3 (N,) and their shared shift."""
+def new_nonlin_table(shift: int, a2, a3, iterations: int = 0):
+    """An ``ac_nonlin_table`` (ac_nonlin.h): a2, a3 (N,), their shared shift and the iteration
+    count (0: AC_NONLIN_ITERATIONS)."""
     t = ffi.new("ac_nonlin_table *")
-    t.n, t.shift = len(a2), int(shift)
+    t.n, t.shift, t.iterations = len(a2), int(shift), int(iterations)
     for i in range(len(a2)):
         t.a2[i], t.a3[i] = int(a2[i]), int(a3[i])
     return t

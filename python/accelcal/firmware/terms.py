@@ -17,7 +17,7 @@ Per sample n, before the resolve and in this order (docs/firmware-terms.md):
 4. :func:`nonlinearity_invert`: the reading gained ``k2 a^2 + k3 a^3`` counts, a = (linear
    reading - b) / |s| in m/s^2 (effects/nonlinearity.py); with ``z = raw - b`` and
    ``c2 = k2 / |s|^2``, ``c3 = k3 / |s|^3`` the linear reading is found by
-   :data:`NONLIN_ITERATIONS` fixed-point iterations ``z_{k+1} = z - c2 z_k^2 - c3 z_k^3``,
+   K fixed-point iterations (:func:`nonlinearity_iterations`, from the contraction bound) ``z_{k+1} = z - c2 z_k^2 - c3 z_k^3``,
    ``z_0 = z``; each shrinks the error by L = max |2 c2 z + 3 c3 z^2| over the readings.
 
 The order is the reverse of the simulator's only up to second-order terms (the gain tempco
@@ -29,12 +29,18 @@ import math
 
 import numpy as np
 
-__all__ = ["NONLIN_ITERATIONS", "channel_values", "has_terms", "lag_coefficient", "lag_temperature", "temperature_correct",
+__all__ = ["NONLIN_ITERATIONS", "NONLIN_MAX_ITERATIONS", "NONLIN_TOLERANCE_COUNTS", "nonlinearity_iterations",
+           "nonlinearity_span", "channel_values", "has_terms", "lag_coefficient", "lag_temperature", "temperature_correct",
            "skew_latency", "skew_delays", "skew_correct", "nonlinearity_coefficients", "nonlinearity_invert",
            "correct_readings"]
 
-#: fixed-point iterations of the nonlinearity's inversion (the C core does the same number)
+#: fixed-point iterations of the nonlinearity's inversion without a converter span to choose
+#: them from, and the fewest chosen (AC_NONLIN_ITERATIONS)
 NONLIN_ITERATIONS = 3
+#: the most iterations chosen (AC_NONLIN_MAX_ITERATIONS)
+NONLIN_MAX_ITERATIONS = 16
+#: counts: what the float iteration may leave of the exact inverse at the span's ends
+NONLIN_TOLERANCE_COUNTS = 0.25
 
 
 def channel_values(arr, n: int) -> np.ndarray:
@@ -139,6 +145,34 @@ def nonlinearity_coefficients(sensitivity, k2, k3) -> tuple[np.ndarray, np.ndarr
     return channel_values(k2, n) / s ** 2, channel_values(k3, n) / s ** 3
 
 
+def nonlinearity_span(offsets, rails) -> float:
+    """counts: the largest |raw - b| a converter with ``rails`` (raw_min, raw_max) codes can read
+    about the offsets b (N,), at most 32767 (the C core's int16 reading)."""
+    b = np.asarray(offsets, float)
+    lo, hi = float(rails[0]), float(rails[1])
+    return float(min(32767.0, np.max(np.maximum(np.abs(hi - b), np.abs(lo - b)))))
+
+
+def nonlinearity_iterations(c2, c3, span: float | None) -> int:
+    """The fixed-point iterations the inversion runs for coefficients c2 (1/counts), c3
+    (1/counts^2) (N,) on readings |raw - b| <= ``span`` counts: the least K >= NONLIN_ITERATIONS
+    with L^K e <= NONLIN_TOLERANCE_COUNTS, L = max(2 |c2| span + 3 |c3| span^2) the iteration's
+    contraction bound and e = max(|c2| span^2 + |c3| span^3) the term it removes (the float
+    iteration's distance to the exact inverse after K steps is at most L^K e), capped at
+    NONLIN_MAX_ITERATIONS (the cap also where L >= 1: the iteration does not converge at the
+    span's ends).  ``span`` None: NONLIN_ITERATIONS."""
+    if span is None:
+        return NONLIN_ITERATIONS
+    c2, c3 = np.abs(np.asarray(c2, float)), np.abs(np.asarray(c3, float))
+    z = float(span)
+    L = float(np.max(2.0 * c2 * z + 3.0 * c3 * z * z, initial=0.0))
+    e = float(np.max(c2 * z * z + c3 * z ** 3, initial=0.0))
+    k = NONLIN_ITERATIONS
+    while k < NONLIN_MAX_ITERATIONS and (L >= 1.0 or L ** k * e > NONLIN_TOLERANCE_COUNTS):
+        k += 1
+    return k
+
+
 def nonlinearity_invert(raw, offsets, sensitivity, k2, k3, iterations: int = NONLIN_ITERATIONS) -> np.ndarray:
     """Readings (n, N) counts with ``k2 a^2 + k3 a^3`` removed by ``iterations`` fixed-point
     iterations (module notes); ``k2`` counts/(m/s^2)^2, ``k3`` counts/(m/s^2)^3 (N,) or None."""
@@ -152,11 +186,12 @@ def nonlinearity_invert(raw, offsets, sensitivity, k2, k3, iterations: int = NON
     return b + zk
 
 
-def correct_readings(cal, raw, temp_c=None, dt_s: float | None = None) -> np.ndarray:
+def correct_readings(cal, raw, temp_c=None, dt_s: float | None = None, rails=None) -> np.ndarray:
     """The float reference of the whole chain on a recording's readings (n, N) counts: the
     temperature (``temp_c`` (n,) degC, needed when ``cal`` has tempcos), the skew (``dt_s``
     the sample period, needed when ``cal`` has ``time_skew_s``) and the nonlinearity, in that
-    order.  Row n of the result is the readings at t_n: the skew's latency m is taken out by
+    order; ``rails`` (raw_min, raw_max) the converter's codes, from which the nonlinearity's
+    iteration count is chosen as the header does (:func:`nonlinearity_iterations`; None: 3).  Row n of the result is the readings at t_n: the skew's latency m is taken out by
     running the stream m samples further on the last sample repeated."""
     raw = np.atleast_2d(np.asarray(raw, float))
     terms = has_terms(cal)
@@ -174,5 +209,7 @@ def correct_readings(cal, raw, temp_c=None, dt_s: float | None = None) -> np.nda
         padded = np.concatenate([y, np.repeat(y[-1:], m, axis=0)], axis=0)
         y = skew_correct(padded, skew_delays(channel_values(cal.time_skew_s, cal.n_channels), dt_s))[0][m:]
     if terms["nonlinearity"]:
-        y = nonlinearity_invert(y, cal.offsets, cal.sensitivity, cal.nonlin_k2, cal.nonlin_k3)
+        c2, c3 = nonlinearity_coefficients(cal.sensitivity, cal.nonlin_k2, cal.nonlin_k3)
+        k = nonlinearity_iterations(c2, c3, None if rails is None else nonlinearity_span(cal.offsets, rails))
+        y = nonlinearity_invert(y, cal.offsets, cal.sensitivity, cal.nonlin_k2, cal.nonlin_k3, k)
     return y

@@ -17,8 +17,8 @@ import numpy as np
 from . import native
 from .native import lib
 from .quantize import QuantizeError, largest_shift, round_half_up, to_fixed
-from .terms import (channel_values, has_terms, lag_coefficient, nonlinearity_coefficients, skew_delays,
-                    skew_latency)
+from .terms import (channel_values, has_terms, lag_coefficient, nonlinearity_coefficients, nonlinearity_iterations,
+                    nonlinearity_span, skew_delays, skew_latency)
 
 __all__ = ["TEMP_FRAC", "TermsTables", "quantize_terms", "lag_fixed", "apply_terms_fixed", "lag_bound",
            "temp_bound", "nonlin_bound", "temp_to_fixed"]
@@ -39,7 +39,7 @@ class TermsTables:
     dt_s: float
     temp: dict | None = None     # t_ref, oc, gc, o, lag_off/lag_gain (k, shift), tau_off/tau_gain (s)
     skew: dict | None = None     # len, whole, frac, latency
-    nonlin: dict | None = None   # shift, a2, a3
+    nonlin: dict | None = None   # shift, a2, a3, iterations
 
     def any(self) -> bool:
         return self.temp is not None or self.skew is not None or self.nonlin is not None
@@ -68,7 +68,8 @@ class TermsTables:
         if self.skew is not None:
             out["skew"] = native.new_skew_table(self.skew["len"], self.skew["whole"], self.skew["frac"])
         if self.nonlin is not None:
-            out["nonlin"] = native.new_nonlin_table(self.nonlin["shift"], self.nonlin["a2"], self.nonlin["a3"])
+            out["nonlin"] = native.new_nonlin_table(self.nonlin["shift"], self.nonlin["a2"], self.nonlin["a3"],
+                                                    self.nonlin["iterations"])
         return out
 
 
@@ -98,9 +99,11 @@ def _shift_for(vmax: float, lo: int, hi: int, what: str, limit: float = 32767.0)
     return s
 
 
-def quantize_terms(cal, n: int, dt_s: float, offset_q) -> TermsTables:
+def quantize_terms(cal, n: int, dt_s: float, offset_q, rails=None) -> TermsTables:
     """The terms of ``cal`` as the core's tables; ``offset_q`` (N,) the residual offsets
-    b_i - trim_i in Q.AC_OFFSET_FRAC (the resolver's or the triad's), ``dt_s`` the sample period."""
+    b_i - trim_i in Q.AC_OFFSET_FRAC (the resolver's or the triad's), ``dt_s`` the sample period,
+    ``rails`` (raw_min, raw_max) the converter's codes the nonlinearity's iteration count is
+    chosen for (firmware.terms.nonlinearity_iterations; None: AC_NONLIN_ITERATIONS)."""
     terms = has_terms(cal)
     tt = TermsTables(n=n, dt_s=float(dt_s))
     if terms["temperature"]:
@@ -127,7 +130,9 @@ def quantize_terms(cal, n: int, dt_s: float, offset_q) -> TermsTables:
         u = np.abs(c2) * 2.0 ** 15 + np.abs(c3) * 2.0 ** 30
         shift = _shift_for(float(u.max()), 0, 30, "the nonlinearity at full scale", 32766.0)
         tt.nonlin = dict(shift=shift, a2=to_fixed(c2, 15 + shift, "nonlin_k2", -32767, 32767),
-                         a3=to_fixed(c3, 30 + shift, "nonlin_k3", -32767, 32767))
+                         a3=to_fixed(c3, 30 + shift, "nonlin_k3", -32767, 32767),
+                         iterations=nonlinearity_iterations(
+                             c2, c3, None if rails is None else nonlinearity_span(cal.offsets, rails)))
     return tt
 
 
@@ -185,12 +190,13 @@ def temp_bound(x, e) -> np.ndarray:
     return 0.5 + 2.0 ** -8 + 0.54 * e + (np.abs(np.asarray(x, float)) + 1.0) * (2.0 ** -18 + e ** 4 / (1.0 - e))
 
 
-def nonlin_bound(z, c2, c3, shift: int) -> np.ndarray:
-    """counts: |ac_nonlin_invert - nonlinearity_invert| for readings of size up to ``z`` (counts)."""
+def nonlin_bound(z, c2, c3, shift: int, iterations: int = ITERATIONS) -> np.ndarray:
+    """counts: |ac_nonlin_invert - nonlinearity_invert| for readings of size up to ``z`` (counts),
+    both running ``iterations`` iterations."""
     z = np.abs(np.asarray(z, float))
     L = 2.0 * np.abs(c2) * z + 3.0 * np.abs(c3) * z * z
     E = 0.5 + (z * z * 2.0 ** -16 + 0.5 * z) * 2.0 ** -shift
     D = 0.5 + 0.0 * z
-    for _ in range(ITERATIONS):
+    for _ in range(int(iterations)):
         D = E + L * D
     return D

@@ -60,10 +60,11 @@ def terms_header_parts(tt: TermsTables, prefix: str, reading_span: float, signed
         com.append(" *   ac_skew_step: <= 0.5 (+ 2^-16 |x[n-k-1] - x[n-k]| for the delay's rounding)")
     if tt.nonlin is not None:
         c2, c3 = tt.nonlin_coefficients()
-        nb = float(np.max(nonlin_bound(z, c2, c3, tt.nonlin["shift"])))
+        k = int(tt.nonlin["iterations"])
+        nb = float(np.max(nonlin_bound(z, c2, c3, tt.nonlin["shift"], k)))
         L = float(np.max(2 * np.abs(c2) * z + 3 * np.abs(c3) * z * z))
-        com.append(f" *   ac_nonlin_invert: <= {nb:.3g} for |x| <= {z:.0f} (contraction L = {L:.3g}: the float "
-                   f"iteration is within L^3 = {L ** 3:.3g} of the term it removes of the exact inverse)")
+        com.append(f" *   ac_nonlin_invert ({k} iterations): <= {nb:.3g} for |x| <= {z:.0f} (contraction L = {L:.3g}: "
+                   f"the float iteration is within L^{k} = {L ** k:.3g} of the term it removes of the exact inverse)")
     com[-1] += " */"
     dec, dfn = list(com), []
     if tt.temp is not None:
@@ -87,7 +88,8 @@ def terms_header_parts(tt: TermsTables, prefix: str, reading_span: float, signed
         nl = tt.nonlin
         dec += [f"extern const ac_nonlin_table {p}_NONLIN;"]
         dfn += [f"const ac_nonlin_table {p}_NONLIN = {{", f"    {n}u, {int(nl['shift'])}, /* n, shift */",
-                f"    {_row(nl['a2'])}, /* a2 */", f"    {_row(nl['a3'])} /* a3 */", "};"]
+                f"    {_row(nl['a2'])}, /* a2 */", f"    {_row(nl['a3'])}, /* a3 */",
+                f"    {int(nl['iterations'])}u /* iterations */", "};"]
     return dec, dfn
 
 
