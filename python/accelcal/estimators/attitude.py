@@ -277,6 +277,26 @@ def attitude_rate_bound(fixed: dict, twin: dict) -> np.ndarray:
     return out
 
 
+def float_outputs(r: dict, n: int):
+    """(theta, w, dw, gmag, gated, unsettled, saturated) of :func:`attitude_core`'s result ``r``
+    over ``n`` samples (the float engine clips nothing)."""
+    return r["theta"], r["w"], r["dw"], r["gmag"], r["gated"], ~r["settled"], np.zeros(n, bool)
+
+
+def fixed_block(cal, rec, p: AttitudeParams, signed: bool, state=None):
+    """The C core's attitude of the readings ``rec.raw`` (both triads through ``ac_triad_apply``,
+    then ``ac_att``; ``state`` carries the estimator across blocks): (theta rad, w rad/s,
+    dw rad/s^2, gmag m/s^2, gated, unsettled, saturated), the core's fixed-point outputs scaled to
+    physical units, saturated also where a triad's force clipped."""
+    f1, s1 = triad_forces(cal, rec, (0, 1, 2), "fixed", signed)
+    f2, s2 = triad_forces(cal, rec, (3, 4, 5), "fixed", signed)
+    r = attitude_fixed(f1, f2, p, state=state)
+    fl = r["flags"]
+    return (r["theta"] / 2.0**ANGLE_FRAC, r["w"] / 2.0**OMEGA_FRAC, r["dw"] / 2.0**OUT_FRAC,
+            r["gmag"] / 2.0**OUT_FRAC, (fl & ATT_GATED) != 0, (fl & ATT_UNSETTLED) != 0,
+            ((fl & ATT_SAT) != 0) | s1 | s2)
+
+
 def triad_geometry(device, cal) -> tuple[float, float]:
     """r1, r2 of a two-triad pendulum device (channels 0-2 and 3-5 on body x)."""
     tri = device.triads()
@@ -360,23 +380,10 @@ def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: fl
         raise InputError(device.name, str(e)) from None
     warnings = [f"attitude: {fill_note}"] if fill_note else []
     if engine == "float":
-        f1, _ = triad_forces(cal, rec, (0, 1, 2), "float")
-        f2, _ = triad_forces(cal, rec, (3, 4, 5), "float")
-        r = attitude_float(f1, f2, p)
-        theta, w, dw, gmag = r["theta"], r["w"], r["dw"], r["gmag"]
-        gated, unsettled = r["gated"], ~r["settled"]
-        sat = np.zeros(rec.n_samples, bool)
+        r = attitude_float(*(triad_forces(cal, rec, ch, "float")[0] for ch in ((0, 1, 2), (3, 4, 5))), p)
+        theta, w, dw, gmag, gated, unsettled, sat = float_outputs(r, rec.n_samples)
     else:
-        f1, s1 = triad_forces(cal, rec, (0, 1, 2), "fixed", device.raw_min < 0)
-        f2, s2 = triad_forces(cal, rec, (3, 4, 5), "fixed", device.raw_min < 0)
-        r = attitude_fixed(f1, f2, p)
-        theta = r["theta"] / 2.0**ANGLE_FRAC
-        w = r["w"] / 2.0**OMEGA_FRAC
-        dw = r["dw"] / 2.0**OUT_FRAC
-        gmag = r["gmag"] / 2.0**OUT_FRAC
-        fl = r["flags"]
-        gated, unsettled = (fl & ATT_GATED) != 0, (fl & ATT_UNSETTLED) != 0
-        sat = ((fl & ATT_SAT) != 0) | s1 | s2
+        theta, w, dw, gmag, gated, unsettled, sat = fixed_block(cal, rec, p, device.raw_min < 0)
     g0 = float(device.gravity_mps2)
     off = np.abs(gmag - g0) > 0.2 * g0
     if unsettled.any():

@@ -21,9 +21,9 @@ from ..io.chunk_source import open_chunks
 from ..io.chunks import BLOCK_BYTES, Fallback
 from ..io.parquet import BATCH_ROWS
 from ..io.result_sink import write_deferred
-from .attitude import (ANGLE_FRAC, ATT_GATED, ATT_SAT, ATT_UNSETTLED, AttitudeConsts, AttitudeParams,
-                       att_init_fixed, attitude_core, attitude_fixed, triad_geometry)
-from .common import OMEGA_FRAC, OUT_FRAC, force_noise, time_span
+from .attitude import (AttitudeConsts, AttitudeParams, att_init_fixed, attitude_core, fixed_block, float_outputs,
+                       triad_geometry)
+from .common import force_noise, time_span
 from .stream_scan import on_grid, scan
 
 __all__ = ["attitude_stream"]
@@ -96,23 +96,11 @@ def attitude_stream(device, cal, path: Any, output: Any, *, engine: str = "float
             on_grid(sc, ch.start, ch.t)
             rec = SimpleNamespace(raw=ch.raw)
             if engine == "float":
-                f1, _ = triad_forces(cal, rec, (0, 1, 2), "float")
-                f2, _ = triad_forces(cal, rec, (3, 4, 5), "float")
-                r = attitude_core(f1, f2, consts, state=state)
-                theta, w, dw, gmag = r["theta"], r["w"], r["dw"], r["gmag"]
-                gated, unsettled = r["gated"], ~r["settled"]
-                sat = np.zeros(ch.n, bool)
+                r = attitude_core(*(triad_forces(cal, rec, c, "float")[0] for c in ((0, 1, 2), (3, 4, 5))), consts,
+                                  state=state)
+                theta, w, dw, gmag, gated, unsettled, sat = float_outputs(r, ch.n)
             else:
-                f1, s1 = triad_forces(cal, rec, (0, 1, 2), "fixed", signed)
-                f2, s2 = triad_forces(cal, rec, (3, 4, 5), "fixed", signed)
-                r = attitude_fixed(f1, f2, p, state=fixed)
-                theta = r["theta"] / 2.0**ANGLE_FRAC
-                w = r["w"] / 2.0**OMEGA_FRAC
-                dw = r["dw"] / 2.0**OUT_FRAC
-                gmag = r["gmag"] / 2.0**OUT_FRAC
-                fl = r["flags"]
-                gated, unsettled = (fl & ATT_GATED) != 0, (fl & ATT_UNSETTLED) != 0
-                sat = ((fl & ATT_SAT) != 0) | s1 | s2
+                theta, w, dw, gmag, gated, unsettled, sat = fixed_block(cal, rec, p, signed, state=fixed)
             k = tally.unsettled + int(np.count_nonzero(unsettled))
             if (k > tally.unsettled and tally.unsettled < ch.start) or np.any(unsettled[1:] & ~unsettled[:-1]):
                 raise Fallback("unsettled samples that are not the first")   # the warning names sample k
