@@ -24,7 +24,7 @@ from ..io.result_sink import write_deferred
 from .attitude import (AttitudeConsts, AttitudeParams, att_init_fixed, attitude_core, fixed_block, float_outputs,
                        triad_geometry)
 from .common import force_noise, time_span
-from .stream_scan import on_grid, scan
+from .stream_scan import on_grid, scan_with_bar
 
 __all__ = ["attitude_stream"]
 
@@ -71,10 +71,7 @@ def attitude_stream(device, cal, path: Any, output: Any, *, engine: str = "float
         return None                         # the whole-file command checks the recording first
     try:
         src = open_chunks(path, device.n_channels, scale, block_bytes, batch_rows)
-        bar = progress(src.total, src.unit) if progress is not None else None
-        sc = scan(device, src, fixed=engine == "fixed", progress=None if bar is None else bar.update)
-        if bar is not None:
-            bar.close()
+        sc = scan_with_bar(device, src, fixed=engine == "fixed", progress=progress)
     except Fallback:
         return None
     try:

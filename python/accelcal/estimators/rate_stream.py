@@ -27,7 +27,7 @@ from ..io.result_sink import ColumnSink
 from .common import CLIP, CLIP_LO, OMEGA_FRAC, alpha_noise, dt_fixed, force_noise
 from .rate import LEAK_FRAC
 from .rest import REST_AT_REST, RestState, RestThresholds, default_rest_params, rest_cfg_fixed
-from .stream_scan import on_grid, scan
+from .stream_scan import on_grid, scan_with_bar
 
 __all__ = ["rate_stream"]
 
@@ -131,10 +131,7 @@ def rate_stream(device, cal, path: Any, output: Any, *, engine: str = "float", l
         return None
     try:
         src = open_chunks(path, device.n_channels, scale, block_bytes, batch_rows)
-        bar = progress(src.total, src.unit) if progress is not None else None
-        sc = scan(device, src, fixed=engine == "fixed", progress=None if bar is None else bar.update)
-        if bar is not None:
-            bar.close()
+        sc = scan_with_bar(device, src, fixed=engine == "fixed", progress=progress)
         k = sc.noise
         rest = default_rest_params(device, 1.0 / sc.dt, alpha_sigma=alpha_noise(device, cal, k),
                                    f_sigma=force_noise(device, cal, k))

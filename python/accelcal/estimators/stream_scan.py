@@ -34,7 +34,7 @@ from ..readings.noise import noise_for, states_noise
 #: ranks of the checks after the reader's (1-4: io.chunks.reader_checks), as in the whole-file command
 RANK_RANGE, RANK_CORE = 10, 12
 
-__all__ = ["MAX_STEP_VALUES", "GRID_MARGIN", "RunCounts", "Scan", "scan", "median_of_counts", "on_grid"]
+__all__ = ["MAX_STEP_VALUES", "GRID_MARGIN", "RunCounts", "Scan", "scan", "scan_with_bar", "median_of_counts", "on_grid"]
 
 #: distinct time steps kept for the exact median (more: the whole-file command)
 MAX_STEP_VALUES = 1 << 16
@@ -75,6 +75,15 @@ class Scan:
     t1: float
     dt: float
     noise: np.ndarray
+
+
+def scan_with_bar(device, source: ChunkSource, *, fixed: bool, progress=None) -> Scan:
+    """:func:`scan` with a progress bar from ``progress(total, unit)`` (None: none), closed after."""
+    bar = progress(source.total, source.unit) if progress is not None else None
+    out = scan(device, source, fixed=fixed, progress=None if bar is None else bar.update)
+    if bar is not None:
+        bar.close()
+    return out
 
 
 def scan(device, source: ChunkSource, *, fixed: bool, progress: Callable[[int], None] | None = None) -> Scan:
