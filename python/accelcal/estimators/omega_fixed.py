@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import AccelcalError, InputError
 from ..firmware.native import FORMATS
 from ..firmware.omega_table import OmegaTable, device_omega_table, omega_run
 from ..firmware.quantize import quantize_calibration
@@ -136,7 +136,7 @@ def choose_omega_engine(device, cal, rec, source: str, engine: str = "float") ->
     :func:`accelcal.estimators.omega.wants_array_omega`, from the float estimator or (engine
     "fixed") the C core on the header's table; else None."""
     if engine not in ("float", "fixed"):
-        raise ValueError(f"unknown engine {engine!r}")
+        raise AccelcalError(f"unknown engine {engine!r}: expected float or fixed")
     if not wants_array_omega(device, cal, rec, source):
         return None
     return omega_fixed_from_recording(device, cal, rec) if engine == "fixed" else omega_from_recording(device, cal, rec)
