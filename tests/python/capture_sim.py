@@ -144,8 +144,14 @@ def run_on_pty(args: list, person: Person, *, env: dict, bad_every: int = 0, int
     master, slave = os.openpty()
     tty.setraw(slave)
     path = os.ttyname(slave)
+    # Ctrl-C as at a terminal: a shell's background job (a CI runner's) inherits SIGINT ignored, and
+    # Python then leaves it ignored; the capture under test gets the default action back
     proc = subprocess.Popen([sys.executable, "-m", "accelcal.cli", "capture", "--port", path, "--json"] + args,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    # a capture that never ends fails the test after ``timeout`` s rather than hanging the suite
+    watchdog = threading.Timer(timeout, proc.kill)
+    watchdog.start()
     stop = threading.Event()
     counts = {"lines": 0, "bad": 0}
     started = threading.Event()
@@ -202,6 +208,7 @@ def run_on_pty(args: list, person: Person, *, env: dict, bad_every: int = 0, int
                     master_open = False
         proc.wait(timeout=timeout)
     finally:
+        watchdog.cancel()
         stop.set()
         th.join()
         if proc.poll() is None:
