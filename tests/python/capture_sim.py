@@ -196,8 +196,7 @@ def run_on_pty(args: list, person: Person, *, env: dict, bad_every: int = 0, int
             if ev["event"] == "pose_captured":
                 k = ev["index"] + 1
                 if interrupt_after is not None and k == interrupt_after:
-                    # the person stops feeding the port at Ctrl-C, as a hand on the keyboard does: on a
-                    # machine loaded 9x the capture had gone on to pose 9 on the data already paced out
+                    # the person stops feeding the port at Ctrl-C, as a hand on the keyboard does
                     stop.set()
                     th.join()
                     proc.send_signal(signal.SIGINT)
