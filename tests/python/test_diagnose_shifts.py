@@ -93,6 +93,26 @@ def test_true_temperature_effect_with_a_varying_temperature_is_still_named():
             assert shape["tau_s"].get("determined"), "a lag the data do not pin quoted as a finding"
 
 
+@pytest.mark.parametrize("seed", [233440, 233441])
+def test_a_thermal_lag_longer_than_the_session_is_pinned_beside_the_shift(seed):
+    """A true thermal offset through a lag of 100-105 s in a session of 75-79 s.  The old code
+    judged the lag's interval on the levels too and required it to end inside the recording: the
+    lag was "not determined", the lag-free form explained nothing, ``session_offset`` took the
+    level and a temperature term refitted on what it left quoted 28 s (interval 27-29 s) as a
+    finding.  Judged beside each recording's own level, the change within the session pins the
+    lag: the verdict is the temperature offset, with an interval that holds the true lag."""
+    ds, res = _run("temperature_offset", seed, own_cal=False)
+    true_tau = float(ds["effects"]["temperature_offset"]["tau_s"])
+    span = max(float(r["duration_s"]) for r in res["recordings"])
+    assert true_tau > span                      # the case: a lag longer than the session
+    assert res["verdict"] == "temperature_offset"
+    sh = res["effects"][0]["shape"]["tau_s"]
+    assert sh["determined"]
+    lo, hi = sh["interval_s"]
+    assert lo <= true_tau <= hi, (lo, hi, true_tau)
+    assert lo <= float(res["model"]["params"]["temperature_offset"]["tau_s"]) <= hi
+
+
 @pytest.mark.parametrize("seed", [412681, 412682, 412683])
 def test_a_drift_while_the_temperature_only_rises_is_stated_beside_the_temperature(seed):
     """A gain shift and a random-walk drift in a session whose temperature rises from 18 to 42 degC

@@ -10,15 +10,20 @@ TEMP_TIME_BINS = 20        # temp_c follows time when the medians of this many s
 TEMP_MONOTONE = 0.9        # ... go one way: their net change at least this share of their total variation
 T_LAG_GRID_S = (0.0, 10.0, 30.0, 60.0, 120.0, 300.0)   # thermal lags (s) the temperature fits try
 T_LAG_MAX_SPANS = 2.0   # ... up to this many times the span of the samples the diagnosis uses
-#: the thermal lag is a finding only where the data pin it: the lags whose profile objective lies within
-#: T_LAG_CRIT_CHI2 (the 95 % point of chi2 with one degree of freedom, 3.84; times the residual's excess
-#: over the floor and the poses' design effect) of the best form an interval that excludes 0 and ends
-#: within T_LAG_INSIDE x the longest recording; else the nested form (no lag) is fitted and reported
+#: the thermal lag is a finding only where the data pin it: the lags whose profile objective, beside each
+#: recording's own level of the change, lies within T_LAG_CRIT_CHI2 (the 95 % point of chi2 with one
+#: degree of freedom, 3.84; times the residual's excess over the floor and the poses' design effect) of
+#: the best form an interval that holds the fitted lag, excludes 0 and ends within T_LAG_INSIDE x the
+#: longest recording; else the nested form (no lag) is fitted and reported
 T_LAG_CRIT_CHI2 = 3.84
 #: a bend's cube and a drift's path through knots are shapes beyond a nested form (the square; the ramp):
 #: the chi2 their extra parameters gain must pass this point of chi2 (effects.fitting.shape_pinned)
 SHAPE_LEVEL = 0.95
-T_LAG_INSIDE = 1.0
+#: T_LAG_INSIDE: the lags the search reaches (T_LAG_MAX_SPANS).  Beside free levels a lag is pinned only by
+#: the shape of the change within the recordings, so an interval that closes there is a finding even where
+#: the lag exceeds the recording (a 100 s lag in a 79 s recording: 92-124 s); a shift between recordings
+#: leaves the profile flat towards long lags (interval to inf: not determined)
+T_LAG_INSIDE = 2.0
 T_LAG_BISECT = 4            # ... its ends refined by this many bisections of a step of 2 (to 2^(1/16))
 T_REF_SPANS = 2.0          # a fitted reference temperature stays within this many spans of temp_c
 MISALIGN_MAX_RAD = 0.35     # relinearised misalignment fits stay below ~20 deg

@@ -12,6 +12,7 @@ from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_list, channel_mask, per_channel, strongest, temperature_of
 from .fitdata import FitData, t_ref_known, temp_skip
 from .fitting import Cand, Candidate, jig_rows, joint_stats, sep_stats, solve_groups
+from .session import per_recording_columns
 from .settings import (PENALTY_PER_PARAM, T_LAG_BISECT, T_LAG_CRIT_CHI2, T_LAG_GRID_S, T_LAG_INSIDE, T_LAG_MAX_SPANS,
                        T_REF_SPANS)
 
@@ -125,7 +126,7 @@ class TemperatureFit(Candidate):
                 best = lag_fit(math.exp(res.x))
         shape = None
         if best[1] > 0:
-            shape = self._lag_interval(D, lag_fit, best, S0w)
+            shape = self._lag_interval(D, self._level_free(D, y, z), best, S0w)
         if shape is not None and not shape["determined"]:
             shaped = self._finish(D, best, S0w, S0u, z, fixed)
             out = self._finish(D, lag_fit(0.0), S0w, S0u, z, fixed)
@@ -142,22 +143,49 @@ class TemperatureFit(Candidate):
             out.shape = {"tau_s": shape}
         return out
 
-    def _lag_interval(self, D, lag_fit, best, S0w) -> dict:
-        """The lags whose profile objective (penalty left out) lies within T_LAG_CRIT_CHI2 (x the
-        residual's excess over the floor and the poses' design effect) of the best one's: the
-        interval's ends found in steps of 2 and refined by bisection (0 where no lag fits as well, inf
-        where none up to the first step beyond T_LAG_MAX_SPANS x the recording does worse), and
-        whether that pins the lag: the interval excludes 0 and ends within T_LAG_INSIDE x the longest
-        recording (:func:`recording_span`)."""
+    def _level_free(self, D, y, z):
+        """The profile objective of the lag (lower is better) with each recording's own level of the
+        change (``z``: an offset, or a gain, per recording and channel; :func:`per_recording_columns`)
+        beside the lagged temperature: what the lag explains *within* the recordings.  A shift between
+        recordings reads as a lag far beyond their length (the lagged temperature then stays near its
+        first value), so judged on the levels alone a long lag would be pinned by what a shift explains
+        as well; beside free levels only the shape of the change within each recording pins it."""
+        cols = per_recording_columns(D, z)
+
+        def objective(tau):
+            T = lagged(D.temp, D.tg, tau, D.rec)
+            X = np.concatenate([(T[:, None] * z)[:, :, None], cols], axis=2)
+            st = sep_stats(D, X, y) if D.Qp is None else joint_stats(D, jig_rows(D, X), D.rows(y))
+            G, h = st[0].sum(0), st[1].sum(0)
+            th = solve_groups(G, h)[0]
+            return -float(np.einsum("gk,gk->", th, h))
+        return objective
+
+    def _lag_interval(self, D, objective, best, S0w) -> dict:
+        """The lags whose profile objective beside each recording's own level (``objective``,
+        :meth:`_level_free`) lies within T_LAG_CRIT_CHI2 (x the residual's excess over the floor and
+        the poses' design effect) of its best: the interval's ends found in steps of 2 from the fitted
+        lag (``best``'s) and refined by bisection (0 where no lag fits as well, inf where none up to
+        the first step beyond T_LAG_MAX_SPANS x the recording does worse), and whether that pins the
+        lag: the fitted lag lies inside the interval, which excludes 0 and ends within T_LAG_INSIDE x
+        the longest recording (:func:`recording_span`)."""
         tau0 = float(best[1])
-        obj0 = best[0] - PENALTY_PER_PARAM
+        span = recording_span(D)
+        probe = [tau0] + [x for x in T_LAG_GRID_S if 0.0 < x <= T_LAG_MAX_SPANS * max(span, 1e-9)]
+        vals = {tau: objective(tau) for tau in probe}
+        obj0 = min(vals.values())
         rows = max(D.n * D.R, 1)
         s2 = max(1.0, float(S0w.sum() + obj0) / rows)
         crit = T_LAG_CRIT_CHI2 * s2 * float(getattr(D, "deff", 1.0) or 1.0)
-        span = recording_span(D)
 
         def worse(tau):
-            return (lag_fit(tau)[0] - (PENALTY_PER_PARAM if tau else 0.0)) - obj0 > crit
+            return (vals[tau] if tau in vals else objective(tau)) - obj0 > crit
+
+        if worse(tau0):
+            # beside the recordings' own levels another lag fits clearly better: the fitted one is
+            # set by the levels between the recordings, not by the change within them
+            return {"value": tau0, "interval_s": [0.0, math.inf], "determined": False, "span_s": span,
+                    "crit_chi2": crit, "within": False}
 
         def crossing(ok, bad):
             # the interval's end between a lag that fits as well (ok) and one that does worse (bad), by
@@ -191,7 +219,7 @@ class TemperatureFit(Candidate):
                     break
         determined = bool(lo > 0.0 and hi <= T_LAG_INSIDE * span)
         return {"value": tau0, "interval_s": [lo, hi], "determined": determined, "span_s": span,
-                "crit_chi2": crit}
+                "crit_chi2": crit, "within": True}
 
     def _finish(self, D, best, S0w, S0u, z, fixed):
         """The candidate at the lag of ``best`` (lag_fit's tuple): the reference temperature per
