@@ -50,6 +50,8 @@ SHAPE_HINTS = {
                     "the reading there unlike a square; at +-g along an axis it is a gain)",
     "bias_drift": "a pose repeated several times through the recording (a path's turns show between the "
                   "repeats; a ramp changes them evenly)",
+    "time_skew": "fast motion with a sharp start and stop on every channel's axis (a skew shifts the edge by "
+                 "its delay; a delay within the noise leaves no edge apart)",
 }
 
 

@@ -11,7 +11,7 @@ from ..spec import Param
 from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_float_array, as_list, channel_mask, per_channel, strongest
 from .fitdata import FitData
 from .fitting import SearchCandidate, Shifter, block_ss
-from .settings import DELAY_GRID, SKEW_GRID
+from .settings import DELAY_GRID, SKEW_GRID, T_LAG_CRIT_CHI2
 
 
 def lowpass_runs(t: np.ndarray, x: np.ndarray, w: complex, h: float) -> np.ndarray:
@@ -111,6 +111,19 @@ class TimeSkew(SearchCandidate, Effect):
     def to_params(self, D, u, su):
         return {"tau": u * D.h}, {"tau": su * D.h}
 
+    def cv(self, D, y, pcur, S0w, S0u, folds=True):
+        c = SearchCandidate.cv(self, D, y, pcur, S0w, S0u, folds)
+        shape = skew_interval(D, c.params["tau"], c.sigma["tau"])
+        c.shape = {"tau_s": shape}
+        loose = [i for i, ok in enumerate(shape["channels_determined"]) if not ok and c.params["tau"][i] != 0.0]
+        if loose:
+            c.notes = list(c.notes) + [
+                "the skew of channel" + ("s " if len(loose) > 1 else " ") + ", ".join(str(i) for i in loose)
+                + " is not determined by these data (its 95 % interval holds 0: "
+                + "; ".join(f"{1e3 * shape['interval_s'][i][0]:+.3g} to {1e3 * shape['interval_s'][i][1]:+.3g} ms"
+                            for i in loose) + "): no finding there"]
+        return c
+
     # -- the benchmark --------------------------------------------------------
 
     bench_size = 0.001
@@ -127,6 +140,21 @@ class TimeSkew(SearchCandidate, Effect):
         """One line in physical units for the report (p: parameters, s: their 1-sigma)."""
         i = strongest(p["tau"])
         return f"time skew up to {1e3 * p['tau'][i]:+.4g} +- {1e3 * s['tau'][i]:.2g} ms on channel {i}"
+
+
+def skew_interval(D: FitData, tau: np.ndarray, sd: np.ndarray) -> dict:
+    """A time skew's ``shape`` entry: per channel the interval tau +- sqrt(T_LAG_CRIT_CHI2) sigma (s;
+    sigma from the profile's curvature and the residual's excess, times the square root of the poses'
+    design effect, as the lag's and the bend's rules weigh it) and whether it excludes 0 (the nested
+    form: no skew on that channel); ``determined``: some channel's does."""
+    tau = np.asarray(tau, float)
+    sd = np.asarray(sd, float) * math.sqrt(float(getattr(D, "deff", 1.0) or 1.0))
+    half = math.sqrt(T_LAG_CRIT_CHI2) * sd
+    lo, hi = tau - half, tau + half
+    ok = np.isfinite(half) & ((lo > 0.0) | (hi < 0.0))
+    return {"value": tau.tolist(), "interval_s": [[float(a), float(b)] for a, b in zip(lo, hi)],
+            "channels_determined": [bool(v) for v in ok], "determined": bool(np.any(ok)),
+            "crit_chi2": T_LAG_CRIT_CHI2}
 
 
 class Bandwidth(SearchCandidate, Effect):
