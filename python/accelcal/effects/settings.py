@@ -14,16 +14,21 @@ T_LAG_MAX_SPANS = 2.0   # ... up to this many times the span of the samples the 
 #: recording's own level of the change, lies within T_LAG_CRIT_CHI2 (the 95 % point of chi2 with one
 #: degree of freedom, 3.84; times the residual's excess over the floor and the poses' design effect) of
 #: the best form an interval that holds the fitted lag, excludes 0 and ends within T_LAG_INSIDE x the
-#: longest recording; else the nested form (no lag) is fitted and reported
+#: longest recording (one recording with samples; its level is not left free there); else the nested form
+#: (no lag) is fitted and reported
 T_LAG_CRIT_CHI2 = 3.84
 #: a bend's cube and a drift's path through knots are shapes beyond a nested form (the square; the ramp):
 #: the chi2 their extra parameters gain must pass this point of chi2 (effects.fitting.shape_pinned)
 SHAPE_LEVEL = 0.95
-#: T_LAG_INSIDE: the lags the search reaches (T_LAG_MAX_SPANS).  Beside free levels a lag is pinned only by
-#: the shape of the change within the recordings, so an interval that closes there is a finding even where
-#: the lag exceeds the recording (a 100 s lag in a 79 s recording: 92-124 s); a shift between recordings
-#: leaves the profile flat towards long lags (interval to inf: not determined)
-T_LAG_INSIDE = 2.0
+T_LAG_INSIDE = 1.0
+#: ... where two recordings or more have samples, the profile leaves each recording's level free and the
+#: interval may end within T_LAG_INSIDE_FREE x the longest recording (the lags the search reaches,
+#: T_LAG_MAX_SPANS): beside free levels only the shape of the change within the recordings pins the lag,
+#: so an interval that closes is a finding even where the lag exceeds the recording (a 100 s lag in a
+#: 79 s session: 92-124 s); a shift between recordings leaves the profile flat towards long lags
+#: (interval to inf: not determined).  With one recording its level is part of what pins the lag, and a
+#: constant offset change can mimic it: the interval must end within the recording
+T_LAG_INSIDE_FREE = 2.0
 T_LAG_BISECT = 4            # ... its ends refined by this many bisections of a step of 2 (to 2^(1/16))
 T_REF_SPANS = 2.0          # a fitted reference temperature stays within this many spans of temp_c
 MISALIGN_MAX_RAD = 0.35     # relinearised misalignment fits stay below ~20 deg

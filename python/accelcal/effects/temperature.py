@@ -13,7 +13,8 @@ from .base import CHANNEL_PARAM, Effect, FitParam, RANDOM_PARAM, as_list, channe
 from .fitdata import FitData, t_ref_known, temp_skip
 from .fitting import Cand, Candidate, jig_rows, joint_stats, sep_stats, solve_groups
 from .session import per_recording_columns
-from .settings import (PENALTY_PER_PARAM, T_LAG_BISECT, T_LAG_CRIT_CHI2, T_LAG_GRID_S, T_LAG_INSIDE, T_LAG_MAX_SPANS,
+from .settings import (PENALTY_PER_PARAM, T_LAG_BISECT, T_LAG_CRIT_CHI2, T_LAG_GRID_S, T_LAG_INSIDE, T_LAG_INSIDE_FREE,
+                       T_LAG_MAX_SPANS,
                        T_REF_SPANS)
 
 
@@ -126,7 +127,11 @@ class TemperatureFit(Candidate):
                 best = lag_fit(math.exp(res.x))
         shape = None
         if best[1] > 0:
-            shape = self._lag_interval(D, self._level_free(D, y, z), best, S0w)
+            if levels_apart(D):
+                shape = self._lag_interval(D, self._level_free(D, y, z), best, S0w, T_LAG_INSIDE_FREE)
+            else:
+                shape = self._lag_interval(D, lambda tau: lag_fit(tau)[0] - (PENALTY_PER_PARAM if tau else 0.0),
+                                           best, S0w, T_LAG_INSIDE)
         if shape is not None and not shape["determined"]:
             shaped = self._finish(D, best, S0w, S0u, z, fixed)
             out = self._finish(D, lag_fit(0.0), S0w, S0u, z, fixed)
@@ -161,14 +166,15 @@ class TemperatureFit(Candidate):
             return -float(np.einsum("gk,gk->", th, h))
         return objective
 
-    def _lag_interval(self, D, objective, best, S0w) -> dict:
-        """The lags whose profile objective beside each recording's own level (``objective``,
-        :meth:`_level_free`) lies within T_LAG_CRIT_CHI2 (x the residual's excess over the floor and
-        the poses' design effect) of its best: the interval's ends found in steps of 2 from the fitted
-        lag (``best``'s) and refined by bisection (0 where no lag fits as well, inf where none up to
-        the first step beyond T_LAG_MAX_SPANS x the recording does worse), and whether that pins the
-        lag: the fitted lag lies inside the interval, which excludes 0 and ends within T_LAG_INSIDE x
-        the longest recording (:func:`recording_span`)."""
+    def _lag_interval(self, D, objective, best, S0w, inside: float) -> dict:
+        """The lags whose profile objective (``objective``: beside each recording's own level,
+        :meth:`_level_free`, where two recordings or more have samples; else the fit's own) lies within
+        T_LAG_CRIT_CHI2 (x the residual's excess over the floor and the poses' design effect) of its
+        best: the interval's ends found in steps of 2 from the fitted lag (``best``'s) and refined by
+        bisection (0 where no lag fits as well, inf where none up to the first step beyond
+        T_LAG_MAX_SPANS x the recording does worse), and whether that pins the lag: the fitted lag lies
+        inside the interval, which excludes 0 and ends within ``inside`` x the longest recording
+        (:func:`recording_span`)."""
         tau0 = float(best[1])
         span = recording_span(D)
         probe = [tau0] + [x for x in T_LAG_GRID_S if 0.0 < x <= T_LAG_MAX_SPANS * max(span, 1e-9)]
@@ -217,7 +223,7 @@ class TemperatureFit(Candidate):
                 if worse(tau):
                     lo = crossing(2.0 * tau, tau)
                     break
-        determined = bool(lo > 0.0 and hi <= T_LAG_INSIDE * span)
+        determined = bool(lo > 0.0 and hi <= inside * span)
         return {"value": tau0, "interval_s": [lo, hi], "determined": determined, "span_s": span,
                 "crit_chi2": crit, "within": True}
 
@@ -294,6 +300,14 @@ class TemperatureFit(Candidate):
             curv = (op + om - 2 * o0) / hstep ** 2
             sigma["t_ref"] = float(math.sqrt(2.0 * scale / curv)) if curv > 0 else math.inf
         return Cand(self.name, npar, Sw, Su, delta, params, sigma, notes)
+
+
+def levels_apart(D) -> bool:
+    """Whether two recordings or more have samples: each then has a level of its own (a shift between
+    sessions), which the lag's interval leaves free (:meth:`TemperatureFit._level_free`).  With one, its
+    level against the calibration's reference temperature is part of what pins the lag, and the rival
+    for it is ``offset`` (or ``gain``), judged by the stepwise search."""
+    return len(np.unique(D.rec)) >= 2
 
 
 def recording_span(D) -> float:
