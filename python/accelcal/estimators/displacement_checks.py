@@ -17,6 +17,7 @@ from .trend import TREND_BLOCK_HOLDS, trend_bound
 
 __all__ = ["REST_DEV_WARN_MPS2", "REST_NOISE_MAX_MPS2", "rest_noise_max", "wide_rest_warning", "no_rest_reason",
            "scale_off", "scale_cause", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned",
+           "still_block", "HeldStretches",
            "streamed_off_g", "trend_warnings", "final_trend_note"]
 
 
@@ -144,18 +145,53 @@ def no_rest_reason(f, t, rp: RestParams, cal=None) -> str:
     return f"the stillest {hold} samples ({where}) are still (within {dev:.3g} m/s^2) but {off_g_text(norm, rp, cal)}"
 
 
+def still_block(blk, at_blk, rp: RestParams):
+    """One block of ``rp.hold`` samples (f ``blk``, m/s^2; at rest ``at_blk``) as
+    :func:`_still_blocks` takes it: (its mean f in m/s^2, whether its mean |f| keeps it from being a
+    rest (:func:`scale_off`)) when it is not at rest and its f stays within ``rp.dev_max`` of that
+    mean, else None."""
+    if at_blk.any():
+        return None
+    m = blk.mean(axis=0)
+    if float(np.max(np.abs(blk - m))) <= rp.dev_max:
+        return m, scale_off(float(np.linalg.norm(m)), rp)
+    return None
+
+
 def _still_blocks(f, at_rest, rp: RestParams):
     """Each block of ``rp.hold`` samples (at a stride of a block) not at rest whose f stays within
     ``rp.dev_max`` of its mean: (its first sample, its mean f in m/s^2, whether its mean |f| keeps
     it from being a rest (:func:`scale_off`))."""
     hold = max(int(rp.hold), 2)
     for i in range(0, f.shape[0] - hold + 1, hold):
-        blk = f[i:i + hold]
-        if at_rest[i:i + hold].any():
-            continue
-        m = blk.mean(axis=0)
-        if float(np.max(np.abs(blk - m))) <= rp.dev_max:
-            yield i, m, scale_off(float(np.linalg.norm(m)), rp)
+        got = still_block(f[i:i + hold], at_rest[i:i + hold], rp)
+        if got is not None:
+            yield i, got[0], got[1]
+
+
+class HeldStretches:
+    """:func:`_held_stretches` fed one block at a time (a recording read in chunks:
+    accelcal.estimators.displacement_stream): :meth:`feed` and :meth:`finish` return the stretches
+    that end there (first sample, last sample, the blocks' means)."""
+
+    def __init__(self, hold: int, dev_max: float) -> None:
+        self.hold, self.dev_max = hold, dev_max
+        self.run: list | None = None
+
+    def feed(self, i: int, m) -> list[tuple]:
+        """The block at sample ``i`` with mean f ``m`` (m/s^2)."""
+        run, hold = self.run, self.hold
+        if (run is not None and _grow(tuple(run[:2]), i, hold) != tuple(run[:2])
+                and float(np.max(np.abs(m - run[2][0]))) <= self.dev_max):
+            run[1] = i + hold - 1
+            run[2].append(m)
+            return []
+        self.run = [i, i + hold - 1, [m]]
+        return [tuple(run)] if run is not None and len(run[2]) >= TREND_BLOCK_HOLDS else []
+
+    def finish(self) -> list[tuple]:
+        run = self.run
+        return [tuple(run)] if run is not None and len(run[2]) >= TREND_BLOCK_HOLDS else []
 
 
 def _grow(first, i: int, hold: int):
@@ -173,19 +209,11 @@ def _held_stretches(blocks, hold: int, dev_max: float):
     TREND_BLOCK_HOLDS blocks or more (1 s at the default hold: a hand that pauses while it
     accelerates, or the flat peaks of a smooth stroke's acceleration, hold that acceleration for a
     moment; a body set down off g or turned stays so): (first sample, last sample, the blocks' means),
-    lazily in order."""
-    run = None
+    lazily in order (:class:`HeldStretches`)."""
+    held = HeldStretches(hold, dev_max)
     for i, m in blocks:
-        if (run is not None and _grow(tuple(run[:2]), i, hold) != tuple(run[:2])
-                and float(np.max(np.abs(m - run[2][0]))) <= dev_max):
-            run[1] = i + hold - 1
-            run[2].append(m)
-            continue
-        if run is not None and len(run[2]) >= TREND_BLOCK_HOLDS:
-            yield tuple(run)
-        run = [i, i + hold - 1, [m]]
-    if run is not None and len(run[2]) >= TREND_BLOCK_HOLDS:
-        yield tuple(run)
+        yield from held.feed(i, m)
+    yield from held.finish()
 
 
 def still_off_g(f, at_rest, rp: RestParams) -> tuple[int, int, float] | None:

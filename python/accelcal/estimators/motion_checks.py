@@ -39,7 +39,7 @@ def zp_limit(n: int, f_sigma: float, rp: RestParams) -> float:
     return ZP_TURN_MPS2 + 5.0 * float(f_sigma) / math.sqrt(n) + 2.0 * rp.dev_max * rp.hold / n
 
 
-def turned_motions(f, at, motions, f_sigma: float, rp: RestParams, axis: int | None
+def turned_motions(f, at, motions, f_sigma: float, rp: RestParams, axis: int | None, m0=None
                    ) -> list[tuple[int, int, float, float]]:
     """The corrected motions whose zero point is more than a calibration or tilt error gives
     (:func:`zp_limit`): an accelerometer alone cannot tell a turn from an acceleration, and a body
@@ -60,6 +60,9 @@ def turned_motions(f, at, motions, f_sigma: float, rp: RestParams, axis: int | N
     rp : RestParams
     axis : int or None
         1-D along that body axis (nothing removed: the rest's level is part of zp), or None.
+    m0 : array_like (3,), optional
+        The first rest's mean f (m/s^2); None: from ``at`` and ``f`` (given: ``f`` and ``at`` may be
+        a stretch of the recording that holds each motion's rest before it, as read in chunks).
 
     Returns
     -------
@@ -75,9 +78,10 @@ def turned_motions(f, at, motions, f_sigma: float, rp: RestParams, axis: int | N
     at = np.asarray(at, bool)
     if not at.any():
         return []
-    first = int(np.argmax(at))
-    first_end = first + int(np.argmin(at[first:])) if not at[first:].all() else at.size
-    m0 = f[first:first_end].mean(axis=0)
+    if m0 is None:
+        first = int(np.argmax(at))
+        first_end = first + int(np.argmin(at[first:])) if not at[first:].all() else at.size
+        m0 = f[first:first_end].mean(axis=0)
     out = []
     for a, e, zp in motions:
         s = rest_run(at, a, 0, a)[0]

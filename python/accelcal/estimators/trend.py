@@ -11,6 +11,7 @@ import numpy as np
 from .rest import RestParams
 
 __all__ = ["TREND_BLOCK_HOLDS", "TREND_FALSE_ALARM", "CORR_CHUNK_BLOCKS", "trend_bound", "noise_correlation",
+           "part_correlation", "median_correlation", "rest_parts",
            "rest_correlation", "rest_widening", "trend_widening", "rest_without_trend"]
 
 
@@ -60,24 +61,43 @@ def noise_correlation(parts, maxlag: int) -> np.ndarray:
         constant axis.
     """
     L = max(int(maxlag), 1)
-    rho = np.zeros((L, 3))
-    rho[0] = 1.0
     est, N = [], 0
     for x in parts:
-        x = np.asarray(x, float)
-        m = x.shape[0]
-        if m < 3:
-            continue
-        t = np.arange(m, dtype=float)
-        r = x - np.polynomial.polynomial.polyval(t, np.polynomial.polynomial.polyfit(t, x, 1)).T
-        c = np.full((L, 3), np.nan)
-        c[:min(L, m)] = [np.einsum("ij,ij->j", r[:m - k], r[k:]) / (m - k) for k in range(min(L, m))]
-        # an axis constant over the stretch (noise below the code step) leaves only the line fit's
-        # rounding, ~1e-15 of its level and smooth (it read as correlation 0.998): no estimate
-        c[:, c[0] <= (1e-12 * max(1.0, float(np.max(np.abs(x))))) ** 2] = np.nan
-        with np.errstate(divide="ignore", invalid="ignore"):
-            est.append(c / c[0])
-        N += m
+        c = part_correlation(x, L)
+        if c is not None:
+            est.append(c)
+            N += np.asarray(x).shape[0]
+    return median_correlation(est, N, L)
+
+
+def part_correlation(x, maxlag: int) -> np.ndarray | None:
+    """One still stretch's estimate for :func:`noise_correlation` (``x`` (m, 3), m/s^2): its lagged
+    products less the fitted line over their count, over its mean square, per axis at lags 0 ..
+    ``maxlag`` - 1 (NaN past m - 1 and on a constant axis); None for fewer than 3 samples.  A
+    recording read in chunks keeps these per stretch (accelcal.estimators.displacement_stream)."""
+    L = max(int(maxlag), 1)
+    x = np.asarray(x, float)
+    m = x.shape[0]
+    if m < 3:
+        return None
+    t = np.arange(m, dtype=float)
+    r = x - np.polynomial.polynomial.polyval(t, np.polynomial.polynomial.polyfit(t, x, 1)).T
+    c = np.full((L, 3), np.nan)
+    c[:min(L, m)] = [np.einsum("ij,ij->j", r[:m - k], r[k:]) / (m - k) for k in range(min(L, m))]
+    # an axis constant over the stretch (noise below the code step) leaves only the line fit's
+    # rounding, ~1e-15 of its level and smooth (it read as correlation 0.998): no estimate
+    c[:, c[0] <= (1e-12 * max(1.0, float(np.max(np.abs(x))))) ** 2] = np.nan
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return c / c[0]
+
+
+def median_correlation(est, N: int, maxlag: int) -> np.ndarray:
+    """:func:`noise_correlation` from its stretches' estimates ``est`` (:func:`part_correlation`,
+    each (maxlag, 3)) over ``N`` samples in all: the median at each lag, cut where it falls within
+    2 / sqrt(N)."""
+    L = max(int(maxlag), 1)
+    rho = np.zeros((L, 3))
+    rho[0] = 1.0
     if not est:
         return rho
     with np.errstate(all="ignore"), warnings.catch_warnings():
@@ -92,6 +112,16 @@ def noise_correlation(parts, maxlag: int) -> np.ndarray:
         k = 1 + int(stop[0]) if stop.size else L
         rho[:k, j] = cj[:k]
     return rho
+
+
+def rest_parts(s: int, e: int, size: int, n: int, trim: int) -> list[np.ndarray]:
+    """The samples of the rest run [s, e) of a recording of ``size`` samples that
+    :func:`rest_correlation` takes for its ``n``-lag estimate: less ``trim`` at an end next to a
+    motion, cut in stretches of about CORR_CHUNK_BLOCKS x n samples (none when shorter than n)."""
+    s, e = s + (int(trim) if s > 0 else 0), e - (int(trim) if e < size else 0)
+    if e - s < n:
+        return []
+    return list(np.array_split(np.arange(s, e), max(1, (e - s) // (CORR_CHUNK_BLOCKS * n))))
 
 
 def rest_correlation(at, f, n: int, trim: int = 0) -> np.ndarray:
@@ -115,9 +145,7 @@ def rest_correlation(at, f, n: int, trim: int = 0) -> np.ndarray:
     edges = np.diff(np.concatenate(([0], at.astype(np.int8), [0])))
     parts = []
     for s, e in zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist()):
-        s, e = s + (int(trim) if s > 0 else 0), e - (int(trim) if e < at.size else 0)
-        if e - s >= n:
-            parts += [f[k] for k in np.array_split(np.arange(s, e), max(1, (e - s) // (CORR_CHUNK_BLOCKS * n)))]
+        parts += [f[k] for k in rest_parts(s, e, at.size, n, trim)]
     return noise_correlation(parts, n)
 
 
