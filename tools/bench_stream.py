@@ -18,7 +18,9 @@ from a large parent).  The input files are generated once into
 ``--dir`` (default a temporary directory) and deleted at the end (``--keep`` keeps them).
 Writes build/bench_stream.md and prints it.
 ``--command rate|attitude --engine E``: instead, ``accelcal rate|attitude --engine E`` streamed and with ``--whole-file``,
-wall time and peak RSS of each (a table row per run, printed).
+wall time and peak RSS of each (a table row per run, printed).  ``--command displacement``: the same for
+``accelcal displacement`` (engine float, its offline form) on a rail recording (:func:`rail_block` tiled;
+lengths in whole blocks of 10^4 samples); the streamed run fails if it fell back to the whole-file read.
 
 ``--command calibrate``: instead, ``accelcal calibrate`` on the static-pose recording below (about
 N samples for each of ``--lengths``, CSV and Parquet), reduced while read and (unless ``--no-whole``)
@@ -65,8 +67,14 @@ if kind == "resolve":
     rc = main(["resolve", "--device", "default", "--calibration", "nominal", "--engine", "fixed", "--quiet",
                src, "-o", out])
     assert rc == 0
-elif kind.startswith(("rate", "attitude")):
+elif kind.startswith(("rate", "attitude", "displacement")):
     from accelcal.cli.main import main
+    if kind == "displacement":
+        import accelcal.cli.estimator_command as ec
+
+        def whole(*a, **k):
+            raise AssertionError("the streamed displacement fell back to the whole-file read")
+        ec.read_recording = whole
     t0 = time.perf_counter()
     rc = main([kind.split("-")[0], "--device", {device!r}, "--calibration", "nominal", "--engine", {engine!r},
                "--quiet", src, "-o", out] + (["--whole-file"] if kind.endswith("-whole") else []))
@@ -101,6 +109,16 @@ def base_block(n: int = 1 << 16) -> np.ndarray:
     sim = run_simulation(dev, "handheld", seed=1, n_poses=60, hold_s=4.0, move_s=2.0, initial_rest_s=5.0)
     raw = sim.recording.raw
     return np.resize(raw, (n, raw.shape[1])) if raw.shape[0] < n else raw[:n]
+
+
+def rail_block() -> np.ndarray:
+    """10^4 samples of the default device's raw readings on a rail: 41 strokes of 0.5 m in 2 s between
+    rests of 2 s (the linear actuator simulation, 9,960 samples) and 40 samples of its last rest again,
+    so that a recording of whole blocks starts and ends at rest (``--command displacement``)."""
+    dev = default_device()
+    raw = run_simulation(dev, "linear_actuator", seed=1, distance_m=0.5, travel_s=2.0, rest_s=2.0,
+                         strokes=41).recording.raw
+    return np.concatenate([raw, raw[-80:-40]])
 
 
 def generate(n: int, d: Path, raw0: np.ndarray) -> tuple[Path, Path]:
@@ -227,7 +245,8 @@ def main() -> None:
                     help="which cases, in this order (comma-separated)")
     ap.add_argument("--calibrate-diagnose", metavar="N", type=float,
                     help="instead: peak memory of calibrate and diagnose on a static-pose recording of N samples")
-    ap.add_argument("--command", choices=["resolve", "rate", "attitude", "calibrate"], default="resolve",
+    ap.add_argument("--command", choices=["resolve", "rate", "attitude", "displacement", "calibrate"],
+                    default="resolve",
                     help="rate, attitude: `accelcal rate|attitude --engine ENGINE` streamed, and with --whole-file "
                     "(no I/O anchor); attitude on the two-triad pendulum device (io.device.pendulum_device), its "
                     "readings a pendulum simulation tiled; calibrate: `accelcal calibrate` on poses_recording(N) "
@@ -256,6 +275,8 @@ def main() -> None:
         save_device(pend, device)
         raw = run_simulation(pend, "pendulum", seed=1, duration_s=600.0).recording.raw
         raw0 = np.resize(raw, (1 << 16, 6))
+    elif a.command == "displacement":
+        raw0 = rail_block()
     else:
         raw0 = base_block()
     rows = []

@@ -1,5 +1,6 @@
-"""``accelcal attitude``, ``displacement`` and ``rate``: load, estimate, write (``rate`` in chunks
-where it may: :mod:`accelcal.estimators.rate_stream`, docs/streaming.md)."""
+"""``accelcal attitude``, ``displacement`` and ``rate``: load, estimate, write (in chunks where they
+may: :mod:`accelcal.estimators.rate_stream`, :mod:`~accelcal.estimators.attitude_stream`,
+:mod:`~accelcal.estimators.displacement_stream`, docs/streaming.md)."""
 from __future__ import annotations
 
 import sys
@@ -8,6 +9,7 @@ import numpy as np
 
 from ..estimators import attitude_from_recording, displacement_from_recording, rate_from_recording, report_plots
 from ..estimators.attitude_stream import attitude_stream
+from ..estimators.displacement_stream import displacement_stream
 from ..estimators.rate_stream import rate_stream
 from ..io.calibration import load_calibration
 from ..io.device import default_device, load_device
@@ -19,7 +21,7 @@ from ..resolve_stream import progress_factory
 from .paths import check_output, check_output_dir
 
 __all__ = ["ESTIMATORS", "run_estimator", "held_warnings", "estimator_command", "reader_notes", "time_note",
-           "load_device_arg", "STREAMED"]
+           "load_device_arg", "STREAMED", "STREAM_OPTIONS"]
 
 
 def reader_notes(rec, command: str) -> list[str]:
@@ -45,7 +47,9 @@ ESTIMATORS = {"attitude": attitude_from_recording, "displacement": displacement_
 
 
 #: the estimators that read a recording in chunks where they may
-STREAMED = {"attitude": attitude_stream, "rate": rate_stream}
+STREAMED = {"attitude": attitude_stream, "displacement": displacement_stream, "rate": rate_stream}
+#: the options each passes on to its chunked form (any other option given: the whole-file command)
+STREAM_OPTIONS = {"attitude": set(), "displacement": {"omega", "axis", "form"}, "rate": set()}
 
 
 def run_estimator(kind: str, device_path, calibration_path, recording_path, output, *, engine: str = "float",
@@ -66,8 +70,9 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
     report : path, optional
         Directory for the plots.
     stream : bool
-        rate (``omega`` alpha) and attitude, without ``report``: read the recording in chunks where
-        it may (:data:`STREAMED`, docs/streaming.md), the same output.
+        rate (``omega`` alpha), attitude and displacement (options ``form``, ``axis``, ``omega``
+        only), without ``report``: read the recording in chunks where it may (:data:`STREAMED`,
+        docs/streaming.md), the same output.
     quiet : bool
         No progress bar (the streamed form's; off anyway when stderr is not a terminal).
     units_args : argparse.Namespace, optional
@@ -99,9 +104,12 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
         cal.extra["source"] = str(calibration_path)       # the calibration a message names
     scale = None if units_args is None else scale_from_args(units_args, dev, reader=True)
     streamed = STREAMED.get(kind) if stream and report is None else None
-    if streamed is not None and options.get("omega", "alpha") == "alpha" and set(options) <= {"omega"}:
+    passed = STREAM_OPTIONS.get(kind, set())
+    if streamed is not None and set(options) <= passed | {"omega"} and (
+            "omega" in passed or options.get("omega", "alpha") == "alpha"):
         warnings = streamed(dev, cal, recording_path, output, engine=engine, scale=scale,
-                            progress=None if quiet else progress_factory(kind))
+                            progress=None if quiet else progress_factory(kind),
+                            **{k: v for k, v in options.items() if k in passed})
         if warnings is not None:
             return [f"accelcal {kind}: warning: {w}" for w in warnings]
     # displacement leaves out a sample a logger wrote twice (with a note): its integrators need

@@ -326,7 +326,7 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--engine", choices=["float", "fixed"], default="float", help=_ENGINE)
         s.add_argument("--report", metavar="DIR", help="write plots into DIR")
         s.add_argument("-o", "--output", required=True, metavar="OUT.csv", help=_OUT_CSV)
-        if name in ("rate", "attitude"):
+        if name in ("rate", "attitude", "displacement"):
             s.add_argument("--whole-file", action="store_true", help="read the whole recording first (docs/streaming.md)")
             s.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
         if name == "rate":
