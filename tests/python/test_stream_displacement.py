@@ -48,13 +48,14 @@ def columns(path):
     return {k: vals[:, j] for j, k in enumerate(names)}
 
 
+@pytest.mark.parametrize("engine", ["float", "fixed"])
 @pytest.mark.parametrize("block", [1, 120, 997, 4099, 1 << 30])
-def test_chunks_give_the_whole_file_bytes(files, capfd, block):
+def test_chunks_give_the_whole_file_bytes(files, capfd, block, engine):
     d = files["dir"]
-    ref = d / "whole.csv"
-    assert disp_cli(capfd, files["csv"], ref, "--whole-file") == (0, "")
-    out = d / f"s_{block}.csv"
-    assert displacement_stream(DEV, NOMINAL, files["csv"], out, block_bytes=block) == []     # it streamed
+    ref = d / f"whole_{engine}.csv"
+    assert disp_cli(capfd, files["csv"], ref, "--whole-file", "--engine", engine) == (0, "")
+    out = d / f"s_{block}_{engine}.csv"
+    assert displacement_stream(DEV, NOMINAL, files["csv"], out, engine=engine, block_bytes=block) == []  # streamed
     assert out.read_bytes() == ref.read_bytes()
     starts = [c.start for c in csv_chunks(files["csv"], csv_head(files["csv"], 6, None), block)]
     cols = columns(ref)
@@ -68,13 +69,14 @@ def test_chunks_give_the_whole_file_bytes(files, capfd, block):
         assert starts == [0]                                   # one chunk larger than the file
 
 
+@pytest.mark.parametrize("engine", ["float", "fixed"])
 @pytest.mark.parametrize("rows", [1, 7, 250])
-def test_parquet_in_rows_of_one_and_parquet_out(files, capfd, rows):
+def test_parquet_in_rows_of_one_and_parquet_out(files, capfd, rows, engine):
     d = files["dir"]
-    ref = d / "whole_pq.csv"
-    assert disp_cli(capfd, files["parquet"], ref, "--whole-file")[0] == 0
-    out = d / f"pq_{rows}.csv"
-    assert displacement_stream(DEV, NOMINAL, files["parquet"], out, batch_rows=rows) == []
+    ref = d / f"whole_pq_{engine}.csv"
+    assert disp_cli(capfd, files["parquet"], ref, "--whole-file", "--engine", engine)[0] == 0
+    out = d / f"pq_{rows}_{engine}.csv"
+    assert displacement_stream(DEV, NOMINAL, files["parquet"], out, engine=engine, batch_rows=rows) == []
     assert out.read_bytes() == ref.read_bytes()
     if rows == 7:
         refp, outp = d / "w.parquet", d / "s.parquet"
@@ -94,28 +96,32 @@ def test_options_passed_on_give_the_whole_file_bytes(files, capfd, args):
     assert out.read_bytes() == ref.read_bytes()
 
 
-def test_a_triad_device_streams_the_whole_file_bytes(tmp_path, capfd):
+@pytest.mark.parametrize("engine", ["float", "fixed"])
+def test_a_triad_device_streams_the_whole_file_bytes(tmp_path, capfd, engine):
     tri = default_triad()
     save_device(tri, tmp_path / "tri.json")
     rec = run_simulation(tri, "linear_actuator", seed=22, distance_m=0.5, travel_s=2.0, rest_s=2.0,
                          strokes=3).recording
     write_recording(tmp_path / "r.csv", rec)
     ref, out = tmp_path / "w.csv", tmp_path / "s.csv"
-    assert disp_cli(capfd, tmp_path / "r.csv", ref, "--whole-file", device=tmp_path / "tri.json")[0] == 0
-    assert displacement_stream(tri, Calibration.nominal(tri), tmp_path / "r.csv", out, block_bytes=500) == []
+    assert disp_cli(capfd, tmp_path / "r.csv", ref, "--whole-file", "--engine", engine,
+                    device=tmp_path / "tri.json")[0] == 0
+    assert displacement_stream(tri, Calibration.nominal(tri), tmp_path / "r.csv", out, engine=engine,
+                               block_bytes=500) == []
     assert out.read_bytes() == ref.read_bytes()
 
 
-def test_cli_streams_without_reading_the_whole_file(files, capfd, monkeypatch):
+@pytest.mark.parametrize("engine", ["float", "fixed"])
+def test_cli_streams_without_reading_the_whole_file(files, capfd, monkeypatch, engine):
     """Fails on the code before: displacement read the recording whole."""
     d = files["dir"]
-    ref, out = d / "cw.csv", d / "cs.csv"
-    assert disp_cli(capfd, files["csv"], ref, "--whole-file")[0] == 0
+    ref, out = d / f"cw_{engine}.csv", d / f"cs_{engine}.csv"
+    assert disp_cli(capfd, files["csv"], ref, "--whole-file", "--engine", engine)[0] == 0
 
     def whole(*a, **k):
         raise AssertionError("read whole")
     monkeypatch.setattr("accelcal.cli.estimator_command.read_recording", whole)
-    rc, err = disp_cli(capfd, files["csv"], out)
+    rc, err = disp_cli(capfd, files["csv"], out, "--engine", engine)
     assert rc == 0, err
     assert out.read_bytes() == ref.read_bytes()
 
@@ -231,3 +237,14 @@ def test_a_row_written_twice_is_left_to_the_whole_file_reader(files, capfd):
     rc, err = disp_cli(capfd, path, out)
     assert (rc, err) == (rc_w, err_w) and rc == 0 and out.read_bytes() == ref.read_bytes()
     assert "note" in err
+
+
+@pytest.mark.parametrize("args", [("--form", "stream"), ("--resample",), ("--keep-turned",)])
+def test_the_options_not_built_for_chunks_read_the_whole_file(files, capfd, args):
+    d = files["dir"]
+    ref, out = d / "nw.csv", d / "ns.csv"
+    rc_w, err_w = disp_cli(capfd, files["csv"], ref, *args, "--whole-file")
+    assert (rc_w, err_w) == disp_cli(capfd, files["csv"], out, *args) and rc_w == 0
+    assert out.read_bytes() == ref.read_bytes()
+    if args[0] == "--form":
+        assert displacement_stream(DEV, NOMINAL, files["csv"], out, form="stream") is None

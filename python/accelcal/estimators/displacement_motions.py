@@ -16,14 +16,15 @@ from typing import Any
 import numpy as np
 
 from ..io.chunks import Fallback
-from .displacement import DisplaceParams, tilt_frame
+from .displacement import (A_FRAC, DISP_BAD_REF, DISP_LONG, DISP_MOVING, DISP_REST, DISP_SAT, DISP_SEG_END, P_FRAC,
+                           V_FRAC, DisplaceParams, tilt_frame)
 from .displacement_checks import HeldStretches, still_block
 from .displacement_host import at_rest_not_moving
 from .motion_checks import ERROR_BOUND_COVERS, motion_errors, rotated_motions, turned_motions
 from .rest import REST_AT_REST, REST_QUIET, motion_window, rest_run
 from .trend import TREND_BLOCK_HOLDS, trend_bound, trend_widening
 
-__all__ = ["NAMES", "MotionPass"]
+__all__ = ["NAMES", "MotionPass", "CoreMotionPass"]
 
 NAMES = ["t", "v_x", "v_y", "v_z", "p_x", "p_y", "p_z", "p_raw_x", "p_raw_y", "p_raw_z", "rest", "corrected"]
 
@@ -55,6 +56,8 @@ class MotionPass:
         self.L = max(2, TREND_BLOCK_HOLDS * self.hold)
         self.widen_L = trend_widening(rho, self.L)
         self.hold2 = max(self.hold, 2)
+        self.offline = True
+        self.extra: tuple = ()                    # a subclass's own per-row buffers
         self.B0 = 0
         self.t = np.zeros(0)
         self.f, self.v, self.pp, self.praw, self.acc = (np.zeros((0, 3)) for _ in range(5))
@@ -89,7 +92,7 @@ class MotionPass:
             return ((np.repeat(f, 2, axis=0) - g) @ R.T)[:1]
         return (f - g) @ R.T
 
-    def feed(self, t, f, alpha, fl, sink: Any) -> None:
+    def feed(self, t, f, alpha, fl, sink: Any, rows=None) -> None:
         """One chunk: its stamps (s), f ((n, 3), m/s^2), alpha (array) and rest flags; the final rows
         into ``sink`` (:class:`accelcal.io.result_sink.ColumnSink`)."""
         self.sink = sink
@@ -100,9 +103,13 @@ class MotionPass:
         if alpha is not None:
             self.alpha = np.concatenate([self.alpha, alpha])
         self.fl = np.concatenate([self.fl, fl])
-        self.v, self.pp, self.praw = (np.concatenate([x, z3]) for x in (self.v, self.pp, self.praw))
-        self.acc = np.concatenate([self.acc, self._acc(f) if self.frame is not None or self.p.axis is not None
-                                   else z3])
+        if rows is None:
+            self.v, self.pp, self.praw = (np.concatenate([x, z3]) for x in (self.v, self.pp, self.praw))
+        else:                                     # the core's v, p and p_raw (CoreMotionPass)
+            self.v, self.pp, self.praw = (np.concatenate([x, y]) for x, y in zip((self.v, self.pp, self.praw),
+                                                                                   rows[1:]))
+        self.acc = np.concatenate([self.acc, self._acc(f) if self.offline and (
+            self.frame is not None or self.p.axis is not None) else z3])
         self.corr = np.concatenate([self.corr, np.zeros(f.shape[0], bool)])
         at = (self.fl & REST_AT_REST) != 0
         self.atd = np.concatenate([self.atd, at[m0:]])
@@ -134,7 +141,7 @@ class MotionPass:
         if self.first_rest is None:
             return
         self._trend(self.rest_r, gi)
-        if self.frame is None and self.p.axis is None:
+        if self.frame is None and self.p.axis is None and self.offline:
             # the first rest: from its first sample (the recording's: the rest pass) to the first motion
             g = self.f[:i].mean(axis=0)
             self.frame = (g, tilt_frame(g))
@@ -199,6 +206,13 @@ class MotionPass:
         lo = self.prev_end + 1 if self.zps else 0
         self.last, self.prev_end = end + 1, end
         self.zps.append(zp)
+        self._checked(a_idx, end, zp, lo)
+
+    def _checked(self, a_idx: int, end: int, zp, lo: int) -> None:
+        """The motion anchored at a_idx and ending at end (global) checked for a turn; the rows before
+        its anchor finalized; the rows before the rest before it dropped."""
+        B0, p, dt = self.B0, self.p, self.p.dt
+        la, le = a_idx - B0, end - B0
         one = [(la, le, zp)]
         if turned_motions(self.f, self.atd, one, self.f_sigma, p.rest, p.axis, self.m0):
             raise Fallback("a turned motion")
@@ -239,11 +253,17 @@ class MotionPass:
                          pr[:, 2], self.atd[w:u].astype(float), self.corr[w:u].astype(float)])
         self.written = upto
 
+    def _tail(self) -> None:
+        """The rows after the last motion: at its end point."""
+        ll = self.last - self.B0
+        self.pp[ll:] = self.pos
+        self.praw[ll:] = self.pos_raw
+
     def _drop(self, keep: int) -> None:
         k = keep - self.B0
         if k <= 0:
             return
-        for name in ("t", "f", "v", "pp", "praw", "acc", "fl", "atd", "corr"):
+        for name in ("t", "f", "v", "pp", "praw", "acc", "fl", "atd", "corr") + self.extra:
             setattr(self, name, getattr(self, name)[k:].copy())
         if self.alpha.shape[0]:
             self.alpha = self.alpha[k:].copy()
@@ -254,9 +274,7 @@ class MotionPass:
         if self.rest_r is None or self.s_cur is not None or not self.zps:
             raise Fallback("no motion closed by a rest")
         self._trend(self.rest_r, self.n)
-        ll = self.last - self.B0
-        self.pp[ll:] = self.pos
-        self.praw[ll:] = self.pos_raw
+        self._tail()
         self.sink = sink
         self.finalize(self.n)
         if self.off.finish() or self.turned.finish():
@@ -266,3 +284,64 @@ class MotionPass:
                                              for z in self.zps),
                 "error_bound_m": "; ".join(f"{x[2]:.3g}" for x in self.errs),
                 "error_bound_covers": ERROR_BOUND_COVERS}
+
+
+class CoreMotionPass(MotionPass):
+    """The C core's streaming form (engine ``fixed``) motion by motion: the core's v and p
+    (:func:`~.displacement.displace_fixed`'s, its state carried by the caller), each closed motion's
+    path corrected on the host as :func:`~.displacement_host.retro_correct` does, p_raw with the end
+    corrections added back as the whole-file command adds them; the checks and rows of
+    :class:`MotionPass`.  ``step_dt``: the core's dt as stored (s)."""
+
+    def __init__(self, *args, step_dt: float) -> None:
+        super().__init__(*args)
+        self.offline = False
+        self.step_dt = step_dt
+        self.extra = ("zq", "dfl")
+        self.zq, self.dfl = np.zeros((0, 3)), np.zeros(0, np.int64)
+        self.dsum = np.zeros((1, 3))             # the end corrections added back so far
+
+    def feed_core(self, t, f, alpha, core: dict, sink: Any) -> None:
+        """One chunk: stamps (s), f ((n, 3), m/s^2), alpha, and the core's outputs (int arrays v, p, zp,
+        nseg, flags, rest)."""
+        fl = core["flags"]
+        if np.any(fl & (DISP_SAT | DISP_BAD_REF)):
+            raise Fallback("samples clipped in the core, or no frame")       # warned, the whole-file way
+        vq, pq, zq = core["v"] / 2.0**V_FRAC, core["p"] / 2.0**P_FRAC, core["zp"] / 2.0**A_FRAC
+        D = np.zeros((fl.size, 3))
+        for e in np.flatnonzero((fl & DISP_SEG_END) != 0).tolist():
+            if fl[e] & DISP_LONG:
+                raise Fallback("a motion beyond the core's count")
+            T = int(core["nseg"][e]) * self.step_dt
+            D[e] = 0.5 * np.asarray(zq[e], float) * T * T
+        cum = np.cumsum(np.concatenate([self.dsum, D]), axis=0)[1:]
+        if fl.size:
+            self.dsum = cum[-1:].copy()
+        rest = ((fl & DISP_REST) != 0) * REST_AT_REST | ((core["rest"] & REST_QUIET) != 0) * REST_QUIET
+        n0 = self.fl.size
+        self.zq = np.concatenate([self.zq, zq])
+        self.dfl = np.concatenate([self.dfl, fl])
+        self.feed(t, f, alpha, rest.astype(np.uint8), sink, rows=(n0, np.array(vq, float), np.array(pq, float),
+                                                                   np.array(pq, float) + cum))
+
+    def _tail(self) -> None:
+        pass
+
+    def _motion(self, s: int, e: int) -> None:
+        """The motion [s, e) (global), closed at e: retro_correct's step."""
+        B0, p = self.B0, self.p
+        a = s - 1
+        if a <= self.prev_end and self.zps:
+            raise Fallback("a motion from the sample its rest was declared at")
+        la, ls, le = a - B0, s - B0, e - B0
+        if not self.dfl[le] & DISP_SEG_END or not self.dfl[ls] & DISP_MOVING:
+            raise Fallback("a motion the core did not segment as the detector")
+        z = np.asarray(self.zq[le], float)
+        tp = self.t[ls:le] - self.t[la]
+        self.v[ls:le] -= z * tp[:, None]
+        self.pp[ls:le] -= 0.5 * z * tp[:, None] ** 2
+        self.corr[ls:le + 1] = True
+        lo = self.prev_end + 1 if self.zps else 0
+        self.prev_end = e
+        self.zps.append(self.zq[le])
+        self._checked(a, e, self.zq[le], lo)

@@ -32,20 +32,23 @@ import numpy as np
 
 from .. import model
 from ..errors import AccelcalError, InputError
+from ..firmware import native
+from ..firmware.native import check, cptr, ffi, lib
+from ..firmware.quantize import quantize_calibration
 from ..firmware.triad import triad_forces
 from ..io.chunk_source import open_chunks
 from ..io.chunks import BLOCK_BYTES, Fallback
 from ..io.parquet import BATCH_ROWS
 from ..io.result_sink import write_deferred
-from .common import CLIP, CLIP_LO, alpha_noise, force_noise_axes
-from .displacement import GSUM_MAX, DisplaceParams, tilt_frame
-from .displacement_motions import NAMES, MotionPass
+from .common import CLIP, CLIP_LO, OUT_FRAC, alpha_noise, force_noise_axes
+from .displacement import DISP_REST, GSUM_MAX, DisplaceParams, disp_cfg_fixed, tilt_frame
+from .displacement_motions import NAMES, CoreMotionPass, MotionPass
 from .omega import omega_observability
 from .rest import REST_AT_REST, REST_QUIET, RestState, RestThresholds, default_rest_params
 from .stream_scan import on_grid, scan_with_bar
 from .trend import TREND_BLOCK_HOLDS, median_correlation, part_correlation, rest_parts
 
-__all__ = ["RestDetector", "RestPass", "displacement_stream"]
+__all__ = ["RestDetector", "RestPass", "CoreRun", "displacement_stream"]
 
 AXES = {None: None, "x": 0, "y": 1, "z": 2}
 
@@ -122,8 +125,10 @@ class RestPass:
         self.est: list = []
         self.N, self.rests = 0, 0
 
-    def feed(self, f: np.ndarray) -> None:
-        fl = self.det.step(f)
+    def feed(self, f: np.ndarray, fl: np.ndarray | None = None) -> None:
+        """One chunk: f ((n, 3), m/s^2) and the rest flags (REST_AT_REST, REST_QUIET; None: the offline
+        form's detector's)."""
+        fl = self.det.step(f) if fl is None else fl
         self.file.write(fl.tobytes())
         F, FL = np.concatenate([self.F, f]), np.concatenate([self.FL, fl])
         at, quiet = (FL & REST_AT_REST) != 0, (FL & REST_QUIET) != 0
@@ -168,6 +173,34 @@ class RestPass:
         return median_correlation(self.est, self.N, self.L)
 
 
+class CoreRun:
+    """The C core's ac_disp over chunks (:func:`~.displacement.displace_fixed`'s batch call, its state
+    carried): per chunk its outputs, and the rest flags for :class:`RestPass`."""
+
+    def __init__(self, p: DisplaceParams) -> None:
+        self.st = ffi.new("ac_disp *")
+        self.cfg = disp_cfg_fixed(p)
+        check(lib.ac_disp_init(self.st, self.cfg), "ac_disp_init")
+        self.dt = self.cfg.dt_m * 2.0 ** -self.cfg.dt_shift
+
+    def step(self, f_q: np.ndarray) -> dict:
+        f_q = np.ascontiguousarray(f_q, dtype=np.int32)
+        n = f_q.shape[0]
+        out = ffi.new("ac_disp_out[]", max(n, 1))
+        check(lib.ac_disp_batch(self.st, cptr("int32_t *", f_q), n, out), "ac_disp_batch")
+        dt = np.dtype([("v", "<i4", 3), ("p", "<i4", 3), ("zp", "<i4", 3), ("nseg", "<u2"), ("flags", "<u2"),
+                       ("rest", "u1")], align=True)
+        rec = np.frombuffer(ffi.buffer(out, ffi.sizeof("ac_disp_out") * n), dtype=dt, count=n).copy() if n \
+            else np.zeros(0, dt)
+        return {k: rec[k].astype(np.int64) for k in ("v", "p", "zp", "nseg", "flags", "rest")}
+
+    @staticmethod
+    def rest_flags(core: dict) -> np.ndarray:
+        """REST_AT_REST where the core is at rest (DISP_REST), REST_QUIET where its detector is quiet."""
+        return (((core["flags"] & DISP_REST) != 0) * REST_AT_REST
+                | ((core["rest"] & REST_QUIET) != 0) * REST_QUIET).astype(np.uint8)
+
+
 def _forces(device, cal, channels):
     """f (and alpha of an array) of a chunk's raw readings, as the whole-file command resolves them."""
     if device.is_array():
@@ -186,6 +219,16 @@ def _forces(device, cal, channels):
         rec = SimpleNamespace(raw=np.repeat(raw, 2, axis=0) if n == 1 else raw)
         return triad_forces(cal, rec, channels, "float", signed)[0][:n], None
     return triad
+
+
+def _core_forces(device, cal, channels):
+    """f of a chunk's raw readings from the C core (int32 Q.AC_OUT_FRAC), as the whole-file command's."""
+    if device.is_array():
+        t = quantize_calibration(device, cal)
+        resolver, trim = t.resolver(), t.trim
+        return lambda raw: native.process_batch(resolver, trim, raw, None)[0][:, :3].astype(np.int32)
+    signed = device.raw_min < 0
+    return lambda raw: triad_forces(cal, SimpleNamespace(raw=raw), channels, "fixed", signed)[0]
 
 
 def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "float", form: str | None = None,
@@ -226,8 +269,10 @@ def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "f
     InputError
         Bad rows, as the whole-file command words them (nothing written).
     """
-    if engine != "float" or (form or "offline") != "offline" or axis not in AXES:
+    form = form or ("offline" if engine == "float" else "stream")
+    if (engine, form) not in (("float", "offline"), ("fixed", "stream")) or axis not in AXES:
         return None
+    fixed = engine == "fixed"
     if omega not in ("auto", "none", "array") or omega == "array":
         return None
     if device.is_array():
@@ -241,7 +286,7 @@ def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "f
     try:
         src = open_chunks(path, device.n_channels, scale, block_bytes, batch_rows)
         try:
-            sc = scan_with_bar(device, src, fixed=False, progress=progress)
+            sc = scan_with_bar(device, src, fixed=fixed, progress=progress)
         except InputError as e:
             if getattr(e, "column", None) == "t":
                 raise Fallback("t not increasing: a row written twice is left out by the whole-file reader")
@@ -251,30 +296,43 @@ def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "f
         rp = default_rest_params(device, 1.0 / sc.dt, f_sigma=f_sigma)
         p = DisplaceParams(dt=sc.dt, axis=AXES[axis], rest=rp)
         forces = _forces(device, cal, channels)
+        core_forces = _core_forces(device, cal, channels) if fixed else None
         folder = Path(output).resolve().parent
         with tempfile.TemporaryFile(dir=folder) as flags_file:
             first = RestPass(p, sc.n, flags_file)
+            core = CoreRun(p) if fixed else None
             bar = progress(src.total, src.unit) if progress is not None else None
             for ch in src.chunks(None if bar is None else bar.update):
                 on_grid(sc, ch.start, ch.t)
-                first.feed(forces(ch.raw)[0])
+                if fixed:
+                    f_q = core_forces(ch.raw)
+                    first.feed(f_q / 2.0**OUT_FRAC, CoreRun.rest_flags(core.step(f_q)))
+                else:
+                    first.feed(forces(ch.raw)[0])
             if bar is not None:
                 bar.close()
             rho = first.finish()
             flags_file.seek(0)
-            note = ("resolved f at the body origin" if device.is_array() else "f of the triad at channels 0-2")
-            meta = {"engine": engine, "form": "offline", "device": device.name, "signal": note,
+            note = ("resolved f at the body origin" + (" (C core)" if fixed else "") if device.is_array()
+                    else "f of the triad at channels 0-2")
+            meta = {"engine": engine, "form": form, "device": device.name, "signal": note,
                     "mode": "3-axis, gravity removed in the frame of the first rest" if p.axis is None else
                     f"1-D along body {'xyz'[p.axis]}"}
-            second = MotionPass(p, sc.n, rho, f_axes, float(device.gravity_mps2),
-                                alpha_noise(device, cal, sc.noise) if device.is_array() else None)
+            args = (p, sc.n, rho, f_axes, float(device.gravity_mps2),
+                    alpha_noise(device, cal, sc.noise) if device.is_array() else None)
+            core = CoreRun(p) if fixed else None
+            second = CoreMotionPass(*args, step_dt=core.dt) if fixed else MotionPass(*args)
 
             def produce(sink: Any) -> dict:
                 bar = progress(src.total, src.unit) if progress is not None else None
                 for ch in src.chunks(None if bar is None else bar.update):
                     fl = np.frombuffer(flags_file.read(ch.n), np.uint8)
                     f, alpha = forces(ch.raw)
-                    second.feed(ch.t, f, alpha, fl, sink)
+                    if fixed:
+                        f_q = core_forces(ch.raw)
+                        second.feed_core(ch.t, f_q / 2.0**OUT_FRAC, alpha, core.step(f_q), sink)
+                    else:
+                        second.feed(ch.t, f, alpha, fl, sink)
                 if bar is not None:
                     bar.close()
                 return {**meta, **second.finish(sink)}
