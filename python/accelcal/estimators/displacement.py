@@ -24,7 +24,7 @@ from .rest import REST_AT_REST, REST_QUIET, RestParams, RestState, RestThreshold
 __all__ = ["DISP_NO_REF", "DISP_REST", "DISP_MOVING", "DISP_SEG_END", "DISP_LONG", "DISP_SAT", "DISP_OPEN",
            "DISP_NO_REST", "DISP_REF_SET", "DISP_BAD_REF", "A_FRAC", "V_FRAC", "P_FRAC", "ROT_FRAC", "G_FRAC",
            "GSUM_MAX", "DisplaceParams", "tilt_frame", "displace_core", "displace_stream", "disp_cfg_fixed",
-           "displace_fixed", "displace_twin", "displace_error_bound"]
+           "DispCore", "displace_fixed", "displace_twin", "displace_error_bound"]
 
 # flag bits, from the compiled core
 (DISP_NO_REF, DISP_REST, DISP_MOVING, DISP_SEG_END, DISP_LONG, DISP_SAT, DISP_OPEN, DISP_NO_REST,
@@ -213,36 +213,58 @@ def disp_cfg_fixed(p: DisplaceParams):
     return c
 
 
+class DispCore:
+    """The C core's ac_disp with its state carried from one batch of samples to the next (the whole
+    recording in one: :func:`displace_fixed`; in chunks: accelcal.estimators.displacement_stream)."""
+
+    #: one ac_disp_out as numpy reads it
+    OUT = np.dtype([("v", "<i4", 3), ("p", "<i4", 3), ("zp", "<i4", 3), ("nseg", "<u2"), ("flags", "<u2"),
+                    ("rest", "u1")], align=True)
+
+    def __init__(self, p: DisplaceParams) -> None:
+        self.p = p
+        self.st = ffi.new("ac_disp *")
+        self.cfg = disp_cfg_fixed(p)
+        check(lib.ac_disp_init(self.st, self.cfg), "ac_disp_init")
+        self.dt = self.cfg.dt_m * 2.0 ** -self.cfg.dt_shift          # dt as stored, s
+
+    def step(self, f_q) -> dict:
+        """ac_disp_batch on (n,3) int32 Q.10: int64 arrays v (Q.24), p (Q.20), zp (Q.16), nseg, flags,
+        rest (the AC_REST_* flags)."""
+        f_q = np.ascontiguousarray(f_q, dtype=np.int32)
+        n = f_q.shape[0]
+        out = ffi.new("ac_disp_out[]", max(n, 1))
+        check(lib.ac_disp_batch(self.st, cptr("int32_t *", f_q), n, out), "ac_disp_batch")
+        assert self.OUT.itemsize == ffi.sizeof("ac_disp_out")
+        rec = np.frombuffer(ffi.buffer(out, ffi.sizeof("ac_disp_out") * n), dtype=self.OUT, count=n).copy() if n \
+            else np.zeros(0, self.OUT)
+        return {k: rec[k].astype(np.int64) for k in ("v", "p", "zp", "nseg", "flags", "rest")}
+
+    def finish(self) -> int:
+        """ac_disp_finish's flags."""
+        fin = ffi.new("ac_disp_out *")
+        check(lib.ac_disp_finish(self.st, fin), "ac_disp_finish")
+        return int(fin.flags)
+
+    def frame(self):
+        """(g Q.16, rot Q.14 or None, c Q.16 or None) as stored, or None before the first motion."""
+        st = self.st
+        if not st.have_ref:
+            return None
+        g = np.array([st.g[k] for k in range(3)], np.int64)
+        if self.p.axis is not None:
+            return (g, None, None)
+        return (g, np.array([[st.rot[j][k] for k in range(3)] for j in range(3)], np.int64),
+                np.array([st.c[k] for k in range(3)], np.int64))
+
+
 def displace_fixed(f_q, p: DisplaceParams) -> dict:
     """ac_disp_batch + ac_disp_finish on (n,3) int32 Q.10.  Returns int arrays v (Q.24), p (Q.20),
     zp (Q.16), nseg, flags, rest (the AC_REST_* flags); 'finish' (the ac_disp_finish flags);
     'frame' (g Q.16, rot Q.14 or None, c Q.16 or None) and 'dt' (as stored)."""
-    f_q = np.ascontiguousarray(f_q, dtype=np.int32)
-    n = f_q.shape[0]
-    st = ffi.new("ac_disp *")
-    cfg = disp_cfg_fixed(p)
-    check(lib.ac_disp_init(st, cfg), "ac_disp_init")
-    out = ffi.new("ac_disp_out[]", max(n, 1))
-    check(lib.ac_disp_batch(st, cptr("int32_t *", f_q), n, out), "ac_disp_batch")
-    fin = ffi.new("ac_disp_out *")
-    check(lib.ac_disp_finish(st, fin), "ac_disp_finish")
-    dt = np.dtype([("v", "<i4", 3), ("p", "<i4", 3), ("zp", "<i4", 3), ("nseg", "<u2"), ("flags", "<u2"),
-                   ("rest", "u1")], align=True)
-    assert dt.itemsize == ffi.sizeof("ac_disp_out")
-    rec = np.frombuffer(ffi.buffer(out, ffi.sizeof("ac_disp_out") * n), dtype=dt, count=n).copy() if n \
-        else np.zeros(0, dt)
-    frame = None
-    if st.have_ref:
-        g = np.array([st.g[k] for k in range(3)], np.int64)
-        if p.axis is None:
-            frame = (g, np.array([[st.rot[j][k] for k in range(3)] for j in range(3)], np.int64),
-                     np.array([st.c[k] for k in range(3)], np.int64))
-        else:
-            frame = (g, None, None)
-    return dict(v=rec["v"].astype(np.int64), p=rec["p"].astype(np.int64), zp=rec["zp"].astype(np.int64),
-                nseg=rec["nseg"].astype(np.int64), flags=rec["flags"].astype(np.int64),
-                rest=rec["rest"].astype(np.int64), finish=int(fin.flags),
-                frame=frame, dt=cfg.dt_m * 2.0 ** -cfg.dt_shift)
+    core = DispCore(p)
+    out = core.step(f_q)
+    return dict(**out, finish=core.finish(), frame=core.frame(), dt=core.dt)
 
 
 def displace_twin(f_q, fixed: dict, p: DisplaceParams) -> dict:

@@ -33,7 +33,6 @@ import numpy as np
 from .. import model
 from ..errors import AccelcalError, InputError
 from ..firmware import native
-from ..firmware.native import check, cptr, ffi, lib
 from ..firmware.quantize import quantize_calibration
 from ..firmware.triad import triad_forces
 from ..io.chunk_source import open_chunks
@@ -41,14 +40,14 @@ from ..io.chunks import BLOCK_BYTES, Fallback
 from ..io.parquet import BATCH_ROWS
 from ..io.result_sink import write_deferred
 from .common import CLIP, CLIP_LO, OUT_FRAC, alpha_noise, force_noise_axes
-from .displacement import DISP_REST, GSUM_MAX, DisplaceParams, disp_cfg_fixed, tilt_frame
+from .displacement import DISP_REST, GSUM_MAX, DisplaceParams, DispCore, tilt_frame
 from .displacement_motions import NAMES, CoreMotionPass, MotionPass
 from .omega import omega_observability
 from .rest import REST_AT_REST, REST_QUIET, RestState, RestThresholds, default_rest_params
 from .stream_scan import on_grid, scan_with_bar
 from .trend import TREND_BLOCK_HOLDS, median_correlation, part_correlation, rest_parts
 
-__all__ = ["RestDetector", "RestPass", "CoreRun", "displacement_stream"]
+__all__ = ["RestDetector", "RestPass", "core_rest_flags", "displacement_stream"]
 
 AXES = {None: None, "x": 0, "y": 1, "z": 2}
 
@@ -173,32 +172,11 @@ class RestPass:
         return median_correlation(self.est, self.N, self.L)
 
 
-class CoreRun:
-    """The C core's ac_disp over chunks (:func:`~.displacement.displace_fixed`'s batch call, its state
-    carried): per chunk its outputs, and the rest flags for :class:`RestPass`."""
-
-    def __init__(self, p: DisplaceParams) -> None:
-        self.st = ffi.new("ac_disp *")
-        self.cfg = disp_cfg_fixed(p)
-        check(lib.ac_disp_init(self.st, self.cfg), "ac_disp_init")
-        self.dt = self.cfg.dt_m * 2.0 ** -self.cfg.dt_shift
-
-    def step(self, f_q: np.ndarray) -> dict:
-        f_q = np.ascontiguousarray(f_q, dtype=np.int32)
-        n = f_q.shape[0]
-        out = ffi.new("ac_disp_out[]", max(n, 1))
-        check(lib.ac_disp_batch(self.st, cptr("int32_t *", f_q), n, out), "ac_disp_batch")
-        dt = np.dtype([("v", "<i4", 3), ("p", "<i4", 3), ("zp", "<i4", 3), ("nseg", "<u2"), ("flags", "<u2"),
-                       ("rest", "u1")], align=True)
-        rec = np.frombuffer(ffi.buffer(out, ffi.sizeof("ac_disp_out") * n), dtype=dt, count=n).copy() if n \
-            else np.zeros(0, dt)
-        return {k: rec[k].astype(np.int64) for k in ("v", "p", "zp", "nseg", "flags", "rest")}
-
-    @staticmethod
-    def rest_flags(core: dict) -> np.ndarray:
-        """REST_AT_REST where the core is at rest (DISP_REST), REST_QUIET where its detector is quiet."""
-        return (((core["flags"] & DISP_REST) != 0) * REST_AT_REST
-                | ((core["rest"] & REST_QUIET) != 0) * REST_QUIET).astype(np.uint8)
+def core_rest_flags(core: dict) -> np.ndarray:
+    """REST_AT_REST where the C core is at rest (DISP_REST), REST_QUIET where its detector is quiet
+    (:meth:`~.displacement.DispCore.step`'s outputs ``core``), for :class:`RestPass`."""
+    return (((core["flags"] & DISP_REST) != 0) * REST_AT_REST
+            | ((core["rest"] & REST_QUIET) != 0) * REST_QUIET).astype(np.uint8)
 
 
 def _forces(device, cal, channels):
@@ -300,13 +278,13 @@ def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "f
         folder = Path(output).resolve().parent
         with tempfile.TemporaryFile(dir=folder) as flags_file:
             first = RestPass(p, sc.n, flags_file)
-            core = CoreRun(p) if fixed else None
+            core = DispCore(p) if fixed else None
             bar = progress(src.total, src.unit) if progress is not None else None
             for ch in src.chunks(None if bar is None else bar.update):
                 on_grid(sc, ch.start, ch.t)
                 if fixed:
                     f_q = core_forces(ch.raw)
-                    first.feed(f_q / 2.0**OUT_FRAC, CoreRun.rest_flags(core.step(f_q)))
+                    first.feed(f_q / 2.0**OUT_FRAC, core_rest_flags(core.step(f_q)))
                 else:
                     first.feed(forces(ch.raw)[0])
             if bar is not None:
@@ -320,7 +298,7 @@ def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "f
                     f"1-D along body {'xyz'[p.axis]}"}
             args = (p, sc.n, rho, f_axes, float(device.gravity_mps2),
                     alpha_noise(device, cal, sc.noise) if device.is_array() else None)
-            core = CoreRun(p) if fixed else None
+            core = DispCore(p) if fixed else None
             second = CoreMotionPass(*args, step_dt=core.dt) if fixed else MotionPass(*args)
 
             def produce(sink: Any) -> dict:
