@@ -48,14 +48,15 @@ def columns(path):
     return {k: vals[:, j] for j, k in enumerate(names)}
 
 
-@pytest.mark.parametrize("engine", ["float", "fixed"])
+@pytest.mark.parametrize("engine, form", [("float", "offline"), ("float", "stream"), ("fixed", "stream")])
 @pytest.mark.parametrize("block", [1, 120, 997, 4099, 1 << 30])
-def test_chunks_give_the_whole_file_bytes(files, capfd, block, engine):
+def test_chunks_give_the_whole_file_bytes(files, capfd, block, engine, form):
     d = files["dir"]
-    ref = d / f"whole_{engine}.csv"
-    assert disp_cli(capfd, files["csv"], ref, "--whole-file", "--engine", engine) == (0, "")
-    out = d / f"s_{block}_{engine}.csv"
-    assert displacement_stream(DEV, NOMINAL, files["csv"], out, engine=engine, block_bytes=block) == []  # streamed
+    ref = d / f"whole_{engine}_{form}.csv"
+    assert disp_cli(capfd, files["csv"], ref, "--whole-file", "--engine", engine, "--form", form) == (0, "")
+    out = d / f"s_{block}_{engine}_{form}.csv"
+    assert displacement_stream(DEV, NOMINAL, files["csv"], out, engine=engine, form=form,
+                               block_bytes=block) == []    # it streamed
     assert out.read_bytes() == ref.read_bytes()
     starts = [c.start for c in csv_chunks(files["csv"], csv_head(files["csv"], 6, None), block)]
     cols = columns(ref)
@@ -239,12 +240,10 @@ def test_a_row_written_twice_is_left_to_the_whole_file_reader(files, capfd):
     assert "note" in err
 
 
-@pytest.mark.parametrize("args", [("--form", "stream"), ("--resample",), ("--keep-turned",)])
+@pytest.mark.parametrize("args", [("--resample",), ("--keep-turned",)])
 def test_the_options_not_built_for_chunks_read_the_whole_file(files, capfd, args):
     d = files["dir"]
     ref, out = d / "nw.csv", d / "ns.csv"
     rc_w, err_w = disp_cli(capfd, files["csv"], ref, *args, "--whole-file")
     assert (rc_w, err_w) == disp_cli(capfd, files["csv"], out, *args) and rc_w == 0
     assert out.read_bytes() == ref.read_bytes()
-    if args[0] == "--form":
-        assert displacement_stream(DEV, NOMINAL, files["csv"], out, form="stream") is None

@@ -23,7 +23,7 @@ from .rest import REST_AT_REST, REST_QUIET, RestParams, RestState, RestThreshold
 
 __all__ = ["DISP_NO_REF", "DISP_REST", "DISP_MOVING", "DISP_SEG_END", "DISP_LONG", "DISP_SAT", "DISP_OPEN",
            "DISP_NO_REST", "DISP_REF_SET", "DISP_BAD_REF", "A_FRAC", "V_FRAC", "P_FRAC", "ROT_FRAC", "G_FRAC",
-           "GSUM_MAX", "DisplaceParams", "tilt_frame", "displace_core", "displace_stream", "disp_cfg_fixed",
+           "GSUM_MAX", "DisplaceParams", "tilt_frame", "DispFloat", "displace_core", "displace_stream", "disp_cfg_fixed",
            "DispCore", "displace_fixed", "displace_twin", "displace_error_bound"]
 
 # flag bits, from the compiled core
@@ -75,6 +75,145 @@ def tilt_frame(g) -> np.ndarray:
     return R
 
 
+class DispFloat:
+    """The algorithm of ac_disp_step in float64 (:func:`displace_core`), its state carried from one
+    batch of samples to the next (the whole recording in one: :func:`displace_core`; in chunks:
+    accelcal.estimators.displacement_stream).  ``frame``: as :func:`displace_core`'s."""
+
+    def __init__(self, dt, axis, th: RestThresholds, frame=None) -> None:
+        self.dt, self.axis, self.frame_given = dt, axis, frame
+        self.rs = RestState(th)
+        self.segments: list = []
+        self.phase, self.have_ref = 0, False
+        self.gsum, self.gcount = np.zeros(3), 0
+        self.g = self.R = self.c = None
+        self.v, self.p, self.a_prev, self.f_prev = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+        self.nseg, self.long_seg, self.anchor = 0, False, -1
+        self.i0 = 0                               # the first sample of the next batch
+
+    def step(self, f, rest_flags=None) -> dict:
+        """One batch (n,3) f (clipped like the core): v, p (n,3), flags (n,), zp (n,3), nseg (n,),
+        rest (n,), own_quiet, dev, dref (n,)."""
+        f = np.clip(np.asarray(f, float), CLIP_LO, CLIP)
+        n = f.shape[0]
+        V, P, ZP = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
+        FL = np.zeros(n, np.int64)
+        NS = np.zeros(n, np.int64)
+        RF = np.zeros(n, np.int64)
+        own_q, DEV, DREF = np.zeros(n, bool), np.zeros(n), np.zeros(n)
+        segments = self.segments
+        phase, have_ref = self.phase, self.have_ref
+        gsum, gcount = self.gsum, self.gcount
+        g, R, c = self.g, self.R, self.c
+        v, p, a_prev = self.v, self.p, self.a_prev
+        f_prev = self.f_prev
+        nseg, long_seg, anchor = self.nseg, self.long_seg, self.anchor
+        dt, axis, frame, i0 = self.dt, self.axis, self.frame_given, self.i0
+        half_dt = 0.5 * dt
+        rs = self.rs
+        fl_list = f.tolist()
+
+        def accel(x):
+            if axis is not None:
+                a = np.zeros(3)
+                a[axis] = x[axis]
+                return a
+            return R @ x - c
+
+        for i in range(n):
+            own, DEV[i], DREF[i] = rs.step(fl_list[i], None, g if have_ref else None)
+            own_q[i] = bool(own & REST_QUIET)
+            rf = own if rest_flags is None else int(rest_flags[i])
+            RF[i] = rf
+            quiet, at = bool(rf & REST_QUIET), bool(rf & REST_AT_REST)
+            fc = f[i]
+            flags = 0
+            zp = None
+            if phase != 2 and not have_ref:
+                if quiet:
+                    if gcount < GSUM_MAX:
+                        gsum = gsum + fc
+                        gcount += 1
+                elif phase == 0:
+                    gsum, gcount = np.zeros(3), 0
+            moving_now = False
+            if phase == 0:
+                if at:
+                    phase = 1
+                    flags |= DISP_REST
+                else:
+                    flags |= DISP_NO_REF
+            elif phase == 1:
+                if at:
+                    flags |= DISP_REST
+                else:
+                    ok = True
+                    if not have_ref:
+                        if frame is not None:
+                            g = np.asarray(frame[0], float)
+                            R = None if frame[1] is None else np.asarray(frame[1], float)
+                            c = None if frame[2] is None else np.asarray(frame[2], float)
+                        else:
+                            g = gsum / gcount
+                            if axis is None:
+                                try:
+                                    R = tilt_frame(g)
+                                except AccelcalError:
+                                    ok = False
+                                else:
+                                    c = R @ g
+                        if ok:
+                            have_ref = True
+                            flags |= DISP_REF_SET
+                        else:
+                            phase = 0
+                            g = None
+                            gsum, gcount = np.zeros(3), 0
+                            flags |= DISP_NO_REF | DISP_BAD_REF
+                    if ok:
+                        a_prev = accel(f_prev)
+                        v = np.zeros(3)
+                        nseg, long_seg, anchor = 0, False, i0 + i - 1
+                        phase = 2
+                        moving_now = True
+            else:
+                moving_now = True
+            if moving_now:
+                a = accel(fc)
+                v_new = v + half_dt * (a_prev + a)
+                p = p + half_dt * (v + v_new)
+                v = v_new
+                a_prev = a
+                if nseg == 65535:
+                    long_seg = True
+                else:
+                    nseg += 1
+                if at:
+                    flags |= DISP_SEG_END | DISP_REST
+                    T = nseg * dt
+                    if long_seg or T <= 0:
+                        flags |= DISP_LONG
+                        zp = None
+                    else:
+                        p = p - v * T / 2.0
+                        zp = v / T
+                        ZP[i] = zp
+                    segments.append((anchor, i0 + i, zp))
+                    v = np.zeros(3)
+                    phase = 1
+                else:
+                    flags |= DISP_MOVING
+            f_prev = fc
+            V[i], P[i], FL[i], NS[i] = v, p, flags, nseg
+        self.phase, self.have_ref = phase, have_ref
+        self.gsum, self.gcount = gsum, gcount
+        self.g, self.R, self.c = g, R, c
+        self.v, self.p, self.a_prev, self.f_prev = v, p, a_prev, f_prev
+        self.nseg, self.long_seg, self.anchor = nseg, long_seg, anchor
+        self.i0 = i0 + n
+        return dict(v=V, p=P, flags=FL, zp=ZP, nseg=NS, rest=RF, own_quiet=own_q, dev=DEV, dref=DREF)
+
+
 def displace_core(f, dt, axis, th: RestThresholds, rest_flags=None, frame=None):
     """The algorithm of ac_disp_step in float64 on (n,3) f (clipped like the core).
 
@@ -83,119 +222,12 @@ def displace_core(f, dt, axis, th: RestThresholds, rest_flags=None, frame=None):
     used instead of the own decisions, which are still computed (``own_quiet``, ``dev``,
     ``dref``) for the margin checks; ``frame`` (g, R, c) replaces the gravity reference
     (R, c None for 1-D).  Returns v, p (n,3), flags (n,), zp (n,3), nseg (n,), rest (n,),
-    segments [(anchor, end, zp (3,) or None)], frame (g, R, c) or None, phase."""
-    f = np.clip(np.asarray(f, float), CLIP_LO, CLIP)
-    n = f.shape[0]
-    V, P, ZP = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
-    FL = np.zeros(n, np.int64)
-    NS = np.zeros(n, np.int64)
-    RF = np.zeros(n, np.int64)
-    own_q, DEV, DREF = np.zeros(n, bool), np.zeros(n), np.zeros(n)
-    segments = []
-    phase, have_ref = 0, False
-    gsum, gcount = np.zeros(3), 0
-    g = R = c = None
-    v, p, a_prev = np.zeros(3), np.zeros(3), np.zeros(3)
-    f_prev = np.zeros(3)
-    nseg, long_seg, anchor = 0, False, -1
-    half_dt = 0.5 * dt
-    rs = RestState(th)
-    fl_list = f.tolist()
-
-    def accel(x):
-        if axis is not None:
-            a = np.zeros(3)
-            a[axis] = x[axis]
-            return a
-        return R @ x - c
-
-    for i in range(n):
-        own, DEV[i], DREF[i] = rs.step(fl_list[i], None, g if have_ref else None)
-        own_q[i] = bool(own & REST_QUIET)
-        rf = own if rest_flags is None else int(rest_flags[i])
-        RF[i] = rf
-        quiet, at = bool(rf & REST_QUIET), bool(rf & REST_AT_REST)
-        fc = f[i]
-        flags = 0
-        zp = None
-        if phase != 2 and not have_ref:
-            if quiet:
-                if gcount < GSUM_MAX:
-                    gsum = gsum + fc
-                    gcount += 1
-            elif phase == 0:
-                gsum, gcount = np.zeros(3), 0
-        moving_now = False
-        if phase == 0:
-            if at:
-                phase = 1
-                flags |= DISP_REST
-            else:
-                flags |= DISP_NO_REF
-        elif phase == 1:
-            if at:
-                flags |= DISP_REST
-            else:
-                ok = True
-                if not have_ref:
-                    if frame is not None:
-                        g = np.asarray(frame[0], float)
-                        R = None if frame[1] is None else np.asarray(frame[1], float)
-                        c = None if frame[2] is None else np.asarray(frame[2], float)
-                    else:
-                        g = gsum / gcount
-                        if axis is None:
-                            try:
-                                R = tilt_frame(g)
-                            except AccelcalError:
-                                ok = False
-                            else:
-                                c = R @ g
-                    if ok:
-                        have_ref = True
-                        flags |= DISP_REF_SET
-                    else:
-                        phase = 0
-                        g = None
-                        gsum, gcount = np.zeros(3), 0
-                        flags |= DISP_NO_REF | DISP_BAD_REF
-                if ok:
-                    a_prev = accel(f_prev)
-                    v = np.zeros(3)
-                    nseg, long_seg, anchor = 0, False, i - 1
-                    phase = 2
-                    moving_now = True
-        else:
-            moving_now = True
-        if moving_now:
-            a = accel(fc)
-            v_new = v + half_dt * (a_prev + a)
-            p = p + half_dt * (v + v_new)
-            v = v_new
-            a_prev = a
-            if nseg == 65535:
-                long_seg = True
-            else:
-                nseg += 1
-            if at:
-                flags |= DISP_SEG_END | DISP_REST
-                T = nseg * dt
-                if long_seg or T <= 0:
-                    flags |= DISP_LONG
-                    zp = None
-                else:
-                    p = p - v * T / 2.0
-                    zp = v / T
-                    ZP[i] = zp
-                segments.append((anchor, i, zp))
-                v = np.zeros(3)
-                phase = 1
-            else:
-                flags |= DISP_MOVING
-        f_prev = fc
-        V[i], P[i], FL[i], NS[i] = v, p, flags, nseg
-    return dict(v=V, p=P, flags=FL, zp=ZP, nseg=NS, rest=RF, own_quiet=own_q, dev=DEV, dref=DREF,
-                segments=segments, phase=phase, frame=None if g is None else (g, R, c))
+    segments [(anchor, end, zp (3,) or None)], frame (g, R, c) or None, phase
+    (:class:`DispFloat` over the whole recording)."""
+    core = DispFloat(dt, axis, th, frame)
+    out = core.step(f, rest_flags)
+    return dict(**out, segments=core.segments, phase=core.phase,
+                frame=None if core.g is None else (core.g, core.R, core.c))
 
 
 def displace_stream(f, p: DisplaceParams) -> dict:

@@ -287,27 +287,31 @@ class MotionPass:
 
 
 class CoreMotionPass(MotionPass):
-    """The C core's streaming form (engine ``fixed``) motion by motion: the core's v and p
-    (:func:`~.displacement.displace_fixed`'s, its state carried by the caller), each closed motion's
+    """The streaming form motion by motion, the C core's (engine ``fixed``, ``fixed`` True) or its
+    float reference's (engine ``float``, form ``stream``): their v and p (:class:`~.displacement.DispCore`,
+    :class:`~.displacement.DispFloat`, their state carried by the caller), each closed motion's
     path corrected on the host as :func:`~.displacement_host.retro_correct` does, p_raw with the end
     corrections added back as the whole-file command adds them; the checks and rows of
     :class:`MotionPass`.  ``step_dt``: the core's dt as stored (s)."""
 
-    def __init__(self, *args, step_dt: float) -> None:
+    def __init__(self, *args, step_dt: float, fixed: bool = True) -> None:
         super().__init__(*args)
-        self.offline = False
+        self.offline, self.fixed = False, fixed
         self.step_dt = step_dt
         self.extra = ("zq", "dfl")
         self.zq, self.dfl = np.zeros((0, 3)), np.zeros(0, np.int64)
         self.dsum = np.zeros((1, 3))             # the end corrections added back so far
 
     def feed_core(self, t, f, alpha, core: dict, sink: Any) -> None:
-        """One chunk: stamps (s), f ((n, 3), m/s^2), alpha, and the core's outputs (int arrays v, p, zp,
-        nseg, flags, rest)."""
+        """One chunk: stamps (s), f ((n, 3), m/s^2), alpha, and the core's outputs (v, p, zp: int arrays
+        of the C core, or floats; nseg, flags, rest)."""
         fl = core["flags"]
         if np.any(fl & (DISP_SAT | DISP_BAD_REF)):
             raise Fallback("samples clipped in the core, or no frame")       # warned, the whole-file way
-        vq, pq, zq = core["v"] / 2.0**V_FRAC, core["p"] / 2.0**P_FRAC, core["zp"] / 2.0**A_FRAC
+        if self.fixed:
+            vq, pq, zq = core["v"] / 2.0**V_FRAC, core["p"] / 2.0**P_FRAC, core["zp"] / 2.0**A_FRAC
+        else:
+            vq, pq, zq = core["v"], core["p"], core["zp"]
         D = np.zeros((fl.size, 3))
         for e in np.flatnonzero((fl & DISP_SEG_END) != 0).tolist():
             if fl[e] & DISP_LONG:

@@ -40,14 +40,14 @@ from ..io.chunks import BLOCK_BYTES, Fallback
 from ..io.parquet import BATCH_ROWS
 from ..io.result_sink import write_deferred
 from .common import CLIP, CLIP_LO, OUT_FRAC, alpha_noise, force_noise_axes
-from .displacement import DISP_REST, GSUM_MAX, DisplaceParams, DispCore, tilt_frame
+from .displacement import DISP_REST, GSUM_MAX, DisplaceParams, DispCore, DispFloat, tilt_frame
 from .displacement_motions import NAMES, CoreMotionPass, MotionPass
 from .omega import omega_observability
 from .rest import REST_AT_REST, REST_QUIET, RestState, RestThresholds, default_rest_params
 from .stream_scan import on_grid, scan_with_bar
 from .trend import TREND_BLOCK_HOLDS, median_correlation, part_correlation, rest_parts
 
-__all__ = ["RestDetector", "RestPass", "core_rest_flags", "displacement_stream"]
+__all__ = ["RestDetector", "RestPass", "core_rest_flags", "new_core", "displacement_stream"]
 
 AXES = {None: None, "x": 0, "y": 1, "z": 2}
 
@@ -179,6 +179,12 @@ def core_rest_flags(core: dict) -> np.ndarray:
             | ((core["rest"] & REST_QUIET) != 0) * REST_QUIET).astype(np.uint8)
 
 
+def new_core(p: DisplaceParams, fixed: bool):
+    """The streaming form's integrator with its state carried over chunks: the C core's ac_disp
+    (:class:`~.displacement.DispCore`) or its float reference (:class:`~.displacement.DispFloat`)."""
+    return DispCore(p) if fixed else DispFloat(p.dt, p.axis, RestThresholds.of(p.rest))
+
+
 def _forces(device, cal, channels):
     """f (and alpha of an array) of a chunk's raw readings, as the whole-file command resolves them."""
     if device.is_array():
@@ -222,7 +228,7 @@ def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "f
     path, output : str or os.PathLike
         The recording and the result (Parquet by the name .parquet, else CSV).
     engine, form : str
-        Only ``float``/``offline`` (the default) is read in chunks.
+        ``float`` with ``offline`` (the default) or ``stream``, ``fixed`` (``stream``).
     axis : {None, "x", "y", "z"}
     omega : {"auto", "none", "array"}
         An array whose layout observes omega ("auto") or "array": the whole-file command.
@@ -236,7 +242,7 @@ def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "f
     -------
     list of str or None
         The warnings (none: what warns goes the whole-file way); None where the whole-file command
-        must run (nothing written): another engine or form, ``--resample``, an array's own omega, a
+        must run (nothing written): ``--resample``, ``--keep-turned``, an array's own omega, a
         recording that does not start at rest or whose last motion does not end at rest, no motion,
         a rest off g, a rest shorter than a trend block (TREND_BLOCK_HOLDS holds) or that holds a
         trend, a motion the body turned in, one longer than the correction holds, a still stretch
@@ -248,9 +254,10 @@ def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "f
         Bad rows, as the whole-file command words them (nothing written).
     """
     form = form or ("offline" if engine == "float" else "stream")
-    if (engine, form) not in (("float", "offline"), ("fixed", "stream")) or axis not in AXES:
+    if (engine, form) not in (("float", "offline"), ("float", "stream"), ("fixed", "stream")) or axis not in AXES:
         return None
     fixed = engine == "fixed"
+    streamed = form == "stream"
     if omega not in ("auto", "none", "array") or omega == "array":
         return None
     if device.is_array():
@@ -278,13 +285,16 @@ def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "f
         folder = Path(output).resolve().parent
         with tempfile.TemporaryFile(dir=folder) as flags_file:
             first = RestPass(p, sc.n, flags_file)
-            core = DispCore(p) if fixed else None
+            core = new_core(p, fixed) if streamed else None
             bar = progress(src.total, src.unit) if progress is not None else None
             for ch in src.chunks(None if bar is None else bar.update):
                 on_grid(sc, ch.start, ch.t)
                 if fixed:
                     f_q = core_forces(ch.raw)
                     first.feed(f_q / 2.0**OUT_FRAC, core_rest_flags(core.step(f_q)))
+                elif streamed:
+                    f = forces(ch.raw)[0]
+                    first.feed(f, core_rest_flags(core.step(f)))
                 else:
                     first.feed(forces(ch.raw)[0])
             if bar is not None:
@@ -298,8 +308,9 @@ def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "f
                     f"1-D along body {'xyz'[p.axis]}"}
             args = (p, sc.n, rho, f_axes, float(device.gravity_mps2),
                     alpha_noise(device, cal, sc.noise) if device.is_array() else None)
-            core = DispCore(p) if fixed else None
-            second = CoreMotionPass(*args, step_dt=core.dt) if fixed else MotionPass(*args)
+            core = new_core(p, fixed) if streamed else None
+            second = (CoreMotionPass(*args, step_dt=core.dt if fixed else p.dt, fixed=fixed) if streamed
+                      else MotionPass(*args))
 
             def produce(sink: Any) -> dict:
                 bar = progress(src.total, src.unit) if progress is not None else None
@@ -309,6 +320,8 @@ def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "f
                     if fixed:
                         f_q = core_forces(ch.raw)
                         second.feed_core(ch.t, f_q / 2.0**OUT_FRAC, alpha, core.step(f_q), sink)
+                    elif streamed:
+                        second.feed_core(ch.t, f, alpha, core.step(f), sink)
                     else:
                         second.feed(ch.t, f, alpha, fl, sink)
                 if bar is not None:
