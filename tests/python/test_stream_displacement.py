@@ -177,13 +177,30 @@ def edited(files, name, keep):
     return path
 
 
-@pytest.mark.parametrize("case", ["open_end", "moving_start", "one_stroke_open"])
+@pytest.mark.parametrize("engine, form", [("float", "offline"), ("float", "stream"), ("fixed", "stream")])
+@pytest.mark.parametrize("block", [1, 997, 1 << 30])
+def test_a_last_motion_not_ending_at_rest_is_left_out_in_chunks_too(files, capfd, engine, form, block):
+    """The commonest warning (a recording stopped before the body was set down): the output ends in
+    the rest before that motion, with the whole-file command's line, in the comments and on stderr."""
+    path = edited(files, "open_end.csv", files["rec"].t < 15.0)      # in the 4th stroke
+    ref, out = files["dir"] / f"oe_w_{engine}_{form}.csv", files["dir"] / f"oe_s_{engine}_{form}_{block}.csv"
+    rc_w, err_w = disp_cli(capfd, path, ref, "--whole-file", "--engine", engine, "--form", form)
+    assert rc_w == 0 and err_w.count("warning") == 1 and "does not end at rest" in err_w
+    got = displacement_stream(DEV, NOMINAL, path, out, engine=engine, form=form, block_bytes=block)
+    assert got == [err_w.strip().split("warning: ", 1)[1]]
+    assert out.read_bytes() == ref.read_bytes()
+    rc, err = disp_cli(capfd, path, out, "--engine", engine, "--form", form)
+    assert (rc, err) == (rc_w, err_w)
+
+
+@pytest.mark.parametrize("case", ["short_last_rest", "moving_start", "one_stroke_open"])
 def test_what_warns_goes_the_whole_file_way_with_its_words(files, capfd, case):
-    """A last motion that does not end at rest (left out, warned), a recording that does not start at
-    rest (warned), one whose only motion does not end at rest (refused): the whole-file command, its
-    output and its lines; the chunked pass writes nothing."""
+    """A last rest shorter than a trend block after a motion longer than the correction holds with it
+    (warned), a recording that does not start at rest (warned), one whose only motion does not end at
+    rest (refused): the whole-file command, its output and its lines; the chunked pass writes
+    nothing."""
     t = files["rec"].t
-    keep = {"open_end": t < 15.0, "moving_start": t > 3.0, "one_stroke_open": t < 3.0}[case]
+    keep = {"short_last_rest": t < 12.9, "moving_start": t > 3.0, "one_stroke_open": t < 3.0}[case]
     path = edited(files, f"{case}.csv", keep)
     out = files["dir"] / f"{case}_s.csv"
     assert displacement_stream(DEV, NOMINAL, path, out, block_bytes=997) is None

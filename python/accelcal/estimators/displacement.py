@@ -23,8 +23,8 @@ from .rest import REST_AT_REST, REST_QUIET, RestParams, RestState, RestThreshold
 
 __all__ = ["DISP_NO_REF", "DISP_REST", "DISP_MOVING", "DISP_SEG_END", "DISP_LONG", "DISP_SAT", "DISP_OPEN",
            "DISP_NO_REST", "DISP_REF_SET", "DISP_BAD_REF", "A_FRAC", "V_FRAC", "P_FRAC", "ROT_FRAC", "G_FRAC",
-           "GSUM_MAX", "DisplaceParams", "tilt_frame", "DispFloat", "displace_core", "displace_stream", "disp_cfg_fixed",
-           "DispCore", "displace_fixed", "displace_twin", "displace_error_bound"]
+           "GSUM_MAX", "DisplaceParams", "tilt_frame", "DispFloat", "displace_core", "displace_stream",
+           "disp_cfg_fixed", "DispCore", "displace_fixed", "displace_twin", "displace_error_bound"]
 
 # flag bits, from the compiled core
 (DISP_NO_REF, DISP_REST, DISP_MOVING, DISP_SEG_END, DISP_LONG, DISP_SAT, DISP_OPEN, DISP_NO_REST,

@@ -17,7 +17,7 @@ from .trend import TREND_BLOCK_HOLDS, trend_bound
 
 __all__ = ["REST_DEV_WARN_MPS2", "REST_NOISE_MAX_MPS2", "rest_noise_max", "wide_rest_warning", "no_rest_reason",
            "scale_off", "scale_cause", "still_off_g", "still_off_g_text", "off_g_text", "still_but_turned",
-           "still_block", "HeldStretches",
+           "still_block", "HeldStretches", "zp_text",
            "streamed_off_g", "trend_warnings", "final_trend_note"]
 
 
@@ -143,6 +143,11 @@ def no_rest_reason(f, t, rp: RestParams, cal=None) -> str:
                 f"|f| = {norm:.4g} m/s^2, but the rest detector's running mean never settles on a still stretch "
                 "that long: the body creeps or turns slowly throughout")
     return f"the stillest {hold} samples ({where}) are still (within {dev:.3g} m/s^2) but {off_g_text(norm, rp, cal)}"
+
+
+def zp_text(z) -> str:
+    """A motion's zero point (m/s^2) as the comment ``zero_point_mps2`` writes it."""
+    return "(" + ", ".join(f"{c:.4g}" for c in np.atleast_1d(z)) + ")"
 
 
 def still_block(blk, at_blk, rp: RestParams):

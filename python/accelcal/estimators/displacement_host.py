@@ -20,7 +20,7 @@ from .displacement import (A_FRAC, DISP_LONG, DISP_MOVING, DISP_NO_REST, DISP_OP
                            DISP_SEG_END, P_FRAC, V_FRAC, DisplaceParams, displace_fixed, displace_stream,
                            tilt_frame)
 from .displacement_checks import (REST_DEV_WARN_MPS2, final_trend_note, no_rest_reason, still_but_turned, still_off_g,
-                                  still_off_g_text, streamed_off_g, trend_warnings, wide_rest_warning)
+                                  still_off_g_text, streamed_off_g, trend_warnings, wide_rest_warning, zp_text)
 from .motion_checks import (ERROR_BOUND_COVERS, motion_error_warnings, motion_errors, rotated_motions, rotated_text,
                             turned_motions, turned_text, turned_warnings)
 from .rest import (REST_AT_REST, REST_QUIET, RestParams, default_rest_params, motion_window, rest_dated_back,
@@ -485,7 +485,7 @@ def displacement_from_recording(device, cal, rec, engine: str = "float", *, form
             "mode": "3-axis, gravity removed in the frame of the first rest" if ax is None else
             f"1-D along body {'xyz'[ax]}", "segments": str(len(zps))}
     if zps:
-        meta["zero_point_mps2"] = "; ".join("(" + ", ".join(f"{c:.4g}" for c in np.atleast_1d(z)) + ")" for z in zps)
+        meta["zero_point_mps2"] = "; ".join(zp_text(z) for z in zps)
         meta["error_bound_m"] = "; ".join(f"{x[2]:.3g}" for x in errs)
         meta["error_bound_covers"] = ERROR_BOUND_COVERS
     k = slice(0, cut)

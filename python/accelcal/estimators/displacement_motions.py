@@ -18,7 +18,7 @@ import numpy as np
 from ..io.chunks import Fallback
 from .displacement import (A_FRAC, DISP_BAD_REF, DISP_LONG, DISP_MOVING, DISP_REST, DISP_SAT, DISP_SEG_END, P_FRAC,
                            V_FRAC, DisplaceParams, tilt_frame)
-from .displacement_checks import HeldStretches, still_block
+from .displacement_checks import HeldStretches, still_block, zp_text
 from .displacement_host import at_rest_not_moving
 from .motion_checks import ERROR_BOUND_COVERS, motion_errors, rotated_motions, turned_motions
 from .rest import REST_AT_REST, REST_QUIET, motion_window, rest_run
@@ -73,9 +73,11 @@ class MotionPass:
         self.last = self.prev_end = 0
         self.written = 0
         self.sink: Any = None
+        self.open_start: int | None = None        # the last motion's first sample when it does not end at rest
+        self.cut: int | None = None               # the rows written, [0, cut), once that motion began
         self.pending = None                      # (anchor, end, zp, lo) of the motion before
-        self.zps: list = []
-        self.errs: list = []
+        self.zps: list = []                      # each corrected motion's zp as the comment writes it
+        self.errs: list = []                     # each one's error bound as the comment writes it
         self.next_block = 0
         self.off = HeldStretches(self.hold2, p.rest.dev_max)
         self.turned = HeldStretches(self.hold2, p.rest.dev_max)
@@ -114,6 +116,10 @@ class MotionPass:
         at = (self.fl & REST_AT_REST) != 0
         self.atd = np.concatenate([self.atd, at[m0:]])
         prev = np.concatenate(([at[m0 - 1] if m0 else False], at[m0:]))
+        if self.cut is not None:                  # the motion left out: its still blocks only
+            self._blocks(self.B0 + self.fl.size)
+            self._drop(self.next_block)
+            return
         for gi in (np.flatnonzero(np.diff(prev.astype(np.int8))) + m0 + self.B0).tolist():
             if (self.fl[gi - self.B0] & REST_AT_REST) != 0:     # global: a motion's drop moves B0
                 self._declared(gi)
@@ -149,7 +155,32 @@ class MotionPass:
         if self.m0 is None:
             self.m0 = self.f[:i].mean(axis=0)
             self.ref = self.f[self.atd][:max(self.p.rest.hold, 1)].mean(axis=0)
-        self.s_cur = gi
+        if gi == self.open_start:
+            self._open(gi)
+        else:
+            self.s_cur = gi
+
+    def _open(self, s: int) -> None:
+        """The last motion, from s (global), which does not end at rest: left out, the output cut at s
+        (displace_offline integrates it from its anchor, whose rows before s are written)."""
+        B0, p = self.B0, self.p
+        if self.offline:
+            pad = (2 ** p.rest.ema_shift) if p.pad is None else int(p.pad)
+            at = (self.fl & REST_AT_REST) != 0
+            a_idx = motion_window(self.acc, at, s - B0, self.prev_end - B0, None, p.rest.dev_max / 5.0,
+                                  1 if p.axis is not None else 3)[0] + B0
+            a_idx = max(a_idx - pad, self.prev_end)
+            la, ll, ls = a_idx - B0, self.last - B0, s - B0
+            self.pp[ll:la + 1] = self.pos
+            self.praw[ll:la + 1] = self.pos_raw
+            a = self.acc[la:ls]
+            vv = np.vstack([np.zeros(3), np.cumsum(0.5 * p.dt * (a[1:] + a[:-1]), axis=0)])[:ls - la]
+            pp = np.vstack([np.zeros(3), np.cumsum(0.5 * p.dt * (vv[1:] + vv[:-1]), axis=0)])[:ls - la]
+            self.v[la:ls] = vv
+            self.pp[la:ls] = self.pos + pp
+            self.praw[la:ls] = self.pos_raw + pp
+        self.finalize(s)
+        self.cut = s
 
     def _trend(self, r: int, end: int) -> None:
         """The trend test of the rest [r, end) (global), as rest_without_trend: a trend, or a block
@@ -205,7 +236,7 @@ class MotionPass:
         self.v[le] = 0.0
         lo = self.prev_end + 1 if self.zps else 0
         self.last, self.prev_end = end + 1, end
-        self.zps.append(zp)
+        self.zps.append(zp_text(zp))
         self._checked(a_idx, end, zp, lo)
 
     def _checked(self, a_idx: int, end: int, zp, lo: int) -> None:
@@ -235,7 +266,15 @@ class MotionPass:
                                 self.p.dt, self.p.axis, self.rho)[0]
             if not err[3] <= err[2] - err[3]:
                 raise Fallback("a motion longer than the correction holds")   # motion_error_warnings
-            self.errs.append(err)
+            self.errs.append(f"{err[2]:.3g}")
+        self._blocks(upto)
+        v, pp, pr = self.v[w:u], self.pp[w:u], self.praw[w:u]
+        self.sink.write([self.t[w:u], v[:, 0], v[:, 1], v[:, 2], pp[:, 0], pp[:, 1], pp[:, 2], pr[:, 0], pr[:, 1],
+                         pr[:, 2], self.atd[w:u].astype(float), self.corr[w:u].astype(float)])
+        self.written = upto
+
+    def _blocks(self, upto: int) -> None:
+        """The still blocks ending by ``upto`` (global), as still_off_g and still_but_turned take them."""
         rp = self.p.rest
         while self.next_block + self.hold2 <= upto:
             j = self.next_block - self.B0
@@ -248,10 +287,6 @@ class MotionPass:
                         self.turned.feed(self.next_block, m):
                     raise Fallback("a still stretch turned")
             self.next_block += self.hold2
-        v, pp, pr = self.v[w:u], self.pp[w:u], self.praw[w:u]
-        self.sink.write([self.t[w:u], v[:, 0], v[:, 1], v[:, 2], pp[:, 0], pp[:, 1], pp[:, 2], pr[:, 0], pr[:, 1],
-                         pr[:, 2], self.atd[w:u].astype(float), self.corr[w:u].astype(float)])
-        self.written = upto
 
     def _tail(self) -> None:
         """The rows after the last motion: at its end point."""
@@ -273,16 +308,18 @@ class MotionPass:
         """The last rest and the rows after the last motion's anchor; the metadata."""
         if self.rest_r is None or self.s_cur is not None or not self.zps:
             raise Fallback("no motion closed by a rest")
-        self._trend(self.rest_r, self.n)
-        self._tail()
         self.sink = sink
-        self.finalize(self.n)
+        if self.cut is None:
+            self._trend(self.rest_r, self.n)
+            self._tail()
+            self.finalize(self.n)
+        else:
+            self._blocks(self.n)
         if self.off.finish() or self.turned.finish():
             raise Fallback("a still stretch off g or turned")
         return {"segments": str(len(self.zps)),
-                "zero_point_mps2": "; ".join("(" + ", ".join(f"{c:.4g}" for c in np.atleast_1d(z)) + ")"
-                                             for z in self.zps),
-                "error_bound_m": "; ".join(f"{x[2]:.3g}" for x in self.errs),
+                "zero_point_mps2": "; ".join(self.zps),
+                "error_bound_m": "; ".join(self.errs),
                 "error_bound_covers": ERROR_BOUND_COVERS}
 
 
@@ -347,5 +384,5 @@ class CoreMotionPass(MotionPass):
         self.corr[ls:le + 1] = True
         lo = self.prev_end + 1 if self.zps else 0
         self.prev_end = e
-        self.zps.append(self.zq[le])
+        self.zps.append(zp_text(self.zq[le]))
         self._checked(a, e, self.zq[le], lo)

@@ -39,17 +39,19 @@ from ..io.chunk_source import open_chunks
 from ..io.chunks import BLOCK_BYTES, Fallback
 from ..io.parquet import BATCH_ROWS
 from ..io.result_sink import write_deferred
-from .common import CLIP, CLIP_LO, OUT_FRAC, alpha_noise, force_noise_axes
+from .common import CLIP, CLIP_LO, OUT_FRAC, alpha_noise, force_noise_axes, time_span
 from .displacement import DISP_REST, GSUM_MAX, DisplaceParams, DispCore, DispFloat, tilt_frame
 from .displacement_motions import NAMES, CoreMotionPass, MotionPass
 from .omega import omega_observability
 from .rest import REST_AT_REST, REST_QUIET, RestState, RestThresholds, default_rest_params
 from .stream_scan import on_grid, scan_with_bar
-from .trend import TREND_BLOCK_HOLDS, median_correlation, part_correlation, rest_parts
+from .trend import TREND_BLOCK_HOLDS, correlation_from_median, nan_median, part_correlation, rest_parts
 
-__all__ = ["RestDetector", "RestPass", "core_rest_flags", "new_core", "displacement_stream"]
+__all__ = ["RestDetector", "RestPass", "core_rest_flags", "new_core", "open_end_warning", "displacement_stream"]
 
 AXES = {None: None, "x": 0, "y": 1, "z": 2}
+#: the most the median of the rests' correlation estimates holds at once (bytes)
+MEDIAN_BYTES = 1 << 24
 
 
 class RestDetector:
@@ -110,19 +112,25 @@ class RestPass:
 
     Attributes
     ----------
-    est, N : list, int
-        The rests' stretches' correlation estimates and their samples (:func:`~.trend.rest_parts`).
+    est, K, N : file, int, int
+        The rests' stretches' correlation estimates (a temporary file in ``folder``), how many, and
+        their samples (:func:`~.trend.rest_parts`).
     rests : int
         Rests (dated back, each from where its quiet run began).
+    open_start : int or None
+        After :meth:`finish`: the first sample of a last motion that does not end at rest.
     """
 
-    def __init__(self, p: DisplaceParams, n: int, flags_file: Any) -> None:
+    def __init__(self, p: DisplaceParams, n: int, flags_file: Any, folder: Any = None) -> None:
         self.p, self.n, self.file = p, n, flags_file
         self.det = RestDetector(p)
         self.L = max(2, TREND_BLOCK_HOLDS * p.rest.hold)
         self.base, self.F, self.FL = 0, np.zeros((0, 3)), np.zeros(0, np.uint8)   # rows kept from `base`
-        self.est: list = []
+        self.est = tempfile.TemporaryFile(dir=folder)
+        self.K = 0                                # estimates written to self.est
         self.N, self.rests = 0, 0
+        self.last_at: int | None = None           # after the last sample at rest
+        self.open_start: int | None = None        # the last motion's first sample, when it does not end at rest
 
     def feed(self, f: np.ndarray, fl: np.ndarray | None = None) -> None:
         """One chunk: f ((n, 3), m/s^2) and the rest flags (REST_AT_REST, REST_QUIET; None: the offline
@@ -135,6 +143,8 @@ class RestPass:
         run_start = np.maximum.accumulate(np.where(quiet, -1, idx)) + 1
         edges = np.diff(np.concatenate(([0], at.astype(np.int8), [0])))
         keep = FL.size if not quiet[-1] else int(run_start[-1])
+        if at.any():
+            self.last_at = self.base + int(np.flatnonzero(at)[-1]) + 1
         for d, x in zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist()):
             if x == FL.size:                    # a rest still going: kept from where it began
                 keep = min(keep, int(run_start[d]))
@@ -154,7 +164,8 @@ class RestPass:
         for k in rest_parts(self.base + r, self.base + x, self.n, self.L, g.hold):
             c = part_correlation(F[k - self.base], self.L)
             if c is not None:
-                self.est.append(c)
+                self.est.write(np.ascontiguousarray(c, np.float64).tobytes())
+                self.K += 1
                 self.N += k.size
 
     def finish(self) -> np.ndarray:
@@ -162,14 +173,38 @@ class RestPass:
         FL = self.FL
         at = (FL & REST_AT_REST) != 0
         if not FL.size or not at[-1]:
-            raise Fallback("no rest, or the last motion does not end at rest")
+            if self.rests < 2:
+                raise Fallback("no rest, or no motion closed by one")
+            self.open_start = self.last_at            # the last motion does not end at rest: left out
+            return self.correlation()
         quiet = (FL & REST_QUIET) != 0
         run_start = np.maximum.accumulate(np.where(quiet, -1, np.arange(FL.size))) + 1
         d = int(np.flatnonzero(~at)[-1]) + 1 if not at.all() else 0
         self.rest(self.F, int(run_start[d]), FL.size)
         if self.rests < 2:
             raise Fallback("no motion closed by a rest")
-        return median_correlation(self.est, self.N, self.L)
+        return self.correlation()
+
+    def correlation(self) -> np.ndarray:
+        """The median of the stretches' estimates (kept in a temporary file, one (L, 3) block each),
+        value by value (:func:`~.trend.nan_median`), in groups of values whose columns take at most
+        MEDIAN_BYTES, read back block by block: memory that does not grow with the rests."""
+        K, L = self.K, self.L
+        if not K:
+            return correlation_from_median(None, self.N, L)
+        width = 3 * L
+        group = max(1, min(width, MEDIAN_BYTES // (8 * K)))
+        med = np.zeros(width)
+        rows = max(1, MEDIAN_BYTES // (8 * width))
+        for g0 in range(0, width, group):
+            cols = np.empty((K, min(group, width - g0)))
+            self.est.seek(0)
+            for r0 in range(0, K, rows):
+                blk = np.frombuffer(self.est.read(8 * width * min(rows, K - r0)), np.float64).reshape(-1, width)
+                cols[r0:r0 + blk.shape[0]] = blk[:, g0:g0 + cols.shape[1]]
+            med[g0:g0 + cols.shape[1]] = nan_median(cols)
+        self.est.close()
+        return correlation_from_median(med.reshape(L, 3), self.N, L)
 
 
 def core_rest_flags(core: dict) -> np.ndarray:
@@ -215,6 +250,20 @@ def _core_forces(device, cal, channels):
     return lambda raw: triad_forces(cal, SimpleNamespace(raw=raw), channels, "fixed", signed)[0]
 
 
+def open_end_warning(t0: float, marks: dict, before: int, s: int, last: int) -> str:
+    """The whole-file command's line (:func:`~.displacement_host.displacement_from_recording`) for a
+    last motion, from sample ``s`` to the last, ``last``, that does not end at rest: left out, the
+    output ending at sample ``before`` (``marks``: sample -> (t in s, its row); ``t0`` the first
+    stamp, s)."""
+    def span(*k):
+        t = np.array([t0] + [marks[i][0] for i in k])
+        rows = dict(enumerate((marks[i][1] for i in k), 1))
+        return time_span(t, 1, None if len(k) == 1 else 2, SimpleNamespace(lines=1, line=rows.get))
+    return (f"displacement: the last motion ({span(s, last)}) does not end at rest: without a rest at its end its "
+            "zero point cannot be removed (its drift grows with time squared), so it is left out; the output ends "
+            f"at {span(before)}, in the rest before it")
+
+
 def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "float", form: str | None = None,
                         axis: Any = None, omega: str = "auto", scale: Any = None, block_bytes: int = BLOCK_BYTES,
                         batch_rows: int = BATCH_ROWS, progress: Callable[[Any, str], Any] | None = None
@@ -241,9 +290,10 @@ def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "f
     Returns
     -------
     list of str or None
-        The warnings (none: what warns goes the whole-file way); None where the whole-file command
+        The warnings (the whole-file command's: a last motion that does not end at rest, left out;
+        anything else that warns goes the whole-file way); None where the whole-file command
         must run (nothing written): ``--resample``, ``--keep-turned``, an array's own omega, a
-        recording that does not start at rest or whose last motion does not end at rest, no motion,
+        recording that does not start at rest, no motion closed by a rest,
         a rest off g, a rest shorter than a trend block (TREND_BLOCK_HOLDS holds) or that holds a
         trend, a motion the body turned in, one longer than the correction holds, a still stretch
         off g or turned, and what :func:`~.stream_scan.scan` leaves to it.
@@ -284,7 +334,7 @@ def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "f
         core_forces = _core_forces(device, cal, channels) if fixed else None
         folder = Path(output).resolve().parent
         with tempfile.TemporaryFile(dir=folder) as flags_file:
-            first = RestPass(p, sc.n, flags_file)
+            first = RestPass(p, sc.n, flags_file, folder)
             core = new_core(p, fixed) if streamed else None
             bar = progress(src.total, src.unit) if progress is not None else None
             for ch in src.chunks(None if bar is None else bar.update):
@@ -311,10 +361,15 @@ def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "f
             core = new_core(p, fixed) if streamed else None
             second = (CoreMotionPass(*args, step_dt=core.dt if fixed else p.dt, fixed=fixed) if streamed
                       else MotionPass(*args))
+            second.open_start = first.open_start
+            marks: dict = {}                      # (t, row) of the samples the warning of an open end names
+            named = () if first.open_start is None else (first.open_start - 1, first.open_start, sc.n - 1)
 
             def produce(sink: Any) -> dict:
                 bar = progress(src.total, src.unit) if progress is not None else None
                 for ch in src.chunks(None if bar is None else bar.update):
+                    marks.update({k: (float(ch.t[k - ch.start]), ch.line(k - ch.start)) for k in named
+                                  if ch.start <= k < ch.start + ch.n})
                     fl = np.frombuffer(flags_file.read(ch.n), np.uint8)
                     f, alpha = forces(ch.raw)
                     if fixed:
@@ -326,9 +381,13 @@ def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "f
                         second.feed(ch.t, f, alpha, fl, sink)
                 if bar is not None:
                     bar.close()
-                return {**meta, **second.finish(sink)}
+                meta.update(second.finish(sink))
+                if named:
+                    warnings.append(open_end_warning(sc.t0, marks, *named))
+                return {**meta, **{f"warning_{k}": w for k, w in enumerate(warnings, 1)}}
 
+            warnings: list[str] = []
             write_deferred(output, NAMES, produce)
     except Fallback:
         return None
-    return []
+    return warnings

@@ -11,7 +11,8 @@ import numpy as np
 from .rest import RestParams
 
 __all__ = ["TREND_BLOCK_HOLDS", "TREND_FALSE_ALARM", "CORR_CHUNK_BLOCKS", "trend_bound", "noise_correlation",
-           "part_correlation", "median_correlation", "rest_parts",
+           "part_correlation", "median_correlation", "nan_median", "correlation_from_median",
+           "rest_parts",
            "rest_correlation", "rest_widening", "trend_widening", "rest_without_trend"]
 
 
@@ -96,14 +97,28 @@ def median_correlation(est, N: int, maxlag: int) -> np.ndarray:
     each (maxlag, 3)) over ``N`` samples in all: the median at each lag, cut where it falls within
     2 / sqrt(N)."""
     L = max(int(maxlag), 1)
-    rho = np.zeros((L, 3))
-    rho[0] = 1.0
-    if not est:
-        return rho
+    if not len(est):
+        return correlation_from_median(None, N, L)
+    return correlation_from_median(nan_median(np.array(est)), N, L)
+
+
+def nan_median(est: np.ndarray) -> np.ndarray:
+    """The median over the stretches' estimates ``est`` ((K, ...)) of each of their values, NaN
+    left out (all NaN: NaN), without numpy's warning."""
     with np.errstate(all="ignore"), warnings.catch_warnings():
         # a constant axis (noise below the code step) has no estimate at any lag: white, below
         warnings.simplefilter("ignore", RuntimeWarning)
-        med = np.nanmedian(np.array(est), axis=0)          # (L, 3)
+        return np.nanmedian(est, axis=0)
+
+
+def correlation_from_median(med, N: int, maxlag: int) -> np.ndarray:
+    """:func:`median_correlation` from the median ``med`` ((maxlag, 3), or None: no estimate) of
+    the stretches' estimates over ``N`` samples."""
+    L = max(int(maxlag), 1)
+    rho = np.zeros((L, 3))
+    rho[0] = 1.0
+    if med is None:
+        return rho
     for j in range(3):
         cj = med[:, j]
         if not np.isfinite(cj[0]):
