@@ -79,6 +79,7 @@ class MotionPass:
         self.zps: list = []                      # each corrected motion's zp as the comment writes it
         self.errs: list = []                     # each one's error bound as the comment writes it
         self.next_block = 0
+        self.keep = 0                             # the rows before are no longer needed (global)
         self.off = HeldStretches(self.hold2, p.rest.dev_max)
         self.turned = HeldStretches(self.hold2, p.rest.dev_max)
 
@@ -121,17 +122,19 @@ class MotionPass:
             self._drop(self.next_block)
             return
         for gi in (np.flatnonzero(np.diff(prev.astype(np.int8))) + m0 + self.B0).tolist():
-            if (self.fl[gi - self.B0] & REST_AT_REST) != 0:     # global: a motion's drop moves B0
+            if (self.fl[gi - self.B0] & REST_AT_REST) != 0:
                 self._declared(gi)
             else:
                 self._moving(gi)
+        if self.cut is None:
+            self._drop(self.keep)                 # once a chunk: a copy per motion would be chunk x motions
 
     def _declared(self, gi: int) -> None:
         i = gi - self.B0
-        quiet = (self.fl & REST_QUIET) != 0
+        fl = self.fl
         r = i
-        if quiet[i]:                              # each rest from where its quiet run began
-            while r > 0 and quiet[r - 1]:
+        if fl[i] & REST_QUIET:                    # each rest from where its quiet run began
+            while r > 0 and fl[r - 1] & REST_QUIET:
                 r -= 1
             self.atd[r:i] = True
         r += self.B0
@@ -166,9 +169,10 @@ class MotionPass:
         B0, p = self.B0, self.p
         if self.offline:
             pad = (2 ** p.rest.ema_shift) if p.pad is None else int(p.pad)
-            at = (self.fl & REST_AT_REST) != 0
-            a_idx = motion_window(self.acc, at, s - B0, self.prev_end - B0, None, p.rest.dev_max / 5.0,
-                                  1 if p.axis is not None else 3)[0] + B0
+            W = self.prev_end
+            at = (self.fl[W - B0:s - B0 + 1] & REST_AT_REST) != 0
+            a_idx = motion_window(self.acc[W - B0:s - B0 + 1], at, s - W, 0, None, p.rest.dev_max / 5.0,
+                                  1 if p.axis is not None else 3)[0] + W
             a_idx = max(a_idx - pad, self.prev_end)
             la, ll, ls = a_idx - B0, self.last - B0, s - B0
             self.pp[ll:la + 1] = self.pos
@@ -209,11 +213,12 @@ class MotionPass:
         """The motion [s, e) (global), its closing rest declared at e: displace_offline's step."""
         B0, p = self.B0, self.p
         pad = (2 ** p.rest.ema_shift) if p.pad is None else int(p.pad)
-        at = (self.fl & REST_AT_REST) != 0
+        W = self.prev_end                         # the window [W, e]: what motion_window looks at
+        at = (self.fl[W - B0:e - B0 + 1] & REST_AT_REST) != 0
         fq = e - p.rest.hold + 1
-        a_idx, b = motion_window(self.acc, at, s - B0, self.prev_end - B0, fq - B0, p.rest.dev_max / 5.0,
+        a_idx, b = motion_window(self.acc[W - B0:e - B0 + 1], at, s - W, 0, fq - W, p.rest.dev_max / 5.0,
                                  1 if p.axis is not None else 3)
-        a_idx, b = a_idx + B0, b + B0
+        a_idx, b = a_idx + W, b + W
         a_idx = max(a_idx - pad, self.prev_end)
         end = min(max(b + pad, s), e)
         la, le, ll = a_idx - B0, end - B0, self.last - B0
@@ -244,15 +249,16 @@ class MotionPass:
         its anchor finalized; the rows before the rest before it dropped."""
         B0, p, dt = self.B0, self.p, self.p.dt
         la, le = a_idx - B0, end - B0
-        one = [(la, le, zp)]
-        if turned_motions(self.f, self.atd, one, self.f_sigma, p.rest, p.axis, self.m0):
+        r = rest_run(self.atd, la, 0, la)[0]      # the rest before it began (dated back)
+        w = slice(r, le + 1)                      # what the checks look at: that rest and the motion
+        if turned_motions(self.f[w], self.atd[w], [(la - r, le - r, zp)], self.f_sigma, p.rest, p.axis, self.m0):
             raise Fallback("a turned motion")
-        if self.alpha_sigma is not None and rotated_motions(self.alpha, self.atd, one, dt, self.alpha_sigma):
+        if self.alpha_sigma is not None and rotated_motions(self.alpha[w], self.atd[w], [(la - r, le - r, zp)], dt,
+                                                            self.alpha_sigma):
             raise Fallback("a rotated motion")
         self.finalize(a_idx)
         self.pending = (a_idx, end, zp, lo)
-        r = B0 + rest_run(self.atd, la, 0, la)[0]
-        self._drop(min(lo, r, a_idx, self.next_block))
+        self.keep = min(lo, B0 + r, a_idx, self.next_block)     # dropped once the chunk is done
 
     def finalize(self, upto: int) -> None:
         """Rows [written, upto) are final: at_rest_not_moving, the motion before's error bound, the
