@@ -16,7 +16,7 @@ from accelcal.estimators.rest import RestThresholds, default_rest_params
 from accelcal.estimators.displacement_stream import displacement_stream
 from accelcal.io.calibration import Calibration
 from accelcal.io.chunks import csv_chunks, csv_head
-from accelcal.io.device import default_device, default_triad, save_device
+from accelcal.io.device import Device, default_device, default_triad, save_device
 from accelcal.io.recording import read_recording, write_recording
 from accelcal.io.recording_type import Recording
 from accelcal.simulate import run_simulation
@@ -296,3 +296,44 @@ def test_the_detector_and_the_float_integrator_in_chunks_are_the_whole_recording
     assert len(core.segments) == len(whole["segments"]) == 4
     for a, b in zip(core.segments, whole["segments"]):
         assert a[:2] == b[:2] and np.array_equal(a[2], b[2])
+
+
+def _tipped_stroke(tmp_path, tip_deg):
+    """A level triad stating its noise (0.02 m/s^2) at 100 Hz: 2 s at rest, 0.5 m along x with one sine
+    period of acceleration in 2 s, 2 s at rest; with ``tip_deg`` the body then tips about y (0.5 s)
+    and holds still to the end, 2.5 s (test_displacement_checks' stroke, not tipped back)."""
+    g, rate = 9.80665, 100.0
+    d = Device(name="triad", sample_rate_hz=rate, gravity_mps2=g, raw_min=-32768, raw_max=32767,
+               positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, 16384 / g),
+               zero_counts=np.zeros(3), noise_mps2=0.02)
+    t = np.arange(int((6.0 if tip_deg == 0.0 else 9.0) * rate)) / rate
+    a = np.where((t >= 2.0) & (t < 4.0), 0.5 * 2 * np.pi / 4.0 * np.sin(np.pi * (t - 2.0)), 0.0)
+    up = np.clip((t - 6.0) / 0.5, 0.0, 1.0)
+    th = np.radians(tip_deg) * (3 * up**2 - 2 * up**3)
+    body = np.column_stack([a * np.cos(th) - g * np.sin(th), np.zeros_like(t), a * np.sin(th) + g * np.cos(th)])
+    raw = np.round((body + 0.02 * np.random.default_rng(1).standard_normal(body.shape)) * d.counts_per_mps2)
+    save_device(d, tmp_path / "d.json")
+    write_recording(tmp_path / "r.csv", Recording(t=t, raw=raw.astype(np.int64)))
+    return d
+
+
+@pytest.mark.parametrize("engine", ["float", "fixed"])
+def test_a_body_still_but_turned_is_seen_while_reading(tmp_path, capfd, engine):
+    """The still blocks are checked as the rows go by (HeldStretches), after the output's end too: a
+    body tipped by 10 deg after its stroke and held to the end (a last motion that does not end at
+    rest, which alone streams) is warned of by the whole-file command, which runs (the chunked pass
+    writes nothing); the stroke alone streams."""
+    for tip, streams in ((0.0, True), (10.0, False)):
+        d = _tipped_stroke(tmp_path, tip)
+        out, ref = tmp_path / f"s{tip}.csv", tmp_path / f"w{tip}.csv"
+        got = displacement_stream(d, Calibration.nominal(d), tmp_path / "r.csv", out, engine=engine, block_bytes=700)
+        rc_w, err_w = disp_cli(capfd, tmp_path / "r.csv", ref, "--whole-file", "--engine", engine,
+                               device=tmp_path / "d.json")
+        assert rc_w == 0 and ("turned from the first rest" in err_w) == (not streams), err_w
+        if streams:
+            assert got == [] and out.read_bytes() == ref.read_bytes()
+        else:
+            assert got is None and not out.exists()
+            assert disp_cli(capfd, tmp_path / "r.csv", out, "--engine", engine, device=tmp_path / "d.json") == \
+                (rc_w, err_w)
+            assert out.read_bytes() == ref.read_bytes()
