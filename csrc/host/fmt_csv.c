@@ -42,7 +42,8 @@ static int g9_digits(double x, long q_out[1], int e_out[1])
     if (!(a >= 1e-19 && a < 1e35)) {
         return 0;
     }
-    e = (int)floor(log10(a));
+    (void)frexp(a, &e);                 /* a in [2^(e-1), 2^e): log10(a) within 0.302 below e*log10(2) */
+    e = (int)floor((double)(e - 1) * 0.30102999566398120);   /* off by one at most: corrected below */
     k = 8 - e;
     if (k < -27 || k > 27) {
         return 0;
@@ -66,7 +67,7 @@ static int g9_digits(double x, long q_out[1], int e_out[1])
             return 0;
         }
     }
-    fl = floorl(y);
+    fl = (long double)(long)y;          /* y > 0: truncation is the floor */
     frac = y - fl;
     if (fabsl(frac - 0.5L) < 1e-6L) {
         return 0;
@@ -196,7 +197,14 @@ size_t acx_csv_rows(const char *prefix, size_t prefix_len, const double *values,
                 out[pos++] = 'n';
                 continue;
             }
-            k = x != 0.0 && isfinite(x) ? g9_fast(x, out + pos) : 0;
+            if (x == 0.0) {
+                if (signbit(x)) {
+                    out[pos++] = '-';
+                }
+                out[pos++] = '0';
+                continue;
+            }
+            k = isfinite(x) ? g9_fast(x, out + pos) : 0;
             if (k > 0) {
                 pos += (size_t)k;
                 continue;

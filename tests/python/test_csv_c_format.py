@@ -41,12 +41,17 @@ def test_c_rows_are_pythons(rows, with_t):
 
 
 def test_many_doubles_at_once():
-    """10^5 doubles of every exponent (random bits, scaled normals, ties of the ninth digit)."""
+    """1.8x10^5 doubles of every exponent (random bits, scaled normals, ties of the ninth digit, powers of
+    ten and their neighbours, multiples of 2^-10)."""
     rng = np.random.default_rng(37)
     n = rng.integers(10 ** 8, 10 ** 9, 20000)
     v = np.concatenate([rng.integers(0, 2 ** 64, 40000, dtype=np.uint64).view(np.float64),
                         rng.normal(0, 10, 20000) * 10.0 ** rng.integers(-25, 36, 20000),
-                        (n * 10 + 5).astype(float) * 10.0 ** rng.integers(-12, 12, 20000), n + 0.5]).reshape(-1, 4)
+                        (n * 10 + 5).astype(float) * 10.0 ** rng.integers(-12, 12, 20000), n + 0.5,
+                        np.nextafter(10.0 ** rng.integers(-70, 120, 20000), np.inf),      # powers of ten and beside
+                        np.nextafter(10.0 ** rng.integers(-70, 120, 20000), -np.inf),
+                        10.0 ** rng.integers(-70, 120, 20000),
+                        np.round(rng.normal(0, 10, 20000) * 1024) / 1024]).reshape(-1, 4)       # the fixed core's steps
     assert c_float_rows(np.arange(v.shape[0]) / 7.0, v) == python_text(np.arange(v.shape[0]) / 7.0, v)
 
 
