@@ -121,20 +121,33 @@ def convert_csv_chunked(path: Any, opts: Options, scale: Scale | None, block_byt
 def first_pass(path: Any, head: Head, block_bytes: int, progress: Callable[[Any, str], Any] | None
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, bool]:
     """t, the counts, the pose labels (None: no pose column) and whether any f is given, read in
-    chunks (Fallback at any bad row or a row whose line is not the header's + its index: the
-    whole-file reader words it)."""
-    ts, raws, poses = [], [], []
-    f_given, prev = False, None
+    chunks into arrays sized from the file's bytes (Fallback at any bad row or a row whose line is
+    not the header's + its index: the whole-file reader words it)."""
+    cols: dict[str, np.ndarray] = {}              # t, raw, pose, grown in place (not a list of chunks joined)
+    n, f_given, prev = 0, False, None
+    size, read = file_size(path) - head.pos, [0]
     bar = bar_for(path, head, progress)
-    for ch in csv_chunks(path, head, block_bytes, None if bar is None else bar.update):
+
+    def tick(k: int) -> None:
+        read[0] += k
+        if bar is not None:
+            bar.update(k)
+
+    for ch in csv_chunks(path, head, block_bytes, tick):
         if reader_checks(head, ch, prev) or not np.all(np.isfinite(ch.t)):
             raise Fallback("a bad row")
         if ch.n and (ch.line(0) != head.first_line + ch.start or ch.line(ch.n - 1) != head.first_line + ch.start + ch.n - 1):
             raise Fallback("rows not on consecutive lines")
-        ts.append(ch.t)
-        raws.append(ch.raw)
-        if "pose" in ch.other:
-            poses.append(ch.other["pose"])
+        parts = {"t": ch.t, "raw": ch.raw, **({"pose": ch.other["pose"]} if "pose" in ch.other else {})}
+        if n + ch.n > (len(cols["t"]) if cols else 0):
+            # room for the rows the file holds at the mean bytes a row so far, and a tenth more
+            # (at least a quarter more than before: an estimate short again and again copies rarely)
+            want = max(n + ch.n, int(1.1 * size * (n + ch.n) / max(read[0], 1)),
+                       int(1.25 * len(cols["t"])) if cols else 0)
+            cols = {k: grown(cols.get(k), v, want) for k, v in parts.items()}
+        for k, v in parts.items():
+            cols[k][n:n + ch.n] = v
+        n += ch.n
         f = ch.vecs.get("f")
         f_given = f_given or (f is not None and bool(np.isfinite(f).any()))
         prev = ch
@@ -142,20 +155,27 @@ def first_pass(path: Any, head: Head, block_bytes: int, progress: Callable[[Any,
         bar.close()
     if prev is None:
         raise Fallback("no rows")
-    t = np.concatenate(ts)
-    del ts
-    raw = np.concatenate(raws)
-    del raws
-    return t, raw, np.concatenate(poses) if poses else None, f_given
+    return cols["t"][:n], cols["raw"][:n], cols["pose"][:n] if "pose" in cols else None, f_given
+
+
+def file_size(path: Any) -> int:
+    with open(path, "rb") as fh:
+        return fh.seek(0, 2)
+
+
+def grown(arr: np.ndarray | None, like: np.ndarray, rows: int) -> np.ndarray:
+    """``arr`` (or nothing) in an array of ``rows`` rows of ``like``'s dtype and columns."""
+    out = np.empty((rows,) + like.shape[1:], dtype=like.dtype)
+    if arr is not None:
+        out[:len(arr)] = arr
+    return out
 
 
 def bar_for(path: Any, head: Head, progress: Callable[[Any, str], Any] | None) -> Any:
     """A bar over the bytes of the rows (None without ``progress``)."""
     if progress is None:
         return None
-    with open(path, "rb") as fh:
-        size = fh.seek(0, 2)
-    return progress(max(size - head.pos, 0), "B")
+    return progress(max(file_size(path) - head.pos, 0), "B")
 
 
 def second_pass(path: Any, head: Head, block_bytes: int, progress: Callable[[Any, str], Any] | None,
