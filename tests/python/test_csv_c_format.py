@@ -35,6 +35,7 @@ doubles = st.one_of(any_double, ties, special, st.floats(allow_nan=True, allow_i
 @settings(max_examples=400, deadline=None)
 @given(st.lists(st.lists(doubles, min_size=3, max_size=3), min_size=1, max_size=40), st.booleans())
 def test_c_rows_are_pythons(rows, with_t):
+    assert csvformat.C_ROWS is not None             # (the extension built with csrc/host/fmt_csv.c)
     v = np.array(rows, dtype=np.float64)
     t = np.arange(v.shape[0]) / 60.0 + 1e9 if with_t else None
     assert c_float_rows(t, v) == python_text(t, v)

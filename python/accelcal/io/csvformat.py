@@ -16,7 +16,10 @@ import numpy as np
 
 from .._core import ffi, lib
 
-__all__ = ["INT", "REPR", "TEXT", "CHUNK_ROWS", "G9", "csv_rows", "csv_cell", "c_float_rows"]
+#: the C formatter, where the built extension has it (an extension built before it: the Python path)
+C_ROWS = getattr(lib, "acx_csv_rows", None)
+
+__all__ = ["INT", "REPR", "TEXT", "CHUNK_ROWS", "G9", "C_ROWS", "csv_rows", "csv_cell", "c_float_rows"]
 
 INT = "%d"  # an integer column: str(v)
 REPR = "%r"  # a float column: repr(x), the shortest text that reads back to x
@@ -59,7 +62,7 @@ def csv_rows(columns: Sequence[Any], formats: Sequence[str], nan_cells: Sequence
     n = len(cols[0])
     lead = 1 if formats[0] == REPR else 0
     if len(formats) > lead and all(f == G9 for f in formats[lead:]) and all(v is None for v in nan_cells[lead:]) \
-            and locale.localeconv()["decimal_point"] == ".":
+            and C_ROWS is not None and locale.localeconv()["decimal_point"] == ".":
         for row0 in range(0, n, chunk_rows):
             part = [c[row0:row0 + chunk_rows] for c in cols]
             yield c_float_rows(part[0] if lead else None, np.column_stack(part[lead:]))
@@ -91,7 +94,7 @@ def c_float_rows(t: np.ndarray | None, values: np.ndarray) -> str:
     prefix = ("\n".join(map(repr, t.tolist())) + "\n").encode("ascii") if t is not None and k else b""
     cap = len(prefix) + k * (m * CELL_MAX + 1) + 1
     buf = ffi.new("char[]", cap)
-    wrote = lib.acx_csv_rows(prefix, len(prefix), ffi.cast("double *", ffi.from_buffer(values)), k, m, buf, cap)
+    wrote = C_ROWS(prefix, len(prefix), ffi.cast("double *", ffi.from_buffer(values)), k, m, buf, cap)
     if k and not wrote:
         raise RuntimeError("acx_csv_rows: the buffer was short")   # (a bug: cap is the C's bound)
     return ffi.buffer(buf, wrote)[:].decode("ascii")
