@@ -67,6 +67,11 @@ if kind == "resolve":
     rc = main(["resolve", "--device", "default", "--calibration", "nominal", "--engine", "fixed", "--quiet",
                src, "-o", out])
     assert rc == 0
+elif kind.startswith("convert"):
+    from accelcal.cli.main import main
+    t0 = time.perf_counter()
+    rc = main(["convert", src, "-o", out, "--quiet"] + (["--whole-file"] if kind.endswith("-whole") else []))
+    assert rc == 0
 elif kind.startswith(("rate", "attitude", "displacement")):
     from accelcal.cli.main import main
     if kind == "displacement":
@@ -125,7 +130,7 @@ def generate(n: int, d: Path, raw0: np.ndarray) -> tuple[Path, Path]:
     """A CSV and a Parquet recording of n samples (t = k / 60 s, raw tiled from raw0), both written by
     pyarrow (t in its shortest round-trip text)."""
     csv_path, pq_path = d / f"rec_{n}.csv", d / f"rec_{n}.parquet"
-    names = ["t"] + [f"raw_{k}" for k in range(6)]
+    names = ["t"] + [f"raw_{k}" for k in range(raw0.shape[1])]
     schema = pa.schema([("t", pa.float64())] + [(c, pa.int64()) for c in names[1:]],
                        metadata={b"device": b"seed-6ch-r60"})
     with open(csv_path, "w") as fh:
@@ -136,10 +141,10 @@ def generate(n: int, d: Path, raw0: np.ndarray) -> tuple[Path, Path]:
             k = np.arange(s, min(s + ROWS, n))
             raw = raw0[k % raw0.shape[0]]
             t = k / 60.0
-            pw.write_table(pa.Table.from_arrays([pa.array(t)] + [pa.array(raw[:, j]) for j in range(6)], schema=schema),
+            pw.write_table(pa.Table.from_arrays([pa.array(t)] + [pa.array(raw[:, j]) for j in range(raw.shape[1])], schema=schema),
                            row_group_size=BATCH_ROWS)
             buf = pa.BufferOutputStream()
-            pa_csv.write_csv(pa.Table.from_arrays([pa.array(t)] + [pa.array(raw[:, j]) for j in range(6)], names=names),
+            pa_csv.write_csv(pa.Table.from_arrays([pa.array(t)] + [pa.array(raw[:, j]) for j in range(raw.shape[1])], names=names),
                              buf, pa_csv.WriteOptions(include_header=False))
             fh.write(buf.getvalue().to_pybytes())
     pw.close()
@@ -245,12 +250,14 @@ def main() -> None:
                     help="which cases, in this order (comma-separated)")
     ap.add_argument("--calibrate-diagnose", metavar="N", type=float,
                     help="instead: peak memory of calibrate and diagnose on a static-pose recording of N samples")
-    ap.add_argument("--command", choices=["resolve", "rate", "attitude", "displacement", "calibrate"],
+    ap.add_argument("--command", choices=["resolve", "rate", "attitude", "displacement", "calibrate", "convert"],
                     default="resolve",
                     help="rate, attitude: `accelcal rate|attitude --engine ENGINE` streamed, and with --whole-file "
                     "(no I/O anchor); attitude on the two-triad pendulum device (io.device.pendulum_device), its "
                     "readings a pendulum simulation tiled; calibrate: `accelcal calibrate` on poses_recording(N) "
-                    "(CSV and Parquet), reduced while read and (unless --no-whole) whole-file")
+                    "(CSV and Parquet), reduced while read and (unless --no-whole) whole-file; convert: `accelcal convert` "
+                    "of a 3-channel recording CSV (the first three channels), in chunks and (unless --no-whole) "
+                    "--whole-file (case csv->csv only)")
     ap.add_argument("--engine", choices=["float", "fixed"], default="fixed", help="rate's or attitude's engine")
     ap.add_argument("--no-whole", action="store_true", help="rate, attitude, calibrate: the streamed runs only")
     a = ap.parse_args()
@@ -283,7 +290,7 @@ def main() -> None:
     try:
         for n in (int(float(x)) for x in a.lengths.split(",")):
             t0 = time.perf_counter()
-            csv_path, pq_path = generate(n, d, raw0)
+            csv_path, pq_path = generate(n, d, raw0[:, :3] if a.command == "convert" else raw0)
             gen = time.perf_counter() - t0
             sizes = (csv_path.stat().st_size / 1e6, pq_path.stat().st_size / 1e6)
             cases = {"csv->csv": (csv_path, d / "o.csv"), "csv->parquet": (csv_path, d / "o.parquet"),
@@ -293,8 +300,8 @@ def main() -> None:
                 if a.command != "resolve":
                     for kind in (a.command,) + (() if a.no_whole else (a.command + "-whole",)):
                         res = run_case(kind, src, out, a.engine, device)
-                        print(f"| {n:.0e} | {name} | {kind} --engine {a.engine} | {res['s']:.2f} | {res['mb']:.0f} |",
-                              flush=True)
+                        what = kind if a.command == "convert" else f"{kind} --engine {a.engine}"
+                        print(f"| {n:.0e} | {name} | {what} | {res['s']:.2f} | {res['mb']:.0f} |", flush=True)
                     continue
                 io = run_case("anchor", src, out)
                 res = run_case("resolve", src, out)

@@ -53,12 +53,15 @@ def cdef_from_headers(include_dir: Path = INCLUDE) -> str:
     return "\n".join(out)
 
 
+#: host-only C of the extension (not the core: no firmware build takes csrc/host/): the CSV formatter
+HOST_HEADERS = ["fmt_csv.h"]
+
 ffibuilder = FFI()
-ffibuilder.cdef(cdef_from_headers())
+ffibuilder.cdef(cdef_from_headers() + "\n" + "\n".join(_cdef_of(CSRC / "host" / h, {}) for h in HOST_HEADERS))
 ffibuilder.set_source(
     "accelcal._core",
-    '#include "accelcal/accelcal.h"',
-    sources=[str(p.relative_to(ROOT)) for p in sorted(CSRC.glob("*.c"))],
+    '#include "accelcal/accelcal.h"\n' + "".join(f'#include "host/{h}"\n' for h in HOST_HEADERS),
+    sources=[str(p.relative_to(ROOT)) for p in sorted(CSRC.glob("*.c")) + sorted((CSRC / "host").glob("*.c"))],
     include_dirs=[str(INCLUDE), str(CSRC)],
     extra_compile_args=["-std=c99", "-O2"],
 )

@@ -10,7 +10,8 @@ from typing import Any, Callable
 from ..convert.formats import FORMATS, convert_file
 from ..io.device import save_device
 from ..errors import AccelcalError
-from ..io.recording import write_recording
+from ..io.parquet import is_parquet
+from ..resolve_stream import progress_factory
 from ..io.units import parse_bits
 from ..io.units_cli import add_units_options, scale_from_args
 
@@ -69,11 +70,13 @@ def cmd_convert(a: argparse.Namespace, check_output: Callable[..., None]) -> int
                             stated_f=a.stated_f, gravity_mps2=positive(a.gravity, "--gravity"), bits=bits,
                             blocks=a.blocks, time_unit=a.time_unit,
                             variable=a.variable, time_column=a.time_column,
-                            repeated_stamps=a.repeated_stamps, columns=a.columns)
+                            repeated_stamps=a.repeated_stamps, columns=a.columns,
+                            stream=not a.whole_file and not is_parquet(a.output),
+                            progress=None if a.quiet else progress_factory("convert"))
     except AccelcalError as e:          # the notes made before a refusal, ahead of its error line
         print_notes(e.notes)
         raise
-    write_recording(a.output, conv.recording)
+    conv.write(a.output)
     if a.device_out is not None:
         save_device(conv.device, a.device_out)
     print_notes(conv.notes + (conv.device_notes if a.device_out is not None else []))
@@ -126,6 +129,9 @@ def add_convert_parser(sub: Any, check_output: Callable[..., None]) -> None:
                    "recording (a triad at the origin; scale from the LSB, else from the readings; no noise_mps2: "
                    "every command estimates the noise from the recording, and a noise_mps2 > 0 added by hand "
                    "overrides that)")
+    s.add_argument("--whole-file", action="store_true", help="read the file whole (a recording CSV is otherwise "
+                   "read in chunks, twice: docs/streaming.md)")
+    s.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
     s.add_argument("-o", "--output", required=True, metavar="OUT.csv",
                    help="the recording CSV to write (atomically: no partial file on error)")
     s.set_defaults(func=lambda a: cmd_convert(a, check_output))

@@ -7,7 +7,7 @@ from __future__ import annotations
 import csv
 import re
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -20,7 +20,7 @@ from ..io.csvtable import convert_columns, cut_short_end, make_table, split_head
 from ..io.device import GRAVITY_REMOVED_G, GRAVITY_REMOVED_TEXT, Device
 from ..errors import InputError, notes_on_refusal
 from ..readings.held import held_runs, held_share, held_text, inner_runs, uneven
-from ..io.recording import Recording
+from ..io.recording import Recording, write_recording
 from ..io.recording_checks import GAP_STEPS, RATE_TOL
 from ..readings.noise import window_std
 from ..readings.static import STATIC_WINDOW_S, window_len
@@ -55,6 +55,9 @@ class Converted:
         what one count of the file's readings was; whether the rows were put in sample order.
     device_notes : list of str
         How the nominal device was made (its rate, its scale): lines for stderr when it is written.
+    writer : callable or None
+        ``writer(path)`` writes the recording where it is not held whole (:mod:`accelcal.convert.stream`:
+        read again in chunks); None: :func:`accelcal.io.recording.write_recording` of ``recording``.
     """
 
     recording: Recording
@@ -65,6 +68,14 @@ class Converted:
     scale: Scale | None = None
     sorted_rows: bool = False
     device_notes: list[str] = field(default_factory=list)
+    writer: Callable[[Any], None] | None = None
+
+    def write(self, path: Any) -> None:
+        """Write the recording to ``path`` (CSV, or Parquet by the name), atomically."""
+        if self.writer is not None:
+            self.writer(path)
+        else:
+            write_recording(path, self.recording)
 
     def summary(self, output: Any) -> str:
         """One line: rows, channels, rate, poses, where it went."""

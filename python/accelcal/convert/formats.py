@@ -75,6 +75,8 @@ from ..io.textinput import (CELL_NUMBER_RE, is_whitespace_header, preamble_notes
 from ..io.units import Scale, file_scale, in_file_unit
 from ..io.units_counts import to_counts
 from .xsens import load_xsens
+from .stream import convert_csv_chunked
+from ..io.chunks import BLOCK_BYTES, Fallback
 
 __all__ = ["FORMATS", "POSE_DIRECTIONS", "Converted", "detect_format", "convert_file", "read_regions", "axis_column",
            "unit_in_name"]
@@ -301,7 +303,8 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
                  regions: Any = None, stated_f: bool = False, gravity_mps2: float | None = None,
                  bits: int = 16, blocks: bool = False, time_unit: str = "auto", variable: str | None = None,
                  time_column: str | None = None, repeated_stamps: str = "refuse",
-                 columns: str | None = None) -> Converted:
+                 columns: str | None = None, stream: bool = False, block_bytes: int = BLOCK_BYTES,
+                 progress: Callable[[Any, str], Any] | None = None) -> Converted:
     """Read another tool's file as a contract recording of a triad.
 
     Parameters
@@ -363,6 +366,14 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
         (:func:`convert_stamps.shift_slipped`: every sample kept) and leaves out the other
         repeats as ``drop`` does.  Rows that repeat the stamp and the readings are left out
         either way.
+    stream : bool
+        A recording CSV (``csv``) in two passes over chunks of ``block_bytes`` of text, never
+        whole (:mod:`accelcal.convert.stream`; the result's ``write`` reads it again), where that
+        path takes the file; else, and by default, read whole.
+    block_bytes : int
+        The chunks' bytes of text (``stream``).
+    progress : callable, optional
+        ``progress(total, unit)`` -> a progress bar for each pass (``stream``).
 
     Returns
     -------
@@ -391,6 +402,15 @@ def convert_file(path: Any, fmt: str = "auto", *, scale: Scale | None = None, ra
     if is_parquet(path):
         raise InputError(str(path), "a .parquet file is read as a contract recording, which every command takes as it "
                          "is: convert reads other tools' files (its output may be .parquet)")
+    if stream and fmt in ("auto", "csv") and columns is None and time_column is None and \
+            repeated_stamps == "refuse" and not blocks:
+        opts = Options(scale, rate_hz, None, None, stated_f, gravity_mps2, bits, time_unit)
+        try:
+            if regions is not None:
+                opts.regions, opts.regions_source = read_regions(regions), str(regions)
+            return convert_csv_chunked(path, opts, scale, block_bytes, progress)
+        except (Fallback, InputError):
+            pass    # the whole-file command: the same output, or its refusal with its notes in its order
     source, data = read_text_bytes(path)
     pre = table_preamble(data)
     timed = cache(partial(timed_rows, data, pre))     # (detection and a table's reading: computed once)

@@ -1,21 +1,34 @@
 """Writing CSV rows: the one writer of every CSV the package writes (recordings, result
 columns).  Integers are written as ``str(v)``, floats as ``repr(x)`` or through a
 %-format such as ``'%.9g'`` (NaN as an empty cell or as the format writes it), text as
-given; all by Python's own formatting, which no locale changes, a chunk of rows at a
-time: each row is one ``%`` of a row template over the chunk's Python values."""
+given; by Python's own formatting, which no locale changes, a chunk of rows at a time: each
+row is one ``%`` of a row template over the chunk's Python values.  Rows of ``'%.9g'`` columns
+(NaN as ``nan``) after at most one ``repr`` column (the result columns: t, then f, alpha, ...)
+are formatted by the host-only C of the extension instead (csrc/host/fmt_csv.c: glibc's
+``snprintf("%.9g")``, correctly rounded as Python's is; NaN as ``nan``), the same text,
+while the C locale's decimal point is ``'.'`` (:func:`c_float_rows`)."""
 from __future__ import annotations
 
+import locale
 from typing import Any, Iterator, Sequence
 
 import numpy as np
 
-__all__ = ["INT", "REPR", "TEXT", "CHUNK_ROWS", "csv_rows", "csv_cell"]
+from .._core import ffi, lib
+
+#: the C formatter, where the built extension has it (an extension built before it: the Python path)
+C_ROWS = getattr(lib, "acx_csv_rows", None)
+
+__all__ = ["INT", "REPR", "TEXT", "CHUNK_ROWS", "G9", "C_ROWS", "csv_rows", "csv_cell", "c_float_rows"]
 
 INT = "%d"  # an integer column: str(v)
 REPR = "%r"  # a float column: repr(x), the shortest text that reads back to x
 TEXT = "%s"  # a column of text cells, written as given (quote them first: csv_cell)
 # Rows formatted per chunk: bounds the memory of the Python values and the text.
 CHUNK_ROWS = 65536
+G9 = "%.9g"  # the result columns' float format, which the C formatter writes
+#: bytes of one '%.9g' cell at most ("-1.23456789e-308") and its ',' (fmt_csv.c's ACX_CELL_MAX)
+CELL_MAX = 24
 
 
 def csv_rows(columns: Sequence[Any], formats: Sequence[str], nan_cells: Sequence[str | None] | None = None,
@@ -47,6 +60,13 @@ def csv_rows(columns: Sequence[Any], formats: Sequence[str], nan_cells: Sequence
     cols: list[Any] = [list(c) if fmt == TEXT else np.asarray(c, dtype=np.int64 if fmt == INT else np.float64)
                        for c, fmt in zip(columns, formats)]
     n = len(cols[0])
+    lead = 1 if formats[0] == REPR else 0
+    if len(formats) > lead and all(f == G9 for f in formats[lead:]) and all(v is None for v in nan_cells[lead:]) \
+            and C_ROWS is not None and locale.localeconv()["decimal_point"] == ".":
+        for row0 in range(0, n, chunk_rows):
+            part = [c[row0:row0 + chunk_rows] for c in cols]
+            yield c_float_rows(part[0] if lead else None, np.column_stack(part[lead:]))
+        return
     for row0 in range(0, n, chunk_rows):
         values = []
         cell_formats = []
@@ -63,6 +83,21 @@ def csv_rows(columns: Sequence[Any], formats: Sequence[str], nan_cells: Sequence
             cell_formats.append(fmt)
         row = ",".join(cell_formats) + "\n"
         yield "".join(map(row.__mod__, zip(*values)))
+
+
+def c_float_rows(t: np.ndarray | None, values: np.ndarray) -> str:
+    """The CSV rows of ``t`` (``repr``; None: no such column) and the columns of ``values``
+    (k, m) float64, each ``'%.9g' % x``, NaN as ``nan``, written by the C formatter
+    (csrc/host/fmt_csv.c): the text :func:`csv_rows`'s Python path writes."""
+    values = np.ascontiguousarray(values, dtype=np.float64)
+    k, m = values.shape
+    prefix = ("\n".join(map(repr, t.tolist())) + "\n").encode("ascii") if t is not None and k else b""
+    cap = len(prefix) + k * (m * CELL_MAX + 1) + 1
+    buf = ffi.new("char[]", cap)
+    wrote = C_ROWS(prefix, len(prefix), ffi.cast("double *", ffi.from_buffer(values)), k, m, buf, cap)
+    if k and not wrote:
+        raise RuntimeError("acx_csv_rows: the buffer was short")   # (a bug: cap is the C's bound)
+    return ffi.buffer(buf, wrote)[:].decode("ascii")
 
 
 def float_strings(values: np.ndarray, fmt: str, nan: str) -> list[str]:

@@ -32,7 +32,7 @@ from .units import Scale, converted_metadata, file_scale
 from .units_counts import to_counts
 
 __all__ = ["Recording", "check_for_device", "check_core_input", "read_recording", "write_recording", "write_columns_csv",
-           "recording_from_arrays", "VECTOR_COLUMNS"]
+           "recording_from_arrays", "recording_layout", "VECTOR_COLUMNS"]
 
 
 # --------------------------------------------------------------------------
@@ -230,6 +230,23 @@ def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> No
     if is_parquet(path):
         write_parquet_recording(path, rec)
         return
+    lines, columns, formats = recording_layout(rec, float_format)
+
+    def write(f: Any) -> None:
+        f.write("\n".join(lines))
+        f.write("\n")
+        for chunk in csv_rows(columns, formats, [""] * len(columns)):
+            f.write(chunk)
+
+    atomic_write(path, write)
+
+
+def recording_layout(rec: Recording, float_format: str = "%.9g", like: Recording | None = None
+                     ) -> tuple[list[str], list[Any], list[str]]:
+    """What :func:`write_recording` writes: the comment and header lines, the columns and their
+    csv_rows formats.  ``like`` (default ``rec``) decides which reference, temp_c and pose columns
+    are written (a writer in chunks: the whole recording's, each chunk's values from ``rec``)."""
+    like = rec if like is None else like
     try:
         probe = float(float_format % 0.1)
     except (TypeError, ValueError):
@@ -237,7 +254,7 @@ def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> No
     if not math.isfinite(probe) or "," in float_format % 0.1:
         raise ValueError(f"float_format {float_format!r} does not format a float readably")
     lines: list[str] = []
-    for k, v in rec.metadata.items():
+    for k, v in like.metadata.items():
         if not META_KEY_RE.fullmatch(k):
             raise ValueError(f"metadata key {k!r}: expected a word of letters, digits, '_', '.', '-'")
         if "\n" in v or "\r" in v:
@@ -249,20 +266,21 @@ def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> No
     columns: list[Any] = [rec.t] + [rec.raw[:, k] for k in range(rec.n_channels)]
     formats = [REPR] + [INT] * rec.n_channels
     for vec, comps in VECTOR_COLUMNS.items():
-        arr = getattr(rec, vec)
-        if np.isfinite(arr).any():
+        if np.isfinite(getattr(like, vec)).any():
+            arr = getattr(rec, vec)
             names += list(comps)
             columns += [arr[:, c] for c in range(3)]
             formats += [float_format] * 3
-    if rec.has_temp():
+    if like.has_temp():
         names.append("temp_c")
         columns.append(rec.temp_c)
         formats.append(float_format)
-    if rec.has_pose():
+    if like.has_pose():
         names.append("pose")
         columns.append(rec.pose)
         formats.append(INT)
-    for name, vals in rec.extra.items():
+    for name in like.extra:
+        vals = rec.extra[name]
         if not name.strip() or name.strip() != name:
             raise ValueError(f"extra column name {name!r}: expected a non-empty name without surrounding spaces")
         if any("\n" in v or "\r" in v for v in vals):
@@ -271,14 +289,7 @@ def write_recording(path: Any, rec: Recording, float_format: str = "%.9g") -> No
         columns.append(list(map(csv_cell, vals)))
         formats.append(TEXT)
     lines.append(",".join(map(csv_cell, names)))
-
-    def write(f: Any) -> None:
-        f.write("\n".join(lines))
-        f.write("\n")
-        for chunk in csv_rows(columns, formats, [""] * len(columns)):
-            f.write(chunk)
-
-    atomic_write(path, write)
+    return lines, columns, formats
 
 
 # ---- result columns and the C core's input range (moved from estimators.py / resolve.py) ----
