@@ -11,7 +11,7 @@ import numpy as np
 from ..io.device import NOMINAL_FACTOR
 from ..errors import InputError
 from ..readings.static import PoseSet
-from .settings import (CANDIDATES, CHIP_GAIN_TOLERANCE, EXCITATION_MIN_SPAN_G, POORLY_DETERMINED_MG, SCATTER_CHI2,
+from .settings import (TEMP_UNDETERMINED_G, TEMP_UNDETERMINED_GAIN, CANDIDATES, CHIP_GAIN_TOLERANCE, EXCITATION_MIN_SPAN_G, POORLY_DETERMINED_MG, SCATTER_CHI2,
                        TILTED, TILTED_AFTER_DEG)
 
 
@@ -349,3 +349,27 @@ def axis_name(u, sign: int) -> str:
     if abs(u[j]) > 0.99:
         return f"{'+' if u[j] > 0 else '-'}{'xyz'[j]}"
     return "(" + ", ".join(f"{v + 0.0:.2f}" for v in np.round(u, 2)) + ")"
+
+
+def undetermined_tempcos(device, fit, temps) -> str | None:
+    """The reason the temperature coefficients of ``fit`` (a StaticFit with ``offset_tc_sigma``,
+    ``gain_tc_sigma``) are not pinned by the poses, or None.  A channel's offset tempco is
+    undetermined when its 1-sigma times the poses' temperature span (degC) exceeds
+    TEMP_UNDETERMINED_G of the channel's 1 g (the device file's counts per m/s^2 times g, counts);
+    its gain tempco when that product exceeds TEMP_UNDETERMINED_GAIN (a fraction of the gain)."""
+    if getattr(fit, "offset_tc", None) is None:
+        return None
+    span = float(np.ptp(np.asarray(temps, float)))
+    one_g = np.abs(np.asarray(device.counts_per_mps2, float)) * float(device.gravity_mps2)
+    so = np.nan_to_num(np.asarray(fit.offset_tc_sigma, float), nan=np.inf) * span
+    sg = np.nan_to_num(np.asarray(fit.gain_tc_sigma, float), nan=np.inf) * span
+    bad = [f"channel {i}'s offset tempco +-{fit.offset_tc_sigma[i]:.3g} counts/degC ({so[i] / one_g[i]:.3g} g "
+           f"over the {span:.3g} degC span)" for i in np.flatnonzero(so > TEMP_UNDETERMINED_G * one_g)]
+    bad += [f"channel {i}'s gain tempco +-{fit.gain_tc_sigma[i] * 1e6:.3g} ppm/degC ({sg[i] * 100:.3g} % of the "
+            f"gain over the {span:.3g} degC span)" for i in np.flatnonzero(sg > TEMP_UNDETERMINED_GAIN)]
+    if not bad:
+        return None
+    return ("temperature coefficients not fitted: the poses do not determine them (1-sigma " + "; ".join(bad)
+            + f": beyond {TEMP_UNDETERMINED_G:g} g or {TEMP_UNDETERMINED_GAIN:.0%} of the gain across the span); "
+            "the calibration is the fit without them. Vary the temperature more between poses of the same "
+            "orientation, or add poses")

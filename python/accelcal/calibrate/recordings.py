@@ -10,7 +10,7 @@ from ..errors import InputError
 from ..readings.held import distinct_recordings
 from ..readings.static import (MIN_POSE_S, NO_POSE, STATIC_THRESHOLD, STATIC_WINDOW_S, PoseSet, at_gravity, detect_static,
                       no_pose, one_wrong_scale, poses_from_recording, window_len)
-from .checks import jig_accuracy_rad, min_poses, pose_label, static_force
+from .checks import jig_accuracy_rad, min_poses, pose_label, static_force, undetermined_tempcos
 from .jig_estimate import fit_estimating_jig
 from .known_poses import fit_known_poses
 from .pose_stream import Reduced
@@ -41,7 +41,9 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
     orientations, a degenerate spread, no convergence), the first of ``gain`` and ``offset``
     they do, with the reason in ``extra["fit"]["fallback"]``.
     Temperature coefficients are fitted when the pose temperatures span at least
-    TEMP_MIN_SPAN_C; lever arms when samples rotate (|w| > ROTATION_MIN_RADPS) with
+    TEMP_MIN_SPAN_C and the fit determines them (:func:`accelcal.calibrate.checks.undetermined_tempcos`;
+    else the fit without them, the reason in ``extra["fit"]["temperature_dropped"]``); lever arms
+    when samples rotate (|w| > ROTATION_MIN_RADPS) with
     reference f, w and dw.  Readings held for several rows by a logger faster than the
     sensor are counted once (:func:`accelcal.readings.held.distinct_recordings`; the calibration's
     ``extra["notes"]`` says so).  Of several recordings, one without a static pose adds none
@@ -145,6 +147,11 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
 
     try:
         fit, fallback = solve(poses)
+        # temperature coefficients the poses do not pin are not a finding: the fit without them
+        dropped = undetermined_tempcos(device, fit, temps) if temperature else None
+        if dropped:
+            temperature = False
+            fit, fallback = solve(poses)
     except InputError as e:
         if e.source != "<poses>":
             raise
@@ -171,6 +178,8 @@ def calibrate_recordings(device, recordings: Sequence[Any], method: str | None =
         if hint:
             fallback["detector"] = hint[2:]
         cal.extra["fit"]["fallback"] = fallback
+    if dropped:
+        cal.extra["fit"]["temperature_dropped"] = dropped
     if outliers is not None:
         cal.extra["outliers"] = outliers
     if notes:

@@ -25,6 +25,13 @@ MIN_RCOND_JAC = 1e-4       # nonlinear fits: column-normalised Jacobian with a s
 TEMP_MIN_SPAN_C = 1.0      # fit temperature coefficients when pose temperatures span this much
 
 
+#: a temperature coefficient is undetermined when its 1-sigma, across the poses' temperature span, moves
+#: the reading by more than the channel's 1 g (offset tempco) or its gain by more than 100 % (gain
+#: tempco): the data do not tell it from a term as large as the signal itself
+TEMP_UNDETERMINED_G = 1.0
+TEMP_UNDETERMINED_GAIN = 1.0
+
+
 ROTATION_MIN_RADPS = 0.05  # samples with |w| above this count as rotating (lever-arm data)
 
 

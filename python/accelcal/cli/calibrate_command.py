@@ -48,7 +48,7 @@ def calibrate_warnings(dev, cal) -> list[str]:
     """The warnings a calibration calls for, one line each: a jig-free model reduced from
     ``full``, poses scattered beyond their noise (with what causes it), channels whose offset
     or gain is poorly determined (:func:`accelcal.calibrate.checks.poorly_determined`), a
-    sensitivity far from the device file's.
+    sensitivity far from the device file's, temperature coefficients left out as undetermined.
 
     Parameters
     ----------
@@ -69,6 +69,8 @@ def calibrate_warnings(dev, cal) -> list[str]:
         warnings.append(f"fitted the jig-free '{fb['to']}' model ({what}, no cross-axis terms), as the poses do not "
                         f"determine {' or '.join(repr(m) for m in fb['reasons'])}. {why} (--jigfree-model chooses "
                         "the model)" + (f"; {fb['detector']}" if fb.get("detector") else ""))
+    if fit.get("temperature_dropped"):
+        warnings.append(fit["temperature_dropped"])
     poses = cal.extra.get("poses", []) if isinstance(cal.extra, dict) else []
     chi2, dof = fit.get("chi2"), fit.get("dof")
     red = chi2 / dof if chi2 is not None and dof else None
