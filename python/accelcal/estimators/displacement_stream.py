@@ -23,6 +23,7 @@ Anything the whole-file command would warn of or refuse, or that needs the whole
 """
 from __future__ import annotations
 
+import contextlib
 import tempfile
 from pathlib import Path
 from types import SimpleNamespace
@@ -167,6 +168,10 @@ class RestPass:
                 self.est.write(np.ascontiguousarray(c, np.float64).tobytes())
                 self.K += 1
                 self.N += k.size
+
+    def close(self) -> None:
+        """Close the estimates' temporary file (also where a pass ends early: a fallback, an error)."""
+        self.est.close()
 
     def finish(self) -> np.ndarray:
         """The noise's correlation as the rests show it (:func:`~.trend.rest_correlation`)."""
@@ -333,8 +338,8 @@ def displacement_stream(device, cal, path: Any, output: Any, *, engine: str = "f
         forces = _forces(device, cal, channels)
         core_forces = _core_forces(device, cal, channels) if fixed else None
         folder = Path(output).resolve().parent
-        with tempfile.TemporaryFile(dir=folder) as flags_file:
-            first = RestPass(p, sc.n, flags_file, folder)
+        with tempfile.TemporaryFile(dir=folder) as flags_file, \
+                contextlib.closing(RestPass(p, sc.n, flags_file, folder)) as first:
             core = new_core(p, fixed) if streamed else None
             bar = progress(src.total, src.unit) if progress is not None else None
             for ch in src.chunks(None if bar is None else bar.update):
