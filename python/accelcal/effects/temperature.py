@@ -130,8 +130,10 @@ class TemperatureFit(Candidate):
             if levels_apart(D):
                 shape = self._lag_interval(D, self._level_free(D, y, z), best, S0w, T_LAG_INSIDE_FREE)
             else:
+                # the fit's own profile: the grid's fits and the best one are already at hand
+                known = {f[1]: f[0] - (PENALTY_PER_PARAM if f[1] else 0.0) for f in fits + [best]}
                 shape = self._lag_interval(D, lambda tau: lag_fit(tau)[0] - (PENALTY_PER_PARAM if tau else 0.0),
-                                           best, S0w, T_LAG_INSIDE)
+                                           best, S0w, T_LAG_INSIDE, known)
         if shape is not None and not shape["determined"]:
             shaped = self._finish(D, best, S0w, S0u, z, fixed)
             out = self._finish(D, lag_fit(0.0), S0w, S0u, z, fixed)
@@ -166,7 +168,7 @@ class TemperatureFit(Candidate):
             return -float(np.einsum("gk,gk->", th, h))
         return objective
 
-    def _lag_interval(self, D, objective, best, S0w, inside: float) -> dict:
+    def _lag_interval(self, D, objective, best, S0w, inside: float, known: dict | None = None) -> dict:
         """The lags whose profile objective (``objective``: beside each recording's own level,
         :meth:`_level_free`, where two recordings or more have samples; else the fit's own) lies within
         T_LAG_CRIT_CHI2 (x the residual's excess over the floor and the poses' design effect) of its
@@ -174,12 +176,13 @@ class TemperatureFit(Candidate):
         bisection (0 where no lag fits as well, inf where none up to the first step beyond
         T_LAG_MAX_SPANS x the recording does worse), and whether that pins the lag: the fitted lag lies
         inside the interval, which excludes 0 and ends within ``inside`` x the longest recording
-        (:func:`recording_span`)."""
+        (:func:`recording_span`).  ``known``: {lag: objective} already computed (not computed again)."""
         tau0 = float(best[1])
         span = recording_span(D)
         probe = [tau0] + [x for x in T_LAG_GRID_S if 0.0 < x <= T_LAG_MAX_SPANS * max(span, 1e-9)]
-        vals = {tau: objective(tau) for tau in probe}
-        obj0 = min(vals.values())
+        vals = dict(known or {})
+        vals.update({tau: objective(tau) for tau in probe if tau not in vals})
+        obj0 = min(vals[tau] for tau in probe)
         rows = max(D.n * D.R, 1)
         s2 = max(1.0, float(S0w.sum() + obj0) / rows)
         crit = T_LAG_CRIT_CHI2 * s2 * float(getattr(D, "deff", 1.0) or 1.0)
