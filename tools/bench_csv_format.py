@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Time of writing result columns as CSV text per 10^6 cells (docs/streaming.md): t as ``repr`` and
 7 float64 columns as ``'%.9g'`` (resolve's output shape), by the C formatter
-(:func:`accelcal.io.csvformat.c_float_rows`, csrc/host/fmt_csv.c) and by Python's ``%`` of a row
+(:func:`accelcal.io.csvformat.c_float_rows`, hostsrc/fmt_csv.c) and by Python's ``%`` of a row
 template (the path :func:`accelcal.io.csvformat.csv_rows` takes for other formats); the best of
 ``--repeat`` runs over ``--rows`` rows, in chunks of CHUNK_ROWS, and whether the texts are equal."""
 from __future__ import annotations

@@ -14,6 +14,8 @@ from cffi import FFI
 ROOT = Path(__file__).resolve().parents[2]
 INCLUDE = ROOT / "include"
 CSRC = ROOT / "csrc"
+#: host-only C of the extension, apart from the firmware core's csrc/ (no firmware build takes it)
+HOST = ROOT / "hostsrc"
 HEADERS = ["ac_status.h", "ac_fixed.h", "ac_xf.h", "ac_trim.h", "ac_resolve.h", "ac_trig.h", "ac_attitude.h",
            "ac_invert.h", "ac_rate.h"]
 HEADERS += ["ac_rest.h", "ac_displace.h"]  # motion estimators
@@ -53,16 +55,16 @@ def cdef_from_headers(include_dir: Path = INCLUDE) -> str:
     return "\n".join(out)
 
 
-#: host-only C of the extension (not the core: no firmware build takes csrc/host/): the CSV formatter
+#: the host-only C's headers (HOST): the CSV formatter
 HOST_HEADERS = ["fmt_csv.h"]
 
 ffibuilder = FFI()
-ffibuilder.cdef(cdef_from_headers() + "\n" + "\n".join(_cdef_of(CSRC / "host" / h, {}) for h in HOST_HEADERS))
+ffibuilder.cdef(cdef_from_headers() + "\n" + "\n".join(_cdef_of(HOST / h, {}) for h in HOST_HEADERS))
 ffibuilder.set_source(
     "accelcal._core",
-    '#include "accelcal/accelcal.h"\n' + "".join(f'#include "host/{h}"\n' for h in HOST_HEADERS),
-    sources=[str(p.relative_to(ROOT)) for p in sorted(CSRC.glob("*.c")) + sorted((CSRC / "host").glob("*.c"))],
-    include_dirs=[str(INCLUDE), str(CSRC)],
+    '#include "accelcal/accelcal.h"\n' + "".join(f'#include "{h}"\n' for h in HOST_HEADERS),
+    sources=[str(p.relative_to(ROOT)) for p in sorted(CSRC.glob("*.c")) + sorted(HOST.glob("*.c"))],
+    include_dirs=[str(INCLUDE), str(CSRC), str(HOST)],
     extra_compile_args=["-std=c99", "-O2"],
 )
 

@@ -1,4 +1,4 @@
-"""The C formatter of result columns (csrc/host/fmt_csv.c through io.csvformat.c_float_rows): the
+"""The C formatter of result columns (hostsrc/fmt_csv.c through io.csvformat.c_float_rows): the
 text Python's ``repr`` and ``'%.9g' %`` write, cell for cell, over any double (subnormals, inf,
 NaN of either sign, negative zero, exact and near ties of the ninth digit), and csv_rows taking it
 for the result columns' formats."""
@@ -35,7 +35,7 @@ doubles = st.one_of(any_double, ties, special, st.floats(allow_nan=True, allow_i
 @settings(max_examples=400, deadline=None)
 @given(st.lists(st.lists(doubles, min_size=3, max_size=3), min_size=1, max_size=40), st.booleans())
 def test_c_rows_are_pythons(rows, with_t):
-    assert csvformat.C_ROWS is not None             # (the extension built with csrc/host/fmt_csv.c)
+    assert csvformat.C_ROWS is not None             # (the extension built with hostsrc/fmt_csv.c)
     v = np.array(rows, dtype=np.float64)
     t = np.arange(v.shape[0]) / 60.0 + 1e9 if with_t else None
     assert c_float_rows(t, v) == python_text(t, v)

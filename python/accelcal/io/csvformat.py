@@ -4,7 +4,7 @@ columns).  Integers are written as ``str(v)``, floats as ``repr(x)`` or through 
 given; by Python's own formatting, which no locale changes, a chunk of rows at a time: each
 row is one ``%`` of a row template over the chunk's Python values.  Rows of ``'%.9g'`` columns
 (NaN as ``nan``) after at most one ``repr`` column (the result columns: t, then f, alpha, ...)
-are formatted by the host-only C of the extension instead (csrc/host/fmt_csv.c: glibc's
+are formatted by the host-only C of the extension instead (hostsrc/fmt_csv.c: glibc's
 ``snprintf("%.9g")``, correctly rounded as Python's is; NaN as ``nan``), the same text,
 while the C locale's decimal point is ``'.'`` (:func:`c_float_rows`)."""
 from __future__ import annotations
@@ -88,7 +88,7 @@ def csv_rows(columns: Sequence[Any], formats: Sequence[str], nan_cells: Sequence
 def c_float_rows(t: np.ndarray | None, values: np.ndarray) -> str:
     """The CSV rows of ``t`` (``repr``; None: no such column) and the columns of ``values``
     (k, m) float64, each ``'%.9g' % x``, NaN as ``nan``, written by the C formatter
-    (csrc/host/fmt_csv.c): the text :func:`csv_rows`'s Python path writes."""
+    (hostsrc/fmt_csv.c): the text :func:`csv_rows`'s Python path writes."""
     values = np.ascontiguousarray(values, dtype=np.float64)
     k, m = values.shape
     prefix = ("\n".join(map(repr, t.tolist())) + "\n").encode("ascii") if t is not None and k else b""

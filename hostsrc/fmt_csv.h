@@ -1,5 +1,5 @@
 /* accelcal -- host-only CSV formatting for the Python extension (not part of the C core:
- * built only into accelcal._core by python/accelcal/_build_core.py; csrc/host/ is outside the
+ * built only into accelcal._core by python/accelcal/_build_core.py; hostsrc/ is outside the
  * firmware's sources: CMake and tools/tidy.sh take the .c files of csrc itself). */
 #ifndef ACCELCAL_HOST_FMT_CSV_H
 #define ACCELCAL_HOST_FMT_CSV_H
