@@ -147,3 +147,35 @@ def test_cli_unwritable_output_exits_2(files, capfd):
 def test_api_exports_refine():
     assert "refine" in ac.__all__ and "RefineResult" in ac.__all__
     assert ac.refine.__doc__ and "Returns" in ac.refine.__doc__
+
+
+def test_a_term_the_recordings_do_not_pin_is_left_out(square_law):
+    """A diagnosis (of another recording) with a temperature offset, refined on a recording whose
+    temperature never changes: the tempco and its lag are not determined there (their Jacobian
+    columns are zero). The old fit's pseudo-inverse read that as a 1-sigma of 0 and wrote the
+    diagnosis's start value (3 counts/degC, lag 30 s) into the calibration; now the term is left
+    out, said in the paragraph and in ``extra.fit``, and the nonlinearity is still refitted."""
+    dev, cal0, r = square_law["device"], square_law["cal0"], square_law["rec1"]
+    rec = recording_from_arrays(r.t, r.raw, f=r.f, w=r.w, dw=r.dw, temp_c=np.full(r.t.size, 25.0), pose=r.pose)
+    n = dev.n_channels
+    diag = nonlin_diagnosis(dev, ("nonlinearity", "temperature_offset"),
+                            {"nonlinearity": {"k2": [0.0] * n, "k3": [0.0] * n},
+                             "temperature_offset": {"coeff": [3.0] * n, "tau_s": 30.0}})
+    res = ac.refine(dev, cal0, diag, rec)
+    assert res.calibration.offset_tc is None and res.calibration.temp_offset_tau_s is None
+    assert "temperature_offset" not in res.added and "temperature_offset" in res.not_added
+    assert "not determined" in res.paragraph and "offset tempco" in res.paragraph
+    assert res.calibration.extra["fit"]["refine_not_determined"] == {"offset tempco": list(range(n))}
+    truth = lc.true_terms(dev, square_law["params"], square_law["effects"])["nonlin_k2"]
+    est, sd = res.added["nonlinearity"]["k2"], res.added["nonlinearity"]["sigma"]["k2"]
+    assert np.all(np.abs(est - truth) <= 3.0 * sd)
+
+
+def test_a_well_posed_refine_leaves_nothing_out(square_law):
+    """The control of the rule above: on the recording the square law was diagnosed on, every
+    channel's k2 is pinned (finite 1-sigma, nothing said to be undetermined)."""
+    dev, cal0, r = square_law["device"], square_law["cal0"], square_law["rec1"]
+    res = ac.refine(dev, cal0, nonlin_diagnosis(dev), r)
+    assert np.all(np.isfinite(res.added["nonlinearity"]["sigma"]["k2"]))
+    assert "not determined" not in res.paragraph
+    assert "refine_not_determined" not in res.calibration.extra["fit"]

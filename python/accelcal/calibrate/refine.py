@@ -30,6 +30,7 @@ from ..io.calibration import Calibration, load_calibration, save_calibration
 from ..io.device import Device, default_device, load_device
 from ..io.recording import Recording, read_recording
 from ..sensor import ChannelState, Context, calibration_arrays, evaluate
+from .refine_pinned import TERM_GROUPS, covariance, describe, drop, unpinned
 from .refine_input import ADDED, EXISTING, NOT_CORRECTABLE, Rows, read_diagnosis, reference_rows, start_value
 
 #: longest thermal lag fitted, in spans of the recordings' duration
@@ -189,21 +190,27 @@ class Fit:
     dof: int
 
 
-def fit(model: Model, x0, lo, hi, mask, noise) -> Fit:
-    """least_squares of the weighted residual on the samples ``mask``; 1-sigma from the Jacobian."""
+def fit(model: Model, x0, lo, hi, mask, noise, free=None) -> Fit:
+    """least_squares of the weighted residual on the samples ``mask`` over the parameters ``free``
+    (all by default; the others stay at ``x0``); 1-sigma from the Jacobian (infinite where it does
+    not determine a parameter: refine_pinned.covariance; 0 for a fixed one)."""
     raw = model.rows.raw[mask]
+    free = np.ones(x0.size, bool) if free is None else free
 
-    def resid(x):
+    def resid(xf):
+        x = x0.copy()
+        x[free] = xf
         return ((model.predict(x)[mask] - raw) / noise).ravel()
 
-    res = least_squares(resid, x0, bounds=(lo, hi), jac_sparsity=model.sparsity(int(mask.sum())),
-                        x_scale="jac", method="trf", max_nfev=60)
-    J = res.jac
-    JtJ = (J.T @ J).toarray() if hasattr(J, "toarray") else J.T @ J
+    res = least_squares(resid, x0[free], bounds=(lo[free], hi[free]),
+                        jac_sparsity=model.sparsity(int(mask.sum()))[:, free], x_scale="jac", method="trf",
+                        max_nfev=60)
     chi2 = float(2.0 * res.cost)
-    dof = max(res.fun.size - x0.size, 1)
-    cov = np.linalg.pinv(JtJ) * max(1.0, chi2 / dof)
-    return Fit(res.x, np.sqrt(np.maximum(np.diag(cov), 0.0)), chi2, dof)
+    dof = max(res.fun.size - int(free.sum()), 1)
+    x, sigma = x0.copy(), np.zeros(x0.size)
+    x[free] = res.x
+    sigma[free] = np.sqrt(np.maximum(np.diag(covariance(res.jac, max(1.0, chi2 / dof))), 0.0))
+    return Fit(x, sigma, chi2, dof)
 
 
 @dataclass
@@ -333,13 +340,32 @@ def refine_calibration(device, calibration: Calibration, diagnosis, recordings) 
     x0, lo, hi = _start(model, cal, device, diag)
     ids = np.unique(rows.block, return_inverse=True)[1]
     train, test = rows.use & (ids % 2 == 0), rows.use & (ids % 2 == 1)
-    before = _gap(model, _given_x(model, cal, device, diag), test)
-    half = fit(model, x0, lo, hi, train, noise)
-    after = _gap(model, half.x, test)
+    given = _given_x(model, cal, device, diag)
+    before = _gap(model, given, test)
+    free, dropped = np.ones(x0.size, bool), {}
     whole = fit(model, x0, lo, hi, rows.use, noise)
-    out, values = _calibration(model, whole, cal, device)
+    for _ in range(3):      # what the recordings do not pin is fixed, and the rest refitted
+        unpin = unpinned(model, whole.x, whole.sigma, free)
+        if not unpin:
+            break
+        for name, (bad, reasons) in unpin.items():
+            old = dropped.get(name, (np.zeros(bad.size, bool), reasons))
+            dropped[name] = (old[0] | bad, [r if b else o for r, o, b in zip(reasons, old[1], bad)])
+        free, x0 = drop(model, unpin, free, x0, given)
+        whole = fit(model, x0, lo, hi, rows.use, noise, free)
+    half = fit(model, x0, lo, hi, train, noise, free)
+    after = _gap(model, half.x, test)
+    out, values = _calibration(model, whole, cal, device, free)
+    added = [e for e in added if e in values]
+    for e in ADDED:
+        if e in diag.effects and e not in values:
+            not_added[e] = "the recordings do not determine it, below"
     text = paragraph({k: v for k, v in values.items() if k in added}, {k: v for k, v in values.items() if k not in added},
                      not_added, existing, before, after, float(np.sqrt(np.mean(noise ** 2))), model.fit_r)
+    text += describe(model, dropped)
+    if dropped:
+        out.extra["fit"]["refine_not_determined"] = {TERM_GROUPS[k][1]: [int(c) for c in np.flatnonzero(b)]
+                                                     for k, (b, _) in dropped.items()}
     try:
         calibration_header(device, out)
     except AccelcalError as e:    # a term beyond the firmware's fixed formats: said, the file still written
@@ -347,38 +373,50 @@ def refine_calibration(device, calibration: Calibration, diagnosis, recordings) 
     return RefineResult(out, values, not_added, before, after, float(np.sqrt(np.mean(noise ** 2))), text)
 
 
-def _calibration(model: Model, res: Fit, cal: Calibration, device):
-    """The refined Calibration and the added terms' values with 1-sigma."""
+def _calibration(model: Model, res: Fit, cal: Calibration, device, free=None):
+    """The refined Calibration and the added terms' values with 1-sigma: an entry not fitted
+    (``free`` False: not determined, refine_pinned) shows as NaN and keeps the calibration's own
+    value, else none; a term none of whose entries was fitted is left as the calibration had it."""
     p = model.params(res.x)
     sd = model.params(res.sigma)
     L, N = model.L, model.L.N
+    free = np.ones(res.x.size, bool) if free is None else free
+    fitted = model.params(free.astype(float))
+
+    def shown(name, v):
+        f = fitted[name]
+        return np.where(np.asarray(f, float) > 0, v, np.nan) if f is not None else v
+
+    def any_fitted(*names):
+        return any(n in L.groups and free[L.groups[n][0]].any() for n in names)
+
     kw = dict(offsets=p["b"], sensitivity=p["s"], offset_sigma=sd["b"], sensitivity_sigma=sd["s"],
               method=cal.method if cal.method.endswith("+refine") else f"{cal.method}+refine")
     if model.fit_r:
         kw.update(positions=p["r"], position_sigma=sd["r"])
     vals = {}
-    if "nonlinearity" in model.terms:
-        k3s = np.where(model.cube, sd["k3"], np.nan)
+    if "nonlinearity" in model.terms and any_fitted("k2", "k3"):
+        cube = model.cube & (fitted["k3"] > 0)
         kw.update(nonlin_k2=p["k2"], nonlin_k3=p["k3"])
-        vals["nonlinearity"] = {"k2": p["k2"], "k3": np.where(model.cube, p["k3"], np.nan),
-                                "sigma": {"k2": sd["k2"], "k3": k3s}}
-    if "temperature_offset" in model.terms:
+        vals["nonlinearity"] = {"k2": shown("k2", p["k2"]), "k3": np.where(cube, p["k3"], np.nan),
+                                "sigma": {"k2": sd["k2"], "k3": np.where(cube, sd["k3"], np.nan)}}
+    if "temperature_offset" in model.terms and any_fitted("oc"):
         kw.update(offset_tc=p["oc"], temp_offset_tau_s=p["tau_off"], temp_ref_c=model.t_ref)
-        vals["temperature_offset"] = {"coeff": p["oc"], "tau_s": p["tau_off"],
+        vals["temperature_offset"] = {"coeff": shown("oc", p["oc"]), "tau_s": p["tau_off"],
                                       "sigma": {"coeff": sd["oc"], "tau_s": sd["tau_off"]}}
-    if "temperature_gain" in model.terms:
+    if "temperature_gain" in model.terms and any_fitted("gc"):
         kw.update(gain_tc=p["gc"], temp_gain_tau_s=p["tau_gain"], temp_ref_c=model.t_ref)
-        vals["temperature_gain"] = {"coeff": p["gc"], "tau_s": p["tau_gain"],
+        vals["temperature_gain"] = {"coeff": shown("gc", p["gc"]), "tau_s": p["tau_gain"],
                                     "sigma": {"coeff": sd["gc"], "tau_s": sd["tau_gain"]}}
-    if "time_skew" in model.terms:
+    if "time_skew" in model.terms and any_fitted("skew"):
         kw.update(time_skew_s=p["skew"])
-        vals["time_skew"] = {"tau": p["skew"], "sigma": {"tau": sd["skew"]}}
+        vals["time_skew"] = {"tau": shown("skew", p["skew"]), "sigma": {"tau": sd["skew"]}}
     extra = dict(cal.extra or {})
     fitx = dict(extra.get("fit") or {})
     fitx.update(refine_chi2=res.chi2, refine_dof=res.dof, refine_terms=sorted(vals))
     extra["fit"] = fitx
     kw["extra"] = extra
-    del L, N
+    del N
     return dataclasses.replace(cal, **kw), vals
 
 
