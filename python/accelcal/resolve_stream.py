@@ -159,7 +159,7 @@ class _Tally:
             at = at | np.any(lv.mask(raw), axis=1)
         k = int(np.count_nonzero(at))
         self.clipped += k
-        if ch.n:
+        if ch.n and self.hist is None:            # else from the histograms (extremes)
             mn, mx = raw.min(axis=0), raw.max(axis=0)
             for ext, cnt, v, side in ((self.vmin, self.cmin, mn, -1), (self.vmax, self.cmax, mx, 1)):
                 c = (raw == v).sum(axis=0)
@@ -168,6 +168,7 @@ class _Tally:
                 cnt[same] += c[same]
                 cnt[new] = c[new]
                 ext[new] = v[new]
+        if ch.n:
             steps = np.diff(ch.t) if self.last_t is None else np.diff(np.concatenate(([self.last_t], ch.t)))
             rate = float(dev.sample_rate_hz)
             for u, (unit, _) in enumerate(TIME_UNITS):
@@ -192,6 +193,11 @@ class _Tally:
         dev = self.device
         if self.n < 2:
             return None
+        if self.hist is not None:                 # the extremes and their counts from the histograms
+            for j, h in enumerate(self.hist):
+                nz = np.flatnonzero(h)
+                self.vmin[j], self.vmax[j] = nz[0] + dev.raw_min, nz[-1] + dev.raw_min
+                self.cmin[j], self.cmax[j] = h[nz[0]], h[nz[-1]]
         maybe = [j for j in range(len(self.vmin)) if self.vmin[j] != self.vmax[j] and (
             (self.vmax[j] < dev.raw_max and self.cmax[j] >= CLIP_MIN_COUNT)
             or (self.vmin[j] > dev.raw_min and self.cmin[j] >= CLIP_MIN_COUNT))]

@@ -176,13 +176,21 @@ def test_milliseconds_go_the_whole_file_way_with_the_same_result(files, capfd):
     assert out.read_bytes() == ref.read_bytes()
 
 
-def test_a_pile_inside_the_range_gives_the_whole_file_column_and_warning(files, capfd):
+@pytest.mark.parametrize("side", ["high", "low"])
+def test_a_pile_inside_the_range_gives_the_whole_file_column_and_warning(files, capfd, side):
+    """A channel piled at a level inside the range, above (its largest readings) or below (its
+    smallest): the streamed extremes and their counts (from the code histograms) find it as the
+    whole file does."""
     rec = read_recording(files["csv"], 6)
-    level = int(np.percentile(rec.raw[:, 2], 93))
-    rec.raw[:, 2] = np.minimum(rec.raw[:, 2], level)          # raw_2 clips at a level inside the range
-    pile = files["dir"] / "pile.csv"
+    if side == "high":
+        level = int(np.percentile(rec.raw[:, 2], 93))
+        rec.raw[:, 2] = np.minimum(rec.raw[:, 2], level)      # raw_2 clips at a level inside the range
+    else:
+        level = int(np.percentile(rec.raw[:, 2], 7))
+        rec.raw[:, 2] = np.maximum(rec.raw[:, 2], level)
+    pile = files["dir"] / f"pile_{side}.csv"
     write_recording(pile, rec)
-    ref, out = files["dir"] / "pw.csv", files["dir"] / "ps.csv"
+    ref, out = files["dir"] / f"pw_{side}.csv", files["dir"] / f"ps_{side}.csv"
     rc, err_w = whole(capfd, pile, ref, "--engine", "fixed")
     assert rc == 0 and f"raw_2: {int(np.count_nonzero(rec.raw[:, 2] == level))} at {level}" in err_w
     res = resolve_stream(DEV, Calibration.nominal(DEV), pile, out, engine="fixed", block_bytes=2000)

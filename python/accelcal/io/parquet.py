@@ -200,7 +200,8 @@ class ParquetSink:
         self.writer = pq.ParquetWriter(f, self.schema)
 
     def write(self, columns: list[np.ndarray]) -> None:
-        arrays = [pa.array(np.asarray(c, dtype=t.type.to_pandas_dtype()), t.type) for c, t in zip(columns, self.schema)]
+        arrays = [pa.array(np.asarray(c, dtype=np.uint8 if t.type == pa.uint8() else np.float64), t.type)
+                  for c, t in zip(columns, self.schema)]
         self.writer.write_table(pa.Table.from_arrays(arrays, schema=self.schema))
 
     def close(self) -> None:
