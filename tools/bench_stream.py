@@ -36,6 +36,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shlex
 import shutil
 import subprocess
 import sys
@@ -61,6 +62,7 @@ CASE = r"""
 import json, sys, time
 sys.path.insert(0, {python!r})
 kind, src, out = sys.argv[1:4]
+extra = sys.argv[4:]
 if kind == "resolve":
     from accelcal.cli.main import main
     t0 = time.perf_counter()
@@ -70,7 +72,7 @@ if kind == "resolve":
 elif kind.startswith("convert"):
     from accelcal.cli.main import main
     t0 = time.perf_counter()
-    rc = main(["convert", src, "-o", out, "--quiet"] + (["--whole-file"] if kind.endswith("-whole") else []))
+    rc = main(["convert", src, "-o", out, "--quiet"] + extra + (["--whole-file"] if kind.endswith("-whole") else []))
     assert rc == 0
 elif kind.startswith(("rate", "attitude", "displacement")):
     from accelcal.cli.main import main
@@ -151,9 +153,10 @@ def generate(n: int, d: Path, raw0: np.ndarray) -> tuple[Path, Path]:
     return csv_path, pq_path
 
 
-def run_case(kind: str, src: Path, out: Path, engine: str = "fixed", device: str = "default") -> dict:
+def run_case(kind: str, src: Path, out: Path, engine: str = "fixed", device: str = "default",
+             extra: tuple = ()) -> dict:
     code = CASE.format(python=str(ROOT / "python"), rows=ROWS, engine=engine, device=device)
-    r = subprocess.run([sys.executable, "-c", code, kind, str(src), str(out)], capture_output=True, text=True)
+    r = subprocess.run([sys.executable, "-c", code, kind, str(src), str(out), *extra], capture_output=True, text=True)
     if r.returncode != 0:
         raise RuntimeError(f"{kind} {src} -> {out}: {r.stderr.strip()[-2000:]}")
     res = json.loads(r.stdout.strip().splitlines()[-1])
@@ -259,6 +262,9 @@ def main() -> None:
                     "of a 3-channel recording CSV (the first three channels), in chunks and (unless --no-whole) "
                     "--whole-file (case csv->csv only)")
     ap.add_argument("--engine", choices=["float", "fixed"], default="fixed", help="rate's or attitude's engine")
+    ap.add_argument("--convert-args", default="",
+                    help="convert: options added to both runs, one string (e.g. '--full-scale 2': a stated scale, "
+                    "which the bounded-memory path takes; docs/streaming.md)")
     ap.add_argument("--no-whole", action="store_true", help="rate, attitude, calibrate: the streamed runs only")
     a = ap.parse_args()
     d = Path(a.dir or tempfile.mkdtemp(prefix="bench_stream_"))
@@ -299,8 +305,10 @@ def main() -> None:
                 src, out = cases[name]
                 if a.command != "resolve":
                     for kind in (a.command,) + (() if a.no_whole else (a.command + "-whole",)):
-                        res = run_case(kind, src, out, a.engine, device)
-                        what = kind if a.command == "convert" else f"{kind} --engine {a.engine}"
+                        extra = tuple(shlex.split(a.convert_args)) if a.command == "convert" else ()
+                        res = run_case(kind, src, out, a.engine, device, extra)
+                        what = (" ".join((kind,) + extra) if a.command == "convert" else
+                                f"{kind} --engine {a.engine}")
                         print(f"| {n:.0e} | {name} | {what} | {res['s']:.2f} | {res['mb']:.0f} |", flush=True)
                     continue
                 io = run_case("anchor", src, out)

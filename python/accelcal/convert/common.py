@@ -28,7 +28,7 @@ from ..io.textinput import NUMBER_RE, is_whitespace_header, split_whitespace_hea
 from ..io.units import STANDARD_GRAVITY, Scale
 
 __all__ = ["Converted", "Options", "INDEX_COLUMNS", "GYRO_RE", "NUMBER_RE", "header_cells", "read_columns",
-           "find_column", "exact_time", "in_sample_order", "finish",
+           "find_column", "exact_time", "in_sample_order", "finish", "recording_metadata",
            "stated_rate_off", "drop_note", "whole_counts", "is_gyro", "stillest_force",
            "gravity_removed_note", "held_note"]
 
@@ -254,13 +254,7 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
         else:
             pose, f, names = label_poses(index, part, opts.regions, opts.stated_f, gravity, source, opts.regions_source,
                                          label_hint)
-        metadata = {"source_file": " ".join(source.splitlines()), "source_format": fmt, **metadata}
-        if scale is not None and (scale.converts or scale.lsb_g):
-            metadata["source_scale"] = scale.describe()
-        if opts.regions_source:
-            metadata["source_regions"] = " ".join(opts.regions_source.splitlines())
-        if names and kept is None:
-            metadata["pose_names"] = " ".join(f"{k}={nm}" for k, nm in enumerate(names))
+        metadata = recording_metadata(source, fmt, metadata, scale, opts, names, kept is not None)
         rec = Recording(t=t, raw=raw, f=f, pose=pose, metadata=metadata, extra=extra_columns, source=source)
         device_notes: list[str] = []
         noise = None
@@ -286,6 +280,21 @@ def finish(source: str, fmt: str, raw: np.ndarray, index: np.ndarray, t: np.ndar
                             noise)
         notes += [clipped] if clipped else []
         return Converted(rec, device, fmt, names, notes, scale, order is not None, device_notes)
+
+
+def recording_metadata(source: str, fmt: str, metadata: dict[str, str], scale: Scale | None, opts: Options,
+                       names: list[str], kept: bool) -> dict[str, str]:
+    """The converted recording's metadata comments: the file, its format, the file's own comments,
+    the scale, the regions file and (poses labelled from regions, not ``kept`` from the file) the
+    pose names."""
+    metadata = {"source_file": " ".join(source.splitlines()), "source_format": fmt, **metadata}
+    if scale is not None and (scale.converts or scale.lsb_g):
+        metadata["source_scale"] = scale.describe()
+    if opts.regions_source:
+        metadata["source_regions"] = " ".join(opts.regions_source.splitlines())
+    if names and not kept:
+        metadata["pose_names"] = " ".join(f"{k}={nm}" for k, nm in enumerate(names))
+    return metadata
 
 
 def grid_gaps_note(rel: np.ndarray) -> list[str]:

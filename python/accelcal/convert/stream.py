@@ -26,6 +26,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .bounded import bounded_convert, bounded_writer, first_pass_sums
 from .common import Converted, Options, finish
 from .time import FLOAT_EXACT
 from ..errors import InputError, atomic_write
@@ -34,7 +35,7 @@ from ..io.csvformat import csv_rows
 from ..io.parquet import is_parquet
 from ..io.recording import Recording, recording_layout
 from ..io.textinput import table_preamble
-from ..io.units import Scale, in_file_unit
+from ..io.units import STANDARD_GRAVITY, Scale, in_file_unit
 
 __all__ = ["convert_csv_chunked", "contract_head"]
 
@@ -97,11 +98,20 @@ def convert_csv_chunked(path: Any, opts: Options, scale: Scale | None, block_byt
         raise Fallback("not 3 raw channels")
     if opts.regions is None and opts.stated_f:
         raise Fallback("--stated-f without --regions")
+    scale = in_file_unit(scale, head.metadata.get("source_units"), head.source)
+    if opts.regions is None and scale is not None and \
+            scale.counts_per_mps2(opts.gravity_mps2 or STANDARD_GRAVITY) is not None and not scale.converts:
+        try:                # in bounded memory (accelcal.convert.bounded), else the arrays below
+            sums = first_pass_sums(path, head, block_bytes, bar_for(path, head, progress))
+            conv = bounded_convert(head, sums, opts, scale)
+            conv.writer = bounded_writer(path, head, block_bytes, lambda: bar_for(path, head, progress), conv)
+            return conv
+        except Fallback:
+            pass
     t, raw, pose, f_given = first_pass(path, head, block_bytes, progress)
     n = t.size
     if np.any(np.abs(t) >= FLOAT_EXACT):
         raise Fallback("an epoch in ns (read exactly from its text)")
-    scale = in_file_unit(scale, head.metadata.get("source_units"), head.source)
     # f stands in as one value: finite where the file gives any (the writer's layout), not its values
     f = np.broadcast_to(np.float64(0.0 if f_given else np.nan), (n, 3))
     kept = (pose if pose is not None else np.broadcast_to(np.int64(-1), (n,)), f) if opts.regions is None else None

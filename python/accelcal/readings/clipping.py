@@ -235,12 +235,18 @@ def clip_note(raw: np.ndarray, device, window: int, name=lambda i: f"raw_{i}",
         return None
     noise = noise_for(device, raw, window)[0] if noise is None else noise
     levels = clip_levels(raw, device, noise, window)
+    counts = [(int(np.count_nonzero(raw[:, i] <= levels.lo[i])), int(np.count_nonzero(raw[:, i] >= levels.hi[i])))
+              for i in range(raw.shape[1])]
+    return clip_counts_text(counts, levels.lo, levels.hi, levels.inside_lo, levels.inside_hi, name)
+
+
+def clip_counts_text(counts, lo, hi, inside_lo, inside_hi, name=lambda i: f"raw_{i}") -> str | None:
+    """:func:`clip_note`'s text from each channel's (readings <= lo, readings >= hi) ``counts`` and
+    its levels (``inside_*``: a pile inside the range, else the converter's limit); None for none."""
     parts, total = [], 0
-    for i in range(raw.shape[1]):
+    for i, (k_lo, k_hi) in enumerate(counts):
         ends = []
-        for at, level, inside, limit in ((raw[:, i] <= levels.lo[i], levels.lo[i], levels.inside_lo[i], "raw_min"),
-                                         (raw[:, i] >= levels.hi[i], levels.hi[i], levels.inside_hi[i], "raw_max")):
-            k = int(np.count_nonzero(at))
+        for k, level, inside, limit in ((k_lo, lo[i], inside_lo[i], "raw_min"), (k_hi, hi[i], inside_hi[i], "raw_max")):
             if k:
                 total += k
                 ends.append(f"{k} at {int(level)}" + (" (a pile inside the range)" if inside else f" ({limit})"))

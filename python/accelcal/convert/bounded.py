@@ -1,0 +1,329 @@
+"""``accelcal convert`` of a recording CSV in memory that does not grow with the recording
+(docs/streaming.md, "convert in bounded memory").
+
+The first pass reads the rows in chunks and keeps, in place of t, the counts and the labels,
+what :func:`accelcal.convert.common.finish` infers from them reduced to bounded summaries
+(:class:`Sums`): each channel's histogram of readings (the ADC range and signedness, the code
+step, the clip levels and their counts), the runs of identical rows
+(:class:`accelcal.readings.held.RunCounts`), the counts of the distinct time steps (the time unit,
+the median step, the gaps, the rate), the first and last stamps, the pose labels seen and
+whether f is given.  :func:`bounded_convert` then gives the notes, the nominal device and the
+recording's layout exactly as ``finish`` gives them on the whole arrays, and the second pass
+writes the rows as they are read again.
+
+Where an inference takes more than these summaries give, :class:`~accelcal.io.chunks.Fallback`
+is raised before anything is written and the caller runs the first-pass-arrays path
+(:func:`accelcal.convert.stream.convert_csv_chunked`'s, the same output):
+
+* no stated scale (``--full-scale``/``--lsb``): the nominal scale then comes from the static
+  detector (:func:`accelcal.readings.static.detect_static`) over the samples;
+* a leading ``0, 0, 0`` row, readings held for several rows, stamps in bursts, t in another
+  unit than s, ``--rate`` off the stamps, ``--regions``: the notes name rows or take the samples;
+* an extreme reading held by CLIP_MIN_COUNT samples or more inside the ADC's range whose pile
+  verdict depends on the noise (:func:`pile_free`), the noise being estimated from the samples;
+* a mean step whose rounding could change the device's rate (:func:`certified_rate`), more than
+  MAX_STEP_VALUES distinct time steps, fewer than 3 rows.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any, Callable
+
+import numpy as np
+
+from .common import Converted, Options, recording_metadata
+from .nominal_device import STEP_MIN_VALUES, adc_range, code_step_note, nominal_triad
+from .time import BURST_SHARE, FLOAT_EXACT, MIN_PLAUSIBLE_HZ, time_factor, unit_in_name
+from ..errors import InputError, atomic_write
+from ..io.chunks import Fallback, Head, csv_chunks, reader_checks
+from ..io.csvformat import csv_rows
+from ..io.parquet import is_parquet
+from ..io.recording import Recording, recording_layout
+from ..io.recording_checks import GAP_STEPS
+from ..io.units import STANDARD_GRAVITY, Scale
+from ..readings.clipping import CLIP_BAND_SIGMA, CLIP_MIN_COUNT, CLIP_PILE_RATIO, clip_counts_text, code_step_counts
+from ..readings.held import RunCounts
+
+__all__ = ["Sums", "MAX_STEP_VALUES", "first_pass_sums", "bounded_convert", "certified_rate", "pile_free",
+           "median_counts"]
+
+#: distinct time steps kept (more: Fallback)
+MAX_STEP_VALUES = 1 << 16
+#: relative margin of the certified comparisons (the float arithmetic of the whole-file functions)
+MARGIN = 1e-9
+
+
+@dataclass
+class Sums:
+    """What the first pass keeps of a recording CSV (bounded: histograms of the readings, of the
+    time steps and of the runs of identical rows)."""
+
+    n: int = 0
+    t0: float = math.nan
+    t_last: float = math.nan
+    hist: list = field(default_factory=lambda: [{}, {}, {}])     # per channel: reading -> count
+    t_steps: dict = field(default_factory=dict)                  # np.diff(t): step -> count
+    rel_steps: dict = field(default_factory=dict)                # np.diff(t - t0): step -> count
+    runs: RunCounts = field(default_factory=RunCounts)
+    labels: set = field(default_factory=set)                     # pose labels >= 0
+    has_pose: bool = False
+    f_given: bool = False
+    rel_last: float = math.nan
+
+    def add(self, t: np.ndarray, raw: np.ndarray, pose: np.ndarray | None, f: np.ndarray | None) -> None:
+        """One chunk's rows (t as read, counts, labels or None, f or None)."""
+        m = t.size
+        if m == 0:
+            return
+        if self.n == 0:
+            if np.all(raw[0] == 0):
+                raise Fallback("a leading 0, 0, 0 row (the placeholder test takes the samples)")
+            self.t0 = float(t[0])
+        if np.any(np.abs(t) >= FLOAT_EXACT):
+            raise Fallback("an epoch in ns (read exactly from its text)")
+        rel = t - self.t0
+        if self.n:
+            count_into(self.t_steps, np.diff(np.concatenate([[self.t_last], t])))
+            count_into(self.rel_steps, np.diff(np.concatenate([[self.rel_last], rel])))
+        else:
+            count_into(self.t_steps, np.diff(t))
+            count_into(self.rel_steps, np.diff(rel))
+        if max(len(self.t_steps), len(self.rel_steps)) > MAX_STEP_VALUES:
+            raise Fallback(f"more than {MAX_STEP_VALUES} distinct time steps")
+        for j in range(3):
+            count_into(self.hist[j], raw[:, j])
+        self.runs.add(raw)
+        if pose is not None:
+            self.has_pose = True
+            self.labels.update(int(v) for v in np.unique(pose[pose >= 0]))
+        self.f_given = self.f_given or (f is not None and bool(np.isfinite(f).any()))
+        self.n += m
+        self.t_last = float(t[-1])
+        self.rel_last = float(rel[-1])
+
+
+def count_into(counts: dict, values: np.ndarray) -> None:
+    """Add the distinct ``values`` and their counts to ``counts``."""
+    u, c = np.unique(values, return_counts=True)
+    for v, k in zip(u.tolist(), c.tolist()):
+        counts[v] = counts.get(v, 0) + k
+
+
+def sorted_counts(counts: dict) -> tuple[np.ndarray, np.ndarray]:
+    """(values ascending, their counts) of a histogram."""
+    u = np.array(sorted(counts))
+    return u, np.array([counts[v] for v in u.tolist()], dtype=np.int64)
+
+
+def median_counts(counts: dict) -> float:
+    """``np.median`` of the values counted in ``counts`` (value -> count): the middle value, or
+    numpy's mean of the two middle ones."""
+    u, c = sorted_counts(counts)
+    n = int(c.sum())
+    cum = np.cumsum(c)
+    a = u[int(np.searchsorted(cum, (n - 1) // 2, side="right"))]
+    if n % 2:
+        return float(a)
+    b = u[int(np.searchsorted(cum, n // 2, side="right"))]
+    return float(np.mean(np.array([a, b], dtype=float)))
+
+
+def first_pass_sums(path: Any, head: Head, block_bytes: int, bar: Any) -> Sums:
+    """The first pass (Fallback at any bad row or a row off its line: the whole-file reader words it)."""
+    sums, prev = Sums(), None
+    for ch in csv_chunks(path, head, block_bytes, None if bar is None else bar.update):
+        if reader_checks(head, ch, prev) or not np.all(np.isfinite(ch.t)):
+            raise Fallback("a bad row")
+        if ch.n and (ch.line(0) != head.first_line + ch.start or ch.line(ch.n - 1) != head.first_line + ch.start + ch.n - 1):
+            raise Fallback("rows not on consecutive lines")
+        sums.add(ch.t, ch.raw, ch.other.get("pose"), ch.vecs.get("f"))
+        prev = ch
+    if bar is not None:
+        bar.close()
+    if sums.n < 3:
+        raise Fallback("fewer than 3 rows")
+    return sums
+
+
+def in_seconds(sums: Sums, opts: Options, column: str) -> None:
+    """:func:`accelcal.convert.time.time_in_seconds` where it reads t in seconds (else Fallback)."""
+    if opts.time_unit != "auto":
+        if time_factor(opts.time_unit) != 1.0:
+            raise Fallback("t in another unit than s (its note, its division)")
+        return
+    named = unit_in_name(column)
+    if named == "s":
+        return
+    if named is not None:
+        raise Fallback("t in a unit its name states")
+    pos = {v: k for v, k in sums.t_steps.items() if v > 0}
+    step = median_counts(pos) if pos else 0.0
+    if step <= 0 or 1.0 / step >= MIN_PLAUSIBLE_HZ:
+        return
+    raise Fallback("t read in ms, us or ns")
+
+
+def certified_rate(steps: dict, notes: list[str]) -> float:
+    """:func:`accelcal.convert.time.rate_from_t` of stamps whose steps are counted in ``steps``,
+    where they are even (no bursts) -- the rate as the device keeps it, ``round(rate, 6)``: the
+    mean of the regular steps (``regular_step``) is numpy's pairwise sum, which the counts give to
+    within its rounding bound only; Fallback where that bound could change the 6th decimal."""
+    median = median_counts(steps)
+    if median <= 0:
+        return 1.0
+    regular = {v: k for v, k in steps.items() if 0 < v <= GAP_STEPS * median}
+    gaps = sum(k for v, k in steps.items() if v > GAP_STEPS * median)
+    if gaps:
+        notes.append(f"t has {gaps} step{'s' if gaps > 1 else ''} longer than {GAP_STEPS:g} x its median step "
+                     f"({median:.6g} s; the longest {max(steps):.6g} s): a pause or samples lost; the "
+                     "rate is that of the other steps")
+    size = sum(regular.values())
+    if not size:
+        return 1.0 / median
+    exact = sum((Fraction(v) * k for v, k in regular.items()), Fraction(0))
+    # numpy's pairwise summation: error below (log2 n + 2 x 128 leaf adds) ulps of the sum of |x|
+    bound = exact * Fraction(2 * (math.ceil(math.log2(size + 1)) + 256), 2 ** 53)
+    lo, hi = float(exact - bound), float(exact + bound)
+    lo, hi = np.nextafter(lo, -np.inf), np.nextafter(hi, np.inf)
+    r_hi, r_lo = 1.0 / (float(lo) / size), 1.0 / (float(hi) / size)
+    if round(r_hi, 6) != round(r_lo, 6):
+        raise Fallback("the device's rate is within the sum's rounding of a 6th-decimal step")
+    return r_lo
+
+
+def pile_free(u: np.ndarray, cnt: np.ndarray, side: int, q: int, sigma_lo: float, sigma_hi: float) -> bool:
+    """Whether :func:`accelcal.readings.clipping.pile_level_counts` finds no pile on ``side`` for
+    every noise in [sigma_lo, sigma_hi] (counts): its band max(CLIP_BAND_SIGMA sigma, 2 q) then runs
+    over an interval, and the readings within the band per code are least just below each
+    distance at which the band takes in a new reading, or at its top (a margin of MARGIN)."""
+    ext = u[-1] if side > 0 else u[0]
+    c = int(cnt[-1] if side > 0 else cnt[0])
+    if c < CLIP_MIN_COUNT:
+        return True
+    b0 = max(CLIP_BAND_SIGMA * sigma_lo, 2.0 * q) * (1 - MARGIN)
+    b1 = max(CLIP_BAND_SIGMA * sigma_hi, 2.0 * q) * (1 + MARGIN)
+    away = (side * (ext - u)).astype(float)
+    order = np.argsort(away)
+    away, k = away[order], cnt[order]
+    within = np.cumsum(k) - c                       # readings with 0 < away <= away[i] (ext itself is away 0)
+    cands = [(float(within[np.searchsorted(away, b1, side="right") - 1]), b1)]
+    for d in np.unique(away[(away > b0) & (away <= b1)]).tolist():
+        below = int(k[away < d].sum()) - c          # readings with 0 < away < d: the band just below d
+        cands.append((float(below), d))
+    for near, band in cands:
+        per_code = near / max(band / q, 1.0)
+        if not c < CLIP_PILE_RATIO * per_code * (1 - MARGIN) + CLIP_MIN_COUNT:
+            return False
+    return True
+
+
+def clip_note_counts(hists: list[tuple[np.ndarray, np.ndarray]], device: Any) -> str | None:
+    """:func:`accelcal.readings.clipping.clip_note` from each channel's histogram, where no pile
+    inside the range can be found whatever the noise (:func:`pile_free`; else Fallback)."""
+    counts = []
+    for i, (u, cnt) in enumerate(hists):
+        if u[0] != u[-1]:
+            q = code_step_counts(u, cnt)
+            # the noise estimate_noise can give: its rounding floor, to the widest window std and rounding
+            lo = q / math.sqrt(12.0)
+            hi = math.sqrt((0.5 * float(u[-1] - u[0])) ** 2 * 1.5 + q * q / 12.0)
+            for side, inside in ((1, u[-1] < device.raw_max), (-1, u[0] > device.raw_min)):
+                if inside and not pile_free(u, cnt, side, q, lo, hi):
+                    raise Fallback("an extreme reading held often inside the range (the pile test takes the noise)")
+        counts.append((int(cnt[u <= device.raw_min].sum()), int(cnt[u >= device.raw_max].sum())))
+    return clip_counts_text(counts, [float(device.raw_min)] * 3, [float(device.raw_max)] * 3, [False] * 3,
+                            [False] * 3, lambda j: f"raw_{j}")
+
+
+def bounded_convert(head: Head, sums: Sums, opts: Options, scale: Scale | None) -> Converted:
+    """``finish``'s result from the first pass's sums (module doc; Fallback where they do not
+    give it).  Its recording is a stand-in of n rows (broadcast views, no memory): the layout
+    decisions (f, pose given) and the counts; the rows are written by the second pass."""
+    if opts.regions is not None:
+        raise Fallback("--regions (the poses are labelled from the samples)")
+    gravity = opts.gravity_mps2 or STANDARD_GRAVITY
+    k = scale.counts_per_mps2(gravity) if scale is not None else None
+    if k is None:
+        raise Fallback("no stated scale: the nominal scale takes the static detector over the samples")
+    if scale.converts:
+        raise Fallback("readings in a unit: converted in the whole-file reader")
+    hists = [sorted_counts(h) for h in sums.hist]
+    signed = any(u[0] < 0 for u, _ in hists)
+    lo, hi = adc_range(opts.bits, signed)
+    if any(u[0] < lo or u[-1] > hi for u, _ in hists):
+        raise Fallback("a reading outside the ADC's range (the refusal names its row)")
+    notes: list[str] = []
+    in_seconds(sums, opts, "t")
+    median = median_counts(sums.rel_steps)
+    mean = float(sums.rel_last - 0.0) / (sums.n - 1)
+    if not (median > 0 and mean > 0 and abs(mean / median - 1.0) <= BURST_SHARE):
+        raise Fallback("stamps not even (bursts, pauses: the burst fit takes the stamps)")
+    if opts.rate_hz is not None:
+        rate = opts.rate_hz
+        own = 1.0 / median
+        if max(abs(rate / own - 1.0), abs(own / rate - 1.0)) > 0.2:
+            raise Fallback("--rate off the stamps (t is written on the grid)")
+    else:
+        rate = certified_rate(sums.rel_steps, notes)
+    held = sums.runs.held(3)
+    if held is None or held > 1:
+        raise Fallback("readings held for several rows (the note takes the runs)")
+    values = np.unique(np.concatenate([u for u, _ in hists]))
+    if values.size >= STEP_MIN_VALUES:
+        notes += code_step_note(values.reshape(-1, 1), opts.bits)
+    names = [str(v) for v in sorted(sums.labels)]
+    metadata = recording_metadata(head.source, "csv", dict(head.metadata), scale, opts, names, True)
+    device_notes: list[str] = []
+    device, _ = nominal_triad("csv-triad", rate, gravity, None, opts.bits, signed, scale, device_notes, None)
+    clipped = clip_note_counts(hists, device)
+    notes += [clipped] if clipped else []
+    n = sums.n
+    nan = np.float64(np.nan)
+    rec = Recording(t=np.broadcast_to(np.float64(0.0), (n,)), raw=np.broadcast_to(np.int64(0), (n, 3)),
+                    f=np.broadcast_to(np.float64(0.0) if sums.f_given else nan, (n, 3)),
+                    w=np.broadcast_to(nan, (n, 3)), dw=np.broadcast_to(nan, (n, 3)),
+                    temp_c=np.broadcast_to(nan, (n,)),
+                    pose=np.broadcast_to(np.int64(0 if sums.labels else -1), (n,)), metadata=metadata,
+                    source=head.source)
+    return Converted(rec, device, "csv", names, notes, scale, False, device_notes)
+
+
+def second_pass(path: Any, head: Head, block_bytes: int, bar: Any, like: Recording, output: Any) -> None:
+    """Write the rows chunk by chunk as they are read again (t as read, in s; the counts; the
+    file's labels and f), atomically, in the whole-file writer's layout (``like``: the stand-in)."""
+    if is_parquet(output):
+        raise ValueError("the chunked writer writes CSV: a .parquet output is written whole")
+    lines, _, formats = recording_layout(like)
+    n = like.n_samples
+
+    def write(fh: Any) -> None:
+        fh.write("\n".join(lines))
+        fh.write("\n")
+        done = 0
+        for ch in csv_chunks(path, head, block_bytes, None if bar is None else bar.update):
+            if not ch.n:
+                continue
+            part = Recording(t=ch.t, raw=ch.raw, f=ch.vecs.get("f") if like.has_f() else None, pose=ch.other.get("pose"),
+                             metadata=like.metadata, source=like.source)
+            _, columns, _ = recording_layout(part, like=like)
+            for text in csv_rows(columns, formats, [""] * len(columns)):
+                fh.write(text)
+            done += ch.n
+        if done != n:
+            raise InputError(head.source, f"the file changed while it was read ({done} rows, then {n})")
+
+    try:
+        atomic_write(output, write)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def bounded_writer(path: Any, head: Head, block_bytes: int, bar_for: Callable[[], Any], conv: Converted
+                   ) -> Callable[[Any], None]:
+    """``Converted.writer`` of the bounded path (the second pass, with its own bar)."""
+    def write(output: Any) -> None:
+        second_pass(path, head, block_bytes, bar_for(), conv.recording, output)
+    return write

@@ -1,0 +1,170 @@
+"""convert of a recording CSV in bounded memory (accelcal.convert.bounded; docs/streaming.md,
+"convert in bounded memory"): with a stated scale the first pass keeps histograms and counts, not
+t, the counts and the labels, and the output, device, notes and summary are the whole-file
+command's byte for byte at chunks of one row to more than the file (boundaries inside still
+poses and inside motions); where a summary cannot give the whole-file answer the arrays path runs
+(the same bytes)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from accelcal.convert import bounded, stream
+from accelcal.convert.formats import convert_file
+from accelcal.io.device import save_device
+from accelcal.io.recording import Recording, write_recording
+from accelcal.readings.clipping import pile_level_counts
+from accelcal.readings.noise import code_step
+
+from cli_run import run
+from indep_model import make_jig
+from shared_data import shared_file
+from test_stream_convert import BLOCKS, poses, whole, whole_scale
+
+#: real recordings (other tools' files) made contract CSVs first: (folder, file)
+REAL = (("imu_tk_xsens", "xsens_acc.txt.gz"), ("mpu6050_tomisuarez", "example_data_calibration.csv.gz"),
+        ("mpu6050_tomisuarez", "example_data_tinit_calc.csv.gz"))
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("bounded_convert")
+    rec = poses(1800, 11)
+    write_recording(d / "plain.csv", Recording(t=rec.t, raw=rec.raw, metadata={"device": "x"}))
+    jig = make_jig(seed=5, device="triad16", rate=100.0, n_poses=6, repeats=False, hold_s=(1.0, 1.5))["recording"]
+    write_recording(d / "labelled.csv", jig)                         # the independent generator's: pose, f
+    signed = poses(1800, 12, signed=True)
+    signed.raw[700:760, 1] = 2 ** 15 - 1                            # at the rail: counted in the note
+    signed.raw[900:905, 2] = -(2 ** 15)
+    write_recording(d / "rail.csv", Recording(t=signed.t, raw=signed.raw))
+    paused = poses(1800, 13)
+    t = paused.t.copy()
+    t[1000:] += 0.5                                                 # a pause of 50 samples: the gap note
+    write_recording(d / "paused.csv", Recording(t=t + 12.25, raw=paused.raw))
+    step4 = poses(1800, 14)
+    write_recording(d / "step4.csv", Recording(t=step4.t, raw=step4.raw * 4))     # the code-step note
+    pile = poses(1800, 15)
+    pile.raw[200:230, 0] = int(pile.raw[:, 0].max()) + 50           # held at a level inside the range
+    write_recording(d / "pile.csv", Recording(t=pile.t, raw=pile.raw))
+    return d
+
+
+#: (file, options): each goes the bounded way but "pile" (an extreme held often inside the range)
+CASES = [("plain", ("--full-scale", "2")), ("labelled", ("--full-scale", "8")), ("rail", ("--full-scale", "4")),
+         ("paused", ("--full-scale", "2")), ("step4", ("--full-scale", "2", "--bits", "16")),
+         ("plain", ("--full-scale", "2", "--rate", "101")), ("plain", ("--units", "counts", "--lsb", "0.001g"))]
+
+
+def no_arrays(monkeypatch):
+    """The arrays path's first pass fails where it is called."""
+    def fail(*a, **k):
+        raise AssertionError("the first pass kept the arrays")
+    monkeypatch.setattr(stream, "first_pass", fail)
+
+
+def same_as_whole(capfd, tmp_path, src, args, blocks=BLOCKS):
+    """The command's output, device, stderr and stdout, and convert_file's at each block size, against
+    the whole-file command's."""
+    ref, ref_dev, ref_err, ref_said = whole(capfd, tmp_path, src, "w", *args)
+    o, dev = tmp_path / "s.csv", tmp_path / "s.json"
+    rc, said, err, _ = run(["convert", src, *args, "-o", o, "--device-out", dev, "--quiet"], capfd)
+    assert rc == 0, err
+    assert (o.read_bytes(), dev.read_text(), err) == (ref, ref_dev, ref_err)
+    assert said.replace("s.csv", "W").replace("s.json", "D") == ref_said.replace("whole_w.csv", "W").replace(
+        "whole_w.json", "D")
+    scale = whole_scale(args)
+    rate = next((float(args[i + 1]) for i, a in enumerate(args) if a == "--rate"), None)
+    for block in blocks:
+        conv = convert_file(src, stream=True, block_bytes=block, scale=scale, rate_hz=rate, bits=16)
+        assert conv.writer is not None
+        conv.write(o)
+        assert o.read_bytes() == ref, block
+        save_device(conv.device, dev)
+        assert dev.read_text() == ref_dev, block
+    return ref_err
+
+
+@pytest.mark.parametrize("case", range(len(CASES)))
+def test_bounded_gives_the_whole_file_bytes(files, capfd, tmp_path, monkeypatch, case):
+    name, args = CASES[case]
+    no_arrays(monkeypatch)          # on the code before, every recording CSV went through the arrays
+    err = same_as_whole(capfd, tmp_path, files / f"{name}.csv", args)
+    if name == "rail":
+        assert "clipped" in err and "raw_max" in err and "raw_min" in err
+    if name == "paused":
+        assert "longer than" in err
+    if name == "step4":
+        assert "multiple of 4" in err
+
+
+def test_fallback_gives_the_same_bytes(files, capfd, tmp_path, monkeypatch):
+    """Where a summary cannot tell (no stated scale; a pile inside the range, whose test takes the
+    noise; readings held), the arrays path runs: the whole-file bytes still."""
+    called = []
+    arrays = stream.first_pass
+
+    def counted(*a, **k):
+        called.append(1)
+        return arrays(*a, **k)
+    monkeypatch.setattr(stream, "first_pass", counted)
+    for name, args in (("plain", ()), ("pile", ("--full-scale", "2"))):
+        called.clear()
+        same_as_whole(capfd, tmp_path, files / f"{name}.csv", args, blocks=(97, 1 << 30))
+        assert called, name
+
+
+def test_summaries_do_not_grow(files, tmp_path):
+    """The first pass's summaries of a recording repeated 20 times hold no more entries than of one."""
+    rec = poses(1800, 16)
+    sizes = []
+    for reps in (1, 20):
+        n = 1800 * reps
+        path = tmp_path / f"r{reps}.csv"
+        write_recording(path, Recording(t=np.arange(n) / 100.0, raw=np.tile(rec.raw, (reps, 1))))
+        head = stream.contract_head(path, None)
+        s = bounded.first_pass_sums(path, head, 4096, None)
+        assert s.n == n
+        sizes.append((sum(len(h) for h in s.hist), len(s.runs.hist)))
+    assert sizes[1] == sizes[0]
+
+
+def test_median_counts_is_numpys():
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 3, 10, 11, 1000):
+        v = rng.integers(-5, 5, n) / 7.0
+        counts: dict = {}
+        bounded.count_into(counts, v)
+        assert bounded.median_counts(counts) == float(np.median(v))
+
+
+def test_pile_free_holds_for_every_noise():
+    """Where pile_free says no pile for a noise interval, the whole-file pile test finds none at any
+    noise in it; and it says so for no histogram the pile test flags."""
+    rng = np.random.default_rng(4)
+    seen = [0, 0]
+    for _ in range(300):
+        v = np.round(rng.normal(0, rng.uniform(0.5, 40), rng.integers(200, 3000))).astype(np.int64)
+        v = np.concatenate([v, np.full(rng.integers(0, 40), v.max() + rng.integers(0, 30))])
+        u, cnt = np.unique(v, return_counts=True)
+        q = code_step(v)
+        lo, hi = q / np.sqrt(12.0), float(rng.uniform(1, 30))
+        free = bounded.pile_free(u, cnt, 1, q, lo, hi)
+        found = [pile_level_counts(u, cnt, 1, s, q) is not None for s in np.linspace(lo, hi, 60)]
+        seen[free] += 1
+        if free:
+            assert not any(found)
+    assert min(seen) > 20        # both answers occur
+
+
+@pytest.mark.parametrize("which", range(len(REAL)))
+def test_real_recordings(capfd, tmp_path, monkeypatch, which):
+    """Real recordings (../shared/data), made contract CSVs by convert, converted again with a stated scale in
+    bounded memory: the whole-file bytes."""
+    path = shared_file(*REAL[which])
+    if path is None:
+        pytest.skip("no ../shared/data beside the repository")
+    rec = tmp_path / "real.csv"
+    rc, _, err, _ = run(["convert", path, "-o", rec, "--quiet"], capfd)
+    assert rc == 0, err
+    no_arrays(monkeypatch)
+    same_as_whole(capfd, tmp_path, rec, ("--full-scale", "2"), blocks=(1000, 1 << 16, 1 << 30))
