@@ -14,7 +14,8 @@ from accelcal.convert.formats import convert_file
 from accelcal.io.device import save_device
 from accelcal.io.recording import Recording, write_recording
 from accelcal.readings.clipping import pile_level_counts
-from accelcal.readings.noise import code_step
+from accelcal.readings import noise_stream
+from accelcal.readings.noise import code_step, estimate_noise
 
 from cli_run import run
 from indep_model import make_jig
@@ -46,13 +47,17 @@ def files(tmp_path_factory):
     pile = poses(1800, 15)
     pile.raw[200:230, 0] = int(pile.raw[:, 0].max()) + 50           # held at a level inside the range
     write_recording(d / "pile.csv", Recording(t=pile.t, raw=pile.raw))
+    held = poses(1800, 17)
+    held.raw[1::2] = held.raw[0::2]                                 # each reading held for two rows
+    write_recording(d / "held.csv", Recording(t=held.t, raw=held.raw))
     return d
 
 
-#: (file, options): each goes the bounded way but "pile" (an extreme held often inside the range)
+#: (file, options): each goes the bounded way ("pile": an extreme held inside the range, the noise pass)
 CASES = [("plain", ("--full-scale", "2")), ("labelled", ("--full-scale", "8")), ("rail", ("--full-scale", "4")),
          ("paused", ("--full-scale", "2")), ("step4", ("--full-scale", "2", "--bits", "16")),
-         ("plain", ("--full-scale", "2", "--rate", "101")), ("plain", ("--units", "counts", "--lsb", "0.001g"))]
+         ("plain", ("--full-scale", "2", "--rate", "101")), ("plain", ("--units", "counts", "--lsb", "0.001g")),
+         ("pile", ("--full-scale", "2"))]
 
 
 def no_arrays(monkeypatch):
@@ -95,11 +100,13 @@ def test_bounded_gives_the_whole_file_bytes(files, capfd, tmp_path, monkeypatch,
         assert "longer than" in err
     if name == "step4":
         assert "multiple of 4" in err
+    if name == "pile":
+        assert "a pile inside the range" in err
 
 
 def test_fallback_gives_the_same_bytes(files, capfd, tmp_path, monkeypatch):
-    """Where a summary cannot tell (no stated scale; a pile inside the range, whose test takes the
-    noise; readings held), the arrays path runs: the whole-file bytes still."""
+    """Where a summary cannot tell (no stated scale; readings held), the arrays path runs: the
+    whole-file bytes still."""
     called = []
     arrays = stream.first_pass
 
@@ -107,7 +114,7 @@ def test_fallback_gives_the_same_bytes(files, capfd, tmp_path, monkeypatch):
         called.append(1)
         return arrays(*a, **k)
     monkeypatch.setattr(stream, "first_pass", counted)
-    for name, args in (("plain", ()), ("pile", ("--full-scale", "2"))):
+    for name, args in (("plain", ()), ("held", ("--full-scale", "2"))):
         called.clear()
         same_as_whole(capfd, tmp_path, files / f"{name}.csv", args, blocks=(97, 1 << 30))
         assert called, name
@@ -126,6 +133,27 @@ def test_summaries_do_not_grow(files, tmp_path):
         assert s.n == n
         sizes.append((sum(len(h) for h in s.hist), len(s.runs.hist)))
     assert sizes[1] == sizes[0]
+
+
+@pytest.mark.parametrize("chunk", (1, 7, 333, 1 << 20))
+def test_noise_pass_is_estimate_noise(monkeypatch, chunk):
+    """NoisePass fed in chunks gives estimate_noise's floats exactly (rests, motions, a held rail,
+    windows of 3 to 80 samples; the Otsu split in slices of 50 windows)."""
+    monkeypatch.setattr(noise_stream, "SLICE", 50)
+    rng = np.random.default_rng(chunk)
+    for trial in range(25):
+        n = int(rng.integers(5, 4000))
+        raw = np.round(rng.normal(0, rng.uniform(0.3, 30), (n, 3))).astype(np.int64) + 2048
+        if trial % 3 == 0:
+            raw[: n // 2] += np.round(500 * np.sin(np.arange(n // 2) / 20)[:, None]).astype(np.int64)
+        if trial % 4 == 1:
+            raw[n // 3: n // 3 + 50, 1] = raw[:, 1].max()
+        w = int(rng.integers(3, 80))
+        q = np.array([code_step(raw[:, i]) for i in range(3)])
+        p = noise_stream.NoisePass(n, w, raw.min(0), raw.max(0), q)
+        for a in range(0, n, chunk):
+            p.add(raw[a:a + chunk])
+        assert np.array_equal(p.noise(slice_windows=7), estimate_noise(raw, w, integer=True)), trial
 
 
 def test_median_counts_is_numpys():

@@ -43,7 +43,10 @@ from ..io.parquet import is_parquet
 from ..io.recording import Recording, recording_layout
 from ..io.recording_checks import GAP_STEPS
 from ..io.units import STANDARD_GRAVITY, Scale
-from ..readings.clipping import CLIP_BAND_SIGMA, CLIP_MIN_COUNT, CLIP_PILE_RATIO, clip_counts_text, code_step_counts
+from ..readings.clipping import (CLIP_BAND_SIGMA, CLIP_MIN_COUNT, CLIP_PILE_RATIO, ClipLevels, clip_counts_text,
+                                 clip_levels_counts, code_step_counts)
+from ..readings.noise_stream import NoisePass
+from ..readings.static import STATIC_WINDOW_S, window_len
 from ..readings.held import RunCounts
 
 __all__ = ["Sums", "MAX_STEP_VALUES", "first_pass_sums", "bounded_convert", "certified_rate", "pile_free",
@@ -202,8 +205,8 @@ def pile_free(u: np.ndarray, cnt: np.ndarray, side: int, q: int, sigma_lo: float
     c = int(cnt[-1] if side > 0 else cnt[0])
     if c < CLIP_MIN_COUNT:
         return True
-    b0 = max(CLIP_BAND_SIGMA * sigma_lo, 2.0 * q) * (1 - MARGIN)
-    b1 = max(CLIP_BAND_SIGMA * sigma_hi, 2.0 * q) * (1 + MARGIN)
+    b0 = max(CLIP_BAND_SIGMA * sigma_lo * (1 - MARGIN), 2.0 * q)       # 2 q: the band's floor, exact
+    b1 = max(CLIP_BAND_SIGMA * sigma_hi * (1 + MARGIN), 2.0 * q)
     away = (side * (ext - u)).astype(float)
     order = np.argsort(away)
     away, k = away[order], cnt[order]
@@ -219,25 +222,38 @@ def pile_free(u: np.ndarray, cnt: np.ndarray, side: int, q: int, sigma_lo: float
     return True
 
 
-def clip_note_counts(hists: list[tuple[np.ndarray, np.ndarray]], device: Any) -> str | None:
-    """:func:`accelcal.readings.clipping.clip_note` from each channel's histogram, where no pile
-    inside the range can be found whatever the noise (:func:`pile_free`; else Fallback)."""
-    counts = []
-    for i, (u, cnt) in enumerate(hists):
+def clip_note_counts(hists: list[tuple[np.ndarray, np.ndarray]], device: Any,
+                     noise_of: Callable[[Any, list], np.ndarray] | None) -> str | None:
+    """:func:`accelcal.readings.clipping.clip_note` from each channel's histogram: where no pile
+    inside the range can be found whatever the noise (:func:`pile_free`), from the counts alone;
+    else with the noise ``noise_of(device, hists)`` (:class:`accelcal.readings.noise_stream.NoisePass`,
+    a pass over the file: ``estimate_noise``'s floats) and :func:`clip_levels_counts` (Fallback
+    where that needs the readings in order, or without ``noise_of``)."""
+    free = True
+    for u, cnt in hists:
         if u[0] != u[-1]:
             q = code_step_counts(u, cnt)
             # the noise estimate_noise can give: its rounding floor, to the widest window std and rounding
             lo = q / math.sqrt(12.0)
             hi = math.sqrt((0.5 * float(u[-1] - u[0])) ** 2 * 1.5 + q * q / 12.0)
             for side, inside in ((1, u[-1] < device.raw_max), (-1, u[0] > device.raw_min)):
-                if inside and not pile_free(u, cnt, side, q, lo, hi):
-                    raise Fallback("an extreme reading held often inside the range (the pile test takes the noise)")
-        counts.append((int(cnt[u <= device.raw_min].sum()), int(cnt[u >= device.raw_max].sum())))
-    return clip_counts_text(counts, [float(device.raw_min)] * 3, [float(device.raw_max)] * 3, [False] * 3,
-                            [False] * 3, lambda j: f"raw_{j}")
+                free = free and not (inside and not pile_free(u, cnt, side, q, lo, hi))
+    if free:
+        n_ch = len(hists)
+        levels = ClipLevels(lo=np.full(n_ch, float(device.raw_min)), hi=np.full(n_ch, float(device.raw_max)),
+                            inside_lo=np.zeros(n_ch, bool), inside_hi=np.zeros(n_ch, bool))
+    else:
+        if noise_of is None:
+            raise Fallback("an extreme reading held often inside the range (the pile test takes the noise)")
+        levels = clip_levels_counts(hists, device, noise_of(device, hists))
+        if levels is None:
+            raise Fallback("a pile on a channel quieter than a code (the test takes the readings in order)")
+    counts = [(int(cnt[u <= levels.lo[i]].sum()), int(cnt[u >= levels.hi[i]].sum())) for i, (u, cnt) in enumerate(hists)]
+    return clip_counts_text(counts, levels.lo, levels.hi, levels.inside_lo, levels.inside_hi, lambda j: f"raw_{j}")
 
 
-def bounded_convert(head: Head, sums: Sums, opts: Options, scale: Scale | None) -> Converted:
+def bounded_convert(head: Head, sums: Sums, opts: Options, scale: Scale | None,
+                    noise_of: Callable[[Any, list], np.ndarray] | None = None) -> Converted:
     """``finish``'s result from the first pass's sums (module doc; Fallback where they do not
     give it).  Its recording is a stand-in of n rows (broadcast views, no memory): the layout
     decisions (f, pose given) and the counts; the rows are written by the second pass."""
@@ -277,7 +293,7 @@ def bounded_convert(head: Head, sums: Sums, opts: Options, scale: Scale | None) 
     metadata = recording_metadata(head.source, "csv", dict(head.metadata), scale, opts, names, True)
     device_notes: list[str] = []
     device, _ = nominal_triad("csv-triad", rate, gravity, None, opts.bits, signed, scale, device_notes, None)
-    clipped = clip_note_counts(hists, device)
+    clipped = clip_note_counts(hists, device, noise_of)
     notes += [clipped] if clipped else []
     n = sums.n
     nan = np.float64(np.nan)
@@ -319,6 +335,26 @@ def second_pass(path: Any, head: Head, block_bytes: int, bar: Any, like: Recordi
     finally:
         if bar is not None:
             bar.close()
+
+
+def noise_pass(path: Any, head: Head, block_bytes: int, bar_for: Callable[[], Any], n: int
+               ) -> Callable[[Any, list], np.ndarray]:
+    """``noise_of(device, hists)`` for :func:`clip_note_counts`: the file read again into a
+    :class:`NoisePass` (the clip note's window, ``static.window_len`` of the device), its noise."""
+    def noise_of(device: Any, hists: list) -> np.ndarray:
+        q = np.array([code_step_counts(u, cnt) for u, cnt in hists])
+        p = NoisePass(n, window_len(device, STATIC_WINDOW_S, n), np.array([u[0] for u, _ in hists]),
+                      np.array([u[-1] for u, _ in hists]), q)
+        bar = bar_for()
+        for ch in csv_chunks(path, head, block_bytes, None if bar is None else bar.update):
+            p.add(ch.raw)
+        if bar is not None:
+            bar.close()
+        try:
+            return p.noise()
+        except ValueError:
+            raise Fallback("window sums beyond exact floats") from None
+    return noise_of
 
 
 def bounded_writer(path: Any, head: Head, block_bytes: int, bar_for: Callable[[], Any], conv: Converted

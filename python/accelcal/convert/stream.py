@@ -26,7 +26,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .bounded import bounded_convert, bounded_writer, first_pass_sums
+from .bounded import bounded_convert, bounded_writer, first_pass_sums, noise_pass
 from .common import Converted, Options, finish
 from .time import FLOAT_EXACT
 from ..errors import InputError, atomic_write
@@ -103,7 +103,8 @@ def convert_csv_chunked(path: Any, opts: Options, scale: Scale | None, block_byt
             scale.counts_per_mps2(opts.gravity_mps2 or STANDARD_GRAVITY) is not None and not scale.converts:
         try:                # in bounded memory (accelcal.convert.bounded), else the arrays below
             sums = first_pass_sums(path, head, block_bytes, bar_for(path, head, progress))
-            conv = bounded_convert(head, sums, opts, scale)
+            conv = bounded_convert(head, sums, opts, scale,
+                                   noise_pass(path, head, block_bytes, lambda: bar_for(path, head, progress), sums.n))
             conv.writer = bounded_writer(path, head, block_bytes, lambda: bar_for(path, head, progress), conv)
             return conv
         except Fallback:
