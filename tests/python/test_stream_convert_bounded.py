@@ -50,6 +50,17 @@ def files(tmp_path_factory):
     held = poses(1800, 17)
     held.raw[1::2] = held.raw[0::2]                                 # each reading held for two rows
     write_recording(d / "held.csv", Recording(t=held.t, raw=held.raw))
+    ms = poses(1800, 18)
+    write_recording(d / "ms.csv", Recording(t=1000.0 * ms.t + 5.0, raw=ms.raw))   # t in ms: told, noted
+    uneven = poses(3000, 19)
+    runs = np.cumsum(np.where(np.arange(3000) % 5 == 0, 2, 3))      # runs of 3, 3, 3, 3, 2 rows: 2.8 on average
+    first = runs[runs < 3000]
+    idx = np.searchsorted(first, np.arange(3000), side="right") - 1
+    uneven.raw[first[0]:] = uneven.raw[first[idx[first[0]:]]]
+    write_recording(d / "uneven.csv", Recording(t=uneven.t, raw=uneven.raw))
+    lead = poses(1800, 20)
+    lead.raw[:3] = 0
+    write_recording(d / "lead.csv", Recording(t=lead.t, raw=lead.raw))
     return d
 
 
@@ -57,7 +68,8 @@ def files(tmp_path_factory):
 CASES = [("plain", ("--full-scale", "2")), ("labelled", ("--full-scale", "8")), ("rail", ("--full-scale", "4")),
          ("paused", ("--full-scale", "2")), ("step4", ("--full-scale", "2", "--bits", "16")),
          ("plain", ("--full-scale", "2", "--rate", "101")), ("plain", ("--units", "counts", "--lsb", "0.001g")),
-         ("pile", ("--full-scale", "2"))]
+         ("pile", ("--full-scale", "2")), ("held", ("--full-scale", "2")), ("ms", ("--full-scale", "2")),
+         ("uneven", ("--full-scale", "2")), ("plain", ("--full-scale", "2", "--time-unit", "s"))]
 
 
 def no_arrays(monkeypatch):
@@ -102,11 +114,15 @@ def test_bounded_gives_the_whole_file_bytes(files, capfd, tmp_path, monkeypatch,
         assert "multiple of 4" in err
     if name == "pile":
         assert "a pile inside the range" in err
+    if name in ("held", "uneven"):
+        assert "repeat the row before" in err and ("on average" in err) == (name == "uneven")
+    if name == "ms":
+        assert "t read in ms" in err
 
 
 def test_fallback_gives_the_same_bytes(files, capfd, tmp_path, monkeypatch):
-    """Where a summary cannot tell (no stated scale; readings held), the arrays path runs: the
-    whole-file bytes still."""
+    """Where a summary cannot tell (no stated scale; a leading 0, 0, 0 placeholder), the arrays path
+    runs: the whole-file bytes still."""
     called = []
     arrays = stream.first_pass
 
@@ -114,7 +130,7 @@ def test_fallback_gives_the_same_bytes(files, capfd, tmp_path, monkeypatch):
         called.append(1)
         return arrays(*a, **k)
     monkeypatch.setattr(stream, "first_pass", counted)
-    for name, args in (("plain", ()), ("held", ("--full-scale", "2"))):
+    for name, args in (("plain", ()), ("lead", ("--full-scale", "2"))):
         called.clear()
         same_as_whole(capfd, tmp_path, files / f"{name}.csv", args, blocks=(97, 1 << 30))
         assert called, name

@@ -33,27 +33,30 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .common import Converted, Options, recording_metadata
-from .nominal_device import STEP_MIN_VALUES, adc_range, code_step_note, nominal_triad
-from .time import BURST_SHARE, FLOAT_EXACT, MIN_PLAUSIBLE_HZ, time_factor, unit_in_name
+from .common import Converted, Options, held_note_text, recording_metadata
+from .nominal_device import adc_range, code_step_note, nominal_triad
+from .time import BURST_SHARE, FLOAT_EXACT, MIN_PLAUSIBLE_HZ, TIME_FACTORS, time_factor, unit_in_name
 from ..errors import InputError, atomic_write
 from ..io.chunks import Fallback, Head, csv_chunks, reader_checks
 from ..io.csvformat import csv_rows
 from ..io.parquet import is_parquet
 from ..io.recording import Recording, recording_layout
-from ..io.recording_checks import GAP_STEPS
+from ..io.recording_checks import GAP_STEPS, RATE_TOL
 from ..io.units import STANDARD_GRAVITY, Scale
 from ..readings.clipping import (CLIP_BAND_SIGMA, CLIP_MIN_COUNT, CLIP_PILE_RATIO, ClipLevels, clip_counts_text,
                                  clip_levels_counts, code_step_counts)
 from ..readings.noise_stream import NoisePass
 from ..readings.static import STATIC_WINDOW_S, window_len
-from ..readings.held import RunCounts
+from ..readings.held import (HELD_CHANGED_SHARE, HELD_MAX, HELD_MIN_RUNS, HELD_MIN_RUNS_UNEVEN, HELD_MODAL_SHARE,
+                             HELD_SINGLE_SHARE, RunCounts, order_stat)
 
-__all__ = ["Sums", "MAX_STEP_VALUES", "first_pass_sums", "bounded_convert", "certified_rate", "pile_free",
+__all__ = ["Sums", "MAX_STEP_VALUES", "first_pass_sums", "bounded_convert", "rate_bounds", "held_counts", "pile_free",
            "median_counts"]
 
 #: distinct time steps kept (more: Fallback)
 MAX_STEP_VALUES = 1 << 16
+#: the time units other than s that t may be read in (time.TIME_FACTORS' factors)
+TICKS = (1e3, 1e6, 1e9)
 #: relative margin of the certified comparisons (the float arithmetic of the whole-file functions)
 MARGIN = 1e-9
 
@@ -67,13 +70,15 @@ class Sums:
     t0: float = math.nan
     t_last: float = math.nan
     hist: list = field(default_factory=lambda: [{}, {}, {}])     # per channel: reading -> count
+    factors: tuple = (1.0,) + TICKS                              # the time units t may be read in (s, ms, us, ns)
     t_steps: dict = field(default_factory=dict)                  # np.diff(t): step -> count
-    rel_steps: dict = field(default_factory=dict)                # np.diff(t - t0): step -> count
+    rel_steps: dict = field(default_factory=dict)                # per factor k: np.diff((t - t0) / k): step -> count
     runs: RunCounts = field(default_factory=RunCounts)
     labels: set = field(default_factory=set)                     # pose labels >= 0
     has_pose: bool = False
     f_given: bool = False
-    rel_last: float = math.nan
+    rel_last: dict = field(default_factory=dict)
+    factor: float = 1.0                                          # the unit t is read in (in_seconds)
 
     def add(self, t: np.ndarray, raw: np.ndarray, pose: np.ndarray | None, f: np.ndarray | None) -> None:
         """One chunk's rows (t as read, counts, labels or None, f or None)."""
@@ -86,14 +91,14 @@ class Sums:
             self.t0 = float(t[0])
         if np.any(np.abs(t) >= FLOAT_EXACT):
             raise Fallback("an epoch in ns (read exactly from its text)")
-        rel = t - self.t0
-        if self.n:
-            count_into(self.t_steps, np.diff(np.concatenate([[self.t_last], t])))
-            count_into(self.rel_steps, np.diff(np.concatenate([[self.rel_last], rel])))
-        else:
-            count_into(self.t_steps, np.diff(t))
-            count_into(self.rel_steps, np.diff(rel))
-        if max(len(self.t_steps), len(self.rel_steps)) > MAX_STEP_VALUES:
+        steps = np.asarray(t, float) - self.t0
+        count_into(self.t_steps, np.diff(np.concatenate([[self.t_last], t]) if self.n else t))
+        for k in self.factors:
+            rel = steps / k if k != 1.0 else steps             # time_in_seconds' rel in s
+            counts = self.rel_steps.setdefault(k, {})
+            count_into(counts, np.diff(np.concatenate([[self.rel_last[k]], rel]) if self.n else rel))
+            self.rel_last[k] = float(rel[-1])
+        if max([len(self.t_steps)] + [len(c) for c in self.rel_steps.values()]) > MAX_STEP_VALUES:
             raise Fallback(f"more than {MAX_STEP_VALUES} distinct time steps")
         for j in range(3):
             count_into(self.hist[j], raw[:, j])
@@ -104,7 +109,6 @@ class Sums:
         self.f_given = self.f_given or (f is not None and bool(np.isfinite(f).any()))
         self.n += m
         self.t_last = float(t[-1])
-        self.rel_last = float(rel[-1])
 
 
 def count_into(counts: dict, values: np.ndarray) -> None:
@@ -133,9 +137,13 @@ def median_counts(counts: dict) -> float:
     return float(np.mean(np.array([a, b], dtype=float)))
 
 
-def first_pass_sums(path: Any, head: Head, block_bytes: int, bar: Any) -> Sums:
-    """The first pass (Fallback at any bad row or a row off its line: the whole-file reader words it)."""
-    sums, prev = Sums(), None
+def first_pass_sums(path: Any, head: Head, block_bytes: int, bar: Any, time_unit: str = "auto") -> Sums:
+    """The first pass (Fallback at any bad row or a row off its line: the whole-file reader words
+    it); t's steps counted in s and, ``time_unit`` auto, in ms, us and ns, else in that unit."""
+    k = time_factor(time_unit) if time_unit != "auto" else None
+    if time_unit != "auto" and k is None:
+        raise Fallback("--time-unit refused by the whole-file command")
+    sums, prev = Sums(factors=(1.0,) + TICKS if k is None else (k,)), None
     for ch in csv_chunks(path, head, block_bytes, None if bar is None else bar.update):
         if reader_checks(head, ch, prev) or not np.all(np.isfinite(ch.t)):
             raise Fallback("a bad row")
@@ -150,32 +158,42 @@ def first_pass_sums(path: Any, head: Head, block_bytes: int, bar: Any) -> Sums:
     return sums
 
 
-def in_seconds(sums: Sums, opts: Options, column: str) -> None:
-    """:func:`accelcal.convert.time.time_in_seconds` where it reads t in seconds (else Fallback)."""
+def in_seconds(sums: Sums, opts: Options, column: str, notes: list[str]) -> float:
+    """The factor :func:`accelcal.convert.time.time_in_seconds` divides t by (its note made), from
+    the counts of t's steps (Fallback for a unit not counted)."""
+    k = 1.0
     if opts.time_unit != "auto":
-        if time_factor(opts.time_unit) != 1.0:
-            raise Fallback("t in another unit than s (its note, its division)")
-        return
-    named = unit_in_name(column)
-    if named == "s":
-        return
-    if named is not None:
-        raise Fallback("t in a unit its name states")
-    pos = {v: k for v, k in sums.t_steps.items() if v > 0}
-    step = median_counts(pos) if pos else 0.0
-    if step <= 0 or 1.0 / step >= MIN_PLAUSIBLE_HZ:
-        return
-    raise Fallback("t read in ms, us or ns")
+        k = time_factor(opts.time_unit)
+    else:
+        named = unit_in_name(column)
+        if named is not None:
+            k = TIME_FACTORS[named]
+            if k != 1.0:
+                notes.append(f"t read in {named}, as its column's name {column!r} says; the recording's t is in seconds")
+        else:
+            pos = {v: c for v, c in sums.t_steps.items() if v > 0}
+            step = median_counts(pos) if pos else 0.0
+            if step > 0 and 1.0 / step < MIN_PLAUSIBLE_HZ:
+                for unit_name, f in list(TIME_FACTORS.items())[1:]:
+                    if f / step >= MIN_PLAUSIBLE_HZ:
+                        notes.append(f"t read in {unit_name}: its steps (median {step:.6g}) would give "
+                                     f"{1.0 / step:.4g} Hz in seconds, {f / step:.6g} Hz in {unit_name} (state "
+                                     "--time-unit s, ms, us or ns when that is not its unit)")
+                        k = f
+                        break
+    if k is None or k not in sums.rel_steps:
+        raise Fallback("t in a unit whose steps were not counted")
+    return k
 
 
-def certified_rate(steps: dict, notes: list[str]) -> float:
-    """:func:`accelcal.convert.time.rate_from_t` of stamps whose steps are counted in ``steps``,
-    where they are even (no bursts) -- the rate as the device keeps it, ``round(rate, 6)``: the
-    mean of the regular steps (``regular_step``) is numpy's pairwise sum, which the counts give to
-    within its rounding bound only; Fallback where that bound could change the 6th decimal."""
+def rate_bounds(steps: dict, notes: list[str]) -> tuple[float, float]:
+    """:func:`accelcal.convert.time.rate_from_t` of even stamps whose steps are counted in
+    ``steps`` (its gap note made): the rate's least and greatest value.  The mean of the regular
+    steps (``regular_step``) is numpy's pairwise sum, which the counts give to within its rounding
+    bound only; the caller takes what the rate decides at both ends (equal: certified)."""
     median = median_counts(steps)
     if median <= 0:
-        return 1.0
+        return 1.0, 1.0
     regular = {v: k for v, k in steps.items() if 0 < v <= GAP_STEPS * median}
     gaps = sum(k for v, k in steps.items() if v > GAP_STEPS * median)
     if gaps:
@@ -184,16 +202,59 @@ def certified_rate(steps: dict, notes: list[str]) -> float:
                      "rate is that of the other steps")
     size = sum(regular.values())
     if not size:
-        return 1.0 / median
+        return 1.0 / median, 1.0 / median
     exact = sum((Fraction(v) * k for v, k in regular.items()), Fraction(0))
     # numpy's pairwise summation: error below (log2 n + 2 x 128 leaf adds) ulps of the sum of |x|
     bound = exact * Fraction(2 * (math.ceil(math.log2(size + 1)) + 256), 2 ** 53)
-    lo, hi = float(exact - bound), float(exact + bound)
-    lo, hi = np.nextafter(lo, -np.inf), np.nextafter(hi, np.inf)
-    r_hi, r_lo = 1.0 / (float(lo) / size), 1.0 / (float(hi) / size)
-    if round(r_hi, 6) != round(r_lo, 6):
-        raise Fallback("the device's rate is within the sum's rounding of a 6th-decimal step")
-    return r_lo
+    lo = float(np.nextafter(float(exact - bound), -np.inf))
+    hi = float(np.nextafter(float(exact + bound), np.inf))
+    return 1.0 / (hi / size), 1.0 / (lo / size)
+
+
+def held_counts(runs: RunCounts, n: int, n_channels: int) -> tuple[int, dict, int]:
+    """:func:`accelcal.readings.held.held_runs`' k from the runs' counts, with the inner runs'
+    histogram (length -> runs, the first and the last left out) and the number of runs (Fallback
+    where the 90th percentile of the run lengths falls between two lengths about HELD_MAX)."""
+    hist = dict(runs.hist)
+    hist[runs.open_len] = hist.get(runs.open_len, 0) + 1
+    total = sum(hist.values())
+    inner = dict(hist)
+    if total >= 2:
+        for length in (runs.first_len, runs.open_len):
+            inner[length] -= 1
+    else:
+        inner = {}
+    inner = {v: c for v, c in inner.items() if c}
+    top = max(hist.values())
+    k = min(length for length, c in hist.items() if c == top)      # np.argmax of the bincount: the first
+    if 2 <= k <= HELD_MAX and total >= HELD_MIN_RUNS and top >= HELD_MODAL_SHARE * total:
+        return k, inner, total
+    m = sum(inner.values())
+    if m >= HELD_MIN_RUNS_UNEVEN and inner.get(1, 0) / m <= HELD_SINGLE_SHARE:
+        idx = 0.9 * (m - 1)
+        lo, hi = order_stat(inner, math.floor(idx)), order_stat(inner, math.ceil(idx))
+        if lo <= HELD_MAX < hi:
+            raise Fallback("the runs' 90th percentile between two lengths about HELD_MAX")
+        if hi <= HELD_MAX and runs.changed / ((total - 1) * n_channels) >= HELD_CHANGED_SHARE:
+            return max(2, int(round(sum(v * c for v, c in inner.items()) / m))), inner, total
+    return 1, inner, total
+
+
+def held_note_counts(k: int, inner: dict, total: int, n: int, distinct_hz: float | None) -> str:
+    """:func:`accelcal.convert.common.held_note` from the runs' counts."""
+    m = sum(inner.values())
+    lo, hi = (min(inner), max(inner)) if m else (k, k)
+    if lo == hi or not uneven_counts(k, inner):
+        held_for = f"{k} rows"
+    else:
+        held_for = f"{lo}-{hi} rows ({sum(v * c for v, c in inner.items()) / m:.1f} on average)"
+    return held_note_text((n - total) / (n - 1) if n > 1 else 0.0, held_for, total, distinct_hz)
+
+
+def uneven_counts(k: int, inner: dict) -> bool:
+    """:func:`accelcal.readings.held.uneven` of the inner runs' histogram."""
+    m = sum(inner.values())
+    return bool(m) and inner.get(k, 0) / m < HELD_MODAL_SHARE
 
 
 def pile_free(u: np.ndarray, cnt: np.ndarray, side: int, q: int, sigma_lo: float, sigma_hi: float) -> bool:
@@ -271,28 +332,46 @@ def bounded_convert(head: Head, sums: Sums, opts: Options, scale: Scale | None,
     if any(u[0] < lo or u[-1] > hi for u, _ in hists):
         raise Fallback("a reading outside the ADC's range (the refusal names its row)")
     notes: list[str] = []
-    in_seconds(sums, opts, "t")
-    median = median_counts(sums.rel_steps)
-    mean = float(sums.rel_last - 0.0) / (sums.n - 1)
+    sums.factor = in_seconds(sums, opts, "t", notes)
+    steps = sums.rel_steps[sums.factor]
+    median = median_counts(steps)
+    mean = float(sums.rel_last[sums.factor] - 0.0) / (sums.n - 1)
     if not (median > 0 and mean > 0 and abs(mean / median - 1.0) <= BURST_SHARE):
         raise Fallback("stamps not even (bursts, pauses: the burst fit takes the stamps)")
     if opts.rate_hz is not None:
-        rate = opts.rate_hz
+        rates = (opts.rate_hz, opts.rate_hz)
         own = 1.0 / median
-        if max(abs(rate / own - 1.0), abs(own / rate - 1.0)) > 0.2:
+        if max(abs(opts.rate_hz / own - 1.0), abs(own / opts.rate_hz - 1.0)) > RATE_TOL:
             raise Fallback("--rate off the stamps (t is written on the grid)")
     else:
-        rate = certified_rate(sums.rel_steps, notes)
-    held = sums.runs.held(3)
-    if held is None or held > 1:
-        raise Fallback("readings held for several rows (the note takes the runs)")
+        rates = rate_bounds(steps, notes)
+    k_held, inner, total = held_counts(sums.runs, sums.n, 3)
     values = np.unique(np.concatenate([u for u, _ in hists]))
-    if values.size >= STEP_MIN_VALUES:
-        notes += code_step_note(values.reshape(-1, 1), opts.bits)
     names = [str(v) for v in sorted(sums.labels)]
     metadata = recording_metadata(head.source, "csv", dict(head.metadata), scale, opts, names, True)
-    device_notes: list[str] = []
-    device, _ = nominal_triad("csv-triad", rate, gravity, None, opts.bits, signed, scale, device_notes, None)
+
+    def rate_decides(rate: float) -> tuple:
+        """What finish makes of the rate: the held note, the device and its notes."""
+        said, device_notes = [], []
+        distinct_hz = None
+        if k_held > 1 and rate:
+            distinct_hz = rate / (sum(v * c for v, c in inner.items()) / sum(inner.values())
+                                  if uneven_counts(k_held, inner) else k_held)
+            said.append(held_note_counts(k_held, inner, total, sums.n, distinct_hz))
+        own = distinct_hz if distinct_hz is not None and opts.rate_hz is None else None
+        device, _ = nominal_triad("csv-triad", own or rate, gravity, None, opts.bits, signed, scale, device_notes, None)
+        if own is not None:
+            device_notes.append(f"the device's rate is {device.sample_rate_hz:.6g} Hz, the distinct readings'; "
+                                f"the recording keeps every row (at {rate:.6g} Hz)")
+        return said, device, device_notes
+
+    ends = [rate_decides(r) for r in rates]
+    if ends[0][0] != ends[1][0] or ends[0][2] != ends[1][2] or \
+            ends[0][1].sample_rate_hz != ends[1][1].sample_rate_hz:
+        raise Fallback("the rate's rounding within the sum's bound changes the device or a note")
+    said, device, device_notes = ends[0]
+    notes += said
+    notes += code_step_note(values.reshape(-1, 1), opts.bits)
     clipped = clip_note_counts(hists, device, noise_of)
     notes += [clipped] if clipped else []
     n = sums.n
@@ -306,9 +385,11 @@ def bounded_convert(head: Head, sums: Sums, opts: Options, scale: Scale | None,
     return Converted(rec, device, "csv", names, notes, scale, False, device_notes)
 
 
-def second_pass(path: Any, head: Head, block_bytes: int, bar: Any, like: Recording, output: Any) -> None:
+def second_pass(path: Any, head: Head, block_bytes: int, bar: Any, like: Recording, output: Any,
+                factor: float = 1.0) -> None:
     """Write the rows chunk by chunk as they are read again (t as read, in s; the counts; the
-    file's labels and f), atomically, in the whole-file writer's layout (``like``: the stand-in)."""
+    file's labels and f), atomically, in the whole-file writer's layout (``like``: the stand-in);
+    t divided by ``factor`` (its unit's, :func:`in_seconds`)."""
     if is_parquet(output):
         raise ValueError("the chunked writer writes CSV: a .parquet output is written whole")
     lines, _, formats = recording_layout(like)
@@ -321,7 +402,7 @@ def second_pass(path: Any, head: Head, block_bytes: int, bar: Any, like: Recordi
         for ch in csv_chunks(path, head, block_bytes, None if bar is None else bar.update):
             if not ch.n:
                 continue
-            part = Recording(t=ch.t, raw=ch.raw, f=ch.vecs.get("f") if like.has_f() else None, pose=ch.other.get("pose"),
+            part = Recording(t=ch.t / factor if factor != 1.0 else ch.t, raw=ch.raw, f=ch.vecs.get("f") if like.has_f() else None, pose=ch.other.get("pose"),
                              metadata=like.metadata, source=like.source)
             _, columns, _ = recording_layout(part, like=like)
             for text in csv_rows(columns, formats, [""] * len(columns)):
@@ -357,9 +438,9 @@ def noise_pass(path: Any, head: Head, block_bytes: int, bar_for: Callable[[], An
     return noise_of
 
 
-def bounded_writer(path: Any, head: Head, block_bytes: int, bar_for: Callable[[], Any], conv: Converted
-                   ) -> Callable[[Any], None]:
+def bounded_writer(path: Any, head: Head, block_bytes: int, bar_for: Callable[[], Any], conv: Converted,
+                   factor: float = 1.0) -> Callable[[Any], None]:
     """``Converted.writer`` of the bounded path (the second pass, with its own bar)."""
     def write(output: Any) -> None:
-        second_pass(path, head, block_bytes, bar_for(), conv.recording, output)
+        second_pass(path, head, block_bytes, bar_for(), conv.recording, output, factor)
     return write

@@ -30,7 +30,7 @@ from ..io.units import STANDARD_GRAVITY, Scale
 __all__ = ["Converted", "Options", "INDEX_COLUMNS", "GYRO_RE", "NUMBER_RE", "header_cells", "read_columns",
            "find_column", "exact_time", "in_sample_order", "finish", "recording_metadata",
            "stated_rate_off", "drop_note", "whole_counts", "is_gyro", "stillest_force",
-           "gravity_removed_note", "held_note"]
+           "gravity_removed_note", "held_note", "held_note_text"]
 
 INDEX_COLUMNS = ("n_samples", "samples")
 #: a gyroscope's column: gx, gyro_x, wx, w_x, EuRoC's frame-subscripted w_RS_S_x (a unit in () or [] after any)
@@ -443,9 +443,14 @@ def gravity_removed_note(raw: np.ndarray, scale: Scale | None, rate_hz: float, l
 def held_note(k: int, first: np.ndarray, n: int, distinct_hz: float | None) -> str:
     """The note on readings held for ``k`` rows (:func:`held.held_runs`'s k and ``first`` over
     ``n`` rows; ``distinct_hz``: the distinct readings' rate, Hz, when known)."""
-    share = held_share(first, n)
+    return held_note_text(held_share(first, n), held_text(k, first, n), first.size, distinct_hz)
+
+
+def held_note_text(share: float, held_for: str, distinct: int, distinct_hz: float | None) -> str:
+    """:func:`held_note` from the share of rows repeated, how long (``held.held_text``), the distinct
+    readings' count and their rate (a reader in chunks gives these from the runs' counts)."""
     at = f" at about {distinct_hz:.4g} Hz" if distinct_hz is not None else ""
     return (f"{100 * share:.0f} % of the rows repeat the row before in all three readings (each reading held for "
-            f"{held_text(k, first, n)}): the logger read the sensor faster than it updates; the {first.size} distinct "
+            f"{held_for}): the logger read the sensor faster than it updates; the {distinct} distinct "
             f"readings come{at}, and successive rows are not independent samples (calibrate and diagnose count each "
             "reading once)")

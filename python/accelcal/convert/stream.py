@@ -102,10 +102,11 @@ def convert_csv_chunked(path: Any, opts: Options, scale: Scale | None, block_byt
     if opts.regions is None and scale is not None and \
             scale.counts_per_mps2(opts.gravity_mps2 or STANDARD_GRAVITY) is not None and not scale.converts:
         try:                # in bounded memory (accelcal.convert.bounded), else the arrays below
-            sums = first_pass_sums(path, head, block_bytes, bar_for(path, head, progress))
+            sums = first_pass_sums(path, head, block_bytes, bar_for(path, head, progress), opts.time_unit)
             conv = bounded_convert(head, sums, opts, scale,
                                    noise_pass(path, head, block_bytes, lambda: bar_for(path, head, progress), sums.n))
-            conv.writer = bounded_writer(path, head, block_bytes, lambda: bar_for(path, head, progress), conv)
+            conv.writer = bounded_writer(path, head, block_bytes, lambda: bar_for(path, head, progress), conv,
+                                         sums.factor)
             return conv
         except Fallback:
             pass

@@ -69,7 +69,7 @@ def rest_level_sorted(v: np.ndarray) -> tuple[float, bool]:
         return 0.0, False
     n = v.size
     if n < 4:
-        return float(np.median(v)), False
+        return median_sorted(v), False
     first_pos = v[int(np.searchsorted(v, 0.0, side="right"))]
     floor = 0.1 * first_pos
     total = 0.0
@@ -98,9 +98,16 @@ def rest_level_sorted(v: np.ndarray) -> tuple[float, bool]:
         prev_x = x
     del prev_x
     j = best_j
-    if best <= 0 or np.median(v[j:]) < NOISE_SPLIT_RATIO * max(np.median(v[:j]), 1e-300):
-        return float(np.median(v)), False
-    return float(np.median(v[:j])), True
+    if best <= 0 or median_sorted(v[j:]) < NOISE_SPLIT_RATIO * max(median_sorted(v[:j]), 1e-300):
+        return median_sorted(v), False
+    return median_sorted(v[:j]), True
+
+
+def median_sorted(v: np.ndarray) -> float:
+    """``np.median`` of ``v`` sorted ascending, without its copy: the middle value, or numpy's mean
+    of the two middle ones."""
+    n = v.size
+    return float(np.mean(v[(n - 1) // 2:n // 2 + 1]))
 
 
 class NoisePass:
@@ -210,8 +217,9 @@ class NoisePass:
         out = np.zeros(N)
         for i in range(N if self.windows else 0):
             cols[i].seek(0)
-            col = np.frombuffer(cols[i].read(), dtype=np.float64).copy()
-            col = col[np.isfinite(col)]
+            col = np.fromfile(cols[i], dtype=np.float64)
+            if not np.isfinite(col).all():
+                col = col[np.isfinite(col)]
             col.sort()
             out[i], split = rest_level_sorted(col)
             del col
