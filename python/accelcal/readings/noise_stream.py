@@ -26,7 +26,7 @@ from .noise import MAD_TO_STD, NOISE_SPLIT_RATIO, ONE_REGIME_RATIO
 __all__ = ["NoisePass", "rest_level_sorted", "white_noise_counts", "SLICE"]
 
 #: values a slice of the Otsu split holds
-SLICE = 1 << 18
+SLICE = 1 << 16
 
 
 def add_counts(counts: dict, values: np.ndarray) -> None:
