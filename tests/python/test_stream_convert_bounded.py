@@ -11,9 +11,12 @@ import pytest
 
 from accelcal.convert import bounded, stream
 from accelcal.convert.formats import convert_file
+from accelcal.convert.common import held_note
+from accelcal.io.chunks import Fallback
 from accelcal.io.device import save_device
 from accelcal.io.recording import Recording, write_recording
 from accelcal.readings.clipping import pile_level_counts
+from accelcal.readings.held import RunCounts, held_runs
 from accelcal.readings import noise_stream
 from accelcal.readings.noise import code_step, estimate_noise
 
@@ -212,3 +215,41 @@ def test_real_recordings(capfd, tmp_path, monkeypatch, which):
     assert rc == 0, err
     no_arrays(monkeypatch)
     same_as_whole(capfd, tmp_path, rec, ("--full-scale", "2"), blocks=(1000, 1 << 16, 1 << 30))
+
+
+def test_held_counts_are_held_runs():
+    """held_counts (runs counted chunk by chunk) gives held_runs' k and held_note's words: rows held
+    for k rows, runs of uneven lengths, chance repeats of a quiet sensor, a run per pose."""
+    rng = np.random.default_rng(6)
+    told = set()
+    for trial in range(120):
+        n_runs = int(rng.integers(3, 400))
+        kind = trial % 4
+        if kind == 0:
+            lengths = np.full(n_runs, int(rng.integers(2, 6)))
+            lengths[rng.random(n_runs) < 0.1] += 1
+        elif kind == 1:
+            lengths = rng.integers(2, 5, n_runs)
+        elif kind == 2:
+            lengths = rng.geometric(0.7, n_runs)
+        else:
+            lengths = rng.integers(1, 40, n_runs)
+        values = np.cumsum(rng.integers(1, 5, (n_runs, 3)), axis=0)
+        if kind == 3:
+            values[:, 1:] = 7                                   # one channel changes where a run ends
+        raw = np.repeat(values, lengths, axis=0)
+        n = raw.shape[0]
+        k, first = held_runs(raw)
+        runs = RunCounts()
+        cut = np.sort(rng.choice(np.arange(1, n), size=min(n - 1, 5), replace=False))
+        for part in np.split(raw, cut):
+            runs.add(part)
+        try:
+            k2, inner, total = bounded.held_counts(runs, n, 3)
+        except Fallback:
+            continue
+        assert k2 == k, trial
+        told.add(k > 1)
+        if k > 1:
+            assert bounded.held_note_counts(k, inner, total, n, 50.0) == held_note(k, first, n, 50.0)
+    assert told == {True, False}
