@@ -147,7 +147,8 @@ def first_pass_sums(path: Any, head: Head, block_bytes: int, bar: Any, time_unit
     for ch in csv_chunks(path, head, block_bytes, None if bar is None else bar.update):
         if reader_checks(head, ch, prev) or not np.all(np.isfinite(ch.t)):
             raise Fallback("a bad row")
-        if ch.n and (ch.line(0) != head.first_line + ch.start or ch.line(ch.n - 1) != head.first_line + ch.start + ch.n - 1):
+        first = head.first_line + ch.start
+        if ch.n and (ch.line(0) != first or ch.line(ch.n - 1) != first + ch.n - 1):
             raise Fallback("rows not on consecutive lines")
         sums.add(ch.t, ch.raw, ch.other.get("pose"), ch.vecs.get("f"))
         prev = ch
@@ -402,7 +403,8 @@ def second_pass(path: Any, head: Head, block_bytes: int, bar: Any, like: Recordi
         for ch in csv_chunks(path, head, block_bytes, None if bar is None else bar.update):
             if not ch.n:
                 continue
-            part = Recording(t=ch.t / factor if factor != 1.0 else ch.t, raw=ch.raw, f=ch.vecs.get("f") if like.has_f() else None, pose=ch.other.get("pose"),
+            part = Recording(t=ch.t / factor if factor != 1.0 else ch.t, raw=ch.raw,
+                             f=ch.vecs.get("f") if like.has_f() else None, pose=ch.other.get("pose"),
                              metadata=like.metadata, source=like.source)
             _, columns, _ = recording_layout(part, like=like)
             for text in csv_rows(columns, formats, [""] * len(columns)):

@@ -193,7 +193,8 @@ class NoisePass:
         ref = np.median(np.concatenate(self.ref_rows), axis=0)
         r2 = np.round(2 * ref).astype(np.int64)                   # the median of integers: whole or half
         dev = np.maximum(np.abs(self.hi - ref), np.abs(self.lo - ref)) + 1
-        if float(np.max(self.n * 4.0 * dev * dev)) >= 2.0 ** 50 or float(np.max(2 * dev)) ** 2 * self.h * self.k >= 2.0 ** 50:
+        big = float(np.max(2 * dev)) ** 2
+        if self.n * big >= 2.0 ** 50 or big * self.h * self.k >= 2.0 ** 50:
             raise ValueError("sums beyond the floats' exact integers")
         h, k, N = self.h, self.k, self.N
         L = k * h
