@@ -75,6 +75,9 @@ ac_status ac_temp_check(const ac_temp_table *t)
             return AC_ERR_FORMAT;
         }
     }
+    if (t->frac > (uint8_t)AC_TEMP_MAX_OUT_FRAC) {
+        return AC_ERR_FORMAT;
+    }
     return AC_OK;
 }
 
@@ -97,6 +100,9 @@ ac_status AC_TEMP_CORRECT_C(const ac_temp_table *t, int16_t t_off, int16_t t_gai
     }
     if (t->n < 1u || t->n > (uint16_t)AC_MAX_CHANNELS) {
         return AC_ERR_SIZE;
+    }
+    if (t->frac > (uint8_t)AC_TEMP_MAX_OUT_FRAC) {
+        return AC_ERR_FORMAT;
     }
     dto = ac_sat_to16((int32_t)t_off - (int32_t)t->t_ref, &sat);
     dtg = ac_sat_to16((int32_t)t_gain - (int32_t)t->t_ref, &sat);
@@ -130,7 +136,19 @@ ac_status AC_TEMP_CORRECT_C(const ac_temp_table *t, int16_t t_off, int16_t t_gai
         g = AC_R3(AC_MUL16(w16, r)); /* |w16 r| < 2^30 */
         w = ac_sat_add(w, g, &sat);
         w = ac_sat_add(w, o8, &sat);
-        if (w >= 0x7FFF8000L) {
+        if (t->frac != 0u) {
+            /* Q.frac: round(w 2^-(16 - frac)) = ac_round_shift, clipped to int16 */
+            const int32_t q = ac_round_shift(w, (uint8_t)(16u - t->frac));
+            if (q > INT16_MAX) {
+                y[i] = INT16_MAX;
+                sat = 1u;
+            } else if (q < INT16_MIN) {
+                y[i] = INT16_MIN;
+                sat = 1u;
+            } else {
+                y[i] = (int16_t)q;
+            }
+        } else if (w >= 0x7FFF8000L) {
             y[i] = INT16_MAX;
             sat = 1u;
         } else {

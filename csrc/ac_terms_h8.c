@@ -242,12 +242,14 @@ AC_STATIC_ASSERT(h8t_tc_ref, offsetof(ac_temp_table, t_ref) == 2);
 AC_STATIC_ASSERT(h8t_tc_oc, offsetof(ac_temp_table, oc) == 4);
 AC_STATIC_ASSERT(h8t_tc_gc, offsetof(ac_temp_table, gc) == 4 + 2 * AC_MAX_CHANNELS);
 AC_STATIC_ASSERT(h8t_tc_o, offsetof(ac_temp_table, o) == 4 + 4 * AC_MAX_CHANNELS);
+AC_STATIC_ASSERT(h8t_tc_fr, offsetof(ac_temp_table, frac) == 4 + 6 * AC_MAX_CHANNELS);
 AC_STATIC_ASSERT(h8t_tc_e, AC_TEMP_E_MAX == 28672 && AC_TEMP_LAG_EXTRA == 16);
 
 __asm__(
     "\t.equ\tTC_MAXCH, " AC_H8T_XSTR(AC_MAX_CHANNELS) "\n"
     "\t.equ\tTC_OD, 4*TC_MAXCH\n"
     "\t.equ\tTC_GD, 2*TC_MAXCH-2\n"
+    "\t.equ\tTC_FR, 4+6*TC_MAXCH\n"
     "\t.equ\tTC_E32, 28672*8192+4095\n"
     "\t.section .text\n"
     "\t.align 1\n"
@@ -400,6 +402,9 @@ __asm__(
     "\tbeq\t.Ltc_c\n"
     "\tmov.w\tr0,r0\n"
     "\tbeq\t.Ltc_c\n"
+    /* a table with output fraction bits (frac > 0): the C */
+    "\tmov.b\t@(TC_FR,er0),r3l\n"
+    "\tbne\t.Ltc_c\n"
     "\tmov.w\t@er0,r3\n"
     "\tbeq\t.Ltc_c\n"
     "\tcmp.w\t#TC_MAXCH,r3\n"

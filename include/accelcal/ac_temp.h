@@ -24,13 +24,19 @@
  *     w  = x 2^16 - o 2^8 - oc dTo                      Q.16 counts (int32, exact unless it clips)
  *     e  = round(gc dTg 2^-13), |e| <= AC_TEMP_E_MAX    Q.19
  *     e2 = round(e e 2^-19), e3 = round(e2 e 2^-19),  r = -e + e2 - e3   (Q.19, 1/(1+e) - 1)
- *     y  = round((w + round(round(w 2^-16) r 2^-3) + o 2^8) 2^-16), clipped to int16
+ *     y  = round((w + round(round(w 2^-16) r 2^-3) + o 2^8) 2^-(16 - k)), clipped to int16
+ *   k = the table's frac (0..AC_TEMP_MAX_OUT_FRAC): y in 2^-k counts (Q.k), the fractional bits the
+ *   terms hand on to ac_skew_step (scale-free), ac_nonlin_invert and the resolver (ac_resolve,
+ *   ac_triad_resolve), whose tables a generated header builds for input in 2^-k counts
+ *   (<PREFIX>_TERMS_FRAC; k = 0: whole counts, today's arithmetic bit for bit).  Without the
+ *   fraction rint(x + c(T)) is off by the same fraction on every sample of a static pose.
  *   Error bound against the float y with the table's coefficients, the same x, dTo, dTg:
- *     |y - y_ref| <= 0.5 + 2^-8 + 0.54 |e| + (max(|x|, |y_ref|) + 1) (2^-18 + |e|^4 / (1 - |e|))   counts
- *   (0.5 the final rounding; the series' truncation e^4; the roundings of e, e2, e3, w r).
+ *     |y 2^-k - y_ref| <= 2^-(k+1) + 2^-8 + 0.54 |e| + (max(|x|, |y_ref|) + 1) (2^-18 + |e|^4 / (1 - |e|))   counts
+ *   (2^-(k+1) the final rounding; the series' truncation e^4; the roundings of e, e2, e3, w r).
  *   |e| is held to AC_TEMP_E_MAX 2^-19 = 5.47 % (a larger gain change clips, AC_SATURATED).
  * On the H8/300H (normal mode) ac_temp_correct and ac_temp_lag_step are assembly
- * (csrc/ac_terms_h8.c), the same arithmetic bit for bit; the C of ac_temp.c everywhere else.
+ * (csrc/ac_terms_h8.c), the same arithmetic bit for bit (frac 0..AC_TEMP_MAX_OUT_FRAC); the C of
+ * ac_temp.c everywhere else.
  */
 #ifndef AC_TEMP_H
 #define AC_TEMP_H
@@ -44,6 +50,7 @@
 #define AC_TEMP_E_MAX 28672
 #define AC_TEMP_OC_FRAC 8
 #define AC_TEMP_GC_FRAC 24
+#define AC_TEMP_MAX_OUT_FRAC 8
 
 typedef struct ac_temp_lag {
     int32_t y;     /* Q.(AC_TEMP_FRAC + AC_TEMP_LAG_EXTRA) degC */
@@ -58,6 +65,8 @@ typedef struct ac_temp_table {
     int16_t oc[AC_MAX_CHANNELS];   /* offset tempco, counts/degC Q.AC_TEMP_OC_FRAC */
     int16_t gc[AC_MAX_CHANNELS];   /* gain tempco, 1/degC Q.AC_TEMP_GC_FRAC */
     int16_t o[AC_MAX_CHANNELS];    /* b_i - trim_i, Q.AC_OFFSET_FRAC counts, |o| <= 128 */
+    uint8_t frac;                  /* k: y in 2^-k counts (Q.k), 0..AC_TEMP_MAX_OUT_FRAC; 0: whole
+                                    * counts (last, so that tables written without it mean 0) */
 } ac_temp_table;
 
 /* A filter of weight k 2^-shift (k <= 2^shift, shift <= 47; k = 1, shift = 0: no lag);
@@ -67,12 +76,13 @@ ac_status ac_temp_lag_init(ac_temp_lag *f, uint16_t k, uint8_t shift);
 /* One sample: temp (Q.AC_TEMP_FRAC degC) -> *lagged (the same format). */
 ac_status ac_temp_lag_step(ac_temp_lag *f, int16_t temp, int16_t *lagged);
 
-/* AC_OK if the table's n is in range and |o| <= 128, AC_ERR_SIZE / AC_ERR_FORMAT if not. */
+/* AC_OK if the table's n is in range, |o| <= 128 and frac <= AC_TEMP_MAX_OUT_FRAC, AC_ERR_SIZE /
+ * AC_ERR_FORMAT if not. */
 ac_status ac_temp_check(const ac_temp_table *t);
 
 /* x[0..n-1] -> y[0..n-1] (may be the same array) with t_off, t_gain the lagged temperatures
- * (Q.AC_TEMP_FRAC degC) of the offset and the gain; AC_SATURATED if a value clipped.  Per call
- * only n is checked (AC_ERR_SIZE); check a table you did not get from a generated header once
+ * (Q.AC_TEMP_FRAC degC) of the offset and the gain; x whole counts, y in 2^-frac counts;
+ * AC_SATURATED if a value clipped.  Per call only n and frac are checked (AC_ERR_SIZE, AC_ERR_FORMAT); check a table you did not get from a generated header once
  * with ac_temp_check (one with |o| > 128 gives wrong numbers, never undefined behaviour). */
 ac_status ac_temp_correct(const ac_temp_table *t, int16_t t_off, int16_t t_gain, const int16_t *x,
                           int16_t *y);

@@ -21,7 +21,7 @@ from .firmware.triad import quantize_triad, triad_apply_float, triad_forces
 from .firmware.native import FORMATS
 from .firmware.quantize import QuantizeError, omega_to_fixed, quantize_calibration
 from .firmware.terms import correct_readings, has_terms
-from .firmware.terms_fixed import apply_terms_fixed, quantize_terms, temp_to_fixed
+from .firmware.terms_fixed import apply_terms_fixed, temp_to_fixed, terms_tables
 from .io.recording import check_core_input, check_for_device
 
 
@@ -181,11 +181,8 @@ def _resolve_with_terms(device, cal, rec, engine, omega_source):
         return f, a, None
     signed = device.raw_min < 0
     check_core_input(rec, signed)
-    rails = (device.raw_min, device.raw_max)
     try:
-        t = (quantize_triad(cal.offsets, cal.sensitivity, signed, rails) if triad
-             else quantize_calibration(device, cal))
-        tt = quantize_terms(cal, device.n_channels, dt, t.offset_q, (device.raw_min, device.raw_max))
+        t, tt = terms_tables(device, cal)     # the resolver's / triad's table takes x in 2^-tt.frac counts
         temp_q = None if temp is None else temp_to_fixed(temp)
     except QuantizeError as e:
         raise InputError(getattr(cal, "source", "calibration"), str(e), field="channels") from None

@@ -11,6 +11,7 @@ from ..io.calibration import Calibration, load_calibration
 from ..io.device import Device, load_device
 from ..errors import AccelcalError, InputError
 from ..firmware.terms import correct_readings, has_terms
+from ..firmware.terms_fixed import terms_frac
 from ..io.recording import Recording, check_for_device, read_recording
 
 
@@ -66,6 +67,11 @@ def with_terms_applied(cal, recs: list, device) -> tuple[Any, list, list[str]]:
     if not (terms["nonlinearity"] or terms["skew"] or (terms["temperature"] and lag)):
         return cal, recs, []
     dt = 1.0 / float(device.sample_rate_hz)
+    # the firmware hands the terms' output on in 2^-frac counts (firmware.terms_fixed.terms_frac, the
+    # header's <PREFIX>_TERMS_FRAC: with a temperature term only)
+    frac = terms_frac((device.raw_min, device.raw_max), np.floor(np.asarray(cal.offsets, float) + 0.5)) \
+        if terms["temperature"] else 0
+    scale = 2.0 ** frac
     out = []
     for r in recs:
         temp = None if r.temp_c is None else np.asarray(r.temp_c, float)
@@ -74,8 +80,14 @@ def with_terms_applied(cal, recs: list, device) -> tuple[Any, list, list[str]]:
         except ValueError as e:
             raise InputError(r.source, str(e), column="temp_c") from None
         rails = (r.raw <= device.raw_min) | (r.raw >= device.raw_max)
-        y = np.where(rails, r.raw, np.clip(np.rint(y), device.raw_min, device.raw_max)).astype(np.int64)
-        out.append(dataclasses.replace(r, raw=y))
+        y = np.clip(np.floor(y * scale + 0.5) / scale, device.raw_min, device.raw_max)
+        y = np.where(rails, r.raw, y)
+        rc = dataclasses.replace(r, raw=np.rint(y).astype(np.int64))
+        if frac:
+            # the hand-off's 2^-frac counts: float readings in counts (a Recording built from arrays holds
+            # whole counts; this copy is the diagnosis's own)
+            rc.raw = y
+        out.append(rc)
     linear = dataclasses.replace(cal, nonlin_k2=None, nonlin_k3=None, time_skew_s=None, offset_tc=None, gain_tc=None,
                                  temp_offset_tau_s=None, temp_gain_tau_s=None,
                                  temp_ref_c=None)

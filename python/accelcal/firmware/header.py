@@ -17,7 +17,7 @@ from .triad import TriadTable, quantize_triad, triad_rounding_bound
 from .native import FORMATS
 from .omega_table import device_omega_table, insert_omega
 from .quantize import FixedTables, quantize_calibration, rail_counts, resolver_rounding_bound, to_fixed
-from .terms_fixed import quantize_terms
+from .terms_fixed import terms_tables
 from .terms_header import insert_terms, terms_header_parts
 
 
@@ -334,10 +334,23 @@ def calibration_header(device, cal, *, prefix: str = "AC_CAL") -> str:
         omega = device_omega_table(device, cal)
         if omega is not None:
             text = insert_omega(text, _c_ident(prefix), omega)
-    tt = quantize_terms(cal, device.n_channels, 1.0 / float(device.sample_rate_hz), t.offset_q,
-                        (device.raw_min, device.raw_max))
+    t_terms, tt = terms_tables(device, cal)
     if not tt.any():
         return text
+    if tt.frac:
+        # the terms hand on 2^-frac counts: the resolver's / triad's table for that input (the same
+        # matrix, each row's shift + frac); the rounding bound stated is the whole-count table's
+        if device.is_triad():
+            text = render_triad_header(t_terms, device=device.name, prefix=prefix, calibration_method=cal.method,
+                                       warnings=warnings, rounding_lsb=rounding, notes=notes,
+                                       counts_per_mps2=device.counts_per_mps2)
+        else:
+            text = render_header(t_terms, prefix=prefix, calibration_method=cal.method,
+                                 temp_ref_c=getattr(cal, "temp_ref_c", None), offset_tc=getattr(cal, "offset_tc", None),
+                                 gain_tc=getattr(cal, "gain_tc", None), warnings=warnings, rounding_lsb=rounding,
+                                 notes=notes, counts_per_mps2=device.counts_per_mps2)
+            if omega is not None:
+                text = insert_omega(text, _c_ident(prefix), omega)
     trim = np.asarray(t.trim, np.int64)
     span = float(np.max(np.maximum(np.abs(device.raw_max - trim), np.abs(device.raw_min - trim))))
     p = _c_ident(prefix)

@@ -183,11 +183,12 @@ def rate_integrate(alpha_q: np.ndarray, dt_m: int, dt_shift: int,
 # --------------------------------------------------------------------------
 
 
-def new_temp_table(t_ref: int, oc, gc, o):
+def new_temp_table(t_ref: int, oc, gc, o, frac: int = 0):
     """An ``ac_temp_table`` (ac_temp.h) from its integer fields (oc Q.AC_TEMP_OC_FRAC, gc
-    Q.AC_TEMP_GC_FRAC, o Q.AC_OFFSET_FRAC: (N,))."""
+    Q.AC_TEMP_GC_FRAC, o Q.AC_OFFSET_FRAC: (N,); ``frac`` the output's fraction bits k, y in
+    2^-k counts)."""
     t = ffi.new("ac_temp_table *")
-    t.n, t.t_ref = len(oc), int(t_ref)
+    t.n, t.t_ref, t.frac = len(oc), int(t_ref), int(frac)
     for i in range(len(oc)):
         t.oc[i], t.gc[i], t.o[i] = int(oc[i]), int(gc[i]), int(o[i])
     return t

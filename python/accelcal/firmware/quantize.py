@@ -146,10 +146,15 @@ def rail_counts(codes, signed: bool) -> tuple[int, int]:
 
 
 def quantize(offsets, sensitivity, positions, device: str = "", signed: bool = False,
-             rails: tuple[int, int] | None = None) -> FixedTables:
+             rails: tuple[int, int] | None = None, in_frac: int = 0) -> FixedTables:
     """Quantise a calibration (b (N,), s (N,3), r (N,3)) into the core's tables
     (``signed``: the chip's readings are int16, and so is the trim; ``rails``: the converter's
-    (raw_min, raw_max) in counts, flagged by the core as AC_AT_RAIL, or None: unknown)."""
+    (raw_min, raw_max) in counts, flagged by the core as AC_AT_RAIL, or None: unknown).
+
+    ``in_frac`` k > 0: the table takes x in 2^-k counts (the correctable terms' output,
+    ac_temp.h's frac): each row's shift m_shift_j + k (at most 31) with the same m_ji
+    (M 2^(m_shift_j + k) 2^-k), k_j = round((M o~)_j 2^(m_shift_j + k)); the matrix keeps its
+    precision, the offset term gains k bits.  0: today's table bit for bit."""
     f = FORMATS
     b = np.asarray(offsets, float)
     n = len(b)
@@ -177,7 +182,8 @@ def quantize(offsets, sensitivity, positions, device: str = "", signed: bool = F
     kv = M @ o_t                                        # LSB
     m_shift = np.array([row_shift(M[j], f"resolve matrix row {j}") for j in range(6)])
     g_shift = np.array([row_shift(G[j], f"centripetal table row {j}") for j in range(6)])
-    m = round_half_up(M * 2.0 ** m_shift[:, None]).astype(np.int16)
+    m = round_half_up(M * 2.0 ** (np.minimum(m_shift + in_frac, 31) - in_frac)[:, None]).astype(np.int16)
+    m_shift = np.minimum(m_shift + in_frac, 31)
     g = round_half_up(G * 2.0 ** g_shift[:, None]).astype(np.int16)
     k = to_fixed(kv * 2.0 ** m_shift, 0, "offset term k")
     return FixedTables(device=device, trim=trim.astype(np.int16 if signed else np.uint16),
@@ -188,11 +194,11 @@ def quantize(offsets, sensitivity, positions, device: str = "", signed: bool = F
                        rails=rail_codes(*(rails or (None, None)), signed))
 
 
-def quantize_calibration(device, cal) -> FixedTables:
+def quantize_calibration(device, cal, in_frac: int = 0) -> FixedTables:
     """quantize() for a Device and a Calibration (positions default to the device's)."""
     pos = cal.positions_or_nominal(device)
     return quantize(cal.offsets, cal.sensitivity, pos, device.name, signed=device.raw_min < 0,
-                    rails=(device.raw_min, device.raw_max))
+                    rails=(device.raw_min, device.raw_max), in_frac=in_frac)
 
 
 def omega_to_fixed(omega) -> np.ndarray:

@@ -2,6 +2,12 @@
 the header's tables and of ``resolve --engine fixed``), the chain run through the core, and
 the error bounds that include/accelcal/ac_temp.h, ac_skew.h and ac_nonlin.h state.
 
+The chain's hand-off (``frac`` k, ``<PREFIX>_TERMS_FRAC``): with a temperature table,
+ac_temp_correct writes its output in 2^-k counts (Q.k), the skew interpolates it as it is,
+the nonlinearity's coefficients are per 2^-k count (c2 2^-k, c3 2^-2k) and the resolver's /
+triad's table takes x in 2^-k counts (quantize's ``in_frac``).  k is chosen from the
+converter's span about the trims (:func:`terms_frac`); without a temperature table k = 0.
+
 Formats (docs/firmware-terms.md): temperature degC int16 Q.8 (``AC_TEMP_FRAC``); offset
 tempco oc[i] Q.8 counts/degC (``AC_TEMP_OC_FRAC``); gain tempco gc[i] Q.24 1/degC
 (``AC_TEMP_GC_FRAC``); the lag weight
@@ -16,12 +22,13 @@ import numpy as np
 
 from . import native
 from .native import lib
-from .quantize import QuantizeError, largest_shift, round_half_up, to_fixed
+from .quantize import QuantizeError, largest_shift, quantize_calibration, round_half_up, to_fixed
 from .terms import (channel_values, has_terms, lag_coefficient, nonlinearity_coefficients, nonlinearity_iterations,
                     nonlinearity_span, skew_delays, skew_latency)
+from .triad import quantize_triad
 
-__all__ = ["TEMP_FRAC", "TermsTables", "quantize_terms", "lag_fixed", "apply_terms_fixed", "lag_bound",
-           "temp_bound", "nonlin_bound", "temp_to_fixed"]
+__all__ = ["TEMP_FRAC", "TERMS_FRAC_MAX", "TERMS_FRAC_SPAN", "TermsTables", "terms_frac", "quantize_terms",
+           "terms_tables", "lag_fixed", "apply_terms_fixed", "lag_bound", "temp_bound", "nonlin_bound", "temp_to_fixed"]
 
 TEMP_FRAC = lib.AC_TEMP_FRAC
 OC_FRAC = lib.AC_TEMP_OC_FRAC
@@ -30,6 +37,12 @@ GAIN_FRAC = lib.AC_TEMP_GAIN_FRAC
 SKEW_FRAC = lib.AC_SKEW_FRAC
 E_MAX = lib.AC_TEMP_E_MAX
 ITERATIONS = lib.AC_NONLIN_ITERATIONS
+#: the most fraction bits the terms hand on (1/16 count: the hand-off's per-pose bias, uniform in
+#: +-2^-(k+1), then stays below a pose mean's standard error on the loop's cases)
+TERMS_FRAC_MAX = 4
+#: the largest span 2^k (in 2^-k counts) of the readings about their trims: a third of headroom in
+#: int16 for what the temperature correction adds (up to 5.47 % of the reading and the offset)
+TERMS_FRAC_SPAN = 24576
 
 
 @dataclass
@@ -40,6 +53,7 @@ class TermsTables:
     temp: dict | None = None     # t_ref, oc, gc, o, lag_off/lag_gain (k, shift), tau_off/tau_gain (s)
     skew: dict | None = None     # len, whole, frac, latency
     nonlin: dict | None = None   # shift, a2, a3, iterations
+    frac: int = 0                # k: the terms' output (and the resolver's input) in 2^-k counts
 
     def any(self) -> bool:
         return self.temp is not None or self.skew is not None or self.nonlin is not None
@@ -55,7 +69,8 @@ class TermsTables:
                 t["o"] / 2.0 ** native.FORMATS.offset_frac)
 
     def nonlin_coefficients(self) -> tuple[np.ndarray, np.ndarray]:
-        """(c2 1/counts, c3 1/counts^2) of the nonlinearity table."""
+        """(c2, c3) of the nonlinearity table per unit of its input (2^-frac counts): c2 2^-frac,
+        c3 2^-2frac for c2 1/counts, c3 1/counts^2."""
         s = self.nonlin["shift"]
         return self.nonlin["a2"] / 2.0 ** (15 + s), self.nonlin["a3"] / 2.0 ** (30 + s)
 
@@ -64,7 +79,7 @@ class TermsTables:
         out = {}
         if self.temp is not None:
             t = self.temp
-            out["temp"] = native.new_temp_table(t["t_ref"], t["oc"], t["gc"], t["o"])
+            out["temp"] = native.new_temp_table(t["t_ref"], t["oc"], t["gc"], t["o"], t["frac"])
         if self.skew is not None:
             out["skew"] = native.new_skew_table(self.skew["len"], self.skew["whole"], self.skew["frac"])
         if self.nonlin is not None:
@@ -99,19 +114,38 @@ def _shift_for(vmax: float, lo: int, hi: int, what: str, limit: float = 32767.0)
     return s
 
 
-def quantize_terms(cal, n: int, dt_s: float, offset_q, rails=None) -> TermsTables:
+def terms_frac(rails, trim) -> int:
+    """k, the fraction bits of the terms' hand-off: the largest k <= TERMS_FRAC_MAX with
+    span 2^k <= TERMS_FRAC_SPAN, span = max |rail - trim_i| (counts, the largest reading about
+    its trim); 0 without rails or trims (a 12-bit converter about mid-scale: 3; the seed's
+    0..10000: 2; a 16-bit one: 0)."""
+    if rails is None or trim is None:
+        return 0
+    t = np.asarray(trim, float)
+    span = float(np.max(np.maximum(np.abs(float(rails[1]) - t), np.abs(float(rails[0]) - t))))
+    k = 0
+    while k < TERMS_FRAC_MAX and span * 2.0 ** (k + 1) <= TERMS_FRAC_SPAN:
+        k += 1
+    return k
+
+
+def quantize_terms(cal, n: int, dt_s: float, offset_q, rails=None, trim=None) -> TermsTables:
     """The terms of ``cal`` as the core's tables; ``offset_q`` (N,) the residual offsets
     b_i - trim_i in Q.AC_OFFSET_FRAC (the resolver's or the triad's), ``dt_s`` the sample period,
     ``rails`` (raw_min, raw_max) the converter's codes the nonlinearity's iteration count is
-    chosen for (firmware.terms.nonlinearity_iterations; None: AC_NONLIN_ITERATIONS)."""
+    chosen for (firmware.terms.nonlinearity_iterations; None: AC_NONLIN_ITERATIONS) and, with
+    ``trim`` (N,) the trims, the hand-off's fraction bits (:func:`terms_frac`; with a temperature
+    table only, else 0)."""
     terms = has_terms(cal)
     tt = TermsTables(n=n, dt_s=float(dt_s))
+    if terms["temperature"]:
+        tt.frac = terms_frac(rails, trim)
     if terms["temperature"]:
         oc, gc = channel_values(cal.offset_tc, n), channel_values(cal.gain_tc, n)
         tt.temp = dict(t_ref=int(to_fixed(cal.temp_ref_c or 0.0, TEMP_FRAC, "temperature_ref_c", -32768, 32767)),
                        oc=to_fixed(oc, OC_FRAC, "offset_tc_counts_per_c", -32767, 32767),
                        gc=to_fixed(gc, GC_FRAC, "gain_tc_per_c", -32767, 32767),
-                       o=np.asarray(offset_q, np.int64),
+                       o=np.asarray(offset_q, np.int64), frac=tt.frac,
                        lag_off=lag_fixed(cal.temp_offset_tau_s, dt_s), lag_gain=lag_fixed(cal.temp_gain_tau_s, dt_s),
                        tau_off=cal.temp_offset_tau_s, tau_gain=cal.temp_gain_tau_s)
     if terms["skew"]:
@@ -127,13 +161,31 @@ def quantize_terms(cal, n: int, dt_s: float, offset_q, rails=None) -> TermsTable
         tt.skew = dict(len=length, whole=whole, frac=frac, latency=skew_latency(tau, dt_s))
     if terms["nonlinearity"]:
         c2, c3 = nonlinearity_coefficients(cal.sensitivity, cal.nonlin_k2, cal.nonlin_k3)
-        u = np.abs(c2) * 2.0 ** 15 + np.abs(c3) * 2.0 ** 30
+        # per 2^-frac count: C(z) = c2 z^2 + c3 z^3 counts is c2 2^-k zq^2 + c3 2^-2k zq^3 in 2^-k counts
+        c2q, c3q = c2 * 2.0 ** -tt.frac, c3 * 2.0 ** (-2 * tt.frac)
+        u = np.abs(c2q) * 2.0 ** 15 + np.abs(c3q) * 2.0 ** 30
         shift = _shift_for(float(u.max()), 0, 30, "the nonlinearity at full scale", 32766.0)
-        tt.nonlin = dict(shift=shift, a2=to_fixed(c2, 15 + shift, "nonlin_k2", -32767, 32767),
-                         a3=to_fixed(c3, 30 + shift, "nonlin_k3", -32767, 32767),
+        tt.nonlin = dict(shift=shift, a2=to_fixed(c2q, 15 + shift, "nonlin_k2", -32767, 32767),
+                         a3=to_fixed(c3q, 30 + shift, "nonlin_k3", -32767, 32767),
                          iterations=nonlinearity_iterations(
                              c2, c3, None if rails is None else nonlinearity_span(cal.offsets, rails)))
     return tt
+
+
+def terms_tables(device, cal):
+    """(table, TermsTables) of a calibration with correctable terms on a device: the resolver's
+    (quantize.FixedTables) or, for a 3-axis chip, the triad's (triad.TriadTable) table for input in
+    2^-frac counts, and the terms' tables (the header's and ``resolve --engine fixed``'s)."""
+    rails = (device.raw_min, device.raw_max)
+    signed = device.raw_min < 0
+    triad = device.is_triad()
+    t = (quantize_triad(cal.offsets, cal.sensitivity, signed, rails) if triad
+         else quantize_calibration(device, cal))
+    tt = quantize_terms(cal, device.n_channels, 1.0 / float(device.sample_rate_hz), t.offset_q, rails, t.trim)
+    if tt.frac:
+        t = (quantize_triad(cal.offsets, cal.sensitivity, signed, rails, in_frac=tt.frac) if triad
+             else quantize_calibration(device, cal, in_frac=tt.frac))
+    return t, tt
 
 
 def temp_to_fixed(temp_c) -> np.ndarray:
@@ -144,8 +196,8 @@ def temp_to_fixed(temp_c) -> np.ndarray:
 def apply_terms_fixed(tt: TermsTables, x, temp_q=None) -> tuple[np.ndarray, np.ndarray]:
     """The terms through the core, sample by sample, as firmware runs them: x (n, N) int16
     trimmed readings, temp_q (n,) int16 Q.AC_TEMP_FRAC (needed with a temperature table).
-    Returns (y (n, N) int16 at the common instant of each step: the skew's latency is not
-    taken out here, saturated (n,) bool)."""
+    Returns (y (n, N) int16 in 2^-tt.frac counts at the common instant of each step: the skew's
+    latency is not taken out here, saturated (n,) bool)."""
     x = np.ascontiguousarray(x, dtype=np.int16)
     n = x.shape[0]
     c = tt.cdata()
@@ -184,15 +236,17 @@ def lag_bound(k: int, shift: int, tau_s: float | None, dt_s: float, span_c: floa
     return 2.0 ** -9 + 2.0 ** -(TEMP_FRAC + lib.AC_TEMP_LAG_EXTRA + 1) / cq + abs(cq - c) / cq * span_c
 
 
-def temp_bound(x, e) -> np.ndarray:
-    """counts: |ac_temp_correct - temperature_correct| for readings x (trimmed) and e = gc dTg."""
+def temp_bound(x, e, frac: int = 0) -> np.ndarray:
+    """counts: |ac_temp_correct 2^-frac - temperature_correct| for readings x (trimmed) and e = gc dTg
+    (the table's output in 2^-frac counts)."""
     e = np.abs(np.asarray(e, float))
-    return 0.5 + 2.0 ** -8 + 0.54 * e + (np.abs(np.asarray(x, float)) + 1.0) * (2.0 ** -18 + e ** 4 / (1.0 - e))
+    return 2.0 ** -(frac + 1) + 2.0 ** -8 + 0.54 * e + (np.abs(np.asarray(x, float)) + 1.0) * (2.0 ** -18 + e ** 4 / (1.0 - e))
 
 
-def nonlin_bound(z, c2, c3, shift: int, iterations: int = ITERATIONS) -> np.ndarray:
-    """counts: |ac_nonlin_invert - nonlinearity_invert| for readings of size up to ``z`` (counts),
-    both running ``iterations`` iterations."""
+def nonlin_bound(z, c2, c3, shift: int, iterations: int = ITERATIONS, frac: int = 0) -> np.ndarray:
+    """|ac_nonlin_invert - nonlinearity_invert| in the table's units (2^-frac counts) for readings of
+    size up to ``z`` and the table's coefficients c2, c3 (per those units: TermsTables.nonlin_coefficients),
+    both running ``iterations`` iterations (the trim's fraction, up to half a count, is 2^(frac-1) units)."""
     z = np.abs(np.asarray(z, float))
     L = 2.0 * np.abs(c2) * z + 3.0 * np.abs(c3) * z * z
     E = 0.5 + (z * z * 2.0 ** -16 + 0.5 * z) * 2.0 ** -shift
@@ -207,4 +261,4 @@ def nonlin_bound(z, c2, c3, shift: int, iterations: int = ITERATIONS) -> np.ndar
     for _ in range(int(iterations)):
         D = E + L * D
         e = L * (1.0 + e)
-    return D + 0.5 * e
+    return D + 2.0 ** (frac - 1) * e

@@ -45,7 +45,16 @@ def terms_header_parts(tt: TermsTables, prefix: str, reading_span: float, signed
                 f" *   the outputs are for the instant {p}_SKEW_LATENCY = {tt.latency()} sample(s) before the newest"]
     if tt.nonlin is not None:
         com += [f" *     ac_nonlin_invert(&{p}_NONLIN, x, x);"]
-    com += [f" *     {resolve_call};", " * Error bounds of the terms against their float reference, in counts of x:"]
+    com += [f" *     {resolve_call};"]
+    kf = int(tt.frac)
+    if kf:
+        table = "TRIAD" if resolve_call.startswith("ac_triad") else "RESOLVER"
+        com += [f" * ac_temp_correct writes x in 2^-{kf} counts ({p}_TERMS_FRAC = {kf}: a fraction of a count, not "
+                "rint(raw + c(T)), reaches the resolver); the skew and the nonlinearity keep that unit and",
+                f" * {p}_{table} is made for it (each row's shift + {kf}): use it after the terms as above, not on "
+                "whole counts (ac_process / ac_triad_apply); an on-device rebuild (ac_resolver_build /",
+                f" * ac_triad_build) makes a whole-count table (then shift its rows by {p}_TERMS_FRAC yourself)."]
+    com += [" * Error bounds of the terms against their float reference, in counts of x:"]
     z = float(reading_span)
     if tt.temp is not None:
         gc = tt.temp_coefficients()[2]
@@ -54,19 +63,21 @@ def terms_header_parts(tt: TermsTables, prefix: str, reading_span: float, signed
                                   ("gain", tt.temp["lag_gain"], tt.temp["tau_gain"])):
             lb = lag_bound(k, s, tau, tt.dt_s, BOUND_SPAN_C)
             com.append(f" *   lagged temperature ({name}): <= {lb:.3g} degC over a {BOUND_SPAN_C:g} degC span")
-        com.append(f" *   ac_temp_correct: <= {float(temp_bound(z, e)):.3g} for |x| <= {z:.0f} and |T_s - t_ref| <= "
+        com.append(f" *   ac_temp_correct: <= {float(temp_bound(z, e, kf)):.3g} for |x| <= {z:.0f} and |T_s - t_ref| <= "
                    f"{BOUND_SPAN_C:g} degC (gain change up to {100 * e:.3g} %)")
     if tt.skew is not None:
-        com.append(" *   ac_skew_step: <= 0.5 (+ 2^-16 |x[n-k-1] - x[n-k]| for the delay's rounding)")
+        com.append(f" *   ac_skew_step: <= {2.0 ** -(kf + 1):g} (+ 2^-16 |x[n-k-1] - x[n-k]| for the delay's rounding)")
     if tt.nonlin is not None:
         c2, c3 = tt.nonlin_coefficients()
         k = int(tt.nonlin["iterations"])
-        nb = float(np.max(nonlin_bound(z, c2, c3, tt.nonlin["shift"], k)))
-        L = float(np.max(2 * np.abs(c2) * z + 3 * np.abs(c3) * z * z))
+        zq = z * 2.0 ** kf
+        nb = float(np.max(nonlin_bound(zq, c2, c3, tt.nonlin["shift"], k, kf))) * 2.0 ** -kf
+        L = float(np.max(2 * np.abs(c2) * zq + 3 * np.abs(c3) * zq * zq))
         com.append(f" *   ac_nonlin_invert ({k} iterations): <= {nb:.3g} for |x| <= {z:.0f} (contraction L = {L:.3g}: "
                    f"the float iteration is within L^{k} = {L ** k:.3g} of the term it removes of the exact inverse)")
     com[-1] += " */"
     dec, dfn = list(com), []
+    dec += [f"#define {p}_TERMS_FRAC {kf}"]
     if tt.temp is not None:
         t = tt.temp
         dec += [f"#define {p}_TEMP_OFF_LAG_K {int(t['lag_off'][0])}u",
@@ -76,7 +87,8 @@ def terms_header_parts(tt: TermsTables, prefix: str, reading_span: float, signed
                 f"extern const ac_temp_table {p}_TEMP;"]
         dfn += [f"const ac_temp_table {p}_TEMP = {{",
                 f"    {n}u, {int(t['t_ref'])}, /* n, t_ref */",
-                f"    {_row(t['oc'])}, /* oc */", f"    {_row(t['gc'])}, /* gc */", f"    {_row(t['o'])} /* o */", "};"]
+                f"    {_row(t['oc'])}, /* oc */", f"    {_row(t['gc'])}, /* gc */", f"    {_row(t['o'])}, /* o */",
+                f"    {int(t['frac'])}u /* frac: x out in 2^-frac counts */", "};"]
     if tt.skew is not None:
         s = tt.skew
         dec += [f"#define {p}_SKEW_LEN {int(s['len'])}", f"#define {p}_SKEW_LATENCY {int(s['latency'])}",

@@ -71,7 +71,8 @@ def triad_matrix(sens3: np.ndarray) -> np.ndarray:
     return np.linalg.inv(S)
 
 
-def quantize_triad(offsets3, sens3, signed: bool = False, rails: tuple[int, int] | None = None) -> TriadTable:
+def quantize_triad(offsets3, sens3, signed: bool = False, rails: tuple[int, int] | None = None,
+                   in_frac: int = 0) -> TriadTable:
     """The triad's table by the rules of quantize.quantize.
 
     Parameters
@@ -85,6 +86,10 @@ def quantize_triad(offsets3, sens3, signed: bool = False, rails: tuple[int, int]
     rails : (int, int) or None
         The converter's (raw_min, raw_max), counts: ``ac_triad_apply`` flags a reading there
         (AC_AT_RAIL); None: unknown, nothing flagged.
+    in_frac : int
+        k > 0: the table takes x in 2^-k counts (the correctable terms' output, ac_temp.h's frac,
+        for ``ac_triad_resolve``): each row's shift + k (at most 31) with the same m, k = M o~
+        2^(shift + k).  0: today's table.
 
     Returns
     -------
@@ -101,7 +106,8 @@ def quantize_triad(offsets3, sens3, signed: bool = False, rails: tuple[int, int]
     M = triad_matrix(sens_q / 2.0 ** FORMATS.sens_frac) * 2.0 ** OUT_FRAC       # output LSB per count
     o = offset_q / 2.0 ** FORMATS.offset_frac
     shift = np.array([row_shift(M[j], f"triad matrix row {j}") for j in range(3)])
-    m = round_half_up(M * 2.0 ** shift[:, None]).astype(np.int16)
+    m = round_half_up(M * 2.0 ** (np.minimum(shift + in_frac, 31) - in_frac)[:, None]).astype(np.int16)
+    shift = np.minimum(shift + in_frac, 31)
     k = to_fixed((M @ o) * 2.0 ** shift, 0, "triad offset term k")
     return TriadTable(trim=trim.astype(np.int16 if signed else np.uint16), m=m, shift=shift.astype(np.int8),
                       k=k.astype(np.int32), signed=signed, sens_q=sens_q.astype(np.int32),
