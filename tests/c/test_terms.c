@@ -60,6 +60,7 @@ static void test_temp_correct(void)
     ac_temp_table t;
     int16_t x[AC_MAX_CHANNELS], y[AC_MAX_CHANNELS];
     int it, i;
+    t.frac = 0u;
     t.n = 0;
     CHECK_STATUS(ac_temp_check(&t), AC_ERR_SIZE);
     t.n = 1;
