@@ -97,13 +97,28 @@ def readings(dev: Device, cal: Calibration, rng, n=1500):
     return raw, temp
 
 
-@pytest.fixture(scope="module", params=["array", "signed_triad"])
+def triad12() -> Device:
+    """An ADXL-like 12-bit 3-axis chip, unsigned 0..4095 about 2048, 41.8 counts per m/s^2, 50 Hz: the
+    terms hand on 2^-3 counts (AC_CAL_TERMS_FRAC 3)."""
+    return Device(name="triad12", sample_rate_hz=50.0, gravity_mps2=9.80665, raw_min=0, raw_max=4095,
+                  positions=np.zeros((3, 3)), axes=np.eye(3), counts_per_mps2=np.full(3, 41.8),
+                  zero_counts=np.full(3, 2048.0))
+
+
+#: each device's hand-off fraction bits (firmware.terms_fixed.terms_frac): the seed's 0..10000 array 2,
+#: the 12-bit chip 3, the signed 16-bit chip 0 (whole counts, the arithmetic before the fraction bits)
+FRAC = {"array": 2, "signed_triad": 0, "triad12": 3}
+
+
+@pytest.fixture(scope="module", params=["array", "signed_triad", "triad12"])
 def built(request, tmp_path_factory):
-    dev = default_device() if request.param == "array" else signed_triad()
+    dev = {"array": default_device, "signed_triad": signed_triad, "triad12": triad12}[request.param]()
     rng = np.random.default_rng(11)
     cal = with_terms(dev, rng)
     tmp = tmp_path_factory.mktemp(f"terms_{request.param}")
-    (tmp / "cal.h").write_text(calibration_header(dev, cal))
+    text = calibration_header(dev, cal)
+    assert f"#define AC_CAL_TERMS_FRAC {FRAC[request.param]}\n" in text
+    (tmp / "cal.h").write_text(text)
     (tmp / "main.c").write_text(driver(dev, cal))
     return dev, cal, tmp
 
