@@ -137,17 +137,8 @@ ac_status AC_TEMP_CORRECT_C(const ac_temp_table *t, int16_t t_off, int16_t t_gai
         w = ac_sat_add(w, g, &sat);
         w = ac_sat_add(w, o8, &sat);
         if (t->frac != 0u) {
-            /* Q.frac: round(w 2^-(16 - frac)) = ac_round_shift, clipped to int16 */
-            const int32_t q = ac_round_shift(w, (uint8_t)(16u - t->frac));
-            if (q > INT16_MAX) {
-                y[i] = INT16_MAX;
-                sat = 1u;
-            } else if (q < INT16_MIN) {
-                y[i] = INT16_MIN;
-                sat = 1u;
-            } else {
-                y[i] = (int16_t)q;
-            }
+            /* Q.frac: round(w 2^-(16 - frac)), clipped to int16 */
+            y[i] = ac_sat_to16(ac_round_shift(w, (uint8_t)(16u - t->frac)), &sat);
         } else if (w >= 0x7FFF8000L) {
             y[i] = INT16_MAX;
             sat = 1u;

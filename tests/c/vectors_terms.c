@@ -66,21 +66,23 @@ static void vec_temp_lag(void)
     nl();
 }
 
-static void vec_temp_correct(void)
+/* with_frac 0: whole counts (VTC); 1: output fraction bits frac 1..AC_TEMP_MAX_OUT_FRAC, one beyond
+ * refused, the readings scaled by 2^-frac so that most fit Q.frac (VTF; the H8/300H runs the C there) */
+static void vec_temp_run(uint8_t count, uint8_t with_frac)
 {
     uint8_t t, i;
     int16_t x[AC_MAX_CHANNELS], y[AC_MAX_CHANNELS];
-    for (t = 0u; t < 120u; t++) {
+    for (t = 0u; t < count; t++) {
         uint16_t n = (uint16_t)(1u + below(AC_MAX_CHANNELS));
         int16_t t_off, t_gain;
         vt_temp.n = (t % 29u == 3u) ? 0u : n;
-        vt_temp.frac = 0u; /* whole counts (vec_temp_frac: the other output formats) */
+        vt_temp.frac = with_frac ? (uint8_t)(1u + below(AC_TEMP_MAX_OUT_FRAC + 1u)) : 0u;
         vt_temp.t_ref = vt_i16();
         for (i = 0u; i < n; i++) {
             vt_temp.oc[i] = (t & 4u) ? vt_i16() : (int16_t)rnd_range(-3000, 3000);
             vt_temp.gc[i] = (t & 8u) ? vt_i16() : (int16_t)rnd_range(-5000, 5000);
             vt_temp.o[i] = (int16_t)((t % 23u == 4u) ? 129 : rnd_range(-128, 128)); /* 129 refused */
-            x[i] = vt_i16();
+            x[i] = (int16_t)(vt_i16() / (int16_t)(1 << (vt_temp.frac > 7u ? 7u : vt_temp.frac)));
         }
         if (t & 16u) {
             t_off = vt_i16();
@@ -92,7 +94,10 @@ static void vec_temp_correct(void)
         } else {
             t_gain = (int16_t)((int32_t)vt_temp.t_ref / 2 + rnd_range(-5000, 5000));
         }
-        TAG("VTC");
+        TAG(with_frac ? "VTF" : "VTC");
+        if (with_frac) {
+            h8(vt_temp.frac);
+        }
         h16(t_off);
         h16(t_gain);
         st(ac_temp_correct(&vt_temp, t_off, t_gain, x, y));
@@ -103,6 +108,13 @@ static void vec_temp_correct(void)
         }
         nl();
     }
+}
+
+static void vec_temp_correct(void)
+{
+    int16_t x[AC_MAX_CHANNELS], y[AC_MAX_CHANNELS];
+    vec_temp_run(120u, 0u);
+    x[0] = 0;
     TAG("VTC0");
     st(ac_temp_correct(0, 0, 0, x, y));
     st(ac_temp_correct(&vt_temp, 0, 0, 0, y));
@@ -306,8 +318,7 @@ static void vec_nonlin_iterations(void)
 }
 
 /* ac_temp_correct with output fraction bits (frac 1..AC_TEMP_MAX_OUT_FRAC; one beyond refused):
- * random tables and inputs, mostly inside the Q.frac range (the H8/300H runs the C for frac > 0),
- * then the final rounding's and the clip's edges through the offset term alone (gc = o = 0,
+ * random tables and inputs (vec_temp_run), then the final rounding's and the clip's edges through the offset term alone (gc = o = 0,
  * dTo = 1 LSB: w = x 2^16 - oc): x = +-2^(15-frac), oc = 2^(15-frac) (+1) puts w at
  * (32767.5 2^-frac) 2^16 (the tie, rounded up to 32768: clipped) and one below it (kept), and
  * at -32768.5 (kept as -32768) and one beyond (clipped); x = 0 gives the ties at +-1/2 */
@@ -316,35 +327,7 @@ static void vec_temp_frac(void)
     uint8_t t, i;
     int16_t x[AC_MAX_CHANNELS], y[AC_MAX_CHANNELS];
     const uint32_t saved = rng; /* the later vectors keep their inputs */
-    for (t = 0u; t < 90u; t++) {
-        uint16_t n = (uint16_t)(1u + below(AC_MAX_CHANNELS));
-        int16_t t_off, t_gain;
-        int32_t span;
-        vt_temp.n = n;
-        vt_temp.frac = (uint8_t)(1u + below(AC_TEMP_MAX_OUT_FRAC + 1u)); /* 1..9: 9 refused */
-        span = (vt_temp.frac <= AC_TEMP_MAX_OUT_FRAC) ? (int32_t)(30000L >> vt_temp.frac) : 100L;
-        vt_temp.t_ref = (int16_t)rnd_range(-8000, 8000);
-        for (i = 0u; i < n; i++) {
-            vt_temp.oc[i] = (t & 4u) ? vt_i16() : (int16_t)rnd_range(-600, 600);
-            vt_temp.gc[i] = (t & 8u) ? vt_i16() : (int16_t)rnd_range(-5000, 5000);
-            vt_temp.o[i] = (int16_t)rnd_range(-128, 128);
-            x[i] = (t % 7u == 2u) ? vt_i16() : (int16_t)rnd_range(-span, span);
-        }
-        t_off = (int16_t)(vt_temp.t_ref + rnd_range(-5000, 5000));
-        t_gain = (t & 16u) ? vt_i16() : (int16_t)(vt_temp.t_ref + rnd_range(-5000, 5000));
-        TAG("VTF");
-        h8(vt_temp.frac);
-        h16(t_off);
-        h16(t_gain);
-        st(ac_temp_check(&vt_temp));
-        st(ac_temp_correct(&vt_temp, t_off, t_gain, x, y));
-        if ((int)ac_temp_check(&vt_temp) == 0) {
-            for (i = 0u; i < n; i++) {
-                h16(y[i]);
-            }
-        }
-        nl();
-    }
+    vec_temp_run(90u, 1u);
     rng = saved;
     for (t = 1u; t <= (uint8_t)AC_TEMP_MAX_OUT_FRAC; t++) {
         const int16_t h = (int16_t)(1 << (15u - t));

@@ -50,13 +50,16 @@ enum {
     R_TERMS_PATH,
     R_OMEGA_REST,
     R_OMEGA_TURN,
+    R_TEMP_K2,
+    R_TERMS_K2,
     R_COUNT
 };
 static const char *const region_name[R_COUNT] = {
     "", "empty", "ac_trim", "ac_process", "ac_process_omega", "ac_resolve_omega",
     "ac_rate_step", "ac_att_step", "ac_disp_step", "ac_process_batch_omega", "ac_resolver_build",
     "ac_triad_apply", "ac_triad_build", "ac_temp_lag_step", "ac_temp_correct", "ac_skew_step",
-    "ac_nonlin_invert", "terms_temp_nonlin", "terms_full_path", "ac_omega_step_rest", "ac_omega_step_turn"};
+    "ac_nonlin_invert", "terms_temp_nonlin", "terms_full_path", "ac_omega_step_rest", "ac_omega_step_turn",
+    "ac_temp_correct_k2", "terms_temp_nonlin_k2"};
 static uint16_t entries[R_COUNT], samples[R_COUNT], deepest[R_COUNT];
 
 /* ---- output through the write trap ---- */
@@ -152,27 +155,36 @@ static const ac_temp_table terms_temp = {6u, 6400, {640, 640, 640, 640, 640, 640
 static const ac_skew_table terms_skew = {6u, 3u, {1, 0, 1, 1, 1, 0}, {7864u, 26870u, 3932u, 0u, 11796u, 22938u}};
 static const ac_nonlin_table terms_nl = {6u, 15, {4295, 4295, 4295, 4295, 4295, 4295},
                                          {22518, 22518, 22518, 22518, 22518, 22518}, 0u};
+/* the same terms as a header writes them now for the seed's 0..10000 converter: the hand-off in
+ * 2^-2 counts (AC_CAL_TERMS_FRAC 2): ac_temp_correct's frac 2 (the C on the H8/300H), the
+ * nonlinearity's coefficients per 2^-2 count (shift 18) */
+static const ac_temp_table terms_temp_k2 = {6u, 6400, {640, 640, 640, 640, 640, 640},
+                                            {5033, 5033, 5033, 5033, 5033, 5033}, {0, 0, 0, 0, 0, 0}, 2u};
+static const ac_nonlin_table terms_nl_k2 = {6u, 18, {8590, 8590, 8590, 8590, 8590, 8590},
+                                            {11259, 11259, 11259, 11259, 11259, 11259}, 0u};
 static ac_temp_lag lag_off, lag_gain;
 static int16_t skew_buf[3u * 6u];
 static ac_skew_line skew_line;
 
 /* the terms between the pre-trim and the resolve: two lags, the temperature, the nonlinearity
- * (and with `full', the pre-trim, the skew and the resolve with omega): what firmware calls */
+ * (and with bit 0 of `mode', the pre-trim, the skew and the resolve with omega): what firmware
+ * calls; bit 1: the 2^-2 count tables */
 static int terms_path(int16_t temp, const uint16_t *raw, const uint16_t *trim, int16_t *x,
-                            const int16_t *w, int32_t *out, uint8_t full)
+                            const int16_t *w, int32_t *out, uint8_t mode)
 {
     int16_t t_off, t_gain;
     int s = 0;
+    const uint8_t full = (uint8_t)(mode & 1u);
     if (full) {
         s = (int)ac_trim_rails(raw, trim, 6u, 0u, 65535u, x);
     }
     s |= (int)ac_temp_lag_step(&lag_off, temp, &t_off);
     s |= (int)ac_temp_lag_step(&lag_gain, temp, &t_gain);
-    s |= (int)ac_temp_correct(&terms_temp, t_off, t_gain, x, x);
+    s |= (int)ac_temp_correct((mode & 2u) ? &terms_temp_k2 : &terms_temp, t_off, t_gain, x, x);
     if (full) {
         s |= (int)ac_skew_step(&terms_skew, &skew_line, x, x);
     }
-    s |= (int)ac_nonlin_invert(&terms_nl, x, x);
+    s |= (int)ac_nonlin_invert((mode & 2u) ? &terms_nl_k2 : &terms_nl, x, x);
     if (full) {
         s |= (int)ac_resolve(&res, x, w, out);
     }
@@ -328,6 +340,8 @@ int main(void)
             MEASURE(R_NONLIN, 1u, ac_nonlin_invert(&terms_nl, x, y));
             MEASURE(R_TERMS, 1u, terms_path(temp, raw, trim, y, w, out, 0u));
             MEASURE(R_TERMS_PATH, 1u, terms_path(temp, raw, trim, y, w, out, 1u));
+            MEASURE(R_TEMP_K2, 1u, ac_temp_correct(&terms_temp_k2, tl, temp, x, y));
+            MEASURE(R_TERMS_K2, 1u, terms_path(temp, raw, trim, y, w, out, 2u));
         }
         for (i = 0u; i < 6u; i++) {
             f[i] = (int32_t)rnd_range(-2000, 4000); /* +-2 m/s^2 */
