@@ -21,6 +21,10 @@
  * L^K max|C| <= 0.25 count at the span, capped at AC_NONLIN_MAX_ITERATIONS (L >= 1 there: the
  * cap; the bent reading is not invertible by this iteration at the span's ends)
  * (python: accelcal.firmware.terms.nonlinearity_iterations).
+ * Units: x, y and z are in 2^-k counts when the terms hand on k fraction bits (ac_temp.h's frac,
+ * a generated header's <PREFIX>_TERMS_FRAC): the table's coefficients are then per 2^-k count,
+ * a2 = c2 2^(15 + shift - k), a3 = c3 2^(30 + shift - 2k), and the arithmetic below is the same
+ * (every count in it reads 2^-k count).
  * Error bound against the float iteration with the table's a2, a3 (z_0 = x - o there):
  *   |y - y_ref| <= D_K,  D_0 = 0.5 (o = b - trim),  D_k = E + L D_{k-1},
  *   E = 0.5 + (|z|^2 2^-16 + |z| / 2) 2^-shift   counts (C's rounding; h's and g's),

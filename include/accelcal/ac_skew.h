@@ -10,8 +10,9 @@
  * samples takes every channel to the common instant t_n - m dt:
  *   y_i[n] = v0 + round(frac[i] (v1 - v0) 2^-15),  v0 = x_i[n - whole[i]], v1 = x_i[n - whole[i] - 1]
  * (one 16 x 16 multiply a channel; the result lies between v0 and v1, so it never clips).
- * Error bound against the float interpolation with the table's delay: 0.5 count (the
- * rounding); against the unquantised delay add 2^-16 |v1 - v0|.
+ * Scale-free: x and y in the unit the terms hand on (2^-k counts, ac_temp.h's frac).
+ * Error bound against the float interpolation with the table's delay: 0.5 of that unit (the
+ * rounding, 2^-(k+1) counts); against the unquantised delay add 2^-16 |v1 - v0|.
  *
  * The delay line is the caller's: len x n int16 (len = whole_max + 2 samples a channel,
  * AC_CAL_SKEW_LEN), e.g. `static int16_t line[AC_CAL_SKEW_LEN * AC_CAL_N_CHANNELS];`,

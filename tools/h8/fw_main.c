@@ -25,7 +25,7 @@ volatile int16_t fw_temp; /* the sensor's temperature, degC Q.8 */
 static ac_resolver fw_table;
 /* the correctable terms (a generated header's tables; the values of tools/h8sim/bench_h8.c) */
 static const ac_temp_table fw_temp_table = {6u, 6400, {640, 640, 640, 640, 640, 640},
-                                            {5033, 5033, 5033, 5033, 5033, 5033}, {0, 0, 0, 0, 0, 0}};
+                                            {5033, 5033, 5033, 5033, 5033, 5033}, {0, 0, 0, 0, 0, 0}, 0u};
 static const ac_skew_table fw_skew = {6u, 3u, {1, 0, 1, 1, 1, 0}, {7864u, 26870u, 3932u, 0u, 11796u, 22938u}};
 static const ac_nonlin_table fw_nl = {6u, 15, {4295, 4295, 4295, 4295, 4295, 4295},
                                       {22518, 22518, 22518, 22518, 22518, 22518}, 0u};

@@ -151,7 +151,7 @@ static ac_disp disp;
  * 0.2 % of g per degC and 3e-4/degC at a 20 s and 5 s lag, skews of -5..6 ms at 60 Hz, a square
  * and a cube term of 0.5 % and 0.1 % of the reading at 1 g) */
 static const ac_temp_table terms_temp = {6u, 6400, {640, 640, 640, 640, 640, 640},
-                                         {5033, 5033, 5033, 5033, 5033, 5033}, {0, 0, 0, 0, 0, 0}};
+                                         {5033, 5033, 5033, 5033, 5033, 5033}, {0, 0, 0, 0, 0, 0}, 0u};
 static const ac_skew_table terms_skew = {6u, 3u, {1, 0, 1, 1, 1, 0}, {7864u, 26870u, 3932u, 0u, 11796u, 22938u}};
 static const ac_nonlin_table terms_nl = {6u, 15, {4295, 4295, 4295, 4295, 4295, 4295},
                                          {22518, 22518, 22518, 22518, 22518, 22518}, 0u};
@@ -167,27 +167,36 @@ static int16_t skew_buf[3u * 6u];
 static ac_skew_line skew_line;
 
 /* the terms between the pre-trim and the resolve: two lags, the temperature, the nonlinearity
- * (and with bit 0 of `mode', the pre-trim, the skew and the resolve with omega): what firmware
- * calls; bit 1: the 2^-2 count tables */
+ * (and with `full', the pre-trim, the skew and the resolve with omega): what firmware calls */
 static int terms_path(int16_t temp, const uint16_t *raw, const uint16_t *trim, int16_t *x,
-                            const int16_t *w, int32_t *out, uint8_t mode)
+                            const int16_t *w, int32_t *out, uint8_t full)
 {
     int16_t t_off, t_gain;
     int s = 0;
-    const uint8_t full = (uint8_t)(mode & 1u);
     if (full) {
         s = (int)ac_trim_rails(raw, trim, 6u, 0u, 65535u, x);
     }
     s |= (int)ac_temp_lag_step(&lag_off, temp, &t_off);
     s |= (int)ac_temp_lag_step(&lag_gain, temp, &t_gain);
-    s |= (int)ac_temp_correct((mode & 2u) ? &terms_temp_k2 : &terms_temp, t_off, t_gain, x, x);
+    s |= (int)ac_temp_correct(&terms_temp, t_off, t_gain, x, x);
     if (full) {
         s |= (int)ac_skew_step(&terms_skew, &skew_line, x, x);
     }
-    s |= (int)ac_nonlin_invert((mode & 2u) ? &terms_nl_k2 : &terms_nl, x, x);
+    s |= (int)ac_nonlin_invert(&terms_nl, x, x);
     if (full) {
         s |= (int)ac_resolve(&res, x, w, out);
     }
+    return s;
+}
+
+/* the same with the 2^-2 count tables (no pre-trim, skew or resolve) */
+static int terms_path_k2(int16_t temp, int16_t *x)
+{
+    int16_t t_off, t_gain;
+    int s = (int)ac_temp_lag_step(&lag_off, temp, &t_off);
+    s |= (int)ac_temp_lag_step(&lag_gain, temp, &t_gain);
+    s |= (int)ac_temp_correct(&terms_temp_k2, t_off, t_gain, x, x);
+    s |= (int)ac_nonlin_invert(&terms_nl_k2, x, x);
     return s;
 }
 
@@ -341,7 +350,7 @@ int main(void)
             MEASURE(R_TERMS, 1u, terms_path(temp, raw, trim, y, w, out, 0u));
             MEASURE(R_TERMS_PATH, 1u, terms_path(temp, raw, trim, y, w, out, 1u));
             MEASURE(R_TEMP_K2, 1u, ac_temp_correct(&terms_temp_k2, tl, temp, x, y));
-            MEASURE(R_TERMS_K2, 1u, terms_path(temp, raw, trim, y, w, out, 2u));
+            MEASURE(R_TERMS_K2, 1u, terms_path_k2(temp, y));
         }
         for (i = 0u; i < 6u; i++) {
             f[i] = (int32_t)rnd_range(-2000, 4000); /* +-2 m/s^2 */
