@@ -136,10 +136,15 @@ ac_status AC_TEMP_CORRECT_C(const ac_temp_table *t, int16_t t_off, int16_t t_gai
         g = AC_R3(AC_MUL16(w16, r)); /* |w16 r| < 2^30 */
         w = ac_sat_add(w, g, &sat);
         w = ac_sat_add(w, o8, &sat);
+#if !AC_H8_RESOLVE_ASM
+        /* (on the H8/300H the assembly takes frac 1..AC_TEMP_MAX_OUT_FRAC and this C only the
+         * errors: the branch would be dead code there) */
         if (t->frac != 0u) {
             /* Q.frac: round(w 2^-(16 - frac)), clipped to int16 */
             y[i] = ac_sat_to16(ac_round_shift(w, (uint8_t)(16u - t->frac)), &sat);
-        } else if (w >= 0x7FFF8000L) {
+        } else
+#endif
+        if (w >= 0x7FFF8000L) {
             y[i] = INT16_MAX;
             sat = 1u;
         } else {

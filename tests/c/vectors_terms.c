@@ -89,6 +89,18 @@ static void vec_temp_run(uint8_t count, uint8_t with_frac)
         } else {
             t_off = (int16_t)((int32_t)vt_temp.t_ref / 2 + rnd_range(-5000, 5000));
         }
+        if (with_frac && (t & 3u) == 1u && vt_temp.frac <= AC_TEMP_MAX_OUT_FRAC) {
+            /* channel 0 at the final rounding's edges (gc = o = 0, dTo = 1 LSB: w = x 2^16 - oc):
+             * x = +-2^(15-frac), oc = 2^(15-frac) (+1 when t & 4) puts w at 32767.5 2^-frac counts (the
+             * tie, rounded up: clipped) or one below (kept), and at -32768.5 (kept) or one beyond
+             * (clipped) */
+            const int16_t h = (int16_t)(1 << (15u - vt_temp.frac));
+            x[0] = (t & 8u) ? (int16_t)-h : h;
+            vt_temp.oc[0] = (int16_t)(h + (int16_t)((t >> 2) & 1u));
+            vt_temp.gc[0] = 0;
+            vt_temp.o[0] = 0;
+            t_off = (int16_t)(vt_temp.t_ref + 1);
+        }
         if (t & 32u) {
             t_gain = vt_i16();
         } else {
@@ -318,37 +330,13 @@ static void vec_nonlin_iterations(void)
 }
 
 /* ac_temp_correct with output fraction bits (frac 1..AC_TEMP_MAX_OUT_FRAC; one beyond refused):
- * random tables and inputs (vec_temp_run), then the final rounding's and the clip's edges through the offset term alone (gc = o = 0,
- * dTo = 1 LSB: w = x 2^16 - oc): x = +-2^(15-frac), oc = 2^(15-frac) (+1) puts w at
- * (32767.5 2^-frac) 2^16 (the tie, rounded up to 32768: clipped) and one below it (kept), and
- * at -32768.5 (kept as -32768) and one beyond (clipped); x = 0 gives the ties at +-1/2 */
+ * random tables and inputs, a quarter of them with channel 0 at the final rounding's and the
+ * clip's edges (vec_temp_run); on the H8/300H the assembly's Q.frac loop */
 static void vec_temp_frac(void)
 {
-    uint8_t t, i;
-    int16_t x[AC_MAX_CHANNELS], y[AC_MAX_CHANNELS];
     const uint32_t saved = rng; /* the later vectors keep their inputs */
-    vec_temp_run(90u, 1u);
+    vec_temp_run(120u, 1u);
     rng = saved;
-    for (t = 1u; t <= (uint8_t)AC_TEMP_MAX_OUT_FRAC; t++) {
-        const int16_t h = (int16_t)(1 << (15u - t));
-        static const int8_t xs[6] = {1, 1, -1, -1, 0, 0};
-        static const int8_t os[6] = {0, 1, 0, 1, -1, 0}; /* oc = +-h + os */
-        vt_temp.n = 1u;
-        vt_temp.frac = t;
-        vt_temp.t_ref = 0;
-        vt_temp.gc[0] = 0;
-        vt_temp.o[0] = 0;
-        for (i = 0u; i < 6u; i++) {
-            x[0] = (int16_t)(xs[i] * h);
-            vt_temp.oc[0] = (int16_t)((os[i] < 0) ? -h : (int16_t)(h + os[i]));
-            TAG("VTF_E");
-            h8(t);
-            h8(i);
-            st(ac_temp_correct(&vt_temp, 1, 0, x, y));
-            h16(y[0]);
-            nl();
-        }
-    }
 }
 
 static void vec_terms(void)
