@@ -106,9 +106,11 @@ static void vec_temp_run(uint8_t count, uint8_t with_frac)
         } else {
             t_gain = (int16_t)((int32_t)vt_temp.t_ref / 2 + rnd_range(-5000, 5000));
         }
-        TAG(with_frac ? "VTF" : "VTC");
         if (with_frac) {
+            TAG("VTF");
             h8(vt_temp.frac);
+        } else {
+            TAG("VTC");
         }
         h16(t_off);
         h16(t_gain);
