@@ -27,6 +27,9 @@
  *       for shift >= 15 |C| <= 2^15 and C fits int16 but for that one case;
  *   z = x0 - C: SUB.W, its V the clip (to 0x7FFF if the wrapped result is negative, else
  *       0x8000, and the flag), out of line.
+ * ac_temp_correct: the channel loop twice (the assembler macro TCCH): for a table with frac 0
+ * and, with a final round(w 2^-(16-k)) by w + 2^(15-k) and k SHAL.L (V: the clip), for frac
+ * 1..8 (issue 35's hand-off in 2^-k counts); the clips are subroutines both share.
  * Addresses: normal mode uses the low 16 bits of a register, so e1..e5 hold data while
  * r4, r5, r6 point (no array reaches 0x10000: a post-increment never carries into them).
  */
