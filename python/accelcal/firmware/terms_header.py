@@ -53,8 +53,8 @@ def terms_header_parts(tt: TermsTables, prefix: str, reading_span: float, signed
                 " * not rint(raw + c(T)), reaches the resolver); the skew and the nonlinearity keep that unit",
                 f" * and {p}_{table} is made for it (each row's shift + {kf}): use it after the terms as above,",
                 " * not on whole counts (ac_process / ac_triad_apply); an on-device rebuild (ac_resolver_build /",
-                f" * ac_triad_build) makes a whole-count table (add {p}_TERMS_FRAC to its shifts, up to 31, and",
-                f" * multiply its k by 2^{p}_TERMS_FRAC yourself)."]
+                f" * ac_triad_build) makes a whole-count table (add {p}_TERMS_FRAC to its shifts, which must stay <= 31,",
+                f" * and multiply its k by 2^{p}_TERMS_FRAC yourself)."]
     com += [" * Error bounds of the terms against their float reference, in counts of x:"]
     z = float(reading_span)
     if tt.temp is not None:
