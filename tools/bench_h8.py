@@ -66,7 +66,8 @@ ALGORITHM_MULS = {"ac_process": 36, "ac_process_omega": 78, "ac_resolve_omega": 
                   # ac_temp_correct 5 a channel, ac_skew_step 1, ac_nonlin_invert 3 an iteration x 3
                   "ac_temp_lag_step": 2, "ac_temp_correct": 30, "ac_skew_step": 6, "ac_nonlin_invert": 54,
                   "terms_temp_nonlin": 2 * 2 + 30 + 54, "terms_full_path": 2 * 2 + 30 + 6 + 54 + 78,
-                  "ac_temp_correct_k2": 30, "terms_temp_nonlin_k2": 2 * 2 + 30 + 54}
+                  "ac_temp_correct_k2": 30, "terms_temp_nonlin_k2": 2 * 2 + 30 + 54,
+                  "ac_nonlin_invert_k2": 54}
 PER_SAMPLE = ("ac_trim", "ac_process", "ac_process_omega", "ac_resolve_omega", "ac_rate_step",
               "ac_att_step", "ac_disp_step", "ac_process_batch_omega", "ac_triad_apply",
               "ac_temp_lag_step", "ac_temp_correct", "ac_skew_step", "ac_nonlin_invert", "terms_temp_nonlin",
@@ -75,7 +76,7 @@ PER_SAMPLE = ("ac_trim", "ac_process", "ac_process_omega", "ac_resolve_omega", "
 # MULXS.W/MULXU.W it executes (ac_xf's partial products and the 2 x 9 x 12 of its rows)
 PER_SAMPLE += ("ac_omega_step_rest", "ac_omega_step_turn")
 # the terms' tables with the hand-off in 2^-2 counts (the seed's converter: AC_CAL_TERMS_FRAC 2)
-PER_SAMPLE += ("ac_temp_correct_k2", "terms_temp_nonlin_k2")
+PER_SAMPLE += ("ac_temp_correct_k2", "terms_temp_nonlin_k2", "ac_nonlin_invert_k2")
 LABELS = {
     "ac_trim": "`ac_trim` (6 channels)",
     "ac_process": "`ac_process`, omega = NULL (pre-trim + apply)",
@@ -97,6 +98,7 @@ LABELS = {
     "ac_omega_step_turn": "`ac_omega_step` (12 channels, turning: the ML each sample)",
     "ac_temp_correct_k2": "`ac_temp_correct` (6 channels, offset + gain, output in 2^-2 counts: the C)",
     "terms_temp_nonlin_k2": "terms with nonlinearity and temperature, the hand-off in 2^-2 counts (frac 2, nonlinearity shift 18)",
+    "ac_nonlin_invert_k2": "`ac_nonlin_invert` (6 channels, 3 iterations) at shift 18 (coefficients per 2^-2 count)",
     "terms_full_path": "the whole per-sample path with every term: `ac_trim_rails` + 2 lags + temperature + "
                        "skew + nonlinearity + `ac_resolve` with omega",
 }

@@ -234,7 +234,10 @@ static void vec_terms_edges(void)
 {
     static const int32_t dl[] = {-0x40000000L, -0x3FFFFFFFL, -0x3FFF0000L, 0x3FFFFFFFL, 0x40000000L,
                                  -0x40010000L, 0x3FFF0000L, 0x3FFF8000L, -0x3FFF8000L};
-    static const int16_t gl[] = {-32768, 32767, 28672, -28672, 1, -1};
+    /* a2 (a3 from the first six): the clips and the product 2^30, then for z = +-4096 with a3 = 0
+     * the rounding ties g z = 3 2^(s-1) at s = 16..19, both signs (a2 = 3 2^(s-10)) */
+    static const int16_t gl[] = {-32768, 32767, 28672, -28672, 1,    -1,    192,   -192,
+                                 384,    -384,  768,   -768,   1536, -1536};
     uint8_t i, j;
     for (i = 0u; i < (uint8_t)(sizeof dl / sizeof dl[0]); i++) {
         for (j = 17u; j <= 47u; j = (uint8_t)(j + 10u)) {
@@ -276,15 +279,19 @@ static void vec_terms_edges(void)
     }
     for (i = 0u; i < (uint8_t)(sizeof gl / sizeof gl[0]); i++) {
         int16_t x[4] = {0, -32768, 32767, -1}, y[4];
+        if (i >= 6u) {
+            x[1] = 4096; /* channels 1 and 3: a3 = 0, h = a2, g = a2 z 2^-15 exactly */
+            x[3] = -4096;
+        }
         vt_nl.n = 4u;
         vt_nl.iterations = 0u;
         for (j = 0u; j < 4u; j++) {
             vt_nl.a2[j] = gl[i];
             vt_nl.a3[j] = (int16_t)((j & 1u) ? 0 : gl[(i + 1u) % 6u]);
         }
-        for (j = 14u; j <= 30u; j = (uint8_t)(j + 4u)) {
+        for (j = 15u; j <= 30u; j++) { /* every shift the assembly takes (15, 16..19, 20..30) */
             uint8_t k;
-            vt_nl.shift = (int8_t)((j == 14u) ? 15 : j);
+            vt_nl.shift = (int8_t)j;
             TAG("VTE_N");
             h8((uint8_t)vt_nl.shift);
             st(ac_nonlin_invert(&vt_nl, x, y));

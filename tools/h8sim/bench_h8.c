@@ -52,6 +52,7 @@ enum {
     R_OMEGA_TURN,
     R_TEMP_K2,
     R_TERMS_K2,
+    R_NONLIN_K2,
     R_COUNT
 };
 static const char *const region_name[R_COUNT] = {
@@ -59,7 +60,7 @@ static const char *const region_name[R_COUNT] = {
     "ac_rate_step", "ac_att_step", "ac_disp_step", "ac_process_batch_omega", "ac_resolver_build",
     "ac_triad_apply", "ac_triad_build", "ac_temp_lag_step", "ac_temp_correct", "ac_skew_step",
     "ac_nonlin_invert", "terms_temp_nonlin", "terms_full_path", "ac_omega_step_rest", "ac_omega_step_turn",
-    "ac_temp_correct_k2", "terms_temp_nonlin_k2"};
+    "ac_temp_correct_k2", "terms_temp_nonlin_k2", "ac_nonlin_invert_k2"};
 static uint16_t entries[R_COUNT], samples[R_COUNT], deepest[R_COUNT];
 
 /* ---- output through the write trap ---- */
@@ -351,6 +352,8 @@ int main(void)
             MEASURE(R_TERMS_PATH, 1u, terms_path(temp, raw, trim, y, w, out, 1u));
             MEASURE(R_TEMP_K2, 1u, ac_temp_correct(&terms_temp_k2, tl, temp, x, y));
             MEASURE(R_TERMS_K2, 1u, terms_path_k2(temp, y));
+            /* the nonlinearity alone at shift 18, on the Q.2 output of the terms */
+            MEASURE(R_NONLIN_K2, 1u, ac_nonlin_invert(&terms_nl_k2, y, y));
         }
         for (i = 0u; i < 6u; i++) {
             f[i] = (int32_t)rnd_range(-2000, 4000); /* +-2 m/s^2 */
