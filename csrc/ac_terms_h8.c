@@ -21,10 +21,13 @@
  *   g = round(h z 2^-15) the same way;
  *   C = round(g z 2^-shift): shift 15: the same with SHAL.L, whose V flags the one product
  *       that leaves the high word (g = z = -32768: g z = 2^30, C = 2^15, out of line);
- *       shift 16..30: floor(g z 2^-15) (SHAL.L, the same case out of line: C = 2^(30 -
- *       shift)) then shift - 16 SHAR.W and one more whose carry is added
- *       (floor((w + 2^(m-1)) 2^-m) = floor((floor(w 2^-(m-1)) + 1) / 2), m = shift - 15);
- *       for shift >= 15 |C| <= 2^15 and C fits int16 but for that one case;
+ *       shift 16..30 (the iterations a loop, e3 the count): a jump through e5 (set once a
+ *       call) to the shift's block, C = floor((g z + 2^(s-1)) 2^-s) with no edge (g z +
+ *       2^(s-1) < 2^31): s 16 adds 0x8000 (er6 twice), s 17..19 add 2^(s-17) to the high
+ *       word and shift it s - 16 SHAR.W, s 20..30 shift the high word s - 17 SHAR.W (a
+ *       loop, s - 16 in the flag word's low byte) and once more, adding the carry
+ *       (floor((w + 1) / 2) = floor(w/2) + the carry, w = floor(g z 2^-(s-1)));
+ *       for shift >= 15 |C| <= 2^15 and C fits int16 but for g z = 2^30 at shift 15;
  *   z = x0 - C: SUB.W, its V the clip (to 0x7FFF if the wrapped result is negative, else
  *       0x8000, and the flag), out of line.
  * ac_temp_correct: the channel loop twice (the assembler macro TCCH): for a table with frac 0
