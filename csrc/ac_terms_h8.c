@@ -31,7 +31,8 @@
  *   z = x0 - C: SUB.W, its V the clip (to 0x7FFF if the wrapped result is negative, else
  *       0x8000, and the flag), out of line.
  * ac_temp_correct: the channel loop twice (the assembler macro TCCH): for a table with frac 0
- * and, with a final round(w 2^-(16-k)) by w + 2^(15-k) and k SHAL.L (V: the clip), for frac
+ * and, with a final round(w 2^-(16-k)) by w + 2^(15-k) (the bias computed once a call, kept
+ * in a stack word, the SHAL.L loop's count) and k SHAL.L (V: the clip), for frac
  * 1..8 (issue 35's hand-off in 2^-k counts); the clips are subroutines both share.
  * Addresses: normal mode uses the low 16 bits of a register, so e1..e5 hold data while
  * r4, r5, r6 point (no array reaches 0x10000: a post-increment never carries into them).
@@ -295,7 +296,8 @@ __asm__(
     "\t.align 1\n"
     /* the channel loop of ac_temp_correct, once for whole counts (K 0: y = round(w 2^-16)) and once
      * for a table with frac k = 1..8 (K 1: y = round(w 2^-(16-k)): w + 2^(15-k), then k SHAL.L whose V
-     * is the clip, the high word; k in the low byte of the flag word at @er7).  The clips are
+     * is the clip, the high word; the bias in a word below the flag word at @er7, set once a
+     * call, and the loop's count: shifted left with w, it turns negative after k).  The clips are
      * subroutines both share (BVC over a BSR: the same states as the BVS they replace when nothing
      * clips; the flag is then 2 bytes up, above the return address) */
     "\t.macro\tTCCH S, K\n"
