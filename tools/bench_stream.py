@@ -181,9 +181,9 @@ def write_table(rows: list) -> str:
 
 def poses_recording(n: int, path: Path) -> None:
     """A static-pose recording of about n samples: 24 jig poses of the default device with reference
-    f, w, dw, temp_c and pose (10^6 samples), repeated with t shifted and the poses relabelled."""
+    f, w, dw, temp_c and pose (10^6 samples; below that, 24 poses of n / 24 samples), repeated with t shifted and the poses relabelled."""
     dev = default_device()
-    per = 41667
+    per = min(41667, max(1000, n // 24))
     rec = run_simulation(dev, "static_poses", seed=1, poses="24", samples_per_pose=per).recording
     k = max(1, round(n / rec.n_samples))
     span = rec.t[-1] - rec.t[0] + 2.0
@@ -195,8 +195,9 @@ def poses_recording(n: int, path: Path) -> None:
     write_recording(path, tiled)
 
 
-def peak_of(argv: list[str]) -> tuple[float, float]:
-    """Wall time (s) and peak RSS (MB, VmHWM polled from /proc) of a command."""
+def peak_of(argv: list[str], limit_mb: float = 0.0) -> tuple[float, float]:
+    """Wall time (s) and peak RSS (MB, VmHWM polled from /proc) of a command; with ``limit_mb``,
+    the command is stopped once its RSS passes that (the time returned is then negative)."""
     t0 = time.perf_counter()
     p = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     peak = 0
@@ -206,6 +207,10 @@ def peak_of(argv: list[str]) -> tuple[float, float]:
                 peak = max(peak, next(int(x.split()[1]) for x in fh if x.startswith("VmHWM")))
         except (OSError, StopIteration):
             pass
+        if limit_mb and peak > limit_mb * 1024:
+            p.kill()
+            p.wait()
+            return -(time.perf_counter() - t0), peak / 1024.0
         time.sleep(0.2)
     if p.returncode:
         raise RuntimeError(f"{' '.join(argv)}: {p.stderr.read()[-2000:]}")
@@ -223,6 +228,41 @@ def calibrate_diagnose(n: int, d: Path) -> None:
                                      "--json", str(d / "diag.json"), "--quiet"])):
         s, mb = peak_of(cli + argv)
         print(f"{name} {n:.0e} samples: {s:.0f} s, peak {mb:.0f} MB", flush=True)
+
+
+def handheld_recording(n: int, path: Path) -> None:
+    """A recording with motion of about n samples: the hand-held session of the default device (a
+    rest, then 40 poses held 4 s with 2 s moves between, reference f, w, dw, temp_c and pose;
+    about 2.8x10^4 samples), repeated with t shifted and the poses relabelled."""
+    dev = default_device()
+    rec = run_simulation(dev, "handheld", seed=1).recording
+    k = max(1, round(n / rec.n_samples))
+    span = rec.t[-1] - rec.t[0] + 2.0
+    top = int(rec.pose.max()) + 1
+    tiled = Recording(t=np.concatenate([rec.t + i * span for i in range(k)]), raw=np.tile(rec.raw, (k, 1)),
+                      f=np.tile(rec.f, (k, 1)), w=np.tile(rec.w, (k, 1)), dw=np.tile(rec.dw, (k, 1)),
+                      temp_c=np.tile(rec.temp_c, k),
+                      pose=np.concatenate([np.where(rec.pose >= 0, rec.pose + top * i, -1) for i in range(k)]),
+                      metadata=rec.metadata)
+    write_recording(path, tiled)
+
+
+def diagnose_runs(n: int, d: Path, kinds: list[str], limit_mb: float) -> None:
+    """Wall time and peak RSS of ``accelcal diagnose`` (against the nominal calibration's fit by
+    ``calibrate`` of the same recording) on poses_recording(n) and handheld_recording(n); one
+    table row each, printed.  A run whose RSS passes ``limit_mb`` is stopped (its row says so)."""
+    cli = [sys.executable, "-c", "import sys; sys.path.insert(0, %r); from accelcal.cli.main import main; "
+           "sys.exit(main(sys.argv[1:]))" % str(ROOT / "python")]
+    for kind in kinds:
+        rec, cal = d / f"{kind}_{n}.csv", d / f"cal_{kind}.json"
+        (poses_recording if kind == "poses" else handheld_recording)(n, rec)
+        peak_of(cli + ["calibrate", "--device", "default", str(rec), "-o", str(cal)])
+        s, mb = peak_of(cli + ["diagnose", "--device", "default", "--calibration", str(cal), str(rec),
+                               "--json", str(d / f"diag_{kind}_{n}.json"), "--quiet"], limit_mb)
+        n_rows = sum(1 for _ in open(rec)) - 1
+        what = f"{s:.1f}" if s >= 0 else f"stopped at {-s:.0f}"
+        print(f"| {n_rows:.2e} | {kind} | {rec.stat().st_size / 1e6:.0f} | {what} | {mb:,.0f} |", flush=True)
+        rec.unlink()
 
 
 def calibrate_runs(n: int, d: Path, whole: bool) -> None:
@@ -261,6 +301,10 @@ def main() -> None:
                     "(CSV and Parquet), reduced while read and (unless --no-whole) whole-file; convert: `accelcal convert` "
                     "of a 3-channel recording CSV (the first three channels), in chunks and (unless --no-whole) "
                     "--whole-file (case csv->csv only)")
+    ap.add_argument("--diagnose", metavar="KINDS",
+                    help="instead: `accelcal diagnose` on the recordings KINDS (comma-separated: poses, handheld) "
+                    "of each of --lengths samples: wall time and peak RSS")
+    ap.add_argument("--limit-mb", type=float, default=12000.0, help="--diagnose: stop a run past this RSS (MB)")
     ap.add_argument("--engine", choices=["float", "fixed"], default="fixed", help="rate's or attitude's engine")
     ap.add_argument("--convert-args", default="",
                     help="convert: options added to both runs, one string (e.g. '--full-scale 2': a stated scale, "
@@ -271,6 +315,15 @@ def main() -> None:
     d.mkdir(parents=True, exist_ok=True)
     if a.calibrate_diagnose:
         calibrate_diagnose(int(a.calibrate_diagnose), d)
+        return
+    if a.diagnose:
+        print("| samples | recording | CSV MB | s | peak MB |\n| ---: | --- | ---: | ---: | ---: |", flush=True)
+        try:
+            for n in (int(float(x)) for x in a.lengths.split(",")):
+                diagnose_runs(n, d, a.diagnose.split(","), a.limit_mb)
+        finally:
+            if not a.keep and not a.dir:
+                shutil.rmtree(d, ignore_errors=True)
         return
     if a.command == "calibrate":
         print("| samples | input | MB | run | s | peak MB |\n| ---: | --- | ---: | --- | ---: | ---: |", flush=True)
