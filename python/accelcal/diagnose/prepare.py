@@ -200,7 +200,7 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
         if mode == "reference" and usable.sum() < 0.5 * n:
             notes.append(f"{rec.source}: {int((~usable).sum())} of {n} samples lack part of the reference "
                          "(f, or w/dw while moving) and are left out")
-        off = np.broadcast_to(state.total_offset(), (n, N))
+        off = np.asarray(state.total_offset(), float)     # (N,), or (n, N) with a bias in time
         gain_t = None if state.gain is None else np.asarray(state.gain, float)
         parts.append(dict(ri=ri, rec=rec, usable=usable, pred=pred, off=off, gain=gain_t, f=f, w=w, dw=dw,
                           T=T, key=key, stated=stated, pose_lab=pose_lab))
@@ -250,7 +250,7 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
         cols["rec"].append(np.full(idx.size, k))
         cols["raw"].append(np.asarray(rec.raw, float)[idx])
         cols["pred"].append(pt["pred"][idx])
-        cols["off"].append(np.asarray(pt["off"], float)[idx])
+        cols["off"].append(pt["off"] if pt["off"].ndim == 1 else np.asarray(pt["off"], float)[idx])
         cols["gain"].append(np.ones((idx.size, N)) if pt["gain"] is None else pt["gain"][idx])
         for nm in ("f", "w", "dw"):
             cols[nm].append(np.asarray(pt[nm], float)[idx])
@@ -265,7 +265,13 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
         cols["pose"].append(gp)
         cols["stated"].append(pt["stated"][idx])
         n_tot += idx.size
+    offs = cols.pop("off")
     cat = {k: np.concatenate(v) for k, v in cols.items()}
+    # one offset for every sample (no bias in time): a read-only view, not n copies of it
+    cat["off"] = np.broadcast_to(offs[0], (n_tot, N)) if all(o.ndim == 1 and np.array_equal(o, offs[0])
+                                                             for o in offs) \
+        else np.concatenate([np.broadcast_to(o, (sz, N)) if o.ndim == 1 else o
+                             for o, sz in zip(offs, (c.shape[0] for c in cols["t"]))])
     seg_lo = np.array(seg_lo, np.int64)
     seg_hi = np.array(seg_hi, np.int64)
     n = n_tot
