@@ -5,6 +5,7 @@ sizes (blocks of whole lines that end inside poses and inside the motion), on a 
 the independent generator (tests/python/indep_model.py) and on a real one (shared data)."""
 from __future__ import annotations
 
+import importlib
 import json
 
 import numpy as np
@@ -16,6 +17,7 @@ from accelcal.diagnose.prepare import prepare
 from accelcal.io.chunks import read_chunked
 from accelcal.io.recording import read_recording, write_recording
 
+result = importlib.import_module("accelcal.diagnose.result")   # accelcal.diagnose is also a function's name
 BLOCKS = (300, 4096, 1 << 16)     # bytes of text per chunk (whole lines)
 
 
@@ -62,3 +64,22 @@ def test_one_offset_for_every_sample_is_held_once(tmp_path):
     assert D.offset_t.shape == (D.n, D.N) and D.offset_t.strides[0] == 0
     assert np.array_equal(D.offset_t[0], np.asarray(cal.offsets, float))
     assert np.array_equal(D.sensed, D.pred - np.asarray(cal.offsets, float))
+
+
+def test_the_first_target_is_the_residual_itself_not_a_copy(monkeypatch):
+    """The first round of fits takes the residual e and the prediction p0 as read-only views, not
+    copies (96 bytes a sample less at the diagnosis's peak, which is in that round): no fit
+    writes into them (a write would raise), and the diagnosis is the same."""
+    jig = im.make_jig(["offset"], seed=3703, n_poses=12, repeats=False)
+    seen = []
+    run = result.run_candidates
+
+    def spy(D, cands, names, y, pcur, progress):
+        seen.append((D, y, pcur))
+        return run(D, cands, names, y, pcur, progress)
+    monkeypatch.setattr(result, "run_candidates", spy)
+    res = diagnose(jig["device"], jig["cal"], [jig["recording"]])
+    D, y, pcur = seen[0]
+    assert not y.flags.writeable and not pcur.flags.writeable
+    assert np.shares_memory(pcur, D.p0)
+    assert res["verdict"] == "offset", res["verdict"]

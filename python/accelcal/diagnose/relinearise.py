@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from ..effects.fitdata import read_only
 from ..effects.fitting import Cand, block_ss
 from ..effects.settings import BACKFIT_PASSES
 from .floor import setup_rows
@@ -55,8 +56,8 @@ def heldout_path(D, cands, names: list[str], e: np.ndarray, joint: dict[str, Can
     effect whose prediction depends on the others' (the converter's rounding after an offset)
     is scored as the model holds it, not after fits that carried part of it."""
     out = []
-    y = e.copy()
-    pcur = D.p0.copy()
+    y = read_only(e)
+    pcur = read_only(D.p0)
     for nm in names:
         s0w, s0u = block_ss(D, D.rows(y))
         c = score(D, cands[nm].cv(D, y, pcur, s0w, s0u), s0w, s0u)

@@ -8,7 +8,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..effects import EFFECT_NAMES
-from ..effects.fitdata import recording_parts
+from ..effects.fitdata import read_only, recording_parts
 from ..effects.fitting import Cand
 from ..effects.settings import BLOCK_S
 from ..io.device import NOMINAL_FACTOR
@@ -103,8 +103,8 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
             skipped.append({"name": nm, "reason": why})
 
     # --- step 1: every candidate alone, then stepwise --------------------------------------------
-    y = e.copy()
-    pcur = D.p0.copy()
+    y = read_only(e)
+    pcur = read_only(D.p0)
     first, _, S0u = run_candidates(D, cands, active, y, pcur, progress)
     base_rms = float(math.sqrt(S0u.sum() / (D.n * D.R)))
     steps: list[tuple[Cand, str]] = []

@@ -87,6 +87,15 @@ class FitData:
         return np.add.reduceat(a, self.bstart, axis=0)
 
 
+def read_only(a: np.ndarray) -> np.ndarray:
+    """A read-only view of ``a`` (no copy): the first target and prediction of a search, which
+    every fit only reads and every step replaces by a new array (``y - delta``), share the
+    residual's and the prediction's memory; a write into them raises instead of changing them."""
+    v = a.view()
+    v.flags.writeable = False
+    return v
+
+
 def tangent_basis(d: np.ndarray) -> np.ndarray:
     """(..., 2, 3) two unit vectors across each unit row of d (..., 3)."""
     d = np.asarray(d, float)
