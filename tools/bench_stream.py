@@ -26,6 +26,11 @@ lengths in whole blocks of 10^4 samples); the streamed run fails if it fell back
 N samples for each of ``--lengths``, CSV and Parquet), reduced while read and (unless ``--no-whole``)
 the whole-file path; wall time and peak RSS of each (a table row per run, printed).
 
+``--diagnose KINDS``: instead, ``accelcal diagnose --calibration nominal`` on the recordings KINDS
+(``poses``: :func:`poses_recording`; ``handheld``: :func:`handheld_recording`) of about each of
+``--lengths`` samples: wall time and peak RSS (a table row per run, printed); a run whose RSS passes
+``--limit-mb`` (12,000 MB) is stopped.
+
 ``--calibrate-diagnose N``: instead, the wall time and peak RSS (VmHWM polled from /proc) of
 ``calibrate`` and ``diagnose`` on a static-pose recording of about N samples (24 jig poses of
 10^6 / 24 samples each with reference f, w, dw, temp_c and pose, repeated with t shifted and the
