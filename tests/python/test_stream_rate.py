@@ -15,7 +15,7 @@ from accelcal.io.chunks import csv_chunks, csv_head
 from accelcal.io.recording import read_recording, write_recording
 from accelcal.io.recording_type import Recording
 from accelcal.estimators.rate_stream import rate_stream
-from accelcal.estimators.stream_scan import median_of_counts
+from accelcal.readings.noise_stream import median_of_counts
 from accelcal.readings.held import held_runs
 from accelcal.cli.main import main
 from accelcal.resolve_stream import progress_factory

@@ -45,13 +45,12 @@ from ..io.recording_checks import GAP_STEPS, RATE_TOL
 from ..io.units import STANDARD_GRAVITY, Scale
 from ..readings.clipping import (CLIP_BAND_SIGMA, CLIP_MIN_COUNT, CLIP_PILE_RATIO, ClipLevels, clip_counts_text,
                                  clip_levels_counts, code_step_counts)
-from ..readings.noise_stream import NoisePass
+from ..readings.noise_stream import NoisePass, median_of_counts
 from ..readings.static import STATIC_WINDOW_S, window_len
 from ..readings.held import (HELD_CHANGED_SHARE, HELD_MAX, HELD_MIN_RUNS, HELD_MIN_RUNS_UNEVEN, HELD_MODAL_SHARE,
                              HELD_SINGLE_SHARE, RunCounts, order_stat)
 
-__all__ = ["Sums", "MAX_STEP_VALUES", "first_pass_sums", "bounded_convert", "rate_bounds", "held_counts", "pile_free",
-           "median_counts"]
+__all__ = ["Sums", "MAX_STEP_VALUES", "first_pass_sums", "bounded_convert", "rate_bounds", "held_counts", "pile_free"]
 
 #: distinct time steps kept (more: Fallback)
 MAX_STEP_VALUES = 1 << 16
@@ -124,19 +123,6 @@ def sorted_counts(counts: dict) -> tuple[np.ndarray, np.ndarray]:
     return u, np.array([counts[v] for v in u.tolist()], dtype=np.int64)
 
 
-def median_counts(counts: dict) -> float:
-    """``np.median`` of the values counted in ``counts`` (value -> count): the middle value, or
-    numpy's mean of the two middle ones."""
-    u, c = sorted_counts(counts)
-    n = int(c.sum())
-    cum = np.cumsum(c)
-    a = u[int(np.searchsorted(cum, (n - 1) // 2, side="right"))]
-    if n % 2:
-        return float(a)
-    b = u[int(np.searchsorted(cum, n // 2, side="right"))]
-    return float(np.mean(np.array([a, b], dtype=float)))
-
-
 def first_pass_sums(path: Any, head: Head, block_bytes: int, bar: Any, time_unit: str = "auto") -> Sums:
     """The first pass (Fallback at any bad row or a row off its line: the whole-file reader words
     it); t's steps counted in s and, ``time_unit`` auto, in ms, us and ns, else in that unit."""
@@ -173,7 +159,7 @@ def in_seconds(sums: Sums, opts: Options, column: str, notes: list[str]) -> floa
                 notes.append(f"t read in {named}, as its column's name {column!r} says; the recording's t is in seconds")
         else:
             pos = {v: c for v, c in sums.t_steps.items() if v > 0}
-            step = median_counts(pos) if pos else 0.0
+            step = median_of_counts(pos) if pos else 0.0
             if step > 0 and 1.0 / step < MIN_PLAUSIBLE_HZ:
                 for unit_name, f in list(TIME_FACTORS.items())[1:]:
                     if f / step >= MIN_PLAUSIBLE_HZ:
@@ -192,7 +178,7 @@ def rate_bounds(steps: dict, notes: list[str]) -> tuple[float, float]:
     ``steps`` (its gap note made): the rate's least and greatest value.  The mean of the regular
     steps (``regular_step``) is numpy's pairwise sum, which the counts give to within its rounding
     bound only; the caller takes what the rate decides at both ends (equal: certified)."""
-    median = median_counts(steps)
+    median = median_of_counts(steps)
     if median <= 0:
         return 1.0, 1.0
     regular = {v: k for v, k in steps.items() if 0 < v <= GAP_STEPS * median}
@@ -335,7 +321,7 @@ def bounded_convert(head: Head, sums: Sums, opts: Options, scale: Scale | None,
     notes: list[str] = []
     sums.factor = in_seconds(sums, opts, "t", notes)
     steps = sums.rel_steps[sums.factor]
-    median = median_counts(steps)
+    median = median_of_counts(steps)
     mean = float(sums.rel_last[sums.factor] - 0.0) / (sums.n - 1)
     if not (median > 0 and mean > 0 and abs(mean / median - 1.0) <= BURST_SHARE):
         raise Fallback("stamps not even (bursts, pauses: the burst fit takes the stamps)")

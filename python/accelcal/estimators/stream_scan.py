@@ -30,28 +30,17 @@ from ..io.chunks import Fallback, reader_checks
 from ..io.recording_checks import TIME_UNIT_TOL, TIME_UNITS, check_core_input, check_raw_range
 from ..readings.held import RunCounts, order_stat
 from ..readings.noise import noise_for, states_noise
+from ..readings.noise_stream import median_of_counts
 
 #: ranks of the checks after the reader's (1-4: io.chunks.reader_checks), as in the whole-file command
 RANK_RANGE, RANK_CORE = 10, 12
 
-__all__ = ["MAX_STEP_VALUES", "GRID_MARGIN", "RunCounts", "Scan", "scan", "scan_with_bar", "median_of_counts", "on_grid"]
+__all__ = ["MAX_STEP_VALUES", "GRID_MARGIN", "RunCounts", "Scan", "scan", "scan_with_bar", "on_grid"]
 
 #: distinct time steps kept for the exact median (more: the whole-file command)
 MAX_STEP_VALUES = 1 << 16
 #: a sample this far (steps) off the line through the first and the last stamps: the whole-file command
 GRID_MARGIN = 0.005
-
-
-def median_of_counts(counts: dict) -> float:
-    """``np.median`` of the values ``counts`` holds (value -> how many times), from the counts."""
-    n = sum(counts.values())
-    values = sorted(counts)
-    cum = np.cumsum([counts[v] for v in values])
-    a = values[int(np.searchsorted(cum, (n - 1) // 2, side="right"))]
-    if n % 2:
-        return float(a)
-    b = values[int(np.searchsorted(cum, n // 2, side="right"))]
-    return float(np.mean(np.array([a, b])))
 
 
 @dataclass

@@ -23,7 +23,7 @@ import numpy as np
 
 from .noise import MAD_TO_STD, NOISE_SPLIT_RATIO, ONE_REGIME_RATIO
 
-__all__ = ["NoisePass", "rest_level_sorted", "white_noise_counts", "SLICE"]
+__all__ = ["NoisePass", "median_of_counts", "rest_level_sorted", "white_noise_counts", "SLICE"]
 
 #: values a slice of the Otsu split holds
 SLICE = 1 << 16
@@ -36,8 +36,10 @@ def add_counts(counts: dict, values: np.ndarray) -> None:
         counts[v] = counts.get(v, 0) + k
 
 
-def median_of(counts: dict) -> float:
-    """``np.median`` of the values counted in ``counts`` (value -> count)."""
+def median_of_counts(counts: dict) -> float:
+    """``np.median`` of the values counted in ``counts`` (value -> count), from the counts: the
+    middle value, or the mean of the two middle ones (the one home of this rule: convert.bounded,
+    estimators.stream_scan)."""
     u = np.array(sorted(counts))
     c = np.array([counts[v] for v in u.tolist()], dtype=np.int64)
     n = int(c.sum())
@@ -54,12 +56,12 @@ def white_noise_counts(d4: dict, n: int) -> float:
     of its fourth differences ``d4`` (exact integers)."""
     if n < 10:
         return 0.0
-    med = median_of(d4)
+    med = median_of_counts(d4)
     dev: dict = {}
     for v, k in d4.items():
         a = abs(v - med)
         dev[a] = dev.get(a, 0) + k
-    return float(MAD_TO_STD * median_of(dev) / math.sqrt(70.0))
+    return float(MAD_TO_STD * median_of_counts(dev) / math.sqrt(70.0))
 
 
 def rest_level_sorted(v: np.ndarray) -> tuple[float, bool]:
