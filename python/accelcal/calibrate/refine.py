@@ -379,7 +379,7 @@ def _calibration(model: Model, res: Fit, cal: Calibration, device, free=None):
     value, else none; a term none of whose entries was fitted is left as the calibration had it."""
     p = model.params(res.x)
     sd = model.params(res.sigma)
-    L, N = model.L, model.L.N
+    L = model.L
     free = np.ones(res.x.size, bool) if free is None else free
     fitted = model.params(free.astype(float))
 
@@ -416,7 +416,6 @@ def _calibration(model: Model, res: Fit, cal: Calibration, device, free=None):
     fitx.update(refine_chi2=res.chi2, refine_dof=res.dof, refine_terms=sorted(vals))
     extra["fit"] = fitx
     kw["extra"] = extra
-    del N
     return dataclasses.replace(cal, **kw), vals
 
 

@@ -11,6 +11,7 @@ from ..io.calibration import Calibration, load_calibration
 from ..io.device import Device, load_device
 from ..errors import AccelcalError, InputError
 from ..firmware.terms import correct_readings, has_terms
+from ..firmware.quantize import round_half_up
 from ..firmware.terms_fixed import terms_frac
 from ..io.recording import Recording, check_for_device, read_recording
 
@@ -69,7 +70,7 @@ def with_terms_applied(cal, recs: list, device) -> tuple[Any, list, list[str]]:
     dt = 1.0 / float(device.sample_rate_hz)
     # the firmware hands the terms' output on in 2^-frac counts (firmware.terms_fixed.terms_frac, the
     # header's <PREFIX>_TERMS_FRAC: with a temperature term only)
-    frac = terms_frac((device.raw_min, device.raw_max), np.floor(np.asarray(cal.offsets, float) + 0.5)) \
+    frac = terms_frac((device.raw_min, device.raw_max), round_half_up(cal.offsets)) \
         if terms["temperature"] else 0
     scale = 2.0 ** frac
     out = []

@@ -315,18 +315,23 @@ def calibration_header(device, cal, *, prefix: str = "AC_CAL") -> str:
     fit = extra.get("fit") if isinstance(extra.get("fit"), dict) else {}
     notes = [fit[k] for k in ("not_fitted_note", "jig_accuracy_note") if fit.get(k)]
     signed = device.raw_min < 0
+    # the resolver's / triad's table as the terms hand it their output: in 2^-tt.frac counts (the same
+    # matrix, each row's shift + frac) where tt.frac > 0, else the whole-count table; the rounding
+    # bound stated is the whole-count table's
+    t_out, tt = terms_tables(device, cal)
     if device.is_triad():
-        t = quantize_triad(cal.offsets, cal.sensitivity, signed=signed, rails=(device.raw_min, device.raw_max))
+        t = quantize_triad(cal.offsets, cal.sensitivity, signed=signed, rails=(device.raw_min, device.raw_max)) \
+            if tt.frac else t_out
         rounding = triad_rounding_bound(t, cal.offsets, cal.sensitivity, device.raw_min, device.raw_max)
-        text = render_triad_header(t, device=device.name, prefix=prefix, calibration_method=cal.method,
+        text = render_triad_header(t_out, device=device.name, prefix=prefix, calibration_method=cal.method,
                                    warnings=warnings, rounding_lsb=rounding, notes=notes,
                                    counts_per_mps2=device.counts_per_mps2)
         call = f"ac_triad_resolve(&{_c_ident(prefix)}_TRIAD, x, f)"
     else:
-        t = quantize_calibration(device, cal)
+        t = quantize_calibration(device, cal) if tt.frac else t_out
         pos = cal.positions_or_nominal(device)
         rounding = resolver_rounding_bound(t, cal.offsets, cal.sensitivity, pos, device.raw_min, device.raw_max)
-        text = render_header(t, prefix=prefix, calibration_method=cal.method,
+        text = render_header(t_out, prefix=prefix, calibration_method=cal.method,
                              temp_ref_c=getattr(cal, "temp_ref_c", None), offset_tc=getattr(cal, "offset_tc", None),
                              gain_tc=getattr(cal, "gain_tc", None), warnings=warnings, rounding_lsb=rounding,
                              notes=notes, counts_per_mps2=device.counts_per_mps2)
@@ -334,23 +339,8 @@ def calibration_header(device, cal, *, prefix: str = "AC_CAL") -> str:
         omega = device_omega_table(device, cal)
         if omega is not None:
             text = insert_omega(text, _c_ident(prefix), omega)
-    t_terms, tt = terms_tables(device, cal)
     if not tt.any():
         return text
-    if tt.frac:
-        # the terms hand on 2^-frac counts: the resolver's / triad's table for that input (the same
-        # matrix, each row's shift + frac); the rounding bound stated is the whole-count table's
-        if device.is_triad():
-            text = render_triad_header(t_terms, device=device.name, prefix=prefix, calibration_method=cal.method,
-                                       warnings=warnings, rounding_lsb=rounding, notes=notes,
-                                       counts_per_mps2=device.counts_per_mps2)
-        else:
-            text = render_header(t_terms, prefix=prefix, calibration_method=cal.method,
-                                 temp_ref_c=getattr(cal, "temp_ref_c", None), offset_tc=getattr(cal, "offset_tc", None),
-                                 gain_tc=getattr(cal, "gain_tc", None), warnings=warnings, rounding_lsb=rounding,
-                                 notes=notes, counts_per_mps2=device.counts_per_mps2)
-            if omega is not None:
-                text = insert_omega(text, _c_ident(prefix), omega)
     trim = np.asarray(t.trim, np.int64)
     span = float(np.max(np.maximum(np.abs(device.raw_max - trim), np.abs(device.raw_min - trim))))
     p = _c_ident(prefix)

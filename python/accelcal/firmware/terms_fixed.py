@@ -140,7 +140,6 @@ def quantize_terms(cal, n: int, dt_s: float, offset_q, rails=None, trim=None) ->
     tt = TermsTables(n=n, dt_s=float(dt_s))
     if terms["temperature"]:
         tt.frac = terms_frac(rails, trim)
-    if terms["temperature"]:
         oc, gc = channel_values(cal.offset_tc, n), channel_values(cal.gain_tc, n)
         tt.temp = dict(t_ref=int(to_fixed(cal.temp_ref_c or 0.0, TEMP_FRAC, "temperature_ref_c", -32768, 32767)),
                        oc=to_fixed(oc, OC_FRAC, "offset_tc_counts_per_c", -32767, 32767),
