@@ -45,7 +45,7 @@ from ..io.recording_checks import GAP_STEPS, RATE_TOL
 from ..io.units import STANDARD_GRAVITY, Scale
 from ..readings.clipping import (CLIP_BAND_SIGMA, CLIP_MIN_COUNT, CLIP_PILE_RATIO, ClipLevels, clip_counts_text,
                                  clip_levels_counts, code_step_counts)
-from ..readings.noise_stream import NoisePass, median_of_counts
+from ..readings.noise_stream import NoisePass, add_counts, median_of_counts
 from ..readings.static import STATIC_WINDOW_S, window_len
 from ..readings.held import (HELD_CHANGED_SHARE, HELD_MAX, HELD_MIN_RUNS, HELD_MIN_RUNS_UNEVEN, HELD_MODAL_SHARE,
                              HELD_SINGLE_SHARE, RunCounts, order_stat)
@@ -91,16 +91,16 @@ class Sums:
         if np.any(np.abs(t) >= FLOAT_EXACT):
             raise Fallback("an epoch in ns (read exactly from its text)")
         steps = np.asarray(t, float) - self.t0
-        count_into(self.t_steps, np.diff(np.concatenate([[self.t_last], t]) if self.n else t))
+        add_counts(self.t_steps, np.diff(np.concatenate([[self.t_last], t]) if self.n else t))
         for k in self.factors:
             rel = steps / k if k != 1.0 else steps             # time_in_seconds' rel in s
             counts = self.rel_steps.setdefault(k, {})
-            count_into(counts, np.diff(np.concatenate([[self.rel_last[k]], rel]) if self.n else rel))
+            add_counts(counts, np.diff(np.concatenate([[self.rel_last[k]], rel]) if self.n else rel))
             self.rel_last[k] = float(rel[-1])
         if max([len(self.t_steps)] + [len(c) for c in self.rel_steps.values()]) > MAX_STEP_VALUES:
             raise Fallback(f"more than {MAX_STEP_VALUES} distinct time steps")
         for j in range(3):
-            count_into(self.hist[j], raw[:, j])
+            add_counts(self.hist[j], raw[:, j])
         self.runs.add(raw)
         if pose is not None:
             self.has_pose = True
@@ -108,13 +108,6 @@ class Sums:
         self.f_given = self.f_given or (f is not None and bool(np.isfinite(f).any()))
         self.n += m
         self.t_last = float(t[-1])
-
-
-def count_into(counts: dict, values: np.ndarray) -> None:
-    """Add the distinct ``values`` and their counts to ``counts``."""
-    u, c = np.unique(values, return_counts=True)
-    for v, k in zip(u.tolist(), c.tolist()):
-        counts[v] = counts.get(v, 0) + k
 
 
 def sorted_counts(counts: dict) -> tuple[np.ndarray, np.ndarray]:

@@ -30,7 +30,7 @@ from ..io.chunks import Fallback, reader_checks
 from ..io.recording_checks import TIME_UNIT_TOL, TIME_UNITS, check_core_input, check_raw_range
 from ..readings.held import RunCounts, order_stat
 from ..readings.noise import noise_for, states_noise
-from ..readings.noise_stream import median_of_counts
+from ..readings.noise_stream import add_counts, median_of_counts
 
 #: ranks of the checks after the reader's (1-4: io.chunks.reader_checks), as in the whole-file command
 RANK_RANGE, RANK_CORE = 10, 12
@@ -115,8 +115,7 @@ def scan(device, source: ChunkSource, *, fixed: bool, progress: Callable[[int], 
         n += ch.n
         if pending is None:
             d = np.diff(ch.t) if prev is None else np.diff(np.concatenate(([prev.t[-1]], ch.t)))
-            for v, c in zip(*np.unique(d, return_counts=True)):
-                steps[v] = steps.get(v, 0) + int(c)
+            add_counts(steps, d)
             if len(steps) > MAX_STEP_VALUES:
                 raise Fallback("steps of too many values")
             runs.add(ch.raw)

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..io.recording import Recording
 from ..io.recording_checks import RATE_TOL, rate_for
+from .noise_stream import add_counts
 
 __all__ = ["RunCounts", "order_stat",
            "HELD_MODAL_SHARE", "HELD_MAX", "HELD_MIN_RUNS", "HELD_SINGLE_SHARE", "HELD_MIN_RUNS_UNEVEN",
@@ -205,8 +206,7 @@ class RunCounts:
             if lengths.size:
                 if self.first_len is None:
                     self.first_len = int(lengths[0])
-                for length, c in zip(*np.unique(lengths, return_counts=True)):
-                    self.hist[int(length)] = self.hist.get(int(length), 0) + int(c)
+                add_counts(self.hist, lengths)
             self.open_len = raw.shape[0] - int(starts[-1])
         self.last = raw[-1].copy()
 

@@ -23,14 +23,15 @@ import numpy as np
 
 from .noise import MAD_TO_STD, NOISE_SPLIT_RATIO, ONE_REGIME_RATIO
 
-__all__ = ["NoisePass", "median_of_counts", "rest_level_sorted", "white_noise_counts", "SLICE"]
+__all__ = ["NoisePass", "add_counts", "median_of_counts", "rest_level_sorted", "white_noise_counts", "SLICE"]
 
 #: values a slice of the Otsu split holds
 SLICE = 1 << 16
 
 
 def add_counts(counts: dict, values: np.ndarray) -> None:
-    """Add the distinct ``values`` and their counts to ``counts``."""
+    """Add the distinct ``values`` and their counts to ``counts`` (value -> count; the values as
+    Python numbers).  The one home of this tally: convert.bounded, estimators.stream_scan, readings.held."""
     u, c = np.unique(values, return_counts=True)
     for v, k in zip(u.tolist(), c.tolist()):
         counts[v] = counts.get(v, 0) + k
