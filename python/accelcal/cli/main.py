@@ -30,6 +30,7 @@ from ..estimators import OMEGA_SOURCES, choose_omega_engine, omega_columns
 from ..firmware.header import calibration_header
 from ..motions import describe_motions
 from ..io.recording import read_recording, write_columns_csv, write_recording
+from ..io.thinned import MAX_SAMPLES, check_max_samples, read_thinned
 from ..report import REPORT_FILES, write_report
 from ..resolve import clipped_samples, resolve_recording
 from ..resolve_stream import resolve_warnings, result_names
@@ -47,10 +48,11 @@ def _load_device(path):
     return default_device() if path in (None, "default") else load_device(path)
 
 
-def _read(paths, device, command: str, a=None) -> list:
+def _read(paths, device, command: str, a=None, max_samples: int | None = None) -> list:
     """Read recordings (in the units --units/--lsb/--full-scale state, with the file's
     comments: units_cli, units.file_scale); mention once, on stderr, the columns that are
-    ignored."""
+    ignored.  ``max_samples``: a longer recording is read as evenly spaced windows of about
+    that many samples (io.thinned; 0: every sample)."""
     scale = None if a is None else scale_from_args(a, device, reader=True)
     seen: dict[Path, str] = {}
     for p in paths:
@@ -58,7 +60,10 @@ def _read(paths, device, command: str, a=None) -> list:
         if key in seen:
             raise AccelcalError(f"{p}: the same recording as {seen[key]} (given twice, its poses would count twice)")
         seen[key] = str(p)
-    recs = [read_recording(p, device.n_channels, scale=scale) for p in paths]
+    if max_samples is None:
+        recs = [read_recording(p, device.n_channels, scale=scale) for p in paths]
+    else:
+        recs = [read_thinned(p, device, max_samples, scale) for p in paths]
     for r in recs:
         for line in reader_notes(r, command):
             print(line, file=sys.stderr)
@@ -179,13 +184,13 @@ def cmd_diagnose(a):
     cal = load_calibration(a.calibration, dev)
     if isinstance(cal.extra, dict):
         cal.extra["source"] = str(a.calibration)          # named so in the JSON's calibration.source
-    recs = _read(a.recordings, dev, "diagnose", a)
+    recs = _read(a.recordings, dev, "diagnose", a, max_samples=a.max_samples)
     with _progress("diagnose: scoring candidates", unit=" fits", quiet=a.quiet) as bar:
         def scored(name):
             bar.set_postfix_str(name, refresh=False)
             bar.update()
         result = diagnose(dev, cal, recs, folds=a.folds, seed=a.seed, progress=scored,
-                          outliers="drop" if a.drop_outliers else "name")
+                          outliers="drop" if a.drop_outliers else "name", max_samples=a.max_samples)
     # the result is the contract's JSON object; it also carries the per-sample
     # series the report plots, so it goes to write_report as it is
     atomic_write(a.json, lambda f: json.dump(result, f, indent=2, default=_json_default))
@@ -194,6 +199,13 @@ def cmd_diagnose(a):
             write_report(result, a.report, progress=lambda path: bar.update())
     print(f"verdict: {result.get('verdict')}")
     return 0
+
+
+def _max_samples(text: str) -> int:
+    try:
+        return check_max_samples(int(text))
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e) if "max_samples" in str(e) else f"expected an integer, got {text!r}") from None
 
 
 def _json_default(o):
@@ -363,6 +375,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="set aside the static poses far off the calibration's terms fitted to the poses (calibrate's "
                    "rule: a knocked or mislabelled pose), which are otherwise kept, named in the JSON's 'outliers' "
                    "with the diagnosis of the other poses, and in a note")
+    s.add_argument("--max-samples", type=_max_samples, default=MAX_SAMPLES, metavar="N",
+                   help="a recording of more samples is diagnosed on evenly spaced windows of about N of them, "
+                   "read in bounded memory (JSON: recordings[].thinned); 0: every sample (default %(default)s)")
     s.add_argument("--quiet", action="store_true", help="no progress bars on stderr")
     add_units_options(s)
     s.set_defaults(func=cmd_diagnose)

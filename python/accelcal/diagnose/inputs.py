@@ -13,7 +13,8 @@ from ..errors import AccelcalError, InputError
 from ..firmware.terms import correct_readings, has_terms
 from ..firmware.quantize import round_half_up
 from ..firmware.terms_fixed import terms_frac
-from ..io.recording import Recording, check_for_device, read_recording
+from ..io.recording import Recording, check_for_device
+from ..io.thinned import read_thinned, thin_recording
 
 
 def as_device(device: Any):
@@ -40,20 +41,42 @@ def as_calibration(cal: Any, device) -> tuple[Any, str]:
     return cal, src
 
 
-def as_recordings(recordings: Any, device) -> list:
+def as_recordings(recordings: Any, device, max_samples: int = 0) -> list:
+    """The recordings (objects, or paths read), each thinned to about ``max_samples`` samples
+    where it has more (:mod:`accelcal.io.thinned`: a file read so in bounded memory; 0: every
+    sample; a Recording's ``thinning`` says what was kept)."""
     if isinstance(recordings, (Recording, str, os.PathLike)):
         recordings = [recordings]
     out = []
+    rate = float(device.sample_rate_hz)
     for r in recordings:
         if isinstance(r, (str, os.PathLike)):
-            r = read_recording(r, device.n_channels)
-        if not isinstance(r, Recording):
+            r = read_thinned(r, device, max_samples)
+        elif isinstance(r, Recording):
+            r = thin_recording(r, rate, max_samples)
+        else:
             raise AccelcalError(f"diagnose: expected Recordings or CSV paths, got {type(r).__name__}")
         check_for_device(r, device, min_samples=2)
         out.append(r)
     if not out:
         raise InputError("<arguments>", "no recording given")
     return out
+
+
+def with_thinning(result: dict, recs: list, rate_hz: float) -> dict:
+    """``result`` with ``recordings[].thinned`` (:meth:`accelcal.io.thinned.Thinning.describe`) on
+    the entries of the recordings that are windows of longer ones (matched by source, in order)."""
+    entries = list(result.get("recordings") or [])
+    used: set[int] = set()
+    for rec in recs:
+        th = rec.thinning
+        j = next((j for j, ri in enumerate(entries) if j not in used and ri.get("source") == rec.source), None)
+        if j is None:
+            continue
+        used.add(j)
+        if th is not None:
+            entries[j]["thinned"] = th.describe(rate_hz)
+    return result
 
 
 def with_terms_applied(cal, recs: list, device) -> tuple[Any, list, list[str]]:

@@ -12,12 +12,13 @@ from ..effects.fitdata import read_only, recording_parts
 from ..effects.fitting import Cand
 from ..effects.settings import BLOCK_S
 from ..io.device import NOMINAL_FACTOR
+from ..io.thinned import MAX_SAMPLES, check_max_samples
 from ..errors import AccelcalError
 from ..readings.held import distinct_recordings
 from ..motions.poses import distinct_orientations
 from ..readings.noise import code_lattice, fractional_grid, uneven_low_bits
 from .floor import setup_rows
-from .inputs import as_calibration, as_device, as_recordings, with_terms_applied
+from .inputs import as_calibration, as_device, as_recordings, with_terms_applied, with_thinning
 from .prepare import prepare
 from .compare import Contest, model_ambiguity, time_beside_pose, time_unmodelled
 from .determined import mark_not_determined
@@ -46,7 +47,7 @@ class DiagnosisResult(dict):
 
 def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, seed: int = 0,
              candidates: Sequence[str] | None = None, max_steps: int = MAX_STEPS, model_centripetal: bool = True,
-             progress: Any = None, outliers: str = "name") -> DiagnosisResult:
+             progress: Any = None, outliers: str = "name", max_samples: int | None = MAX_SAMPLES) -> DiagnosisResult:
     """Diagnose the gap between recordings and a calibrated model (see the module doc).
 
     ``device``, ``calibration``: objects or JSON paths; ``recordings``: Recordings or CSV
@@ -57,6 +58,9 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     ``outliers``: static poses far off the calibration's terms (:mod:`.outliers`): "name" them
     (``outliers`` in the JSON, with the diagnosis of the other poses and a note), "drop" them
     (the diagnosis is of the others), or "keep" them unjudged.
+    ``max_samples``: a recording of more samples is diagnosed on evenly spaced windows of
+    about that many (:mod:`accelcal.io.thinned`; a file read so in bounded memory; the JSON's
+    ``recordings[].thinned`` and a note say what was kept); 0 or None: every sample.
     Returns the JSON object of the data contract (a dict; see :class:`DiagnosisResult`).
     Bad input raises :class:`~accelcal.errors.InputError` / AccelcalError (one line).
     """
@@ -67,10 +71,17 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         raise AccelcalError(f"diagnose: outliers must be one of {', '.join(OUTLIER_MODES)}, got {outliers!r}")
     dev = as_device(device)
     cal, cal_src = as_calibration(calibration, dev)
+    try:
+        max_samples = check_max_samples(max_samples)
+    except ValueError as e:
+        raise AccelcalError(f"diagnose: {e}") from None
+    recs = as_recordings(recordings, dev, max_samples)
+    rate = float(dev.sample_rate_hz)
+    thin_notes = [r.thinning.note(r.source, rate) for r in recs if r.thinning is not None]
     # readings held for several rows (a logger faster than the sensor) are counted once
-    recs, dev, held_notes = distinct_recordings(as_recordings(recordings, dev), dev)
+    recs, dev, held_notes = distinct_recordings(recs, dev)
     cal, recs, term_notes = with_terms_applied(cal, recs, dev)
-    held_notes = held_notes + term_notes
+    held_notes = thin_notes + held_notes + term_notes
     cands = dict(EFFECTS)
     if candidates is None:
         names = list(EFFECT_NAMES)
@@ -86,12 +97,13 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
     setup_rows(D, e)
     off_poses = find_outliers(D, e) if outliers != "keep" else None
     again = dict(folds=folds, seed=seed, candidates=candidates, max_steps=max_steps,
-                 model_centripetal=model_centripetal, progress=progress, outliers="keep")
+                 model_centripetal=model_centripetal, progress=progress, outliers="keep", max_samples=0)
     if off_poses is not None and outliers == "drop":
         res = diagnose(dev, cal, without_poses(D, recs, off_poses), **again)
         res["outliers"] = outlier_entry(D, recs, off_poses, dropped=True)
-        res["notes"] = held_notes + res["notes"] + [outlier_note(res["outliers"], res["verdict"])]
-        return res
+        res["notes"] = held_notes + [n for n in res["notes"] if n not in held_notes] + [
+            outlier_note(res["outliers"], res["verdict"])]
+        return with_thinning(res, recs, rate)
 
     skipped = []
     active = []
@@ -380,7 +392,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         "tg": D.tg, "t": D.t, "rec": D.rec, "residual": e, "residual_after": e - total_delta,
         "noise_floor": D.sigma, "sources": [ri["source"] for ri in D.rec_info], "static": D.static,
     }
-    return result
+    return with_thinning(result, recs, rate)
 
 
 def pose_orientations(D) -> int:

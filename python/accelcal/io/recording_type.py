@@ -69,6 +69,9 @@ class Recording:
         others following); None when built in memory (see :meth:`line`).
     notes : list of str
         What a check changed in reading the file (e.g. t read as milliseconds).
+    thinning : accelcal.io.thinned.Thinning or None
+        Where the samples are evenly spaced windows of a longer recording
+        (:mod:`accelcal.io.thinned`): which; None for every sample.
     """
 
     t: np.ndarray  # (n,) s
@@ -85,6 +88,8 @@ class Recording:
     lines: Any = field(default=None, repr=False)
     # what a check changed in reading the file (recording_checks.seconds: t in milliseconds)
     notes: list = field(default_factory=list, repr=False, compare=False)
+    # the windows of a longer recording these samples are (io.thinned), None: every sample
+    thinning: Any = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         self.t = np.asarray(self.t, dtype=np.float64)
@@ -174,6 +179,7 @@ class Recording:
             extra={k: [v[i] for i in ilist] for k, v in self.extra.items()},
             source=self.source,
             lines=None if self.lines is None else np.array([self.line(i) for i in ilist], dtype=np.int64),
+            thinning=self.thinning,
         )
 
     def __eq__(self, other: object) -> bool:

@@ -1,0 +1,231 @@
+"""A long recording read as evenly spaced windows of its samples, in bounded memory, for the
+commands that fit the whole recording (``accelcal diagnose``; docs/streaming.md, "diagnose on a
+long recording").
+
+A recording of more than ``max_samples`` samples is cut into windows of :func:`window_len`
+consecutive samples (2 to 10 s at the device's rate), and one window in every ``stride`` is kept,
+from the first, so that at most ``max_samples`` samples are kept and the kept windows are spread
+evenly over the whole recording.  Each kept sample is the file's sample as the whole-file reader
+reads it (a window is a run of full-rate samples: the code lattice, the noise, the clipped
+readings, the timing within a motion are those of the recording); between windows the diagnosis
+sees a time gap, as it does where it leaves out samples itself.  What is lost is precision: an
+effect is judged against ``max_samples`` samples' noise, not the whole recording's.
+
+Every row of the file is still read and checked (the bad cells, t increasing, a vector given in
+part, a reading outside the device's range), with the whole-file reader's message naming the
+file's row, so a recording refused whole is refused thinned, with the same line.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from .chunk_source import open_chunks
+from .chunks import BLOCK_BYTES, Fallback, reader_checks
+from .parquet import BATCH_ROWS
+from .recording import read_recording
+from .recording_checks import check_raw_range
+from .recording_type import Recording
+from .units import Scale
+
+__all__ = ["MAX_SAMPLES", "WINDOWS", "WINDOW_S", "Thinning", "thinning", "window_len", "check_max_samples", "thin_recording",
+           "read_thinned"]
+
+#: samples of a recording kept by default (``accelcal diagnose --max-samples``); 0 or None keeps all
+MAX_SAMPLES = 100_000
+#: the windows kept number about this many when the window length allows
+WINDOWS = 256
+#: a window's length, s: at least WINDOW_S[0], at most WINDOW_S[1]
+WINDOW_S = (2.0, 10.0)
+
+
+@dataclass(frozen=True)
+class Thinning:
+    """Which samples of a recording are kept: ``kept`` of its ``windows`` windows of ``window``
+    samples (window ``j``: samples ``j * window`` to ``(j + 1) * window - 1``), spread evenly
+    from the first (window ``j`` is kept where ``floor(j * kept / windows)`` steps).
+
+    Attributes
+    ----------
+    n_read : int
+        Samples in the recording (every row read and checked).
+    window : int
+        Samples per window.
+    windows : int
+        Windows in the recording (the last may be short).
+    kept : int
+        Windows kept.
+    """
+
+    n_read: int
+    window: int
+    windows: int
+    kept: int
+
+    def kept_windows(self, j: np.ndarray) -> np.ndarray:
+        """Whether each window ``j`` is kept (bool)."""
+        j = np.asarray(j, np.int64)
+        return (j * self.kept) // self.windows != ((j - 1) * self.kept) // self.windows
+
+    def keep(self, start: int, n: int) -> np.ndarray:
+        """Whether each of the samples ``start .. start + n - 1`` is kept (bool (n,))."""
+        return self.kept_windows(np.arange(start, start + n, dtype=np.int64) // self.window)
+
+    @property
+    def n_kept(self) -> int:
+        """Samples kept."""
+        j = np.flatnonzero(self.kept_windows(np.arange(self.windows)))
+        return int(np.minimum(self.window, self.n_read - j * self.window).sum())
+
+    def describe(self, rate_hz: float) -> dict:
+        """The JSON entry (docs/diagnosis-json.md: ``recordings[].thinned``)."""
+        return {"n_read": int(self.n_read), "n_kept": self.n_kept, "windows": int(self.kept),
+                "window_samples": int(self.window), "window_s": self.window / float(rate_hz),
+                "spacing_s": self.window * self.windows / self.kept / float(rate_hz)}
+
+    def note(self, source: str, rate_hz: float) -> str:
+        """One sentence for the diagnosis's notes."""
+        return (f"{source}: {self.n_read:,} samples, diagnosed on {self.n_kept:,} of them: {self.kept:,} windows "
+                f"of {self.window:,} samples ({self.window / rate_hz:.3g} s), one every "
+                f"{self.window * self.windows / self.kept / rate_hz:.4g} s over the whole recording (--max-samples; "
+                "0 keeps every sample); an effect is judged against the noise of the samples kept")
+
+
+def window_len(rate_hz: float, max_samples: int) -> int:
+    """Samples per window: ``max_samples / WINDOWS``, within ``WINDOW_S`` at ``rate_hz`` (and at
+    most ``max_samples``)."""
+    lo, hi = (max(1, int(round(s * float(rate_hz)))) for s in WINDOW_S)
+    return int(max(1, min(max(lo, min(hi, max_samples // WINDOWS)), max_samples)))
+
+
+def thinning(n: int, rate_hz: float, max_samples: int | None) -> Thinning | None:
+    """The windows of an ``n``-sample recording kept for ``max_samples`` (None: every sample,
+    when ``max_samples`` is 0 or None or ``n`` <= ``max_samples``)."""
+    if not max_samples or n <= max_samples:
+        return None
+    w = window_len(rate_hz, int(max_samples))
+    windows = -(-int(n) // w)
+    return Thinning(int(n), w, windows, max(1, int(max_samples) // w))
+
+
+def check_max_samples(max_samples: Any) -> int:
+    """``max_samples`` as an int >= 0 (0: every sample), else ValueError."""
+    if max_samples is None:
+        return 0
+    if isinstance(max_samples, bool) or not isinstance(max_samples, (int, np.integer)) or max_samples < 0:
+        raise ValueError(f"max_samples must be an integer >= 0 (0: every sample), got {max_samples!r}")
+    if 0 < max_samples < 100:
+        raise ValueError(f"max_samples must be 0 (every sample) or at least 100, got {max_samples}")
+    return int(max_samples)
+
+
+def thin_recording(rec: Recording, rate_hz: float, max_samples: int | None) -> Recording:
+    """A Recording held in memory thinned as :func:`read_thinned` thins its file (itself where
+    it has at most ``max_samples`` samples)."""
+    th = thinning(rec.n_samples, rate_hz, max_samples)
+    if th is None:
+        return rec
+    out = rec.select(th.keep(0, rec.n_samples))
+    out.thinning = th
+    return out
+
+
+def _count_rows(src: Any, path: Any) -> int:
+    """Rows of a recording: a Parquet file's metadata, a CSV's lines after its header (an
+    estimate only where the file has blank lines at its end: the plan, not the result, takes it)."""
+    if src.unit != "B":
+        return int(src.total)
+    n, last = 0, b"\n"
+    with open(path, "rb") as fh:
+        fh.seek(src.head.pos)
+        while True:
+            buf = fh.read(1 << 24)
+            if not buf:
+                break
+            n += buf.count(b"\n")
+            last = buf[-1:]
+    return n + (last != b"\n")
+
+
+def read_thinned(path: Any, device: Any, max_samples: int | None, scale: Scale | None = None,
+                 block_bytes: int = BLOCK_BYTES, batch_rows: int = BATCH_ROWS) -> Recording:
+    """A recording file (CSV, or Parquet by its name) read as :func:`thinning`'s windows, every
+    row read and checked, the kept rows' arrays only held (a plain CSV or a Parquet file: in
+    chunks; anything the chunked reader leaves to the whole-file reader, such as a compressed
+    file: read whole, then thinned).
+
+    Returns
+    -------
+    Recording
+        The kept samples (each with its file line, for messages; ``thinning`` says which), or
+        the whole-file reader's Recording where it has at most ``max_samples`` samples.
+
+    Raises
+    ------
+    InputError
+        The whole-file reader's error for a bad row anywhere in the file, or a reading outside
+        the device's range.
+    """
+    rate = float(device.sample_rate_hz)
+    if not max_samples:
+        return read_recording(path, device.n_channels, scale=scale)
+    try:
+        src = open_chunks(path, device.n_channels, scale, block_bytes=block_bytes, batch_rows=batch_rows)
+        if src.head.extra:
+            raise Fallback("extra columns")
+        n_est = _count_rows(src, path)
+    except Fallback:
+        return thin_recording(read_recording(path, device.n_channels, scale=scale), rate, max_samples)
+    if n_est <= max_samples:
+        return read_recording(path, device.n_channels, scale=scale)
+    plan = th = thinning(n_est, rate, max_samples)
+    head = src.head
+    parts: dict[str, list[np.ndarray]] = {}
+    lines: list[np.ndarray] = []
+    errors: list[tuple[int, int, InputError]] = []
+    first_range: InputError | None = None
+    prev = None
+    n = 0
+    try:
+        for ch in src.chunks():
+            errors += [(rank, ch.start, e) for rank, e in reader_checks(head, ch, prev)]
+            if first_range is None and not errors:
+                try:
+                    check_raw_range(_Located(ch, head.source), device)
+                except InputError as e:
+                    first_range = e
+            keep = th.keep(ch.start, ch.n)
+            idx = np.flatnonzero(keep)
+            for name, arr in (("t", ch.t), ("raw", ch.raw), *ch.vecs.items(), *ch.other.items()):
+                if arr is not None:
+                    parts.setdefault(name, []).append(arr[idx])
+            lines.append(np.array([ch.line(int(i)) for i in idx], dtype=np.int64))
+            n += ch.n
+            prev = ch
+    except Fallback:
+        return thin_recording(read_recording(path, device.n_channels, scale=scale), rate, max_samples)
+    if errors:
+        raise min(errors, key=lambda x: (x[0], x[1]))[2]
+    if first_range is not None:     # check_for_device's range check, over every row
+        raise first_range
+    th = thinning(n, rate, max_samples)
+    if th is None or th.windows != plan.windows:
+        # the rows were fewer than the lines counted: the windows the whole-file reader's rows give
+        return thin_recording(read_recording(path, device.n_channels, scale=scale), rate, max_samples)
+    cols = {name: np.concatenate(parts.pop(name)) for name in list(parts)}
+    rec = Recording(t=cols["t"], raw=cols["raw"], f=cols.get("f"), w=cols.get("w"), dw=cols.get("dw"),
+                    temp_c=cols.get("temp_c"), pose=cols.get("pose"), metadata=head.metadata, source=head.source,
+                    lines=np.concatenate(lines))
+    rec.thinning = th
+    return rec
+
+
+class _Located:
+    """A chunk as :func:`check_raw_range` takes it (raw, source, line)."""
+
+    def __init__(self, ch: Any, source: str) -> None:
+        self.raw, self.source, self.line = ch.raw, source, ch.line
