@@ -32,13 +32,15 @@ from .recording_checks import check_raw_range
 from .recording_type import Recording
 from .units import Scale
 
-__all__ = ["MAX_SAMPLES", "WINDOWS", "WINDOW_S", "Thinning", "thinning", "window_len", "check_max_samples", "thin_recording",
+__all__ = ["MAX_SAMPLES", "WINDOWS", "MIN_WINDOWS", "WINDOW_S", "Thinning", "thinning", "window_len", "check_max_samples", "thin_recording",
            "read_thinned"]
 
 #: samples of a recording kept by default (``accelcal diagnose --max-samples``); 0 or None keeps all
 MAX_SAMPLES = 100_000
 #: the windows kept number about this many when the window length allows
 WINDOWS = 256
+#: and at least this many (windows shorter than WINDOW_S[0] for a small budget)
+MIN_WINDOWS = 16
 #: a window's length, s: at least WINDOW_S[0], at most WINDOW_S[1]
 WINDOW_S = (2.0, 10.0)
 
@@ -96,10 +98,10 @@ class Thinning:
 
 
 def window_len(rate_hz: float, max_samples: int) -> int:
-    """Samples per window: ``max_samples / WINDOWS``, within ``WINDOW_S`` at ``rate_hz`` (and at
-    most ``max_samples``)."""
+    """Samples per window: ``max_samples / WINDOWS`` within ``WINDOW_S`` at ``rate_hz``, and
+    short enough for ``MIN_WINDOWS`` windows."""
     lo, hi = (max(1, int(round(s * float(rate_hz)))) for s in WINDOW_S)
-    return int(max(1, min(max(lo, min(hi, max_samples // WINDOWS)), max_samples)))
+    return int(max(1, min(max(lo, min(hi, max_samples // WINDOWS)), max_samples // MIN_WINDOWS)))
 
 
 def thinning(n: int, rate_hz: float, max_samples: int | None) -> Thinning | None:
