@@ -252,7 +252,7 @@ def handheld_recording(n: int, path: Path) -> None:
     write_recording(path, tiled)
 
 
-def diagnose_runs(n: int, d: Path, kinds: list[str], limit_mb: float) -> None:
+def diagnose_runs(n: int, d: Path, kinds: list[str], limit_mb: float, extra: list[str] = ()) -> None:
     """Wall time and peak RSS of ``accelcal diagnose --calibration nominal`` (the simulation's
     truth: no effect was simulated) on poses_recording(n) and handheld_recording(n); one table row
     each, printed.  A run whose RSS passes ``limit_mb`` is stopped (its row says so)."""
@@ -262,7 +262,7 @@ def diagnose_runs(n: int, d: Path, kinds: list[str], limit_mb: float) -> None:
         rec = d / f"{kind}_{n}.csv"
         (poses_recording if kind == "poses" else handheld_recording)(n, rec)
         s, mb = peak_of(cli + ["diagnose", "--device", "default", "--calibration", "nominal", str(rec),
-                               "--json", str(d / f"diag_{kind}_{n}.json"), "--quiet"], limit_mb)
+                               "--json", str(d / f"diag_{kind}_{n}.json"), "--quiet", *extra], limit_mb)
         n_rows = sum(1 for _ in open(rec)) - 1
         what = f"{s:.1f}" if s >= 0 else f"stopped at {-s:.0f}"
         print(f"| {n_rows:.2e} | {kind} | {rec.stat().st_size / 1e6:.0f} | {what} | {mb:,.0f} |", flush=True)
@@ -309,6 +309,8 @@ def main() -> None:
                     help="instead: `accelcal diagnose` on the recordings KINDS (comma-separated: poses, handheld) "
                     "of each of --lengths samples: wall time and peak RSS")
     ap.add_argument("--limit-mb", type=float, default=12000.0, help="--diagnose: stop a run past this RSS (MB)")
+    ap.add_argument("--diagnose-args", default="", help="--diagnose: more options of the command, such as "
+                    "'--max-samples 0' (every sample; the default keeps windows of about 100,000)")
     ap.add_argument("--engine", choices=["float", "fixed"], default="fixed", help="rate's or attitude's engine")
     ap.add_argument("--convert-args", default="",
                     help="convert: options added to both runs, one string (e.g. '--full-scale 2': a stated scale, "
@@ -324,7 +326,7 @@ def main() -> None:
         print("| samples | recording | CSV MB | s | peak MB |\n| ---: | --- | ---: | ---: | ---: |", flush=True)
         try:
             for n in (int(float(x)) for x in a.lengths.split(",")):
-                diagnose_runs(n, d, a.diagnose.split(","), a.limit_mb)
+                diagnose_runs(n, d, a.diagnose.split(","), a.limit_mb, a.diagnose_args.split())
         finally:
             if not a.keep and not a.dir:
                 shutil.rmtree(d, ignore_errors=True)

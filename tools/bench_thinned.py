@@ -9,7 +9,7 @@ For each effect of the table (and ``none``) and seed: the diagnosis of every sam
 whether it is right (tools/bench_diagnose_indep.py's ``score``), the time and the samples used.
 
     python3 tools/bench_thinned.py [--effects a,b] [--seeds 2] [--hold-s 300] [--max-samples 50000,20000]
-                                   [--jobs 1] [-o build/bench_thinned.md]
+                                   [--ratio R] [--jobs 1] [-o build/bench_thinned.md]
 """
 from __future__ import annotations
 
@@ -36,8 +36,9 @@ EFFECTS = ("none", "offset", "gain", "misalignment", "nonlinearity", "bias_drift
 
 
 def run(job: tuple) -> dict:
-    effect, seed, hold_s, budgets = job
-    ds = im.make_jig(list(truth_of(effect)), seed, hold_s=hold_s)
+    effect, seed, hold_s, budgets, ratio = job
+    names = list(truth_of(effect))
+    ds = im.make_jig(names, seed, hold_s=hold_s, ratio={nm: ratio for nm in names} if ratio else None)
     rec = ds["recordings"]
     row = {"effect": effect, "seed": seed, "n": sum(r.n_samples for r in rec),
            "device": f"{ds['device'].name} {ds['rate_hz']:.0f} Hz", "runs": []}
@@ -57,11 +58,13 @@ def main(argv=None) -> int:
     ap.add_argument("--seed0", type=int, default=0)
     ap.add_argument("--hold-s", type=float, default=300.0, help="each pose held this long (s)")
     ap.add_argument("--max-samples", default="50000,20000")
+    ap.add_argument("--ratio", type=float, default=None,
+                    help="each effect's RMS contribution / the per-sample noise floor (default: drawn 3-30)")
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("-o", "--output", default=os.path.join(ROOT, "build", "bench_thinned.md"))
     a = ap.parse_args(argv)
     budgets = tuple(int(float(x)) for x in a.max_samples.split(","))
-    jobs = [(e, a.seed0 + s, a.hold_s, budgets) for e in a.effects.split(",") for s in range(a.seeds)]
+    jobs = [(e, a.seed0 + s, a.hold_s, budgets, a.ratio) for e in a.effects.split(",") for s in range(a.seeds)]
     rows = []
     with mp.Pool(a.jobs) if a.jobs > 1 else _Serial() as pool:
         for row in tqdm(pool.imap(run, jobs), total=len(jobs), desc="cases"):
