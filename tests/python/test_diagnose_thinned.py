@@ -1,8 +1,8 @@
-"""diagnose on a long recording: evenly spaced windows of about ``max_samples`` samples
-(``accelcal.io.thinned``), read in bounded memory.  The windows kept are the same from a file
-(CSV in chunks of any size, Parquet in batches) as from the Recording held whole; every row is
-still checked; the diagnosis of the windows names the effect the independent generator put in;
-the JSON and the notes say what was kept."""
+"""diagnose on a long recording cut down to about ``max_samples`` samples (``accelcal.io.thinned``),
+read in bounded memory: evenly spaced windows with a reference f, every k-th sample jig-free.
+The samples kept are the same from a file (CSV in chunks of any size, Parquet in batches) as from
+the Recording held whole; every row is still checked; the diagnosis of what is kept names the
+effect the independent generator put in; the JSON and the notes say what was kept."""
 from __future__ import annotations
 
 import json
@@ -52,7 +52,7 @@ def test_windows_are_at_most_the_budget_and_spread_evenly(n, rate, m):
 def test_no_thinning_at_or_under_the_budget_or_without_one(m):
     assert T.thinning(10_000, 60.0, m) is None
     rec = Recording(t=np.arange(500) / 60.0, raw=np.zeros((500, 3), np.int64))
-    assert T.thin_recording(rec, 60.0, m) is rec
+    assert T.thin_recordings([rec], 60.0, m)[0] is rec
 
 
 def test_max_samples_is_checked():
@@ -71,7 +71,7 @@ def drift_jig():
 def test_file_windows_are_the_recordings_windows(drift_jig, tmp_path):
     dev, rec = drift_jig["device"], drift_jig["recording"]
     m = rec.n_samples // 4
-    want = T.thin_recording(read_recording(_csv(tmp_path, rec), dev.n_channels, whole=True), dev.sample_rate_hz, m)
+    want = T.thin_recordings([read_recording(_csv(tmp_path, rec), dev.n_channels, whole=True)], dev.sample_rate_hz, m)[0]
     assert want.thinning is not None and want.n_samples < rec.n_samples // 3
     for block in (300, 4096, 1 << 16, 1 << 26):       # boundaries inside windows and inside the gaps
         got = T.read_thinned(tmp_path / "rec.csv", dev, m, block_bytes=block)
@@ -79,7 +79,7 @@ def test_file_windows_are_the_recordings_windows(drift_jig, tmp_path):
         assert np.array_equal(got.lines, want.lines)  # each kept sample names its file line
     write_parquet_recording(tmp_path / "rec.parquet", rec)
     whole = read_recording(tmp_path / "rec.parquet", dev.n_channels)
-    want_pq = T.thin_recording(whole, dev.sample_rate_hz, m)
+    want_pq = T.thin_recordings([whole], dev.sample_rate_hz, m)[0]
     for rows in (7, 250, 1 << 20):
         got = T.read_thinned(tmp_path / "rec.parquet", dev, m, batch_rows=rows)
         assert got == want_pq and got.thinning == want_pq.thinning and np.array_equal(got.lines, want_pq.lines)
@@ -185,5 +185,24 @@ def test_default_budget_leaves_the_shared_recordings_whole(real_model):
     for name in ("mpu6050", "xsens"):
         dev, rec, step, cal = real_model(name)
         assert rec.n_samples <= T.MAX_SAMPLES
-        assert T.thin_recording(rec, dev.sample_rate_hz, T.MAX_SAMPLES) is rec
+        assert T.thin_recordings([rec], dev.sample_rate_hz, T.MAX_SAMPLES)[0] is rec
     assert default_device().sample_rate_hz > 0
+
+
+@pytest.mark.parametrize("effect,seed", [("misalignment", 5), ("nonlinearity", 3)])
+def test_jigfree_keeps_every_kth_sample_of_every_pose(effect, seed, tmp_path):
+    """Jig-free (no reference f): every pose's orientation counts, so every k-th sample is kept
+    (a recording at rate / k), not windows (windows of a hand-held session lose most of its
+    2-4 s poses: this case was named ``gain`` from windows of a third of the samples)."""
+    ds = im.make_handheld([effect], seed, n_poses=60, labels=False)
+    dev, cal, rec = ds["device"], ds["cal"], ds["recording"]
+    m = rec.n_samples // 3
+    path = _csv(tmp_path, rec)
+    got = T.read_thinned(path, dev, m, block_bytes=1 << 14)
+    k = -(-rec.n_samples // m)
+    assert got.thinning.step == k and np.array_equal(got.t, rec.t[::k]) and np.array_equal(got.raw, rec.raw[::k])
+    res = diagnose(dev, cal, [path], max_samples=m)
+    assert res["recordings"][0]["thinned"] == {"n_read": rec.n_samples, "n_kept": len(rec.t[::k]), "every": k,
+                                               "rate_hz": dev.sample_rate_hz / k}
+    assert res["mode"] == "jigfree" and res["verdict"] == effect
+    assert _json(res) == _json(diagnose(dev, cal, [read_recording(path, dev.n_channels, whole=True)], max_samples=m))

@@ -30,7 +30,7 @@ from ..estimators import OMEGA_SOURCES, choose_omega_engine, omega_columns
 from ..firmware.header import calibration_header
 from ..motions import describe_motions
 from ..io.recording import read_recording, write_columns_csv, write_recording
-from ..io.thinned import MAX_SAMPLES, check_max_samples, read_thinned
+from ..io.thinned import MAX_SAMPLES, check_max_samples, read_all_thinned
 from ..report import REPORT_FILES, write_report
 from ..resolve import clipped_samples, resolve_recording
 from ..resolve_stream import resolve_warnings, result_names
@@ -63,7 +63,7 @@ def _read(paths, device, command: str, a=None, max_samples: int | None = None) -
     if max_samples is None:
         recs = [read_recording(p, device.n_channels, scale=scale) for p in paths]
     else:
-        recs = [read_thinned(p, device, max_samples, scale) for p in paths]
+        recs = read_all_thinned(list(paths), device, max_samples, scale)
     for r in recs:
         for line in reader_notes(r, command):
             print(line, file=sys.stderr)

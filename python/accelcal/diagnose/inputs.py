@@ -13,8 +13,8 @@ from ..errors import AccelcalError, InputError
 from ..firmware.terms import correct_readings, has_terms
 from ..firmware.quantize import round_half_up
 from ..firmware.terms_fixed import terms_frac
-from ..io.recording import Recording, check_for_device
-from ..io.thinned import read_thinned, thin_recording
+from ..io.recording import Recording, check_for_device, read_recording
+from ..io.thinned import read_all_thinned, thin_recordings
 
 
 def as_device(device: Any):
@@ -41,29 +41,36 @@ def as_calibration(cal: Any, device) -> tuple[Any, str]:
     return cal, src
 
 
-def as_recordings(recordings: Any, device, max_samples: int = 0) -> list:
-    """The recordings (objects, or paths read), each thinned to about ``max_samples`` samples
-    where it has more (:mod:`accelcal.io.thinned`: a file read so in bounded memory; 0: every
-    sample; a Recording's ``thinning`` says what was kept)."""
+def as_recordings(recordings: Any, device, max_samples: int = 0) -> tuple[list, Any, list[str]]:
+    """The recordings (objects, or paths read), cut down where longer than ``max_samples``
+    samples (:mod:`accelcal.io.thinned`: paths read so in bounded memory; 0: every sample; a
+    Recording's ``thinning`` says what was kept).  Returns (recordings, the device, notes): the
+    device at rate / k where every k-th sample is kept (jig-free)."""
     if isinstance(recordings, (Recording, str, os.PathLike)):
         recordings = [recordings]
-    out = []
-    rate = float(device.sample_rate_hz)
-    for r in recordings:
-        if isinstance(r, (str, os.PathLike)):
-            r = read_thinned(r, device, max_samples)
-        elif isinstance(r, Recording):
-            r = thin_recording(r, rate, max_samples)
-        else:
+    items = list(recordings)
+    for r in items:
+        if not isinstance(r, (Recording, str, os.PathLike)):
             raise AccelcalError(f"diagnose: expected Recordings or CSV paths, got {type(r).__name__}")
-        check_for_device(r, device, min_samples=2)
-        out.append(r)
-    if not out:
+    if not items:
         raise InputError("<arguments>", "no recording given")
-    return out
+    rate = float(device.sample_rate_hz)
+    if all(isinstance(r, (str, os.PathLike)) for r in items):
+        out = read_all_thinned(items, device, max_samples)
+    else:
+        out = thin_recordings([r if isinstance(r, Recording) else read_recording(r, device.n_channels)
+                               for r in items], rate, max_samples)
+    for r in out:
+        check_for_device(r, device, min_samples=2)
+    notes = [r.thinning.note(r.source) for r in out if r.thinning is not None]
+    every = [r.thinning for r in out if r.thinning is not None and r.thinning.step]
+    if every and abs(rate / every[0].rate_hz - 1.0) < 1e-9:
+        # every k-th sample: recordings at rate / k (not yet so where a caller had cut them down and said so)
+        device = dataclasses.replace(device, sample_rate_hz=rate / max(th.step for th in every))
+    return out, device, notes
 
 
-def with_thinning(result: dict, recs: list, rate_hz: float) -> dict:
+def with_thinning(result: dict, recs: list) -> dict:
     """``result`` with ``recordings[].thinned`` (:meth:`accelcal.io.thinned.Thinning.describe`) on
     the entries of the recordings that are windows of longer ones (matched by source, in order)."""
     entries = list(result.get("recordings") or [])
@@ -75,7 +82,7 @@ def with_thinning(result: dict, recs: list, rate_hz: float) -> dict:
             continue
         used.add(j)
         if th is not None:
-            entries[j]["thinned"] = th.describe(rate_hz)
+            entries[j]["thinned"] = th.describe()
     return result
 
 

@@ -75,9 +75,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         max_samples = check_max_samples(max_samples)
     except ValueError as e:
         raise AccelcalError(f"diagnose: {e}") from None
-    recs = as_recordings(recordings, dev, max_samples)
-    rate = float(dev.sample_rate_hz)
-    thin_notes = [r.thinning.note(r.source, rate) for r in recs if r.thinning is not None]
+    recs, dev, thin_notes = as_recordings(recordings, dev, max_samples)
     # readings held for several rows (a logger faster than the sensor) are counted once
     recs, dev, held_notes = distinct_recordings(recs, dev)
     cal, recs, term_notes = with_terms_applied(cal, recs, dev)
@@ -103,7 +101,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         res["outliers"] = outlier_entry(D, recs, off_poses, dropped=True)
         res["notes"] = held_notes + [n for n in res["notes"] if n not in held_notes] + [
             outlier_note(res["outliers"], res["verdict"])]
-        return with_thinning(res, recs, rate)
+        return with_thinning(res, recs)
 
     skipped = []
     active = []
@@ -392,7 +390,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         "tg": D.tg, "t": D.t, "rec": D.rec, "residual": e, "residual_after": e - total_delta,
         "noise_floor": D.sigma, "sources": [ri["source"] for ri in D.rec_info], "static": D.static,
     }
-    return with_thinning(result, recs, rate)
+    return with_thinning(result, recs)
 
 
 def pose_orientations(D) -> int:

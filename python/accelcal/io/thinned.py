@@ -1,19 +1,24 @@
-"""A long recording read as evenly spaced windows of its samples, in bounded memory, for the
-commands that fit the whole recording (``accelcal diagnose``; docs/streaming.md, "diagnose on a
-long recording").
+"""Long recordings cut down to a bounded number of their own samples, read in bounded memory,
+for the commands that fit the whole recording (``accelcal diagnose``; docs/streaming.md,
+"diagnose on a long recording").
 
-A recording of more than ``max_samples`` samples is cut into windows of :func:`window_len`
-consecutive samples (2 to 10 s at the device's rate), and one window in every ``stride`` is kept,
-from the first, so that at most ``max_samples`` samples are kept and the kept windows are spread
-evenly over the whole recording.  Each kept sample is the file's sample as the whole-file reader
-reads it (a window is a run of full-rate samples: the code lattice, the noise, the clipped
-readings, the timing within a motion are those of the recording); between windows the diagnosis
-sees a time gap, as it does where it leaves out samples itself.  What is lost is precision: an
-effect is judged against ``max_samples`` samples' noise, not the whole recording's.
+Recordings of more than ``max_samples`` samples are cut down two ways (:func:`plan`):
 
-Every row of the file is still read and checked (the bad cells, t increasing, a vector given in
+* **with a reference** (f columns: the diagnosis scores every sample, the motion too, against
+  its own reference): each such recording is cut into windows of :func:`window_len`
+  consecutive samples (2 to 10 s at the device's rate) and about ``max_samples`` samples' worth
+  of them are kept, spread evenly from the first window to the last.  A window is a stretch of
+  full-rate samples: the timing within a motion, the rests after it, the code lattice and the
+  noise are the recording's;
+* **jig-free** (no reference: the static poses are the reference, and each one's orientation
+  counts): every k-th sample of every recording, k the smallest integer that brings the longest
+  recording to ``max_samples``; the recordings are then recordings at the device's rate / k
+  (the diagnosis takes the device at that rate), and every pose keeps 1/k of its samples.
+
+Every row of a file is still read and checked (the bad cells, t increasing, a vector given in
 part, a reading outside the device's range), with the whole-file reader's message naming the
-file's row, so a recording refused whole is refused thinned, with the same line.
+file's row, so a recording refused whole is refused thinned, with the same line.  What is lost is
+precision: an effect is judged against the noise of the samples kept, not the whole recording's.
 """
 from __future__ import annotations
 
@@ -32,8 +37,8 @@ from .recording_checks import check_raw_range
 from .recording_type import Recording
 from .units import Scale
 
-__all__ = ["MAX_SAMPLES", "WINDOWS", "MIN_WINDOWS", "WINDOW_S", "Thinning", "thinning", "window_len", "check_max_samples", "thin_recording",
-           "read_thinned"]
+__all__ = ["MAX_SAMPLES", "WINDOWS", "MIN_WINDOWS", "WINDOW_S", "Thinning", "thinning", "every", "plan", "window_len",
+           "check_max_samples", "thin_recordings", "read_thinned", "read_all_thinned"]
 
 #: samples of a recording kept by default (``accelcal diagnose --max-samples``); 0 or None keeps all
 MAX_SAMPLES = 100_000
@@ -61,16 +66,24 @@ class Thinning:
         Windows in the recording (the last may be short).
     kept : int
         Windows kept.
+    step : int
+        0, or k: every k-th sample is kept (``window`` 1; jig-free).
+    rate_hz : float
+        The device's rate the plan was made for (Hz).
     """
 
     n_read: int
     window: int
     windows: int
     kept: int
+    step: int = 0
+    rate_hz: float = 0.0
 
     def kept_windows(self, j: np.ndarray) -> np.ndarray:
         """Whether each window ``j`` is kept (bool)."""
         j = np.asarray(j, np.int64)
+        if self.step:
+            return j % self.step == 0
         return (j * self.kept) // self.windows != ((j - 1) * self.kept) // self.windows
 
     def keep(self, start: int, n: int) -> np.ndarray:
@@ -83,14 +96,23 @@ class Thinning:
         j = np.flatnonzero(self.kept_windows(np.arange(self.windows)))
         return int(np.minimum(self.window, self.n_read - j * self.window).sum())
 
-    def describe(self, rate_hz: float) -> dict:
+    def describe(self) -> dict:
         """The JSON entry (docs/diagnosis-json.md: ``recordings[].thinned``)."""
+        rate_hz = self.rate_hz
+        if self.step:
+            return {"n_read": int(self.n_read), "n_kept": self.n_kept, "every": int(self.step),
+                    "rate_hz": float(rate_hz) / self.step}
         return {"n_read": int(self.n_read), "n_kept": self.n_kept, "windows": int(self.kept),
                 "window_samples": int(self.window), "window_s": self.window / float(rate_hz),
                 "spacing_s": self.window * self.windows / self.kept / float(rate_hz)}
 
-    def note(self, source: str, rate_hz: float) -> str:
+    def note(self, source: str) -> str:
         """One sentence for the diagnosis's notes."""
+        rate_hz = self.rate_hz
+        if self.step:
+            return (f"{source}: {self.n_read:,} samples, diagnosed on {self.n_kept:,} of them: every {self.step:,}th "
+                    f"sample, a recording at {rate_hz / self.step:.6g} Hz (--max-samples; 0 keeps every sample); an "
+                    "effect is judged against the noise of the samples kept")
         return (f"{source}: {self.n_read:,} samples, diagnosed on {self.n_kept:,} of them: {self.kept:,} windows "
                 f"of {self.window:,} samples ({self.window / rate_hz:.3g} s), one every "
                 f"{self.window * self.windows / self.kept / rate_hz:.4g} s over the whole recording (--max-samples; "
@@ -111,7 +133,26 @@ def thinning(n: int, rate_hz: float, max_samples: int | None) -> Thinning | None
         return None
     w = window_len(rate_hz, int(max_samples))
     windows = -(-int(n) // w)
-    return Thinning(int(n), w, windows, max(1, int(max_samples) // w))
+    return Thinning(int(n), w, windows, max(1, int(max_samples) // w), 0, float(rate_hz))
+
+
+def every(n: int, k: int, rate_hz: float) -> Thinning | None:
+    """Every ``k``-th sample of an ``n``-sample recording at ``rate_hz`` (None for k <= 1)."""
+    if k <= 1:
+        return None
+    return Thinning(int(n), 1, int(n), -(-int(n) // k), int(k), float(rate_hz))
+
+
+def plan(sizes: list[tuple[int, bool]], rate_hz: float, max_samples: int | None) -> list[Thinning | None]:
+    """What is kept of each recording, from (samples, has a reference f) of each (see the module
+    doc): windows of each longer recording where any has a reference, else every k-th sample of
+    every recording (one k, so that they share one rate)."""
+    if not max_samples:
+        return [None] * len(sizes)
+    if any(has_f for _, has_f in sizes):
+        return [thinning(n, rate_hz, max_samples) for n, _ in sizes]
+    k = max([-(-n // max_samples) for n, _ in sizes] or [1])
+    return [every(n, k, rate_hz) for n, _ in sizes]
 
 
 def check_max_samples(max_samples: Any) -> int:
@@ -125,10 +166,14 @@ def check_max_samples(max_samples: Any) -> int:
     return int(max_samples)
 
 
-def thin_recording(rec: Recording, rate_hz: float, max_samples: int | None) -> Recording:
-    """A Recording held in memory thinned as :func:`read_thinned` thins its file (itself where
-    it has at most ``max_samples`` samples)."""
-    th = thinning(rec.n_samples, rate_hz, max_samples)
+def thin_recordings(recs: list[Recording], rate_hz: float, max_samples: int | None) -> list[Recording]:
+    """Recordings held in memory cut down as :func:`read_thinned` cuts their files (:func:`plan`;
+    a recording kept whole is itself)."""
+    return [_take(r, th) for r, th in zip(recs, plan([(r.n_samples, r.has_f()) for r in recs], rate_hz,
+                                                     max_samples))]
+
+
+def _take(rec: Recording, th: Thinning | None) -> Recording:
     if th is None:
         return rec
     out = rec.select(th.keep(0, rec.n_samples))
@@ -155,36 +200,67 @@ def _count_rows(src: Any, path: Any) -> int:
 
 def read_thinned(path: Any, device: Any, max_samples: int | None, scale: Scale | None = None,
                  block_bytes: int = BLOCK_BYTES, batch_rows: int = BATCH_ROWS) -> Recording:
-    """A recording file (CSV, or Parquet by its name) read as :func:`thinning`'s windows, every
-    row read and checked, the kept rows' arrays only held (a plain CSV or a Parquet file: in
-    chunks; anything the chunked reader leaves to the whole-file reader, such as a compressed
-    file: read whole, then thinned).
+    """One recording file read as :func:`read_all_thinned` reads several."""
+    return read_all_thinned([path], device, max_samples, scale, block_bytes, batch_rows)[0]
+
+
+def read_all_thinned(paths: list, device: Any, max_samples: int | None, scale: Scale | None = None,
+                     block_bytes: int = BLOCK_BYTES, batch_rows: int = BATCH_ROWS) -> list[Recording]:
+    """Recording files (CSV, or Parquet by the name) cut down by :func:`plan`: every row read and
+    checked, only the kept rows' arrays held (a plain CSV or a Parquet file: in chunks, after a
+    count of its rows; anything the chunked reader leaves to the whole-file reader, such as a
+    compressed file: read whole, then cut down).
 
     Returns
     -------
-    Recording
-        The kept samples (each with its file line, for messages; ``thinning`` says which), or
-        the whole-file reader's Recording where it has at most ``max_samples`` samples.
+    list of Recording
+        The kept samples of each (each with its file line, for messages; ``thinning`` says
+        which), or the whole-file reader's Recording where it is kept whole.
 
     Raises
     ------
     InputError
-        The whole-file reader's error for a bad row anywhere in the file, or a reading outside
-        the device's range.
+        The whole-file reader's error for a bad row anywhere in a file, or a reading outside the
+        device's range.
     """
     rate = float(device.sample_rate_hz)
     if not max_samples:
-        return read_recording(path, device.n_channels, scale=scale)
-    try:
-        src = open_chunks(path, device.n_channels, scale, block_bytes=block_bytes, batch_rows=batch_rows)
-        if src.head.extra:
-            raise Fallback("extra columns")
-        n_est = _count_rows(src, path)
-    except Fallback:
-        return thin_recording(read_recording(path, device.n_channels, scale=scale), rate, max_samples)
-    if n_est <= max_samples:
-        return read_recording(path, device.n_channels, scale=scale)
-    plan = th = thinning(n_est, rate, max_samples)
+        return [read_recording(p, device.n_channels, scale=scale) for p in paths]
+    found: list[Any] = []          # per file: a ChunkSource, or the Recording read whole
+    sizes: list[tuple[int, bool]] = []
+    for p in paths:
+        try:
+            src = open_chunks(p, device.n_channels, scale, block_bytes=block_bytes, batch_rows=batch_rows)
+            if src.head.extra:
+                raise Fallback("extra columns")
+            found.append(src)
+            sizes.append((_count_rows(src, p), "f_x" in src.head.cols))
+        except Fallback:
+            rec = read_recording(p, device.n_channels, scale=scale)
+            found.append(rec)
+            sizes.append((rec.n_samples, rec.has_f()))
+    out = []
+    for p, got, th, (n_est, _) in zip(paths, found, plan(sizes, rate, max_samples), sizes):
+        if isinstance(got, Recording):
+            out.append(_take(got, th))
+        elif th is None:
+            out.append(read_recording(p, device.n_channels, scale=scale))
+        else:
+            try:
+                out.append(_read_kept(got, device, th))
+            except Fallback:       # later text the chunked reader leaves to the whole-file reader
+                out.append(_take(read_recording(p, device.n_channels, scale=scale), th))
+    return out
+
+
+def _read_kept(src: Any, device: Any, th: Thinning) -> Recording:
+    """The rows ``th`` keeps of a recording read in chunks, every row checked.
+
+    Raises
+    ------
+    Fallback
+        Text the chunked reader leaves to the whole-file reader, or fewer rows than counted.
+    """
     head = src.head
     parts: dict[str, list[np.ndarray]] = {}
     lines: list[np.ndarray] = []
@@ -192,32 +268,26 @@ def read_thinned(path: Any, device: Any, max_samples: int | None, scale: Scale |
     first_range: InputError | None = None
     prev = None
     n = 0
-    try:
-        for ch in src.chunks():
-            errors += [(rank, ch.start, e) for rank, e in reader_checks(head, ch, prev)]
-            if first_range is None and not errors:
-                try:
-                    check_raw_range(_Located(ch, head.source), device)
-                except InputError as e:
-                    first_range = e
-            keep = th.keep(ch.start, ch.n)
-            idx = np.flatnonzero(keep)
-            for name, arr in (("t", ch.t), ("raw", ch.raw), *ch.vecs.items(), *ch.other.items()):
-                if arr is not None:
-                    parts.setdefault(name, []).append(arr[idx])
-            lines.append(np.array([ch.line(int(i)) for i in idx], dtype=np.int64))
-            n += ch.n
-            prev = ch
-    except Fallback:
-        return thin_recording(read_recording(path, device.n_channels, scale=scale), rate, max_samples)
+    for ch in src.chunks():
+        errors += [(rank, ch.start, e) for rank, e in reader_checks(head, ch, prev)]
+        if first_range is None and not errors:
+            try:
+                check_raw_range(_Located(ch, head.source), device)
+            except InputError as e:
+                first_range = e
+        idx = np.flatnonzero(th.keep(ch.start, ch.n))
+        for name, arr in (("t", ch.t), ("raw", ch.raw), *ch.vecs.items(), *ch.other.items()):
+            if arr is not None:
+                parts.setdefault(name, []).append(arr[idx])
+        lines.append(np.array([ch.line(int(i)) for i in idx], dtype=np.int64))
+        n += ch.n
+        prev = ch
     if errors:
         raise min(errors, key=lambda x: (x[0], x[1]))[2]
     if first_range is not None:     # check_for_device's range check, over every row
         raise first_range
-    th = thinning(n, rate, max_samples)
-    if th is None or th.windows != plan.windows:
-        # the rows were fewer than the lines counted: the windows the whole-file reader's rows give
-        return thin_recording(read_recording(path, device.n_channels, scale=scale), rate, max_samples)
+    if n != th.n_read:
+        raise Fallback("fewer rows than lines counted")
     cols = {name: np.concatenate(parts.pop(name)) for name in list(parts)}
     rec = Recording(t=cols["t"], raw=cols["raw"], f=cols.get("f"), w=cols.get("w"), dw=cols.get("dw"),
                     temp_c=cols.get("temp_c"), pose=cols.get("pose"), metadata=head.metadata, source=head.source,
