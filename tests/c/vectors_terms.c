@@ -348,7 +348,7 @@ static void vec_temp_frac(void)
     rng = saved;
 }
 
-static void vec_terms(void)
+static VEC_STEP void vec_terms(void)
 {
     vec_temp_lag();
     vec_temp_correct();
