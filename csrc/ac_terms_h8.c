@@ -435,16 +435,18 @@ __asm__(
     "\tbvc\t1f\n"
     "\tbsr\t.Ltc_clip1:16\n"
     "1:\n"
-    "\tadd.l\ter2,er1\n"
-    "\tbvc\t1f\n"
-    "\tbsr\t.Ltc_clip1:16\n"
-    "1:\n"
     "\t.if\t\\K\n"
-    /* w + 2^(15-k) (the bias from its word, then the loop's count: shifted left once a
-     * SHAL.L, it reaches 0x8000, negative, after k); the clips out of line, after the rts */
+    /* w + (o 2^8 + 2^(15-k)): one sum, one V test (the bias from its word, then the loop's count:
+     * shifted left once a SHAL.L, it reaches 0x8000, negative, after k).  The C's w + o 2^8
+     * saturates first; the fused sum gives the same y and flag: it overflows where w + o 2^8 does
+     * upwards (o > 0 there) and where w + o 2^8 + 2^(15-k) leaves int32 (y clips either way);
+     * where w + o 2^8 leaves int32 downwards and the sum does not, the sum is below
+     * -2^31 + 2^14 and the first SHAL.L overflows (y = -32768 and the flag, as the C's
+     * round of INT32_MIN).  The clips out of line, after the rts */
     "\tmov.w\t@(2,er7),r0\n"
     "\textu.l\ter0\n"
-    "\tadd.l\ter0,er1\n"
+    "\tadd.l\ter0,er2\n"
+    "\tadd.l\ter2,er1\n"
     "\tbvs\t3f\n"
     "2:\n"
     "\tshal.l\ter1\n"
@@ -453,6 +455,10 @@ __asm__(
     "\tbpl\t2b\n"
     "4:\n"
     "\t.else\n"
+    "\tadd.l\ter2,er1\n"
+    "\tbvc\t1f\n"
+    "\tbsr\t.Ltc_clip1:16\n"
+    "1:\n"
     "\tadd.l\t#0x8000,er1\n"
     "\tbvc\t1f\n"
     "\tbsr\t.Ltc_y:16\n"
