@@ -437,12 +437,12 @@ __asm__(
     "1:\n"
     "\t.if\t\\K\n"
     /* w + (o 2^8 + 2^(15-k)): one sum, one V test (the bias from its word, then the loop's count:
-     * shifted left once a SHAL.L, it reaches 0x8000, negative, after k).  The C's w + o 2^8
-     * saturates first; the fused sum gives the same y and flag: it overflows where w + o 2^8 does
-     * upwards (o > 0 there) and where w + o 2^8 + 2^(15-k) leaves int32 (y clips either way);
-     * where w + o 2^8 leaves int32 downwards and the sum does not, the sum is below
-     * -2^31 + 2^14 and the first SHAL.L overflows (y = -32768 and the flag, as the C's
-     * round of INT32_MIN).  The clips out of line, after the rts */
+     * shifted left once a SHAL.L, it reaches 0x8000, negative, after k).  The C saturates
+     * w + o 2^8 first; the fused sum gives the same y and flag: y clips wherever w + o 2^8 or
+     * the sum is within 2^15 of int32's ends (|y| >= 2^(31-k) 2^-(16-k) = 2^15 there), and the
+     * sum's V (the wrapped sign gives the direction) or the first SHAL.L's V (a sum below
+     * -2^30 or at or above 2^30) catches each such case; not so at frac 0, where w + o 2^8 just
+     * below INT32_MIN rounds to -32768 (the VTS vectors).  The clips out of line, after the rts */
     "\tmov.w\t@(2,er7),r0\n"
     "\textu.l\ter0\n"
     "\tadd.l\ter0,er2\n"
