@@ -96,7 +96,7 @@ LABELS = {
     "terms_temp_nonlin": "terms with nonlinearity and temperature: 2 lag steps + `ac_temp_correct` + `ac_nonlin_invert`",
     "ac_omega_step_rest": "`ac_omega_step` (12 channels, at rest: the ML skipped)",
     "ac_omega_step_turn": "`ac_omega_step` (12 channels, turning: the ML each sample)",
-    "ac_temp_correct_k2": "`ac_temp_correct` (6 channels, offset + gain, output in 2^-2 counts: the C)",
+    "ac_temp_correct_k2": "`ac_temp_correct` (6 channels, offset + gain, output in 2^-2 counts, frac 2)",
     "terms_temp_nonlin_k2": "terms with nonlinearity and temperature, the hand-off in 2^-2 counts (frac 2, nonlinearity shift 18)",
     "ac_nonlin_invert_k2": "`ac_nonlin_invert` (6 channels, 3 iterations) at shift 18 (coefficients per 2^-2 count)",
     "terms_full_path": "the whole per-sample path with every term: `ac_trim_rails` + 2 lags + temperature + "

@@ -157,7 +157,7 @@ static const ac_skew_table terms_skew = {6u, 3u, {1, 0, 1, 1, 1, 0}, {7864u, 268
 static const ac_nonlin_table terms_nl = {6u, 15, {4295, 4295, 4295, 4295, 4295, 4295},
                                          {22518, 22518, 22518, 22518, 22518, 22518}, 0u};
 /* the same terms as a header writes them now for the seed's 0..10000 converter: the hand-off in
- * 2^-2 counts (AC_CAL_TERMS_FRAC 2): ac_temp_correct's frac 2 (the C on the H8/300H), the
+ * 2^-2 counts (AC_CAL_TERMS_FRAC 2): ac_temp_correct's frac 2, the
  * nonlinearity's coefficients per 2^-2 count (shift 18) */
 static const ac_temp_table terms_temp_k2 = {6u, 6400, {640, 640, 640, 640, 640, 640},
                                             {5033, 5033, 5033, 5033, 5033, 5033}, {0, 0, 0, 0, 0, 0}, 2u};
