@@ -21,18 +21,20 @@
  *   g = round(h z 2^-15) the same way;
  *   C = round(g z 2^-shift): shift 15: the same with SHAL.L, whose V flags the one product
  *       that leaves the high word (g = z = -32768: g z = 2^30, C = 2^15, out of line);
- *       shift 16..30 (the iterations a loop, e3 the count): a jump through e5 (set once a
+ *       shift 17..19: s 17..19 add 2^(s-17) to the high word and shift it s - 16 SHAR.W, the
+ *       iterations unrolled as at shift 15 (the channel loop NLU 15, 17, 18, 19; the seed's
+ *       coefficients per 2^-2 count are at 17..19, 18 for its 0.5 % square + 0.1 % cube);
+ *       shift 16 and 20..30 (the iterations a loop, e3 the count): a jump through e5 (set once a
  *       call) to the shift's block, C = floor((g z + 2^(s-1)) 2^-s) with no edge (g z +
- *       2^(s-1) < 2^31): s 16 adds 0x8000 (er6 twice), s 17..19 add 2^(s-17) to the high
- *       word and shift it s - 16 SHAR.W, s 20..30 shift the high word s - 17 SHAR.W (a
- *       loop, s - 16 in the flag word's low byte) and once more, adding the carry
+ *       2^(s-1) < 2^31): s 16 adds 0x8000 (er6 twice), s 20..30 shift the high word s - 17
+ *       SHAR.W (a loop, s - 16 in the flag word's low byte) and once more, adding the carry
  *       (floor((w + 1) / 2) = floor(w/2) + the carry, w = floor(g z 2^-(s-1)));
  *       for shift >= 15 |C| <= 2^15 and C fits int16 but for g z = 2^30 at shift 15;
  *   z = x0 - C: SUB.W, its V the clip (to 0x7FFF if the wrapped result is negative, else
  *       0x8000, and the flag), out of line.
  * ac_temp_correct: the channel loop twice (the assembler macro TCCH): for a table with frac 0
- * and, with a final round(w 2^-(16-k)) by w + 2^(15-k) (the bias computed once a call, kept
- * in a stack word, the SHAL.L loop's count) and k SHAL.L (V: the clip), for frac
+ * and, with a final round(w 2^-(16-k)) by w + (o 2^8 + 2^(15-k)) (the bias computed once a call,
+ * kept in a stack word, the SHAL.L loop's count) and k SHAL.L (V: the clip), for frac
  * 1..8 (issue 35's hand-off in 2^-k counts); the clips are subroutines both share.
  * Addresses: normal mode uses the low 16 bits of a register, so e1..e5 hold data while
  * r4, r5, r6 point (no array reaches 0x10000: a post-increment never carries into them).
@@ -146,6 +148,8 @@ __asm__(
     "ac_h8_nonlin:\n"
     "\tNLU\t15\n"
     "\tNLU\t18\n"
+    "\tNLU\t17\n"
+    "\tNLU\t19\n"
     /* g z = 2^30 at shift 15 (a subroutine): C = 2^15.  z = -32768 there, and z reaches -32768 only
      * as x0 or as a clip below, both with x0 < 0: z = x0 - 2^15 clips to -32768, flagged */
     ".Lnl_a_edge:\n"
@@ -182,24 +186,13 @@ __asm__(
     "\tmov.w\te0,r0\n"
     "\tmulxs.w\tr1,er0\n"
     /* C = floor((g z + 2^(s-1)) 2^-s) (|g z| <= 2^30: no overflow, no edge): a jump (e5) to the
-     * block of the shift s; shift 18 (the seed's, k = 2) falls through */
+     * block of the shift s (16, or 20..30 falling through; 17..19 run unrolled, NLU) */
     "\tmov.w\te5,r1\n"
     "\tjmp\t@er1\n"
     /* s 16: + 0x8000 (er6 twice), the high word */
     ".Lnl_k16:\n"
     "\tadd.l\ter6,er0\n"
     "\tadd.l\ter6,er0\n"
-    "\tbra\t.Lnl_b_v\n"
-    /* s 17..19: + 2^(s-17) to the high word, then s - 16 SHAR.W (floor of a floor) */
-    ".Lnl_k17:\n"
-    "\tinc.w\t#1,e0\n"
-    "\tshar.w\te0\n"
-    "\tbra\t.Lnl_b_v\n"
-    ".Lnl_k19:\n"
-    "\tadd.w\t#4,e0\n"
-    "\tshar.w\te0\n"
-    "\tshar.w\te0\n"
-    "\tshar.w\te0\n"
     "\tbra\t.Lnl_b_v\n"
     /* s 20..30: floor(g z 2^-(s-1)) by s - 17 SHAR.W of the high word (s - 16 in the flag word's
      * low byte), one more whose carry is added */
@@ -212,11 +205,6 @@ __asm__(
     "\tshar.w\te0\n"
     "\tbcc\t.Lnl_b_v\n"
     "\tinc.w\t#1,e0\n"
-    "\tbra\t.Lnl_b_v\n"
-    ".Lnl_k18:\n"
-    "\tinc.w\t#2,e0\n"
-    "\tshar.w\te0\n"
-    "\tshar.w\te0\n"
     ".Lnl_b_v:\n"
     "\tmov.w\te1,r1\n"
     "\tsub.w\te0,r1\n"
@@ -286,17 +274,12 @@ __asm__(
     "\tmov.w\tr0,@-er7\n"
     "\tcmp.b\t#18-16,r0l\n"
     "\tbeq\t.Lnl_ch18:16\n"
+    "\tcmp.b\t#17-16,r0l\n"
+    "\tbeq\t.Lnl_ch17:16\n"
+    "\tcmp.b\t#19-16,r0l\n"
+    "\tbeq\t.Lnl_ch19:16\n"
     "\tmov.w\t#.Lnl_k16,r1\n"
     "\tcmp.b\t#0,r0l\n"
-    "\tbeq\t5f\n"
-    "\tmov.w\t#.Lnl_k17,r1\n"
-    "\tcmp.b\t#1,r0l\n"
-    "\tbeq\t5f\n"
-    "\tmov.w\t#.Lnl_k18,r1\n"
-    "\tcmp.b\t#2,r0l\n"
-    "\tbeq\t5f\n"
-    "\tmov.w\t#.Lnl_k19,r1\n"
-    "\tcmp.b\t#3,r0l\n"
     "\tbeq\t5f\n"
     "\tmov.w\t#.Lnl_kg,r1\n"
     "5:\tmov.w\tr1,e5\n"
