@@ -21,7 +21,8 @@
  *   g = round(h z 2^-15) the same way;
  *   C = round(g z 2^-shift): shift 15: the same with SHAL.L, whose V flags the one product
  *       that leaves the high word (g = z = -32768: g z = 2^30, C = 2^15, out of line);
- *       shift 17..19: s 17..19 add 2^(s-17) to the high word and shift it s - 16 SHAR.W, the
+ *       shift 17..19: s 17..19 add 2^(s-17) to the high word and shift it s - 16 SHAR.W (19: the
+ *       add after two of its shifts, as + 1), the
  *       iterations unrolled as at shift 15 (the channel loop NLU 15, 17, 18, 19; the seed's
  *       coefficients per 2^-2 count are at 17..19, 18 for its 0.5 % square + 0.1 % cube);
  *       shift 16 and 20..30 (the iterations a loop, e3 the count): a jump through e5 (set once a
@@ -66,7 +67,8 @@ __asm__(
      * out-of-line stubs of the product 2^30 (shift 15 only) and of the clip, \n the label after it.
      * C = round(g z 2^-S): S 15 by SHAL.L (its V the product 2^30); S 16..19 as the loop's blocks
      * below (|g z| <= 2^30: no edge): + 0x8000 (er6 twice) and the high word at 16, + 2^(S-17) to
-     * the high word and S - 16 SHAR.W at 17..19 */
+     * the high word and S - 16 SHAR.W at 17..19 (at 19 as two SHAR.W, + 1, one SHAR.W: floor((floor(v/4)
+ * + 1) / 2) = floor((v + 4) / 8), INC.W where ADD.W #4 is a longer instruction) */
     "\t.macro\tNLA S, e, c, n\n"
     "\tmov.w\te2,r0\n"
     "\tmulxs.w\tr1,er0\n"
@@ -94,9 +96,9 @@ __asm__(
     "\tshar.w\te0\n"
     "\tshar.w\te0\n"
     "\t.elseif\t\\S == 19\n"
-    "\tadd.w\t#4,e0\n"
     "\tshar.w\te0\n"
     "\tshar.w\te0\n"
+    "\tinc.w\t#1,e0\n"
     "\tshar.w\te0\n"
     "\t.else\n"
     "\t.error\t\"NLA: shift 15..19 only\"\n"
