@@ -21,18 +21,21 @@
  *   g = round(h z 2^-15) the same way;
  *   C = round(g z 2^-shift): shift 15: the same with SHAL.L, whose V flags the one product
  *       that leaves the high word (g = z = -32768: g z = 2^30, C = 2^15, out of line);
- *       shift 16..30 (the iterations a loop, e3 the count): a jump through e5 (set once a
+ *       shift 17..19: s 17..19 add 2^(s-17) to the high word and shift it s - 16 SHAR.W (19: the
+ *       add after two of its shifts, as + 1), the
+ *       iterations unrolled as at shift 15 (the channel loop NLU 15, 17, 18, 19; the seed's
+ *       coefficients per 2^-2 count are at 17..19, 18 for its 0.5 % square + 0.1 % cube);
+ *       shift 16 and 20..30 (the iterations a loop, e3 the count): a jump through e5 (set once a
  *       call) to the shift's block, C = floor((g z + 2^(s-1)) 2^-s) with no edge (g z +
- *       2^(s-1) < 2^31): s 16 adds 0x8000 (er6 twice), s 17..19 add 2^(s-17) to the high
- *       word and shift it s - 16 SHAR.W, s 20..30 shift the high word s - 17 SHAR.W (a
- *       loop, s - 16 in the flag word's low byte) and once more, adding the carry
+ *       2^(s-1) < 2^31): s 16 adds 0x8000 (er6 twice), s 20..30 shift the high word s - 17
+ *       SHAR.W (a loop, s - 16 in the flag word's low byte) and once more, adding the carry
  *       (floor((w + 1) / 2) = floor(w/2) + the carry, w = floor(g z 2^-(s-1)));
  *       for shift >= 15 |C| <= 2^15 and C fits int16 but for g z = 2^30 at shift 15;
  *   z = x0 - C: SUB.W, its V the clip (to 0x7FFF if the wrapped result is negative, else
  *       0x8000, and the flag), out of line.
  * ac_temp_correct: the channel loop twice (the assembler macro TCCH): for a table with frac 0
- * and, with a final round(w 2^-(16-k)) by w + 2^(15-k) (the bias computed once a call, kept
- * in a stack word, the SHAL.L loop's count) and k SHAL.L (V: the clip), for frac
+ * and, with a final round(w 2^-(16-k)) by w + (o 2^8 + 2^(15-k)) (the bias computed once a call,
+ * kept in a stack word, the SHAL.L loop's count) and k SHAL.L (V: the clip), for frac
  * 1..8 (issue 35's hand-off in 2^-k counts); the clips are subroutines both share.
  * Addresses: normal mode uses the low 16 bits of a register, so e1..e5 hold data while
  * r4, r5, r6 point (no array reaches 0x10000: a post-increment never carries into them).
@@ -60,9 +63,13 @@ __asm__(
     "\t.equ\tNL_A3D, 2*NL_MAXCH-2\n"
     "\t.equ\tNL_KOFF, 4+4*NL_MAXCH\n"
     "\t.equ\tNL_IT, " AC_H8T_XSTR(AC_NONLIN_ITERATIONS) "\n"
-    /* one iteration at shift 15 (z r1, x0 e1, a2 r2, a3 e2, 0x4000 in er6); \e, \c the out-of-line
-     * stubs of the product 2^30 and of the clip, \n the label after it */
-    "\t.macro\tNLA e, c, n\n"
+    /* one iteration at the shift S, unrolled (z r1, x0 e1, a2 r2, a3 e2, 0x4000 in er6); \e, \c the
+     * out-of-line stubs of the product 2^30 (shift 15 only) and of the clip, \n the label after it.
+     * C = round(g z 2^-S): S 15 by SHAL.L (its V the product 2^30); S 16..19 as the loop's blocks
+     * below (|g z| <= 2^30: no edge): + 0x8000 (er6 twice) and the high word at 16, + 2^(S-17) to
+     * the high word and S - 16 SHAR.W at 17..19 (at 19 as two SHAR.W, + 1, one SHAR.W: floor((floor(v/4)
+ * + 1) / 2) = floor((v + 4) / 8), INC.W where ADD.W #4 is a longer instruction) */
+    "\t.macro\tNLA S, e, c, n\n"
     "\tmov.w\te2,r0\n"
     "\tmulxs.w\tr1,er0\n"
     "\tadd.l\ter6,er0\n"
@@ -74,49 +81,77 @@ __asm__(
     "\tshll.l\ter0\n"
     "\tmov.w\te0,r0\n"
     "\tmulxs.w\tr1,er0\n"
+    "\t.if\t\\S == 15\n"
     "\tadd.l\ter6,er0\n"
     "\tshal.l\ter0\n"
     "\tbvs\t\\e\n"
+    "\t.elseif\t\\S == 16\n"
+    "\tadd.l\ter6,er0\n"
+    "\tadd.l\ter6,er0\n"
+    "\t.elseif\t\\S == 17\n"
+    "\tinc.w\t#1,e0\n"
+    "\tshar.w\te0\n"
+    "\t.elseif\t\\S == 18\n"
+    "\tinc.w\t#2,e0\n"
+    "\tshar.w\te0\n"
+    "\tshar.w\te0\n"
+    "\t.elseif\t\\S == 19\n"
+    "\tshar.w\te0\n"
+    "\tshar.w\te0\n"
+    "\tinc.w\t#1,e0\n"
+    "\tshar.w\te0\n"
+    "\t.else\n"
+    "\t.error\t\"NLA: shift 15..19 only\"\n"
+    "\t.endif\n"
     "\tmov.w\te1,r1\n"
     "\tsub.w\te0,r1\n"
     "\tbvs\t\\c\n"
     "\\n:\n"
     "\t.endm\n"
     /* the stubs of one NLA */
-    "\t.macro\tNLAS e, c, n\n"
+    "\t.macro\tNLAS S, e, c, n\n"
+    "\t.if\t\\S == 15\n"
     "\\e:\tbsr\t.Lnl_a_edge:16\n"
     "\tbra\t\\n\n"
+    "\t.endif\n"
     "\\c:\tbsr\t.Lnl_clip:16\n"
     "\tbra\t\\n\n"
     "\t.endm\n"
-    "\t.section .text\n"
-    "\t.align 1\n"
-    /* ---- shift 15, the iterations unrolled (ac_h8_nonlin: a symbol for the profiles) */
-    "ac_h8_nonlin:\n"
-    "\tNLAS\t.Lnl_e1, .Lnl_c1, .Lnl_n1\n"
-    "\tNLAS\t.Lnl_e2, .Lnl_c2, .Lnl_n2\n"
-    ".Lnl_a_ch:\n"
+    /* the channel loop at the shift S with the iterations unrolled (entered at .Lnl_ch<S>) */
+    "\t.macro\tNLU S\n"
+    "\tNLAS\t\\S, .Lnl_e1_\\S, .Lnl_c1_\\S, .Lnl_n1_\\S\n"
+    "\tNLAS\t\\S, .Lnl_e2_\\S, .Lnl_c2_\\S, .Lnl_n2_\\S\n"
+    ".Lnl_ch\\S:\n"
     "\tmov.w\t@er5+,e1\n"
     "\tmov.w\te1,r1\n"
     "\tmov.w\t@er4+,r2\n"
     "\tmov.w\t@(NL_A3D,er4),e2\n"
     "\t.if\tNL_IT == 3\n"
-    "\tNLA\t.Lnl_e1, .Lnl_c1, .Lnl_n1\n"
-    "\tNLA\t.Lnl_e2, .Lnl_c2, .Lnl_n2\n"
-    "\tNLA\t.Lnl_e3, .Lnl_c3, .Lnl_n3\n"
+    "\tNLA\t\\S, .Lnl_e1_\\S, .Lnl_c1_\\S, .Lnl_n1_\\S\n"
+    "\tNLA\t\\S, .Lnl_e2_\\S, .Lnl_c2_\\S, .Lnl_n2_\\S\n"
+    "\tNLA\t\\S, .Lnl_e3_\\S, .Lnl_c3_\\S, .Lnl_n3_\\S\n"
     "\t.else\n"
     "\tmov.w\t#NL_IT,e3\n"
-    ".Lnl_a_it:\n"
-    "\tNLA\t.Lnl_e3, .Lnl_c3, .Lnl_n3\n"
+    ".Lnl_it\\S:\n"
+    "\tNLA\t\\S, .Lnl_e3_\\S, .Lnl_c3_\\S, .Lnl_n3_\\S\n"
     "\tdec.w\t#1,e3\n"
-    "\tbne\t.Lnl_a_it:16\n"
+    "\tbne\t.Lnl_it\\S:16\n"
     "\t.endif\n"
     "\tmov.w\tr1,@er3\n"
     "\tadds\t#2,er3\n"
     "\tdec.w\t#1,e4\n"
-    "\tbne\t.Lnl_a_ch:16\n"
+    "\tbne\t.Lnl_ch\\S:16\n"
     "\tbra\t.Lnl_done:16\n"
-    "\tNLAS\t.Lnl_e3, .Lnl_c3, .Lnl_n3\n"
+    "\tNLAS\t\\S, .Lnl_e3_\\S, .Lnl_c3_\\S, .Lnl_n3_\\S\n"
+    "\t.endm\n"
+    "\t.section .text\n"
+    "\t.align 1\n"
+    /* ---- shift 15 and the unrolled shifts (ac_h8_nonlin: a symbol for the profiles) */
+    "ac_h8_nonlin:\n"
+    "\tNLU\t15\n"
+    "\tNLU\t18\n"
+    "\tNLU\t17\n"
+    "\tNLU\t19\n"
     /* g z = 2^30 at shift 15 (a subroutine): C = 2^15.  z = -32768 there, and z reaches -32768 only
      * as x0 or as a clip below, both with x0 < 0: z = x0 - 2^15 clips to -32768, flagged */
     ".Lnl_a_edge:\n"
@@ -153,24 +188,13 @@ __asm__(
     "\tmov.w\te0,r0\n"
     "\tmulxs.w\tr1,er0\n"
     /* C = floor((g z + 2^(s-1)) 2^-s) (|g z| <= 2^30: no overflow, no edge): a jump (e5) to the
-     * block of the shift s; shift 18 (the seed's, k = 2) falls through */
+     * block of the shift s (16, or 20..30 falling through; 17..19 run unrolled, NLU) */
     "\tmov.w\te5,r1\n"
     "\tjmp\t@er1\n"
     /* s 16: + 0x8000 (er6 twice), the high word */
     ".Lnl_k16:\n"
     "\tadd.l\ter6,er0\n"
     "\tadd.l\ter6,er0\n"
-    "\tbra\t.Lnl_b_v\n"
-    /* s 17..19: + 2^(s-17) to the high word, then s - 16 SHAR.W (floor of a floor) */
-    ".Lnl_k17:\n"
-    "\tinc.w\t#1,e0\n"
-    "\tshar.w\te0\n"
-    "\tbra\t.Lnl_b_v\n"
-    ".Lnl_k19:\n"
-    "\tadd.w\t#4,e0\n"
-    "\tshar.w\te0\n"
-    "\tshar.w\te0\n"
-    "\tshar.w\te0\n"
     "\tbra\t.Lnl_b_v\n"
     /* s 20..30: floor(g z 2^-(s-1)) by s - 17 SHAR.W of the high word (s - 16 in the flag word's
      * low byte), one more whose carry is added */
@@ -183,11 +207,6 @@ __asm__(
     "\tshar.w\te0\n"
     "\tbcc\t.Lnl_b_v\n"
     "\tinc.w\t#1,e0\n"
-    "\tbra\t.Lnl_b_v\n"
-    ".Lnl_k18:\n"
-    "\tinc.w\t#2,e0\n"
-    "\tshar.w\te0\n"
-    "\tshar.w\te0\n"
     ".Lnl_b_v:\n"
     "\tmov.w\te1,r1\n"
     "\tsub.w\te0,r1\n"
@@ -255,24 +274,21 @@ __asm__(
     "\tmov.w\te5,r0\n"
     "\tbmi\t4f\n"
     "\tmov.w\tr0,@-er7\n"
+    "\tcmp.b\t#18-16,r0l\n"
+    "\tbeq\t.Lnl_ch18:16\n"
+    "\tcmp.b\t#17-16,r0l\n"
+    "\tbeq\t.Lnl_ch17:16\n"
+    "\tcmp.b\t#19-16,r0l\n"
+    "\tbeq\t.Lnl_ch19:16\n"
     "\tmov.w\t#.Lnl_k16,r1\n"
     "\tcmp.b\t#0,r0l\n"
-    "\tbeq\t5f\n"
-    "\tmov.w\t#.Lnl_k17,r1\n"
-    "\tcmp.b\t#1,r0l\n"
-    "\tbeq\t5f\n"
-    "\tmov.w\t#.Lnl_k18,r1\n"
-    "\tcmp.b\t#2,r0l\n"
-    "\tbeq\t5f\n"
-    "\tmov.w\t#.Lnl_k19,r1\n"
-    "\tcmp.b\t#3,r0l\n"
     "\tbeq\t5f\n"
     "\tmov.w\t#.Lnl_kg,r1\n"
     "5:\tmov.w\tr1,e5\n"
     "\tbra\t.Lnl_b_ch:16\n"
     "4:\tsub.w\tr0,r0\n"
     "\tmov.w\tr0,@-er7\n"
-    "\tbra\t.Lnl_a_ch:16\n");
+    "\tbra\t.Lnl_ch15:16\n");
 
 /* the structure offsets and limits the temperature kernels use */
 AC_STATIC_ASSERT(h8t_tl_y, offsetof(ac_temp_lag, y) == 0);
@@ -404,16 +420,18 @@ __asm__(
     "\tbvc\t1f\n"
     "\tbsr\t.Ltc_clip1:16\n"
     "1:\n"
-    "\tadd.l\ter2,er1\n"
-    "\tbvc\t1f\n"
-    "\tbsr\t.Ltc_clip1:16\n"
-    "1:\n"
     "\t.if\t\\K\n"
-    /* w + 2^(15-k) (the bias from its word, then the loop's count: shifted left once a
-     * SHAL.L, it reaches 0x8000, negative, after k); the clips out of line, after the rts */
+    /* w + (o 2^8 + 2^(15-k)): one sum, one V test (the bias from its word, then the loop's count:
+     * shifted left once a SHAL.L, it reaches 0x8000, negative, after k).  The C saturates
+     * w + o 2^8 first; the fused sum gives the same y and flag: y clips wherever w + o 2^8 or
+     * the sum is within 2^15 of int32's ends (|y| >= 2^(31-k) 2^-(16-k) = 2^15 there), and the
+     * sum's V (the wrapped sign gives the direction) or the first SHAL.L's V (a sum below
+     * -2^30 or at or above 2^30) catches each such case; not so at frac 0, where w + o 2^8 just
+     * below INT32_MIN rounds to -32768 (the VTS vectors).  The clips out of line, after the rts */
     "\tmov.w\t@(2,er7),r0\n"
     "\textu.l\ter0\n"
-    "\tadd.l\ter0,er1\n"
+    "\tadd.l\ter0,er2\n"
+    "\tadd.l\ter2,er1\n"
     "\tbvs\t3f\n"
     "2:\n"
     "\tshal.l\ter1\n"
@@ -422,6 +440,10 @@ __asm__(
     "\tbpl\t2b\n"
     "4:\n"
     "\t.else\n"
+    "\tadd.l\ter2,er1\n"
+    "\tbvc\t1f\n"
+    "\tbsr\t.Ltc_clip1:16\n"
+    "1:\n"
     "\tadd.l\t#0x8000,er1\n"
     "\tbvc\t1f\n"
     "\tbsr\t.Ltc_y:16\n"

@@ -67,7 +67,8 @@ ALGORITHM_MULS = {"ac_process": 36, "ac_process_omega": 78, "ac_resolve_omega": 
                   "ac_temp_lag_step": 2, "ac_temp_correct": 30, "ac_skew_step": 6, "ac_nonlin_invert": 54,
                   "terms_temp_nonlin": 2 * 2 + 30 + 54, "terms_full_path": 2 * 2 + 30 + 6 + 54 + 78,
                   "ac_temp_correct_k2": 30, "terms_temp_nonlin_k2": 2 * 2 + 30 + 54,
-                  "ac_nonlin_invert_k2": 54}
+                  "ac_nonlin_invert_k2": 54, "ac_nonlin_invert_s16": 54, "ac_nonlin_invert_s17": 54,
+                  "ac_nonlin_invert_s19": 54}
 PER_SAMPLE = ("ac_trim", "ac_process", "ac_process_omega", "ac_resolve_omega", "ac_rate_step",
               "ac_att_step", "ac_disp_step", "ac_process_batch_omega", "ac_triad_apply",
               "ac_temp_lag_step", "ac_temp_correct", "ac_skew_step", "ac_nonlin_invert", "terms_temp_nonlin",
@@ -77,6 +78,8 @@ PER_SAMPLE = ("ac_trim", "ac_process", "ac_process_omega", "ac_resolve_omega", "
 PER_SAMPLE += ("ac_omega_step_rest", "ac_omega_step_turn")
 # the terms' tables with the hand-off in 2^-2 counts (the seed's converter: AC_CAL_TERMS_FRAC 2)
 PER_SAMPLE += ("ac_temp_correct_k2", "terms_temp_nonlin_k2", "ac_nonlin_invert_k2")
+# the same coefficients at the shifts next to 18 (a 2^-2-count table's is 17..19, 16 for k = 1)
+PER_SAMPLE += ("ac_nonlin_invert_s16", "ac_nonlin_invert_s17", "ac_nonlin_invert_s19")
 LABELS = {
     "ac_trim": "`ac_trim` (6 channels)",
     "ac_process": "`ac_process`, omega = NULL (pre-trim + apply)",
@@ -96,9 +99,12 @@ LABELS = {
     "terms_temp_nonlin": "terms with nonlinearity and temperature: 2 lag steps + `ac_temp_correct` + `ac_nonlin_invert`",
     "ac_omega_step_rest": "`ac_omega_step` (12 channels, at rest: the ML skipped)",
     "ac_omega_step_turn": "`ac_omega_step` (12 channels, turning: the ML each sample)",
-    "ac_temp_correct_k2": "`ac_temp_correct` (6 channels, offset + gain, output in 2^-2 counts: the C)",
+    "ac_temp_correct_k2": "`ac_temp_correct` (6 channels, offset + gain, output in 2^-2 counts, frac 2)",
     "terms_temp_nonlin_k2": "terms with nonlinearity and temperature, the hand-off in 2^-2 counts (frac 2, nonlinearity shift 18)",
     "ac_nonlin_invert_k2": "`ac_nonlin_invert` (6 channels, 3 iterations) at shift 18 (coefficients per 2^-2 count)",
+    "ac_nonlin_invert_s16": "`ac_nonlin_invert` (6 channels, 3 iterations), the shift-18 coefficients at shift 16",
+    "ac_nonlin_invert_s17": "`ac_nonlin_invert` (6 channels, 3 iterations), the shift-18 coefficients at shift 17",
+    "ac_nonlin_invert_s19": "`ac_nonlin_invert` (6 channels, 3 iterations), the shift-18 coefficients at shift 19",
     "terms_full_path": "the whole per-sample path with every term: `ac_trim_rails` + 2 lags + temperature + "
                        "skew + nonlinearity + `ac_resolve` with omega",
 }

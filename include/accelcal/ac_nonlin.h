@@ -31,7 +31,8 @@
  * |z| the largest reading involved (python: accelcal.firmware.terms_fixed.nonlin_bound).
  * AC_SATURATED if a z_k clipped to int16.
  * On the H8/300H (normal mode) the function is assembly for shifts 15..30 and K = 3
- * (csrc/ac_terms_h8.c), the same arithmetic bit for bit; the C of ac_nonlin.c everywhere else
+ * (csrc/ac_terms_h8.c; the iterations unrolled at shifts 15 and 17..19, a loop at 16 and
+ * 20..30), the same arithmetic bit for bit; the C of ac_nonlin.c everywhere else
  * (other K included: about 2,070 H8/300H states an iteration for 6 channels in C).
  */
 #ifndef AC_NONLIN_H

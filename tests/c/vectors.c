@@ -23,6 +23,15 @@
 
 #include "vectors.h"
 
+/* main's steps are kept out of line: inlined (gcc -O2 inlines a static function called once) their
+ * locals all sat in main's frame, under every later step's; the -O2 H8/300H run has the 64 KB of
+ * normal mode for code, data and stack */
+#if defined(__GNUC__)
+#define VEC_STEP __attribute__((noinline))
+#else
+#define VEC_STEP
+#endif
+
 /* ---- output ------------------------------------------------------------------ */
 
 static uint32_t crc = 0xFFFFFFFFUL;
@@ -231,7 +240,7 @@ static union {
 /* every rounding shift at its edges: the values around 0, +-2^(n-1) (the
  * rounding ties) and the int32 limits, for each shift 1..31 and a few left
  * shifts; AVR has its own assembly for these, the host plain C */
-static void vec_shift_edges(void)
+static VEC_STEP void vec_shift_edges(void)
 {
     int16_t sh;
     for (sh = -3; sh <= 31; sh++) {
@@ -263,7 +272,7 @@ static void vec_shift_edges(void)
     }
 }
 
-static void vec_fixed(void)
+static VEC_STEP void vec_fixed(void)
 {
     uint16_t i;
     for (i = 0u; i < 400u; i++) {
@@ -369,7 +378,7 @@ static void vec_fixed(void)
 
 /* ---- xf ------------------------------------------------------------------------------ */
 
-static void vec_xf(void)
+static VEC_STEP void vec_xf(void)
 {
     uint16_t i;
     for (i = 0u; i < 300u; i++) {
@@ -459,7 +468,7 @@ static void vec_xf(void)
 
 /* ---- trim ------------------------------------------------------------------------------ */
 
-static void vec_trim(void)
+static VEC_STEP void vec_trim(void)
 {
     uint16_t i, k;
     uint16_t raw[AC_MAX_CHANNELS + 2u], trim[AC_MAX_CHANNELS + 2u];
@@ -535,7 +544,7 @@ static int32_t rnd_pm(int32_t lim)
     return (int32_t)(rnd() & mask) - (int32_t)(mask >> 1);
 }
 
-static void vec_triad_build(void)
+static VEC_STEP void vec_triad_build(void)
 {
     uint16_t i, j, q;
     ac_build_work work;
@@ -575,7 +584,7 @@ static void vec_triad_build(void)
     }
 }
 
-static void vec_triad(void)
+static VEC_STEP void vec_triad(void)
 {
     uint16_t i, j, q;
     for (i = 0u; i < 40u; i++) {
@@ -660,7 +669,7 @@ static void print_out6(const int32_t *out)
     }
 }
 
-static void vec_resolve(void)
+static VEC_STEP void vec_resolve(void)
 {
     uint16_t t, i, k;
     int16_t x[AC_MAX_CHANNELS], w[3];
@@ -767,7 +776,7 @@ static const int16_t edge_w[][3] = {{0, 0, 0},          {-32767 - 1, -32767 - 1,
                                     {32767, -32767 - 1, 1}, {127, -128, 126},
                                     {181, 0, -181},     {-2896, 2896, 100}};
 
-static void vec_resolve_edges(void)
+static VEC_STEP void vec_resolve_edges(void)
 {
     uint16_t t, i, k;
     int16_t x[AC_MAX_CHANNELS], w[3];
@@ -846,7 +855,7 @@ static void vec_resolve_edges(void)
  * (the pre-trim into registers) and n = AC_MAX_CHANNELS, several faults at
  * once (the C's order decides: NULL, then n, then the shifts), and out left as
  * it was after every error. */
-static void vec_resolve_errors(void)
+static VEC_STEP void vec_resolve_errors(void)
 {
     static const int8_t bad[] = {32, -32, 33, -33, 63, -63, 64, -64, 96, -96, 127, -128};
     static const int8_t good[] = {31, -31, 30, -30, 1, -1, 0};
@@ -966,7 +975,7 @@ static void vec_resolve_errors(void)
  * 16/17 (the word step) and 31/32, for t = +-2^30 exactly, one p step beyond,
  * and near +-1.6e9 (omega = 2^14 on every axis: s = 15, every p = 2^13; m = 0
  * and m_shift = 0, so out = -k - round(t 2^-shift) shows the aligned t itself). */
-static void vec_tshift_edges(void)
+static VEC_STEP void vec_tshift_edges(void)
 {
     static const int8_t dshift[] = {-2, -1, 0, 1, 2, 15, 16, 17, 18, 29, 30, 31, 32, 33};
     static const int16_t gq[6][6] = {{32767, 32767, 32767, 32767, 32767, 32767},
@@ -1096,7 +1105,7 @@ static void print_table(void)
     }
 }
 
-static void vec_build(void)
+static VEC_STEP void vec_build(void)
 {
     static const uint16_t sizes[4] AC_ROM = {6u, 6u, 9u, 12u};
     uint16_t t, i;
@@ -1165,7 +1174,7 @@ static void vec_build(void)
     nl();
 }
 
-static void vec_invert6(void)
+static VEC_STEP void vec_invert6(void)
 {
     uint16_t t;
     uint8_t i, j;
@@ -1215,7 +1224,7 @@ static void vec_invert6(void)
 
 static ac_rate rs;
 
-static void vec_rate(void)
+static VEC_STEP void vec_rate(void)
 {
     uint16_t run, k;
     int32_t alpha[3];
@@ -1370,7 +1379,7 @@ static void rail_pair(uint16_t t, uint16_t *lo, uint16_t *hi)
     }
 }
 
-static void vec_rails(void)
+static VEC_STEP void vec_rails(void)
 {
     uint16_t t, i, k, lo, hi;
     uint16_t raw[AC_MAX_CHANNELS + 2u], trim[AC_MAX_CHANNELS + 2u];

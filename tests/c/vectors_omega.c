@@ -78,7 +78,7 @@ static void vo_step(const int16_t *x)
     nl();
 }
 
-static void vec_omega(void)
+static VEC_STEP void vec_omega(void)
 {
     ac_omega_table tab;
     ac_omega_state state;

@@ -348,7 +348,44 @@ static void vec_temp_frac(void)
     rng = saved;
 }
 
-static void vec_terms(void)
+/* the last sum of ac_temp_correct at int32's ends (no random numbers: the later vectors keep theirs):
+ * gc = 0 (g = 0), dTo = 1 LSB, channel 0 at x = -32768 with o = -128 (o 2^8 = -2^15), so that
+ * w + o 2^8 = -2^31 - oc: exactly INT32_MIN (oc 0), one below (oc 1: the C's sum saturates and
+ * flags though w itself is in range) or far below (oc 32767, w clipped before); channel 1 at
+ * x = 32767, o = 128, oc = -oc (the top end).  At frac 0 channel 1 stays in range, so the status
+ * is channel 0's (a sum of o 2^8 and the rounding's 2^15 before the V test, as the H8/300H
+ * assembly does at frac >= 1, drops the flag of oc 1); at frac 1..8 both clip (y = x 2^frac) and
+ * the lines hold the clips' directions */
+static void vec_temp_sum_edges(void)
+{
+    static const int16_t ocs[3] = {0, 1, 32767};
+    int16_t x[2], y[2];
+    uint8_t k, j;
+    vt_temp.n = 2u;
+    vt_temp.t_ref = 0;
+    vt_temp.gc[0] = 0;
+    vt_temp.gc[1] = 0;
+    vt_temp.o[0] = -128;
+    vt_temp.o[1] = 128;
+    for (k = 0u; k <= (uint8_t)AC_TEMP_MAX_OUT_FRAC; k++) {
+        for (j = 0u; j < 3u; j++) {
+            vt_temp.frac = k;
+            vt_temp.oc[0] = ocs[j];
+            vt_temp.oc[1] = (int16_t)-ocs[j];
+            x[0] = INT16_MIN;
+            x[1] = INT16_MAX;
+            TAG("VTS");
+            h8(k);
+            h16(vt_temp.oc[0]);
+            st(ac_temp_correct(&vt_temp, 1, 0, x, y));
+            h16(y[0]);
+            h16(y[1]);
+            nl();
+        }
+    }
+}
+
+static VEC_STEP void vec_terms(void)
 {
     vec_temp_lag();
     vec_temp_correct();
@@ -357,4 +394,5 @@ static void vec_terms(void)
     vec_terms_edges();
     vec_nonlin_iterations();
     vec_temp_frac();
+    vec_temp_sum_edges();
 }

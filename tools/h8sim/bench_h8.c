@@ -53,6 +53,9 @@ enum {
     R_TEMP_K2,
     R_TERMS_K2,
     R_NONLIN_K2,
+    R_NONLIN_S16,
+    R_NONLIN_S17,
+    R_NONLIN_S19,
     R_COUNT
 };
 static const char *const region_name[R_COUNT] = {
@@ -60,7 +63,8 @@ static const char *const region_name[R_COUNT] = {
     "ac_rate_step", "ac_att_step", "ac_disp_step", "ac_process_batch_omega", "ac_resolver_build",
     "ac_triad_apply", "ac_triad_build", "ac_temp_lag_step", "ac_temp_correct", "ac_skew_step",
     "ac_nonlin_invert", "terms_temp_nonlin", "terms_full_path", "ac_omega_step_rest", "ac_omega_step_turn",
-    "ac_temp_correct_k2", "terms_temp_nonlin_k2", "ac_nonlin_invert_k2"};
+    "ac_temp_correct_k2", "terms_temp_nonlin_k2", "ac_nonlin_invert_k2", "ac_nonlin_invert_s16",
+    "ac_nonlin_invert_s17", "ac_nonlin_invert_s19"};
 static uint16_t entries[R_COUNT], samples[R_COUNT], deepest[R_COUNT];
 
 /* ---- output through the write trap ---- */
@@ -157,12 +161,21 @@ static const ac_skew_table terms_skew = {6u, 3u, {1, 0, 1, 1, 1, 0}, {7864u, 268
 static const ac_nonlin_table terms_nl = {6u, 15, {4295, 4295, 4295, 4295, 4295, 4295},
                                          {22518, 22518, 22518, 22518, 22518, 22518}, 0u};
 /* the same terms as a header writes them now for the seed's 0..10000 converter: the hand-off in
- * 2^-2 counts (AC_CAL_TERMS_FRAC 2): ac_temp_correct's frac 2 (the C on the H8/300H), the
+ * 2^-2 counts (AC_CAL_TERMS_FRAC 2): ac_temp_correct's frac 2, the
  * nonlinearity's coefficients per 2^-2 count (shift 18) */
 static const ac_temp_table terms_temp_k2 = {6u, 6400, {640, 640, 640, 640, 640, 640},
                                             {5033, 5033, 5033, 5033, 5033, 5033}, {0, 0, 0, 0, 0, 0}, 2u};
 static const ac_nonlin_table terms_nl_k2 = {6u, 18, {8590, 8590, 8590, 8590, 8590, 8590},
                                             {11259, 11259, 11259, 11259, 11259, 11259}, 0u};
+/* a 2^-2-count table's shift is 15 + 2 for a square alone up to 15 + 4 for a cube alone: the same
+ * coefficients at the shifts next to the seed's 18 (the states do not depend on a2, a3 but through a
+ * clip, none here) */
+static const ac_nonlin_table terms_nl_s16 = {6u, 16, {8590, 8590, 8590, 8590, 8590, 8590},
+                                             {11259, 11259, 11259, 11259, 11259, 11259}, 0u};
+static const ac_nonlin_table terms_nl_s17 = {6u, 17, {8590, 8590, 8590, 8590, 8590, 8590},
+                                             {11259, 11259, 11259, 11259, 11259, 11259}, 0u};
+static const ac_nonlin_table terms_nl_s19 = {6u, 19, {8590, 8590, 8590, 8590, 8590, 8590},
+                                             {11259, 11259, 11259, 11259, 11259, 11259}, 0u};
 static ac_temp_lag lag_off, lag_gain;
 static int16_t skew_buf[3u * 6u];
 static ac_skew_line skew_line;
@@ -343,7 +356,7 @@ int main(void)
         MEASURE(R_RATE, 1u, ac_rate_step(&rate, &out[3], w));
         MEASURE(R_TRIAD, 1u, ac_triad_apply(&tri, raw, f));
         {
-            int16_t temp = (int16_t)(25 * 256 + rnd_range(-2560, 5120)), tl = 0, y[6];
+            int16_t temp = (int16_t)(25 * 256 + rnd_range(-2560, 5120)), tl = 0, y[6], x2[6];
             MEASURE(R_TEMP_LAG, 1u, ac_temp_lag_step(&lag_off, temp, &tl));
             MEASURE(R_TEMP, 1u, ac_temp_correct(&terms_temp, tl, temp, x, y));
             MEASURE(R_SKEW, 1u, ac_skew_step(&terms_skew, &skew_line, y, y));
@@ -354,6 +367,9 @@ int main(void)
             MEASURE(R_TERMS_K2, 1u, terms_path_k2(temp, y));
             /* the nonlinearity alone at shift 18, on the Q.2 output of the terms */
             MEASURE(R_NONLIN_K2, 1u, ac_nonlin_invert(&terms_nl_k2, y, y));
+            MEASURE(R_NONLIN_S16, 1u, ac_nonlin_invert(&terms_nl_s16, y, x2));
+            MEASURE(R_NONLIN_S17, 1u, ac_nonlin_invert(&terms_nl_s17, y, x2));
+            MEASURE(R_NONLIN_S19, 1u, ac_nonlin_invert(&terms_nl_s19, y, x2));
         }
         for (i = 0u; i < 6u; i++) {
             f[i] = (int32_t)rnd_range(-2000, 4000); /* +-2 m/s^2 */
