@@ -197,6 +197,8 @@ def poses_recording(n: int, path: Path) -> None:
                       temp_c=np.tile(rec.temp_c, k),
                       pose=np.concatenate([np.where(rec.pose >= 0, rec.pose + 24 * i, -1) for i in range(k)]),
                       metadata=rec.metadata)
+    if jigfree:
+        tiled = Recording(t=tiled.t, raw=tiled.raw, metadata=rec.metadata)
     write_recording(path, tiled)
 
 
@@ -235,10 +237,11 @@ def calibrate_diagnose(n: int, d: Path) -> None:
         print(f"{name} {n:.0e} samples: {s:.0f} s, peak {mb:.0f} MB", flush=True)
 
 
-def handheld_recording(n: int, path: Path) -> None:
+def handheld_recording(n: int, path: Path, jigfree: bool = False) -> None:
     """A recording with motion of about n samples: the hand-held session of the default device (a
     rest, then 40 poses held 4 s with 2 s moves between, reference f, w, dw, temp_c and pose;
-    about 2.8x10^4 samples), repeated with t shifted and the poses relabelled."""
+    about 2.8x10^4 samples), repeated with t shifted and the poses relabelled.  ``jigfree``: the
+    raw readings and t alone (no reference, no labels: what a hand-held logger writes)."""
     dev = default_device()
     rec = run_simulation(dev, "handheld", seed=1).recording
     k = max(1, round(n / rec.n_samples))
@@ -249,6 +252,8 @@ def handheld_recording(n: int, path: Path) -> None:
                       temp_c=np.tile(rec.temp_c, k),
                       pose=np.concatenate([np.where(rec.pose >= 0, rec.pose + top * i, -1) for i in range(k)]),
                       metadata=rec.metadata)
+    if jigfree:
+        tiled = Recording(t=tiled.t, raw=tiled.raw, metadata=rec.metadata)
     write_recording(path, tiled)
 
 
@@ -260,7 +265,10 @@ def diagnose_runs(n: int, d: Path, kinds: list[str], limit_mb: float, extra: lis
            "sys.exit(main(sys.argv[1:]))" % str(ROOT / "python")]
     for kind in kinds:
         rec = d / f"{kind}_{n}.csv"
-        (poses_recording if kind == "poses" else handheld_recording)(n, rec)
+        if kind == "poses":
+            poses_recording(n, rec)
+        else:
+            handheld_recording(n, rec, jigfree=kind == "jigfree")
         s, mb = peak_of(cli + ["diagnose", "--device", "default", "--calibration", "nominal", str(rec),
                                "--json", str(d / f"diag_{kind}_{n}.json"), "--quiet", *extra], limit_mb)
         n_rows = sum(1 for _ in open(rec)) - 1
@@ -306,7 +314,8 @@ def main() -> None:
                     "of a 3-channel recording CSV (the first three channels), in chunks and (unless --no-whole) "
                     "--whole-file (case csv->csv only)")
     ap.add_argument("--diagnose", metavar="KINDS",
-                    help="instead: `accelcal diagnose` on the recordings KINDS (comma-separated: poses, handheld) "
+                    help="instead: `accelcal diagnose` on the recordings KINDS (comma-separated: poses, handheld, "
+                    "jigfree: the hand-held session without reference or labels) "
                     "of each of --lengths samples: wall time and peak RSS")
     ap.add_argument("--limit-mb", type=float, default=12000.0, help="--diagnose: stop a run past this RSS (MB)")
     ap.add_argument("--diagnose-args", default="", help="--diagnose: more options of the command, such as "
