@@ -206,3 +206,16 @@ def test_jigfree_keeps_every_kth_sample_of_every_pose(effect, seed, tmp_path):
                                                "rate_hz": dev.sample_rate_hz / k}
     assert res["mode"] == "jigfree" and res["verdict"] == effect
     assert _json(res) == _json(diagnose(dev, cal, [read_recording(path, dev.n_channels, whole=True)], max_samples=m))
+
+
+def test_jigfree_plan_one_k_for_all_recordings_down_to_min_rate_then_windows():
+    short, long_ = T.plan([(50_000, False), (300_000, False)], 100.0, 100_000)
+    assert short.step == long_.step == 3 and not short.windowed and not long_.windowed
+    assert long_.n_kept == 100_000 and short.n_kept == 16_667
+    (th,) = T.plan([(10**7, False)], 60.0, 100_000)
+    assert th.step == int(60.0 / T.MIN_RATE_HZ) and th.windowed and th.n_kept <= 100_000
+    keep = th.keep(0, 10**6)
+    assert np.all(np.flatnonzero(keep) % th.step == 0)
+    (ref,) = T.plan([(10**7, True)], 60.0, 100_000)       # with a reference: windows of full-rate samples
+    assert ref.step == 1 and ref.windowed
+    assert T.plan([(90_000, False), (80_000, True)], 60.0, 100_000) == [None, None]

@@ -63,7 +63,7 @@ def as_recordings(recordings: Any, device, max_samples: int = 0) -> tuple[list, 
     for r in out:
         check_for_device(r, device, min_samples=2)
     notes = [r.thinning.note(r.source) for r in out if r.thinning is not None]
-    every = [r.thinning for r in out if r.thinning is not None and r.thinning.step]
+    every = [r.thinning for r in out if r.thinning is not None and r.thinning.step > 1]
     if every and abs(rate / every[0].rate_hz - 1.0) < 1e-9:
         # every k-th sample: recordings at rate / k (not yet so where a caller had cut them down and said so)
         device = dataclasses.replace(device, sample_rate_hz=rate / max(th.step for th in every))

@@ -37,7 +37,7 @@ from .recording_checks import check_raw_range
 from .recording_type import Recording
 from .units import Scale
 
-__all__ = ["MAX_SAMPLES", "WINDOWS", "MIN_WINDOWS", "WINDOW_S", "Thinning", "thinning", "every", "plan", "window_len",
+__all__ = ["MAX_SAMPLES", "WINDOWS", "MIN_WINDOWS", "WINDOW_S", "MIN_RATE_HZ", "Thinning", "thinning", "plan", "window_len",
            "check_max_samples", "thin_recordings", "read_thinned", "read_all_thinned"]
 
 #: samples of a recording kept by default (``accelcal diagnose --max-samples``); 0 or None keeps all
@@ -48,75 +48,88 @@ WINDOWS = 256
 MIN_WINDOWS = 16
 #: a window's length, s: at least WINDOW_S[0], at most WINDOW_S[1]
 WINDOW_S = (2.0, 10.0)
+#: jig-free, every k-th sample is kept down to this rate (Hz; a 2 s pose keeps 10 samples), windows of those beyond
+MIN_RATE_HZ = 5.0
 
 
 @dataclass(frozen=True)
 class Thinning:
-    """Which samples of a recording are kept: ``kept`` of its ``windows`` windows of ``window``
-    samples (window ``j``: samples ``j * window`` to ``(j + 1) * window - 1``), spread evenly
-    from the first (window ``j`` is kept where ``floor(j * kept / windows)`` steps).
+    """Which samples of a recording are kept: one sample in every ``step`` (a recording at the
+    rate / ``step``: its ``m = ceil(n_read / step)`` samples), and of those, ``kept`` of their
+    ``windows`` windows of ``window`` consecutive samples (window ``j``: samples ``j * window`` to
+    ``(j + 1) * window - 1`` of the m), spread evenly from the first (window ``j`` is kept where
+    ``floor(j * kept / windows)`` steps; every window where ``kept == windows``).
 
     Attributes
     ----------
     n_read : int
         Samples in the recording (every row read and checked).
+    step : int
+        1, or k: every k-th sample (jig-free).
     window : int
-        Samples per window.
+        Samples (of the m) per window.
     windows : int
-        Windows in the recording (the last may be short).
+        Windows of the m (the last may be short).
     kept : int
         Windows kept.
-    step : int
-        0, or k: every k-th sample is kept (``window`` 1; jig-free).
     rate_hz : float
         The device's rate the plan was made for (Hz).
     """
 
     n_read: int
+    step: int
     window: int
     windows: int
     kept: int
-    step: int = 0
-    rate_hz: float = 0.0
+    rate_hz: float
 
     def kept_windows(self, j: np.ndarray) -> np.ndarray:
         """Whether each window ``j`` is kept (bool)."""
         j = np.asarray(j, np.int64)
-        if self.step:
-            return j % self.step == 0
+        if self.kept >= self.windows:
+            return np.ones(j.shape, bool)
         return (j * self.kept) // self.windows != ((j - 1) * self.kept) // self.windows
 
     def keep(self, start: int, n: int) -> np.ndarray:
         """Whether each of the samples ``start .. start + n - 1`` is kept (bool (n,))."""
-        return self.kept_windows(np.arange(start, start + n, dtype=np.int64) // self.window)
+        i = np.arange(start, start + n, dtype=np.int64)
+        q, r = np.divmod(i, self.step)
+        return (r == 0) & self.kept_windows(q // self.window)
+
+    @property
+    def windowed(self) -> bool:
+        """Whether only some windows are kept."""
+        return self.kept < self.windows
 
     @property
     def n_kept(self) -> int:
         """Samples kept."""
+        m = -(-self.n_read // self.step)
+        if not self.windowed:
+            return m
         j = np.flatnonzero(self.kept_windows(np.arange(self.windows)))
-        return int(np.minimum(self.window, self.n_read - j * self.window).sum())
+        return int(np.minimum(self.window, m - j * self.window).sum())
 
     def describe(self) -> dict:
         """The JSON entry (docs/diagnosis-json.md: ``recordings[].thinned``)."""
-        rate_hz = self.rate_hz
-        if self.step:
-            return {"n_read": int(self.n_read), "n_kept": self.n_kept, "every": int(self.step),
-                    "rate_hz": float(rate_hz) / self.step}
-        return {"n_read": int(self.n_read), "n_kept": self.n_kept, "windows": int(self.kept),
-                "window_samples": int(self.window), "window_s": self.window / float(rate_hz),
-                "spacing_s": self.window * self.windows / self.kept / float(rate_hz)}
+        rate = self.rate_hz / self.step
+        out = {"n_read": int(self.n_read), "n_kept": self.n_kept, "every": int(self.step), "rate_hz": rate}
+        if self.windowed:
+            out.update({"windows": int(self.kept), "window_samples": int(self.window), "window_s": self.window / rate,
+                        "spacing_s": self.window * self.windows / self.kept / rate})
+        return out
 
     def note(self, source: str) -> str:
         """One sentence for the diagnosis's notes."""
-        rate_hz = self.rate_hz
-        if self.step:
-            return (f"{source}: {self.n_read:,} samples, diagnosed on {self.n_kept:,} of them: every {self.step:,}th "
-                    f"sample, a recording at {rate_hz / self.step:.6g} Hz (--max-samples; 0 keeps every sample); an "
-                    "effect is judged against the noise of the samples kept")
-        return (f"{source}: {self.n_read:,} samples, diagnosed on {self.n_kept:,} of them: {self.kept:,} windows "
-                f"of {self.window:,} samples ({self.window / rate_hz:.3g} s), one every "
-                f"{self.window * self.windows / self.kept / rate_hz:.4g} s over the whole recording (--max-samples; "
-                "0 keeps every sample); an effect is judged against the noise of the samples kept")
+        rate = self.rate_hz / self.step
+        what = []
+        if self.step > 1:
+            what.append(f"one sample in every {self.step:,} (a recording at {rate:.6g} Hz)")
+        if self.windowed:
+            what.append(f"{self.kept:,} windows of {self.window:,} samples ({self.window / rate:.3g} s), one every "
+                        f"{self.window * self.windows / self.kept / rate:.4g} s over the whole recording")
+        return (f"{source}: {self.n_read:,} samples, diagnosed on {self.n_kept:,} of them: {'; of those, '.join(what)} "
+                "(--max-samples; 0 keeps every sample); an effect is judged against the noise of the samples kept")
 
 
 def window_len(rate_hz: float, max_samples: int) -> int:
@@ -126,33 +139,32 @@ def window_len(rate_hz: float, max_samples: int) -> int:
     return int(max(1, min(max(lo, min(hi, max_samples // WINDOWS)), max_samples // MIN_WINDOWS)))
 
 
-def thinning(n: int, rate_hz: float, max_samples: int | None) -> Thinning | None:
-    """The windows of an ``n``-sample recording kept for ``max_samples`` (None: every sample,
-    when ``max_samples`` is 0 or None or ``n`` <= ``max_samples``)."""
-    if not max_samples or n <= max_samples:
+def thinning(n: int, rate_hz: float, max_samples: int | None, step: int = 1) -> Thinning | None:
+    """What is kept of an ``n``-sample recording at ``rate_hz`` for ``max_samples``: one sample
+    in every ``step``, then windows of those where they are more than ``max_samples`` (None:
+    every sample, when ``max_samples`` is 0 or None or ``n`` <= ``max_samples``)."""
+    step = max(1, int(step))
+    if not max_samples or (step == 1 and n <= max_samples):
         return None
-    w = window_len(rate_hz, int(max_samples))
-    windows = -(-int(n) // w)
-    return Thinning(int(n), w, windows, max(1, int(max_samples) // w), 0, float(rate_hz))
-
-
-def every(n: int, k: int, rate_hz: float) -> Thinning | None:
-    """Every ``k``-th sample of an ``n``-sample recording at ``rate_hz`` (None for k <= 1)."""
-    if k <= 1:
-        return None
-    return Thinning(int(n), 1, int(n), -(-int(n) // k), int(k), float(rate_hz))
+    m = -(-int(n) // step)
+    w = window_len(rate_hz / step, int(max_samples))
+    windows = -(-m // w)
+    kept = windows if m <= max_samples else max(1, int(max_samples) // w)
+    return Thinning(int(n), step, w, windows, kept, float(rate_hz))
 
 
 def plan(sizes: list[tuple[int, bool]], rate_hz: float, max_samples: int | None) -> list[Thinning | None]:
     """What is kept of each recording, from (samples, has a reference f) of each (see the module
     doc): windows of each longer recording where any has a reference, else every k-th sample of
-    every recording (one k, so that they share one rate)."""
+    every recording (one k, so that they share one rate; at most ``rate_hz / MIN_RATE_HZ``, and
+    windows of those samples beyond)."""
     if not max_samples:
         return [None] * len(sizes)
     if any(has_f for _, has_f in sizes):
         return [thinning(n, rate_hz, max_samples) for n, _ in sizes]
     k = max([-(-n // max_samples) for n, _ in sizes] or [1])
-    return [every(n, k, rate_hz) for n, _ in sizes]
+    k = max(1, min(k, int(rate_hz / MIN_RATE_HZ)))
+    return [thinning(n, rate_hz, max_samples, k) for n, _ in sizes]
 
 
 def check_max_samples(max_samples: Any) -> int:
