@@ -101,12 +101,18 @@ static void ft_temp(rd *r, int raw, int inplace)
     memset(&t, 0, sizeof t);
     n = raw ? (uint16_t)(rd_u8(r) % (AC_MAX_CHANNELS + 2u)) : (uint16_t)(1u + rd_u8(r) % AC_MAX_CHANNELS);
     t.n = n;
+    /* the output in 2^-frac counts (frac 0..AC_TEMP_MAX_OUT_FRAC; a raw input also past it); the
+     * readings of a table with frac k mostly within int16 / 2^k (the output's range), edges kept */
+    t.frac = (uint8_t)(rd_u8(r) % (raw ? AC_TEMP_MAX_OUT_FRAC + 3u : AC_TEMP_MAX_OUT_FRAC + 1u));
     t.t_ref = rd_i16_edge(r);
     for (i = 0u; i < AC_MAX_CHANNELS; i++) {
         t.oc[i] = raw ? rd_i16_edge(r) : (int16_t)(rd_i16(r) % 32768);
         t.gc[i] = raw ? rd_i16_edge(r) : (int16_t)(rd_i16(r) % 32768);
         t.o[i] = raw ? rd_i16(r) : (int16_t)(rd_i16(r) % 129);
         x[i] = rd_i16_edge(r);
+        if (!raw && t.frac <= AC_TEMP_MAX_OUT_FRAC) {
+            x[i] = (int16_t)(x[i] / (1 << t.frac));
+        }
         y[i] = FT_SENT;
     }
     t_off = rd_i16_edge(r);
@@ -126,8 +132,9 @@ static void ft_temp(rd *r, int raw, int inplace)
     st = inplace ? ac_temp_correct(&t, t_off, t_gain, memcpy(y, x, sizeof x), y)
                  : ac_temp_correct(&t, t_off, t_gain, x, y);
     CHECK_STATUS(st);
-    if (n < 1u || n > AC_MAX_CHANNELS) {
-        CHECK(st == AC_ERR_SIZE, "ac_temp_correct n %u: %d", n, (int)st);
+    if (n < 1u || n > AC_MAX_CHANNELS || t.frac > AC_TEMP_MAX_OUT_FRAC) {
+        CHECK(st == ((n < 1u || n > AC_MAX_CHANNELS) ? AC_ERR_SIZE : AC_ERR_FORMAT), "ac_temp_correct n %u frac %u: %d",
+              n, t.frac, (int)st);
         if (!inplace) {
             for (i = 0u; i < AC_MAX_CHANNELS; i++) {
                 CHECK(y[i] == FT_SENT, "ac_temp_correct wrote y[%u] on an error", i);
@@ -159,7 +166,9 @@ static void ft_temp(rd *r, int raw, int inplace)
         g = ft_round(w16 * rr, 3);
         w = FT_C32(w + g, &sat);
         w = FT_C32(w + o8, &sat);
-        if (w >= 0x7FFF8000LL) {
+        if (t.frac != 0u) {
+            want[i] = (int16_t)FT_C16(ft_round(w, 16 - t.frac), &sat);
+        } else if (w >= 0x7FFF8000LL) {
             want[i] = INT16_MAX;
             sat = 1;
         } else {
@@ -176,10 +185,11 @@ static void ft_temp(rd *r, int raw, int inplace)
             double e = gc * ((double)dtg / 256.0);
             double yref = o + ((double)x[i] - o - oc * ((double)dto / 256.0)) / (1.0 + e);
             double big = fabs((double)x[i]) > fabs(yref) ? fabs((double)x[i]) : fabs(yref);
-            double bound = 0.5 + 1.0 / 256 + 0.54 * fabs(e)
+            double q = ldexp(1.0, -(int)t.frac);     /* one output step, counts */
+            double bound = 0.5 * q + 1.0 / 256 + 0.54 * fabs(e)
                            + (big + 1.0) * (1.0 / 262144 + e * e * e * e / (1.0 - fabs(e)));
-            CHECK(fabs(y[i] - yref) <= bound, "ac_temp_correct channel %u: %d against %.6f, bound %.6f", i, y[i],
-                  yref, bound);
+            CHECK(fabs(y[i] * q - yref) <= bound, "ac_temp_correct channel %u frac %u: %d against %.6f, bound %.6f", i,
+                  t.frac, y[i], yref, bound);
         }
     }
 }

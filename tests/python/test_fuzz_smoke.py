@@ -160,3 +160,23 @@ def test_omega_target_checks_its_properties(build, tmp_path):
     seed = next(CORPUS.glob("seed_omega_mb5_plain_*"))     # the vectors' rest and mid-turn readings
     r = subprocess.run([str(exe), str(seed)], capture_output=True, text=True, timeout=60, env=_env())
     assert r.returncode != 0 and "omega_q10" in r.stderr, r.stderr[-2000:]
+
+
+def test_terms_target_checks_the_fractional_output(build, tmp_path):
+    """The terms target's ac_temp_correct runs its tables at frac 0..8 (the output in 2^-frac
+    counts, as a header with a temperature term writes it): with the reference's final rounding
+    at frac > 0 deliberately a floor, the corpus's temperature seeds abort the replay."""
+    src = (ROOT / "fuzz" / "fuzz_terms.c").read_text()
+    bad = src.replace("FT_C16(ft_round(w, 16 - t.frac), &sat)", "FT_C16(ft_floor(w, 16 - t.frac), &sat)")
+    assert bad != src
+    core = (ROOT / "fuzz" / "fuzz_core.c").read_text().replace('#include "fuzz_terms.c"', '#include "fuzz_terms_bad.c"')
+    (tmp_path / "fuzz_terms_bad.c").write_text(bad)
+    (tmp_path / "fuzz_bad.c").write_text(core)
+    (tmp_path / "fuzz_omega.c").write_text((ROOT / "fuzz" / "fuzz_omega.c").read_text())
+    _compile_all(build["cc"], [(tmp_path / "fuzz_bad.c", tmp_path / "fuzz_bad.o", "-O0")])
+    exe = tmp_path / "replay_bad"
+    _link(build["cc"], [tmp_path / "fuzz_bad.o", build["main"], *build["core"]], exe)
+    seeds = sorted(CORPUS.glob("seed_terms_m*"))
+    failed = [s.name for s in seeds
+              if subprocess.run([str(exe), str(s)], capture_output=True, text=True, timeout=60, env=_env()).returncode]
+    assert failed, "no terms seed reached ac_temp_correct at frac > 0"
