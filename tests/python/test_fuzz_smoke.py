@@ -121,24 +121,33 @@ def test_replay_empty_and_short_inputs(replay, tmp_path):
     assert f"replay: {k} inputs ran" in r.stdout
 
 
+def _mutant(build, tmp_path, name: str, old: str, new: str):
+    """The replay program built from a copy of the harness whose fuzz/NAME has ``old`` replaced
+    by ``new`` (fuzz_core.c includes its terms and omega targets from its own directory)."""
+    src = (ROOT / "fuzz" / name).read_text()
+    bad = src.replace(old, new)
+    assert bad != src
+    for other in ("fuzz_core.c", "fuzz_terms.c", "fuzz_omega.c"):
+        (tmp_path / other).write_text(bad if other == name else (ROOT / "fuzz" / other).read_text())
+    _compile_all(build["cc"], [(tmp_path / "fuzz_core.c", tmp_path / "fuzz_bad.o", "-O0")])
+    exe = tmp_path / "replay_bad"
+    _link(build["cc"], [tmp_path / "fuzz_bad.o", build["main"], *build["core"]], exe)
+    return exe
+
+
+def _replay(exe, path):
+    return subprocess.run([str(exe), str(path)], capture_output=True, text=True, timeout=60, env=_env())
+
+
 def test_harness_catches_a_violation(build, tmp_path):
     """The replay really runs the properties: a harness whose own reference is
     deliberately wrong must abort (guards against a harness that checks nothing)."""
-    src = (ROOT / "fuzz" / "fuzz_core.c").read_text()
     # break the reference of ac_trim's clipping in a copy of the harness
-    bad = src.replace("int32_t e = d > 32767 ? 32767 : (d < -32768 ? -32768 : d);",
-                      "int32_t e = d > 32766 ? 32766 : (d < -32768 ? -32768 : d);")
-    assert bad != src
-    (tmp_path / "fuzz_bad.c").write_text(bad)
-    # fuzz_core.c includes its terms and omega targets from its own directory
-    for name in ("fuzz_terms.c", "fuzz_omega.c"):
-        (tmp_path / name).write_text((ROOT / "fuzz" / name).read_text())
-    _compile_all(build["cc"], [(tmp_path / "fuzz_bad.c", tmp_path / "fuzz_bad.o", "-O0")])
-    exe = tmp_path / "replay_bad"
-    _link(build["cc"], [tmp_path / "fuzz_bad.o", build["main"], *build["core"]], exe)
+    exe = _mutant(build, tmp_path, "fuzz_core.c", "int32_t e = d > 32767 ? 32767 : (d < -32768 ? -32768 : d);",
+                  "int32_t e = d > 32766 ? 32766 : (d < -32768 ? -32768 : d);")
     data = bytes([0, 1, 0xFF, 0xFF, 0, 0])  # ac_trim, n = 1: raw 65535, trim 0 -> clipped to 32767
     (tmp_path / "in").write_bytes(data)
-    r = subprocess.run([str(exe), str(tmp_path / "in")], capture_output=True, text=True, timeout=60, env=_env())
+    r = _replay(exe, tmp_path / "in")
     assert r.returncode != 0
     assert "property failed" in r.stderr
 
@@ -146,19 +155,10 @@ def test_harness_catches_a_violation(build, tmp_path):
 def test_omega_target_checks_its_properties(build, tmp_path):
     """Target 15 (ac_omega, fuzz/fuzz_omega.c) runs its checks: with its q16 -> q10 rescaling
     deliberately wrong (/ 32 for / 64) the vectors' table and readings abort the replay."""
-    src = (ROOT / "fuzz" / "fuzz_omega.c").read_text()
-    bad = src.replace("floor_div_p2((i128)w2[i] + 32, 6)", "floor_div_p2((i128)w2[i] + 32, 5)")
-    assert bad != src
-    core = (ROOT / "fuzz" / "fuzz_core.c").read_text().replace('#include "fuzz_omega.c"', '#include "fuzz_omega_bad.c"')
-    (tmp_path / "fuzz_omega_bad.c").write_text(bad)
-    (tmp_path / "fuzz_bad.c").write_text(core)
-    for name in ("fuzz_terms.c",):
-        (tmp_path / name).write_text((ROOT / "fuzz" / name).read_text())
-    _compile_all(build["cc"], [(tmp_path / "fuzz_bad.c", tmp_path / "fuzz_bad.o", "-O0")])
-    exe = tmp_path / "replay_bad"
-    _link(build["cc"], [tmp_path / "fuzz_bad.o", build["main"], *build["core"]], exe)
+    exe = _mutant(build, tmp_path, "fuzz_omega.c", "floor_div_p2((i128)w2[i] + 32, 6)",
+                  "floor_div_p2((i128)w2[i] + 32, 5)")
     seed = next(CORPUS.glob("seed_omega_mb5_plain_*"))     # the vectors' rest and mid-turn readings
-    r = subprocess.run([str(exe), str(seed)], capture_output=True, text=True, timeout=60, env=_env())
+    r = _replay(exe, seed)
     assert r.returncode != 0 and "omega_q10" in r.stderr, r.stderr[-2000:]
 
 
@@ -166,17 +166,7 @@ def test_terms_target_checks_the_fractional_output(build, tmp_path):
     """The terms target's ac_temp_correct runs its tables at frac 0..8 (the output in 2^-frac
     counts, as a header with a temperature term writes it): with the reference's final rounding
     at frac > 0 deliberately a floor, the corpus's temperature seeds abort the replay."""
-    src = (ROOT / "fuzz" / "fuzz_terms.c").read_text()
-    bad = src.replace("FT_C16(ft_round(w, 16 - t.frac), &sat)", "FT_C16(ft_floor(w, 16 - t.frac), &sat)")
-    assert bad != src
-    core = (ROOT / "fuzz" / "fuzz_core.c").read_text().replace('#include "fuzz_terms.c"', '#include "fuzz_terms_bad.c"')
-    (tmp_path / "fuzz_terms_bad.c").write_text(bad)
-    (tmp_path / "fuzz_bad.c").write_text(core)
-    (tmp_path / "fuzz_omega.c").write_text((ROOT / "fuzz" / "fuzz_omega.c").read_text())
-    _compile_all(build["cc"], [(tmp_path / "fuzz_bad.c", tmp_path / "fuzz_bad.o", "-O0")])
-    exe = tmp_path / "replay_bad"
-    _link(build["cc"], [tmp_path / "fuzz_bad.o", build["main"], *build["core"]], exe)
-    seeds = sorted(CORPUS.glob("seed_terms_m*"))
-    failed = [s.name for s in seeds
-              if subprocess.run([str(exe), str(s)], capture_output=True, text=True, timeout=60, env=_env()).returncode]
+    exe = _mutant(build, tmp_path, "fuzz_terms.c", "FT_C16(ft_round(w, 16 - t.frac), &sat)",
+                  "FT_C16(ft_floor(w, 16 - t.frac), &sat)")
+    failed = [s.name for s in sorted(CORPUS.glob("seed_terms_m*")) if _replay(exe, s).returncode]
     assert failed, "no terms seed reached ac_temp_correct at frac > 0"
