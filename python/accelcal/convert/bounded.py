@@ -34,7 +34,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .common import Converted, Options, held_note_text, recording_metadata
-from .nominal_device import adc_range, code_step_note, nominal_triad
+from .nominal_device import adc_range, code_step_note, nominal_triad, triad_device
 from .time import BURST_SHARE, FLOAT_EXACT, MIN_PLAUSIBLE_HZ, TIME_FACTORS, time_factor, unit_in_name
 from ..errors import InputError, atomic_write
 from ..io.chunks import Fallback, Head, csv_chunks, reader_checks
@@ -47,6 +47,7 @@ from ..readings.clipping import (CLIP_BAND_SIGMA, CLIP_MIN_COUNT, CLIP_PILE_RATI
                                  clip_levels_counts, code_step_counts)
 from ..readings.noise_stream import NoisePass, add_counts, median_of_counts
 from ..readings.static import STATIC_WINDOW_S, window_len
+from ..readings.still_stream import DiffSums
 from ..readings.held import (HELD_CHANGED_SHARE, HELD_MAX, HELD_MIN_RUNS, HELD_MIN_RUNS_UNEVEN, HELD_MODAL_SHARE,
                              HELD_SINGLE_SHARE, RunCounts, order_stat)
 
@@ -78,6 +79,7 @@ class Sums:
     f_given: bool = False
     rel_last: dict = field(default_factory=dict)
     factor: float = 1.0                                          # the unit t is read in (in_seconds)
+    diffs: DiffSums | None = None                                # without a stated scale: the detector's sums
 
     def add(self, t: np.ndarray, raw: np.ndarray, pose: np.ndarray | None, f: np.ndarray | None) -> None:
         """One chunk's rows (t as read, counts, labels or None, f or None)."""
@@ -102,6 +104,8 @@ class Sums:
         for j in range(3):
             add_counts(self.hist[j], raw[:, j])
         self.runs.add(raw)
+        if self.diffs is not None:
+            self.diffs.add(raw)
         if pose is not None:
             self.has_pose = True
             self.labels.update(int(v) for v in np.unique(pose[pose >= 0]))
@@ -116,13 +120,15 @@ def sorted_counts(counts: dict) -> tuple[np.ndarray, np.ndarray]:
     return u, np.array([counts[v] for v in u.tolist()], dtype=np.int64)
 
 
-def first_pass_sums(path: Any, head: Head, block_bytes: int, bar: Any, time_unit: str = "auto") -> Sums:
+def first_pass_sums(path: Any, head: Head, block_bytes: int, bar: Any, time_unit: str = "auto",
+                    diffs: bool = False) -> Sums:
     """The first pass (Fallback at any bad row or a row off its line: the whole-file reader words
-    it); t's steps counted in s and, ``time_unit`` auto, in ms, us and ns, else in that unit."""
+    it); t's steps counted in s and, ``time_unit`` auto, in ms, us and ns, else in that unit;
+    with ``diffs`` the readings' differences too (:class:`accelcal.readings.still_stream.DiffSums`)."""
     k = time_factor(time_unit) if time_unit != "auto" else None
     if time_unit != "auto" and k is None:
         raise Fallback("--time-unit refused by the whole-file command")
-    sums, prev = Sums(factors=(1.0,) + TICKS if k is None else (k,)), None
+    sums, prev = Sums(factors=(1.0,) + TICKS if k is None else (k,), diffs=DiffSums() if diffs else None), None
     for ch in csv_chunks(path, head, block_bytes, None if bar is None else bar.update):
         if reader_checks(head, ch, prev) or not np.all(np.isfinite(ch.t)):
             raise Fallback("a bad row")
@@ -294,17 +300,20 @@ def clip_note_counts(hists: list[tuple[np.ndarray, np.ndarray]], device: Any,
 
 
 def bounded_convert(head: Head, sums: Sums, opts: Options, scale: Scale | None,
-                    noise_of: Callable[[Any, list], np.ndarray] | None = None) -> Converted:
+                    noise_of: Callable[[Any, list], np.ndarray] | None = None,
+                    still_of: Callable[..., tuple[float, np.ndarray | None]] | None = None) -> Converted:
     """``finish``'s result from the first pass's sums (module doc; Fallback where they do not
     give it).  Its recording is a stand-in of n rows (broadcast views, no memory): the layout
-    decisions (f, pose given) and the counts; the rows are written by the second pass."""
+    decisions (f, pose given) and the counts; the rows are written by the second pass.  Without a
+    stated scale, ``still_of(hists, rate_hz, gravity, signed, notes)`` gives the nominal scale and
+    the noise (:func:`accelcal.convert.bounded_scale.still_scale` bound to the file)."""
     if opts.regions is not None:
         raise Fallback("--regions (the poses are labelled from the samples)")
     gravity = opts.gravity_mps2 or STANDARD_GRAVITY
     k = scale.counts_per_mps2(gravity) if scale is not None else None
-    if k is None:
+    if k is None and (still_of is None or sums.diffs is None):
         raise Fallback("no stated scale: the nominal scale takes the static detector over the samples")
-    if scale.converts:
+    if scale is not None and scale.converts:
         raise Fallback("readings in a unit: converted in the whole-file reader")
     hists = [sorted_counts(h) for h in sums.hist]
     signed = any(u[0] < 0 for u, _ in hists)
@@ -339,7 +348,8 @@ def bounded_convert(head: Head, sums: Sums, opts: Options, scale: Scale | None,
                                   if uneven_counts(k_held, inner) else k_held)
             said.append(held_note_counts(k_held, inner, total, sums.n, distinct_hz))
         own = distinct_hz if distinct_hz is not None and opts.rate_hz is None else None
-        device, _ = nominal_triad("csv-triad", own or rate, gravity, None, opts.bits, signed, scale, device_notes, None)
+        device = (nominal_triad("csv-triad", own or rate, gravity, None, opts.bits, signed, scale, device_notes, None)[0]
+                  if k is not None else triad_device("csv-triad", own or rate, gravity, opts.bits, signed, 1.0))
         if own is not None:
             device_notes.append(f"the device's rate is {device.sample_rate_hz:.6g} Hz, the distinct readings'; "
                                 f"the recording keeps every row (at {rate:.6g} Hz)")
@@ -350,6 +360,13 @@ def bounded_convert(head: Head, sums: Sums, opts: Options, scale: Scale | None,
             ends[0][1].sample_rate_hz != ends[1][1].sample_rate_hz:
         raise Fallback("the rate's rounding within the sum's bound changes the device or a note")
     said, device, device_notes = ends[0]
+    if k is None:               # the scale of the still stretches, its note before the rate's
+        scale_notes: list[str] = []
+        k_rest, noise = still_of(hists, device.sample_rate_hz, gravity, signed, scale_notes)
+        device = triad_device("csv-triad", device.sample_rate_hz, gravity, opts.bits, signed, k_rest)
+        device_notes = scale_notes + device_notes
+        if noise is not None:
+            noise_of = (lambda known: lambda device, hists: known)(noise)
     notes += said
     notes += code_step_note(values.reshape(-1, 1), opts.bits)
     clipped = clip_note_counts(hists, device, noise_of)
@@ -416,6 +433,8 @@ def noise_pass(path: Any, head: Head, block_bytes: int, bar_for: Callable[[], An
             return p.noise()
         except ValueError:
             raise Fallback("window sums beyond exact floats") from None
+        finally:
+            p.close()
     return noise_of
 
 

@@ -27,6 +27,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .bounded import bounded_convert, bounded_writer, first_pass_sums, noise_pass
+from .bounded_scale import still_scale
 from .common import Converted, Options, finish
 from .time import FLOAT_EXACT
 from ..errors import InputError, atomic_write
@@ -99,14 +100,22 @@ def convert_csv_chunked(path: Any, opts: Options, scale: Scale | None, block_byt
     if opts.regions is None and opts.stated_f:
         raise Fallback("--stated-f without --regions")
     scale = in_file_unit(scale, head.metadata.get("source_units"), head.source)
-    if opts.regions is None and scale is not None and \
-            scale.counts_per_mps2(opts.gravity_mps2 or STANDARD_GRAVITY) is not None and not scale.converts:
+    if opts.regions is None and (scale is None or not scale.converts):
         try:                # in bounded memory (accelcal.convert.bounded), else the arrays below
-            sums = first_pass_sums(path, head, block_bytes, bar_for(path, head, progress), opts.time_unit)
-            conv = bounded_convert(head, sums, opts, scale,
-                                   noise_pass(path, head, block_bytes, lambda: bar_for(path, head, progress), sums.n))
-            conv.writer = bounded_writer(path, head, block_bytes, lambda: bar_for(path, head, progress), conv,
-                                         sums.factor)
+            stated = scale is not None and scale.counts_per_mps2(opts.gravity_mps2 or STANDARD_GRAVITY) is not None
+            sums = first_pass_sums(path, head, block_bytes, bar_for(path, head, progress), opts.time_unit,
+                                   diffs=not stated)
+
+            def bars() -> Any:
+                return bar_for(path, head, progress)
+
+            def still_of(hists: list, rate_hz: float, gravity: float, signed: bool, notes: list[str]) -> Any:
+                return still_scale(path, head, block_bytes, bars, sums, hists, rate_hz, gravity, opts.bits, signed,
+                                   notes)
+
+            conv = bounded_convert(head, sums, opts, scale, noise_pass(path, head, block_bytes, bars, sums.n),
+                                   still_of)
+            conv.writer = bounded_writer(path, head, block_bytes, bars, conv, sums.factor)
             return conv
         except Fallback:
             pass

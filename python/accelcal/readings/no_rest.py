@@ -9,7 +9,7 @@ from scipy.signal import welch
 
 from ..io.device import GRAVITY_REMOVED_G, GRAVITY_REMOVED_TEXT
 
-__all__ = ["REST_NOISE_MAX", "noise_share", "median_force", "no_rest_clause", "gravity_removed_clause", "tonal",
+__all__ = ["REST_NOISE_MAX", "noise_share", "share_of", "median_force", "force_median", "no_rest_clause", "gravity_removed_clause", "tonal",
            "TONE_SHARE", "TONE_MIN_BINS"]
 
 REST_NOISE_MAX = 0.05      # a recording whose noise (stated or estimated) on a channel is beyond this x its readings'
@@ -59,17 +59,28 @@ def noise_share(raw: np.ndarray, device, sig: np.ndarray) -> np.ndarray:
     twice that, rows pointing tens of degrees apart had been taken for one pose.
     """
     raw = np.asarray(raw)
-    ref = median_force(raw, device)
+    return share_of(median_force(raw, device), device, sig)
+
+
+def share_of(ref: float, device, sig: np.ndarray) -> np.ndarray:
+    """:func:`noise_share` from the readings' median |f| ``ref`` (m/s^2, :func:`median_force`)."""
+    sig = np.asarray(sig, float)
     if not ref > 0:
-        return np.zeros(raw.shape[1])
-    return np.asarray(sig, float) / (ref * np.linalg.norm(device.nominal_sensitivity(), axis=1))
+        return np.zeros(sig.shape[0])
+    return sig / (ref * np.linalg.norm(device.nominal_sensitivity(), axis=1))
 
 
 def median_force(raw: np.ndarray, device) -> float:
     """The readings' median |f| (m/s^2) through the device file's nominal offsets and
     sensitivities (least squares over the channels; up to 5000 rows, evenly spaced); 0 for no rows."""
     raw = np.asarray(raw)
-    x = raw[:: max(1, raw.shape[0] // 5000)] - device.nominal_offsets()
+    return force_median(raw[:: max(1, raw.shape[0] // 5000)], device)
+
+
+def force_median(rows: np.ndarray, device) -> float:
+    """:func:`median_force` of the rows it takes (every ``max(1, n // 5000)``-th of n: a reader in
+    chunks gathers them)."""
+    x = np.asarray(rows) - device.nominal_offsets()
     if not x.size:
         return 0.0
     return float(np.median(np.linalg.norm(np.linalg.lstsq(device.nominal_sensitivity(), x.T, rcond=None)[0], axis=0)))

@@ -194,30 +194,18 @@ class NoisePass:
         if self.seen != self.n:
             raise ValueError(f"{self.seen} rows added of {self.n}")
         ref = np.median(np.concatenate(self.ref_rows), axis=0)
-        r2 = np.round(2 * ref).astype(np.int64)                   # the median of integers: whole or half
         dev = np.maximum(np.abs(self.hi - ref), np.abs(self.lo - ref)) + 1
         big = float(np.max(2 * dev)) ** 2
         if self.n * big >= 2.0 ** 50 or big * self.h * self.k >= 2.0 ** 50:
             raise ValueError("sums beyond the floats' exact integers")
         h, k, N = self.h, self.k, self.N
         L = k * h
+        self.r2 = np.round(2 * ref).astype(np.int64)            # the median of integers: whole or half
         cols = [tempfile.TemporaryFile() for _ in range(N)]
-        self.file.seek(0)
-        per = 3 * N * 8
-        while True:
-            buf = self.file.read(per * slice_windows)
-            if not buf:
-                break
-            win = np.frombuffer(buf, dtype=np.int64).reshape(-1, 3, N)
-            w1, w2, first = win[:, 0], win[:, 1], win[:, 2]
-            # the whole-file window sums about ref, exact: S1 = sum(x - ref), S2 = sum((x - ref)^2)
-            S1 = (2 * w1 - L * r2).astype(float) / 2.0
-            S2 = (4 * w2 - 4 * r2 * w1 + L * r2 * r2).astype(float) / 4.0
-            ws = np.sqrt(np.maximum((S2 - S1 * S1 / L) / L, 0.0))
+        for ws, first in self.window_stds(slice_windows):
             for i in range(N):
                 held = (ws[:, i] == 0) & ((first[:, i] == self.hi[i]) | (first[:, i] == self.lo[i]))
                 cols[i].write(np.ascontiguousarray(ws[~held, i]).tobytes())
-        self.file.close()
         out = np.zeros(N)
         for i in range(N if self.windows else 0):
             cols[i].seek(0)
@@ -233,3 +221,33 @@ class NoisePass:
         for fh in cols:
             fh.close()
         return np.sqrt(out ** 2 + self.q ** 2 / 12.0)
+
+    def window_stds(self, slice_windows: int = SLICE):
+        """Each window's std per channel (:func:`noise.window_std`'s floats) and its first reading,
+        ``slice_windows`` windows at a time, once :meth:`noise` has been taken (it knows the
+        reference reading)."""
+        h, k, N = self.h, self.k, self.N
+        L = k * h
+        r2 = self.r2
+        self.file.seek(0)
+        per = 3 * N * 8
+        while True:
+            buf = self.file.read(per * slice_windows)
+            if not buf:
+                break
+            win = np.frombuffer(buf, dtype=np.int64).reshape(-1, 3, N)
+            w1, w2, first = win[:, 0], win[:, 1], win[:, 2]
+            # the whole-file window sums about ref, exact: S1 = sum(x - ref), S2 = sum((x - ref)^2)
+            S1 = (2 * w1 - L * r2).astype(float) / 2.0
+            S2 = (4 * w2 - 4 * r2 * w1 + L * r2 * r2).astype(float) / 4.0
+            yield np.sqrt(np.maximum((S2 - S1 * S1 / L) / L, 0.0)), first
+
+    def quiet(self, limit: np.ndarray, slice_windows: int = SLICE) -> np.ndarray:
+        """(windows,) bool: every channel's window std <= ``limit`` (counts, per channel; the
+        static detector's quiet windows), once :meth:`noise` has been taken."""
+        return np.concatenate([np.all(ws <= limit[None, :], axis=1) for ws, _ in self.window_stds(slice_windows)]
+                              or [np.zeros(0, bool)])
+
+    def close(self) -> None:
+        """The windows' temporary file removed."""
+        self.file.close()

@@ -21,7 +21,8 @@ from .no_rest import REST_NOISE_MAX, gravity_removed_clause, no_rest_clause, noi
 from .noise import (code_step, colour_factor, mean_rounding_var, noise_for, nyquist_tone, pose_colour, window_std,
                     without_nyquist_tone)
 from ..io.recording import check_for_device
-from .steps import MOVE_PARTS, MOVE_RANGE, MOVE_STD, block_log_intervals, part_spread, step_splits
+from .steps import MOVE_PARTS, MOVE_RANGE, MOVE_STD, block_log_intervals, part_spread
+from .still_pieces import long_enough, refine_pieces, run_pieces, static_runs
 
 
 STATIC_WINDOW_S = 0.5      # window over which the moving std is taken
@@ -185,40 +186,12 @@ def detect_static(rec, device, *, window_s: float = STATIC_WINDOW_S, threshold: 
     nw = ws.shape[0]
     if nw == 0:
         return []
-    quiet = np.all(ws <= threshold * sig[None, :], axis=1).astype(np.int64)
-    # block b is static if a quiet window j with j <= b <= j + k - 1 covers it
-    c = np.concatenate([[0], np.cumsum(quiet)])
-    blk = np.arange(nw + k - 1)
-    static = (c[np.clip(blk + 1, 0, nw)] - c[np.clip(blk - k + 1, 0, nw)]) > 0
-    edges = np.diff(np.concatenate([[0], static.astype(np.int8), [0]]))
-    runs = []
-    for a, b in zip(np.flatnonzero(edges == 1) * h, np.flatnonzero(edges == -1) * h):
-        cuts = [int(a)] + step_splits(raw, int(a), int(b), max(2, h), sig) + [int(b)]
-        runs += [(cuts[j], cuts[j + 1], j > 0, j + 2 < len(cuts)) for j in range(len(cuts) - 1)]
-    min_n = max(w, int(math.ceil(min_s * device.sample_rate_hz)))
-    ext = k * h
+    quiet = np.all(ws <= threshold * sig[None, :], axis=1)
+    runs = [p for a, b in static_runs(quiet, k) for p in run_pieces(raw, a * h, b * h, h, sig)]
     out: list[tuple[int, int]] = []
-    lim = EDGE_SIGMA * sig
-    for r, (a, b, cut_a, cut_b) in enumerate(runs):
-        lo_lim = max(out[-1][1] if out else 0, runs[r - 1][1] if r else 0)
-        hi_lim = runs[r + 1][0] if r + 1 < len(runs) else n
-        lo = a if cut_a else max(lo_lim, a - ext)
-        hi = b if cut_b else min(hi_lim, b + ext)
-        if b - a < 1:
-            continue
-        med = np.median(raw[a:b:max(1, (b - a) // 2000)], axis=0)
-        left = np.flatnonzero(np.any(np.abs(raw[lo:min(a + h, b)] - med) > lim, axis=1))
-        start = lo + (int(left[-1]) + 1 if left.size else 0)
-        r0 = max(b - h, a)
-        right = np.flatnonzero(np.any(np.abs(raw[r0:hi] - med) > lim, axis=1))
-        stop = r0 + int(right[0]) if right.size else hi
-        if stop - start >= w:
-            out.append((int(start), int(stop)))
-    # a piece joined to its neighbours (or the recording's ends) with no sample between
-    # them was recorded as a static block: no motion touches it
-    stops = {0} | {iv[1] for iv in out}
-    starts = {n} | {iv[0] for iv in out}
-    out = [iv for iv in out if iv[1] - iv[0] >= min_n or (iv[0] in stops and iv[1] in starts)]
+    refine_pieces(raw, runs, out, w, h, k * h, EDGE_SIGMA * sig, 0, n)
+    min_n = max(w, int(math.ceil(min_s * device.sample_rate_hz)))
+    out = [iv for iv, keep in zip(out, long_enough(out, n, min_n)) if keep]
     # a recording of static blocks alone: its blocks whose means hold still, tremor or not,
     # and the intervals above that none of them overlaps; a block that holds two of those
     # intervals at different levels spans a motion and is not one
