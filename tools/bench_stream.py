@@ -76,6 +76,14 @@ if kind == "resolve":
     assert rc == 0
 elif kind.startswith("convert"):
     from accelcal.cli.main import main
+    if kind == "convert" and "--arrays-ok" not in extra:
+        import importlib
+        cs = importlib.import_module("accelcal.convert.stream")
+
+        def arrays(*a, **k):
+            raise AssertionError("the streamed convert fell back to the first pass's arrays")
+        cs.first_pass = arrays
+    extra = [x for x in extra if x != "--arrays-ok"]
     t0 = time.perf_counter()
     rc = main(["convert", src, "-o", out, "--quiet"] + extra + (["--whole-file"] if kind.endswith("-whole") else []))
     assert rc == 0
@@ -159,13 +167,14 @@ def generate(n: int, d: Path, raw0: np.ndarray) -> tuple[Path, Path]:
 
 
 def run_case(kind: str, src: Path, out: Path, engine: str = "fixed", device: str = "default",
-             extra: tuple = ()) -> dict:
+             extra: tuple = (), keep: bool = False) -> dict:
     code = CASE.format(python=str(ROOT / "python"), rows=ROWS, engine=engine, device=device)
     r = subprocess.run([sys.executable, "-c", code, kind, str(src), str(out), *extra], capture_output=True, text=True)
     if r.returncode != 0:
         raise RuntimeError(f"{kind} {src} -> {out}: {r.stderr.strip()[-2000:]}")
     res = json.loads(r.stdout.strip().splitlines()[-1])
-    out.unlink(missing_ok=True)
+    if not keep:
+        out.unlink(missing_ok=True)
     return res
 
 
@@ -374,9 +383,16 @@ def main() -> None:
                 if a.command != "resolve":
                     for kind in (a.command,) + (() if a.no_whole else (a.command + "-whole",)):
                         extra = tuple(shlex.split(a.convert_args)) if a.command == "convert" else ()
-                        res = run_case(kind, src, out, a.engine, device, extra)
-                        what = (" ".join((kind,) + extra) if a.command == "convert" else
-                                f"{kind} --engine {a.engine}")
+                        res = run_case(kind, src, out, a.engine, device, extra, keep=a.command == "convert")
+                        what = (" ".join((kind,) + tuple(x for x in extra if x != "--arrays-ok"))
+                                if a.command == "convert" else f"{kind} --engine {a.engine}")
+                        if a.command == "convert" and kind == "convert" and not a.no_whole:
+                            out.rename(out.with_suffix(".stream"))       # compared with the whole-file run's
+                        elif a.command == "convert" and kind != "convert":
+                            same = out.with_suffix(".stream").read_bytes() == out.read_bytes()
+                            what += f" (output {'the same bytes' if same else 'DIFFERENT'})"
+                            out.with_suffix(".stream").unlink()
+                        out.unlink(missing_ok=True)
                         print(f"| {n:.0e} | {name} | {what} | {res['s']:.2f} | {res['mb']:.0f} |", flush=True)
                     continue
                 io = run_case("anchor", src, out)
