@@ -124,8 +124,9 @@ def test_bounded_gives_the_whole_file_bytes(files, capfd, tmp_path, monkeypatch,
 
 
 def test_fallback_gives_the_same_bytes(files, capfd, tmp_path, monkeypatch):
-    """Where a summary cannot tell (no stated scale; a leading 0, 0, 0 placeholder), the arrays path
-    runs: the whole-file bytes still."""
+    """Where a summary cannot tell (a leading 0, 0, 0 placeholder), the arrays path runs: the
+    whole-file bytes still (without a stated scale the bounded path runs now:
+    test_stream_convert_scale.py)."""
     called = []
     arrays = stream.first_pass
 
@@ -133,7 +134,7 @@ def test_fallback_gives_the_same_bytes(files, capfd, tmp_path, monkeypatch):
         called.append(1)
         return arrays(*a, **k)
     monkeypatch.setattr(stream, "first_pass", counted)
-    for name, args in (("plain", ()), ("lead", ("--full-scale", "2"))):
+    for name, args in (("lead", ()), ("lead", ("--full-scale", "2"))):
         called.clear()
         same_as_whole(capfd, tmp_path, files / f"{name}.csv", args, blocks=(97, 1 << 30))
         assert called, name
