@@ -15,8 +15,10 @@ Where an inference takes more than these summaries give, :class:`~accelcal.io.ch
 is raised before anything is written and the caller runs the first-pass-arrays path
 (:func:`accelcal.convert.stream.convert_csv_chunked`'s, the same output):
 
-* no stated scale (``--full-scale``/``--lsb``): the nominal scale then comes from the static
-  detector (:func:`accelcal.readings.static.detect_static`) over the samples;
+* no stated scale (``--full-scale``/``--lsb``) and no ``still_of`` (the nominal scale then comes
+  from the static detector, :func:`accelcal.readings.static.detect_static`: with ``still_of``,
+  :func:`accelcal.convert.bounded_scale.still_scale` finds its still stretches in two more
+  passes, or raises Fallback where it cannot);
 * a leading ``0, 0, 0`` row, readings held for several rows, stamps in bursts, t in another
   unit than s, ``--rate`` off the stamps, ``--regions``: the notes name rows or take the samples;
 * an extreme reading held by CLIP_MIN_COUNT samples or more inside the ADC's range whose pile
