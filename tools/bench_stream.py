@@ -331,8 +331,9 @@ def main() -> None:
                     "'--max-samples 0' (every sample; the default keeps windows of about 100,000)")
     ap.add_argument("--engine", choices=["float", "fixed"], default="fixed", help="rate's or attitude's engine")
     ap.add_argument("--convert-args", default="",
-                    help="convert: options added to both runs, one string (e.g. '--full-scale 2': a stated scale, "
-                    "which the bounded-memory path takes; docs/streaming.md)")
+                    help="convert: options added to both runs, one string (e.g. '--full-scale 2': a stated scale; "
+                    "docs/streaming.md). The streamed run fails where it falls back to the first pass's arrays "
+                    "('--convert-args=--arrays-ok' allows it); the two runs' outputs are compared byte for byte")
     ap.add_argument("--no-whole", action="store_true", help="rate, attitude, calibrate: the streamed runs only")
     a = ap.parse_args()
     d = Path(a.dir or tempfile.mkdtemp(prefix="bench_stream_"))
