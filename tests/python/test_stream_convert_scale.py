@@ -81,6 +81,9 @@ def files(tmp_path_factory):
     dirs = np.array([[0, 0, 1], [0, 1, 0], [1, 0, 0], [0, 0, -1], [0, -1, 0], [-1, 0, 0]], float)
     blocks = np.round(np.repeat(dirs[np.arange(12) % 6] * 4096, 150, axis=0) + rng.normal(0, 6, (1800, 3)))
     write_recording(d / "blocks.csv", Recording(t=np.arange(1800) / 100.0, raw=blocks.astype(np.int64) + 2048))
+    inner = poses(1800, 39)
+    inner.raw[150:300] += 35                                        # an instant step of 6 x the noise in a pose
+    write_recording(d / "inner_step.csv", Recording(t=inner.t, raw=inner.raw))
     return d
 
 
@@ -102,17 +105,28 @@ def test_no_scale_bounded_gives_the_whole_file_bytes(files, capfd, tmp_path, mon
 
 
 def test_fallbacks_give_the_same_bytes(files, capfd, tmp_path, monkeypatch):
-    """A tone at half the rate, a logger's blocks, a still stretch longer than MAX_STILL_ROWS: the
-    arrays path runs (the rule of docs/streaming.md) and gives the whole-file bytes."""
+    """A tone at half the rate, a logger's blocks, a still stretch not held (longer than
+    MAX_STILL_ROWS) with a candidate instant step in it: the arrays path runs (the rules of
+    docs/streaming.md) and gives the whole-file bytes."""
     called = arrays_counted(monkeypatch)
     for name in ("tone", "blocks"):
         called.clear()
         same_as_whole(capfd, tmp_path, files / f"{name}.csv", (), blocks=(97, 1 << 30))
         assert called, name
-    monkeypatch.setattr(bounded_scale, "MAX_STILL_ROWS", 200)       # the poses' stretches are about 300 rows
+    monkeypatch.setattr(bounded_scale, "MAX_STILL_ROWS", 0)
     called.clear()
-    same_as_whole(capfd, tmp_path, files / "plain.csv", (), blocks=(97, 1 << 30))
+    same_as_whole(capfd, tmp_path, files / "inner_step.csv", (), blocks=(97, 1 << 30))
     assert called
+
+
+@pytest.mark.parametrize("name", ("plain", "labelled", "handheld"))
+def test_long_stretches_not_held(files, capfd, tmp_path, monkeypatch, name):
+    """Every run of static blocks longer than MAX_STILL_ROWS (0 here: none held; 2^18 rows by
+    default): kept as its end rows, a subsample and sums (LongRun), the whole-file bytes still."""
+    monkeypatch.setattr(bounded_scale, "MAX_STILL_ROWS", 0)
+    no_arrays(monkeypatch)
+    err = same_as_whole(capfd, tmp_path, files / f"{name}.csv", (), blocks=(97, 4096, 1 << 30))
+    assert "still stretches over g" in err
 
 
 @pytest.mark.parametrize("which", range(len(REAL)))
@@ -150,19 +164,24 @@ def chunked(raw: np.ndarray, rng) -> list:
     return np.split(raw, cuts)
 
 
-def test_still_stretches_are_detect_statics(monkeypatch):
+@pytest.mark.parametrize("hold", (None, 0, 150))
+def test_still_stretches_are_detect_statics(monkeypatch, hold):
     """still_stretches over chunks cut anywhere gives detect_static's intervals (poses with motions,
-    instant steps, hand-held turns of the independent generator) and numpy's means of them."""
+    small instant steps inside poses, hand-held turns of the independent generator) and numpy's
+    means of them; with runs held (``hold`` None: 2^18 rows) or not (longer than 0 or 150 rows: a
+    LongRun, which falls back only where a step may split it)."""
+    if hold is not None:
+        monkeypatch.setattr(bounded_scale, "MAX_STILL_ROWS", hold)
     rng = np.random.default_rng(41)
-    seen = 0
-    for trial in range(12):
+    seen, fell = 0, 0
+    for trial in range(15):
         if trial % 3 == 2:
             rec = make_handheld(seed=trial, device="triad16", rate=100.0, n_poses=6, labels=False)["recording"]
             raw = rec.raw.astype(np.int64)
         else:
             raw = poses(int(rng.integers(900, 3000)), 50 + trial).raw
             if trial % 3 == 1:
-                raw[400:700] = raw[400] + np.round(rng.normal(0, 6, (300, 3))).astype(np.int64) + 200   # a step
+                raw[400:550] += int(rng.integers(20, 40))          # an instant step inside a pose
         n = raw.shape[0]
         probe = triad_device("csv-triad", 100.0, 9.80665, 16, False, 400.0)
         hists = [np.unique(raw[:, i], return_counts=True) for i in range(3)]
@@ -178,6 +197,7 @@ def test_still_stretches_are_detect_statics(monkeypatch):
         try:
             out, means, noise = bounded_scale.still_stretches(passes, n, probe, hists, diffs)
         except Fallback:
+            fell += 1
             continue
         sig = estimate_noise(raw, 50, integer=True)
         assert np.array_equal(noise, sig)
@@ -186,7 +206,8 @@ def test_still_stretches_are_detect_statics(monkeypatch):
         for (a, b), m in zip(out, means):
             assert np.array_equal(m, raw[a:b].mean(axis=0))
         seen += bool(out)
-    assert seen >= 8
+    assert seen >= 9
+    assert (fell > 0) == (hold is not None)      # held runs never fall back; some not held hold a step
 
 
 def test_percentiles_of_counts_are_numpys():

@@ -15,7 +15,7 @@ from the first pass's histograms and two more passes over the file.
 
 Where the detector takes more than this (a tone at half the rate, noise beyond REST_NOISE_MAX of
 |f|: the Welch test; a recording whose large changes may be a logger's steps; a run of static
-blocks that would hold more than MAX_STILL_ROWS rows; a file of pose means; sums beyond exact
+blocks longer than MAX_STILL_ROWS rows that may hold an instant step; a file of pose means; sums beyond exact
 floats) :class:`~accelcal.io.chunks.Fallback` is raised and the arrays path runs (the same output).
 """
 from __future__ import annotations
@@ -36,8 +36,9 @@ from ..readings.still_stream import DiffSums, LoggerBound, StillPass, percentile
 
 __all__ = ["MAX_STILL_ROWS", "still_scale", "still_stretches"]
 
-#: the most rows of one run of static blocks (and a window either side) the still pass holds (more:
-#: Fallback): 2^18 rows, 6 MiB of counts and about 40 MiB of the step test's floats
+#: the most rows of one run of static blocks (and a window either side) the still pass holds (2^18 rows,
+#: 6 MiB of counts and about 40 MiB of the step test's floats); a longer run goes as a LongRun (its
+#: rows not held; Fallback where it may hold an instant step)
 MAX_STILL_ROWS = 1 << 18
 
 
@@ -113,11 +114,13 @@ def still_stretches(passes: Callable[..., None], n: int, probe: Any, hists: list
         raise Fallback("large changes that may be a logger's steps (its blocks take the samples)")
     runs = [(a * p.h, b * p.h) for a, b in static_runs(quiet, p.k)]
     ext = p.k * p.h
-    if StillPass.longest(n, runs, ext) > MAX_STILL_ROWS:
-        raise Fallback(f"a still stretch of more than {MAX_STILL_ROWS} rows")
-    still = StillPass(n, runs, w, p.h, ext, sig, EDGE_SIGMA * sig)
-    passes(still.add)
-    still.finish()
+    span = max(max(abs(int(u[0])), abs(int(u[-1])), int(u[-1] - u[0])) for u, _ in hists)
+    still = StillPass(n, runs, w, p.h, ext, sig, EDGE_SIGMA * sig, hold=MAX_STILL_ROWS, span=span)
+    try:
+        passes(still.add)
+        still.finish()
+    except ValueError as e:
+        raise Fallback(str(e)) from None
     min_n = max(w, int(math.ceil(MIN_POSE_S * probe.sample_rate_hz)))
     keep = long_enough(still.out, n, min_n)
     return ([iv for iv, k in zip(still.out, keep) if k], [m for m, k in zip(still.means, keep) if k], noise)

@@ -20,14 +20,16 @@ numbers each) and the samples of the longest run of static blocks (its caller bo
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from .noise import NYQUIST_RATIO, MAD_TO_STD
 from .noise_stream import add_counts, median_of_counts
-from .steps import BLOCK_JUMP, BLOCK_SHARE, BLOCK_SPAN
+from .steps import BLOCK_JUMP, BLOCK_SHARE, BLOCK_SPAN, STEP_SIGMA
 from .still_pieces import refine_pieces, run_pieces
 
-__all__ = ["DiffSums", "LoggerBound", "StillPass", "percentiles_of_counts", "order_stat_of"]
+__all__ = ["DiffSums", "LoggerBound", "StillPass", "LongRun", "RowsOf", "percentiles_of_counts", "order_stat_of"]
 
 #: sums the floats of numpy's means hold exactly
 EXACT = 2.0 ** 53
@@ -168,21 +170,103 @@ class LoggerBound:
         return not (self.cands < 2 or self.cands < BLOCK_SHARE * self.groups)
 
 
+class RowsOf:
+    """The rows of a long run that :func:`accelcal.readings.still_pieces.refine_pieces` takes, sliced as
+    it slices the recording: slices within one of ``parts`` ((first sample, rows)), or the subsample
+    ``sub`` ((start, stop, stride), rows)."""
+
+    def __init__(self, parts: list, sub: tuple) -> None:
+        self.parts, self.sub = parts, sub
+
+    def __getitem__(self, sl: slice) -> np.ndarray:
+        if (sl.start, sl.stop, sl.step or 1) == self.sub[0]:
+            return self.sub[1]
+        for first, rows in self.parts:
+            if first <= sl.start and sl.stop <= first + rows.shape[0]:
+                return rows[sl.start - first:sl.stop - first]
+        raise ValueError(f"rows {sl} not kept")
+
+
+class LongRun:
+    """One run of static blocks [a, b) too long to hold, its span [lo, hi) (the run and a window
+    either side) fed in chunks: of it are kept the rows a refinement takes (the span's first rows to
+    a + h, its last from b - h, every ``(b - a) // 2000``-th row of the run), the integer sum of the
+    rows between, and whether ``step_splits`` finds a candidate step in it (``step``: the means of
+    the m rows before and after some split differ by more than STEP_SIGMA x ``sig``; the same floats,
+    its cumulative sums being exact integers)."""
+
+    def __init__(self, a: int, b: int, lo: int, hi: int, h: int, m: int, sig: np.ndarray, n_channels: int) -> None:
+        self.a, self.b, self.lo, self.hi, self.h, self.m, self.sig = a, b, lo, hi, h, m, sig
+        self.head: list[np.ndarray] = []
+        self.tail: list[np.ndarray] = []
+        self.stride = max(1, (b - a) // 2000)
+        self.sub: list[np.ndarray] = []
+        self.mid = np.zeros(n_channels, np.int64)
+        self.ctx = np.zeros((0, n_channels), np.int64)
+        self.ctx_start = a
+        self.next_i = a + m                      # the first split not yet tested
+        self.step = False
+
+    def add(self, raw: np.ndarray, s: int) -> None:
+        """Rows ``raw`` of samples s, s + 1, ..."""
+        e = s + raw.shape[0]
+        a, b, h, m = self.a, self.b, self.h, self.m
+        for keep, lo, hi in ((self.head, self.lo, a + h), (self.tail, b - h, self.hi)):
+            if max(lo, s) < min(hi, e):
+                keep.append(raw[max(lo, s) - s:min(hi, e) - s])
+        if max(a + h, s) < min(b - h, e):
+            self.mid += raw[max(a + h, s) - s:min(b - h, e) - s].sum(axis=0)
+        first = a + -(-(max(a, s) - a) // self.stride) * self.stride
+        if first < min(b, e):
+            self.sub.append(raw[first - s:min(b, e) - s:self.stride])
+        if max(a, s) < min(b, e):
+            y = np.concatenate([self.ctx, raw[max(a, s) - s:min(b, e) - s]])
+            y0 = self.ctx_start
+            last = min(b - m, y0 + y.shape[0] - m)          # the last split whose m rows after are here
+            if last >= self.next_i:
+                c = np.concatenate([np.zeros((1, y.shape[1]), np.int64), np.cumsum(y, axis=0)])
+                i = np.arange(self.next_i, last + 1) - y0
+                left = (c[i] - c[i - m]) / m
+                right = (c[i + m] - c[i]) / m
+                z = np.max(np.abs(right - left) / self.sig[None, :], axis=1)
+                self.step = self.step or bool(np.any(z > STEP_SIGMA))
+                self.next_i = last + 1
+            self.ctx = y[self.next_i - m - y0:]
+            self.ctx_start = self.next_i - m
+
+    def rows(self) -> RowsOf:
+        a, b, h = self.a, self.b, self.h
+        return RowsOf([(self.lo, np.concatenate(self.head)), (b - h, np.concatenate(self.tail))],
+                      ((a, b, self.stride), np.concatenate(self.sub)))
+
+    def mean(self, start: int, stop: int) -> np.ndarray:
+        """The mean reading of rows [start, stop) (start at most a + h, stop at least b - h): numpy's
+        float of the exact sum."""
+        a, b, h = self.a, self.b, self.h
+        head, tail = np.concatenate(self.head), np.concatenate(self.tail)
+        total = head[start - self.lo:].sum(axis=0) + self.mid + tail[:stop - (b - h)].sum(axis=0)
+        return total.astype(float) / (stop - start)
+
+
 class StillPass:
     """The static detector's intervals within given runs of static blocks, over a recording of
     ``n`` rows fed in chunks: for each run [a, b) (samples, ascending), the rows from a - ``ext``
     to b + ``ext`` are held, then cut at their instant steps and refined as ``detect_static`` does
     (:func:`accelcal.readings.still_pieces.run_pieces`, :func:`~accelcal.readings.still_pieces.refine_pieces`:
     window ``w``, block ``h``, noise ``sig``, edge limit ``lim``, counts); ``out`` the intervals,
-    ``means`` the mean reading of each (numpy's mean of its rows: the same floats)."""
+    ``means`` the mean reading of each (numpy's mean of its rows: the same floats).  A run whose
+    rows would be more than ``hold`` goes as a :class:`LongRun` (its rows not held): ValueError where
+    it may hold an instant step, or where its sums ``span`` (the readings' greatest |value| and
+    range, counts) could pass the floats' exact integers."""
 
     def __init__(self, n: int, runs: list[tuple[int, int]], w: int, h: int, ext: int, sig: np.ndarray,
-                 lim: np.ndarray) -> None:
+                 lim: np.ndarray, hold: int | None = None, span: int = 0) -> None:
         self.n, self.runs, self.w, self.h, self.ext = n, runs, w, h, ext
-        self.sig, self.lim = sig, lim
+        self.sig, self.lim, self.span = sig, lim, span
         self.spans = [(max(0, a - ext), min(n, b + ext)) for a, b in runs]
+        self.hold = hold
         self.next = 0
-        self.active: dict[int, list[np.ndarray]] = {}
+        self.active: dict[int, Any] = {}
         self.seen = 0
         self.out: list[tuple[int, int]] = []
         self.means: list[np.ndarray] = []
@@ -193,28 +277,49 @@ class StillPass:
         return max((min(n, b + ext) - max(0, a - ext) for a, b in runs), default=0)
 
     def add(self, raw: np.ndarray) -> None:
+        raw = np.asarray(raw, np.int64)
         s, e = self.seen, self.seen + raw.shape[0]
         while self.next < len(self.spans) and self.spans[self.next][0] < e:
-            self.active[self.next] = []
+            lo, hi = self.spans[self.next]
+            a, b = self.runs[self.next]
+            if self.hold is not None and hi - lo > self.hold:
+                if (b - a) * self.span >= EXACT:
+                    raise ValueError("a long still stretch whose sums pass the floats' exact integers")
+                self.active[self.next] = LongRun(a, b, lo, hi, self.h, max(2, self.h), self.sig, raw.shape[1])
+            else:
+                self.active[self.next] = []
             self.next += 1
         for r, parts in self.active.items():
             lo, hi = self.spans[r]
             a, b = max(lo, s), min(hi, e)
-            if b > a:
-                parts.append(np.asarray(raw[a - s:b - s], np.int64))
+            if isinstance(parts, LongRun):
+                parts.add(raw, s)
+            elif b > a:
+                parts.append(raw[a - s:b - s])
         for r in sorted(self.active):
             if self.spans[r][1] > e:
                 break
-            self.piece(r, np.concatenate(self.active.pop(r)))
+            self.piece(r, self.active.pop(r))
         self.seen = e
 
-    def piece(self, r: int, x: np.ndarray) -> None:
-        off = self.spans[r][0]
+    def piece(self, r: int, held: Any) -> None:
         a, b = self.runs[r]
-        pieces = run_pieces(x, a, b, self.h, self.sig, off)
+        prev_stop = self.runs[r - 1][1] if r else 0
+        next_start = self.runs[r + 1][0] if r + 1 < len(self.runs) else self.n
         first = len(self.out)
-        refine_pieces(x, pieces, self.out, self.w, self.h, self.ext, self.lim,
-                      self.runs[r - 1][1] if r else 0, self.runs[r + 1][0] if r + 1 < len(self.runs) else self.n, off)
+        if isinstance(held, LongRun):
+            if held.step:
+                raise ValueError("a long still stretch that may hold an instant step")
+            if b - a < 2 * max(2, self.h) + 1 or self.h >= (b - a) // 2:
+                raise ValueError("a long run too short for its kept rows")
+            refine_pieces(held.rows(), [(a, b, False, False)], self.out, self.w, self.h, self.ext, self.lim,
+                          prev_stop, next_start)
+            self.means += [held.mean(lo, hi) for lo, hi in self.out[first:]]
+            return
+        x = np.concatenate(held)
+        off = self.spans[r][0]
+        pieces = run_pieces(x, a, b, self.h, self.sig, off)
+        refine_pieces(x, pieces, self.out, self.w, self.h, self.ext, self.lim, prev_stop, next_start, off)
         self.means += [x[lo - off:hi - off].mean(axis=0) for lo, hi in self.out[first:]]
 
     def finish(self) -> None:
