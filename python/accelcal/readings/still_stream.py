@@ -33,6 +33,8 @@ __all__ = ["DiffSums", "LoggerBound", "StillPass", "LongRun", "RowsOf", "percent
 
 #: sums the floats of numpy's means hold exactly
 EXACT = 2.0 ** 53
+#: rows of a long run whose step test is taken at once (its temporaries: about 200 bytes a row)
+SPLIT_SLICE = 1 << 15
 
 
 def order_stat_of(u: np.ndarray, cnt: np.ndarray, i: int) -> np.int64:
@@ -219,20 +221,27 @@ class LongRun:
         first = a + -(-(max(a, s) - a) // self.stride) * self.stride
         if first < min(b, e):
             self.sub.append(raw[first - s:min(b, e) - s:self.stride])
-        if max(a, s) < min(b, e):
-            y = np.concatenate([self.ctx, raw[max(a, s) - s:min(b, e) - s]])
-            y0 = self.ctx_start
-            last = min(b - m, y0 + y.shape[0] - m)          # the last split whose m rows after are here
-            if last >= self.next_i:
-                c = np.concatenate([np.zeros((1, y.shape[1]), np.int64), np.cumsum(y, axis=0)])
-                i = np.arange(self.next_i, last + 1) - y0
-                left = (c[i] - c[i - m]) / m
-                right = (c[i + m] - c[i]) / m
-                z = np.max(np.abs(right - left) / self.sig[None, :], axis=1)
-                self.step = self.step or bool(np.any(z > STEP_SIGMA))
-                self.next_i = last + 1
-            self.ctx = y[self.next_i - m - y0:]
-            self.ctx_start = self.next_i - m
+        seg = raw[max(a, s) - s:max(min(b, e) - s, 0)] if max(a, s) < min(b, e) else raw[:0]
+        for k in range(0, seg.shape[0], SPLIT_SLICE):       # the test's temporaries a slice's
+            self.test(seg[k:k + SPLIT_SLICE])
+
+    def test(self, rows: np.ndarray) -> None:
+        """step_splits' candidate test over the splits whose m rows after are in ``rows`` (the run's
+        next rows) and before."""
+        b, m = self.b, self.m
+        y = np.concatenate([self.ctx, rows])
+        y0 = self.ctx_start
+        last = min(b - m, y0 + y.shape[0] - m)              # the last split whose m rows after are here
+        if last >= self.next_i:
+            c = np.concatenate([np.zeros((1, y.shape[1]), np.int64), np.cumsum(y, axis=0)])
+            i = np.arange(self.next_i, last + 1) - y0
+            left = (c[i] - c[i - m]) / m
+            right = (c[i + m] - c[i]) / m
+            z = np.max(np.abs(right - left) / self.sig[None, :], axis=1)
+            self.step = self.step or bool(np.any(z > STEP_SIGMA))
+            self.next_i = last + 1
+        self.ctx = y[self.next_i - m - y0:]
+        self.ctx_start = self.next_i - m
 
     def rows(self) -> RowsOf:
         a, b, h = self.a, self.b, self.h
