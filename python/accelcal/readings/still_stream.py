@@ -214,13 +214,13 @@ class LongRun:
         e = s + raw.shape[0]
         a, b, h, m = self.a, self.b, self.h, self.m
         for keep, lo, hi in ((self.head, self.lo, a + h), (self.tail, b - h, self.hi)):
-            if max(lo, s) < min(hi, e):
-                keep.append(raw[max(lo, s) - s:min(hi, e) - s])
+            if max(lo, s) < min(hi, e):          # copies: a view would keep the whole chunk
+                keep.append(raw[max(lo, s) - s:min(hi, e) - s].copy())
         if max(a + h, s) < min(b - h, e):
             self.mid += raw[max(a + h, s) - s:min(b - h, e) - s].sum(axis=0)
         first = a + -(-(max(a, s) - a) // self.stride) * self.stride
         if first < min(b, e):
-            self.sub.append(raw[first - s:min(b, e) - s:self.stride])
+            self.sub.append(raw[first - s:min(b, e) - s:self.stride].copy())
         seg = raw[max(a, s) - s:max(min(b, e) - s, 0)] if max(a, s) < min(b, e) else raw[:0]
         for k in range(0, seg.shape[0], SPLIT_SLICE):       # the test's temporaries a slice's
             self.test(seg[k:k + SPLIT_SLICE])
@@ -240,7 +240,7 @@ class LongRun:
             z = np.max(np.abs(right - left) / self.sig[None, :], axis=1)
             self.step = self.step or bool(np.any(z > STEP_SIGMA))
             self.next_i = last + 1
-        self.ctx = y[self.next_i - m - y0:]
+        self.ctx = y[self.next_i - m - y0:].copy()
         self.ctx_start = self.next_i - m
 
     def rows(self) -> RowsOf:
