@@ -30,31 +30,38 @@ REAL = (("imu_tk_xsens", "xsens_acc.txt.gz"), ("mpu6050_tomisuarez", "example_da
         ("mpu6050_tomisuarez", "example_data_tinit_calc.csv.gz"))
 
 
-@pytest.fixture(scope="module")
-def files(tmp_path_factory):
-    d = tmp_path_factory.mktemp("bounded_convert")
-    rec = poses(1800, 11)
+def write_common_cases(d, seeds: tuple) -> None:
+    """The recordings both bounded convert paths (with and without a stated scale) are checked on,
+    in the directory d: plain.csv, labelled.csv (the independent generator's jig: pose, f),
+    rail.csv, pile.csv, held.csv, ms.csv; ``seeds`` the five poses() seeds."""
+    rec = poses(1800, seeds[0])
     write_recording(d / "plain.csv", Recording(t=rec.t, raw=rec.raw, metadata={"device": "x"}))
     jig = make_jig(seed=5, device="triad16", rate=100.0, n_poses=6, repeats=False, hold_s=(1.0, 1.5))["recording"]
     write_recording(d / "labelled.csv", jig)                         # the independent generator's: pose, f
-    signed = poses(1800, 12, signed=True)
+    signed = poses(1800, seeds[1], signed=True)
     signed.raw[700:760, 1] = 2 ** 15 - 1                            # at the rail: counted in the note
     signed.raw[900:905, 2] = -(2 ** 15)
     write_recording(d / "rail.csv", Recording(t=signed.t, raw=signed.raw))
+    pile = poses(1800, seeds[2])
+    pile.raw[200:230, 0] = int(pile.raw[:, 0].max()) + 50           # held at a level inside the range
+    write_recording(d / "pile.csv", Recording(t=pile.t, raw=pile.raw))
+    held = poses(1800, seeds[3])
+    held.raw[1::2] = held.raw[0::2]                                 # each reading held for two rows
+    write_recording(d / "held.csv", Recording(t=held.t, raw=held.raw))
+    ms = poses(1800, seeds[4])
+    write_recording(d / "ms.csv", Recording(t=1000.0 * ms.t + 5.0, raw=ms.raw))   # t in ms: told, noted
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("bounded_convert")
+    write_common_cases(d, (11, 12, 15, 17, 18))
     paused = poses(1800, 13)
     t = paused.t.copy()
     t[1000:] += 0.5                                                 # a pause of 50 samples: the gap note
     write_recording(d / "paused.csv", Recording(t=t + 12.25, raw=paused.raw))
     step4 = poses(1800, 14)
     write_recording(d / "step4.csv", Recording(t=step4.t, raw=step4.raw * 4))     # the code-step note
-    pile = poses(1800, 15)
-    pile.raw[200:230, 0] = int(pile.raw[:, 0].max()) + 50           # held at a level inside the range
-    write_recording(d / "pile.csv", Recording(t=pile.t, raw=pile.raw))
-    held = poses(1800, 17)
-    held.raw[1::2] = held.raw[0::2]                                 # each reading held for two rows
-    write_recording(d / "held.csv", Recording(t=held.t, raw=held.raw))
-    ms = poses(1800, 18)
-    write_recording(d / "ms.csv", Recording(t=1000.0 * ms.t + 5.0, raw=ms.raw))   # t in ms: told, noted
     uneven = poses(3000, 19)
     runs = np.cumsum(np.where(np.arange(3000) % 5 == 0, 2, 3))      # runs of 3, 3, 3, 3, 2 rows: 2.8 on average
     first = runs[runs < 3000]
@@ -208,14 +215,20 @@ def test_pile_free_holds_for_every_noise():
 def test_real_recordings(capfd, tmp_path, monkeypatch, which):
     """Real recordings (../shared/data), made contract CSVs by convert, converted again with a stated scale in
     bounded memory: the whole-file bytes."""
+    rec = real_as_contract(capfd, tmp_path, which)
+    no_arrays(monkeypatch)
+    same_as_whole(capfd, tmp_path, rec, ("--full-scale", "2"), blocks=(1000, 1 << 16, 1 << 30))
+
+
+def real_as_contract(capfd, tmp_path, which: int):
+    """REAL[which] (../shared/data) made a contract CSV by convert (its path); skips without the data."""
     path = shared_file(*REAL[which])
     if path is None:
         pytest.skip("no ../shared/data beside the repository")
     rec = tmp_path / "real.csv"
     rc, _, err, _ = run(["convert", path, "-o", rec, "--quiet"], capfd)
     assert rc == 0, err
-    no_arrays(monkeypatch)
-    same_as_whole(capfd, tmp_path, rec, ("--full-scale", "2"), blocks=(1000, 1 << 16, 1 << 30))
+    return rec
 
 
 def test_held_counts_are_held_runs():

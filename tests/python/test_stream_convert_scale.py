@@ -21,10 +21,10 @@ from accelcal.readings.steps import logger_steps
 from accelcal.readings.still_stream import DiffSums, LoggerBound, percentiles_of_counts
 
 from cli_run import run
-from indep_model import make_handheld, make_jig
+from indep_model import make_handheld
 from shared_data import shared_file
 from test_stream_convert import poses
-from test_stream_convert_bounded import REAL, same_as_whole
+from test_stream_convert_bounded import REAL, real_as_contract, same_as_whole, write_common_cases
 
 # accelcal.convert is also a function of the package's top: the module by its name
 stream = importlib.import_module("accelcal.convert.stream")
@@ -51,23 +51,9 @@ def no_arrays(monkeypatch):
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     d = tmp_path_factory.mktemp("scale_convert")
-    rec = poses(1800, 31)
-    write_recording(d / "plain.csv", Recording(t=rec.t, raw=rec.raw, metadata={"device": "x"}))
-    jig = make_jig(seed=5, device="triad16", rate=100.0, n_poses=6, repeats=False, hold_s=(1.0, 1.5))["recording"]
-    write_recording(d / "labelled.csv", jig)                         # the independent generator's: pose, f
+    write_common_cases(d, (31, 32, 33, 34, 35))
     hand = make_handheld(seed=3, device="triad16", rate=100.0, n_poses=8, labels=False)["recording"]
     write_recording(d / "handheld.csv", Recording(t=hand.t, raw=hand.raw))   # smooth turns between the poses
-    signed = poses(1800, 32, signed=True)
-    signed.raw[700:760, 1] = 2 ** 15 - 1                            # at the rail: counted in the note
-    write_recording(d / "rail.csv", Recording(t=signed.t, raw=signed.raw))
-    pile = poses(1800, 33)
-    pile.raw[200:230, 0] = int(pile.raw[:, 0].max()) + 50           # held at a level inside the range
-    write_recording(d / "pile.csv", Recording(t=pile.t, raw=pile.raw))
-    held = poses(1800, 34)
-    held.raw[1::2] = held.raw[0::2]                                 # each reading held for two rows
-    write_recording(d / "held.csv", Recording(t=held.t, raw=held.raw))
-    ms = poses(1800, 35)
-    write_recording(d / "ms.csv", Recording(t=1000.0 * ms.t + 5.0, raw=ms.raw))   # t in ms: told, noted
     quiet = poses(1800, 36)
     quiet.raw[:] = quiet.raw[0]                                     # no range: the scale is a guess
     write_recording(d / "flat.csv", Recording(t=quiet.t, raw=quiet.raw))
@@ -133,12 +119,7 @@ def test_long_stretches_not_held(files, capfd, tmp_path, monkeypatch, name):
 def test_real_recordings_without_scale(capfd, tmp_path, monkeypatch, which):
     """Real recordings (../shared/data: imu_tk's Xsens log, the two MPU-6050 logs) made contract CSVs by
     convert, converted again without a stated scale in bounded memory: the whole-file bytes."""
-    path = shared_file(*REAL[which])
-    if path is None:
-        pytest.skip("no ../shared/data beside the repository")
-    rec = tmp_path / "real.csv"
-    rc, _, err, _ = run(["convert", path, "-o", rec, "--quiet"], capfd)
-    assert rc == 0, err
+    rec = real_as_contract(capfd, tmp_path, which)
     no_arrays(monkeypatch)
     err = same_as_whole(capfd, tmp_path, rec, (), blocks=(1000, 1 << 16, 1 << 30))
     assert "still stretch" in err
