@@ -257,7 +257,8 @@ def nonlin_bound(z, c2, c3, shift: int, iterations: int = ITERATIONS, frac: int 
     # x -2966, o 0.5: hypothesis found it.)
     D = 0.0 * z
     e = 0.0 * z
-    for _ in range(int(iterations)):
-        D = E + L * D
-        e = L * (1.0 + e)
-    return D + 2.0 ** (frac - 1) * e
+    with np.errstate(over="ignore"):      # far outside the contraction the bound is inf: no bound
+        for _ in range(int(iterations)):
+            D = E + L * D
+            e = L * (1.0 + e)
+        return D + 2.0 ** (frac - 1) * e
