@@ -70,22 +70,6 @@ def as_recordings(recordings: Any, device, max_samples: int = 0) -> tuple[list, 
     return out, device, notes
 
 
-def with_thinning(result: dict, recs: list) -> dict:
-    """``result`` with ``recordings[].thinned`` (:meth:`accelcal.io.thinned.Thinning.describe`) on
-    the entries of the recordings that are windows of longer ones (matched by source, in order)."""
-    entries = list(result.get("recordings") or [])
-    used: set[int] = set()
-    for rec in recs:
-        th = rec.thinning
-        j = next((j for j, ri in enumerate(entries) if j not in used and ri.get("source") == rec.source), None)
-        if j is None:
-            continue
-        used.add(j)
-        if th is not None:
-            entries[j]["thinned"] = th.describe()
-    return result
-
-
 def with_terms_applied(cal, recs: list, device) -> tuple[Any, list, list[str]]:
     """A calibration with correctable terms beyond the model's own (a nonlinearity, a time skew,
     a thermal lag: firmware/terms.py, as ``accelcal refine`` writes them): the readings are

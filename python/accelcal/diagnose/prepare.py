@@ -209,7 +209,9 @@ def prepare(device, cal, recs: list, K: int, seed: int, m0: float) -> FitData:
                          "clipping": {"levels_lo": levels.lo.tolist(), "levels_hi": levels.hi.tolist(),
                                       "inside_range": (levels.inside_lo | levels.inside_hi).tolist(),
                                       "clipped_per_channel": clipped.sum(axis=0).astype(int).tolist(),
-                                      "left_out_at_adc_limits": int(np.count_nonzero(at_limit & usable0))}})
+                                      "left_out_at_adc_limits": int(np.count_nonzero(at_limit & usable0))},
+                         # the share of a longer recording these samples are (io.thinned)
+                         **({} if rec.thinning is None else {"thinned": rec.thinning.describe()})})
         if levels.any_inside():
             hit = clipped.any(axis=1)
             out = int(np.count_nonzero(hit & ~usable))

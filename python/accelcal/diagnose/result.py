@@ -18,7 +18,7 @@ from ..readings.held import distinct_recordings
 from ..motions.poses import distinct_orientations
 from ..readings.noise import code_lattice, fractional_grid, uneven_low_bits
 from .floor import setup_rows
-from .inputs import as_calibration, as_device, as_recordings, with_terms_applied, with_thinning
+from .inputs import as_calibration, as_device, as_recordings, with_terms_applied
 from .prepare import prepare
 from .compare import Contest, model_ambiguity, time_beside_pose, time_unmodelled
 from .determined import mark_not_determined
@@ -101,7 +101,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         res["outliers"] = outlier_entry(D, recs, off_poses, dropped=True)
         res["notes"] = held_notes + [n for n in res["notes"] if n not in held_notes] + [
             outlier_note(res["outliers"], res["verdict"])]
-        return with_thinning(res, recs)
+        return res
 
     skipped = []
     active = []
@@ -390,7 +390,7 @@ def diagnose(device: Any, calibration: Any, recordings: Any, *, folds: int = 5, 
         "tg": D.tg, "t": D.t, "rec": D.rec, "residual": e, "residual_after": e - total_delta,
         "noise_floor": D.sigma, "sources": [ri["source"] for ri in D.rec_info], "static": D.static,
     }
-    return with_thinning(result, recs)
+    return result
 
 
 def pose_orientations(D) -> int:

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -284,7 +285,7 @@ def _read_kept(src: Any, device: Any, th: Thinning) -> Recording:
         errors += [(rank, ch.start, e) for rank, e in reader_checks(head, ch, prev)]
         if first_range is None and not errors:
             try:
-                check_raw_range(_Located(ch, head.source), device)
+                check_raw_range(SimpleNamespace(raw=ch.raw, source=head.source, line=ch.line), device)
             except InputError as e:
                 first_range = e
         idx = np.flatnonzero(th.keep(ch.start, ch.n))
@@ -306,10 +307,3 @@ def _read_kept(src: Any, device: Any, th: Thinning) -> Recording:
                     lines=np.concatenate(lines))
     rec.thinning = th
     return rec
-
-
-class _Located:
-    """A chunk as :func:`check_raw_range` takes it (raw, source, line)."""
-
-    def __init__(self, ch: Any, source: str) -> None:
-        self.raw, self.source, self.line = ch.raw, source, ch.line
