@@ -42,6 +42,7 @@ from .io.csvformat import REPR, csv_rows
 from .errors import InputError, atomic_write
 from .io.chunks import BLOCK_BYTES, Fallback, csv_chunks, csv_head, reader_checks
 from .io.parquet import BATCH_ROWS, ParquetSink, is_parquet, parquet_chunks, parquet_head
+from .io.pipeline import WriteBehind, read_ahead
 from .readings.noise import noise_for, states_noise
 from .io.recording_checks import TIME_UNIT_TOL, TIME_UNITS, check_core_input, check_raw_range
 from .resolve import omega_for, resolve_chunk, resolver_for
@@ -299,58 +300,60 @@ def _stream(device, cal, path, output, engine, scale, block_bytes, batch_rows, p
         bar = progress(total, unit) if progress is not None else None
         pending: tuple[int, InputError] | None = None
         prev = None
-        for ch in chunks(bar.update if bar is not None else None):
-            rec = SimpleNamespace(raw=ch.raw, source=head.source, line=ch.line,
-                                  w=ch.vecs["w"] if ch.vecs["w"] is not None else np.full((ch.n, 3), np.nan))
-            errs = reader_checks(head, ch, prev)
-            for rank, check in ((RANK_RANGE, lambda: check_raw_range(rec, device)),
-                                (RANK_OMEGA, lambda: None if triad else omega_for(rec, omega_source)),
-                                (RANK_CORE, lambda: check_core_input(rec, signed) if engine == "fixed" else None)):
-                try:
-                    check()
-                except InputError as e:
-                    errs.append((rank, e))
-            for rank, e in errs:
-                if pending is None or rank < pending[0]:
-                    pending = (rank, e)
-            prev = ch
+        # the chunks read one ahead and written one behind, each in a thread (io.pipeline); leaving
+        # the block closes the sink, an exception drops what is queued (nothing written after it)
+        with WriteBehind(sink) as out:
+            for ch in read_ahead(chunks(bar.update if bar is not None else None)):
+                rec = SimpleNamespace(raw=ch.raw, source=head.source, line=ch.line,
+                                      w=ch.vecs["w"] if ch.vecs["w"] is not None else np.full((ch.n, 3), np.nan))
+                errs = reader_checks(head, ch, prev)
+                for rank, check in ((RANK_RANGE, lambda: check_raw_range(rec, device)),
+                                    (RANK_OMEGA, lambda: None if triad else omega_for(rec, omega_source)),
+                                    (RANK_CORE, lambda: check_core_input(rec, signed) if engine == "fixed" else None)):
+                    try:
+                        check()
+                    except InputError as e:
+                        errs.append((rank, e))
+                for rank, e in errs:
+                    if pending is None or rank < pending[0]:
+                        pending = (rank, e)
+                prev = ch
+                if pending is not None:
+                    continue
+                omega = None
+                if not triad and omega_source != "none" and ch.vecs["w"] is not None:
+                    have = np.all(np.isfinite(ch.vecs["w"]), axis=1)
+                    if not have.all():
+                        raise _Again(omega_source="none")     # "auto": no omega for any sample
+                    omega = ch.vecs["w"]
+                if ch.n == 1 and (ch.start > 0 or (total_rows or 1) > 1):
+                    # BLAS multiplies one row (gemv) with other roundings than a row of many (gemm): the
+                    # last chunk's one row goes in twice, as the whole file's rows went
+                    f_, a_, flags = resolve_chunk(resolver, np.repeat(ch.raw, 2, axis=0),
+                                                  None if omega is None else np.repeat(omega, 2, axis=0))
+                    f_, a_, flags = f_[:1], a_[:1], None if flags is None else flags[:1]
+                else:
+                    f_, a_, flags = resolve_chunk(resolver, ch.raw, omega)
+                at = tally.add(ch, flags)
+                cols = [ch.t, f_[:, 0], f_[:, 1], f_[:, 2], a_[:, 0], a_[:, 1], a_[:, 2]]
+                if flags is not None:
+                    cols.append(flags)
+                if clipped:
+                    cols.append(at)
+                out.write(cols)
+            if bar is not None:
+                bar.close()
             if pending is not None:
-                continue
-            omega = None
-            if not triad and omega_source != "none" and ch.vecs["w"] is not None:
-                have = np.all(np.isfinite(ch.vecs["w"]), axis=1)
-                if not have.all():
-                    raise _Again(omega_source="none")     # "auto": no omega for any sample
-                omega = ch.vecs["w"]
-            if ch.n == 1 and (ch.start > 0 or (total_rows or 1) > 1):
-                # BLAS multiplies one row (gemv) with other roundings than a row of many (gemm): the
-                # last chunk's one row goes in twice, as the whole file's rows went
-                f_, a_, flags = resolve_chunk(resolver, np.repeat(ch.raw, 2, axis=0),
-                                              None if omega is None else np.repeat(omega, 2, axis=0))
-                f_, a_, flags = f_[:1], a_[:1], None if flags is None else flags[:1]
-            else:
-                f_, a_, flags = resolve_chunk(resolver, ch.raw, omega)
-            at = tally.add(ch, flags)
-            cols = [ch.t, f_[:, 0], f_[:, 1], f_[:, 2], a_[:, 0], a_[:, 1], a_[:, 2]]
-            if flags is not None:
-                cols.append(flags)
-            if clipped:
-                cols.append(at)
-            sink.write(cols)
-        if bar is not None:
-            bar.close()
-        if pending is not None:
-            raise pending[1]
-        why = tally.whole_file_decides()
-        if why is not None:
-            raise Fallback(why)
-        if levels is None:
-            found = tally.pile_levels()
-            if found is not None:
-                raise _Again(clipped=True, levels=found)
-        if tally.clipped and not clipped:
-            raise _Again(clipped=True)
-        sink.close()
+                raise pending[1]
+            why = tally.whole_file_decides()
+            if why is not None:
+                raise Fallback(why)
+            if levels is None:
+                found = tally.pile_levels()
+                if found is not None:
+                    raise _Again(clipped=True, levels=found)
+            if tally.clipped and not clipped:
+                raise _Again(clipped=True)
 
     atomic_write(output, write, mode="wb" if is_parquet(output) else "w")
     result.saturated = tally.saturated

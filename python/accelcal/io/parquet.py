@@ -193,11 +193,21 @@ def result_schema(names: list[str], meta: dict | None = None) -> pa.Schema:
 
 
 class ParquetSink:
-    """Result columns written as Parquet chunk by chunk into an open binary file."""
+    """Result columns written as Parquet chunk by chunk into an open binary file.
+
+    The float64 columns are written BYTE_STREAM_SPLIT (each value's eight bytes in eight streams,
+    which compress) and zstd-compressed, without a dictionary; the 0/1 columns dictionary-encoded.
+    Against pyarrow's defaults (a dictionary tried on every column, snappy), on 3x10^6 rows of
+    ``resolve --engine fixed``'s output: 0.55 s against 1.24 s of CPU to write, 25.5 MB against
+    47.8 MB, and read back in half the time (docs/streaming.md).
+    """
 
     def __init__(self, f: Any, names: list[str], meta: dict | None) -> None:
         self.schema = result_schema(names, meta)
-        self.writer = pq.ParquetWriter(f, self.schema)
+        floats = [fld.name for fld in self.schema if fld.type == pa.float64()]
+        self.writer = pq.ParquetWriter(f, self.schema, compression="zstd",
+                                       use_dictionary=[fld.name for fld in self.schema if fld.name not in floats],
+                                       use_byte_stream_split=floats)
 
     def write(self, columns: list[np.ndarray]) -> None:
         arrays = [pa.array(np.asarray(c, dtype=np.uint8 if t.type == pa.uint8() else np.float64), t.type)
@@ -206,6 +216,14 @@ class ParquetSink:
 
     def close(self) -> None:
         self.writer.close()
+
+    def abort(self) -> None:
+        """Close the writer after a failure (its footer goes into the file the caller removes;
+        an unclosed writer would try again when collected, into a closed file)."""
+        try:
+            self.writer.close()
+        except (OSError, ValueError, pa.ArrowException):
+            pass
 
 
 def write_parquet_columns(path: Any, columns: Any, meta: dict | None = None) -> None:
