@@ -128,13 +128,17 @@ class _Tally:
         self.piled = 0
         self.first_pile: int | None = None
 
-    def add(self, ch, flags) -> np.ndarray:
-        """Add a chunk; returns its samples at a rail."""
+    def add(self, ch, flags, ext: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+        """Add a chunk (``ext``: its columns' minima and maxima, where known); returns its samples
+        at a rail."""
         dev = self.device
         raw = ch.raw
-        low, high = raw <= dev.raw_min, raw >= dev.raw_max
-        at = np.any(low | high, axis=1)
-        k = int(np.count_nonzero(at))
+        if ext is not None and ch.n and (ext[0] > dev.raw_min).all() and (ext[1] < dev.raw_max).all():
+            at, k = np.zeros(ch.n, bool), 0        # no reading at a rail
+        else:
+            low, high = raw <= dev.raw_min, raw >= dev.raw_max
+            at = np.any(low | high, axis=1)
+            k = int(np.count_nonzero(at))
         if k:
             self.low += low.sum(axis=0)
             self.high += high.sum(axis=0)
@@ -288,6 +292,11 @@ def _stream(device, cal, path, output, engine, scale, block_bytes, batch_rows, p
     triad = device.is_triad()
     names = result_names(engine == "fixed", clipped)
     signed = device.raw_min < 0
+    # where the core's input range (int16 or uint16) holds the device's (always, where the fixed engine's
+    # tables are made), a reading outside it is outside the device's range too and refused first
+    # (RANK_RANGE < RANK_CORE): the core's check then runs only on a chunk with such a reading
+    core_lo, core_hi = (-32768, 32767) if signed else (0, 65535)
+    core_always = not (core_lo <= device.raw_min and device.raw_max <= core_hi)
     tally = _Tally(head.n_raw, device)
     tally.levels = levels
     result = StreamResult(extra=list(head.extra))
@@ -304,12 +313,18 @@ def _stream(device, cal, path, output, engine, scale, block_bytes, batch_rows, p
         # the block closes the sink, an exception drops what is queued (nothing written after it)
         with WriteBehind(sink) as out:
             for ch in read_ahead(chunks(bar.update if bar is not None else None)):
+                # each chunk's extremes first: the checks of every reading run only where one is outside
+                ext = (ch.raw.min(axis=0), ch.raw.max(axis=0)) if ch.n else None
+                out_range = ext is not None and bool((ext[0] < device.raw_min).any() or (ext[1] > device.raw_max).any())
+                w_missing = ch.vecs["w"] is None
                 rec = SimpleNamespace(raw=ch.raw, source=head.source, line=ch.line,
-                                      w=ch.vecs["w"] if ch.vecs["w"] is not None else np.full((ch.n, 3), np.nan))
+                                      w=ch.vecs["w"] if not w_missing else np.full((ch.n, 3), np.nan))
                 errs = reader_checks(head, ch, prev)
-                for rank, check in ((RANK_RANGE, lambda: check_raw_range(rec, device)),
-                                    (RANK_OMEGA, lambda: None if triad else omega_for(rec, omega_source)),
-                                    (RANK_CORE, lambda: check_core_input(rec, signed) if engine == "fixed" else None)):
+                for rank, check in ((RANK_RANGE, lambda: check_raw_range(rec, device) if out_range else None),
+                                    (RANK_OMEGA, lambda: None if triad or (w_missing and omega_source != "reference")
+                                     else omega_for(rec, omega_source)),
+                                    (RANK_CORE, lambda: check_core_input(rec, signed)
+                                     if engine == "fixed" and (core_always or out_range) else None)):
                     try:
                         check()
                     except InputError as e:
@@ -334,7 +349,7 @@ def _stream(device, cal, path, output, engine, scale, block_bytes, batch_rows, p
                     f_, a_, flags = f_[:1], a_[:1], None if flags is None else flags[:1]
                 else:
                     f_, a_, flags = resolve_chunk(resolver, ch.raw, omega)
-                at = tally.add(ch, flags)
+                at = tally.add(ch, flags, ext)
                 cols = [ch.t, f_[:, 0], f_[:, 1], f_[:, 2], a_[:, 0], a_[:, 1], a_[:, 2]]
                 if flags is not None:
                     cols.append(flags)

@@ -327,3 +327,38 @@ def test_stderr_is_the_whole_file_commands(files, capfd):
         outs.append((err, out.read_bytes()))
     assert "ignored column note" in outs[0][0]
     assert outs[0] == outs[1]
+
+
+@pytest.mark.parametrize("wide", [False, True])
+def test_fixed_engine_refuses_what_the_core_cannot_take_as_the_whole_file_does(files, capfd, wide):
+    """The fixed engine's checks: a reading beyond the device's range (its error first), and, for a
+    device whose range is wider than the core's uint16 input, a reading inside the device's range the
+    core cannot take (the streamed loop looks at every reading only where a chunk's extremes say so)."""
+    import dataclasses
+    from accelcal.io.device import save_device
+    dev = dataclasses.replace(DEV, raw_max=100000) if wide else DEV
+    dev_path = files["dir"] / f"dev_{wide}.json"
+    save_device(dev, dev_path)
+
+    def edit(lines, first):
+        n = len(lines) - first - 1
+        cells = lines[first + 1 + n - 40].split(",")
+        cells[3] = "70000"                                        # raw_2, late in the file
+        lines[first + 1 + n - 40] = ",".join(cells)
+    bad = bad_copy(files, f"core_{wide}.csv", edit)
+    out_w, out_s = files["dir"] / f"cw_{wide}.csv", files["dir"] / f"cs_{wide}.csv"
+    rc, _, err_w, _ = run(["resolve", "--device", str(dev_path), "--calibration", "nominal", str(bad), "-o",
+                           str(out_w), "--whole-file", "--engine", "fixed"], capfd)
+    assert rc == 2 and not out_w.exists()
+    if wide:    # the core's tables refuse the device: the whole-file command words it, nothing streamed
+        assert resolve_stream(dev, Calibration.nominal(dev), bad, out_s, engine="fixed", block_bytes=700) is None
+        assert "does not fit the C core's uint16 input" in err_w
+        rc, _, err_s, _ = run(["resolve", "--device", str(dev_path), "--calibration", "nominal", str(bad), "-o",
+                               str(out_s), "--engine", "fixed"], capfd)
+        assert rc == 2 and err_s == err_w and not out_s.exists()
+        return
+    from accelcal.errors import InputError
+    with pytest.raises(InputError) as e:
+        resolve_stream(dev, Calibration.nominal(dev), bad, out_s, engine="fixed", block_bytes=700)
+    assert err_w.strip() == f"accelcal resolve: error: {e.value}" and "is outside device" in str(e.value)
+    assert not out_s.exists()
