@@ -309,6 +309,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--lengths", default="1e5,1e6,1e7,1e8", help="samples, comma-separated")
     ap.add_argument("--dir", help="where the recordings are generated (default: a temporary directory)")
+    ap.add_argument("--reuse", action="store_true",
+                    help="take the recordings an earlier --keep run left in --dir (rec_N.csv, rec_N.parquet)")
     ap.add_argument("--keep", action="store_true", help="keep the generated recordings")
     ap.add_argument("--cases", default="csv->csv,csv->parquet,parquet->parquet",
                     help="which cases, in this order (comma-separated)")
@@ -374,7 +376,9 @@ def main() -> None:
     try:
         for n in (int(float(x)) for x in a.lengths.split(",")):
             t0 = time.perf_counter()
-            csv_path, pq_path = generate(n, d, raw0[:, :3] if a.command == "convert" else raw0)
+            csv_path, pq_path = d / f"rec_{n}.csv", d / f"rec_{n}.parquet"
+            if not (a.reuse and csv_path.exists() and pq_path.exists()):
+                csv_path, pq_path = generate(n, d, raw0[:, :3] if a.command == "convert" else raw0)
             gen = time.perf_counter() - t0
             sizes = (csv_path.stat().st_size / 1e6, pq_path.stat().st_size / 1e6)
             cases = {"csv->csv": (csv_path, d / "o.csv"), "csv->parquet": (csv_path, d / "o.parquet"),

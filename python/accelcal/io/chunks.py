@@ -20,7 +20,7 @@ from __future__ import annotations
 import csv
 import os
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterator
+from typing import Any, Callable, Iterable, Iterator
 
 import numpy as np
 
@@ -32,7 +32,7 @@ from .textinput import COMPRESSIONS, is_whitespace_header, read_preamble
 from .units import Scale, file_scale
 
 __all__ = ["BLOCK_BYTES", "HEAD_BYTES", "Fallback", "Head", "Chunk", "csv_head", "csv_chunks", "reader_checks",
-           "read_chunked"]
+           "read_chunked", "gather_rows", "recording_of"]
 
 #: bytes of text read at a time (whole lines; a block holds at least one line)
 BLOCK_BYTES = 1 << 21
@@ -191,23 +191,68 @@ def read_chunked(path: Any, n_channels: int | None, scale: Scale | None, block_b
     head = csv_head(path, n_channels, scale)
     if head.extra:
         raise Fallback("extra columns")
+    cols, _, _ = gather_rows(head, csv_chunks(path, head, block_bytes))
+    return recording_of(head, cols, head.first_line)
+
+
+def gather_rows(head: Head, chunks: Iterable[Chunk], keep: Callable[[int, int], np.ndarray] | None = None,
+                visit: Callable[[Chunk, bool], None] | None = None
+                ) -> tuple[dict[str, np.ndarray], np.ndarray | None, int]:
+    """The rows of a recording's chunks gathered into whole columns, every row checked as the
+    whole-file reader checks it (:func:`reader_checks`; the first error by rank, then row, raised
+    after the last chunk).
+
+    Parameters
+    ----------
+    head : Head
+    chunks : iterable of Chunk
+    keep : callable, optional
+        ``keep(start, n)`` -> (n,) bool: the rows of the chunk starting at row ``start`` to keep
+        (default: every row).
+    visit : callable, optional
+        ``visit(chunk, clean)`` on each chunk (``clean``: no reader error so far), for a check of
+        the caller's own.
+
+    Returns
+    -------
+    columns : dict of str to ndarray
+        t, raw and each vector and other column the file has, of the rows kept.
+    lines : ndarray (n_kept,) int64 or None
+        The kept rows' file lines (None without ``keep``).
+    n : int
+        Rows read.
+    """
     parts: dict[str, list[np.ndarray]] = {}
+    lines: list[np.ndarray] = []
     errors: list[tuple[int, int, InputError]] = []
     prev = None
-    for ch in csv_chunks(path, head, block_bytes):
+    n = 0
+    for ch in chunks:
         errors += [(rank, ch.start, e) for rank, e in reader_checks(head, ch, prev)]
+        if visit is not None:
+            visit(ch, not errors)
+        idx = None if keep is None else np.flatnonzero(keep(ch.start, ch.n))
         for name, arr in (("t", ch.t), ("raw", ch.raw), *ch.vecs.items(), *ch.other.items()):
             if arr is not None:
-                parts.setdefault(name, []).append(arr)
+                parts.setdefault(name, []).append(arr if idx is None else arr[idx])
+        if idx is not None:
+            lines.append(np.array([ch.line(int(i)) for i in idx], dtype=np.int64))
+        n += ch.n
         prev = ch
     if errors:
         raise min(errors, key=lambda x: (x[0], x[1]))[2]
     cols = {}
     for name in list(parts):
         cols[name] = np.concatenate(parts.pop(name))
+    return cols, (np.concatenate(lines) if keep is not None else None), n
+
+
+def recording_of(head: Head, cols: dict[str, np.ndarray], lines: Any) -> Recording:
+    """The Recording of columns gathered by :func:`gather_rows` (``lines``: its first line, or
+    each row's)."""
     return Recording(t=cols["t"], raw=cols["raw"], f=cols.get("f"), w=cols.get("w"), dw=cols.get("dw"),
                      temp_c=cols.get("temp_c"), pose=cols.get("pose"), metadata=head.metadata, source=head.source,
-                     lines=head.first_line)
+                     lines=lines)
 
 
 def _blocks(path: Any, pos: int, block_bytes: int) -> Iterator[tuple[bytes, bool]]:

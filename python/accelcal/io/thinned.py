@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import InputError
 from .chunk_source import open_chunks
-from .chunks import BLOCK_BYTES, Fallback, reader_checks
+from .chunks import BLOCK_BYTES, Fallback, gather_rows, recording_of
 from .parquet import BATCH_ROWS
 from .recording import read_recording
 from .recording_checks import check_raw_range
@@ -275,35 +275,20 @@ def _read_kept(src: Any, device: Any, th: Thinning) -> Recording:
         Text the chunked reader leaves to the whole-file reader, or fewer rows than counted.
     """
     head = src.head
-    parts: dict[str, list[np.ndarray]] = {}
-    lines: list[np.ndarray] = []
-    errors: list[tuple[int, int, InputError]] = []
-    first_range: InputError | None = None
-    prev = None
-    n = 0
-    for ch in src.chunks():
-        errors += [(rank, ch.start, e) for rank, e in reader_checks(head, ch, prev)]
-        if first_range is None and not errors:
+    first_range: list[InputError] = []
+
+    def range_check(ch: Any, clean: bool) -> None:
+        if clean and not first_range:
             try:
                 check_raw_range(SimpleNamespace(raw=ch.raw, source=head.source, line=ch.line), device)
             except InputError as e:
-                first_range = e
-        idx = np.flatnonzero(th.keep(ch.start, ch.n))
-        for name, arr in (("t", ch.t), ("raw", ch.raw), *ch.vecs.items(), *ch.other.items()):
-            if arr is not None:
-                parts.setdefault(name, []).append(arr[idx])
-        lines.append(np.array([ch.line(int(i)) for i in idx], dtype=np.int64))
-        n += ch.n
-        prev = ch
-    if errors:
-        raise min(errors, key=lambda x: (x[0], x[1]))[2]
-    if first_range is not None:     # check_for_device's range check, over every row
-        raise first_range
+                first_range.append(e)
+
+    cols, lines, n = gather_rows(head, src.chunks(), th.keep, range_check)
+    if first_range:     # check_for_device's range check, over every row
+        raise first_range[0]
     if n != th.n_read:
         raise Fallback("fewer rows than lines counted")
-    cols = {name: np.concatenate(parts.pop(name)) for name in list(parts)}
-    rec = Recording(t=cols["t"], raw=cols["raw"], f=cols.get("f"), w=cols.get("w"), dw=cols.get("dw"),
-                    temp_c=cols.get("temp_c"), pose=cols.get("pose"), metadata=head.metadata, source=head.source,
-                    lines=np.concatenate(lines))
+    rec = recording_of(head, cols, lines)
     rec.thinning = th
     return rec
