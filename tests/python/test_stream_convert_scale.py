@@ -1,5 +1,5 @@
-"""convert of a recording CSV without a stated scale in bounded memory (accelcal.convert.bounded_scale;
-docs/streaming.md, "convert without a stated scale"): the nominal scale from the static detector's
+"""convert of a recording CSV without a stated scale in bounded memory (accelcal.convert.bounded_scale,
+accelcal.readings.still_stream; docs/streaming.md, "convert without a stated scale"): the nominal scale from the static detector's
 still stretches found over passes in chunks, the output, device file, notes and summary the
 whole-file command's byte for byte at chunks of one row to more than the file (boundaries inside
 still stretches and inside motions); where the passes cannot give the detector's answer, the arrays
@@ -11,7 +11,7 @@ import importlib
 import numpy as np
 import pytest
 
-from accelcal.convert import bounded_scale
+from accelcal.readings import still_stream
 from accelcal.convert.nominal_device import triad_device
 from accelcal.io.chunks import Fallback
 from accelcal.io.recording import Recording, write_recording
@@ -99,7 +99,7 @@ def test_fallbacks_give_the_same_bytes(files, capfd, tmp_path, monkeypatch):
         called.clear()
         same_as_whole(capfd, tmp_path, files / f"{name}.csv", (), blocks=(97, 1 << 30))
         assert called, name
-    monkeypatch.setattr(bounded_scale, "MAX_STILL_ROWS", 0)
+    monkeypatch.setattr(still_stream, "MAX_STILL_ROWS", 0)
     called.clear()
     same_as_whole(capfd, tmp_path, files / "inner_step.csv", (), blocks=(97, 1 << 30))
     assert called
@@ -109,7 +109,7 @@ def test_fallbacks_give_the_same_bytes(files, capfd, tmp_path, monkeypatch):
 def test_long_stretches_not_held(files, capfd, tmp_path, monkeypatch, name):
     """Every run of static blocks longer than MAX_STILL_ROWS (0 here: none held; 2^18 rows by
     default): kept as its end rows, a subsample and sums (LongRun), the whole-file bytes still."""
-    monkeypatch.setattr(bounded_scale, "MAX_STILL_ROWS", 0)
+    monkeypatch.setattr(still_stream, "MAX_STILL_ROWS", 0)
     no_arrays(monkeypatch)
     err = same_as_whole(capfd, tmp_path, files / f"{name}.csv", (), blocks=(97, 4096, 1 << 30))
     assert "still stretches over g" in err
@@ -152,7 +152,7 @@ def test_still_stretches_are_detect_statics(monkeypatch, hold):
     means of them; with runs held (``hold`` None: 2^18 rows) or not (longer than 0 or 150 rows: a
     LongRun, which falls back only where a step may split it)."""
     if hold is not None:
-        monkeypatch.setattr(bounded_scale, "MAX_STILL_ROWS", hold)
+        monkeypatch.setattr(still_stream, "MAX_STILL_ROWS", hold)
     rng = np.random.default_rng(41)
     seen, fell = 0, 0
     for trial in range(15):
@@ -176,7 +176,7 @@ def test_still_stretches_are_detect_statics(monkeypatch, hold):
                 for feed in feeds:
                     feed(part)
         try:
-            out, means, noise = bounded_scale.still_stretches(passes, n, probe, hists, diffs)
+            out, means, noise = still_stream.still_stretches(passes, n, probe, hists, diffs)
         except Fallback:
             fell += 1
             continue

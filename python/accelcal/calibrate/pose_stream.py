@@ -27,9 +27,9 @@ several rows, any reader fallback or input error (the whole-file reader words it
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import SimpleNamespace
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -44,7 +44,7 @@ from ..readings.static import PoseSet, at_gravity
 from ..readings.steps import MOVE_PARTS, MOVE_RANGE, MOVE_STD
 from .settings import ROTATION_MIN_RADPS
 
-__all__ = ["Reduced", "reduce_labelled"]
+__all__ = ["Reduced", "reduce_labelled", "checked_pass", "mean_var"]
 
 @dataclass
 class Reduced:
@@ -63,6 +63,12 @@ class Reduced:
         The columns that are not the contract's.
     metadata : dict of str to str
         The file's comments (``pose_names`` names the poses in messages).
+    labelled : bool
+        Whether the poses are the file's ``pose`` labels (else the static detector's still
+        stretches: :func:`accelcal.calibrate.still_reduce.reduce_unlabelled`).
+    short : list of float
+        The lengths (s) of the still stretches the detector left out as shorter than its minimum
+        where a motion touches them (:func:`accelcal.calibrate.recordings.short_stretches`).
     """
 
     source: str
@@ -70,9 +76,11 @@ class Reduced:
     poses: PoseSet
     extra: list
     metadata: dict
+    labelled: bool = True
+    short: list = field(default_factory=list)
 
     def has_pose(self) -> bool:
-        return True
+        return self.labelled
 
 
 def _group_sums(x: np.ndarray, key: np.ndarray, groups: int) -> tuple[np.ndarray, np.ndarray]:
@@ -85,7 +93,7 @@ def _group_sums(x: np.ndarray, key: np.ndarray, groups: int) -> tuple[np.ndarray
     return s1, s2
 
 
-def _mean_var(s1: np.ndarray, s2: np.ndarray, cnt: np.ndarray, ref: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def mean_var(s1: np.ndarray, s2: np.ndarray, cnt: np.ndarray, ref: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """pose_means' arithmetic: mean and ddof-1 variance from integer sums about ``ref``."""
     a, b = s1.astype(float), s2.astype(float)
     cf = cnt.astype(float)[..., None]
@@ -103,20 +111,20 @@ def reduce_labelled(path: Any, device, scale=None, block_bytes: int = BLOCK_BYTE
         return None
 
 
-def _reduce(path: Any, device, scale, block_bytes: int) -> Reduced | None:
-    src = open_chunks(path, device.n_channels, scale, block_bytes=block_bytes, batch_rows=max(block_bytes // 64, 1))
+def checked_pass(src, device, each: Callable[[Any], None] | None = None) -> tuple[int, list] | None:
+    """The first pass over ``src`` (:func:`accelcal.io.chunk_source.open_chunks`): per chunk the
+    reader's checks and the device's range, the time steps, the runs of identical rows, each
+    channel's histogram and no rotating sample (f, w, dw given, |w| > ROTATION_MIN_RADPS), then
+    ``each(chunk)``.  Returns (rows, each channel's histogram as (values ascending, counts)), or
+    None where the whole-file path must read the file: a reader's error or fallback, t not
+    finite, a rotating sample, half the steps or more off the device's by more than RATE_TOL / 2,
+    readings held for several rows, a range of more than 2^20 codes."""
     head = src.head
-    if "pose" not in head.cols:
-        return None
-    if not states_noise(device) or head.n_raw != device.n_channels:
-        return None
     N = device.n_channels
     span = int(device.raw_max) - int(device.raw_min) + 1
     if span > (1 << 20):
         return None
     hist = np.zeros((N, span), np.int64)
-    counts: dict[int, int] = {}
-    f_seen: dict[int, list] = {}          # label -> [any f given, any f missing]
     prev = None
     n_rows = 0
     runs = RunCounts()
@@ -135,7 +143,6 @@ def _reduce(path: Any, device, scale, block_bytes: int) -> Reduced | None:
         runs.add(ch.raw)
         prev = ch
         n_rows += ch.n
-        pose = ch.other["pose"]
         for j in range(N):
             hist[j] += np.bincount(ch.raw[:, j] - int(device.raw_min), minlength=span)
         w, dw, f = ch.vecs.get("w"), ch.vecs.get("dw"), ch.vecs.get("f")
@@ -143,9 +150,34 @@ def _reduce(path: Any, device, scale, block_bytes: int) -> Reduced | None:
             ok = np.all(np.isfinite(f), 1) & np.all(np.isfinite(w), 1) & np.all(np.isfinite(dw), 1)
             if np.any(ok & (np.linalg.norm(np.nan_to_num(w), axis=1) > ROTATION_MIN_RADPS)):
                 return None
+        if each is not None:
+            each(ch)
+    if 2 * near <= n_rows - 1 or runs.held(N) != 1:
+        return None
+    hists = []
+    for h in hist:
+        u = np.flatnonzero(h)
+        hists.append((u.astype(np.int64) + int(device.raw_min), h[u]))
+    return n_rows, hists
+
+
+def _reduce(path: Any, device, scale, block_bytes: int) -> Reduced | None:
+    src = open_chunks(path, device.n_channels, scale, block_bytes=block_bytes, batch_rows=max(block_bytes // 64, 1))
+    head = src.head
+    if "pose" not in head.cols:
+        return None
+    if not states_noise(device) or head.n_raw != device.n_channels:
+        return None
+    N = device.n_channels
+    counts: dict[int, int] = {}
+    f_seen: dict[int, list] = {}          # label -> [any f given, any f missing]
+
+    def each(ch) -> None:
+        pose = ch.other["pose"]
         labs, cnt = np.unique(pose[pose >= 0], return_counts=True)
         for v, c in zip(labs.tolist(), cnt.tolist()):
             counts[v] = counts.get(v, 0) + c
+        f = ch.vecs.get("f")
         if f is not None:
             fin = np.all(np.isfinite(f), axis=1)
             for v in labs.tolist():
@@ -153,16 +185,15 @@ def _reduce(path: Any, device, scale, block_bytes: int) -> Reduced | None:
                 seen = f_seen.setdefault(v, [False, False])
                 seen[0] |= bool(fin[m].any())
                 seen[1] |= bool((~fin[m]).any())
-    if not counts or 2 * near <= n_rows - 1 or runs.held(N) != 1 or any(a and b for a, b in f_seen.values()):
+
+    first = checked_pass(src, device, each)
+    if first is None or not counts or any(a and b for a, b in f_seen.values()):
         return None
+    n_rows, hists = first
     labels = sorted(counts)
     P = len(labels)
     cnt = np.array([counts[v] for v in labels], np.int64)
     noise = noise_for(device, np.zeros((0, N), np.int64), 1)[0]
-    hists = []
-    for h in hist:
-        u = np.flatnonzero(h)
-        hists.append((u.astype(np.int64) + int(device.raw_min), h[u]))
     levels = clip_levels_counts(hists, device, noise)
     if levels is None:
         return None
@@ -243,13 +274,13 @@ def _reduce(path: Any, device, scale, block_bytes: int) -> Reduced | None:
         np.add.at(seen, pidx, 1)
     if clipped:
         return None
-    means, var = _mean_var(s1, s2, cnt, ref)
+    means, var = mean_var(s1, s2, cnt, ref)
     std = np.sqrt(var)
     # the motion test of labelled poses (pose_means' check_motion) on the parts' sums
     ref_sig = np.maximum(np.asarray(noise, float), np.median(std[cnt >= 3], axis=0) if np.any(cnt >= 3) else 0.0)
     ref_sig = np.maximum(ref_sig, 1e-9)
     pc = np.concatenate(part_len)
-    pm, pv = _mean_var(p1, p2, pc, ref)
+    pm, pv = mean_var(p1, p2, pc, ref)
     for p in range(P):
         if cnt[p] < 2 * MOVE_PARTS:
             continue

@@ -265,9 +265,12 @@ def detector_found(device, recordings, poses: PoseSet | None, min_s: float = MIN
 def short_stretches(device, recordings, min_s: float) -> list[float]:
     """The lengths (s) of the still stretches :func:`accelcal.readings.static.detect_static` leaves out as
     shorter than ``min_s`` where a motion touches them: those it finds with no minimum beyond its
-    window, less those it finds with ``min_s``."""
+    window, less those it finds with ``min_s`` (of a recording reduced while read, its ``short``)."""
     out: list[float] = []
     for rec in recordings:
+        if isinstance(rec, Reduced):          # reduced while read: the lengths it kept
+            out += rec.short
+            continue
         kept = set(detect_static(rec, device, min_s=min_s))
         out += [(b - a) / device.sample_rate_hz for a, b in detect_static(rec, device, min_s=0.0) if (a, b) not in kept]
     return out

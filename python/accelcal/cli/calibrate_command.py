@@ -11,6 +11,7 @@ from ..calibrate.checks import far_from_nominal, gain_sigma, poorly_determined
 from ..calibrate.jig_estimate import p_text
 from ..calibrate.omega_check import lever_arm_omega_warning
 from ..calibrate.pose_stream import Reduced, reduce_labelled
+from ..calibrate.still_reduce import reduce_unlabelled
 from ..calibrate.results import interval_text
 from ..calibrate.settings import JIG_ACCURACY_AUTO, SCATTER_CHI2
 from ..errors import AccelcalError
@@ -309,18 +310,26 @@ def calibration_summary(cal, n_recordings: int, output) -> str:
 
 def reduced_recordings(paths, dev, a) -> list[Reduced] | None:
     """Each recording reduced to its poses while read in chunks
-    (:func:`accelcal.calibrate.pose_stream.reduce_labelled`), or None where one of them is not
+    (:func:`accelcal.calibrate.pose_stream.reduce_labelled` with ``pose`` labels, else
+    :func:`accelcal.calibrate.still_reduce.reduce_unlabelled`), or None where one of them is not
     (the caller then reads them whole; the same paths given twice: None, the whole-file reader
-    refuses them).  The note on ignored columns as the whole-file reader gives it, on stderr."""
+    refuses them).  None too where no recording is labelled, the device a triad and the poses hold
+    less than half of the rows: the whole-file messages then ask whether the rows are pose means
+    (:func:`accelcal.calibrate.recordings.rows_look_like_pose_means`), which takes every row.  The
+    note on ignored columns as the whole-file reader gives it, on stderr."""
     if len({Path(p).resolve() for p in paths}) != len(paths):
         return None
     scale = scale_from_args(a, dev, reader=True)
+    min_s = min_static_arg(a.min_static)
     out = []
     for p in paths:
-        r = reduce_labelled(p, dev, scale)
+        r = reduce_labelled(p, dev, scale) or reduce_unlabelled(p, dev, scale, min_s=min_s)
         if r is None:
             return None
         out.append(r)
+    held = sum(int(np.sum(r.poses.n)) for r in out)
+    if not any(r.labelled for r in out) and dev.n_channels == 3 and held < sum(r.n_samples for r in out) / 2:
+        return None
     ignored = sorted({k for r in out for k in r.extra})
     if ignored:
         print(f"accelcal calibrate: note: ignored column{'s' if len(ignored) > 1 else ''} "

@@ -20,16 +20,27 @@ numbers each) and the samples of the longest run of static blocks (its caller bo
 """
 from __future__ import annotations
 
-from typing import Any
+import math
+from typing import Any, Callable
 
 import numpy as np
 
+from ..io.chunks import Fallback
+from .clipping import code_step_counts
+from .no_rest import REST_NOISE_MAX, force_median, share_of
 from .noise import NYQUIST_RATIO, MAD_TO_STD
-from .noise_stream import add_counts, median_of_counts
+from .noise_stream import NoisePass, add_counts, median_of_counts
+from .static import EDGE_SIGMA, MIN_POSE_S, STATIC_THRESHOLD, STATIC_WINDOW_S, window_len
 from .steps import BLOCK_JUMP, BLOCK_SHARE, BLOCK_SPAN, STEP_SIGMA
-from .still_pieces import refine_pieces, run_pieces
+from .still_pieces import long_enough, refine_pieces, run_pieces, static_runs
 
-__all__ = ["DiffSums", "LoggerBound", "StillPass", "LongRun", "RowsOf", "percentiles_of_counts", "order_stat_of"]
+__all__ = ["DiffSums", "LoggerBound", "StillPass", "LongRun", "RowsOf", "percentiles_of_counts", "order_stat_of",
+           "still_stretches", "MAX_STILL_ROWS"]
+
+#: the most rows of one run of static blocks (and a window either side) the still pass holds (2^18 rows,
+#: 6 MiB of counts and about 40 MiB of the step test's floats); a longer run goes as a LongRun (its
+#: rows not held; Fallback where it may hold an instant step)
+MAX_STILL_ROWS = 1 << 18
 
 #: sums the floats of numpy's means hold exactly
 EXACT = 2.0 ** 53
@@ -335,3 +346,63 @@ class StillPass:
         """Every row added (ValueError otherwise)."""
         if self.seen != self.n or self.active or self.next != len(self.spans):
             raise ValueError(f"{self.seen} rows added of {self.n}")
+
+
+def still_stretches(passes: Callable[..., None], n: int, probe: Any, hists: list, diffs: DiffSums, *,
+                    noise: np.ndarray | None = None, min_s: float = MIN_POSE_S, found: list | None = None
+                    ) -> tuple[list[tuple[int, int]], list[np.ndarray], np.ndarray]:
+    """``detect_static(rec, probe, noise=noise, min_s=min_s)``'s intervals of a recording of ``n``
+    rows read by ``passes(*feeds)`` (one pass over its rows in chunks, each chunk's counts to
+    every feed), the mean reading of each, and the noise (counts per channel: ``noise`` where given,
+    else ``estimate_noise``'s); ``hists`` each channel's histogram (values ascending, counts),
+    ``diffs`` the first pass's differences.  ``found``, where given, gets every interval the
+    detector finds before its length rule (``detect_static(..., min_s=0)``'s).  Runs of static
+    blocks longer than MAX_STILL_ROWS go as a :class:`LongRun`.  :class:`~accelcal.io.chunks.Fallback`
+    where the passes cannot give the detector's answer (a tone at half the rate; noise beyond
+    REST_NOISE_MAX of |f|: the Welch test; large changes that may be a logger's steps; a long run
+    that may hold an instant step; sums beyond exact floats)."""
+    w = window_len(probe, STATIC_WINDOW_S, n)
+    tone = diffs.tone()
+    if tone is None or tone.any():
+        raise Fallback("a tone at half the rate (the detector averages it out of the samples)")
+    p = NoisePass(n, w, np.array([u[0] for u, _ in hists]), np.array([u[-1] for u, _ in hists]),
+                  np.array([code_step_counts(u, cnt) for u, cnt in hists]))
+    logger = LoggerBound(n, diffs.change_std(), max(2, w // 4))
+    stride, rows, seen = max(1, n // 5000), [], [0]
+
+    def gather(raw: np.ndarray) -> None:
+        idx = np.arange(seen[0], seen[0] + raw.shape[0])
+        rows.append(raw[idx % stride == 0])
+        seen[0] += raw.shape[0]
+
+    try:
+        passes(p.add, logger.add, gather)
+        try:
+            estimated = p.noise()          # also the reference of the window stds
+        except ValueError:
+            raise Fallback("window sums beyond exact floats") from None
+        noise = estimated if noise is None else np.asarray(noise, float)
+        if np.any(share_of(force_median(np.concatenate(rows), probe), probe, noise) > REST_NOISE_MAX):
+            raise Fallback("noise beyond REST_NOISE_MAX of |f| (the detector's Welch test takes the samples)")
+        sig = np.maximum(noise, 1e-9)
+        quiet = p.quiet(STATIC_THRESHOLD * sig)
+    finally:
+        p.close()
+    if not quiet.size:
+        return [], [], noise
+    if logger.maybe_logger():
+        raise Fallback("large changes that may be a logger's steps (its blocks take the samples)")
+    runs = [(a * p.h, b * p.h) for a, b in static_runs(quiet, p.k)]
+    ext = p.k * p.h
+    span = max(max(abs(int(u[0])), abs(int(u[-1])), int(u[-1] - u[0])) for u, _ in hists)
+    still = StillPass(n, runs, w, p.h, ext, sig, EDGE_SIGMA * sig, hold=MAX_STILL_ROWS, span=span)
+    try:
+        passes(still.add)
+        still.finish()
+    except ValueError as e:
+        raise Fallback(str(e)) from None
+    min_n = max(w, int(math.ceil(min_s * probe.sample_rate_hz)))
+    keep = long_enough(still.out, n, min_n)
+    if found is not None:
+        found += still.out
+    return ([iv for iv, k in zip(still.out, keep) if k], [m for m, k in zip(still.means, keep) if k], noise)
