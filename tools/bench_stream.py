@@ -22,8 +22,9 @@ wall time and peak RSS of each (a table row per run, printed).  ``--command disp
 ``accelcal displacement`` (engine float, its offline form) on a rail recording (:func:`rail_block` tiled;
 lengths in whole blocks of 10^4 samples); the streamed run fails if it fell back to the whole-file read.
 
-``--command calibrate``: instead, ``accelcal calibrate`` on the static-pose recording below (about
-N samples for each of ``--lengths``, CSV and Parquet), reduced while read and (unless ``--no-whole``)
+``--command calibrate``: instead, ``accelcal calibrate`` on the static-pose recording below
+(``--calibrate-kinds poses``; ``handheld``: the hand-held session without labels or reference) of about
+N samples for each of ``--lengths``, CSV and Parquet, reduced while read and (unless ``--no-whole``)
 the whole-file path; wall time and peak RSS of each (a table row per run, printed).
 
 ``--diagnose KINDS``: instead, ``accelcal diagnose --calibration nominal`` on the recordings KINDS
@@ -193,9 +194,11 @@ def write_table(rows: list) -> str:
     return text
 
 
-def poses_recording(n: int, path: Path) -> None:
+def poses_recording(n: int, path: Path, jigfree: bool = False) -> None:
     """A static-pose recording of about n samples: 24 jig poses of the default device with reference
-    f, w, dw, temp_c and pose (10^6 samples; below that, 24 poses of n / 24 samples), repeated with t shifted and the poses relabelled."""
+    f, w, dw, temp_c and pose (10^6 samples; below that, 24 poses of n / 24 samples), repeated with t
+    shifted and the poses relabelled.  ``jigfree``: t and raw only (its poses join by instant steps:
+    the static detector takes them for a logger's blocks, which calibrate reads whole)."""
     dev = default_device()
     per = min(41667, max(1000, n // 24))
     rec = run_simulation(dev, "static_poses", seed=1, poses="24", samples_per_pose=per).recording
@@ -286,23 +289,35 @@ def diagnose_runs(n: int, d: Path, kinds: list[str], limit_mb: float, extra: lis
         rec.unlink()
 
 
-def calibrate_runs(n: int, d: Path, whole: bool) -> None:
-    """Wall time and peak RSS of ``accelcal calibrate`` on poses_recording(n) (CSV and Parquet), the
-    labelled recording reduced while read (calibrate.pose_stream) and, with ``whole``, the
-    whole-file path (the reduced reader disabled in that process); one table row each, printed."""
-    csv_path, pq_path = d / f"poses_{n}.csv", d / f"poses_{n}.parquet"
-    poses_recording(n, csv_path)
-    write_recording(pq_path, read_recording(csv_path, 6))
-    run = ("import sys; sys.path.insert(0, %r); import accelcal.cli.main as m; "
-           "m.reduced_recordings = (lambda *a: None) if sys.argv[1] == 'whole' else m.reduced_recordings; "
+def calibrate_runs(n: int, d: Path, whole: bool, kinds: list[str]) -> None:
+    """Wall time and peak RSS of ``accelcal calibrate`` on each of ``kinds`` of about n samples (CSV
+    and Parquet): ``poses`` (:func:`poses_recording`: labelled, calibrate.pose_stream) and
+    ``handheld`` (:func:`handheld_recording` with ``jigfree``: no labels, no reference, poses joined
+    by 2 s moves: calibrate.still_reduce), reduced while read (the run fails where the reduced
+    reader leaves a file to the whole-file path) and, with ``whole``, the whole-file path (the
+    reduced reader disabled in that process; its JSON compared with the reduced run's byte for
+    byte); one table row each, printed."""
+    run = ("import sys; sys.path.insert(0, %r); import accelcal.cli.main as m; real = m.reduced_recordings\n"
+           "def reduced(*a):\n    r = real(*a)\n    if r is None: sys.exit('the reduced reader left it whole')\n"
+           "    return r\n"
+           "m.reduced_recordings = (lambda *a: None) if sys.argv[1] == 'whole' else reduced\n"
            "sys.exit(m.main(sys.argv[2:]))" % str(ROOT / "python"))
-    for src in (csv_path, pq_path):
-        for kind in ("reduced",) + (("whole",) if whole else ()):
-            s, mb = peak_of([sys.executable, "-c", run, kind, "calibrate", "--device", "default", str(src),
-                             "-o", str(d / f"cal_{kind}.json")])
-            print(f"| {n:.0e} | {src.suffix[1:]} | {src.stat().st_size / 1e6:.0f} | calibrate {kind} | {s:.1f} | "
-                  f"{mb:.0f} |", flush=True)
-        src.unlink()
+    for name in kinds:
+        csv_path, pq_path = d / f"{name}_{n}.csv", d / f"{name}_{n}.parquet"
+        if name == "poses":
+            poses_recording(n, csv_path)
+        else:
+            handheld_recording(n, csv_path, jigfree=True)
+        write_recording(pq_path, read_recording(csv_path, 6))
+        for src in (csv_path, pq_path):
+            for kind in ("reduced",) + (("whole",) if whole else ()):
+                s, mb = peak_of([sys.executable, "-c", run, kind, "calibrate", "--device", "default", str(src),
+                                 "-o", str(d / f"cal_{kind}.json")])
+                print(f"| {n:.0e} | {name} {src.suffix[1:]} | {src.stat().st_size / 1e6:.0f} | calibrate {kind} | "
+                      f"{s:.1f} | {mb:.0f} |", flush=True)
+            if whole and (d / "cal_reduced.json").read_bytes() != (d / "cal_whole.json").read_bytes():
+                raise RuntimeError(f"{src}: the reduced and whole-file calibrations differ")
+            src.unlink()
 
 
 def main() -> None:
@@ -337,6 +352,8 @@ def main() -> None:
                     "docs/streaming.md). The streamed run fails where it falls back to the first pass's arrays "
                     "('--convert-args=--arrays-ok' allows it); the two runs' outputs are compared byte for byte")
     ap.add_argument("--no-whole", action="store_true", help="rate, attitude, calibrate: the streamed runs only")
+    ap.add_argument("--calibrate-kinds", default="poses", help="--command calibrate: the recordings (comma-separated: "
+                    "poses, labelled; handheld, without labels or reference)")
     a = ap.parse_args()
     d = Path(a.dir or tempfile.mkdtemp(prefix="bench_stream_"))
     d.mkdir(parents=True, exist_ok=True)
@@ -356,7 +373,7 @@ def main() -> None:
         print("| samples | input | MB | run | s | peak MB |\n| ---: | --- | ---: | --- | ---: | ---: |", flush=True)
         try:
             for n in (int(float(x)) for x in a.lengths.split(",")):
-                calibrate_runs(n, d, not a.no_whole)
+                calibrate_runs(n, d, not a.no_whole, a.calibrate_kinds.split(","))
         finally:
             if not a.keep and not a.dir:
                 shutil.rmtree(d, ignore_errors=True)
