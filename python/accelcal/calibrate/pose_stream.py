@@ -19,9 +19,9 @@ pose's readings; :func:`reduce_labelled` reads the file twice in chunks
 The means, counts and std equal the whole-file ones bit for bit; the parts' and batches' figures
 and f_ref, temp differ by rounding only (float sums in another order).  Where this path cannot
 tell what the whole-file path would do it returns None and the caller reads the file whole:
-no ``pose`` labels (the static detector needs the samples), a device without ``noise_mps2``,
-a pose with a clipped reading or that moves, rotating samples (the lever arms need them), f
-given on part of a pose, a pose off gravity without f, a pose before the lowest label's first
+no ``pose`` labels (:func:`accelcal.calibrate.still_reduce.reduce_unlabelled` reduces those), a
+device without ``noise_mps2``, a pose with a clipped reading or that moves, rotating samples (the
+lever arms need them), f given on part of a pose, a pose off gravity without f, a pose before the lowest label's first
 sample, half the steps or more off the device's by more than RATE_TOL / 2, readings held for
 several rows, any reader fallback or input error (the whole-file reader words it).
 """
