@@ -120,11 +120,13 @@ def run_cli(args, capsys):
     return code, out.out, out.err
 
 
-def test_cli_json_equals_the_whole_file_one(tmp_path, capsys, monkeypatch):
+@pytest.mark.parametrize("stated", [True, False])
+def test_cli_json_equals_the_whole_file_one(tmp_path, capsys, monkeypatch, stated):
     """accelcal calibrate on two labelled recordings (CSV and Parquet): the reduced path is taken
     (its reader is called and returns poses) and the written calibration, stdout and stderr equal
-    the whole-file command's (reduced path disabled) byte for byte."""
-    dev = device()
+    the whole-file command's (reduced path disabled) byte for byte; the device's noise_mps2 stated,
+    or not (the noise estimated from the data in a third pass: pose_stream.data_noise)."""
+    dev = device() if stated else dataclasses.replace(device(), noise_mps2=0.0)
     dpath = tmp_path / "dev.json"
     save_device(dev, dpath)
     paths = []

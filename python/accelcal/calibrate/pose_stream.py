@@ -19,8 +19,9 @@ pose's readings; :func:`reduce_labelled` reads the file twice in chunks
 The means, counts and std equal the whole-file ones bit for bit; the parts' and batches' figures
 and f_ref, temp differ by rounding only (float sums in another order).  Where this path cannot
 tell what the whole-file path would do it returns None and the caller reads the file whole:
-no ``pose`` labels (:func:`accelcal.calibrate.still_reduce.reduce_unlabelled` reduces those), a
-device without ``noise_mps2``, a pose with a clipped reading or that moves, rotating samples (the
+no ``pose`` labels (:func:`accelcal.calibrate.still_reduce.reduce_unlabelled` reduces those), the
+noise estimate's sums beyond exact floats (a device without ``noise_mps2``: :func:`data_noise`, a
+third pass), a pose with a clipped reading or that moves, rotating samples (the
 lever arms need them), f given on part of a pose, a pose off gravity without f, a pose before the lowest label's first
 sample, half the steps or more off the device's by more than RATE_TOL / 2, readings held for
 several rows, any reader fallback or input error (the whole-file reader words it).
@@ -40,11 +41,12 @@ from ..io.recording_checks import RATE_TOL, check_raw_range
 from ..readings.held import RunCounts
 from ..readings.clipping import clip_levels_counts, code_step_counts
 from ..readings.noise import COLOUR_BATCHES, noise_for, states_noise
-from ..readings.static import PoseSet, at_gravity
+from ..readings.noise_stream import NoisePass
+from ..readings.static import STATIC_WINDOW_S, PoseSet, at_gravity, window_len
 from ..readings.steps import MOVE_PARTS, MOVE_RANGE, MOVE_STD
 from .settings import ROTATION_MIN_RADPS
 
-__all__ = ["Reduced", "reduce_labelled", "checked_pass", "mean_var"]
+__all__ = ["Reduced", "reduce_labelled", "checked_pass", "data_noise", "mean_var"]
 
 @dataclass
 class Reduced:
@@ -161,12 +163,32 @@ def checked_pass(src, device, each: Callable[[Any], None] | None = None) -> tupl
     return n_rows, hists
 
 
+def data_noise(src, device, n: int, hists: list) -> np.ndarray | None:
+    """:func:`accelcal.readings.noise.noise_for`'s noise of the recording read by ``src`` (``n``
+    rows, each channel's histogram ``hists``): the device's ``noise_mps2`` where it states one,
+    else ``estimate_noise``'s from a pass over the chunks (:class:`accelcal.readings.noise_stream.NoisePass`:
+    the same floats), or None where its sums pass the floats' exact integers."""
+    N = device.n_channels
+    if states_noise(device):
+        return noise_for(device, np.zeros((0, N), np.int64), 1)[0]
+    p = NoisePass(n, window_len(device, STATIC_WINDOW_S, n), np.array([u[0] for u, _ in hists]),
+                  np.array([u[-1] for u, _ in hists]), np.array([code_step_counts(u, c) for u, c in hists]))
+    try:
+        for ch in src.chunks():
+            p.add(ch.raw)
+        return p.noise()
+    except ValueError:
+        return None
+    finally:
+        p.close()
+
+
 def _reduce(path: Any, device, scale, block_bytes: int) -> Reduced | None:
     src = open_chunks(path, device.n_channels, scale, block_bytes=block_bytes, batch_rows=max(block_bytes // 64, 1))
     head = src.head
     if "pose" not in head.cols:
         return None
-    if not states_noise(device) or head.n_raw != device.n_channels:
+    if head.n_raw != device.n_channels:
         return None
     N = device.n_channels
     counts: dict[int, int] = {}
@@ -193,7 +215,9 @@ def _reduce(path: Any, device, scale, block_bytes: int) -> Reduced | None:
     labels = sorted(counts)
     P = len(labels)
     cnt = np.array([counts[v] for v in labels], np.int64)
-    noise = noise_for(device, np.zeros((0, N), np.int64), 1)[0]
+    noise = data_noise(src, device, n_rows, hists)
+    if noise is None:
+        return None
     levels = clip_levels_counts(hists, device, noise)
     if levels is None:
         return None
