@@ -94,9 +94,9 @@ def test_long_stretches_take_a_fifth_pass(tmp_path, monkeypatch):
     same_poses(red.poses, poses_from_recording(read_recording(path, 6), dev), temp_rtol=4.4e-16)
 
 
-def test_a_stretch_off_gravity_is_set_aside(tmp_path):
+def test_a_stretch_off_gravity_is_set_aside(tmp_path, capsys, monkeypatch):
     """A still stretch read at 0.2 g (a coast, free fall) and without f: set aside "not at rest"
-    with its |f| / g, as the whole-file path sets it aside."""
+    with its |f| / g, as the whole-file path sets it aside; the CLI's bytes the whole-file ones."""
     dev = device()
     rec = unlabelled(dev, 7, temps=False)
     raw = rec.raw.copy()
@@ -107,6 +107,9 @@ def test_a_stretch_off_gravity_is_set_aside(tmp_path):
     red = reduce_unlabelled(path, dev, block_bytes=2000)
     assert red is not None and [d["reason"] for d in red.poses.set_aside] == ["not at rest"]
     same_poses(red.poses, poses_from_recording(read_recording(path, 6), dev))
+    calls, got = cli_against_whole(tmp_path, capsys, monkeypatch, dev, {"g.csv": read_recording(path, 6)})
+    reduced_ran(calls, 1)
+    assert got[0] == 0 and "set aside (not at rest)" in got[1]
 
 
 def run_cli(args, capsys):

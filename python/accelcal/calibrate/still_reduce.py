@@ -218,7 +218,7 @@ def _reduce(path: Any, device, scale, block_bytes: int, min_s: float) -> Reduced
         sums.long_colour()
     cnt = sums.b - sums.a
     total = sums.s1 + cnt[:, None] * sums.r0              # each interval's exact sum of readings
-    if np.any(np.abs(total) >= EXACT) or np.any(sums.s2 >= EXACT):
+    if np.any(np.abs(total) >= EXACT):                    # numpy's float sums of them would round
         return None
     # set_aside_off_gravity: |f| / g of each interval's mean through the nominal scale
     S, b0 = device.nominal_sensitivity(), device.nominal_offsets()
@@ -247,6 +247,7 @@ def _reduce(path: Any, device, scale, block_bytes: int, min_s: float) -> Reduced
     step = np.array([float(code_step_counts(u, k)) for u, k in hists])
     poses = PoseSet(means=means, n=c, std=np.sqrt(var), f_ref=f_ref, temp=temp, info=info, set_aside=aside,
                     colour_r2=sums.colour[use], step=np.tile(step, (use.size, 1)))
-    short = [(b - a) / device.sample_rate_hz for a, b in found if (a, b) not in set(kept)]
+    taken = set(kept)
+    short = [(b - a) / device.sample_rate_hz for a, b in found if (a, b) not in taken]
     return Reduced(source=head.source, n_samples=n, poses=poses, extra=list(head.extra),
                    metadata=dict(head.metadata), labelled=False, short=short)
