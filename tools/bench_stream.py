@@ -289,14 +289,22 @@ def diagnose_runs(n: int, d: Path, kinds: list[str], limit_mb: float, extra: lis
         rec.unlink()
 
 
-def calibrate_runs(n: int, d: Path, whole: bool, kinds: list[str]) -> None:
+def calibrate_runs(n: int, d: Path, whole: bool, kinds: list[str], reduce_only: bool = False) -> None:
     """Wall time and peak RSS of ``accelcal calibrate`` on each of ``kinds`` of about n samples (CSV
     and Parquet): ``poses`` (:func:`poses_recording`: labelled, calibrate.pose_stream) and
     ``handheld`` (:func:`handheld_recording` with ``jigfree``: no labels, no reference, poses joined
     by 2 s moves: calibrate.still_reduce), reduced while read (the run fails where the reduced
     reader leaves a file to the whole-file path) and, with ``whole``, the whole-file path (the
     reduced reader disabled in that process; its JSON compared with the reduced run's byte for
-    byte); one table row each, printed."""
+    byte); with ``reduce_only``, instead, the reduction alone (``reduce_labelled`` or
+    ``reduce_unlabelled``, no fit; it fails where the file is left whole); one table row each, printed."""
+    alone = ("import sys; sys.path.insert(0, %r)\n"
+             "from accelcal.io.device import default_device\n"
+             "from accelcal.calibrate.pose_stream import reduce_labelled\n"
+             "from accelcal.calibrate.still_reduce import reduce_unlabelled\n"
+             "dev = default_device()\n"
+             "r = reduce_labelled(sys.argv[1], dev) or reduce_unlabelled(sys.argv[1], dev)\n"
+             "sys.exit(0 if r is not None else 'the reduced reader left it whole')" % str(ROOT / "python"))
     run = ("import sys; sys.path.insert(0, %r); import accelcal.cli.main as m; real = m.reduced_recordings\n"
            "def reduced(*a):\n    r = real(*a)\n    if r is None: sys.exit('the reduced reader left it whole')\n"
            "    return r\n"
@@ -310,6 +318,12 @@ def calibrate_runs(n: int, d: Path, whole: bool, kinds: list[str]) -> None:
             handheld_recording(n, csv_path, jigfree=True)
         write_recording(pq_path, read_recording(csv_path, 6))
         for src in (csv_path, pq_path):
+            if reduce_only:
+                s, mb = peak_of([sys.executable, "-c", alone, str(src)])
+                print(f"| {n:.0e} | {name} {src.suffix[1:]} | {src.stat().st_size / 1e6:.0f} | reduce alone | "
+                      f"{s:.1f} | {mb:.0f} |", flush=True)
+                src.unlink()
+                continue
             for kind in ("reduced",) + (("whole",) if whole else ()):
                 s, mb = peak_of([sys.executable, "-c", run, kind, "calibrate", "--device", "default", str(src),
                                  "-o", str(d / f"cal_{kind}.json")])
@@ -352,6 +366,8 @@ def main() -> None:
                     "docs/streaming.md). The streamed run fails where it falls back to the first pass's arrays "
                     "('--convert-args=--arrays-ok' allows it); the two runs' outputs are compared byte for byte")
     ap.add_argument("--no-whole", action="store_true", help="rate, attitude, calibrate: the streamed runs only")
+    ap.add_argument("--reduce-only", action="store_true", help="--command calibrate: instead, the reduction alone "
+                    "(no fit), its time and peak RSS")
     ap.add_argument("--calibrate-kinds", default="poses", help="--command calibrate: the recordings (comma-separated: "
                     "poses, labelled; handheld, without labels or reference)")
     a = ap.parse_args()
@@ -373,7 +389,7 @@ def main() -> None:
         print("| samples | input | MB | run | s | peak MB |\n| ---: | --- | ---: | --- | ---: | ---: |", flush=True)
         try:
             for n in (int(float(x)) for x in a.lengths.split(",")):
-                calibrate_runs(n, d, not a.no_whole, a.calibrate_kinds.split(","))
+                calibrate_runs(n, d, not a.no_whole, a.calibrate_kinds.split(","), a.reduce_only)
         finally:
             if not a.keep and not a.dir:
                 shutil.rmtree(d, ignore_errors=True)
