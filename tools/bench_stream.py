@@ -59,6 +59,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "python"))
 from accelcal.io.device import default_device, pendulum_device, save_device  # noqa: E402
 from accelcal.io.parquet import BATCH_ROWS  # noqa: E402
+from accelcal.calibrate.still_reduce import reduce_unlabelled  # noqa: E402
 from accelcal.io.recording import Recording, read_recording, write_recording  # noqa: E402
 from accelcal.simulate import run_simulation  # noqa: E402
 
@@ -334,6 +335,30 @@ def calibrate_runs(n: int, d: Path, whole: bool, kinds: list[str], reduce_only: 
             src.unlink()
 
 
+def fit_runs(repeats: list[int], d: Path) -> None:
+    """Wall time and peak RSS of ``calibrate_recordings`` on the 10^5-sample hand-held session
+    (:func:`handheld_recording` with ``jigfree``) reduced while read and its still stretches repeated
+    ``k`` times for each of ``repeats`` (t shifted a second a pose): the jig-free fit's memory
+    against the number of poses, apart from the reading; one table row each, printed."""
+    src = d / "fit_poses.csv"
+    handheld_recording(100_000, src, jigfree=True)
+    code = ("import sys, dataclasses; sys.path.insert(0, %r)\n"
+            "from accelcal.io.device import default_device\n"
+            "from accelcal.calibrate import calibrate_recordings\n"
+            "from accelcal.calibrate.still_reduce import reduce_unlabelled\n"
+            "from accelcal.readings.static import PoseSet\n"
+            "dev = default_device(); red = reduce_unlabelled(sys.argv[1], dev); k = int(sys.argv[2])\n"
+            "ps = PoseSet.concat([red.poses] * k)\n"
+            "ps.info = [dict(d, first=d['first'] + i, t_start=d['t_start'] + i) for i, d in enumerate(ps.info)]\n"
+            "calibrate_recordings(dev, [dataclasses.replace(red, poses=ps, n_samples=red.n_samples * k)])\n"
+            % str(ROOT / "python"))
+    per = reduce_unlabelled(src, default_device()).poses.n_poses
+    for k in repeats:
+        s, mb = peak_of([sys.executable, "-c", code, str(src), str(k)])
+        print(f"| {k} | {per * k} | {s:.1f} | {mb:.0f} |", flush=True)
+    src.unlink()
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--lengths", default="1e5,1e6,1e7,1e8", help="samples, comma-separated")
@@ -366,6 +391,8 @@ def main() -> None:
                     "docs/streaming.md). The streamed run fails where it falls back to the first pass's arrays "
                     "('--convert-args=--arrays-ok' allows it); the two runs' outputs are compared byte for byte")
     ap.add_argument("--no-whole", action="store_true", help="rate, attitude, calibrate: the streamed runs only")
+    ap.add_argument("--fit-repeats", metavar="K,...", help="instead: the jig-free fit of the 10^5-sample hand-held "
+                    "session's still stretches repeated K times (its memory against the number of poses)")
     ap.add_argument("--reduce-only", action="store_true", help="--command calibrate: instead, the reduction alone "
                     "(no fit), its time and peak RSS")
     ap.add_argument("--calibrate-kinds", default="poses", help="--command calibrate: the recordings (comma-separated: "
@@ -375,6 +402,10 @@ def main() -> None:
     d.mkdir(parents=True, exist_ok=True)
     if a.calibrate_diagnose:
         calibrate_diagnose(int(a.calibrate_diagnose), d)
+        return
+    if a.fit_repeats:
+        print("| repeats | poses | s | peak MB |\n| ---: | ---: | ---: | ---: |", flush=True)
+        fit_runs([int(x) for x in a.fit_repeats.split(",")], d)
         return
     if a.diagnose:
         print("| samples | recording | CSV MB | s | peak MB |\n| ---: | --- | ---: | ---: | ---: |", flush=True)
