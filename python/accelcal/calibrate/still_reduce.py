@@ -13,14 +13,18 @@ stretches (:func:`~accelcal.readings.static.detect_static`) and gathers each one
    windows, then the detector's intervals (the same as ``detect_static``'s, with and without
    its minimum length);
 4. per interval the integer sums of its readings and of their squares about its first reading
-   (exact: ``pose_means`` sums the same integers), the same over COLOUR_BATCHES batches
-   (``pose_colour``), the sums of f (added row after row, as numpy's mean over the rows adds
-   them) and temp_c, the rows where f is given, its first and last samples.
+   (exact: ``pose_means`` sums the same integers), the sum of f (added row after row, as numpy's
+   mean over the rows adds them), the rows where f is given, its first and last samples; an
+   interval of at most MAX_STILL_ROWS rows is held while read (one at a time) and its colour
+   ratios (``pose_colour``) and mean temperature are the whole-file functions' own; of a longer
+   one the COLOUR_BATCHES batch sums are kept and a fifth pass adds its squared deviations row
+   after row (:class:`IntervalSums`).
 
 Then as ``poses_from_recording``: the stretches whose |f| is far from g and that have no f on
 every row are set aside ("not at rest"), the others' means, counts and std are the whole-file
-ones bit for bit (the sums moved to the first kept reading exactly in integers), f_ref too;
-the colour ratios and temp differ by rounding only (float sums in another order).  Where this
+ones bit for bit (the sums moved to the first kept reading exactly in integers), f_ref, the
+colour ratios and temp too, but for the temperature of an interval longer than MAX_STILL_ROWS
+(summed in chunks; numpy's nanmean adds the column pairwise: one ulp measured).  Where this
 path cannot tell what the whole-file path would do it returns None and the caller reads the file
 whole: ``pose`` labels (:func:`accelcal.calibrate.pose_stream.reduce_labelled`'s), what
 :func:`~accelcal.calibrate.pose_stream.checked_pass` refuses, the Fallbacks of ``still_stretches``
