@@ -112,6 +112,25 @@ def test_a_stretch_off_gravity_is_set_aside(tmp_path, capsys, monkeypatch):
     assert got[0] == 0 and "set aside (not at rest)" in got[1]
 
 
+def test_a_clipped_stretch_is_set_aside(tmp_path, capsys, monkeypatch):
+    """A channel at the rail through a pose: its still stretch set aside "clipped" with its clipped
+    rows, channel and level, as the whole-file path sets it aside; the CLI's bytes the whole-file
+    ones (the summary names it)."""
+    dev = device()
+    lab = labelled(dev, np.random.default_rng(11), hold=(150, 300), temps=False)
+    raw = lab.raw.copy()
+    raw[lab.pose == 3, 1] = dev.raw_max
+    rec = recording_from_arrays(lab.t, raw)
+    path = tmp_path / "c.csv"
+    write_recording(path, rec)
+    red = reduce_unlabelled(path, dev, block_bytes=700)
+    assert red is not None and [d["reason"] for d in red.poses.set_aside] == ["clipped"]
+    same_poses(red.poses, poses_from_recording(read_recording(path, 6), dev))
+    calls, got = cli_against_whole(tmp_path, capsys, monkeypatch, dev, {"c.csv": rec})
+    reduced_ran(calls, 1)
+    assert got[0] == 0 and "raw_1 at 10000" in got[1] + got[2]
+
+
 def run_cli(args, capsys):
     code = cli_main.main(args)
     out = capsys.readouterr()
@@ -232,11 +251,6 @@ def fallback_recordings(dev):
     # a logger's static blocks joined by instant steps (the detector's block_log_intervals take the samples)
     blocks = 32768 + np.repeat(dirs[np.arange(12) % 6] * 16000, 300, axis=0) + rng.normal(0, 6, (3600, 3))
     out["blocks"] = (tri, recording_from_arrays(np.arange(3600) / 100.0, np.rint(blocks).astype(np.int64)))
-    # a channel at the rail through a pose (its stretch set aside as clipped by the whole-file path)
-    lab = labelled(dev, np.random.default_rng(11), hold=(150, 300), temps=False)
-    raw = lab.raw.copy()
-    raw[lab.pose == 3, 1] = dev.raw_max
-    out["clipped"] = (dev, recording_from_arrays(lab.t, raw))
     # a triad whose still stretches hold less than half the rows (the pose-means hint takes every row)
     moving = 32768 + 16000 * np.column_stack([np.sin(np.arange(4000) / 90.0), np.cos(np.arange(4000) / 90.0),
                                               0.1 * np.sin(np.arange(4000) / 50.0)])
@@ -252,11 +266,11 @@ def fallback_recordings(dev):
     return out
 
 
-@pytest.mark.parametrize("case", ["blocks", "clipped", "mostly motion", "tone", "f on part of a stretch"])
+@pytest.mark.parametrize("case", ["blocks", "mostly motion", "tone", "f on part of a stretch"])
 def test_fallbacks_give_the_whole_file_output(tmp_path, capsys, monkeypatch, case):
-    """Where the reduced reader cannot give the whole-file path's answer (a logger's blocks, a
-    clipped reading in a stretch, stretches holding less than half a triad's rows, a tone at half the
-    rate, f given on part of a stretch), reduced_recordings gives None and the output is the whole-file command's."""
+    """Where the reduced reader cannot give the whole-file path's answer (a logger's blocks,
+    stretches holding less than half a triad's rows, a tone at half the rate, f given on part of a
+    stretch), reduced_recordings gives None and the output is the whole-file command's."""
     dev, rec = fallback_recordings(device())[case]
     calls, _ = cli_against_whole(tmp_path, capsys, monkeypatch, dev, {"f.csv": rec})
     assert calls == [None]

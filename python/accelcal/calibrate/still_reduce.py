@@ -20,8 +20,9 @@ stretches (:func:`~accelcal.readings.static.detect_static`) and gathers each one
    one the COLOUR_BATCHES batch sums are kept and a fifth pass adds its squared deviations row
    after row (:class:`IntervalSums`).
 
-Then as ``poses_from_recording``: the stretches whose |f| is far from g and that have no f on
-every row are set aside ("not at rest"), the others' means, counts and std are the whole-file
+Then as ``poses_from_recording``: the stretches with a clipped reading are set aside ("clipped",
+with their clipped rows, channels and levels), then of the others those whose |f| is far from g
+and that have no f on every row ("not at rest"), the others' means, counts and std are the whole-file
 ones bit for bit (the sums moved to the first kept reading exactly in integers), f_ref, the
 colour ratios and temp too, but for the temperature of an interval longer than MAX_STILL_ROWS
 (summed in chunks; numpy's nanmean adds the column pairwise: one ulp measured).  Where this
@@ -29,8 +30,8 @@ path cannot tell what the whole-file path would do it returns None and the calle
 whole: ``pose`` labels (:func:`accelcal.calibrate.pose_stream.reduce_labelled`'s), what
 :func:`~accelcal.calibrate.pose_stream.checked_pass` refuses, the Fallbacks of ``still_stretches``
 (a tone at half the rate, noise beyond REST_NOISE_MAX of |f|, a logger's static blocks, a long
-still stretch that may hold an instant step, sums beyond exact floats), a clipped reading in a
-still stretch (clip levels the histograms cannot give included), f given on part of a stretch
+still stretch that may hold an instant step, sums beyond exact floats), clip levels the
+histograms cannot give (``clip_levels_counts``), f given on part of a stretch
 kept, no stretch kept, any reader fallback or input error (the whole-file reader words it).
 """
 from __future__ import annotations
@@ -64,15 +65,16 @@ def reduce_unlabelled(path: Any, device, scale=None, block_bytes: int = BLOCK_BY
 
 class IntervalSums:
     """Pass 4: the sums of each interval [a, b) of ``kept`` over the chunks fed in order, with the
-    clip levels ``levels``.  An interval of at most ``hold`` rows is held while it is read (one at
+    clip levels ``levels`` (each interval's clipped rows, channels and levels: :meth:`clipped`), the
+    file's name ``source``.  An interval of at most ``hold`` rows is held while it is read (one at
     a time: they do not overlap) and its colour ratios and mean temperature are then the
     whole-file functions' own; of a longer one its batch sums are kept and :meth:`spread` (a
     fifth pass) adds its squared deviations from the mean row after row as numpy's variance
     does, and its temperature is summed in chunks (rounding: numpy adds a column pairwise)."""
 
-    def __init__(self, kept: list[tuple[int, int]], N: int, levels, hold: int) -> None:
+    def __init__(self, kept: list[tuple[int, int]], N: int, levels, hold: int, source: str) -> None:
         P, B = len(kept), COLOUR_BATCHES
-        self.kept, self.levels, self.hold = kept, levels, hold
+        self.kept, self.levels, self.hold, self.source = kept, levels, hold, source
         self.a = np.array([a for a, _ in kept], np.int64)
         self.b = np.array([b for _, b in kept], np.int64)
         self.L = (self.b - self.a) // B
@@ -90,7 +92,9 @@ class IntervalSums:
         self.temp = np.full(P, np.nan)
         self.dev2 = np.zeros((P, N))             # long intervals: sum of (x - mean)^2 (pass 5)
         self.held: dict[int, tuple[list, list]] = {}
-        self.clipped = False
+        self.n_clipped = np.zeros(P, np.int64)           # rows with a clipped reading
+        self.clip_hi = np.full((P, N), np.iinfo(np.int64).min)   # each channel's greatest and least
+        self.clip_lo = np.full((P, N), np.iinfo(np.int64).max)   # clipped reading
         self.next = 0          # the first interval not yet past
 
     def add(self, ch) -> None:
@@ -117,7 +121,12 @@ class IntervalSums:
             if self.b[p] - self.a[p] <= self.hold:
                 self.held[p] = ([], [])
         self.t_stop[p] = float(ch.t[j - 1])
-        self.clipped |= bool(self.levels.mask(x).any())
+        cl = self.levels.mask(x)
+        if cl.any():
+            self.n_clipped[p] += int(np.count_nonzero(cl.any(axis=1)))
+            big, small = np.where(cl, x, np.iinfo(np.int64).min), np.where(cl, x, np.iinfo(np.int64).max)
+            self.clip_hi[p] = np.maximum(self.clip_hi[p], big.max(axis=0))
+            self.clip_lo[p] = np.minimum(self.clip_lo[p], small.min(axis=0))
         d = x - self.r0[p]
         self.s1[p] += d.sum(axis=0)
         self.s2[p] += (d * d).sum(axis=0)
@@ -155,6 +164,17 @@ class IntervalSums:
             tc = np.concatenate(temps)
             if np.isfinite(tc).any():
                 self.temp[p] = float(np.nanmean(tc))
+
+    def clipped(self, p: int) -> dict | None:
+        """``set_aside_clipped``'s record of interval p where it has a clipped reading, else None."""
+        if not self.n_clipped[p]:
+            return None
+        chans = [int(c) for c in np.flatnonzero(self.clip_hi[p] > np.iinfo(np.int64).min)]
+        lv = [f"raw_{c} at {int(self.clip_hi[p, c]) if self.clip_hi[p, c] >= self.levels.hi[c] else int(self.clip_lo[p, c])}"
+              for c in chans]
+        return {"source": self.source, "label": None, "t_start": float(self.t_start[p]),
+                "t_stop": float(self.t_stop[p]), "n": int(self.b[p] - self.a[p]), "reason": "clipped",
+                "n_clipped": int(self.n_clipped[p]), "channels": chans, "levels": ", ".join(lv)}
 
     def long(self) -> list[int]:
         """The intervals not held whose colour a fifth pass (:meth:`spread`) gives."""
@@ -211,11 +231,9 @@ def _reduce(path: Any, device, scale, block_bytes: int, min_s: float) -> Reduced
     levels = clip_levels_counts(hists, device, noise)
     if levels is None:
         return None
-    sums = IntervalSums(kept, N, levels, MAX_STILL_ROWS)
+    sums = IntervalSums(kept, N, levels, MAX_STILL_ROWS, head.source)
     for ch in src.chunks():
         sums.add(ch)
-    if sums.clipped:
-        return None
     if sums.long():
         for ch in src.chunks():
             sums.spread(ch)
@@ -224,16 +242,19 @@ def _reduce(path: Any, device, scale, block_bytes: int, min_s: float) -> Reduced
     total = sums.s1 + cnt[:, None] * sums.r0              # each interval's exact sum of readings
     if np.any(np.abs(total) >= EXACT):                    # numpy's float sums of them would round
         return None
-    # set_aside_off_gravity: |f| / g of each interval's mean through the nominal scale
+    # set_aside_clipped, then set_aside_off_gravity on the others: |f| / g of each interval's mean
+    # through the nominal scale
+    aside = [d for d in (sums.clipped(p) for p in range(len(kept))) if d is not None]
+    rest = np.flatnonzero(sums.n_clipped == 0)
     S, b0 = device.nominal_sensitivity(), device.nominal_offsets()
     ratio = np.array([float(np.linalg.norm(np.linalg.lstsq(S, m - b0, rcond=None)[0])) / device.gravity_mps2
-                      for m in total.astype(float) / cnt[:, None]])
-    ok = at_gravity(ratio) | (sums.fin == cnt)
-    aside = [{"source": head.source, "label": None, "t_start": float(sums.t_start[p]),
-              "t_stop": float(sums.t_stop[p]), "n": int(cnt[p]), "reason": "not at rest", "n_clipped": 0,
-              "channels": [], "ratio": float(ratio[p]), "levels": f"|f| = {ratio[p]:.3g} g with the device file's scale"}
-             for p in np.flatnonzero(~ok).tolist()]
-    use = np.flatnonzero(ok)
+                      for m in total[rest].astype(float) / cnt[rest, None]])
+    ok = at_gravity(ratio) | (sums.fin[rest] == cnt[rest])
+    aside += [{"source": head.source, "label": None, "t_start": float(sums.t_start[p]),
+               "t_stop": float(sums.t_stop[p]), "n": int(cnt[p]), "reason": "not at rest", "n_clipped": 0,
+               "channels": [], "ratio": float(r), "levels": f"|f| = {r:.3g} g with the device file's scale"}
+              for p, r in zip(rest[~ok].tolist(), ratio[~ok].tolist())]
+    use = rest[ok]
     if not use.size or np.any((sums.fin[use] > 0) & (sums.fin[use] < cnt[use])):
         return None
     # pose_means about the first reading of the first interval kept: the sums moved there exactly
