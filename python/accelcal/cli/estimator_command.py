@@ -49,7 +49,7 @@ ESTIMATORS = {"attitude": attitude_from_recording, "displacement": displacement_
 #: the estimators that read a recording in chunks where they may
 STREAMED = {"attitude": attitude_stream, "displacement": displacement_stream, "rate": rate_stream}
 #: the options each passes on to its chunked form (any other option given: the whole-file command)
-STREAM_OPTIONS = {"attitude": set(), "displacement": {"omega", "axis", "form"}, "rate": set()}
+STREAM_OPTIONS = {"attitude": set(), "displacement": {"omega", "axis", "form"}, "rate": {"omega"}}
 
 
 def run_estimator(kind: str, device_path, calibration_path, recording_path, output, *, engine: str = "float",
@@ -70,7 +70,7 @@ def run_estimator(kind: str, device_path, calibration_path, recording_path, outp
     report : path, optional
         Directory for the plots.
     stream : bool
-        rate (``omega`` alpha), attitude and displacement (options ``form``, ``axis``, ``omega``
+        rate, attitude and displacement (options ``form``, ``axis``, ``omega``
         only), without ``report``: read the recording in chunks where it may (:data:`STREAMED`,
         docs/streaming.md), the same output.
     quiet : bool

@@ -39,7 +39,7 @@ from .common import channel_noise, uniform_dt
 from .omega_filter import fuse
 
 __all__ = ["OMEGA_SOURCES", "OmegaObservability", "ArrayOmega", "omega_observability", "omega_ml",
-           "array_omega", "omega_from_recording", "choose_omega", "wants_array_omega", "omega_columns", "omega_crb"]
+           "row_products", "FusedOmega", "array_omega", "omega_from_recording", "choose_omega", "wants_array_omega", "omega_columns", "omega_crb"]
 
 #: ``resolve --omega``: the recording's w columns, none, the array's own estimate, or auto
 OMEGA_SOURCES = ("auto", "reference", "none", "array")
@@ -159,8 +159,8 @@ def omega_ml(q, m, start=None, iterations: int = 4, ridge: float | None = None) 
     """
     q = np.atleast_2d(np.asarray(q, float))
     m = np.asarray(m, float)
-    if start is None:
-        lam, V = np.linalg.eigh(_products_matrix(np.linalg.lstsq(m, q.T, rcond=None)[0].T))
+    if start is None:    # m^-1 q (lstsq's cutoff), each row on its own (row_products)
+        lam, V = np.linalg.eigh(_products_matrix(row_products(q, np.linalg.pinv(m, rcond=np.finfo(float).eps * 6))))
         w = V[..., :, -1] * np.sqrt(np.maximum(lam[..., -1], 0.0))[..., None]
     else:
         w = np.array(start, float)
@@ -168,7 +168,7 @@ def omega_ml(q, m, start=None, iterations: int = 4, ridge: float | None = None) 
     for _ in range(iterations):
         J = model.product_jacobian(w)
         Jt = np.swapaxes(J, -1, -2)
-        g = (Jt @ (q - model.omega_products(w) @ m.T)[..., None])[..., 0]
+        g = (Jt @ (q - row_products(model.omega_products(w), m))[..., None])[..., 0]
         w = w + np.linalg.solve(Jt @ m @ J + ridge, g[..., None])[..., 0]
     return w, model.omega_information(m, w)
 
@@ -208,6 +208,69 @@ class ArrayOmega:
         return self.w if self.w_core is None else self.w_core
 
 
+def row_products(x, a) -> np.ndarray:
+    """``x @ a.T`` (n, J) row by row in a fixed order: each row's sum over k taken k = 0, 1, ...
+    whatever the other rows are (BLAS's sums depend on the rows around one: a lone row at the end
+    of a block, or the split between threads, rounds otherwise), so that a recording in chunks
+    gives the numbers of the whole (docs/streaming.md).
+
+    Parameters
+    ----------
+    x : array_like (n, K)
+    a : array_like (J, K)
+    """
+    x = np.atleast_2d(np.asarray(x, float))
+    a = np.asarray(a, float)
+    out = x[:, :1] * a[:, 0]
+    for k in range(1, a.shape[1]):
+        out = out + x[:, k:k + 1] * a[:, k]
+    return out
+
+
+class FusedOmega:
+    """The fused omega's per-sample filter (:func:`array_omega`), run on a recording whole or chunk
+    by chunk with its state carried (:mod:`accelcal.estimators.omega_stream`): the same numbers.
+
+    Parameters as :func:`array_omega` (without ``raw``).
+    """
+
+    def __init__(self, offsets, sensitivity, positions, dt: float, noise_counts, *, iterations: int = 2,
+                 snap: float = SNAP, omega0=None, sigma0: float = 0.01) -> None:
+        self.split = split = model.centripetal_split(positions, sensitivity, noise_counts)
+        self.obs = omega_observability(positions, sensitivity)
+        self.offsets = np.asarray(offsets, float)
+        self.dt, self.iterations = float(dt), iterations
+        self.Q = dt * dt * split.cov[3:, 3:] + (snap * dt ** 3 / 12.0) ** 2 * np.eye(3)
+        self.x0 = np.zeros(3) if omega0 is None else np.asarray(omega0, float)
+        self.P0 = sigma0 ** 2 * np.eye(3)
+        self.state: dict = {}
+        self.a_last: np.ndarray | None = None   # the ML start's integrated alpha: the last row and sum
+        self.a_sum = np.zeros(3)
+
+    def readings(self, raw) -> tuple[np.ndarray, np.ndarray]:
+        """The centripetal readings q (n, 6) and the alpha rows' [f; alpha] before the centripetal
+        term, lin (n, 6), of raw counts (n, N)."""
+        y = np.atleast_2d(np.asarray(raw, float)) - self.offsets
+        return row_products(y, self.split.qmap), row_products(y, self.split.lin)
+
+    def step(self, q, lin) -> tuple[np.ndarray, np.ndarray]:
+        """The next samples' fused omega (n, 3) rad/s and its covariance (n, 3, 3) (rad/s)^2."""
+        m = self.split.m
+        if self.obs.products == 6:
+            w_ml, _ = omega_ml(q, m)
+        else:   # the integrated alpha (no centripetal correction) as the start, its sum carried
+            a0 = lin[:, 3:]
+            prev = a0[:1] if self.a_last is None else self.a_last
+            d = (a0 + np.vstack([prev, a0[:-1]])) * (self.dt / 2.0)
+            start = np.cumsum(np.vstack([self.a_sum[None], d]), axis=0)[1:] if self.a_last is not None else \
+                np.cumsum(d, axis=0)
+            if len(a0):
+                self.a_last, self.a_sum = a0[-1:], start[-1]
+            w_ml, _ = omega_ml(q, m, start)
+        return fuse(q, lin[:, 3:], self.split.leak[3:], self.Q, m, w_ml, self.dt, self.x0, self.P0,
+                    self.iterations, state=self.state)
+
+
 def array_omega(offsets, sensitivity, positions, raw, dt: float, noise_counts, *, iterations: int = 2,
                 snap: float = SNAP, omega0=None, sigma0: float = 0.01) -> ArrayOmega:
     """The fused omega of an array (float reference), sample by sample.
@@ -242,25 +305,15 @@ def array_omega(offsets, sensitivity, positions, raw, dt: float, noise_counts, *
     -------
     ArrayOmega
     """
-    split = model.centripetal_split(positions, sensitivity, noise_counts)
-    obs = omega_observability(positions, sensitivity)
-    y = np.atleast_2d(np.asarray(raw, float)) - np.asarray(offsets, float)
-    q = y @ split.qmap.T
-    lin = y @ split.lin.T
-    m = split.m
-    if obs.products == 6:
-        w_ml, _ = omega_ml(q, m)
-    else:   # the integrated alpha (no centripetal correction) as the start
-        a0 = lin[:, 3:]
-        w_ml, _ = omega_ml(q, m, np.cumsum((a0 + np.vstack([a0[:1], a0[:-1]])) * (dt / 2.0), axis=0))
-    Q = dt * dt * split.cov[3:, 3:] + (snap * dt ** 3 / 12.0) ** 2 * np.eye(3)
-    x0 = np.zeros(3) if omega0 is None else np.asarray(omega0, float)
-    w, cov = fuse(q, lin[:, 3:], split.leak[3:], Q, m, w_ml, dt, x0, sigma0 ** 2 * np.eye(3), iterations)
-    theta = lin - model.omega_products(w) @ split.leak.T
+    fo = FusedOmega(offsets, sensitivity, positions, dt, noise_counts, iterations=iterations, snap=snap,
+                    omega0=omega0, sigma0=sigma0)
+    q, lin = fo.readings(raw)
+    w, cov = fo.step(q, lin)
+    theta = lin - row_products(model.omega_products(w), fo.split.leak)
     # the accelerometers' ML alone on the fused estimate's branch (its sign, its mirror solution)
-    w_ml, info_ml = omega_ml(q, m, w)
+    w_ml, info_ml = omega_ml(q, fo.split.m, w)
     sigma = np.sqrt(np.diagonal(cov, axis1=1, axis2=2))
-    return ArrayOmega(w, sigma, theta[:, :3], theta[:, 3:], w_ml, info_ml, obs)
+    return ArrayOmega(w, sigma, theta[:, :3], theta[:, 3:], w_ml, info_ml, fo.obs)
 
 
 def omega_from_recording(device, cal, rec, **options) -> ArrayOmega:

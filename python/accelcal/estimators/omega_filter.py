@@ -88,8 +88,8 @@ def _cost(x, w, lam, q, m):
 
 
 def fuse(q, lin_alpha, leak_alpha, Q, m, w_ml, dt: float, x0, P0, iterations: int = 2, jump: float = JUMP_CHI2,
-         margins: list | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Run the step over every sample.
+         margins: list | None = None, state: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Run the step over every sample (or, with ``state``, over a chunk of them, carried on).
 
     Parameters
     ----------
@@ -113,6 +113,10 @@ def fuse(q, lin_alpha, leak_alpha, Q, m, w_ml, dt: float, x0, P0, iterations: in
     margins : list, optional
         Appended per sample: cost(ML) - (cost(prediction) - jump), the jump test's margin
         (negative: the start moved to the ML estimate).
+    state : dict, optional
+        The filter's state after the last sample (x, P and the alpha it integrates), kept in it
+        and taken from it: run on the next chunk of samples with the same dict, the step goes on
+        from there (``x0``, ``P0`` then unused), the numbers those of one run over all of them.
 
     Returns
     -------
@@ -124,8 +128,12 @@ def fuse(q, lin_alpha, leak_alpha, Q, m, w_ml, dt: float, x0, P0, iterations: in
     m = np.asarray(m, float).tolist()
     la = np.asarray(leak_alpha, float).tolist()
     Qs = np.asarray(Q, float)[[0, 0, 0, 1, 1, 2], [0, 1, 2, 1, 2, 2]].tolist()
-    P = tuple(np.asarray(P0, float)[[0, 0, 0, 1, 1, 2], [0, 1, 2, 1, 2, 2]].tolist())
-    x = tuple(float(v) for v in x0)
+    carried = state is not None and "x" in state
+    if carried:
+        x, P, a_prev = state["x"], state["P"], state["a"]
+    else:
+        P = tuple(np.asarray(P0, float)[[0, 0, 0, 1, 1, 2], [0, 1, 2, 1, 2, 2]].tolist())
+        x = tuple(float(v) for v in x0)
     h = 0.5 * dt
     qs, als, mls = np.asarray(q, float).tolist(), np.asarray(lin_alpha, float).tolist(), np.asarray(w_ml, float).tolist()
     n = len(qs)
@@ -136,10 +144,11 @@ def fuse(q, lin_alpha, leak_alpha, Q, m, w_ml, dt: float, x0, P0, iterations: in
         p = _products(x)
         return [als[k][i] - _dot(la[i], p) for i in range(3)]
 
-    a_prev = alpha(0, x) if n else None
+    if not carried:
+        a_prev = alpha(0, x) if n else None
     for k in range(n):
         qk = qs[k]
-        if k:
+        if k or carried:
             a = alpha(k, x)
             P = _propagate(P, la, _columns(x), dt, Qs)
             # alpha[n]'s centripetal term at the predicted omega[n] (at omega[n-1] it lags a step,
@@ -170,5 +179,7 @@ def fuse(q, lin_alpha, leak_alpha, Q, m, w_ml, dt: float, x0, P0, iterations: in
         w[k] = x
         cov[k] = P
         a_prev = alpha(k, x)
+    if state is not None and (carried or n):
+        state.update(x=x, P=P, a=a_prev)
     full = cov[:, [0, 1, 2, 1, 3, 4, 2, 4, 5]].reshape(n, 3, 3)
     return w, full

@@ -35,7 +35,7 @@ from ..readings.noise_stream import add_counts, median_of_counts
 #: ranks of the checks after the reader's (1-4: io.chunks.reader_checks), as in the whole-file command
 RANK_RANGE, RANK_CORE = 10, 12
 
-__all__ = ["MAX_STEP_VALUES", "GRID_MARGIN", "RunCounts", "Scan", "scan", "scan_with_bar", "on_grid"]
+__all__ = ["RANK_RANGE", "RANK_CORE", "MAX_STEP_VALUES", "GRID_MARGIN", "RunCounts", "Scan", "scan", "scan_with_bar", "on_grid"]
 
 #: distinct time steps kept for the exact median (more: the whole-file command)
 MAX_STEP_VALUES = 1 << 16
@@ -66,17 +66,22 @@ class Scan:
     noise: np.ndarray
 
 
-def scan_with_bar(device, source: ChunkSource, *, fixed: bool, progress=None) -> Scan:
+def scan_with_bar(device, source: ChunkSource, *, fixed: bool, progress=None, defer_from: int | None = None) -> Scan:
     """:func:`scan` with a progress bar from ``progress(total, unit)`` (None: none), closed after."""
     bar = progress(source.total, source.unit) if progress is not None else None
-    out = scan(device, source, fixed=fixed, progress=None if bar is None else bar.update)
+    out = scan(device, source, fixed=fixed, progress=None if bar is None else bar.update, defer_from=defer_from)
     if bar is not None:
         bar.close()
     return out
 
 
-def scan(device, source: ChunkSource, *, fixed: bool, progress: Callable[[int], None] | None = None) -> Scan:
+def scan(device, source: ChunkSource, *, fixed: bool, progress: Callable[[int], None] | None = None,
+         defer_from: int | None = None) -> Scan:
     """The first pass (see the module doc).
+
+    ``defer_from``: an error of this rank or after (:data:`RANK_RANGE`, :data:`RANK_CORE`) raises
+    Fallback instead (a command that looks at the time grid before the device's range: its
+    whole-file form words what it finds first).
 
     Raises
     ------
@@ -127,6 +132,8 @@ def scan(device, source: ChunkSource, *, fixed: bool, progress: Callable[[int], 
     if n < 3:
         raise Fallback("too few samples")
     if pending is not None:
+        if defer_from is not None and pending[0] >= defer_from:
+            raise Fallback("an error the whole-file command ranks after the time grid")
         raise pending[1]
     dt = median_of_counts(steps)
     ratio = dt * float(device.sample_rate_hz)
