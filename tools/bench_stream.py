@@ -18,7 +18,10 @@ from a large parent).  The input files are generated once into
 ``--dir`` (default a temporary directory) and deleted at the end (``--keep`` keeps them).
 Writes build/bench_stream.md and prints it.
 ``--command rate|attitude --engine E``: instead, ``accelcal rate|attitude --engine E`` streamed and with ``--whole-file``,
-wall time and peak RSS of each (a table row per run, printed).  ``--command displacement``: the same for
+wall time and peak RSS of each (a table row per run, printed).  ``--command rate-array``: the same for
+``accelcal rate --omega array --engine float`` on a 12-channel tetrahedron array (:func:`spin_block` tiled,
+t = k / 500 s); the streamed run fails if it fell back to the whole-file read, and with both runs their
+outputs are compared byte for byte.  ``--command displacement``: the same for
 ``accelcal displacement`` (engine float, its offline form) on a rail recording (:func:`rail_block` tiled;
 lengths in whole blocks of 10^4 samples); the streamed run fails if it fell back to the whole-file read.
 
@@ -57,7 +60,7 @@ import pyarrow.parquet as pq
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "python"))
-from accelcal.io.device import default_device, pendulum_device, save_device  # noqa: E402
+from accelcal.io.device import default_device, pendulum_device, save_device, tetrahedron_device  # noqa: E402
 from accelcal.io.parquet import BATCH_ROWS  # noqa: E402
 from accelcal.calibrate.still_reduce import reduce_unlabelled  # noqa: E402
 from accelcal.io.recording import Recording, read_recording, write_recording  # noqa: E402
@@ -91,15 +94,17 @@ elif kind.startswith("convert"):
     assert rc == 0
 elif kind.startswith(("rate", "attitude", "displacement")):
     from accelcal.cli.main import main
-    if kind == "displacement":
+    cmd = kind.split("-")[0]
+    more = ["--omega", "array"] if cmd == "rate_array" else []
+    if kind in ("displacement", "rate_array"):
         import accelcal.cli.estimator_command as ec
 
         def whole(*a, **k):
-            raise AssertionError("the streamed displacement fell back to the whole-file read")
+            raise AssertionError("the streamed command fell back to the whole-file read")
         ec.read_recording = whole
     t0 = time.perf_counter()
-    rc = main([kind.split("-")[0], "--device", {device!r}, "--calibration", "nominal", "--engine", {engine!r},
-               "--quiet", src, "-o", out] + (["--whole-file"] if kind.endswith("-whole") else []))
+    rc = main([cmd.split("_")[0], "--device", {device!r}, "--calibration", "nominal", "--engine", {engine!r},
+               "--quiet", src, "-o", out] + more + (["--whole-file"] if kind.endswith("-whole") else []))
     assert rc == 0
 else:
     import numpy as np, pyarrow as pa, pyarrow.csv as pa_csv, pyarrow.parquet as pq
@@ -143,21 +148,31 @@ def rail_block() -> np.ndarray:
     return np.concatenate([raw, raw[-80:-40]])
 
 
-def generate(n: int, d: Path, raw0: np.ndarray) -> tuple[Path, Path]:
-    """A CSV and a Parquet recording of n samples (t = k / 60 s, raw tiled from raw0), both written by
+def spin_block(device) -> np.ndarray:
+    """2^16 samples of a 12-channel array's raw readings turned fast (``--command rate-array``): the
+    independent generator's spins (tests/python/indep_model.py ``make_spin_array``, 40 turns up to
+    40 rad/s from rest to rest, 83 s at 500 Hz), tiled."""
+    sys.path.insert(0, str(ROOT / "tests" / "python"))
+    import indep_model                                       # noqa: E402  (the tests' generator)
+    raw = indep_model.make_spin_array(device, 1, n_turns=40)["recording"].raw
+    return np.resize(raw, (1 << 16, raw.shape[1]))
+
+
+def generate(n: int, d: Path, raw0: np.ndarray, hz: float = 60.0, name: str = "seed-6ch-r60") -> tuple[Path, Path]:
+    """A CSV and a Parquet recording of n samples (t = k / hz s, raw tiled from raw0), both written by
     pyarrow (t in its shortest round-trip text)."""
     csv_path, pq_path = d / f"rec_{n}.csv", d / f"rec_{n}.parquet"
     names = ["t"] + [f"raw_{k}" for k in range(raw0.shape[1])]
     schema = pa.schema([("t", pa.float64())] + [(c, pa.int64()) for c in names[1:]],
-                       metadata={b"device": b"seed-6ch-r60"})
+                       metadata={b"device": name.encode()})
     with open(csv_path, "w") as fh:
-        fh.write("# device: seed-6ch-r60\n" + ",".join(names) + "\n")
+        fh.write(f"# device: {name}\n" + ",".join(names) + "\n")
     pw = pq.ParquetWriter(pq_path, schema)
     with open(csv_path, "ab") as fh:
         for s in range(0, n, ROWS):
             k = np.arange(s, min(s + ROWS, n))
             raw = raw0[k % raw0.shape[0]]
-            t = k / 60.0
+            t = k / hz
             pw.write_table(pa.Table.from_arrays([pa.array(t)] + [pa.array(raw[:, j]) for j in range(raw.shape[1])], schema=schema),
                            row_group_size=BATCH_ROWS)
             buf = pa.BufferOutputStream()
@@ -166,6 +181,15 @@ def generate(n: int, d: Path, raw0: np.ndarray) -> tuple[Path, Path]:
             fh.write(buf.getvalue().to_pybytes())
     pw.close()
     return csv_path, pq_path
+
+
+def same_output(a: Path, b: Path) -> bool:
+    """Two outputs the same: a CSV's bytes; a Parquet file's table and metadata (its bytes depend on
+    how the rows were written: whole, or chunk by chunk)."""
+    if b.suffix == ".parquet":
+        ta, tb = pq.read_table(a), pq.read_table(b)
+        return ta.schema == tb.schema and ta.schema.metadata == tb.schema.metadata and ta.equals(tb)
+    return a.read_bytes() == b.read_bytes()
 
 
 def run_case(kind: str, src: Path, out: Path, engine: str = "fixed", device: str = "default",
@@ -370,7 +394,8 @@ def main() -> None:
                     help="which cases, in this order (comma-separated)")
     ap.add_argument("--calibrate-diagnose", metavar="N", type=float,
                     help="instead: peak memory of calibrate and diagnose on a static-pose recording of N samples")
-    ap.add_argument("--command", choices=["resolve", "rate", "attitude", "displacement", "calibrate", "convert"],
+    ap.add_argument("--command", choices=["resolve", "rate", "rate-array", "attitude", "displacement", "calibrate",
+                                          "convert"],
                     default="resolve",
                     help="rate, attitude: `accelcal rate|attitude --engine ENGINE` streamed, and with --whole-file "
                     "(no I/O anchor); attitude on the two-triad pendulum device (io.device.pendulum_device), its "
@@ -425,8 +450,13 @@ def main() -> None:
             if not a.keep and not a.dir:
                 shutil.rmtree(d, ignore_errors=True)
         return
-    device = "default"
-    if a.command == "attitude":
+    device, hz, dev_name = "default", 60.0, "seed-6ch-r60"
+    if a.command == "rate-array":
+        tet = tetrahedron_device()
+        device, hz, dev_name = str(d / "tetra.json"), float(tet.sample_rate_hz), tet.name
+        save_device(tet, device)
+        raw0 = spin_block(tet)
+    elif a.command == "attitude":
         pend = pendulum_device()
         device = str(d / "pendulum.json")
         save_device(pend, device)
@@ -442,7 +472,7 @@ def main() -> None:
             t0 = time.perf_counter()
             csv_path, pq_path = d / f"rec_{n}.csv", d / f"rec_{n}.parquet"
             if not (a.reuse and csv_path.exists() and pq_path.exists()):
-                csv_path, pq_path = generate(n, d, raw0[:, :3] if a.command == "convert" else raw0)
+                csv_path, pq_path = generate(n, d, raw0[:, :3] if a.command == "convert" else raw0, hz, dev_name)
             gen = time.perf_counter() - t0
             sizes = (csv_path.stat().st_size / 1e6, pq_path.stat().st_size / 1e6)
             cases = {"csv->csv": (csv_path, d / "o.csv"), "csv->parquet": (csv_path, d / "o.parquet"),
@@ -450,15 +480,17 @@ def main() -> None:
             for name in a.cases.split(","):
                 src, out = cases[name]
                 if a.command != "resolve":
-                    for kind in (a.command,) + (() if a.no_whole else (a.command + "-whole",)):
+                    command = a.command.replace("-", "_")
+                    compare = a.command in ("convert", "rate-array")
+                    for kind in (command,) + (() if a.no_whole else (command + "-whole",)):
                         extra = tuple(shlex.split(a.convert_args)) if a.command == "convert" else ()
-                        res = run_case(kind, src, out, a.engine, device, extra, keep=a.command == "convert")
+                        res = run_case(kind, src, out, a.engine, device, extra, keep=compare)
                         what = (" ".join((kind,) + tuple(x for x in extra if x != "--arrays-ok"))
                                 if a.command == "convert" else f"{kind} --engine {a.engine}")
-                        if a.command == "convert" and kind == "convert" and not a.no_whole:
+                        if compare and kind == command and not a.no_whole:
                             out.rename(out.with_suffix(".stream"))       # compared with the whole-file run's
-                        elif a.command == "convert" and kind != "convert":
-                            same = out.with_suffix(".stream").read_bytes() == out.read_bytes()
+                        elif compare and kind != command:
+                            same = same_output(out.with_suffix(".stream"), out)
                             what += f" (output {'the same bytes' if same else 'DIFFERENT'})"
                             out.with_suffix(".stream").unlink()
                         out.unlink(missing_ok=True)
