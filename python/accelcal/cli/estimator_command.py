@@ -49,7 +49,7 @@ ESTIMATORS = {"attitude": attitude_from_recording, "displacement": displacement_
 #: the estimators that read a recording in chunks where they may
 STREAMED = {"attitude": attitude_stream, "displacement": displacement_stream, "rate": rate_stream}
 #: the options each passes on to its chunked form (any other option given: the whole-file command)
-STREAM_OPTIONS = {"attitude": set(), "displacement": {"omega", "axis", "form"}, "rate": {"omega"}}
+STREAM_OPTIONS = {"attitude": {"omega"}, "displacement": {"omega", "axis", "form"}, "rate": {"omega"}}
 
 
 def run_estimator(kind: str, device_path, calibration_path, recording_path, output, *, engine: str = "float",

@@ -21,7 +21,7 @@ from ..firmware.quantize import round_half_up
 from ..io.recording import check_core_input, check_for_device
 from .common import (CLIP, CLIP_LO, OMEGA_FRAC, OUT_FRAC, Columns, channel_noise, clip_i16, dt_fixed, force_noise,
                      resolve_array, time_span, uniform_dt)
-from .omega import wants_array_omega
+from .omega import resolve_rows, wants_array_omega
 from .omega_fixed import ESTIMATOR_OMEGA, estimator_omega
 from .timegrid import on_uniform_grid
 from ..firmware.triad import triad_forces
@@ -29,7 +29,7 @@ from ..firmware.triad import triad_forces
 __all__ = ["ATT_GATED", "ATT_W2_NEG", "ATT_UNSETTLED", "ATT_NO_GRAVITY", "ATT_SAT", "ATT_SIGN_NEG",
            "ANGLE_FRAC", "W_FRAC", "W2_FRAC", "atan2_fixed", "AttitudeParams", "AttitudeConsts",
            "attitude_core", "attitude_float", "att_init_fixed", "attitude_fixed", "attitude_twin",
-           "attitude_rate_bound", "triad_geometry", "attitude_from_recording"]
+           "attitude_rate_bound", "triad_geometry", "attitude_from_recording", "array_block", "array_warnings"]
 
 # flag bits, from the compiled core
 ATT_GATED, ATT_W2_NEG, ATT_UNSETTLED, ATT_NO_GRAVITY, ATT_SAT, ATT_SIGN_NEG = (
@@ -408,34 +408,55 @@ def attitude_from_recording(device, cal, rec, engine: str = "float", *, gain: fl
     return cols
 
 
+def array_block(device, cal, rec, engine: str, w, w_core) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The pendulum's angle from the array's omega on a block of samples (the recording whole, or a
+    chunk: ``rec`` has raw, and source and line for the fixed engine's messages): f at the pivot
+    (the origin), f(0) = (-g sin theta, ., g cos theta) as ac_attitude.h's pair sees it.
+
+    Parameters
+    ----------
+    w : ndarray (n, 3)
+        rad/s: the float estimate (engine "float").
+    w_core : ndarray (n, 3)
+        rad/s: the C core's Q5.10 rate (engine "fixed").
+
+    Returns
+    -------
+    theta_rad, dw_y, g_mps2 : ndarray (n,)
+        rad, rad/s^2, |f| in the swing's plane m/s^2.
+    saturated : ndarray (n,) bool
+    """
+    if engine == "float":     # each row's sums in one order: the same numbers in chunks
+        f, a = resolve_rows(cal.offsets, cal.sensitivity, cal.positions_or_nominal(device), rec.raw, w)
+        return np.arctan2(-f[:, 0], f[:, 2]), a[:, 1], np.hypot(f[:, 0], f[:, 2]), np.zeros(len(f), bool)
+    f, a, sat = resolve_array(device, cal, rec, engine, w_core, with_flags=True)
+    ang, mag = atan2_fixed(-np.asarray(f[:, 0], np.int64), f[:, 2])    # the core's atan2 on Q.AC_OUT_FRAC f
+    return ang / 2.0**ANGLE_FRAC, a[:, 1] / 2.0**OUT_FRAC, np.hypot(f[:, 0], f[:, 2]) / 2.0**OUT_FRAC, sat
+
+
+def array_warnings(off: int, sat: int) -> list[str]:
+    """attitude's warnings with the array's omega: samples whose f at the pivot is off g, clipped."""
+    out = []
+    if off:
+        out.append(f"attitude: on {off} samples f at the pivot is more than 20 % off "
+                   "gravity in the swing's plane (pivot moving, turning about another axis, or clipping): "
+                   "theta there is doubtful; column g_mps2")
+    if sat:
+        out.append(f"attitude: {sat} samples clipped in the fixed-point core (column saturated)")
+    return out
+
+
 def _array_attitude(device, cal, rec, engine: str, omega: str) -> Columns:
-    """attitude_from_recording with the array's own omega: the pendulum's angle from f at the
-    pivot (the origin), f(0) = (-g sin theta, ., g cos theta) as ac_attitude.h's pair sees it, w_y
-    and dw_y from the array (docs/angular-rate.md)."""
+    """attitude_from_recording with the array's own omega: theta from f at the pivot
+    (:func:`array_block`), w_y and dw_y from the array (docs/angular-rate.md)."""
     if engine == "fixed":
         check_core_input(rec, device.raw_min < 0)
     rec, filled, fill_note = on_uniform_grid(rec)
     est = estimator_omega(device, cal, rec, "array", engine)
-    f, a, sat = resolve_array(device, cal, rec, engine, est.for_resolver(), with_flags=True)
-    if engine == "float":
-        theta = np.arctan2(-f[:, 0], f[:, 2])
-        gmag = np.hypot(f[:, 0], f[:, 2])
-        dw = a[:, 1]
-    else:       # the core's atan2 on the resolver's Q.AC_OUT_FRAC f
-        ang, mag = atan2_fixed(-np.asarray(f[:, 0], np.int64), f[:, 2])
-        theta = ang / 2.0**ANGLE_FRAC
-        gmag = np.hypot(f[:, 0], f[:, 2]) / 2.0**OUT_FRAC
-        dw = a[:, 1] / 2.0**OUT_FRAC
-    warnings = [f"attitude: {fill_note}"] if fill_note else []
+    theta, dw, gmag, sat = array_block(device, cal, rec, engine, est.w, est.w_core)
     g0 = float(device.gravity_mps2)
-    off = np.abs(gmag - g0) > 0.2 * g0
-    if off.any():
-        warnings.append(f"attitude: on {int(np.count_nonzero(off))} samples f at the pivot is more than 20 % off "
-                        "gravity in the swing's plane (pivot moving, turning about another axis, or clipping): "
-                        "theta there is doubtful; column g_mps2")
-    if sat.any():
-        warnings.append(f"attitude: {int(np.count_nonzero(sat))} samples clipped in the fixed-point core "
-                        "(column saturated)")
+    warnings = ([f"attitude: {fill_note}"] if fill_note else []) + array_warnings(
+        int(np.count_nonzero(np.abs(gmag - g0) > 0.2 * g0)), int(np.count_nonzero(sat)))
     n = rec.n_samples
     return Columns(t=np.asarray(rec.t, float), theta_rad=np.asarray(theta, float), w_y=np.asarray(est.w[:, 1], float),
                    dw_y=np.asarray(dw, float), g_mps2=np.asarray(gmag, float), w_y_sigma=est.sigma[:, 1],

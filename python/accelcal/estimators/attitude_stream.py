@@ -7,6 +7,11 @@ carried over (:func:`~accelcal.estimators.attitude.attitude_core`'s ``state``, t
 ``ac_att``), counting what the warnings say (samples unsettled, |g| off, saturated).  The warnings
 are comments above the rows, so the rows go to a temporary file first
 (:func:`accelcal.io.result_sink.write_deferred`).
+
+With the array's own omega (``--omega array``, or ``auto`` on a layout that observes it and a file
+without w columns) the second pass runs the fused omega filter (float: :class:`FusedOmega`; fixed:
+the C core's ``ac_omega`` through :class:`~accelcal.firmware.omega_table.OmegaCore`) with its state
+carried, and :func:`~accelcal.estimators.attitude.array_block` on each chunk.
 """
 from __future__ import annotations
 
@@ -16,23 +21,30 @@ from typing import Any, Callable
 import numpy as np
 
 from ..errors import AccelcalError, InputError
+from ..firmware.native import FORMATS
+from ..firmware.omega_table import OmegaCore, device_omega_table
+from ..firmware.quantize import quantize_calibration
 from ..firmware.triad import triad_forces
 from ..io.chunk_source import open_chunks
 from ..io.chunks import BLOCK_BYTES, Fallback
 from ..io.parquet import BATCH_ROWS
 from ..io.result_sink import write_deferred
-from .attitude import (AttitudeConsts, AttitudeParams, att_init_fixed, attitude_core, fixed_block, float_outputs,
-                       triad_geometry)
+from .attitude import (AttitudeConsts, AttitudeParams, array_block, array_warnings, att_init_fixed, attitude_core,
+                       fixed_block, float_outputs, triad_geometry)
 from .common import force_noise, time_span
+from .omega import FusedOmega, omega_observability
+from .omega_fixed import ESTIMATOR_OMEGA, pretrim
 from .stream_scan import on_grid, scan_with_bar
 
 __all__ = ["attitude_stream"]
 
 NAMES = ["t", "theta_rad", "w_y", "dw_y", "g_mps2", "gated", "unsettled", "saturated"]
+#: with the array's own omega
+ARRAY_NAMES = ["t", "theta_rad", "w_y", "dw_y", "g_mps2", "w_y_sigma", "gated", "unsettled", "saturated"]
 
 
 def attitude_stream(device, cal, path: Any, output: Any, *, engine: str = "float", gain: float = 2.0,
-                    w2_gate: float | None = None, leak_tau_s: float = 2.0, scale: Any = None,
+                    w2_gate: float | None = None, leak_tau_s: float = 2.0, omega: str = "auto", scale: Any = None,
                     block_bytes: int = BLOCK_BYTES, batch_rows: int = BATCH_ROWS,
                     progress: Callable[[Any, str], Any] | None = None) -> list[str] | None:
     """`accelcal attitude` from ``path`` into ``output`` chunk by chunk.
@@ -46,6 +58,8 @@ def attitude_stream(device, cal, path: Any, output: Any, *, engine: str = "float
     engine : {"float", "fixed"}
     gain, w2_gate, leak_tau_s : float
         As :func:`~accelcal.estimators.attitude.attitude_from_recording` (1/rad, (rad/s)^2, s).
+    omega : {"auto", "array", "none"}
+        As :func:`~accelcal.estimators.attitude.attitude_from_recording`.
     scale : units.Scale, optional
     block_bytes, batch_rows : int
         Chunk size: bytes of CSV text, rows of Parquet.
@@ -63,8 +77,17 @@ def attitude_stream(device, cal, path: Any, output: Any, *, engine: str = "float
     InputError
         Bad rows, as the whole-file command words them (nothing written).
     """
-    if engine not in ("float", "fixed"):
+    if engine not in ("float", "fixed") or omega not in ESTIMATOR_OMEGA:
         return None
+    observed = not device.is_triad() and omega_observability(cal.positions_or_nominal(device), cal.sensitivity).full
+    if omega == "array" or (omega == "auto" and observed):
+        if not observed:
+            return None                     # the whole-file command's refusal, after its checks
+        try:
+            src = open_chunks(path, device.n_channels, scale, block_bytes, batch_rows)
+        except Fallback:
+            return None
+        return _array_stream(device, cal, src, output, engine=engine, auto=omega == "auto", progress=progress)
     try:
         r1, r2 = triad_geometry(device, cal)
     except InputError:
@@ -120,6 +143,56 @@ def attitude_stream(device, cal, path: Any, output: Any, *, engine: str = "float
     result: list[str] = []
     try:
         write_deferred(output, NAMES, lambda sink: _keep(result, produce(sink)))
+    except Fallback:
+        return None
+    return result
+
+
+def _array_stream(device, cal, src: Any, output: Any, *, engine: str, auto: bool,
+                  progress: Callable[[Any, str], Any] | None) -> list[str] | None:
+    """attitude with the array's own omega, chunk by chunk (see the module doc)."""
+    try:
+        sc = scan_with_bar(device, src, fixed=engine == "fixed", progress=progress)
+    except Fallback:
+        return None
+    if engine == "float":
+        fo = FusedOmega(cal.offsets, cal.sensitivity, cal.positions_or_nominal(device), sc.dt,
+                        np.sqrt(np.asarray(sc.noise, float) ** 2 + 1.0 / 12.0))
+    else:       # omega_fixed.table_for_recording's table, its refusals the whole-file command's
+        table = device_omega_table(device, cal) if device.noise_mps2 > 0 else None
+        if table is None or abs(sc.dt * float(device.sample_rate_hz) - 1.0) > 0.01:
+            return None
+        tables, core = quantize_calibration(device, cal), OmegaCore(table)
+    g0 = float(device.gravity_mps2)
+    tally = SimpleNamespace(off=0, sat=0)
+
+    def produce(sink: Any) -> dict:
+        bar = progress(src.total, src.unit) if progress is not None else None
+        for ch in src.chunks(None if bar is None else bar.update):
+            on_grid(sc, ch.start, ch.t)
+            if auto and ch.vecs.get("w") is not None:
+                raise Fallback("w columns: auto takes them where complete")
+            if engine == "float":
+                w, cov = fo.step(*fo.readings(ch.raw))
+                sigma, w_core = np.sqrt(np.diagonal(cov, axis1=1, axis2=2)), None
+            else:
+                w16, w10, sig, _, _ = core.run(pretrim(tables, ch.raw)[0])
+                w, sigma, w_core = w16 * 2.0 ** -16, sig * 2.0 ** -16, w10 * 2.0 ** -FORMATS.omega_frac
+            rec = SimpleNamespace(raw=ch.raw, source=src.head.source, line=ch.line)
+            theta, dw, gmag, sat = array_block(device, cal, rec, engine, w, w_core)
+            tally.off += int(np.count_nonzero(np.abs(gmag - g0) > 0.2 * g0))
+            tally.sat += int(np.count_nonzero(sat))
+            zero = np.zeros(ch.n)
+            sink.write([ch.t, np.asarray(theta, float), np.asarray(w[:, 1], float), np.asarray(dw, float),
+                        np.asarray(gmag, float), sigma[:, 1], zero, zero, sat.astype(float)])
+        if bar is not None:
+            bar.close()
+        meta = {"engine": engine, "device": device.name, "omega": "array"}
+        return {**meta, **{f"warning_{k}": w for k, w in enumerate(array_warnings(tally.off, tally.sat), 1)}}
+
+    result: list[str] = []
+    try:
+        write_deferred(output, ARRAY_NAMES, lambda sink: _keep(result, produce(sink)))
     except Fallback:
         return None
     return result

@@ -39,7 +39,7 @@ from .common import channel_noise, uniform_dt
 from .omega_filter import fuse
 
 __all__ = ["OMEGA_SOURCES", "OmegaObservability", "ArrayOmega", "omega_observability", "omega_ml",
-           "row_products", "FusedOmega", "array_omega", "omega_from_recording", "choose_omega", "wants_array_omega", "omega_columns", "omega_crb"]
+           "row_products", "resolve_rows", "FusedOmega", "array_omega", "omega_from_recording", "choose_omega", "wants_array_omega", "omega_columns", "omega_crb"]
 
 #: ``resolve --omega``: the recording's w columns, none, the array's own estimate, or auto
 OMEGA_SOURCES = ("auto", "reference", "none", "array")
@@ -225,6 +225,16 @@ def row_products(x, a) -> np.ndarray:
     for k in range(1, a.shape[1]):
         out = out + x[:, k:k + 1] * a[:, k]
     return out
+
+
+def resolve_rows(offsets, sensitivity, positions, raw, omega) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`accelcal.model.resolve` with omega's centripetal term, each row's sums in a fixed order
+    (:func:`row_products`): f (n, 3) m/s^2 and alpha (n, 3) rad/s^2 of raw counts (n, N) and omega
+    (n, 3) rad/s, the same numbers whole or in chunks."""
+    y = np.atleast_2d(np.asarray(raw, float)) - np.asarray(offsets, float)
+    y = y - row_products(model.omega_products(np.atleast_2d(omega)), model.centripetal_matrix(positions, sensitivity))
+    out = row_products(y, model.resolve_matrix(positions, sensitivity))
+    return out[:, :3], out[:, 3:]
 
 
 class FusedOmega:

@@ -20,7 +20,7 @@ from .. import model
 from .native import check, cptr, ffi, lib
 from .quantize import COEF_MAX, QuantizeError, FixedTables, quantize_calibration, round_half_up, row_shift
 
-__all__ = ["OmegaTable", "to_xf", "xf_value", "omega_table", "omega_run", "omega_header_lines", "insert_omega", "device_omega_table",
+__all__ = ["OmegaTable", "to_xf", "xf_value", "omega_table", "OmegaCore", "omega_run", "omega_header_lines", "insert_omega", "device_omega_table",
            "OMEGA_JUMP_CHI2", "OMEGA_RANK_RTOL", "OMEGA_SNAP", "OMEGA_SIGMA0"]
 
 #: the float estimator's constants (estimators.omega / omega_filter), repeated here because
@@ -175,6 +175,42 @@ def omega_table(tables: FixedTables, noise_counts, dt: float, *, snap: float = O
                       ridge=xf_value(to_xf(OMEGA_RANK_RTOL * float(np.trace(m)))))
 
 
+class OmegaCore:
+    """``ac_omega_step`` with its state kept from one call of :meth:`run` to the next (a recording in
+    chunks: the numbers of one run over all of it).
+
+    Parameters
+    ----------
+    table : OmegaTable
+    """
+
+    def __init__(self, table: OmegaTable) -> None:
+        self.table = table
+        self.c = table.cdata()
+        self.st = ffi.new("ac_omega_state *")
+        check(lib.ac_omega_init(self.st, self.c), "ac_omega_init")
+
+    def run(self, x) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The next samples (see :func:`omega_run`)."""
+        x = np.ascontiguousarray(np.atleast_2d(x), dtype=np.int16)
+        n = x.shape[0]
+        if x.shape[1] != self.table.n:
+            raise ValueError(f"x must be (n, {self.table.n})")
+        c, st = self.c, self.st
+        w16 = np.zeros((n, 3), np.int32)
+        w10 = np.zeros((n, 3), np.int16)
+        sig = np.zeros((n, 3), np.int32)
+        flags = np.zeros(n, np.uint8)
+        sat = np.zeros(n, bool)
+        o16, o10, osig, ofl = (ffi.new("int32_t[3]"), ffi.new("int16_t[3]"), ffi.new("int32_t[3]"),
+                               ffi.new("uint8_t *"))
+        for k in range(n):
+            sat[k] = check(lib.ac_omega_step(st, c, cptr("int16_t *", x[k]), o16, o10, ofl), "ac_omega_step")
+            sat[k] |= check(lib.ac_omega_sigma(st, osig), "ac_omega_sigma")
+            w16[k], w10[k], sig[k], flags[k] = list(o16), list(o10), list(osig), ofl[0]
+        return w16, w10, sig, flags, sat
+
+
 def omega_run(table: OmegaTable, x) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Run ``ac_omega_step`` over every sample of the pre-trimmed readings x (n, N) int16.
 
@@ -190,25 +226,7 @@ def omega_run(table: OmegaTable, x) -> tuple[np.ndarray, np.ndarray, np.ndarray,
         AC_OMEGA_FLAG_*.
     saturated : ndarray (n,) bool
     """
-    x = np.ascontiguousarray(np.atleast_2d(x), dtype=np.int16)
-    n = x.shape[0]
-    if x.shape[1] != table.n:
-        raise ValueError(f"x must be (n, {table.n})")
-    c = table.cdata()
-    st = ffi.new("ac_omega_state *")
-    check(lib.ac_omega_init(st, c), "ac_omega_init")
-    w16 = np.zeros((n, 3), np.int32)
-    w10 = np.zeros((n, 3), np.int16)
-    sig = np.zeros((n, 3), np.int32)
-    flags = np.zeros(n, np.uint8)
-    sat = np.zeros(n, bool)
-    o16, o10, osig, ofl = (ffi.new("int32_t[3]"), ffi.new("int16_t[3]"), ffi.new("int32_t[3]"),
-                           ffi.new("uint8_t *"))
-    for k in range(n):
-        sat[k] = check(lib.ac_omega_step(st, c, cptr("int16_t *", x[k]), o16, o10, ofl), "ac_omega_step")
-        sat[k] |= check(lib.ac_omega_sigma(st, osig), "ac_omega_sigma")
-        w16[k], w10[k], sig[k], flags[k] = list(o16), list(o10), list(osig), ofl[0]
-    return w16, w10, sig, flags, sat
+    return OmegaCore(table).run(x)
 
 
 def _xf_init(v: float) -> str:
