@@ -1,4 +1,5 @@
-"""rate --omega array in chunks (accelcal.estimators.rate_stream, omega.FusedOmega; docs/streaming.md):
+"""rate --omega array and attitude with the array's omega in chunks (accelcal.estimators.rate_stream,
+attitude_stream, omega.FusedOmega, firmware.omega_table.OmegaCore; docs/streaming.md):
 the whole-file output byte for byte with chunk boundaries inside a rest and inside a turn, on
 recordings of the independent generator (indep_model.make_spin_array: a 12-channel tetrahedron,
 whose readings fix all six rate products, and a 9-channel layout that fixes three, where the
@@ -13,6 +14,7 @@ import pytest
 
 import indep_model as im
 from accelcal.errors import InputError
+from accelcal.estimators.attitude_stream import attitude_stream
 from accelcal.estimators.omega import row_products
 from accelcal.estimators.rate_stream import rate_stream
 from accelcal.io.calibration import Calibration, save_calibration
@@ -213,3 +215,55 @@ def test_row_products_do_not_depend_on_the_other_rows(seed):
     assert np.array_equal(np.vstack([row_products(p, a) for p in np.split(x, cuts)]), whole_rows)
     assert np.array_equal(np.vstack([row_products(x[i:i + 1], a) for i in range(257)]), whole_rows)
     np.testing.assert_allclose(whole_rows, x @ a.T, rtol=1e-12, atol=1e-9)
+
+
+def attitude_cli(capfd, s, rec, out, *args):
+    rc, _, err, _ = run(["attitude", "--device", s["dev_path"], "--calibration", s["cal_path"], rec, "-o", out,
+                         "--quiet", *args], capfd)
+    return rc, err
+
+
+@pytest.mark.parametrize("engine", ["float", "fixed"])
+@pytest.mark.parametrize("block", [120, 4099])
+def test_attitude_with_the_array_omega_in_chunks(spin, capfd, monkeypatch, engine, block):
+    """The spins are no swing about y: f at the pivot is off g in the swing's plane on many samples,
+    which the warning counts. --omega array and auto (no w columns), both engines; the CLI without
+    the whole-file read."""
+    s = spin
+    if engine == "fixed" and s["device"].n_channels < 12:   # three of the six rate products: refused whole-file
+        out = s["dir"] / f"att_refused_{block}.csv"
+        assert attitude_stream(s["device"], s["cal"], s["csv"], out, engine=engine, omega="array") is None
+        rc, err = attitude_cli(capfd, s, s["csv"], out, "--engine", engine)
+        assert rc == 2 and "all six rate products" in err and not out.exists()
+        return
+    ref = s["dir"] / f"att_{engine}.csv"
+    if not ref.exists():
+        rc, err = attitude_cli(capfd, s, s["csv"], ref, "--engine", engine, "--omega", "array", "--whole-file")
+        assert rc == 0 and "f at the pivot is more than 20 % off" in err
+    for omega in ("array", "auto"):
+        out = s["dir"] / f"att_{engine}_{omega}_{block}.csv"
+        warnings = attitude_stream(s["device"], s["cal"], s["csv"], out, engine=engine, omega=omega, block_bytes=block)
+        assert len(warnings) == 1 and "f at the pivot is more than 20 % off" in warnings[0]
+        assert out.read_bytes() == ref.read_bytes()
+    no_whole_read(monkeypatch)
+    out = s["dir"] / f"att_cli_{engine}_{block}.csv"
+    rc, err = attitude_cli(capfd, s, s["csv"], out, "--engine", engine)
+    assert rc == 0 and "f at the pivot is more than 20 % off" in err and out.read_bytes() == ref.read_bytes()
+
+
+def test_attitude_parquet_and_a_bad_cell_late(spin, capfd, monkeypatch):
+    s = spin
+    rec_pq = s["dir"] / "att_rec.parquet"
+    write_recording(rec_pq, s["recording"])
+    ref = s["dir"] / "att_whole.parquet"
+    assert attitude_cli(capfd, s, rec_pq, ref, "--whole-file")[0] == 0
+    out = s["dir"] / "att_s.parquet"
+    assert attitude_stream(s["device"], s["cal"], rec_pq, out, batch_rows=7)
+    a, b = pq.read_table(ref), pq.read_table(out)
+    assert a.schema == b.schema and a.schema.metadata == b.schema.metadata and a.equals(b)
+    path = edited_lines(s, "att_bad.csv", bad_cell)
+    rc_w, err_w = attitude_cli(capfd, s, path, s["dir"] / "att_bw.csv", "--whole-file")
+    assert rc_w == 2 and "raw_4" in err_w
+    no_whole_read(monkeypatch)
+    out = s["dir"] / "att_bs.csv"
+    assert attitude_cli(capfd, s, path, out) == (rc_w, err_w) and not out.exists()
