@@ -491,7 +491,7 @@ def main() -> None:
                             out.rename(out.with_suffix(".stream"))       # compared with the whole-file run's
                         elif compare and kind != command:
                             same = same_output(out.with_suffix(".stream"), out)
-                            what += f" (output {'the same bytes' if same else 'DIFFERENT'})"
+                            what += f" (output {'the same' if same else 'DIFFERENT'})"
                             out.with_suffix(".stream").unlink()
                         out.unlink(missing_ok=True)
                         print(f"| {n:.0e} | {name} | {what} | {res['s']:.2f} | {res['mb']:.0f} |", flush=True)

@@ -39,7 +39,8 @@ from .common import channel_noise, uniform_dt
 from .omega_filter import fuse
 
 __all__ = ["OMEGA_SOURCES", "OmegaObservability", "ArrayOmega", "omega_observability", "omega_ml",
-           "row_products", "resolve_rows", "FusedOmega", "array_omega", "omega_from_recording", "choose_omega", "wants_array_omega", "omega_columns", "omega_crb"]
+           "row_products", "resolve_rows", "FusedOmega", "array_omega", "omega_from_recording", "choose_omega",
+           "wants_array_omega", "omega_columns", "omega_crb"]
 
 #: ``resolve --omega``: the recording's w columns, none, the array's own estimate, or auto
 OMEGA_SOURCES = ("auto", "reference", "none", "array")
@@ -160,7 +161,8 @@ def omega_ml(q, m, start=None, iterations: int = 4, ridge: float | None = None) 
     q = np.atleast_2d(np.asarray(q, float))
     m = np.asarray(m, float)
     if start is None:    # m^-1 q (lstsq's cutoff), each row on its own (row_products)
-        lam, V = np.linalg.eigh(_products_matrix(row_products(q, np.linalg.pinv(m, rcond=np.finfo(float).eps * 6))))
+        minv = np.linalg.pinv(m, rcond=np.finfo(float).eps * 6)
+        lam, V = np.linalg.eigh(_products_matrix(row_products(q, minv)))
         w = V[..., :, -1] * np.sqrt(np.maximum(lam[..., -1], 0.0))[..., None]
     else:
         w = np.array(start, float)
@@ -239,7 +241,8 @@ def resolve_rows(offsets, sensitivity, positions, raw, omega) -> tuple[np.ndarra
 
 class FusedOmega:
     """The fused omega's per-sample filter (:func:`array_omega`), run on a recording whole or chunk
-    by chunk with its state carried (:mod:`accelcal.estimators.omega_stream`): the same numbers.
+    by chunk with its state carried (:mod:`accelcal.estimators.rate_stream`,
+    :mod:`~accelcal.estimators.attitude_stream`): the same numbers.
 
     Parameters as :func:`array_omega` (without ``raw``).
     """

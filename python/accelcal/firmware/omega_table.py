@@ -20,7 +20,8 @@ from .. import model
 from .native import check, cptr, ffi, lib
 from .quantize import COEF_MAX, QuantizeError, FixedTables, quantize_calibration, round_half_up, row_shift
 
-__all__ = ["OmegaTable", "to_xf", "xf_value", "omega_table", "OmegaCore", "omega_run", "omega_header_lines", "insert_omega", "device_omega_table",
+__all__ = ["OmegaTable", "to_xf", "xf_value", "omega_table", "OmegaCore", "omega_run", "omega_header_lines",
+           "insert_omega", "device_omega_table",
            "OMEGA_JUMP_CHI2", "OMEGA_RANK_RTOL", "OMEGA_SNAP", "OMEGA_SIGMA0"]
 
 #: the float estimator's constants (estimators.omega / omega_filter), repeated here because
