@@ -168,11 +168,19 @@ def out_of_range(t, raw):
     return t, raw
 
 
-@pytest.mark.parametrize("case, edit", [("lost", drop_sample), ("range", out_of_range)])
+def lost_and_out_of_range(t, raw):
+    return drop_sample(*out_of_range(t, raw))
+
+
+def in_milliseconds(t, raw):
+    return t * 1000.0, out_of_range(t, raw)[1]
+
+
+@pytest.mark.parametrize("case, edit", [("lost", drop_sample), ("lost_range", lost_and_out_of_range)])
 def test_what_the_whole_recording_tells_goes_the_whole_file_way(spin, capfd, case, edit):
-    """A lost sample (filled, with a warning) and a reading outside the device's range (the whole-file
-    command puts t on its grid before it checks the range): nothing written by the chunked pass, and
-    the command's output and lines are the whole-file command's."""
+    """A lost sample (filled, with a warning), and with it a reading outside the device's range (the
+    whole-file command puts t on its grid, filling the sample, before it checks the range): nothing
+    written by the chunked pass, and the command's output and lines are the whole-file command's."""
     s = spin
     path = edited_recording(s, f"{case}.csv", edit)
     out = s["dir"] / f"{case}_s.csv"
@@ -185,6 +193,36 @@ def test_what_the_whole_recording_tells_goes_the_whole_file_way(spin, capfd, cas
         assert rc_w == 0 and "filled" in ref.read_text() and out.read_bytes() == ref.read_bytes()
     else:
         assert rc_w == 2 and "outside" in err_w and not out.exists()
+
+
+def test_a_reading_out_of_range_on_the_grid_is_refused_in_chunks(spin, capfd, monkeypatch):
+    """Stamps on the grid: the range error, found by the scan and held until the stamps are read again,
+    is the whole-file command's line, without reading the file whole."""
+    s = spin
+    path = edited_recording(s, "range.csv", out_of_range)
+    out = s["dir"] / "range_s.csv"
+    rc_w, err_w = rate_cli(capfd, s, path, s["dir"] / "range_w.csv", "--whole-file")
+    assert rc_w == 2 and "outside" in err_w and len(err_w.strip().splitlines()) == 1
+    with pytest.raises(InputError) as e:
+        rate_stream(s["device"], s["cal"], path, out, omega="array", block_bytes=997)
+    assert str(e.value) in err_w and not out.exists()
+    no_whole_read(monkeypatch)
+    assert rate_cli(capfd, s, path, out) == (rc_w, err_w) and not out.exists()
+
+
+@pytest.mark.parametrize("omega", ["alpha", "array"])
+def test_t_in_milliseconds_with_a_reading_out_of_range_is_noted_first(spin, capfd, omega):
+    """The whole-file command notes t's unit, then refuses the reading: the chunked pass leaves it to it
+    (before: the streamed rate (--omega alpha) gave the error without the note)."""
+    s = spin
+    path = edited_recording(s, "ms_range.csv", in_milliseconds)
+    lines = []
+    for extra in (["--whole-file"], []):
+        rc, _, err, _ = run(["rate", "--device", s["dev_path"], "--calibration", s["cal_path"], path, "-o",
+                             s["dir"] / "ms_out.csv", "--omega", omega, "--quiet", *extra], capfd)
+        lines.append((rc, err))
+    assert lines[0][0] == 2 and "milliseconds" in lines[0][1] and "outside" in lines[0][1]
+    assert lines[1] == lines[0] and not (s["dir"] / "ms_out.csv").exists()
 
 
 def test_engine_fixed_and_a_layout_without_omega_are_the_whole_file_refusals(spin, capfd, tmp_path):

@@ -30,7 +30,7 @@ from .common import CLIP, CLIP_LO, OMEGA_FRAC, alpha_noise, dt_fixed, force_nois
 from .omega import FusedOmega, omega_columns, omega_observability
 from .rate import LEAK_FRAC
 from .rest import REST_AT_REST, RestState, RestThresholds, default_rest_params, rest_cfg_fixed
-from .stream_scan import RANK_RANGE, on_grid, scan_with_bar
+from .stream_scan import RANK_RANGE, Deferred, on_grid, raise_deferred, scan_with_bar
 
 __all__ = ["rate_stream"]
 
@@ -154,8 +154,11 @@ def rate_stream(device, cal, path: Any, output: Any, *, engine: str = "float", l
     try:
         src = open_chunks(path, device.n_channels, scale, block_bytes, batch_rows)
         # the whole-file --omega array puts t on its grid before it checks the device's range
-        sc = scan_with_bar(device, src, fixed=engine == "fixed", progress=progress,
-                           defer_from=RANK_RANGE if omega == "array" else None)
+        try:
+            sc = scan_with_bar(device, src, fixed=engine == "fixed", progress=progress,
+                               defer_from=RANK_RANGE if omega == "array" else None)
+        except Deferred as d:
+            raise_deferred(src, d)
         if omega == "array":
             core: Any = _ArrayRate(device, cal, sc.noise, sc.dt)
             meta = {"engine": engine, "omega": "array"}

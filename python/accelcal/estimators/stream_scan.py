@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from types import SimpleNamespace
-from typing import Any, Callable
+from typing import Any, Callable, NoReturn
 
 import numpy as np
 
@@ -35,7 +35,7 @@ from ..readings.noise_stream import add_counts, median_of_counts
 #: ranks of the checks after the reader's (1-4: io.chunks.reader_checks), as in the whole-file command
 RANK_RANGE, RANK_CORE = 10, 12
 
-__all__ = ["RANK_RANGE", "RANK_CORE", "MAX_STEP_VALUES", "GRID_MARGIN", "RunCounts", "Scan", "scan", "scan_with_bar", "on_grid"]
+__all__ = ["RANK_RANGE", "RANK_CORE", "Deferred", "raise_deferred", "MAX_STEP_VALUES", "GRID_MARGIN", "RunCounts", "Scan", "scan", "scan_with_bar", "on_grid"]
 
 #: distinct time steps kept for the exact median (more: the whole-file command)
 MAX_STEP_VALUES = 1 << 16
@@ -80,8 +80,8 @@ def scan(device, source: ChunkSource, *, fixed: bool, progress: Callable[[int], 
     """The first pass (see the module doc).
 
     ``defer_from``: an error of this rank or after (:data:`RANK_RANGE`, :data:`RANK_CORE`) raises
-    Fallback instead (a command that looks at the time grid before the device's range: its
-    whole-file form words what it finds first).
+    :class:`Deferred` instead (a command that looks at the time grid before the device's range:
+    :func:`raise_deferred`).
 
     Raises
     ------
@@ -90,7 +90,8 @@ def scan(device, source: ChunkSource, *, fixed: bool, progress: Callable[[int], 
         ``fixed``, the C core's input), as it words it: the first of the lowest rank, once the
         whole file has been read (a bad cell at once: it is the file's first).
     Fallback
-        Where the whole-file command must run.
+        Where the whole-file command must run (t in another unit also under a range error: the
+        whole-file command notes it before the error).
     """
     if not states_noise(device):
         raise Fallback("the noise is estimated from the data")
@@ -118,12 +119,14 @@ def scan(device, source: ChunkSource, *, fixed: bool, progress: Callable[[int], 
             if pending is None or rank < pending[0]:
                 pending = (rank, e)
         n += ch.n
-        if pending is None:
+        # the steps and stamps also under a range error: the whole-file command notes t's unit first
+        if pending is None or pending[0] >= RANK_RANGE:
             d = np.diff(ch.t) if prev is None else np.diff(np.concatenate(([prev.t[-1]], ch.t)))
             add_counts(steps, d)
             if len(steps) > MAX_STEP_VALUES:
                 raise Fallback("steps of too many values")
-            runs.add(ch.raw)
+            if pending is None:
+                runs.add(ch.raw)
             if prev is None and ch.n:
                 t0 = float(ch.t[0])
             if ch.n:
@@ -131,17 +134,45 @@ def scan(device, source: ChunkSource, *, fixed: bool, progress: Callable[[int], 
         prev = ch
     if n < 3:
         raise Fallback("too few samples")
-    if pending is not None:
-        if defer_from is not None and pending[0] >= defer_from:
-            raise Fallback("an error the whole-file command ranks after the time grid")
-        raise pending[1]
+    if pending is not None and pending[0] < RANK_RANGE:
+        raise pending[1]                          # the reader's: before the whole-file command notes t's unit
     dt = median_of_counts(steps)
     ratio = dt * float(device.sample_rate_hz)
     if any(abs(ratio / k - 1.0) <= TIME_UNIT_TOL for k, _ in TIME_UNITS):
-        raise Fallback("t in another unit")
+        raise Fallback("t in another unit")       # the whole-file command's note, then what it finds
+    sc = Scan(n=n, t0=t0, t1=t1, dt=dt, noise=noise_for(device, np.zeros((0, device.n_channels), np.int64), 1)[0])
+    if pending is not None:
+        if defer_from is not None and pending[0] >= defer_from:
+            raise Deferred(pending[1], sc)
+        raise pending[1]
     if runs.held(device.n_channels) != 1:
         raise Fallback("held readings")
-    return Scan(n=n, t0=t0, t1=t1, dt=dt, noise=noise_for(device, np.zeros((0, device.n_channels), np.int64), 1)[0])
+    return sc
+
+
+class Deferred(Fallback):
+    """An error of the device's range (or the C core's input) that a command whose whole-file form puts t
+    on its grid first (``rate --omega array``) names only where the grid leaves t alone:
+    :func:`raise_deferred`.
+
+    Attributes
+    ----------
+    error : InputError
+    scan : Scan
+        The first pass's figures (n, the first and last stamps, dt).
+    """
+
+    def __init__(self, error: InputError, scan: Scan) -> None:
+        super().__init__("an error the whole-file command ranks after the time grid")
+        self.error, self.scan = error, scan
+
+
+def raise_deferred(source: ChunkSource, deferred: Deferred) -> NoReturn:
+    """Read the stamps again: on the grid (:func:`on_grid`, every chunk), raise the deferred error (the
+    whole-file command's, as it words it); else Fallback (the whole-file command decides)."""
+    for ch in source.chunks():
+        on_grid(deferred.scan, ch.start, ch.t)
+    raise deferred.error
 
 
 def on_grid(sc: Scan, start: int, t: np.ndarray) -> None:
