@@ -5,7 +5,8 @@ import json
 import warnings
 
 from accelcal.cli.main import main
-from accelcal.io.recording import read_recording
+from accelcal.io.recording import read_recording, write_recording
+from accelcal.io.recording_type import Recording
 
 
 def run(argv, capfd):
@@ -50,3 +51,26 @@ def convert_refused(tmp_path, capfd, src, *args, name="refused"):
     assert rc == 2 and one_refusal(err) and "Traceback" not in err, err
     assert not list(out.iterdir())
     return err
+
+
+def edited_copy(src, n_channels, dst, edit):
+    """The recording ``src`` with ``(t, raw) = edit(t, raw)`` (copies) written to ``dst`` (t and raw
+    only); returns ``dst``."""
+    rec = read_recording(src, n_channels)
+    t, raw = edit(rec.t.copy(), rec.raw.copy())
+    write_recording(dst, Recording(t=t, raw=raw))
+    return dst
+
+
+def spy(monkeypatch, owner, name):
+    """Replace ``owner.name`` by a wrapper recording each call's result; returns that list."""
+    calls = []
+    real = getattr(owner, name)
+
+    def wrapper(*args, **kwargs):
+        out = real(*args, **kwargs)
+        calls.append(out)
+        return out
+
+    monkeypatch.setattr(owner, name, wrapper)
+    return calls

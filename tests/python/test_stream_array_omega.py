@@ -24,7 +24,7 @@ from accelcal.io.parquet import parquet_chunks, parquet_head
 from accelcal.io.recording import read_recording, write_recording
 from accelcal.io.recording_type import Recording
 
-from cli_run import run
+from cli_run import edited_copy, run
 
 LAYOUTS = {"tetra": tetrahedron_device, "axes9": lambda: axes_device(origin=False)}
 
@@ -150,11 +150,7 @@ def test_bad_row_late_in_the_file_is_the_whole_file_error(spin, capfd, monkeypat
 
 
 def edited_recording(s, name, edit):
-    rec = read_recording(s["csv"], s["device"].n_channels)
-    t, raw = edit(rec.t.copy(), rec.raw.copy())
-    path = s["dir"] / name
-    write_recording(path, Recording(t=t, raw=raw))
-    return path
+    return edited_copy(s["csv"], s["device"].n_channels, s["dir"] / name, edit)
 
 
 def drop_sample(t, raw):

@@ -18,6 +18,7 @@ from accelcal.io.device import save_device
 from accelcal.io.recording import read_recording, recording_from_arrays, write_recording
 from accelcal.readings.static import poses_from_recording
 
+from cli_run import spy
 from indep_model import seed6, true_parameters
 
 P = 12
@@ -134,15 +135,7 @@ def test_cli_json_equals_the_whole_file_one(tmp_path, capsys, monkeypatch, state
         p = tmp_path / name
         write_recording(p, labelled(dev, np.random.default_rng(20 + k), temps=False))
         paths.append(str(p))
-    calls = []
-    real = cli_main.reduced_recordings
-
-    def spy(*args):
-        out = real(*args)
-        calls.append(out)
-        return out
-
-    monkeypatch.setattr(cli_main, "reduced_recordings", spy)
+    calls = spy(monkeypatch, cli_main, "reduced_recordings")
     got = run_cli(["calibrate", "--device", str(dpath), *paths, "-o", str(tmp_path / "r.json")], capsys)
     assert calls and calls[0] is not None and len(calls[0]) == 2
     monkeypatch.setattr(cli_main, "reduced_recordings", lambda *args: None)

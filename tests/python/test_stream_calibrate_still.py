@@ -25,6 +25,7 @@ from accelcal.io.recording import read_recording, recording_from_arrays, write_r
 from accelcal.readings import still_stream
 from accelcal.readings.static import poses_from_recording
 
+from cli_run import spy
 from indep_model import load_real, make_handheld, make_jig, triad16
 from shared_data import shared_file
 from test_stream_calibrate import device, labelled
@@ -79,11 +80,11 @@ def test_long_stretches_take_a_fifth_pass(tmp_path, monkeypatch):
     spread = []
     real = still_reduce.IntervalSums.spread
 
-    def spy(self, ch):
+    def counted(self, ch):
         spread.append(ch.n)
         return real(self, ch)
 
-    monkeypatch.setattr(still_reduce.IntervalSums, "spread", spy)
+    monkeypatch.setattr(still_reduce.IntervalSums, "spread", counted)
     dev = device()
     rec = unlabelled(dev, 5)
     rec = recording_from_arrays(rec.t, rec.raw, temp_c=rec.temp_c + 0.37 * np.sin(np.arange(rec.n_samples)))
@@ -148,15 +149,7 @@ def cli_against_whole(tmp_path, capsys, monkeypatch, dev, recs: dict, extra=()) 
     for name, rec in recs.items():
         write_recording(tmp_path / name, rec)
         paths.append(str(tmp_path / name))
-    calls = []
-    real = cli_main.reduced_recordings
-
-    def spy(*args):
-        out = real(*args)
-        calls.append(out)
-        return out
-
-    monkeypatch.setattr(cli_main, "reduced_recordings", spy)
+    calls = spy(monkeypatch, cli_main, "reduced_recordings")
     args = ["calibrate", "--device", str(dpath), *paths, *extra]
     got = run_cli(args + ["-o", str(tmp_path / "r.json")], capsys)
     monkeypatch.setattr(cli_main, "reduced_recordings", lambda *args: None)

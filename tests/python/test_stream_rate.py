@@ -21,7 +21,7 @@ from accelcal.cli.main import main
 from accelcal.resolve_stream import progress_factory
 from accelcal.simulate import run_simulation
 
-from cli_run import run
+from cli_run import edited_copy, run
 
 DEV = default_device()
 NOMINAL = Calibration.nominal(DEV)
@@ -93,11 +93,7 @@ def test_parquet_in_and_out_stream_the_whole_file_values(files, capfd):
 
 
 def edited(files, name, edit):
-    rec = read_recording(files["csv"], 6)
-    t, raw = edit(rec.t.copy(), rec.raw.copy())
-    path = files["dir"] / name
-    write_recording(path, Recording(t=t, raw=raw))
-    return path
+    return edited_copy(files["csv"], 6, files["dir"] / name, edit)
 
 
 def drop_sample(t, raw):

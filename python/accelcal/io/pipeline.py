@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import queue
 import threading
-from typing import Any, Iterable, Iterator, TypeVar
+from typing import Any, Callable, Iterable, Iterator, TypeVar
 
 __all__ = ["read_ahead", "WriteBehind", "DEPTH"]
 
@@ -33,9 +33,10 @@ _END = object()
 T = TypeVar("T")
 
 
-def _put(q: queue.Queue, item: Any, stop: threading.Event) -> bool:
-    """Put ``item`` unless told to stop first; True when put."""
-    while not stop.is_set():
+def _put(q: queue.Queue, item: Any, go_on: Callable[[], bool]) -> bool:
+    """Put ``item`` while ``go_on()`` holds (looked at every _POLL_S while the queue is full); True
+    when put."""
+    while go_on():
         try:
             q.put(item, timeout=_POLL_S)
             return True
@@ -64,16 +65,17 @@ def read_ahead(items: Iterable[T], depth: int = DEPTH) -> Iterator[T]:
     """
     q: queue.Queue = queue.Queue(maxsize=max(int(depth), 1))
     stop = threading.Event()
+    go_on = lambda: not stop.is_set()  # noqa: E731
 
     def run() -> None:
         it = iter(items)
         try:
             for item in it:
-                if not _put(q, (item, None), stop):
+                if not _put(q, (item, None), go_on):
                     return
-            _put(q, (_END, None), stop)
+            _put(q, (_END, None), go_on)
         except BaseException as e:  # noqa: BLE001 - handed to the consumer, in order
-            _put(q, (_END, e), stop)
+            _put(q, (_END, e), go_on)
         finally:
             close = getattr(it, "close", None)
             if close is not None:
@@ -143,23 +145,13 @@ class WriteBehind:
     def write(self, columns: Any) -> None:
         """Queue ``columns`` for ``sink.write`` (an earlier write's exception is raised here)."""
         self._raise()
-        while self._thread.is_alive():
-            try:
-                self._q.put(columns, timeout=_POLL_S)
-                return
-            except queue.Full:
-                continue
-        self._raise()
-        raise RuntimeError("WriteBehind: the writer has stopped")  # pragma: no cover - close()d before
+        if not _put(self._q, columns, self._thread.is_alive):
+            self._raise()
+            raise RuntimeError("WriteBehind: the writer has stopped")  # pragma: no cover - close()d before
 
     def close(self) -> None:
         """Finish the queued writes, then ``sink.close()`` (a write's exception is raised here)."""
-        while self._thread.is_alive():
-            try:
-                self._q.put(_END, timeout=_POLL_S)
-                break
-            except queue.Full:
-                continue
+        _put(self._q, _END, self._thread.is_alive)
         self._thread.join()
         self._raise()
         self.sink.close()
