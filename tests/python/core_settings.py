@@ -21,6 +21,9 @@ BATCHED = {
     "temp": (200, 100),
     "skew": (125, 100),
     "nonlin": (200, 100),
+    "trim": (200, 100),
+    "process": (1_000, 40),          # samples per table (4 before batching)
+    "triad": (250, 10),              # tables per example, of TRIAD_READINGS = 20 samples (5 before)
 }
 #: examples of a batched property in the dev profile
 DEV_BATCHED_EXAMPLES = 30
