@@ -5,7 +5,8 @@ whole counts make a constant fraction of a count per pose (docs/firmware-terms.m
 import dataclasses
 
 import numpy as np
-from core_settings import core
+from core_batch import floats, generator, ints, rows_hold, seeds, stack
+from core_settings import batched
 from hypothesis import given, strategies as st
 
 from accelcal.firmware import native, terms
@@ -37,25 +38,36 @@ def test_terms_frac_from_the_span():
     assert terms_frac(None, [0]) == 0
 
 
-@core
+def q_k_rows(rng, n, count):
+    """``count`` rows (k (B,), oc, gc, o, u (B, N), dto, dtg (B,)) of n channels as the strategies
+    below draw them."""
+    return (ints(rng, 1, 8, count), ints(rng, -600, 600, (count, n)), ints(rng, -8000, 8000, (count, n)),
+            ints(rng, -128, 128, (count, n)), floats(rng, -1.0, 1.0, (count, n)),
+            ints(rng, -10 * 256, 10 * 256, count), ints(rng, -10 * 256, 10 * 256, count))
+
+
+@batched("frac")
 @given(st.integers(1, 8), st.lists(st.tuples(st.integers(-600, 600), st.integers(-8000, 8000),
                                              st.integers(-128, 128), st.floats(-1.0, 1.0)), min_size=1, max_size=12),
-       st.integers(-10 * 256, 10 * 256), st.integers(-10 * 256, 10 * 256))
-def test_temp_correct_q_k_within_bound(k, chans, dto, dtg):
+       st.integers(-10 * 256, 10 * 256), st.integers(-10 * 256, 10 * 256), seeds)
+def test_temp_correct_q_k_within_bound(k, chans, dto, dtg, seed):
     """ac_temp_correct with frac k: y 2^-k within temp_bound(x, e, k) (the final rounding 2^-(k+1)
     counts instead of 1/2) of the float reference, on readings that fit Q.k (|x| < 0.7 2^(15-k)),
-    and no clip there."""
+    and no clip there.  A batch per example (core_batch.py): the first row drawn by hypothesis."""
     oc, gc, o, u = (list(v) for v in zip(*chans))
-    x = [int(round(v * 0.7 * 2 ** (15 - k))) for v in u]
-    t = native.new_temp_table(0, oc, gc, o, k)
-    y, sat = native.temp_correct(t, dto, dtg, x)
-    occ, gcc = np.asarray(oc) * 2.0 ** -OC_FRAC, np.asarray(gc) * 2.0 ** -GC_FRAC
-    e = gcc * dtg * 2.0 ** -TEMP_FRAC
-    ref = terms.temperature_correct(np.asarray(x, float)[None, :], np.asarray(o) * O_LSB, 0.0, occ, gcc,
-                                    [dto * 2.0 ** -TEMP_FRAC], [dtg * 2.0 ** -TEMP_FRAC])[0]
-    assert not sat
-    err = np.abs(np.asarray(y) * 2.0 ** -k - ref)
-    assert np.all(err <= temp_bound(np.maximum(np.abs(x), np.abs(ref)), e, k))
+    rows = q_k_rows(generator(seed), len(chans), batched.size("frac") - 1)
+    k, oc, gc, o, u, dto, dtg = (stack(a, r) for a, r in zip((k, oc, gc, o, u, dto, dtg), rows))
+    x = np.round(u * 0.7 * 2.0 ** (15 - k[:, None])).astype(np.int64)
+    y, sat = np.zeros(x.shape, np.int16), np.zeros(len(x), bool)
+    for i in range(len(x)):
+        y[i], sat[i] = native.temp_correct(native.new_temp_table(0, oc[i], gc[i], o[i], k[i]), dto[i], dtg[i], x[i])
+    occ, gcc = oc * 2.0 ** -OC_FRAC, gc * 2.0 ** -GC_FRAC
+    e = gcc * dtg[:, None] * 2.0 ** -TEMP_FRAC
+    ref = terms.temperature_correct(x.astype(float), o * O_LSB, 0.0, occ, gcc, dto * 2.0 ** -TEMP_FRAC,
+                                    dtg * 2.0 ** -TEMP_FRAC)
+    err = np.abs(y * 2.0 ** -k[:, None] - ref)
+    within = np.all(err <= temp_bound(np.maximum(np.abs(x), np.abs(ref)), e, k[:, None]), axis=1)
+    rows_hold(~sat & within, k=k, oc=oc, gc=gc, o=o, x=x, dto=dto, dtg=dtg, y=y, sat=sat)
 
 
 def static_poses(dev, cal, rng, n_poses=16, per_pose=300, noise=0.15):
