@@ -15,9 +15,8 @@ core = settings(max_examples=CORE_EXAMPLES)
 
 #: name: (examples in CI, vectors per example).  Before batching (10,000 examples, CI), per property:
 #: lag 10,000 runs (78,188 temperatures); temp 10,000 samples; skew 10,000 runs; nonlin 10,000
-#: samples (test_nonlin_realistic_tight: the examples its assume() kept); trim, unknown 10,000 samples;
-#: process 10,000 tables x 4 samples; triad 10,000 tables x 5 samples; frac 10,000 samples; resolve 10,000 tables x 6
-#: samples (test_fixed_path_tracks_float_reference: the tables with a clean sample).
+#: samples (test_nonlin_realistic_tight: the examples its assume() kept); frac 10,000 samples; trim,
+#: unknown 10,000 samples; process 10,000 tables x 4 samples; triad 10,000 tables x 5 samples.
 BATCHED = {
     "lag": (250, 40),
     "temp": (200, 100),
@@ -26,7 +25,6 @@ BATCHED = {
     "frac": (200, 100),              # test_terms_frac.py's Q.k temperature correction
     "trim": (200, 100),
     "process": (1_000, 40),          # samples per table (4 before batching)
-    "resolve": (2_500, 4),           # blocks of 6 samples (inputs()) per table (1 before)
     "triad": (250, 10),              # tables per example, of TRIAD_READINGS = 20 samples (5 before)
 }
 #: examples of a batched property in the dev profile

@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from core_settings import batched, core
+from core_settings import core
 from hypothesis import assume, given, strategies as st
 
 from accelcal import model
@@ -68,13 +68,6 @@ def inputs(rng, t, count=6):
     return raw, w
 
 
-def input_blocks(rng, t):
-    """batched.size("resolve") blocks of :func:`inputs` (each block its near-trim rows, edge rows
-    and slow / edge rotations, so the shares are those of one block) -> raw, w."""
-    blocks = [inputs(rng, t) for _ in range(batched.size("resolve"))]
-    return np.concatenate([b[0] for b in blocks]), np.concatenate([b[1] for b in blocks])
-
-
 def intermediates_overflow(t, raw, w):
     """Python big-int check: does any int32 intermediate of the core overflow?"""
     x = np.clip(raw.astype(object) - t.trim.astype(object), -32768, 32767)
@@ -88,11 +81,11 @@ def intermediates_overflow(t, raw, w):
         (np.abs(acc.astype(float) - tacc) >= lim) | (np.abs(out) >= lim)
 
 
-@batched("resolve")
+@core
 @given(calibrated_arrays())
 def test_resolve_within_bound_of_exact(case):
     t, _, _, _, rng = case
-    raw, w = input_blocks(rng, t)
+    raw, w = inputs(rng, t)
     out, flags = native.process_batch(t.resolver(), t.trim, raw, w)
     exact, bound, trim_sat = exact_fixed_semantics(t, raw, w)
     assert np.array_equal(flags & lib.AC_FLAG_TRIM_SAT > 0, trim_sat)
@@ -104,12 +97,12 @@ def test_resolve_within_bound_of_exact(case):
         assert np.all(intermediates_overflow(t, raw[out_sat], w[out_sat]).any(axis=1))
 
 
-@batched("resolve")
+@core
 @given(calibrated_arrays())
 def test_resolve_without_rotation_is_correctly_rounded(case):
     """No omega: the linear path is exact before one rounding (half up)."""
     t, _, _, _, rng = case
-    raw, _ = input_blocks(rng, t)
+    raw, _ = inputs(rng, t)
     out, flags = native.process_batch(t.resolver(), t.trim, raw, None)
     exact, _, _ = exact_fixed_semantics(t, raw, None)
     clean = flags == 0
@@ -137,13 +130,13 @@ def test_device_build_matches_host_quantizer(case):
                   + np.abs(kb) * 2.0**-26 * 2.0 ** t.cond_log2)
 
 
-@batched("resolve")
+@core
 @given(calibrated_arrays())
 def test_fixed_path_tracks_float_reference(case):
     """Against the float reference: the core's arithmetic bound plus the rounding
     of the table entries, nothing else."""
     t, offsets, sens, pos, rng = case
-    raw, w = input_blocks(rng, t)
+    raw, w = inputs(rng, t)
     out, flags = native.process_batch(t.resolver(), t.trim, raw, w)
     clean = flags == 0
     assume(clean.any())
