@@ -20,6 +20,8 @@
 
 /* the longest "%.9g": "-1.23456789e-308" (16) and the ',' before it */
 #define ACX_CELL_MAX 24
+/* the longest repr: "-0.00012345678901234567" (23) or "-1.2345678901234567e-308" (24) */
+#define ACX_REPR_MAX 32
 
 #if LDBL_MANT_DIG >= 64
 /* 10^k, k = 0..27: exact in a 64-bit mantissa (5^27 < 2^63) */
@@ -215,6 +217,159 @@ size_t acx_csv_rows(const char *prefix, size_t prefix_len, const double *values,
             }
             pos += (size_t)k;
         }
+        out[pos++] = '\n';
+    }
+    return pos;
+}
+
+/* One line of acx_repr_lines: the shortest round-trip digits in src[0..len) (pyarrow's cast of a
+ * double to text: "[-]digits[.digits][e(+|-)digits]", "nan", "inf") laid out as Python's repr
+ * writes them, into out (ACX_REPR_MAX bytes); returns its length, or 0 for any other text. */
+static int repr_line(const char *src, size_t len, char *out)
+{
+    char d[32];
+    int nd = 0;
+    int point = -1;             /* digits before the '.' (-1: no '.') */
+    int exp10 = 0;
+    int neg = 0;
+    int lead;
+    int p;
+    int n = 0;
+    int i;
+    size_t k = 0;
+    if (len > 0 && src[0] == '-') {
+        neg = 1;
+        k = 1;
+    }
+    if (len - k == 3 && memcmp(src + k, "nan", 3) == 0) {
+        memcpy(out, "nan", 3);
+        return 3;
+    }
+    if (len - k == 3 && memcmp(src + k, "inf", 3) == 0) {
+        if (neg) {
+            out[n++] = '-';
+        }
+        memcpy(out + n, "inf", 3);
+        return n + 3;
+    }
+    for (; k < len; k++) {
+        char c = src[k];
+        if (c >= '0' && c <= '9') {
+            if (nd >= (int)sizeof d) {
+                return 0;
+            }
+            d[nd++] = c;
+        } else if (c == '.' && point < 0 && nd > 0) {
+            point = nd;
+        } else if (c == 'e' && nd > 0 && k + 2 < len + 1) {
+            int es = 1;
+            int ev = 0;
+            int ed = 0;
+            k++;
+            if (k < len && (src[k] == '+' || src[k] == '-')) {
+                es = src[k] == '-' ? -1 : 1;
+                k++;
+            }
+            for (; k < len; k++) {
+                if (src[k] < '0' || src[k] > '9' || ed >= 4) {
+                    return 0;
+                }
+                ev = ev * 10 + (src[k] - '0');
+                ed++;
+            }
+            if (ed == 0) {
+                return 0;
+            }
+            exp10 = es * ev;
+            break;
+        } else {
+            return 0;
+        }
+    }
+    if (nd == 0) {
+        return 0;
+    }
+    /* value = 0.d[0..nd) x 10^p */
+    p = (point < 0 ? nd : point) + exp10;
+    for (lead = 0; lead < nd && d[lead] == '0'; lead++) {
+        p--;
+    }
+    while (nd > lead && d[nd - 1] == '0') {
+        nd--;
+    }
+    if (neg) {
+        out[n++] = '-';
+    }
+    if (nd == lead) {                   /* zero */
+        memcpy(out + n, "0.0", 3);
+        return n + 3;
+    }
+    if (nd - lead > 17) {
+        return 0;
+    }
+    if (p > -4 && p <= 16) {            /* Python's repr: positional for 1e-4 <= |x| < 1e16 */
+        if (p <= 0) {
+            out[n++] = '0';
+            out[n++] = '.';
+            for (i = 0; i < -p; i++) {
+                out[n++] = '0';
+            }
+            for (i = lead; i < nd; i++) {
+                out[n++] = d[i];
+            }
+        } else if (p >= nd - lead) {
+            for (i = lead; i < nd; i++) {
+                out[n++] = d[i];
+            }
+            for (i = nd - lead; i < p; i++) {
+                out[n++] = '0';
+            }
+            out[n++] = '.';
+            out[n++] = '0';
+        } else {
+            for (i = lead; i < lead + p; i++) {
+                out[n++] = d[i];
+            }
+            out[n++] = '.';
+            for (; i < nd; i++) {
+                out[n++] = d[i];
+            }
+        }
+        return n;
+    }
+    out[n++] = d[lead];
+    if (nd - lead > 1) {
+        out[n++] = '.';
+        for (i = lead + 1; i < nd; i++) {
+            out[n++] = d[i];
+        }
+    }
+    p -= 1;
+    out[n++] = 'e';
+    out[n++] = p < 0 ? '-' : '+';
+    p = p < 0 ? -p : p;
+    if (p >= 100) {
+        out[n++] = (char)('0' + p / 100);
+    }
+    out[n++] = (char)('0' + (p / 10) % 10);
+    out[n++] = (char)('0' + p % 10);
+    return n;
+}
+
+size_t acx_repr_lines(const int32_t *offsets, const char *data, size_t n, char *out, size_t cap)
+{
+    size_t pos = 0;
+    size_t i;
+    for (i = 0; i < n; i++) {
+        int k;
+        if (offsets[i + 1] < offsets[i] || pos + ACX_REPR_MAX + 1 > cap) {
+            return 0;
+        }
+        k = repr_line(data + offsets[i], (size_t)(offsets[i + 1] - offsets[i]), out + pos);
+        if (k <= 0) {
+            return 0;
+        }
+        pos += (size_t)k;
         out[pos++] = '\n';
     }
     return pos;

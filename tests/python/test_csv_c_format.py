@@ -70,3 +70,41 @@ def test_csv_rows_and_the_sink_take_it(tmp_path, monkeypatch):
         sink = ColumnSink(f, ["t", "a", "b", "c", "d"], {"k": "v"}, False)
         sink.write([t] + [v[:, j] for j in range(4)])
     assert (tmp_path / "o.csv").read_text() == "# k: v\nt,a,b,c,d\n" + python_text(t, v)
+
+
+def python_repr_lines(x):
+    return ("\n".join(map(repr, x.tolist())) + "\n").encode("ascii") if x.size else b""
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(doubles, min_size=1, max_size=60))
+def test_repr_lines_are_pythons(xs):
+    """pyarrow's shortest digits laid out by the C: Python's repr, line for line, over any double."""
+    assert csvformat.C_REPR is not None             # (the extension built with acx_repr_lines)
+    x = np.array(xs, dtype=np.float64)
+    assert csvformat.repr_lines(x) == python_repr_lines(x)
+
+
+def test_repr_lines_over_a_million_doubles():
+    """Random bit patterns (every exponent, NaN and inf included), time stamps k / 60 and k / 1000
+    and their neighbours, the layout's edges (1e-4, 1e16 and their neighbours, powers of ten and two,
+    integers up to 2^54): Python's repr, byte for byte."""
+    rng = np.random.default_rng(7)
+    bits = rng.integers(0, 2 ** 63, 400_000, dtype=np.uint64) * np.uint64(2) + rng.integers(0, 2, 400_000).astype(np.uint64)
+    k = np.arange(200_000, dtype=np.float64)
+    edges = np.array([10.0 ** e for e in range(-30, 31)] + [2.0 ** e for e in range(-60, 70)]
+                     + [1e-4, 1e16, 9.999999999999999e15, 1e15, 0.0001, 9.99999999999e-5])
+    x = np.concatenate([bits.view(np.float64), k / 60.0, k / 1000.0 + 1.7e9, np.nextafter(k / 60.0, np.inf),
+                        edges, np.nextafter(edges, np.inf), np.nextafter(edges, -np.inf), -edges,
+                        np.arange(2 ** 53 - 1000, 2 ** 53 + 1000, dtype=np.float64),
+                        rng.integers(-10 ** 6, 10 ** 6, 100_000).astype(np.float64)])
+    got = csvformat.repr_lines(x).split(b"\n")
+    want = python_repr_lines(x).split(b"\n")
+    bad = [i for i, (a, b) in enumerate(zip(got, want)) if a != b]
+    assert len(got) == len(want) and not bad, [(x[i], got[i], want[i]) for i in bad[:5]]
+
+
+def test_repr_lines_fall_back_to_python_without_the_c(monkeypatch):
+    x = np.array([0.1, -0.0, 1e16, np.nan])
+    monkeypatch.setattr(csvformat, "C_REPR", None)
+    assert csvformat.repr_lines(x) == python_repr_lines(x)
