@@ -23,6 +23,30 @@
 /* the longest repr: "-0.00012345678901234567" (23) or "-1.2345678901234567e-308" (24) */
 #define ACX_REPR_MAX 32
 
+/* "d[0][.d[1..nd)]e(+|-)XX[X]" (the exponent e in at least two digits, as printf's %e and Python's
+ * repr write it) into out; returns its length. */
+static int sci_text(const char *d, int nd, int e, char *out)
+{
+    int n = 0;
+    out[n++] = d[0];
+    if (nd > 1) {
+        int i;
+        out[n++] = '.';
+        for (i = 1; i < nd; i++) {
+            out[n++] = d[i];
+        }
+    }
+    out[n++] = 'e';
+    out[n++] = e < 0 ? '-' : '+';
+    e = e < 0 ? -e : e;
+    if (e >= 100) {
+        out[n++] = (char)('0' + e / 100);
+    }
+    out[n++] = (char)('0' + (e / 10) % 10);
+    out[n++] = (char)('0' + e % 10);
+    return n;
+}
+
 #if LDBL_MANT_DIG >= 64
 /* 10^k, k = 0..27: exact in a 64-bit mantissa (5^27 < 2^63) */
 static const long double POW10[28] = {
@@ -134,22 +158,7 @@ static int g9_fast(double x, char *out)
         }
         return n;
     }
-    out[n++] = d[0];
-    if (nd > 1) {
-        out[n++] = '.';
-        for (i = 1; i < nd; i++) {
-            out[n++] = d[i];
-        }
-    }
-    out[n++] = 'e';
-    out[n++] = e < 0 ? '-' : '+';
-    e = e < 0 ? -e : e;
-    if (e >= 100) {
-        out[n++] = (char)('0' + e / 100);
-    }
-    out[n++] = (char)('0' + (e / 10) % 10);
-    out[n++] = (char)('0' + e % 10);
-    return n;
+    return n + sci_text(d, nd, e, out + n);
 }
 #else
 static int g9_fast(double x, char *out)
@@ -222,6 +231,17 @@ size_t acx_csv_rows(const char *prefix, size_t prefix_len, const double *values,
     return pos;
 }
 
+/* The characters of word (no NUL: a cell of a line) into out; returns their number. */
+static int put_word(const char *word, char *out)
+{
+    int n = 0;
+    while (word[n] != '\0') {
+        out[n] = word[n];
+        n++;
+    }
+    return n;
+}
+
 /* One line of acx_repr_lines: the shortest round-trip digits in src[0..len) (pyarrow's cast of a
  * double to text: "[-]digits[.digits][e(+|-)digits]", "nan", "inf") laid out as Python's repr
  * writes them, into out (ACX_REPR_MAX bytes); returns its length, or 0 for any other text. */
@@ -235,22 +255,19 @@ static int repr_line(const char *src, size_t len, char *out)
     int lead;
     int p;
     int n = 0;
-    int i;
     size_t k = 0;
     if (len > 0 && src[0] == '-') {
         neg = 1;
         k = 1;
     }
     if (len - k == 3 && memcmp(src + k, "nan", 3) == 0) {
-        memcpy(out, "nan", 3);
-        return 3;
+        return put_word("nan", out);
     }
     if (len - k == 3 && memcmp(src + k, "inf", 3) == 0) {
         if (neg) {
             out[n++] = '-';
         }
-        memcpy(out + n, "inf", 3);
-        return n + 3;
+        return n + put_word("inf", out + n);
     }
     for (; k < len; k++) {
         char c = src[k];
@@ -301,13 +318,13 @@ static int repr_line(const char *src, size_t len, char *out)
         out[n++] = '-';
     }
     if (nd == lead) {                   /* zero */
-        memcpy(out + n, "0.0", 3);
-        return n + 3;
+        return n + put_word("0.0", out + n);
     }
     if (nd - lead > 17) {
         return 0;
     }
     if (p > -4 && p <= 16) {            /* Python's repr: positional for 1e-4 <= |x| < 1e16 */
+        int i;
         if (p <= 0) {
             out[n++] = '0';
             out[n++] = '.';
@@ -337,23 +354,7 @@ static int repr_line(const char *src, size_t len, char *out)
         }
         return n;
     }
-    out[n++] = d[lead];
-    if (nd - lead > 1) {
-        out[n++] = '.';
-        for (i = lead + 1; i < nd; i++) {
-            out[n++] = d[i];
-        }
-    }
-    p -= 1;
-    out[n++] = 'e';
-    out[n++] = p < 0 ? '-' : '+';
-    p = p < 0 ? -p : p;
-    if (p >= 100) {
-        out[n++] = (char)('0' + p / 100);
-    }
-    out[n++] = (char)('0' + (p / 10) % 10);
-    out[n++] = (char)('0' + p % 10);
-    return n;
+    return n + sci_text(d + lead, nd - lead, p - 1, out + n);
 }
 
 size_t acx_repr_lines(const int32_t *offsets, const char *data, size_t n, char *out, size_t cap)
