@@ -173,14 +173,14 @@ class _Tally:
         k = int(np.count_nonzero(at))
         self.clipped += k
         if ch.n and self.hist is None:            # else from the histograms (extremes)
-            mn, mx = raw.min(axis=0), raw.max(axis=0)
-            for ext, cnt, v, side in ((self.vmin, self.cmin, mn, -1), (self.vmax, self.cmax, mx, 1)):
+            mn, mx = ext if ext is not None else (raw.min(axis=0), raw.max(axis=0))
+            for best, cnt, v, side in ((self.vmin, self.cmin, mn, -1), (self.vmax, self.cmax, mx, 1)):
                 c = (raw == v).sum(axis=0)
-                new = v < ext if side < 0 else v > ext
-                same = v == ext
+                new = v < best if side < 0 else v > best
+                same = v == best
                 cnt[same] += c[same]
                 cnt[new] = c[new]
-                ext[new] = v[new]
+                best[new] = v[new]
         if ch.n:
             steps = np.diff(ch.t) if self.last_t is None else np.diff(np.concatenate(([self.last_t], ch.t)))
             rate = float(dev.sample_rate_hz)
@@ -325,8 +325,9 @@ def _stream(device, cal, path, output, engine, scale, block_bytes, batch_rows, p
                 ext = (ch.raw.min(axis=0), ch.raw.max(axis=0)) if ch.n else None
                 out_range = ext is not None and bool((ext[0] < device.raw_min).any() or (ext[1] > device.raw_max).any())
                 w_missing = ch.vecs["w"] is None
-                rec = SimpleNamespace(raw=ch.raw, source=head.source, line=ch.line,
-                                      w=ch.vecs["w"] if not w_missing else np.full((ch.n, 3), np.nan))
+                rec = SimpleNamespace(raw=ch.raw, source=head.source, line=ch.line, w=ch.vecs["w"])
+                if w_missing and omega_source == "reference" and not triad:   # refused at its first row
+                    rec.w = np.full((ch.n, 3), np.nan)
                 errs = reader_checks(head, ch, prev)
                 for rank, check in ((RANK_RANGE, lambda: check_raw_range(rec, device) if out_range else None),
                                     (RANK_OMEGA, lambda: None if triad or (w_missing and omega_source != "reference")

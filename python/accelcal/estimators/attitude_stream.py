@@ -140,12 +140,7 @@ def attitude_stream(device, cal, path: Any, output: Any, *, engine: str = "float
                 "w2_gate": f"{p.gate():.6g}", "gain": f"{gain:g}", "leak_tau_s": f"{leak_tau_s:g}"}
         return {**meta, **{f"warning_{k}": w for k, w in enumerate(warnings, 1)}}
 
-    result: list[str] = []
-    try:
-        write_deferred(output, NAMES, lambda sink: _keep(result, produce(sink)))
-    except Fallback:
-        return None
-    return result
+    return _write(output, NAMES, produce)
 
 
 def _array_stream(device, cal, src: Any, output: Any, *, engine: str, auto: bool,
@@ -190,17 +185,24 @@ def _array_stream(device, cal, src: Any, output: Any, *, engine: str, auto: bool
         meta = {"engine": engine, "device": device.name, "omega": "array"}
         return {**meta, **{f"warning_{k}": w for k, w in enumerate(array_warnings(tally.off, tally.sat), 1)}}
 
+    return _write(output, ARRAY_NAMES, produce)
+
+
+def _write(output: Any, names: list[str], produce: Callable[[Any], dict]) -> list[str] | None:
+    """``write_deferred(output, names, produce)``; the warnings among the comments ``produce``
+    returns, or None where it falls back (nothing written)."""
     result: list[str] = []
+
+    def keep(sink: Any) -> dict:
+        meta = produce(sink)
+        result.extend(v for k, v in meta.items() if k.startswith("warning_"))
+        return meta
+
     try:
-        write_deferred(output, ARRAY_NAMES, lambda sink: _keep(result, produce(sink)))
+        write_deferred(output, names, keep)
     except Fallback:
         return None
     return result
-
-
-def _keep(result: list, meta: dict) -> dict:
-    result.extend(v for k, v in meta.items() if k.startswith("warning_"))
-    return meta
 
 
 def warnings_of(tally: Any) -> list[str]:
